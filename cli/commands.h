@@ -1,0 +1,14 @@
+// Each subcommand family registers itself on the `dynsky` CLI::App; main.cpp wires them up.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace dynsky::cli {
+
+void register_render_command(CLI::App& app);         // dynsky render
+void register_sky_clear_commands(CLI::App& sky);     // dynsky sky clear | latlong | sun
+void register_sky_import_commands(CLI::App& sky);    // dynsky sky import | mask
+void register_sky_procedural_command(CLI::App& sky); // dynsky sky procedural
+void register_bench_commands(CLI::App& app);         // dynsky bench ...
+
+}  // namespace dynsky::cli

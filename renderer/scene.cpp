@@ -1,0 +1,51 @@
+#include "renderer/scene.h"
+
+namespace dynsky {
+
+Bounds3 Scene::world_bounds() const {
+    Bounds3 b;
+    for (const Instance& inst : instances)
+        for (const TriangleMesh& mesh : meshes[size_t(inst.mesh_group)].primitives)
+            for (const Vec3& p : mesh.positions) b.extend(inst.transform * p);
+    return b;
+}
+
+size_t Scene::triangle_count() const {
+    size_t n = 0;
+    for (const Instance& inst : instances)
+        for (const TriangleMesh& mesh : meshes[size_t(inst.mesh_group)].primitives) n += mesh.triangle_count();
+    return n;
+}
+
+const Material& Scene::default_material() {
+    static const Material m = [] {
+        Material d;
+        d.name = "glTF default";
+        return d;
+    }();
+    return m;
+}
+
+Camera frame_bounds_camera(const Bounds3& bounds, float aspect_ratio) {
+    Camera cam;
+    cam.name = "framing camera";
+    cam.yfov = 0.7f;
+    cam.aspect_ratio = aspect_ratio;
+    Vec3 center = bounds.empty() ? Vec3::Zero() : bounds.center();
+    float radius = bounds.empty() ? 1.0f : std::max(0.5f * bounds.diagonal().norm(), 1e-3f);
+    // Look from the south-east and above, far enough that the bounding sphere fits the narrower fov.
+    float fov = cam.yfov;
+    if (aspect_ratio > 0 && aspect_ratio < 1) fov = 2 * std::atan(std::tan(fov / 2) * aspect_ratio);
+    float distance = radius / std::sin(fov / 2) * 1.05f;
+    Vec3 dir = Vec3(0.6f, 0.45f, 0.65f).normalized();  // from the centre towards the eye
+    Vec3 eye = center + distance * dir;
+    Vec3 forward = (center - eye).normalized();
+    Vec3 right = forward.cross(Vec3::UnitY()).normalized();
+    Vec3 up = right.cross(forward);
+    Eigen::Matrix3f rot;
+    rot.col(0) = right, rot.col(1) = up, rot.col(2) = -forward;
+    cam.camera_to_world = Eigen::Translation3f(eye) * rot;
+    return cam;
+}
+
+}  // namespace dynsky

@@ -1,0 +1,103 @@
+// The renderer's scene: plain data filled by a loader (renderer/gltf_loader.h) or built in code,
+// then handed to the ray-tracing accelerator (renderer/accel.h). Units: metres, world frame of
+// ../shared/CONVENTIONS.md (+Y up).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "renderer/texture.h"
+#include "util/math.h"
+
+namespace dynsky {
+
+// A texture slot of a material: which texture, which UV set, and KHR_texture_transform.
+struct TextureSlot {
+    int texture = -1;  // index into Scene::textures, -1 for none
+    int texcoord = 0;  // TEXCOORD_n
+    // uv' = uv_transform * (u, v, 1): glTF's KHR_texture_transform (offset, rotation, scale).
+    Eigen::Matrix3f uv_transform = Eigen::Matrix3f::Identity();
+    float scale = 1.0f;  // normalTexture.scale or occlusionTexture.strength
+    bool present() const { return texture >= 0; }
+};
+
+enum class AlphaMode { Opaque, Mask, Blend };
+
+// glTF 2.0 metallic-roughness material (core spec, plus KHR_materials_emissive_strength).
+struct Material {
+    std::string name;
+    Color base_color = Color::Ones();
+    float base_alpha = 1.0f;
+    TextureSlot base_color_texture;          // sRGB RGBA
+    float metallic = 1.0f, roughness = 1.0f;
+    TextureSlot metallic_roughness_texture;  // linear: G roughness, B metallic
+    TextureSlot normal_texture;              // linear, tangent space, scale in slot.scale
+    TextureSlot occlusion_texture;           // linear R, strength in slot.scale
+    Color emissive = Color::Zero();          // already multiplied by emissive_strength
+    TextureSlot emissive_texture;            // sRGB
+    AlphaMode alpha_mode = AlphaMode::Opaque;
+    float alpha_cutoff = 0.5f;
+    bool double_sided = false;
+};
+
+// One triangle primitive (glTF mesh primitive), in its mesh's local frame. Triangles only:
+// strips and fans are converted, and non-indexed primitives get 0..n-1 indices, by the loader.
+struct TriangleMesh {
+    std::vector<Vec3> positions;
+    std::vector<Vec3> normals;              // per vertex, unit; generated when missing
+    std::vector<Vec4> tangents;             // xyz unit, w = handedness +-1; generated when missing
+    std::vector<Vec2> texcoords[2];         // TEXCOORD_0 and TEXCOORD_1 (empty when absent)
+    std::vector<Vec4> colors;               // COLOR_0 (empty when absent), multiplies base colour
+    std::vector<uint32_t> indices;          // 3 per triangle
+    int material = -1;                      // index into Scene::materials, -1 for the glTF default
+    size_t triangle_count() const { return indices.size() / 3; }
+};
+
+// A glTF mesh: primitives built once and instanced by every node that uses it.
+struct MeshGroup {
+    std::string name;
+    std::vector<TriangleMesh> primitives;
+};
+
+struct Instance {
+    int mesh_group = -1;
+    Eigen::Affine3f transform = Eigen::Affine3f::Identity();  // local to world
+};
+
+struct Camera {
+    std::string name;
+    Eigen::Affine3f camera_to_world = Eigen::Affine3f::Identity();  // camera looks down -Z, +Y up
+    float yfov = 0.8f;            // radians
+    float aspect_ratio = 0.0f;    // 0: take it from the image resolution
+};
+
+struct Bounds3 {
+    Vec3 lo = Vec3::Constant(std::numeric_limits<float>::infinity());
+    Vec3 hi = Vec3::Constant(-std::numeric_limits<float>::infinity());
+    void extend(const Vec3& p) { lo = lo.cwiseMin(p), hi = hi.cwiseMax(p); }
+    bool empty() const { return !(lo.x() <= hi.x()); }
+    Vec3 center() const { return 0.5f * (lo + hi); }
+    Vec3 diagonal() const { return hi - lo; }
+};
+
+struct Scene {
+    std::string source;                           // file it came from
+    std::vector<MeshGroup> meshes;
+    std::vector<Instance> instances;
+    std::vector<Material> materials;
+    std::vector<std::shared_ptr<Texture>> textures;
+    std::vector<Camera> cameras;                  // glTF perspective cameras, in file order
+    std::vector<std::string> warnings;            // e.g. extensions used but not supported
+
+    Bounds3 world_bounds() const;
+    size_t triangle_count() const;                // counting every instance
+    // The default glTF material (white, metallic 1, roughness 1) for primitives without one.
+    static const Material& default_material();
+    const Material& material(int index) const { return index < 0 ? default_material() : materials[size_t(index)]; }
+};
+
+// A camera that frames the scene's bounds from the south-east, above (used when a file has none).
+Camera frame_bounds_camera(const Bounds3& bounds, float aspect_ratio);
+
+}  // namespace dynsky

@@ -1,0 +1,38 @@
+// Image textures with glTF samplers: wrap modes, nearest or bilinear filtering, and colour space.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "util/math.h"
+
+namespace dynsky {
+
+enum class TextureWrap { Repeat, ClampToEdge, MirroredRepeat };
+enum class TextureFilter { Nearest, Linear };
+
+class Texture {
+  public:
+    // texels: width * height * 4 floats (RGBA), row 0 at the top (glTF uv (0, 0) is the top-left).
+    // If srgb, RGB are decoded to linear at construction (base colour and emissive textures).
+    Texture(std::string name, int width, int height, std::vector<float> rgba, bool srgb,
+            TextureWrap wrap_s = TextureWrap::Repeat, TextureWrap wrap_t = TextureWrap::Repeat,
+            TextureFilter filter = TextureFilter::Linear);
+
+    // RGBA at glTF uv (u right, v down), filtered and wrapped per the sampler.
+    Vec4 evaluate(const Vec2& uv) const;
+
+    int width() const { return width_; }
+    int height() const { return height_; }
+    const std::string& name() const { return name_; }
+
+  private:
+    Vec4 texel(int x, int y) const;
+    std::string name_;
+    int width_, height_;
+    std::vector<float> rgba_;
+    TextureWrap wrap_s_, wrap_t_;
+    TextureFilter filter_;
+};
+
+}  // namespace dynsky

@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Installs every Debian package dynsky needs that is missing. Safe to run again: it installs
+# nothing when all are present. Needs root (or sudo) only when something is missing.
+set -euo pipefail
+
+packages=(
+  build-essential cmake ninja-build ccache pkg-config
+  libembree-dev libtinygltf-dev nlohmann-json3-dev libstb-dev
+  libopenimageio-dev openimageio-tools libopenexr-dev
+  libopencv-dev libeigen3-dev libtbb-dev
+  libgtest-dev libbenchmark-dev libcli11-dev
+  ffmpeg python3-matplotlib python3-numpy
+)
+# Training the cloud networks (not needed to build, run or test): scripts/setup.sh --training
+if [[ "${1:-}" == "--training" ]]; then packages+=(python3-torch python3-onnx); fi
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]} == 0)); then
+  echo "setup: all ${#packages[@]} packages present"
+  exit 0
+fi
+echo "setup: installing ${missing[*]}"
+SUDO=""
+if [[ $(id -u) -ne 0 ]]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

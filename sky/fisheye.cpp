@@ -1,0 +1,53 @@
+#include "sky/fisheye.h"
+
+namespace dynsky::fisheye {
+
+Vec3d direction_from_uv(double u, double v) {
+    double r = std::sqrt(u * u + v * v);
+    double theta = r * kPiD / 2.0;
+    // x = sin(theta) sin(phi) = -u sin(theta)/r, z = -sin(theta) cos(phi) = v sin(theta)/r.
+    double s = (kPiD / 2.0) * sinc(theta);  // sin(theta) / r
+    return Vec3d(-u * s, std::cos(theta), v * s);
+}
+
+Vec3 direction_from_uv(const Vec2& uv) { return direction_from_uv(double(uv.x()), double(uv.y())).cast<float>(); }
+
+bool uv_from_direction(const Vec3d& w, double* u, double* v) {
+    if (w.y() < 0.0) return false;
+    double sin_theta = std::sqrt(w.x() * w.x() + w.z() * w.z());
+    double theta = std::atan2(sin_theta, w.y());
+    // r / sin(theta) = (2 / pi) theta / sin(theta)
+    double k = (2.0 / kPiD) / sinc(theta);
+    *u = -w.x() * k;
+    *v = w.z() * k;
+    return true;
+}
+
+bool uv_from_direction(const Vec3& w, Vec2* uv) {
+    double u, v;
+    if (!uv_from_direction(w.cast<double>(), &u, &v)) return false;
+    *uv = Vec2(float(u), float(v));
+    return true;
+}
+
+double zenith_angle(const Vec3d& w) { return std::acos(clamp(w.y() / w.norm(), -1.0, 1.0)); }
+
+double azimuth(const Vec3d& w) {
+    double phi = std::atan2(w.x(), -w.z());
+    return phi < 0 ? phi + 2 * kPiD : phi;
+}
+
+Vec3d direction_from_angles(double theta, double phi) {
+    return Vec3d(std::sin(theta) * std::sin(phi), std::cos(theta), -std::sin(theta) * std::cos(phi));
+}
+
+double pixel_solid_angle(int i, int j, int n) {
+    Vec2 uv = pixel_center_uv(i, j, n);
+    double u = uv.x(), v = uv.y();
+    double r = std::sqrt(u * u + v * v);
+    if (r > 1.0) return 0.0;
+    double du = 2.0 / n;
+    return solid_angle_jacobian(r * kPiD / 2.0) * du * du;
+}
+
+}  // namespace dynsky::fisheye

@@ -1,0 +1,87 @@
+#include "sky/sky_image.h"
+
+#include <cmath>
+
+#include "sky/fisheye.h"
+#include "util/error.h"
+
+namespace dynsky {
+
+bool SkyImage::in_disc(int i, int j) const {
+    Vec2 uv = fisheye::pixel_center_uv(i, j, resolution);
+    return uv.squaredNorm() <= 1.0f;
+}
+
+void validate_sky(const SkyImage& sky, const std::string& name) {
+    int n = sky.resolution;
+    if (n <= 0 || sky.rgb.size() != size_t(n) * n * 3) throw_file_error(name, "sky image has no pixels");
+    double total = 0;
+    for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) {
+            Color c = sky.pixel(i, j);
+            for (int k = 0; k < 3; ++k) {
+                if (!std::isfinite(c[k]))
+                    throw_file_error(name, "sky pixel (" + std::to_string(i) + ", " + std::to_string(j) +
+                                               ") is " + (std::isnan(c[k]) ? "NaN" : "infinite") +
+                                               ": a sky must hold finite radiance");
+                if (c[k] < 0)
+                    throw_file_error(name, "sky pixel (" + std::to_string(i) + ", " + std::to_string(j) +
+                                               ") is negative (" + std::to_string(c[k]) + "): radiance cannot be negative");
+            }
+            if (sky.in_disc(i, j)) total += c.sum();
+        }
+    }
+    if (!(total > 0)) throw_file_error(name, "sky is black everywhere inside the fisheye disc: nothing to light with");
+}
+
+Image sky_to_image(const SkyImage& sky) {
+    Image image(sky.resolution, sky.resolution, 3);
+    image.pixels = sky.rgb;
+    image.metadata.numbers["dynsky:time"] = sky.time_seconds;
+    if (sky.sun_direction) {
+        image.metadata.numbers["dynsky:sun_x"] = sky.sun_direction->x();
+        image.metadata.numbers["dynsky:sun_y"] = sky.sun_direction->y();
+        image.metadata.numbers["dynsky:sun_z"] = sky.sun_direction->z();
+    }
+    if (!sky.source.empty()) image.metadata.strings["dynsky:source"] = sky.source;
+    image.metadata.strings["dynsky:layout"] = "equidistant fisheye, upper hemisphere, north up, east left";
+    return image;
+}
+
+SkyImage sky_from_image(const Image& image, const std::string& name) {
+    if (image.width != image.height)
+        throw_file_error(name, "sky image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                                   ", but a canonical fisheye sky must be square");
+    if (image.channels < 3) throw_file_error(name, "sky image needs 3 colour channels, has " + std::to_string(image.channels));
+    SkyImage sky(image.width);
+    for (size_t p = 0; p < size_t(image.width) * image.height; ++p)
+        for (int c = 0; c < 3; ++c) sky.rgb[p * 3 + c] = image.pixels[p * image.channels + c];
+    const auto& num = image.metadata.numbers;
+    if (auto it = num.find("dynsky:time"); it != num.end()) sky.time_seconds = it->second;
+    if (num.count("dynsky:sun_x") && num.count("dynsky:sun_y") && num.count("dynsky:sun_z"))
+        sky.sun_direction = Vec3(float(num.at("dynsky:sun_x")), float(num.at("dynsky:sun_y")), float(num.at("dynsky:sun_z"))).normalized();
+    if (auto it = image.metadata.strings.find("dynsky:source"); it != image.metadata.strings.end()) sky.source = it->second;
+    return sky;
+}
+
+SkyImage load_sky(const std::string& path) {
+    SkyImage sky = sky_from_image(read_image(path), path);
+    validate_sky(sky, path);
+    if (sky.source.empty()) sky.source = path;
+    return sky;
+}
+
+void save_sky(const std::string& path, const SkyImage& sky, const std::string& preview_png) {
+    if (file_extension(path) != ".exr") throw_file_error(path, "sky images are written as OpenEXR: use a .exr name");
+    Image image = sky_to_image(sky);
+    write_image(path, image);
+    if (!preview_png.empty()) write_image(preview_png, tonemap_to_display(image));
+}
+
+void clear_outside_disc(SkyImage* sky) {
+    for (int j = 0; j < sky->resolution; ++j)
+        for (int i = 0; i < sky->resolution; ++i)
+            if (!sky->in_disc(i, j)) sky->set_pixel(i, j, Color::Zero());
+}
+
+}  // namespace dynsky

@@ -1,0 +1,53 @@
+// A sky: one canonical fisheye image (sky/fisheye.h) of linear HDR radiance, with its time and sun.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "util/image.h"
+#include "util/math.h"
+
+namespace dynsky {
+
+struct SkyImage {
+    int resolution = 0;          // N: the image is N x N
+    std::vector<float> rgb;      // N * N * 3, row-major, row 0 at the top (north); 0 outside the disc
+    double time_seconds = 0.0;   // the sequence's own clock (CONVENTIONS.md, Time)
+    std::optional<Vec3> sun_direction;  // world frame, unit, if known
+    std::string source;          // what made it ("hosek-wilkie", "photo:FILE", "procedural", ...)
+
+    SkyImage() = default;
+    explicit SkyImage(int n) : resolution(n), rgb(size_t(n) * n * 3, 0.0f) {}
+
+    Color pixel(int i, int j) const {
+        const float* p = &rgb[(size_t(j) * resolution + i) * 3];
+        return Color(p[0], p[1], p[2]);
+    }
+    void set_pixel(int i, int j, const Color& c) {
+        float* p = &rgb[(size_t(j) * resolution + i) * 3];
+        p[0] = c[0], p[1] = c[1], p[2] = c[2];
+    }
+    // True for pixels whose centre lies inside the unit disc (above the horizon).
+    bool in_disc(int i, int j) const;
+};
+
+// Checks a sky is usable as radiance: square, finite, non-negative, not all black.
+// Throws dynsky::Error starting with `name` (usually the file path).
+void validate_sky(const SkyImage& sky, const std::string& name);
+
+// EXR in, validated. Reads the "dynsky:time" and "dynsky:sun_*" attributes when present.
+SkyImage load_sky(const std::string& path);
+
+// EXR out (atomic), with time, sun direction and source as attributes. If preview_png is
+// non-empty, also writes a tone-mapped PNG there.
+void save_sky(const std::string& path, const SkyImage& sky, const std::string& preview_png = "");
+
+// Conversions between SkyImage and the generic Image (3 channels).
+Image sky_to_image(const SkyImage& sky);
+SkyImage sky_from_image(const Image& image, const std::string& name);
+
+// Sets every pixel outside the disc to zero (they hold no sky).
+void clear_outside_disc(SkyImage* sky);
+
+}  // namespace dynsky

@@ -1,0 +1,37 @@
+// Small math vocabulary shared by sky and renderer (Eigen does the linear algebra).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+
+namespace dynsky {
+
+using Vec2 = Eigen::Vector2f;
+using Vec3 = Eigen::Vector3f;
+using Vec4 = Eigen::Vector4f;
+using Vec3d = Eigen::Vector3d;
+using Color = Eigen::Array3f;  // linear RGB, Rec.709 primaries
+
+constexpr float kPi = 3.14159265358979323846f;
+constexpr double kPiD = 3.14159265358979323846;
+constexpr float kInvPi = 1.0f / kPi;
+
+inline float luminance(const Color& c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
+
+template <typename T>
+inline T clamp(T x, T lo, T hi) { return std::min(std::max(x, lo), hi); }
+
+inline float safe_sqrt(float x) { return std::sqrt(std::max(0.0f, x)); }
+
+// Orthonormal basis from one unit vector (Duff et al. 2017, "Building an Orthonormal Basis, Revisited").
+inline void orthonormal_basis(const Vec3& n, Vec3* t, Vec3* b) {
+    float sign = std::copysign(1.0f, n.z());
+    float a = -1.0f / (sign + n.z());
+    float bb = n.x() * n.y() * a;
+    *t = Vec3(1.0f + sign * n.x() * n.x() * a, sign * bb, -sign * n.x());
+    *b = Vec3(bb, sign + n.y() * n.y() * a, -n.y());
+}
+
+}  // namespace dynsky

@@ -1,0 +1,61 @@
+#include "util/progress.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+
+namespace dynsky {
+
+ProgressBar::ProgressBar(long long total, std::string label, bool quiet)
+    : total_(total > 0 ? total : 1), label_(std::move(label)), quiet_(quiet), tty_(isatty(STDERR_FILENO)) {
+    start_ = last_draw_ = std::chrono::steady_clock::now();
+    if (!quiet_) draw(0, false);
+}
+
+ProgressBar::~ProgressBar() { finish(); }
+
+double ProgressBar::elapsed_seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+}
+
+void ProgressBar::advance(long long n) {
+    long long done = done_.fetch_add(n) + n;
+    if (quiet_) return;
+    auto now = std::chrono::steady_clock::now();
+    // Redraw at most 10 times a second on a terminal, every 10% otherwise (logs stay short).
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (tty_) {
+        if (now - last_draw_ < std::chrono::milliseconds(100)) return;
+    } else {
+        long long step = std::max(1LL, total_ / 10);
+        if ((done - n) / step == done / step) return;
+    }
+    last_draw_ = now;
+    draw(done, false);
+}
+
+void ProgressBar::finish() {
+    if (finished_) return;
+    finished_ = true;
+    if (quiet_) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    draw(done_.load(), true);
+}
+
+void ProgressBar::draw(long long done, bool final) {
+    double frac = std::min(1.0, double(done) / double(total_));
+    double t = elapsed_seconds();
+    double eta = frac > 0 ? t * (1 - frac) / frac : 0;
+    const int width = 30;
+    int filled = int(frac * width);
+    std::string bar(filled, '#');
+    bar += std::string(width - filled, '.');
+    if (tty_)
+        std::fprintf(stderr, "\r%s [%s] %5.1f%%  %.1fs elapsed, %.1fs left%s", label_.c_str(), bar.c_str(),
+                     100 * frac, t, eta, final ? "\n" : "   ");
+    else
+        std::fprintf(stderr, "%s [%s] %5.1f%%  %.1fs elapsed\n", label_.c_str(), bar.c_str(), 100 * frac, t);
+    std::fflush(stderr);
+}
+
+}  // namespace dynsky
