@@ -32,6 +32,7 @@ struct Material {
     TextureSlot base_color_texture;          // sRGB RGBA
     float metallic = 1.0f, roughness = 1.0f;
     TextureSlot metallic_roughness_texture;  // linear: G roughness, B metallic
+    float specular = 1.0f;                   // KHR_materials_specular specularFactor (0: pure Lambert base)
     TextureSlot normal_texture;              // linear, tangent space, scale in slot.scale
     TextureSlot occlusion_texture;           // linear R, strength in slot.scale
     Color emissive = Color::Zero();          // already multiplied by emissive_strength

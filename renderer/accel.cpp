@@ -1,0 +1,153 @@
+#include "renderer/accel.h"
+
+#include <cstring>
+
+#include "util/error.h"
+
+namespace dynsky {
+
+static void embree_error(void*, RTCError code, const char* message) {
+    // Embree reports through this callback; surfacing it beats silent empty images.
+    std::fprintf(stderr, "dynsky: Embree error %d: %s\n", int(code), message ? message : "");
+}
+
+Accel::Accel(const Scene& scene) : scene_(scene) {
+    device_ = rtcNewDevice("threads=0");
+    if (!device_) throw Error("Embree: could not create a device (error " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
+    rtcSetDeviceErrorFunction(device_, embree_error, nullptr);
+
+    for (const Material& m : scene.materials)
+        if (m.alpha_mode != AlphaMode::Opaque) has_non_opaque_ = true;
+
+    mesh_scenes_.resize(scene.meshes.size(), nullptr);
+    for (size_t g = 0; g < scene.meshes.size(); ++g) {
+        RTCScene ms = rtcNewScene(device_);
+        rtcSetSceneBuildQuality(ms, RTC_BUILD_QUALITY_HIGH);
+        const MeshGroup& group = scene.meshes[g];
+        for (size_t p = 0; p < group.primitives.size(); ++p) {
+            const TriangleMesh& mesh = group.primitives[p];
+            RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+            // Copies (not shared buffers): Embree wants padding past the last vertex.
+            auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                                  3 * sizeof(float), mesh.positions.size()));
+            for (size_t k = 0; k < mesh.positions.size(); ++k) std::memcpy(v + 3 * k, mesh.positions[k].data(), 3 * sizeof(float));
+            auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                       3 * sizeof(uint32_t), mesh.triangle_count()));
+            std::memcpy(idx, mesh.indices.data(), mesh.triangle_count() * 3 * sizeof(uint32_t));
+            rtcCommitGeometry(geom);
+            rtcAttachGeometryByID(ms, geom, unsigned(p));
+            rtcReleaseGeometry(geom);
+        }
+        rtcCommitScene(ms);
+        mesh_scenes_[g] = ms;
+    }
+
+    top_ = rtcNewScene(device_);
+    normal_matrices_.resize(scene.instances.size());
+    for (size_t i = 0; i < scene.instances.size(); ++i) {
+        const Instance& inst = scene.instances[i];
+        RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
+        rtcSetGeometryInstancedScene(geom, mesh_scenes_[size_t(inst.mesh_group)]);
+        Eigen::Matrix4f m = inst.transform.matrix();
+        rtcSetGeometryTransform(geom, 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR, m.data());
+        rtcCommitGeometry(geom);
+        rtcAttachGeometryByID(top_, geom, unsigned(i));
+        rtcReleaseGeometry(geom);
+        normal_matrices_[i] = inst.transform.linear().inverse().transpose();
+    }
+    rtcCommitScene(top_);
+    RTCBounds b;
+    rtcGetSceneBounds(top_, &b);
+    if (b.lower_x <= b.upper_x) {
+        bounds_.extend(Vec3(b.lower_x, b.lower_y, b.lower_z));
+        bounds_.extend(Vec3(b.upper_x, b.upper_y, b.upper_z));
+    }
+}
+
+Accel::~Accel() {
+    if (top_) rtcReleaseScene(top_);
+    for (RTCScene s : mesh_scenes_)
+        if (s) rtcReleaseScene(s);
+    if (device_) rtcReleaseDevice(device_);
+}
+
+static void setup_ray(const Ray& ray, RTCRay* r) {
+    r->org_x = ray.origin.x(), r->org_y = ray.origin.y(), r->org_z = ray.origin.z();
+    r->dir_x = ray.direction.x(), r->dir_y = ray.direction.y(), r->dir_z = ray.direction.z();
+    r->tnear = ray.tmin, r->tfar = ray.tmax;
+    r->mask = 0xFFFFFFFFu, r->flags = 0, r->time = 0, r->id = 0;
+}
+
+bool Accel::intersect_raw(const Ray& ray, float* t) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRayHit rh;
+    setup_ray(ray, &rh.ray);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(top_, &ctx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    *t = rh.ray.tfar;
+    return true;
+}
+
+bool Accel::intersect(const Ray& ray, SurfaceHit* hit) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRayHit rh;
+    setup_ray(ray, &rh.ray);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(top_, &ctx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+
+    int inst = int(rh.hit.instID[0]);
+    const Instance& instance = scene_.instances[size_t(inst)];
+    const TriangleMesh& mesh = scene_.meshes[size_t(instance.mesh_group)].primitives[rh.hit.geomID];
+    uint32_t tri = rh.hit.primID;
+    uint32_t i0 = mesh.indices[3 * tri], i1 = mesh.indices[3 * tri + 1], i2 = mesh.indices[3 * tri + 2];
+    float b1 = rh.hit.u, b2 = rh.hit.v, b0 = 1 - b1 - b2;
+
+    hit->t = rh.ray.tfar;
+    hit->position = ray.origin + hit->t * ray.direction;
+    hit->instance = inst, hit->primitive = int(rh.hit.geomID), hit->triangle = int(tri);
+    hit->material = &scene_.material(mesh.material);
+
+    const Eigen::Matrix3f& nm = normal_matrices_[size_t(inst)];
+    const Vec3 &p0 = mesh.positions[i0], &p1 = mesh.positions[i1], &p2 = mesh.positions[i2];
+    Vec3 ng = nm * (p1 - p0).cross(p2 - p0);
+    float len = ng.norm();
+    hit->geometric_normal = len > 0 ? Vec3(ng / len) : Vec3(0, 1, 0);
+    if (!mesh.normals.empty()) {
+        Vec3 ns = nm * (b0 * mesh.normals[i0] + b1 * mesh.normals[i1] + b2 * mesh.normals[i2]);
+        float l = ns.norm();
+        hit->shading_normal = l > 0 ? Vec3(ns / l) : hit->geometric_normal;
+    } else {
+        hit->shading_normal = hit->geometric_normal;
+    }
+    if (!mesh.tangents.empty()) {
+        Vec4 t = b0 * mesh.tangents[i0] + b1 * mesh.tangents[i1] + b2 * mesh.tangents[i2];
+        Vec3 tw = instance.transform.linear() * t.head<3>();
+        float l = tw.norm();
+        hit->tangent = l > 0 ? Vec4(tw.x() / l, tw.y() / l, tw.z() / l, mesh.tangents[i0].w() < 0 ? -1.0f : 1.0f) : Vec4::Zero();
+    } else {
+        hit->tangent = Vec4::Zero();
+    }
+    for (int k = 0; k < 2; ++k) {
+        const auto& uv = mesh.texcoords[k];
+        hit->texcoord[k] = uv.empty() ? Vec2::Zero() : Vec2(b0 * uv[i0] + b1 * uv[i1] + b2 * uv[i2]);
+    }
+    hit->color = mesh.colors.empty() ? Vec4::Ones() : Vec4(b0 * mesh.colors[i0] + b1 * mesh.colors[i1] + b2 * mesh.colors[i2]);
+    return true;
+}
+
+bool Accel::occluded(const Ray& ray) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRay r;
+    setup_ray(ray, &r);
+    rtcOccluded1(top_, &ctx, &r);
+    return r.tfar < 0;  // Embree sets tfar = -inf on a hit
+}
+
+}  // namespace dynsky

@@ -1,0 +1,58 @@
+// Ray tracing on Embree 3: each glTF mesh (MeshGroup) is one Embree scene built once; every node
+// that uses it is an Embree instance of it. Alpha MASK/BLEND is resolved by the caller (the
+// integrator) by continuing rays, so no filter callbacks run inside traversal.
+#pragma once
+
+#include <embree3/rtcore.h>
+
+#include <cstdint>
+#include <vector>
+
+#include "renderer/scene.h"
+
+namespace dynsky {
+
+struct Ray {
+    Vec3 origin, direction;  // direction need not be unit
+    float tmin = 0, tmax = std::numeric_limits<float>::infinity();
+};
+
+// Everything the integrator needs at a hit, in world space.
+struct SurfaceHit {
+    float t = 0;
+    Vec3 position;
+    Vec3 geometric_normal;   // unit, from the triangle's winding (front side per glTF CCW)
+    Vec3 shading_normal;     // unit, interpolated vertex normal
+    Vec4 tangent = Vec4(0, 0, 0, 0);  // xyz unit, w handedness; zero if the mesh has none
+    Vec2 texcoord[2] = {Vec2::Zero(), Vec2::Zero()};
+    Vec4 color = Vec4::Ones();
+    const Material* material = nullptr;
+    int instance = -1, primitive = -1, triangle = -1;
+};
+
+class Accel {
+  public:
+    explicit Accel(const Scene& scene);
+    ~Accel();
+    Accel(const Accel&) = delete;
+    Accel& operator=(const Accel&) = delete;
+
+    bool intersect(const Ray& ray, SurfaceHit* hit) const;
+    // Closest hit distance only (for benchmarks of raw traversal).
+    bool intersect_raw(const Ray& ray, float* t) const;
+    bool occluded(const Ray& ray) const;
+    bool has_non_opaque_materials() const { return has_non_opaque_; }
+    const Scene& scene() const { return scene_; }
+    Bounds3 bounds() const { return bounds_; }
+
+  private:
+    const Scene& scene_;
+    RTCDevice device_ = nullptr;
+    RTCScene top_ = nullptr;
+    std::vector<RTCScene> mesh_scenes_;
+    std::vector<Eigen::Matrix3f> normal_matrices_;  // per instance: inverse transpose of the linear part
+    bool has_non_opaque_ = false;
+    Bounds3 bounds_;
+};
+
+}  // namespace dynsky

@@ -1,0 +1,183 @@
+#include "renderer/bsdf.h"
+
+#include "renderer/sampling.h"
+
+namespace dynsky {
+
+// Below this GGX alpha the lobe is so sharp that float pdfs overflow; 1e-3 still looks mirror-like.
+constexpr float kMinAlpha = 1e-3f;
+
+static float schlick_weight(float cos_theta) {
+    float m = clamp(1.0f - cos_theta, 0.0f, 1.0f);
+    float m2 = m * m;
+    return m2 * m2 * m;
+}
+
+namespace {
+
+// Directional albedo E(mu, roughness) of the dielectric specular lobe (F0 = 0.04, Schlick), and
+// its cosine-weighted average. The Lambert base is scaled by (1 - E(mu_o)) (1 - E(mu_i)) /
+// (1 - E_avg) (Kelemen and Szirmay-Kalos 2001; Kulla and Conty 2017): reciprocal, and a white
+// dielectric then reflects exactly what its specular lobe does not, so energy is conserved,
+// where glTF's reference fresnel_mix reflects up to 1.2 at grazing angles.
+class SpecularAlbedoTable {
+  public:
+    static constexpr int kSize = 32;
+    static const SpecularAlbedoTable& get() {
+        static const SpecularAlbedoTable table;
+        return table;
+    }
+    float albedo(float mu, float roughness) const {
+        float x = clamp(mu, 0.0f, 1.0f) * (kSize - 1), y = clamp(roughness, 0.0f, 1.0f) * (kSize - 1);
+        int x0 = std::min(int(x), kSize - 2), y0 = std::min(int(y), kSize - 2);
+        float fx = x - x0, fy = y - y0;
+        auto e = [&](int i, int j) { return albedo_[j * kSize + i]; };
+        return (1 - fy) * ((1 - fx) * e(x0, y0) + fx * e(x0 + 1, y0)) + fy * ((1 - fx) * e(x0, y0 + 1) + fx * e(x0 + 1, y0 + 1));
+    }
+    float average(float roughness) const {
+        float y = clamp(roughness, 0.0f, 1.0f) * (kSize - 1);
+        int y0 = std::min(int(y), kSize - 2);
+        float fy = y - y0;
+        return (1 - fy) * average_[y0] + fy * average_[y0 + 1];
+    }
+
+  private:
+    SpecularAlbedoTable() {
+        // Stratified visible-normal sampling: E = E[F(wo.m) G1(wi)] under the VNDF.
+        const int strata = 24;
+        for (int j = 0; j < kSize; ++j) {
+            float roughness = float(j) / (kSize - 1);
+            float alpha = std::max(roughness * roughness, kMinAlpha);
+            double avg = 0;
+            for (int i = 0; i < kSize; ++i) {
+                float mu = std::max(float(i) / (kSize - 1), 1e-3f);
+                Vec3 wo(safe_sqrt(1 - mu * mu), 0, mu);
+                double sum = 0;
+                for (int a = 0; a < strata; ++a)
+                    for (int b = 0; b < strata; ++b) {
+                        Vec2 u((a + 0.5f) / strata, (b + 0.5f) / strata);
+                        Vec3 wm = MetalRoughBsdf::sample_ggx_vndf(wo, alpha, u);
+                        Vec3 wi = 2 * wo.dot(wm) * wm - wo;
+                        if (wi.z() <= 0) continue;
+                        sum += (0.04f + 0.96f * schlick_weight(wo.dot(wm))) * MetalRoughBsdf::smith_g1(wi, alpha);
+                    }
+                albedo_[j * kSize + i] = float(sum / (strata * strata));
+            }
+            // E_avg = 2 * integral of E(mu) mu dmu (trapezoid over the table's mu nodes).
+            for (int i = 0; i + 1 < kSize; ++i) {
+                float m0 = float(i) / (kSize - 1), m1 = float(i + 1) / (kSize - 1);
+                avg += 0.5 * (albedo_[j * kSize + i] * m0 + albedo_[j * kSize + i + 1] * m1) * (m1 - m0);
+            }
+            average_[j] = float(2 * avg);
+        }
+    }
+    float albedo_[kSize * kSize];
+    float average_[kSize];
+};
+
+}  // namespace
+
+
+MetalRoughBsdf::MetalRoughBsdf(const Color& base_color, float metallic, float roughness, float specular)
+    : base_(base_color.max(0.0f).min(1.0f)), metallic_(clamp(metallic, 0.0f, 1.0f)), specular_(clamp(specular, 0.0f, 1.0f)) {
+    roughness_ = clamp(roughness, 0.0f, 1.0f);
+    alpha_ = std::max(roughness_ * roughness_, kMinAlpha);
+}
+
+float MetalRoughBsdf::ggx_d(const Vec3& wm, float alpha) {
+    float c2 = wm.z() * wm.z();
+    if (c2 <= 0) return 0;
+    float a2 = alpha * alpha;
+    float d = c2 * (a2 - 1) + 1;
+    return a2 / (kPi * d * d);
+}
+
+float MetalRoughBsdf::smith_g1(const Vec3& w, float alpha) {
+    float c2 = w.z() * w.z();
+    if (c2 <= 0) return 0;
+    float t2 = (1 - c2) / c2;  // tan^2(theta)
+    return 2.0f / (1.0f + std::sqrt(1.0f + alpha * alpha * t2));
+}
+
+Vec3 MetalRoughBsdf::sample_ggx_vndf(const Vec3& wo, float alpha, const Vec2& u) {
+    // Stretch the view vector to the hemisphere configuration, sample a projected disc, unstretch.
+    Vec3 wh = Vec3(alpha * wo.x(), alpha * wo.y(), wo.z()).normalized();
+    if (wh.z() < 0) wh = -wh;
+    Vec3 t1 = wh.z() < 0.99999f ? Vec3::UnitZ().cross(wh).normalized() : Vec3::UnitX();
+    Vec3 t2 = wh.cross(t1);
+    float r = std::sqrt(u.x()), phi = 2 * kPi * u.y();
+    float p1 = r * std::cos(phi), p2 = r * std::sin(phi);
+    float s = 0.5f * (1 + wh.z());
+    p2 = (1 - s) * safe_sqrt(1 - p1 * p1) + s * p2;
+    Vec3 nh = p1 * t1 + p2 * t2 + safe_sqrt(1 - p1 * p1 - p2 * p2) * wh;
+    return Vec3(alpha * nh.x(), alpha * nh.y(), std::max(1e-6f, nh.z())).normalized();
+}
+
+float MetalRoughBsdf::ggx_vndf_pdf_wi(const Vec3& wo, const Vec3& wi, float alpha) {
+    Vec3 wm = wo + wi;
+    if (wm.squaredNorm() == 0 || wo.z() <= 0) return 0;
+    wm.normalize();
+    if (wm.z() < 0) wm = -wm;
+    float wo_dot_m = wo.dot(wm);
+    if (wo_dot_m <= 0) return 0;
+    // D_v(wm) = G1(wo) max(0, wo.wm) D(wm) / cos(theta_o); pdf(wi) = D_v / (4 wo.wm).
+    return smith_g1(wo, alpha) * ggx_d(wm, alpha) / (4 * wo.z());
+}
+
+
+Color MetalRoughBsdf::eval(const Vec3& wo, const Vec3& wi) const {
+    if (wo.z() <= 0 || wi.z() <= 0) return Color::Zero();
+    Vec3 wm = (wo + wi).normalized();
+    float v_dot_h = clamp(wo.dot(wm), 0.0f, 1.0f);
+    float w = schlick_weight(v_dot_h);
+    // Specular microfacet term without Fresnel: D G / (4 cos_o cos_i), separable Smith G.
+    float spec = ggx_d(wm, alpha_) * smith_g1(wo, alpha_) * smith_g1(wi, alpha_) / (4 * wo.z() * wi.z());
+    // Dielectric: fresnel_mix(ior 1.5) of Lambert base and specular; metal: conductor Fresnel.
+    float f_dielectric = specular_ * (0.04f + 0.96f * w);
+    const auto& table = SpecularAlbedoTable::get();
+    float diffuse_weight = 1.0f;
+    if (specular_ > 0) {
+        float e_avg = specular_ * table.average(roughness_);
+        diffuse_weight = (1 - specular_ * table.albedo(wo.z(), roughness_)) * (1 - specular_ * table.albedo(wi.z(), roughness_)) /
+                         std::max(1 - e_avg, 1e-4f);
+    }
+    Color dielectric = diffuse_weight * base_ * kInvPi + Color::Constant(f_dielectric * spec);
+    Color metal = (base_ + (1 - base_) * w) * spec;
+    return (1 - metallic_) * dielectric + metallic_ * metal;
+}
+
+float MetalRoughBsdf::specular_probability(const Vec3& wo) const {
+    if (metallic_ >= 1) return 1.0f;
+    float w = schlick_weight(std::max(0.0f, wo.z()));
+    float e_spec = specular_ * SpecularAlbedoTable::get().albedo(wo.z(), roughness_);
+    float spec = (1 - metallic_) * e_spec + metallic_ * luminance(base_ + (1 - base_) * w);
+    float diff = (1 - metallic_) * (1 - e_spec) * luminance(base_);
+    if (spec <= 0) return 0.0f;  // pure Lambertian
+    float p = spec / std::max(spec + diff, 1e-6f);
+    return clamp(p, 0.1f, 0.9f);  // both lobes stay reachable
+}
+
+float MetalRoughBsdf::pdf(const Vec3& wo, const Vec3& wi) const {
+    if (wo.z() <= 0 || wi.z() <= 0) return 0;
+    float ps = specular_probability(wo);
+    return ps * ggx_vndf_pdf_wi(wo, wi, alpha_) + (1 - ps) * wi.z() * kInvPi;
+}
+
+bool MetalRoughBsdf::sample(const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* out) const {
+    if (wo.z() <= 0) return false;
+    float ps = specular_probability(wo);
+    Vec3 wi;
+    if (u_lobe < ps) {
+        Vec3 wm = sample_ggx_vndf(wo, alpha_, u);
+        wi = 2 * wo.dot(wm) * wm - wo;
+    } else {
+        wi = sample_cosine_hemisphere(u);
+    }
+    if (wi.z() <= 0) return false;
+    out->wi = wi;
+    out->pdf = pdf(wo, wi);
+    out->f = eval(wo, wi);
+    return out->pdf > 0;
+}
+
+}  // namespace dynsky

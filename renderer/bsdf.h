@@ -1,0 +1,46 @@
+// The glTF 2.0 metallic-roughness BRDF (glTF spec, Appendix B): Trowbridge-Reitz (GGX)
+// microfacet specular with Smith masking, Schlick Fresnel, and a Lambert diffuse base. The base
+// is weighted by what the specular lobe leaves (an albedo-scaled Lambert, see bsdf.cpp) rather
+// than by glTF's per-half-vector fresnel_mix, so the model never reflects more than it receives.
+// Directions are in the local shading frame: +Z is the shading normal.
+#pragma once
+
+#include "util/math.h"
+
+namespace dynsky {
+
+struct BsdfSample {
+    Vec3 wi;            // local frame
+    Color f;            // BSDF value (not multiplied by the cosine)
+    float pdf = 0;      // solid angle
+    bool delta = false; // unused by this model (roughness is clamped), kept for the integrator
+};
+
+class MetalRoughBsdf {
+  public:
+    // roughness is the glTF perceptual roughness (alpha = roughness^2).
+    // specular scales the dielectric Fresnel (KHR_materials_specular); 0 leaves a pure Lambertian.
+    MetalRoughBsdf(const Color& base_color, float metallic, float roughness, float specular = 1.0f);
+
+    Color eval(const Vec3& wo, const Vec3& wi) const;
+    float pdf(const Vec3& wo, const Vec3& wi) const;
+    // u_lobe picks the lobe; u picks the direction within it.
+    bool sample(const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* out) const;
+
+    float alpha() const { return alpha_; }
+    // Probability of sampling the specular lobe for this wo.
+    float specular_probability(const Vec3& wo) const;
+
+    // GGX pieces, public for tests.
+    static float ggx_d(const Vec3& wm, float alpha);
+    static float smith_g1(const Vec3& w, float alpha);
+    // Visible-normal sampling (Heitz 2018, "Sampling the GGX Distribution of Visible Normals").
+    static Vec3 sample_ggx_vndf(const Vec3& wo, float alpha, const Vec2& u);
+    static float ggx_vndf_pdf_wi(const Vec3& wo, const Vec3& wi, float alpha);
+
+  private:
+    Color base_;
+    float metallic_, roughness_, alpha_, specular_;
+};
+
+}  // namespace dynsky

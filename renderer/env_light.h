@@ -1,0 +1,66 @@
+// The sky as a light: a canonical fisheye SkyImage above the horizon, a ground model below it.
+//
+// Radiance lookup and sampling density agree exactly (the classic source of fireflies when they
+// don't): radiance is the nearest pixel (no filter that would blur a small sun), and sampling
+// picks pixels in proportion to luminance x solid angle, uniformly in (u, v) within a pixel, so
+// p_w = p_pixel / (pixel area in uv) / J(theta) with J = dw / (du dv) evaluated at the sample.
+//
+// Ground (below the horizon): a uniform Lambertian ground lit by the sky, radiance
+// L_ground = albedo * E_sky / pi, with E_sky the sky's irradiance on a horizontal plane.
+// Light samples pick the sky or the ground in proportion to their power.
+#pragma once
+
+#include <memory>
+
+#include "renderer/distribution_2d.h"
+#include "sky/sky_image.h"
+
+namespace dynsky {
+
+struct EnvLightSample {
+    Vec3 wi;       // world direction towards the light
+    Color radiance;
+    float pdf = 0; // solid angle
+};
+
+class EnvLight {
+  public:
+    explicit EnvLight(float ground_albedo = 0.3f) : ground_albedo_(ground_albedo) {}
+    EnvLight(std::shared_ptr<const SkyImage> sky, float ground_albedo);
+
+    // The per-frame path: point at a new sky and rebuild the distribution (storage is reused
+    // when the resolution is unchanged). The scene is untouched.
+    void set_sky(std::shared_ptr<const SkyImage> sky);
+    double last_build_seconds() const { return build_seconds_; }
+
+    Color radiance(const Vec3& w) const;
+    float pdf(const Vec3& w) const;
+    bool sample(float u_choice, const Vec2& u, EnvLightSample* out) const;
+
+    float ground_albedo() const { return ground_albedo_; }
+    Color ground_radiance() const { return ground_radiance_; }
+    Color sky_irradiance() const { return sky_irradiance_; }   // on a horizontal plane, W m^-2 per channel
+    float sky_probability() const { return sky_probability_; }
+    const SkyImage& sky() const { return *sky_; }
+    const Distribution2D& distribution() const { return distribution_; }
+
+    // dw / (du dv) = (pi^2/4) sin(theta)/theta as a polynomial in theta^2 = (pi^2/4) r^2:
+    // no sqrt or sin per pixel, which keeps the per-frame rebuild near memory bandwidth.
+    static float jacobian_from_r2(float r2);
+    static float cos_theta_from_r2(float r2);
+
+  private:
+    // Pixel holding the radiance of uv (with r <= 1): itself, or for rim pixels whose centre lies
+    // outside the disc, the nearest pixel inward.
+    int lookup_pixel(const Vec2& uv) const;
+
+    std::shared_ptr<const SkyImage> sky_;
+    Distribution2D distribution_;
+    float ground_albedo_;
+    Color ground_radiance_ = Color::Zero();
+    Color sky_irradiance_ = Color::Zero();
+    float sky_probability_ = 1.0f;
+    double build_seconds_ = 0;
+};
+
+}  // namespace dynsky

@@ -1,0 +1,954 @@
+#include "renderer/gltf_loader.h"
+
+#include <tbb/parallel_for.h>
+#include <tiny_gltf.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+#include <tuple>
+#include <type_traits>
+
+#include "renderer/mesh_attributes.h"
+#include "util/error.h"
+#include "util/image.h"
+
+namespace dynsky {
+
+Eigen::Matrix3f texture_transform_matrix(const Vec2& offset, float rotation, const Vec2& scale) {
+    Eigen::Matrix3f t = Eigen::Matrix3f::Identity(), r = Eigen::Matrix3f::Identity(), s = Eigen::Matrix3f::Identity();
+    t(0, 2) = offset.x(), t(1, 2) = offset.y();
+    float c = std::cos(rotation), sn = std::sin(rotation);
+    // The extension's GLSL listing writes this matrix column-major, which read literally is the
+    // transpose; its prose ("counter-clockwise") and its worked example (offset [0, 1], rotation
+    // pi/2, scale 0.5 selects the lower-left quadrant) need this form, as three.js and other
+    // viewers implement it.
+    r(0, 0) = c, r(0, 1) = sn, r(1, 0) = -sn, r(1, 1) = c;
+    s(0, 0) = scale.x(), s(1, 1) = scale.y();
+    return t * r * s;
+}
+
+namespace {
+
+namespace tg = tinygltf;
+
+// Extensions whose meaning the loader fully implements (KHR_mesh_quantization only widens the
+// accessor types allowed for attributes, which the accessor reader handles anyway).
+const std::set<std::string>& supported_extensions() {
+    static const std::set<std::string> s = {"KHR_texture_transform", "KHR_materials_emissive_strength",
+                                            "EXT_mesh_gpu_instancing", "KHR_mesh_quantization"};
+    return s;
+}
+
+std::string in_quotes(const std::string& s) { return "'" + s + "'"; }
+
+// Trims and joins tinygltf's newline-separated messages.
+std::vector<std::string> split_lines(const std::string& text) {
+    std::vector<std::string> lines;
+    std::istringstream in(text);
+    std::string line;
+    while (std::getline(in, line)) {
+        size_t a = line.find_first_not_of(" \t\r"), b = line.find_last_not_of(" \t\r");
+        if (a != std::string::npos) lines.push_back(line.substr(a, b - a + 1));
+    }
+    return lines;
+}
+
+std::string join(const std::vector<std::string>& parts, const std::string& sep) {
+    std::string out;
+    for (size_t i = 0; i < parts.size(); ++i) out += (i ? sep : "") + parts[i];
+    return out;
+}
+
+// What a file that is not glTF looks like, for the error message.
+std::string describe_foreign_bytes(const std::vector<unsigned char>& b) {
+    auto starts = [&](const char* sig, size_t n) { return b.size() >= n && std::memcmp(b.data(), sig, n) == 0; };
+    if (b.empty()) return "the file is empty";
+    if (starts("\x89PNG", 4)) return "not a glTF file: it is a PNG image";
+    if (starts("\xFF\xD8\xFF", 3)) return "not a glTF file: it is a JPEG image";
+    if (starts("\x76\x2F\x31\x01", 4)) return "not a glTF file: it is an OpenEXR image";
+    return "not a glTF file: no binary 'glTF' magic and not a JSON object";
+}
+
+uint32_t read_u32(const unsigned char* p) {
+    return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
+}
+
+// The image callback given to tinygltf: keep the encoded bytes and decode later, in parallel and
+// only for images a material uses. Images in a bufferView are read later from the (validated)
+// view, so tinygltf's unchecked pointer into the buffer is never dereferenced.
+bool keep_encoded_image(tg::Image* image, const int, std::string*, std::string*, int, int,
+                        const unsigned char* bytes, int size, void*) {
+    if (image->bufferView >= 0) return true;
+    image->image.assign(bytes, bytes + std::max(size, 0));
+    image->as_is = true;
+    return true;
+}
+
+int component_count(int type) {
+    switch (type) {
+        case TINYGLTF_TYPE_SCALAR: return 1;
+        case TINYGLTF_TYPE_VEC2: return 2;
+        case TINYGLTF_TYPE_VEC3: return 3;
+        case TINYGLTF_TYPE_VEC4: return 4;
+        case TINYGLTF_TYPE_MAT2: return 4;
+        case TINYGLTF_TYPE_MAT3: return 9;
+        case TINYGLTF_TYPE_MAT4: return 16;
+        default: return 0;
+    }
+}
+
+const char* type_name(int type) {
+    switch (type) {
+        case TINYGLTF_TYPE_SCALAR: return "SCALAR";
+        case TINYGLTF_TYPE_VEC2: return "VEC2";
+        case TINYGLTF_TYPE_VEC3: return "VEC3";
+        case TINYGLTF_TYPE_VEC4: return "VEC4";
+        case TINYGLTF_TYPE_MAT2: return "MAT2";
+        case TINYGLTF_TYPE_MAT3: return "MAT3";
+        case TINYGLTF_TYPE_MAT4: return "MAT4";
+        default: return "unknown";
+    }
+}
+
+size_t component_size(int component_type) {
+    switch (component_type) {
+        case TINYGLTF_COMPONENT_TYPE_BYTE:
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
+        case TINYGLTF_COMPONENT_TYPE_SHORT:
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+        case TINYGLTF_COMPONENT_TYPE_FLOAT: return 4;
+        default: return 0;  // INT and DOUBLE are not glTF 2.0 accessor types
+    }
+}
+
+// One component to the output type; normalised integers per glTF 2.0 section 3.11.
+template <typename Out, typename C>
+Out convert_component(C v, bool normalized) {
+    if constexpr (std::is_same_v<Out, uint32_t>) {
+        return uint32_t(v);
+    } else if constexpr (std::is_floating_point_v<C>) {
+        return Out(v);
+    } else {
+        if (!normalized) return Out(v);
+        if constexpr (std::is_signed_v<C>) return std::max(float(v) / float(std::numeric_limits<C>::max()), -1.0f);
+        else return Out(double(v) / double(std::numeric_limits<C>::max()));
+    }
+}
+
+template <typename Out, typename C>
+void copy_typed(const unsigned char* src, size_t stride, size_t count, int ncomp, bool normalized, Out* dst) {
+    for (size_t i = 0; i < count; ++i) {
+        const unsigned char* e = src + i * stride;
+        for (int c = 0; c < ncomp; ++c) {
+            C v;
+            std::memcpy(&v, e + size_t(c) * sizeof(C), sizeof(C));  // accessors need not be aligned
+            dst[i * size_t(ncomp) + size_t(c)] = convert_component<Out, C>(v, normalized);
+        }
+    }
+}
+
+template <typename Out>
+void copy_components(int component_type, const unsigned char* src, size_t stride, size_t count, int ncomp,
+                     bool normalized, Out* dst) {
+    switch (component_type) {
+        case TINYGLTF_COMPONENT_TYPE_BYTE: return copy_typed<Out, int8_t>(src, stride, count, ncomp, normalized, dst);
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return copy_typed<Out, uint8_t>(src, stride, count, ncomp, normalized, dst);
+        case TINYGLTF_COMPONENT_TYPE_SHORT: return copy_typed<Out, int16_t>(src, stride, count, ncomp, normalized, dst);
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return copy_typed<Out, uint16_t>(src, stride, count, ncomp, normalized, dst);
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return copy_typed<Out, uint32_t>(src, stride, count, ncomp, normalized, dst);
+        case TINYGLTF_COMPONENT_TYPE_FLOAT: return copy_typed<Out, float>(src, stride, count, ncomp, normalized, dst);
+    }
+}
+
+// tinygltf::Value helpers that never trip its debug asserts on unexpected JSON.
+const tg::Value* member(const tg::Value& v, const char* key) { return v.Has(key) ? &v.Get(key) : nullptr; }
+double number_or(const tg::Value* v, double fallback) { return v && v->IsNumber() ? v->GetNumberAsDouble() : fallback; }
+Vec2 vec2_or(const tg::Value* v, const Vec2& fallback) {
+    if (!v || !v->IsArray() || v->ArrayLen() != 2 || !v->Get(0).IsNumber() || !v->Get(1).IsNumber()) return fallback;
+    return Vec2(float(v->Get(0).GetNumberAsDouble()), float(v->Get(1).GetNumberAsDouble()));
+}
+const tg::Value* extension(const tg::ExtensionMap& map, const char* name) {
+    auto it = map.find(name);
+    return it != map.end() && it->second.IsObject() ? &it->second : nullptr;
+}
+
+// Vertex attribute and instancing arrays as floats: count elements of `components` each.
+struct FloatArray {
+    std::vector<float> values;
+    size_t count = 0;
+    int components = 0;
+};
+
+Eigen::Matrix4d trs_matrix(const Eigen::Vector3d& t, const Eigen::Quaterniond& r, const Eigen::Vector3d& s) {
+    Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+    m.topLeftCorner<3, 3>() = r.toRotationMatrix() * s.asDiagonal();
+    m.topRightCorner<3, 1>() = t;
+    return m;
+}
+
+Eigen::Affine3f to_affine(const Eigen::Matrix4d& m) {
+    Eigen::Affine3f a = Eigen::Affine3f::Identity();
+    a.matrix().topRows<3>() = m.topRows<3>().cast<float>();
+    return a;
+}
+
+class GltfLoader {
+  public:
+    explicit GltfLoader(std::string path) : path_(std::move(path)) {}
+
+    Scene load() {
+        scene_.source = path_;
+        parse_file();
+        check_extensions();
+        validate_buffer_views();
+        build_materials();
+        build_textures();
+        traverse_nodes();
+        if (!model_.animations.empty())
+            warn(std::to_string(model_.animations.size()) + " animation(s) ignored: the scene is rendered in its rest pose");
+        scene_.warnings = warnings_;
+        return std::move(scene_);
+    }
+
+  private:
+    [[noreturn]] void fail(const std::string& problem) const { throw_file_error(path_, problem); }
+
+    void warn(const std::string& message) {
+        if (std::find(warnings_.begin(), warnings_.end(), message) == warnings_.end()) warnings_.push_back(message);
+    }
+
+    // ---- File -------------------------------------------------------------------------------
+
+    std::vector<unsigned char> read_file() const {
+        namespace fs = std::filesystem;
+        std::error_code ec;
+        if (!fs::exists(path_, ec)) fail("no such file");
+        if (!fs::is_regular_file(path_, ec)) fail("not a regular file");
+        std::ifstream in(path_, std::ios::binary);
+        if (!in) fail(std::string("cannot open: ") + std::strerror(errno));
+        std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        if (in.bad()) fail("read error");
+        return bytes;
+    }
+
+    void check_glb_header(const std::vector<unsigned char>& b) const {
+        if (b.size() < 12) fail("truncated GLB: " + std::to_string(b.size()) + " bytes, shorter than the 12-byte header");
+        uint32_t version = read_u32(&b[4]), length = read_u32(&b[8]);
+        if (version != 2) fail("GLB container version " + std::to_string(version) + " (only glTF 2.0 is supported)");
+        if (length > b.size())
+            fail("truncated GLB: the header says " + std::to_string(length) + " bytes but the file has " +
+                 std::to_string(b.size()));
+        if (length < 20) fail("truncated GLB: no JSON chunk");
+        uint32_t json_length = read_u32(&b[12]), json_type = read_u32(&b[16]);
+        if (json_type != 0x4E4F534Au) fail("malformed GLB: the first chunk is not JSON");
+        if (uint64_t(json_length) + 20 > length)
+            fail("truncated GLB: the JSON chunk needs " + std::to_string(json_length) + " bytes, " +
+                 std::to_string(length - 20) + " remain");
+        if (uint64_t(json_length) + 20 + 8 <= length) {
+            uint32_t bin_length = read_u32(&b[20 + json_length]);
+            if (uint64_t(bin_length) + 28 + json_length > length)
+                fail("truncated GLB: the BIN chunk needs " + std::to_string(bin_length) + " bytes, " +
+                     std::to_string(length - 28 - json_length) + " remain");
+        }
+    }
+
+    void parse_file() {
+        std::vector<unsigned char> bytes = read_file();
+        if (bytes.size() > std::numeric_limits<unsigned int>::max()) fail("file larger than 4 GiB");
+        bool binary = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
+        if (!binary) {
+            size_t first = 0;
+            while (first < bytes.size() && std::isspace(bytes[first])) ++first;
+            // UTF-8 byte order mark, which some exporters write before the JSON.
+            if (first + 3 <= bytes.size() && bytes[first] == 0xEF && bytes[first + 1] == 0xBB && bytes[first + 2] == 0xBF)
+                first += 3;
+            if (first >= bytes.size() || bytes[first] != '{') fail(describe_foreign_bytes(bytes));
+        } else {
+            check_glb_header(bytes);
+        }
+
+        tg::TinyGLTF gltf;
+        gltf.SetImageLoader(&keep_encoded_image, nullptr);
+        std::string err, warn_text;
+        std::string base_dir = std::filesystem::path(path_).parent_path().string();
+        bool ok = binary ? gltf.LoadBinaryFromMemory(&model_, &err, &warn_text, bytes.data(), unsigned(bytes.size()), base_dir)
+                         : gltf.LoadASCIIFromString(&model_, &err, &warn_text, reinterpret_cast<const char*>(bytes.data()),
+                                                    unsigned(bytes.size()), base_dir);
+        if (!ok) {
+            std::vector<std::string> lines = split_lines(err);
+            std::string text = join(lines, "; ");
+            if (text.find("parse_error") != std::string::npos || text.find("Failed to parse JSON") != std::string::npos)
+                fail("invalid JSON: " + text);
+            for (const std::string& l : lines)
+                if (l.rfind("File not found", 0) == 0) {
+                    size_t colon = l.find(':');
+                    std::string missing = colon == std::string::npos ? l : l.substr(colon + 1);
+                    size_t a = missing.find_first_not_of(' ');
+                    fail("missing file " + in_quotes(a == std::string::npos ? missing : missing.substr(a)) +
+                         " (a buffer referenced by the glTF)");
+                }
+            fail("cannot load glTF: " + (text.empty() ? std::string("tinygltf failed without a message") : text));
+        }
+        // Missing external images are only warnings in tinygltf: build_textures() turns them into
+        // errors when a material needs them. Keep other tinygltf warnings.
+        for (const std::string& l : split_lines(warn_text))
+            if (l.rfind("File not found", 0) != 0 && l.find("Failed to load external 'uri' for image") == std::string::npos)
+                warn("tinygltf: " + l);
+    }
+
+    void check_extensions() {
+        for (const std::string& e : model_.extensionsRequired)
+            if (!supported_extensions().count(e))
+                fail("requires glTF extension " + in_quotes(e) + ", which dynsky does not support");
+        for (const std::string& e : model_.extensionsUsed)
+            if (!supported_extensions().count(e)) {
+                if (e == "KHR_materials_specular")
+                    warn("extension 'KHR_materials_specular' is only partly supported: specularFactor is used, "
+                         "specularColorFactor and the textures are ignored");
+                else
+                    warn("extension " + in_quotes(e) + " is not supported: ignored");
+            }
+    }
+
+    // ---- Buffers and accessors ----------------------------------------------------------------
+
+    void validate_buffer_views() {
+        for (size_t i = 0; i < model_.bufferViews.size(); ++i) {
+            const tg::BufferView& v = model_.bufferViews[i];
+            if (v.buffer < 0 || size_t(v.buffer) >= model_.buffers.size())
+                fail("bufferView " + std::to_string(i) + " refers to buffer " + std::to_string(v.buffer) +
+                     ", which does not exist");
+            size_t size = model_.buffers[size_t(v.buffer)].data.size();
+            if (v.byteOffset > size || v.byteLength > size - v.byteOffset)
+                fail("bufferView " + std::to_string(i) + " (bytes " + std::to_string(v.byteOffset) + " + " +
+                     std::to_string(v.byteLength) + ") is out of range of buffer " + std::to_string(v.buffer) + " (" +
+                     std::to_string(size) + " bytes)");
+        }
+    }
+
+    // Pointer to `count` elements of `element_size` bytes, `stride` apart, starting `offset` bytes
+    // into bufferView `view`; fails if any byte lies outside the view.
+    const unsigned char* view_span(int view, size_t offset, size_t count, size_t stride, size_t element_size,
+                                   const std::string& what) const {
+        if (view < 0 || size_t(view) >= model_.bufferViews.size())
+            fail(what + " refers to bufferView " + std::to_string(view) + ", which does not exist");
+        const tg::BufferView& v = model_.bufferViews[size_t(view)];
+        const unsigned char* base = model_.buffers[size_t(v.buffer)].data.data() + v.byteOffset;
+        if (count == 0) return base;
+        bool fits = offset <= v.byteLength && element_size <= v.byteLength - offset &&
+                    (stride == 0 || (count - 1) <= (v.byteLength - offset - element_size) / stride);
+        if (!fits)
+            fail(what + " is out of range: " + std::to_string(count) + " elements of " + std::to_string(element_size) +
+                 " bytes (stride " + std::to_string(stride) + ") from byte " + std::to_string(offset) +
+                 " do not fit bufferView " + std::to_string(view) + " (" + std::to_string(v.byteLength) + " bytes)");
+        return base + offset;
+    }
+
+    const tg::Accessor& accessor(int index, const std::string& what) const {
+        if (index < 0 || size_t(index) >= model_.accessors.size())
+            fail(what + " refers to accessor " + std::to_string(index) + ", which does not exist");
+        return model_.accessors[size_t(index)];
+    }
+
+    // Reads an accessor (dense data, then sparse substitutions) as Out (float, or uint32_t for
+    // indices). `allowed_types` lists the acceptable TINYGLTF_TYPE_* values.
+    template <typename Out>
+    std::vector<Out> read_accessor(int index, const std::string& what_in, std::initializer_list<int> allowed_types,
+                                   int* components_out = nullptr) const {
+        const tg::Accessor& a = accessor(index, what_in);
+        std::string what = "accessor " + std::to_string(index) + " (" + what_in + ")";
+        if (std::find(allowed_types.begin(), allowed_types.end(), a.type) == allowed_types.end()) {
+            std::vector<std::string> names;
+            for (int t : allowed_types) names.push_back(type_name(t));
+            fail(what + " has type " + type_name(a.type) + ", expected " + join(names, " or "));
+        }
+        size_t csize = component_size(a.componentType);
+        if (csize == 0) fail(what + " has invalid componentType " + std::to_string(a.componentType));
+        if (std::is_same_v<Out, uint32_t> &&
+            !(a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+              a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ||
+              a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT))
+            fail(what + " must have an unsigned integer componentType, not " + std::to_string(a.componentType));
+        int ncomp = component_count(a.type);
+        if (components_out) *components_out = ncomp;
+        size_t element_size = csize * size_t(ncomp);
+        size_t count = a.count;
+        // An accessor without a bufferView is all zeros: cap its size so a hostile count cannot
+        // exhaust memory (real data is bounded by its bufferView below).
+        if (a.bufferView < 0 && count > (size_t(1) << 28)) fail(what + " has an implausible count " + std::to_string(count));
+
+        std::vector<Out> out;
+        if (a.bufferView >= 0) {
+            if (size_t(a.bufferView) >= model_.bufferViews.size())
+                fail(what + " refers to bufferView " + std::to_string(a.bufferView) + ", which does not exist");
+            size_t stride = model_.bufferViews[size_t(a.bufferView)].byteStride;
+            if (stride == 0) stride = element_size;
+            if (stride < element_size)
+                fail(what + ": byteStride " + std::to_string(stride) + " is smaller than the element (" +
+                     std::to_string(element_size) + " bytes)");
+            const unsigned char* src = view_span(a.bufferView, a.byteOffset, count, stride, element_size, what);
+            out.resize(count * size_t(ncomp));
+            copy_components<Out>(a.componentType, src, stride, count, ncomp, a.normalized, out.data());
+        } else {
+            out.assign(count * size_t(ncomp), Out(0));
+        }
+
+        if (a.sparse.isSparse) {
+            const auto& sp = a.sparse;
+            if (sp.count <= 0 || size_t(sp.count) > count)
+                fail(what + ": sparse count " + std::to_string(sp.count) + " is not in 1.." + std::to_string(count));
+            if (sp.indices.byteOffset < 0 || sp.values.byteOffset < 0) fail(what + ": negative sparse byteOffset");
+            int ict = sp.indices.componentType;
+            if (!(ict == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE || ict == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ||
+                  ict == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT))
+                fail(what + ": sparse indices must be unsigned integers");
+            size_t n = size_t(sp.count), isize = component_size(ict);
+            std::vector<uint32_t> sparse_indices(n);
+            copy_components<uint32_t>(ict, view_span(sp.indices.bufferView, size_t(sp.indices.byteOffset), n, isize, isize,
+                                                     what + " sparse indices"),
+                                      isize, n, 1, false, sparse_indices.data());
+            std::vector<Out> values(n * size_t(ncomp));
+            copy_components<Out>(a.componentType,
+                                 view_span(sp.values.bufferView, size_t(sp.values.byteOffset), n, element_size, element_size,
+                                           what + " sparse values"),
+                                 element_size, n, ncomp, a.normalized, values.data());
+            for (size_t k = 0; k < n; ++k) {
+                size_t target = sparse_indices[k];
+                if (target >= count)
+                    fail(what + ": sparse index " + std::to_string(target) + " is out of range (count " +
+                         std::to_string(count) + ")");
+                std::copy_n(&values[k * size_t(ncomp)], ncomp, &out[target * size_t(ncomp)]);
+            }
+        }
+        return out;
+    }
+
+    FloatArray read_floats(int index, const std::string& what, std::initializer_list<int> allowed_types) const {
+        FloatArray f;
+        f.values = read_accessor<float>(index, what, allowed_types, &f.components);
+        f.count = f.components ? f.values.size() / size_t(f.components) : 0;
+        return f;
+    }
+
+    // ---- Materials and textures -------------------------------------------------------------
+
+    struct TextureRequest {
+        int image, sampler;
+        bool srgb;
+        bool operator<(const TextureRequest& o) const {
+            return std::tie(image, sampler, srgb) < std::tie(o.image, o.sampler, o.srgb);
+        }
+    };
+
+    // Fills a slot from a glTF textureInfo (any of its three flavours).
+    void read_slot(int texture, int texcoord, const tg::ExtensionMap& extensions, bool srgb, float scale,
+                   TextureSlot* slot, const std::string& what) {
+        if (texture < 0) return;
+        if (size_t(texture) >= model_.textures.size())
+            fail(what + " refers to texture " + std::to_string(texture) + ", which does not exist");
+        const tg::Texture& t = model_.textures[size_t(texture)];
+        if (t.source < 0) {
+            warn(what + ": texture " + std::to_string(texture) + " has no core image source (an image-format " +
+                 "extension?): slot ignored");
+            return;
+        }
+        if (size_t(t.source) >= model_.images.size())
+            fail("texture " + std::to_string(texture) + " refers to image " + std::to_string(t.source) + ", which does not exist");
+        if (t.sampler >= 0 && size_t(t.sampler) >= model_.samplers.size())
+            fail("texture " + std::to_string(texture) + " refers to sampler " + std::to_string(t.sampler) + ", which does not exist");
+        slot->texcoord = texcoord;
+        slot->scale = scale;
+        if (const tg::Value* tt = extension(extensions, "KHR_texture_transform")) {
+            Vec2 offset = vec2_or(member(*tt, "offset"), Vec2(0, 0));
+            Vec2 sc = vec2_or(member(*tt, "scale"), Vec2(1, 1));
+            float rotation = float(number_or(member(*tt, "rotation"), 0.0));
+            slot->uv_transform = texture_transform_matrix(offset, rotation, sc);
+            if (const tg::Value* tc = member(*tt, "texCoord"); tc && tc->IsNumber()) slot->texcoord = tc->GetNumberAsInt();
+        }
+        if (slot->texcoord < 0 || slot->texcoord > 1) {
+            warn(what + " uses TEXCOORD_" + std::to_string(slot->texcoord) + ": only TEXCOORD_0 and TEXCOORD_1 are read, using 0");
+            slot->texcoord = 0;
+        }
+        TextureRequest key{t.source, t.sampler, srgb};
+        auto it = texture_of_request_.find(key);
+        if (it == texture_of_request_.end()) {
+            it = texture_of_request_.emplace(key, int(requests_.size())).first;
+            requests_.push_back(key);
+        }
+        slot->texture = it->second;
+    }
+
+    void build_materials() {
+        for (size_t i = 0; i < model_.materials.size(); ++i) {
+            const tg::Material& m = model_.materials[i];
+            Material out;
+            out.name = m.name.empty() ? "material " + std::to_string(i) : m.name;
+            std::string what = "material " + in_quotes(out.name);
+            const tg::PbrMetallicRoughness& pbr = m.pbrMetallicRoughness;
+            if (pbr.baseColorFactor.size() == 4) {
+                out.base_color = Color(float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]), float(pbr.baseColorFactor[2]));
+                out.base_alpha = float(pbr.baseColorFactor[3]);
+            }
+            out.metallic = clamp(float(pbr.metallicFactor), 0.0f, 1.0f);
+            out.roughness = clamp(float(pbr.roughnessFactor), 0.0f, 1.0f);
+            read_slot(pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, pbr.baseColorTexture.extensions, true, 1.0f,
+                      &out.base_color_texture, what + " baseColorTexture");
+            read_slot(pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord,
+                      pbr.metallicRoughnessTexture.extensions, false, 1.0f, &out.metallic_roughness_texture,
+                      what + " metallicRoughnessTexture");
+            read_slot(m.normalTexture.index, m.normalTexture.texCoord, m.normalTexture.extensions, false,
+                      float(m.normalTexture.scale), &out.normal_texture, what + " normalTexture");
+            read_slot(m.occlusionTexture.index, m.occlusionTexture.texCoord, m.occlusionTexture.extensions, false,
+                      float(m.occlusionTexture.strength), &out.occlusion_texture, what + " occlusionTexture");
+            read_slot(m.emissiveTexture.index, m.emissiveTexture.texCoord, m.emissiveTexture.extensions, true, 1.0f,
+                      &out.emissive_texture, what + " emissiveTexture");
+            if (m.emissiveFactor.size() == 3)
+                out.emissive = Color(float(m.emissiveFactor[0]), float(m.emissiveFactor[1]), float(m.emissiveFactor[2]));
+            if (const tg::Value* es = extension(m.extensions, "KHR_materials_emissive_strength"))
+                out.emissive *= float(number_or(member(*es, "emissiveStrength"), 1.0));
+            if (const tg::Value* sp = extension(m.extensions, "KHR_materials_specular"))
+                out.specular = clamp(float(number_or(member(*sp, "specularFactor"), 1.0)), 0.0f, 1.0f);
+            if (m.alphaMode == "MASK") out.alpha_mode = AlphaMode::Mask;
+            else if (m.alphaMode == "BLEND") out.alpha_mode = AlphaMode::Blend;
+            else if (m.alphaMode != "OPAQUE" && !m.alphaMode.empty())
+                warn(what + ": unknown alphaMode " + in_quotes(m.alphaMode) + ", treated as OPAQUE");
+            out.alpha_cutoff = float(m.alphaCutoff);
+            out.double_sided = m.doubleSided;
+            scene_.materials.push_back(std::move(out));
+        }
+    }
+
+    // The encoded bytes of an image: from its file or data URI (kept by keep_encoded_image), or
+    // from its bufferView.
+    std::pair<const unsigned char*, size_t> encoded_image(int index) const {
+        const tg::Image& img = model_.images[size_t(index)];
+        if (img.bufferView >= 0) {
+            if (size_t(img.bufferView) >= model_.bufferViews.size())
+                fail("image " + std::to_string(index) + " refers to bufferView " + std::to_string(img.bufferView) +
+                     ", which does not exist");
+            size_t n = model_.bufferViews[size_t(img.bufferView)].byteLength;
+            return {view_span(img.bufferView, 0, 1, 0, n, "image " + std::to_string(index)), n};
+        }
+        if (img.image.empty()) {
+            std::string file = img.uri;
+            std::string dir = std::filesystem::path(path_).parent_path().string();
+            if (!dir.empty()) file = (std::filesystem::path(dir) / img.uri).string();
+            fail("missing texture file " + in_quotes(file) + " (image " + std::to_string(index) + ")");
+        }
+        return {img.image.data(), img.image.size()};
+    }
+
+    static TextureWrap wrap_mode(int gl) {
+        switch (gl) {
+            case TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE: return TextureWrap::ClampToEdge;
+            case TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT: return TextureWrap::MirroredRepeat;
+            default: return TextureWrap::Repeat;
+        }
+    }
+
+    void build_textures() {
+        // Decode every image some slot uses, once, in parallel (stb, through tinygltf).
+        std::vector<int> images;
+        for (const TextureRequest& r : requests_) images.push_back(r.image);
+        std::sort(images.begin(), images.end());
+        images.erase(std::unique(images.begin(), images.end()), images.end());
+        std::vector<std::pair<const unsigned char*, size_t>> encoded;
+        for (int i : images) encoded.push_back(encoded_image(i));  // fails here for missing files
+
+        struct Decoded {
+            int width = 0, height = 0;
+            std::vector<float> rgba;
+            std::string error;
+        };
+        std::vector<Decoded> decoded(images.size());
+        tbb::parallel_for(size_t(0), images.size(), [&](size_t k) {
+            tg::Image img;
+            std::string err, warn_text;
+            if (encoded[k].second > size_t(std::numeric_limits<int>::max()) ||
+                !tg::LoadImageData(&img, images[k], &err, &warn_text, 0, 0, encoded[k].first, int(encoded[k].second), nullptr)) {
+                decoded[k].error = join(split_lines(err), "; ");
+                return;
+            }
+            size_t n = size_t(img.width) * size_t(img.height) * 4;
+            if (img.component != 4 || (img.bits != 8 && img.bits != 16) || img.image.size() != n * size_t(img.bits / 8)) {
+                decoded[k].error = "unexpected decoded layout";
+                return;
+            }
+            decoded[k].width = img.width, decoded[k].height = img.height;
+            decoded[k].rgba.resize(n);
+            if (img.bits == 8) {
+                for (size_t j = 0; j < n; ++j) decoded[k].rgba[j] = float(img.image[j]) * (1.0f / 255.0f);
+            } else {
+                for (size_t j = 0; j < n; ++j) {
+                    uint16_t v;
+                    std::memcpy(&v, &img.image[2 * j], 2);
+                    decoded[k].rgba[j] = float(v) * (1.0f / 65535.0f);
+                }
+            }
+        });
+        for (size_t k = 0; k < images.size(); ++k)
+            if (!decoded[k].error.empty()) {
+                const tg::Image& img = model_.images[size_t(images[k])];
+                std::string name = !img.uri.empty() ? img.uri : img.name;
+                fail("cannot decode image " + std::to_string(images[k]) + (name.empty() ? "" : " " + in_quotes(name)) + ": " +
+                     decoded[k].error);
+            }
+        for (size_t i = 0; i < model_.images.size(); ++i) {
+            const tg::Image& img = model_.images[i];
+            if (img.bufferView < 0 && img.image.empty() && !std::binary_search(images.begin(), images.end(), int(i)))
+                warn("unused image " + std::to_string(i) + " " + in_quotes(img.uri) + " is missing");
+        }
+
+        // One Texture per (image, sampler, colour space); sRGB decoding happens in the constructor.
+        scene_.textures.resize(requests_.size());
+        tbb::parallel_for(size_t(0), requests_.size(), [&](size_t r) {
+            const TextureRequest& req = requests_[r];
+            size_t k = size_t(std::lower_bound(images.begin(), images.end(), req.image) - images.begin());
+            TextureWrap ws = TextureWrap::Repeat, wt = TextureWrap::Repeat;
+            TextureFilter filter = TextureFilter::Linear;
+            if (req.sampler >= 0) {
+                const tg::Sampler& s = model_.samplers[size_t(req.sampler)];
+                ws = wrap_mode(s.wrapS), wt = wrap_mode(s.wrapT);
+                // No mip maps: the magnification filter decides; minFilter is ignored.
+                if (s.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST) filter = TextureFilter::Nearest;
+            }
+            const tg::Image& img = model_.images[size_t(req.image)];
+            std::string name = !img.name.empty() ? img.name : !img.uri.empty() ? img.uri : "image " + std::to_string(req.image);
+            scene_.textures[r] = std::make_shared<Texture>(name, decoded[k].width, decoded[k].height, decoded[k].rgba,
+                                                           req.srgb, ws, wt, filter);
+        });
+    }
+
+    // ---- Meshes -----------------------------------------------------------------------------
+
+    // Triangle list from a primitive's index stream, per glTF 2.0 section 3.7.2.1.
+    std::vector<uint32_t> triangulate(int mode, const std::vector<uint32_t>& v, const std::string& what) {
+        std::vector<uint32_t> tri;
+        size_t n = v.size();
+        if (mode == TINYGLTF_MODE_TRIANGLES) {
+            if (n % 3) warn(what + ": " + std::to_string(n) + " indices is not a multiple of 3, the last " +
+                            std::to_string(n % 3) + " ignored");
+            tri.assign(v.begin(), v.begin() + std::ptrdiff_t(n - n % 3));
+        } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+            for (size_t i = 0; i + 2 < n; ++i) {
+                // Every other triangle swaps its last two vertices so all keep the strip's winding.
+                bool odd = i % 2;
+                tri.insert(tri.end(), {v[i], v[i + 1 + odd], v[i + 2 - odd]});
+            }
+        } else {  // TRIANGLE_FAN
+            for (size_t i = 0; i + 2 < n; ++i) tri.insert(tri.end(), {v[i + 1], v[i + 2], v[0]});
+        }
+        return tri;
+    }
+
+    template <int N>
+    static std::vector<Eigen::Matrix<float, N, 1>> to_vectors(const FloatArray& f) {
+        std::vector<Eigen::Matrix<float, N, 1>> out(f.count);
+        for (size_t i = 0; i < f.count; ++i)
+            for (int c = 0; c < N; ++c) out[i][c] = f.values[i * size_t(f.components) + size_t(c)];
+        return out;
+    }
+
+    // Builds one primitive, or returns false (with a warning) when it has nothing to draw.
+    bool build_primitive(const tg::Primitive& p, const std::string& what, TriangleMesh* mesh) {
+        int mode = p.mode < 0 ? TINYGLTF_MODE_TRIANGLES : p.mode;
+        if (mode == TINYGLTF_MODE_POINTS || mode == TINYGLTF_MODE_LINE || mode == TINYGLTF_MODE_LINE_LOOP ||
+            mode == TINYGLTF_MODE_LINE_STRIP) {
+            warn(what + ": points and lines are not rendered, skipped");
+            return false;
+        }
+        if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+            warn(what + ": unknown primitive mode " + std::to_string(mode) + ", skipped");
+            return false;
+        }
+        auto attr = [&](const char* name) {
+            auto it = p.attributes.find(name);
+            return it == p.attributes.end() ? -1 : it->second;
+        };
+        if (attr("POSITION") < 0) {
+            warn(what + ": no POSITION attribute, skipped");
+            return false;
+        }
+        if (!p.targets.empty()) warn("morph targets ignored: meshes are drawn with their base shape");
+
+        FloatArray pos = read_floats(attr("POSITION"), what + " POSITION", {TINYGLTF_TYPE_VEC3});
+        const size_t n = pos.count;
+        if (n > size_t(std::numeric_limits<uint32_t>::max())) fail(what + ": too many vertices");
+        mesh->positions = to_vectors<3>(pos);
+
+        std::vector<uint32_t> stream;
+        if (p.indices >= 0) {
+            stream = read_accessor<uint32_t>(p.indices, what + " indices", {TINYGLTF_TYPE_SCALAR});
+            for (uint32_t i : stream)
+                if (i >= n)
+                    fail(what + ": index " + std::to_string(i) + " is out of range (the primitive has " +
+                         std::to_string(n) + " vertices)");
+        } else {
+            stream.resize(n);
+            for (size_t i = 0; i < n; ++i) stream[i] = uint32_t(i);
+        }
+        mesh->indices = triangulate(mode, stream, what);
+        if (mesh->indices.empty()) {
+            warn(what + ": no triangles, skipped");
+            return false;
+        }
+
+        auto read_matching = [&](const char* name, std::initializer_list<int> types) {
+            FloatArray f = read_floats(attr(name), what + " " + name, types);
+            if (f.count != n)
+                fail(what + ": " + name + " has " + std::to_string(f.count) + " elements but POSITION has " + std::to_string(n));
+            return f;
+        };
+        if (attr("TEXCOORD_0") >= 0) mesh->texcoords[0] = to_vectors<2>(read_matching("TEXCOORD_0", {TINYGLTF_TYPE_VEC2}));
+        if (attr("TEXCOORD_1") >= 0) mesh->texcoords[1] = to_vectors<2>(read_matching("TEXCOORD_1", {TINYGLTF_TYPE_VEC2}));
+        if (attr("COLOR_0") >= 0) {
+            FloatArray c = read_matching("COLOR_0", {TINYGLTF_TYPE_VEC3, TINYGLTF_TYPE_VEC4});
+            mesh->colors.resize(n);
+            for (size_t i = 0; i < n; ++i) {
+                const float* v = &c.values[i * size_t(c.components)];
+                mesh->colors[i] = Vec4(v[0], v[1], v[2], c.components == 4 ? v[3] : 1.0f);
+            }
+        }
+        if (p.material >= 0) {
+            if (size_t(p.material) >= scene_.materials.size())
+                fail(what + " refers to material " + std::to_string(p.material) + ", which does not exist");
+            mesh->material = p.material;
+        }
+
+        if (attr("NORMAL") < 0) {
+            // The spec: no normals means flat normals, and any TANGENT must then be ignored.
+            generate_flat_normals(*mesh);
+        } else {
+            mesh->normals = to_vectors<3>(read_matching("NORMAL", {TINYGLTF_TYPE_VEC3}));
+            bool all_valid = true;
+            for (Vec3& nrm : mesh->normals) {
+                float len = nrm.norm();
+                if (len > 0 && std::isfinite(len)) nrm /= len;
+                else all_valid = false;
+            }
+            if (!all_valid) {
+                // Repair only the broken ones, from the area-weighted neighbourhood.
+                TriangleMesh smooth;
+                smooth.positions = mesh->positions, smooth.indices = mesh->indices;
+                generate_smooth_normals(smooth);
+                for (size_t i = 0; i < n; ++i)
+                    if (!(std::abs(mesh->normals[i].squaredNorm() - 1.0f) < 1e-3f)) mesh->normals[i] = smooth.normals[i];
+                warn(what + ": some normals were zero or not finite and were regenerated");
+            }
+            if (attr("TANGENT") >= 0) {
+                mesh->tangents = to_vectors<4>(read_matching("TANGENT", {TINYGLTF_TYPE_VEC4}));
+                bool tangents_valid = true;
+                for (Vec4& t : mesh->tangents) {
+                    float len = t.head<3>().norm();
+                    if (len > 0 && std::isfinite(len)) t.head<3>() /= len;
+                    else tangents_valid = false;
+                    t.w() = t.w() < 0 ? -1.0f : 1.0f;
+                }
+                if (!tangents_valid) mesh->tangents.clear();
+            }
+        }
+        if (mesh->tangents.empty()) {
+            int texcoord = mesh->material >= 0 ? scene_.materials[size_t(mesh->material)].normal_texture.texcoord : 0;
+            generate_tangents(*mesh, texcoord);
+        }
+        return true;
+    }
+
+    // The MeshGroup of a glTF mesh, built on first use; -1 when it has nothing to draw.
+    int mesh_group(int mesh_index) {
+        if (mesh_index < 0 || size_t(mesh_index) >= model_.meshes.size())
+            fail("a node refers to mesh " + std::to_string(mesh_index) + ", which does not exist");
+        if (group_of_mesh_.empty()) group_of_mesh_.assign(model_.meshes.size(), kNotBuilt);
+        int& group = group_of_mesh_[size_t(mesh_index)];
+        if (group != kNotBuilt) return group;
+        const tg::Mesh& m = model_.meshes[size_t(mesh_index)];
+        MeshGroup g;
+        g.name = m.name.empty() ? "mesh " + std::to_string(mesh_index) : m.name;
+        for (size_t k = 0; k < m.primitives.size(); ++k) {
+            TriangleMesh tm;
+            if (build_primitive(m.primitives[k], "mesh " + in_quotes(g.name) + " primitive " + std::to_string(k), &tm))
+                g.primitives.push_back(std::move(tm));
+        }
+        if (g.primitives.empty()) return group = -1;
+        scene_.meshes.push_back(std::move(g));
+        return group = int(scene_.meshes.size()) - 1;
+    }
+
+    // ---- Nodes ------------------------------------------------------------------------------
+
+    Eigen::Matrix4d local_matrix(const tg::Node& node) const {
+        if (node.matrix.size() == 16) {
+            Eigen::Matrix4d m;
+            for (int i = 0; i < 16; ++i) m(i % 4, i / 4) = node.matrix[size_t(i)];  // column-major
+            return m;
+        }
+        Eigen::Vector3d t = Eigen::Vector3d::Zero(), s = Eigen::Vector3d::Ones();
+        Eigen::Quaterniond r = Eigen::Quaterniond::Identity();
+        if (node.translation.size() == 3) t = Eigen::Vector3d(node.translation[0], node.translation[1], node.translation[2]);
+        if (node.scale.size() == 3) s = Eigen::Vector3d(node.scale[0], node.scale[1], node.scale[2]);
+        if (node.rotation.size() == 4) {
+            // glTF stores (x, y, z, w); Eigen's constructor takes (w, x, y, z).
+            r = Eigen::Quaterniond(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2]);
+            if (r.norm() > 0) r.normalize();
+            else r = Eigen::Quaterniond::Identity();
+        }
+        return trs_matrix(t, r, s);
+    }
+
+    // EXT_mesh_gpu_instancing: per-instance TRS, applied before the node's world transform.
+    std::vector<Eigen::Matrix4d> gpu_instances(const tg::Node& node, const std::string& what) {
+        const tg::Value* ext = extension(node.extensions, "EXT_mesh_gpu_instancing");
+        if (!ext) return {};
+        const tg::Value* attributes = member(*ext, "attributes");
+        auto read = [&](const char* name, int type) -> FloatArray {
+            const tg::Value* a = attributes ? member(*attributes, name) : nullptr;
+            if (!a || !a->IsNumber()) return {};
+            return read_floats(a->GetNumberAsInt(), what + " EXT_mesh_gpu_instancing " + name, {type});
+        };
+        FloatArray t = read("TRANSLATION", TINYGLTF_TYPE_VEC3), r = read("ROTATION", TINYGLTF_TYPE_VEC4),
+                   s = read("SCALE", TINYGLTF_TYPE_VEC3);
+        size_t count = std::max({t.count, r.count, s.count});
+        for (const FloatArray* f : {&t, &r, &s})
+            if (f->count != 0 && f->count != count)
+                fail(what + ": EXT_mesh_gpu_instancing attributes have different counts");
+        if (count == 0) {
+            warn(what + ": EXT_mesh_gpu_instancing without attributes, drawn once");
+            return {};
+        }
+        std::vector<Eigen::Matrix4d> out(count);
+        for (size_t i = 0; i < count; ++i) {
+            Eigen::Vector3d ti = t.count ? Eigen::Vector3d(t.values[3 * i], t.values[3 * i + 1], t.values[3 * i + 2])
+                                         : Eigen::Vector3d::Zero();
+            Eigen::Vector3d si = s.count ? Eigen::Vector3d(s.values[3 * i], s.values[3 * i + 1], s.values[3 * i + 2])
+                                         : Eigen::Vector3d::Ones();
+            Eigen::Quaterniond ri = Eigen::Quaterniond::Identity();
+            if (r.count) {
+                ri = Eigen::Quaterniond(r.values[4 * i + 3], r.values[4 * i], r.values[4 * i + 1], r.values[4 * i + 2]);
+                if (ri.norm() > 0) ri.normalize();
+                else ri = Eigen::Quaterniond::Identity();
+            }
+            out[i] = trs_matrix(ti, ri, si);
+        }
+        return out;
+    }
+
+    void add_camera(const tg::Node& node, int node_index, const Eigen::Matrix4d& world) {
+        if (node.camera < 0) return;
+        if (size_t(node.camera) >= model_.cameras.size())
+            fail("node " + std::to_string(node_index) + " refers to camera " + std::to_string(node.camera) +
+                 ", which does not exist");
+        const tg::Camera& c = model_.cameras[size_t(node.camera)];
+        std::string name = !c.name.empty() ? c.name : !node.name.empty() ? node.name : "camera " + std::to_string(node.camera);
+        if (c.type != "perspective") {
+            warn("camera " + in_quotes(name) + " is " + (c.type.empty() ? std::string("untyped") : c.type) +
+                 ": only perspective cameras are supported, skipped");
+            return;
+        }
+        Camera cam;
+        cam.name = name;
+        // The rotation part only: a camera frame must stay orthonormal even under scaled parents.
+        Eigen::Affine3f w = to_affine(world);
+        cam.camera_to_world = Eigen::Translation3f(w.translation()) * w.rotation();
+        if (c.perspective.yfov > 0 && c.perspective.yfov < kPiD) cam.yfov = float(c.perspective.yfov);
+        else warn("camera " + in_quotes(name) + ": invalid yfov " + std::to_string(c.perspective.yfov) + ", using the default");
+        cam.aspect_ratio = c.perspective.aspectRatio > 0 ? float(c.perspective.aspectRatio) : 0.0f;
+        cameras_.push_back({node.camera, node_index, std::move(cam)});
+    }
+
+    void traverse_nodes() {
+        const size_t count = model_.nodes.size();
+        std::vector<int> parent(count, -1);
+        for (size_t i = 0; i < count; ++i)
+            for (int c : model_.nodes[i].children) {
+                if (c < 0 || size_t(c) >= count)
+                    fail("node " + std::to_string(i) + " has child " + std::to_string(c) + ", which does not exist");
+                if (parent[size_t(c)] >= 0)
+                    fail("node " + std::to_string(c) + " has two parents (" + std::to_string(parent[size_t(c)]) + " and " +
+                         std::to_string(i) + "): the node hierarchy must be a forest");
+                parent[size_t(c)] = int(i);
+            }
+
+        std::vector<int> roots;
+        if (!model_.scenes.empty()) {
+            int s = model_.defaultScene;
+            if (s < 0 || size_t(s) >= model_.scenes.size()) s = 0;
+            roots = model_.scenes[size_t(s)].nodes;
+            if (model_.scenes.size() > 1)
+                warn("the file has " + std::to_string(model_.scenes.size()) + " scenes: rendering scene " + std::to_string(s));
+        } else {
+            for (size_t i = 0; i < count; ++i)
+                if (parent[i] < 0) roots.push_back(int(i));
+            if (!roots.empty()) warn("the file has no scenes: rendering every root node");
+        }
+
+        std::vector<char> visited(count, 0);
+        std::vector<std::pair<int, Eigen::Matrix4d>> stack;
+        for (auto it = roots.rbegin(); it != roots.rend(); ++it) {
+            if (*it < 0 || size_t(*it) >= count) fail("the scene refers to node " + std::to_string(*it) + ", which does not exist");
+            stack.emplace_back(*it, Eigen::Matrix4d::Identity());
+        }
+        while (!stack.empty()) {
+            auto [index, parent_world] = stack.back();
+            stack.pop_back();
+            if (visited[size_t(index)])
+                fail("node " + std::to_string(index) + " is reached twice (a cycle, or listed in the scene as well as a child)");
+            visited[size_t(index)] = 1;
+            const tg::Node& node = model_.nodes[size_t(index)];
+            Eigen::Matrix4d world = parent_world * local_matrix(node);
+            std::string what = "node " + (node.name.empty() ? std::to_string(index) : in_quotes(node.name));
+            if (node.mesh >= 0) {
+                if (node.skin >= 0) warn("skins ignored: skinned meshes are drawn in their bind pose");
+                int group = mesh_group(node.mesh);
+                if (group >= 0) {
+                    std::vector<Eigen::Matrix4d> instances = gpu_instances(node, what);
+                    if (instances.empty()) {
+                        scene_.instances.push_back({group, to_affine(world)});
+                    } else {
+                        for (const Eigen::Matrix4d& m : instances) scene_.instances.push_back({group, to_affine(world * m)});
+                    }
+                }
+            }
+            add_camera(node, index, world);
+            for (auto c = node.children.rbegin(); c != node.children.rend(); ++c) stack.emplace_back(*c, world);
+        }
+        // Cameras in the order of the file's cameras array (then of the nodes that use them).
+        std::stable_sort(cameras_.begin(), cameras_.end(), [](const NodeCamera& a, const NodeCamera& b) {
+            return std::tie(a.camera_index, a.node_index) < std::tie(b.camera_index, b.node_index);
+        });
+        for (NodeCamera& c : cameras_) scene_.cameras.push_back(std::move(c.camera));
+    }
+
+    static constexpr int kNotBuilt = -2;
+    struct NodeCamera {
+        int camera_index, node_index;
+        Camera camera;
+    };
+
+    const std::string path_;
+    tg::Model model_;
+    Scene scene_;
+    std::vector<std::string> warnings_;
+    std::vector<int> group_of_mesh_;
+    std::map<TextureRequest, int> texture_of_request_;
+    std::vector<TextureRequest> requests_;
+    std::vector<NodeCamera> cameras_;
+};
+
+}  // namespace
+
+Scene load_gltf(const std::string& path, std::vector<std::string>* warnings) {
+    Scene scene = GltfLoader(path).load();
+    if (warnings) warnings->insert(warnings->end(), scene.warnings.begin(), scene.warnings.end());
+    return scene;
+}
+
+}  // namespace dynsky

@@ -1,0 +1,35 @@
+// glTF 2.0 (.gltf with its .bin/images, or .glb) to the renderer's Scene, through tinygltf.
+//
+// What is read: the default scene's node hierarchy (matrix or TRS), every triangle primitive
+// (TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN; indexed or not; any accessor component type,
+// normalised or not, sparse accessors), NORMAL (flat normals generated when missing, as the
+// spec requires), TANGENT (generated from the normal texture's UV set when missing),
+// TEXCOORD_0/1, COLOR_0; metallic-roughness materials with their textures, samplers and factors;
+// perspective cameras on nodes. Each glTF mesh becomes one MeshGroup, instanced by every node
+// that uses it (and by every EXT_mesh_gpu_instancing instance).
+// Supported extensions: KHR_texture_transform, KHR_materials_emissive_strength,
+// EXT_mesh_gpu_instancing, KHR_mesh_quantization.
+// Ignored with a warning: points and lines, orthographic cameras, skins, morph targets,
+// animations, and any other extension listed in extensionsUsed. One listed in
+// extensionsRequired that is not supported is an error.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "renderer/scene.h"
+
+namespace dynsky {
+
+// Loads a glTF 2.0 file. Warnings (what was ignored) go to Scene::warnings and, if given, are
+// appended to *warnings. Throws dynsky::Error "PATH: problem" for a missing, truncated or
+// malformed file, a missing buffer or texture file (named), out-of-range accessors or indices,
+// or an unsupported required extension (named).
+Scene load_gltf(const std::string& path, std::vector<std::string>* warnings = nullptr);
+
+// KHR_texture_transform as a matrix on (u, v, 1): T(offset) * R(rotation) * S(scale), with R
+// rotating the UVs counter-clockwise by `rotation` radians as the extension text and its worked
+// example define it (u axis towards -v), i.e. R = [cos sin; -sin cos].
+Eigen::Matrix3f texture_transform_matrix(const Vec2& offset, float rotation, const Vec2& scale);
+
+}  // namespace dynsky

@@ -1,0 +1,72 @@
+#include "renderer/material_eval.h"
+
+namespace dynsky {
+
+ShadingPoint evaluate_material(const Scene& scene, const SurfaceHit& hit, const Vec3& wo) {
+    const Material& m = *hit.material;
+    ShadingPoint sp;
+    auto tex = [&](const TextureSlot& slot) { return scene.textures[size_t(slot.texture)]->evaluate(texture_uv(slot, hit)); };
+
+    sp.base_color = m.base_color * hit.color.head<3>().array();
+    if (m.base_color_texture.present()) sp.base_color *= tex(m.base_color_texture).head<3>().array();
+    sp.metallic = m.metallic, sp.roughness = m.roughness, sp.specular = m.specular;
+    if (m.metallic_roughness_texture.present()) {
+        Vec4 t = tex(m.metallic_roughness_texture);
+        sp.roughness *= t.y(), sp.metallic *= t.z();
+    }
+    sp.emission = m.emissive;
+    if (m.emissive_texture.present() && (m.emissive > 0).any()) sp.emission *= tex(m.emissive_texture).head<3>().array();
+    // occlusion_texture is not applied: a path tracer computes occlusion itself, and glTF defines
+    // it as a rasteriser's approximation of exactly that.
+
+    // Two-sided shading: put both normals on the viewer's side. Single-sided glTF materials are
+    // only culled by rasterisers; seen from behind they would otherwise render black.
+    Vec3 ng = hit.geometric_normal, ns = hit.shading_normal;
+    if (ng.dot(wo) < 0) ng = -ng;
+    if (ns.dot(ng) < 0) ns = -ns;
+
+    Vec3 t;
+    float handedness = 1;
+    if (hit.tangent.head<3>().squaredNorm() > 0) {
+        t = hit.tangent.head<3>();
+        handedness = hit.tangent.w();
+    } else {
+        Vec3 b;
+        orthonormal_basis(ns, &t, &b);
+    }
+    // Gram-Schmidt against the interpolated normal.
+    t = (t - ns * ns.dot(t));
+    if (t.squaredNorm() < 1e-12f) {
+        Vec3 b;
+        orthonormal_basis(ns, &t, &b);
+    }
+    t.normalize();
+    Vec3 b = ns.cross(t) * handedness;
+    if (hit.shading_normal.dot(ns) < 0) b = -b;  // flipped frame keeps the texture's orientation
+
+    if (m.normal_texture.present() && hit.tangent.head<3>().squaredNorm() > 0) {
+        Vec4 c = tex(m.normal_texture);
+        Vec3 nt(2 * c.x() - 1, 2 * c.y() - 1, 2 * c.z() - 1);
+        nt.x() *= m.normal_texture.scale, nt.y() *= m.normal_texture.scale;
+        Vec3 n = (nt.x() * t + nt.y() * b + nt.z() * ns);
+        if (n.squaredNorm() > 0) {
+            n.normalize();
+            if (n.dot(ng) > 0) ns = n;  // a mapped normal facing away from the surface is ignored
+        }
+    }
+    // The shading normal must see the viewer, or the BRDF is zero everywhere (black speckles):
+    // fall back to the geometric normal then.
+    if (ns.dot(wo) <= 1e-4f) ns = ng;
+    sp.geometric_normal = ng;
+    sp.normal = ns;
+    sp.tangent = (t - ns * ns.dot(t));
+    if (sp.tangent.squaredNorm() < 1e-12f) {
+        Vec3 bb;
+        orthonormal_basis(ns, &sp.tangent, &bb);
+    }
+    sp.tangent.normalize();
+    sp.bitangent = ns.cross(sp.tangent);
+    return sp;
+}
+
+}  // namespace dynsky

@@ -1,0 +1,29 @@
+// Evaluating a glTF material at a hit: textures, vertex colour, normal mapping, shading frame.
+#pragma once
+
+#include "renderer/accel.h"
+
+namespace dynsky {
+
+struct ShadingPoint {
+    Color base_color = Color::Ones();
+    float metallic = 1, roughness = 1, specular = 1;
+    Color emission = Color::Zero();
+    Vec3 geometric_normal;           // flipped to the side of wo
+    Vec3 normal, tangent, bitangent;  // shading frame (normal-mapped), on the side of wo
+
+    Vec3 to_local(const Vec3& w) const { return Vec3(w.dot(tangent), w.dot(bitangent), w.dot(normal)); }
+    Vec3 to_world(const Vec3& w) const { return w.x() * tangent + w.y() * bitangent + w.z() * normal; }
+};
+
+// uv of a texture slot at a hit, through its KHR_texture_transform.
+inline Vec2 texture_uv(const TextureSlot& slot, const SurfaceHit& hit) {
+    const Vec2& uv = hit.texcoord[slot.texcoord == 1 ? 1 : 0];
+    Eigen::Vector3f t = slot.uv_transform * Eigen::Vector3f(uv.x(), uv.y(), 1.0f);
+    return Vec2(t.x(), t.y());
+}
+
+// wo: world direction towards the viewer (unit).
+ShadingPoint evaluate_material(const Scene& scene, const SurfaceHit& hit, const Vec3& wo);
+
+}  // namespace dynsky

@@ -1,0 +1,84 @@
+#include "renderer/texture.h"
+
+#include <cmath>
+
+#include "util/color.h"
+#include "util/error.h"
+
+namespace dynsky {
+namespace {
+
+// Reduces a texture coordinate to a range where the texel index fits an int, without changing
+// which texels the wrap mode selects: Repeat has period 1, MirroredRepeat period 2, and clamping
+// beyond [-1, 2] changes nothing. NaN and infinities (from degenerate UVs) read at 0.
+float reduce_coordinate(float u, TextureWrap wrap) {
+    if (!std::isfinite(u)) return 0.0f;
+    switch (wrap) {
+        case TextureWrap::Repeat: return u - std::floor(u);
+        case TextureWrap::MirroredRepeat: return u - 2.0f * std::floor(0.5f * u);
+        case TextureWrap::ClampToEdge: return clamp(u, -1.0f, 2.0f);
+    }
+    return u;
+}
+
+// Texel index i (any integer) to [0, n) per the glTF (OpenGL) wrap mode.
+int wrap_index(int i, int n, TextureWrap wrap) {
+    switch (wrap) {
+        case TextureWrap::Repeat: {
+            int m = i % n;
+            return m < 0 ? m + n : m;
+        }
+        case TextureWrap::MirroredRepeat: {
+            int period = 2 * n;
+            int m = i % period;
+            if (m < 0) m += period;
+            return m < n ? m : period - 1 - m;
+        }
+        case TextureWrap::ClampToEdge: return clamp(i, 0, n - 1);
+    }
+    return 0;
+}
+
+}  // namespace
+
+Texture::Texture(std::string name, int width, int height, std::vector<float> rgba, bool srgb,
+                 TextureWrap wrap_s, TextureWrap wrap_t, TextureFilter filter)
+    : name_(std::move(name)), width_(width), height_(height), rgba_(std::move(rgba)),
+      wrap_s_(wrap_s), wrap_t_(wrap_t), filter_(filter) {
+    if (width_ <= 0 || height_ <= 0 || rgba_.size() != size_t(width_) * size_t(height_) * 4)
+        throw Error("texture '" + name_ + "': " + std::to_string(rgba_.size()) + " floats do not make a " +
+                    std::to_string(width_) + " x " + std::to_string(height_) + " RGBA image");
+    if (srgb) {
+        // Decode once here so that every lookup (and the bilinear blend) works in linear values.
+        // 8- and 16-bit sources have at most 65536 distinct values, but floats may come from
+        // anywhere, so decode each value (alpha is linear in glTF and stays untouched).
+        for (size_t i = 0; i < rgba_.size(); i += 4)
+            for (size_t c = 0; c < 3; ++c) rgba_[i + c] = srgb_to_linear(rgba_[i + c]);
+    }
+}
+
+Vec4 Texture::texel(int x, int y) const {
+    const float* p = &rgba_[(size_t(y) * size_t(width_) + size_t(x)) * 4];
+    return Vec4(p[0], p[1], p[2], p[3]);
+}
+
+Vec4 Texture::evaluate(const Vec2& uv) const {
+    float u = reduce_coordinate(uv.x(), wrap_s_);
+    float v = reduce_coordinate(uv.y(), wrap_t_);
+    if (filter_ == TextureFilter::Nearest) {
+        int x = wrap_index(int(std::floor(u * float(width_))), width_, wrap_s_);
+        int y = wrap_index(int(std::floor(v * float(height_))), height_, wrap_t_);
+        return texel(x, y);
+    }
+    // Texel centres sit at (i + 0.5) / size, as in OpenGL's LINEAR filter.
+    float fx = u * float(width_) - 0.5f, fy = v * float(height_) - 0.5f;
+    float x0f = std::floor(fx), y0f = std::floor(fy);
+    float tx = fx - x0f, ty = fy - y0f;
+    int x0 = int(x0f), y0 = int(y0f);
+    int xa = wrap_index(x0, width_, wrap_s_), xb = wrap_index(x0 + 1, width_, wrap_s_);
+    int ya = wrap_index(y0, height_, wrap_t_), yb = wrap_index(y0 + 1, height_, wrap_t_);
+    return (1 - ty) * ((1 - tx) * texel(xa, ya) + tx * texel(xb, ya)) +
+           ty * ((1 - tx) * texel(xa, yb) + tx * texel(xb, yb));
+}
+
+}  // namespace dynsky

@@ -1,0 +1,141 @@
+#include "sky/clear_sky.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "sky/fisheye.h"
+#include "util/error.h"
+
+namespace dynsky {
+
+namespace {
+
+// A sun below the horizon is raised to it, keeping its azimuth (north if it is at the nadir).
+Vec3d raise_to_horizon(const Vec3d& sun) {
+    if (sun.y() >= 0) return sun;
+    Vec3d flat(sun.x(), 0.0, sun.z());
+    double n = flat.norm();
+    return n > 1e-12 ? Vec3d(flat / n) : Vec3d(0, 0, -1);
+}
+
+}  // namespace
+
+void validate_clear_sky_params(const ClearSkyParams& params) {
+    validate_hosek_wilkie_range(params.turbidity, params.ground_albedo);
+    const Vec3d& s = params.sun_direction;
+    if (!s.allFinite() || !(s.norm() > 1e-9)) throw Error("the sun direction must be a finite, non-zero vector");
+}
+
+double ClearSkyModel::model_elevation(const Vec3d& sun) { return std::asin(std::clamp(sun.y(), 0.0, 1.0)); }
+
+ClearSkyModel::ClearSkyModel(const ClearSkyParams& params, bool warn)
+    : params_((validate_clear_sky_params(params), params)),
+      sun_(params.sun_direction.normalized()),
+      model_sun_(raise_to_horizon(sun_)),
+      clamped_(sun_.y() < 0),
+      model_(params.turbidity, params.ground_albedo, model_elevation(sun_)) {
+    if (warn && clamped_) std::fprintf(stderr, "dynsky: warning: %s\n", clamp_warning().c_str());
+}
+
+std::string ClearSkyModel::clamp_warning() const {
+    if (!clamped_) return "";
+    std::ostringstream s;
+    s.precision(3);
+    s << std::fixed << "the sun is " << -std::asin(sun_.y()) * 180 / kPiD
+      << " deg below the horizon, outside the Hosek-Wilkie model's 0..90 deg: the sky is computed with the sun at the horizon "
+         "(a sunset sky, not a twilight or night sky)";
+    return s.str();
+}
+
+Color ClearSkyModel::sky_radiance(const Vec3d& w_in) const {
+    double n = w_in.norm();
+    if (!(n > 0)) return Color::Zero();
+    Vec3d w = w_in / n;
+    if (w.y() < 0) return Color::Zero();
+    double cos_gamma = std::clamp(w.dot(model_sun_), -1.0, 1.0);
+    return model_.sky_radiance_rgb(w.y(), std::acos(cos_gamma), cos_gamma);
+}
+
+Color ClearSkyModel::sun_radiance(const Vec3d& w_in) const {
+    if (!params_.sun_disc) return Color::Zero();
+    double n = w_in.norm();
+    if (!(n > 0)) return Color::Zero();
+    Vec3d w = w_in / n;
+    if (w.y() < 0) return Color::Zero();
+    // atan2 of |cross| and dot keeps precision at the sub-degree angles of the disc.
+    double gamma = std::atan2(w.cross(sun_).norm(), w.dot(sun_));
+    return model_.solar_radiance_rgb(gamma);
+}
+
+Color ClearSkyModel::sun_irradiance() const { return params_.sun_disc ? model_.solar_irradiance_rgb() : Color::Zero(); }
+
+SkyImage make_clear_sky(const ClearSkyParams& params, int resolution) {
+    if (resolution < 1 || resolution > 32768)
+        throw Error("sky resolution " + std::to_string(resolution) + " is not in 1..32768 pixels");
+    ClearSkyModel model(params);
+    const int n = resolution;
+    SkyImage sky(n);
+
+    tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
+        for (int j = rows.begin(); j != rows.end(); ++j) {
+            for (int i = 0; i < n; ++i) {
+                Vec2 uv = fisheye::pixel_center_uv(i, j, n);
+                if (uv.squaredNorm() > 1.0f) continue;
+                Vec3d w = fisheye::direction_from_uv(double(uv.x()), double(uv.y()));
+                sky.set_pixel(i, j, model.sky_radiance(w));
+            }
+        }
+    });
+
+    if (params.sun_disc) {
+        // Splat the disc: equal-area rings in s = sin(gamma)/sin(R), each ring's exact irradiance
+        // split over its sectors, each sector's share added to the pixel holding its centre as
+        // radiance (share / pixel solid angle). Rings and sectors are fine enough for ~0.2-pixel
+        // spacing at any resolution.
+        const Vec3d& s = model.sun_direction();
+        Vec3d t = (std::abs(s.x()) < 0.9 ? Vec3d::UnitX() : Vec3d::UnitY()).cross(s).normalized();
+        Vec3d b = s.cross(t);
+        const double radius_px = kHosekWilkieSolarRadius / (kPiD / n);
+        const int rings = std::max(16, int(std::ceil(5 * radius_px)));
+        const int sectors = std::max(32, int(std::ceil(4 * kPiD * radius_px)));
+        const double sin_r = std::sin(kHosekWilkieSolarRadius);
+        for (int r = 0; r < rings; ++r) {
+            double s0 = std::sqrt(double(r) / rings), s1 = std::sqrt(double(r + 1) / rings);
+            Color share = model.model().solar_irradiance_rgb(s0, s1) / float(sectors);
+            double gamma = std::asin(std::sqrt(0.5 * (s0 * s0 + s1 * s1)) * sin_r);
+            for (int k = 0; k < sectors; ++k) {
+                double phi = 2 * kPiD * (k + 0.5) / sectors;
+                Vec3d w = std::cos(gamma) * s + std::sin(gamma) * (std::cos(phi) * t + std::sin(phi) * b);
+                double u, v;
+                if (!fisheye::uv_from_direction(w, &u, &v)) continue;  // below the horizon
+                int i = std::clamp(int(std::floor((u + 1) / 2 * n)), 0, n - 1);
+                int j = std::clamp(int(std::floor((v + 1) / 2 * n)), 0, n - 1);
+                double omega = fisheye::pixel_solid_angle(i, j, n);
+                if (omega <= 0) continue;  // the pixel's centre is outside the disc: it holds no sky
+                sky.set_pixel(i, j, sky.pixel(i, j) + share / float(omega));
+            }
+        }
+    }
+
+    sky.sun_direction = model.sun_direction().cast<float>();
+    std::ostringstream source;
+    source << "hosek-wilkie turbidity=" << params.turbidity << " albedo=" << params.ground_albedo
+           << (params.sun_disc ? "" : " no-sun");
+    sky.source = source.str();
+    return sky;
+}
+
+Color clear_sky_radiance(const ClearSkyParams& params, const Vec3d& direction) {
+    static std::atomic<bool> warned{false};
+    ClearSkyModel model(params, false);
+    if (model.elevation_clamped() && !warned.exchange(true))
+        std::fprintf(stderr, "dynsky: warning: %s\n", model.clamp_warning().c_str());
+    return model.radiance(direction);
+}
+
+}  // namespace dynsky

@@ -1,0 +1,42 @@
+// Equirectangular (lat-long) panoramas of a sky, so the same skies light Blender, Unreal and
+// other renderers that take an HDRI.
+//
+// Layout (W x H, W = 2H): pixel (c, r), row 0 at the top, has centre (u, v) = ((c + .5) / W, (r + .5) / H),
+//   zenith angle theta = pi v  (top row zenith, the horizon between the two middle rows, bottom nadir),
+//   azimuth      phi   = 2 pi u - pi / 2, measured from north towards east (CONVENTIONS.md):
+//   u = 0.25 north, u = 0.5 (centre column) east, u = 0.75 south, u = 0 and 1 west.
+// This is Blender's equirectangular mapping (Cycles' direction_to_equirectangular:
+// u = 0.5 - atan2(y, x) / 2 pi, Z up) for a world where north is +Y and east +X, which is where
+// Blender's glTF importer puts our north (-Z) and east (+X), so a dynsky latlong used as Blender's
+// Environment Texture with the default mapping lights an imported glTF scene from the right side.
+// The lower half (the ground) holds a constant colour (default black): a sky image says nothing
+// below the horizon.
+#pragma once
+
+#include "sky/sky_image.h"
+#include "util/image.h"
+#include "util/math.h"
+
+namespace dynsky {
+
+// Direction of a lat-long point (u, v) in [0, 1]^2 and back (u in [0, 1), v in [0, 1]).
+Vec3d latlong_direction(double u, double v);
+void latlong_uv(const Vec3d& w, double* u, double* v);
+
+// Exact solid angle of a pixel of row r in a W x H lat-long image.
+double latlong_pixel_solid_angle(int row, int width, int height);
+
+// Bilinear radiance of a fisheye sky in direction w, using only pixels whose centre lies inside
+// the disc (weights renormalised at the rim). Black below the horizon.
+Color sample_sky(const SkyImage& sky, const Vec3d& w);
+
+// Bilinear lookup in a lat-long image (wraps in azimuth, clamps at the poles).
+Color sample_latlong(const Image& latlong, const Vec3d& w);
+
+// The sky as a W x (W / 2) lat-long image (W even, >= 4). Each pixel averages (weighted by solid
+// angle) enough bilinear lookups of the fisheye to see every fisheye pixel it covers, so a sun
+// one fisheye pixel wide is neither missed nor doubled and the upper hemisphere's integral is kept.
+// Metadata: the sky's time, sun direction and source, plus the layout.
+Image sky_to_latlong(const SkyImage& sky, int width, const Color& ground = Color::Zero());
+
+}  // namespace dynsky

@@ -1,0 +1,104 @@
+#include "renderer/bsdf.h"
+
+#include <gtest/gtest.h>
+
+#include "renderer/sampling.h"
+
+namespace dynsky {
+namespace {
+
+Vec3 dir_from_theta(float theta) { return Vec3(std::sin(theta), 0, std::cos(theta)); }
+
+// Directional albedo by midpoint quadrature over (cos theta, phi): no sampling involved.
+Color albedo_quadrature(const MetalRoughBsdf& bsdf, const Vec3& wo, int n = 400) {
+    Eigen::Array3d sum = Eigen::Array3d::Zero();
+    for (int a = 0; a < n; ++a)
+        for (int b = 0; b < 2 * n; ++b) {
+            float z = (a + 0.5f) / n, phi = 2 * kPi * (b + 0.5f) / (2 * n), r = safe_sqrt(1 - z * z);
+            Vec3 wi(r * std::cos(phi), r * std::sin(phi), z);
+            sum += (bsdf.eval(wo, wi) * z).cast<double>();
+        }
+    return (sum * (2 * kPiD / (double(n) * 2 * n))).cast<float>();
+}
+
+double pdf_integral(const MetalRoughBsdf& bsdf, const Vec3& wo, int n = 400) {
+    double sum = 0;
+    for (int a = 0; a < n; ++a)
+        for (int b = 0; b < 2 * n; ++b) {
+            float z = (a + 0.5f) / n, phi = 2 * kPi * (b + 0.5f) / (2 * n), r = safe_sqrt(1 - z * z);
+            sum += bsdf.pdf(wo, Vec3(r * std::cos(phi), r * std::sin(phi), z));
+        }
+    return sum * 2 * kPiD / (double(n) * 2 * n);
+}
+
+TEST(MetalRoughBsdf, WhiteLambertianHasAlbedoOne) {
+    MetalRoughBsdf bsdf(Color::Ones(), 0.0f, 1.0f, 0.0f);
+    for (float theta : {0.0f, 0.7f, 1.3f}) {
+        Color a = albedo_quadrature(bsdf, dir_from_theta(theta));
+        EXPECT_NEAR(a[0], 1.0f, 2e-3f);
+    }
+}
+
+TEST(MetalRoughBsdf, NeverReflectsMoreThanItReceives) {
+    for (float metallic : {0.0f, 0.5f, 1.0f})
+        for (float roughness : {0.3f, 0.5f, 0.7f, 1.0f})
+            for (float theta : {0.0f, 0.8f, 1.2f, 1.4f}) {
+                MetalRoughBsdf bsdf(Color::Ones(), metallic, roughness);
+                Color a = albedo_quadrature(bsdf, dir_from_theta(theta), 500);
+                EXPECT_LE(a.maxCoeff(), 1.0f + 5e-3f) << "metallic " << metallic << " roughness " << roughness << " theta " << theta;
+                EXPECT_GT(a.minCoeff(), 0.3f);
+                // A white dielectric reflects everything: what the specular lobe does not, the base does.
+                if (metallic == 0) EXPECT_NEAR(a[0], 1.0f, 1e-2f) << "roughness " << roughness << " theta " << theta;
+            }
+}
+
+TEST(MetalRoughBsdf, PdfIntegratesToAtMostOne) {
+    for (float metallic : {0.0f, 1.0f})
+        for (float roughness : {0.3f, 0.8f})
+            for (float theta : {0.2f, 1.0f}) {
+                MetalRoughBsdf bsdf(Color(0.8f, 0.5f, 0.2f), metallic, roughness);
+                double integral = pdf_integral(bsdf, dir_from_theta(theta));
+                EXPECT_LE(integral, 1.0 + 5e-3);
+                // The visible-normal lobe loses only what reflects below the horizon.
+                EXPECT_GT(integral, 0.6);
+            }
+}
+
+TEST(MetalRoughBsdf, SampledEstimateMatchesQuadrature) {
+    // E[f cos / pdf] over sampled directions equals the quadrature albedo iff the sampler draws
+    // from the pdf it reports.
+    for (float metallic : {0.0f, 1.0f})
+        for (float roughness : {0.2f, 0.6f}) {
+            MetalRoughBsdf bsdf(Color(0.9f, 0.6f, 0.3f), metallic, roughness);
+            Vec3 wo = dir_from_theta(0.9f);
+            Color exact = albedo_quadrature(bsdf, wo, 1000);
+            Rng rng(17, 3);
+            const int n = 400000;
+            Eigen::Array3d sum = Eigen::Array3d::Zero(), sum2 = Eigen::Array3d::Zero();
+            for (int k = 0; k < n; ++k) {
+                BsdfSample s;
+                float ul = rng.uniform();
+                Vec2 u = rng.uniform2();
+                if (!bsdf.sample(wo, ul, u, &s)) continue;
+                EXPECT_NEAR(s.pdf, bsdf.pdf(wo, s.wi), 1e-3f * s.pdf);
+                Eigen::Array3d v = (s.f * (s.wi.z() / s.pdf)).cast<double>();
+                sum += v, sum2 += v * v;
+            }
+            Eigen::Array3d mean = sum / n, se = ((sum2 / n - mean * mean) / n).sqrt();
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(mean[c], exact[c], 4 * se[c] + 2e-3) << "metallic " << metallic << " roughness " << roughness;
+        }
+}
+
+TEST(MetalRoughBsdf, IsReciprocal) {
+    MetalRoughBsdf bsdf(Color(0.7f, 0.4f, 0.9f), 0.3f, 0.45f);
+    Rng rng(1, 1);
+    for (int k = 0; k < 1000; ++k) {
+        Vec3 a = sample_cosine_hemisphere(rng.uniform2()), b = sample_cosine_hemisphere(rng.uniform2());
+        Color f1 = bsdf.eval(a, b), f2 = bsdf.eval(b, a);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(f1[c], f2[c], 1e-4f * std::max(1.0f, f1[c]));
+    }
+}
+
+}  // namespace
+}  // namespace dynsky

@@ -1,0 +1,3 @@
+#include "renderer/gltf_loader.h"
+
+#include <gtest/gtest.h>

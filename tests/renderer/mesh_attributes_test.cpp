@@ -1,0 +1,3 @@
+#include "renderer/mesh_attributes.h"
+
+#include <gtest/gtest.h>
