@@ -1,9 +1,164 @@
+// dynsky render: one image of a glTF scene (or the built-in plaza) under a fisheye sky.
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <filesystem>
+#include <memory>
+#include <regex>
+
 #include "cli/commands.h"
+#include "renderer/builtin_scene.h"
+#include "renderer/gltf_loader.h"
+#include "renderer/integrator.h"
+#include "sky/clear_sky.h"
+#include "sky/sun_position.h"
+#include "util/error.h"
 
 namespace dynsky::cli {
 
+namespace {
+
+struct RenderOptions {
+    std::string scene = "builtin";
+    std::string sky;
+    std::string out = "render.exr";
+    std::string resolution = "960x540";
+    int spp = 64;
+    int camera = 0;
+    uint64_t seed = 0;
+    int threads = 0;
+    float ground_albedo = 0.3f;
+    int max_depth = 8;
+    float exposure = std::numeric_limits<float>::quiet_NaN();  // NaN: automatic
+    bool quiet = false;
+};
+
+void parse_resolution(const std::string& text, int* w, int* h) {
+    std::smatch m;
+    std::regex re("^([0-9]+)x([0-9]+)$");
+    if (!std::regex_match(text, m, re)) throw Error("--res '" + text + "': expected WIDTHxHEIGHT, e.g. 1280x720");
+    *w = std::stoi(m[1]), *h = std::stoi(m[2]);
+    if (*w < 1 || *h < 1 || *w > 16384 || *h > 16384) throw Error("--res '" + text + "': each side must be 1..16384");
+}
+
+// The default sky when --sky is not given: a clear afternoon over Paris at the summer solstice.
+std::shared_ptr<SkyImage> default_sky() {
+    ClearSkyParams p;
+    GeoLocation where{48.8566, 2.3522, 35};
+    p.sun_direction = compute_sun_position(parse_utc_time("2026-06-21T16:00:00Z"), where).direction();
+    p.turbidity = 3;
+    auto sky = std::make_shared<SkyImage>(make_clear_sky(p, 1024));
+    sky->source = "builtin: clear sky, Paris 2026-06-21T16:00:00Z, turbidity 3";
+    return sky;
+}
+
+int run_render(const RenderOptions& o) {
+    // Everything that can be wrong with the input is checked before any pixel is traced, so a
+    // bad run leaves no output behind.
+    int width, height;
+    parse_resolution(o.resolution, &width, &height);
+    std::string ext = file_extension(o.out);
+    if (ext != ".exr" && ext != ".png") throw Error(o.out + ": output must end in .exr or .png");
+    if (o.spp < 1) throw Error("--spp must be at least 1");
+    if (!(o.ground_albedo >= 0 && o.ground_albedo <= 1)) throw Error("--ground-albedo must be in [0, 1]");
+
+    std::unique_ptr<tbb::global_control> threads;
+    if (o.threads > 0) threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
+
+    Scene scene;
+    if (o.scene == "builtin") {
+        scene = make_builtin_scene();
+    } else {
+        scene = load_gltf(o.scene);
+        for (const std::string& w : scene.warnings) std::fprintf(stderr, "dynsky: warning: %s\n", w.c_str());
+    }
+    if (scene.instances.empty()) throw Error(o.scene + ": the scene has no triangles to render");
+
+    Camera camera;
+    if (scene.cameras.empty()) {
+        if (o.camera != 0) throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " asked for, but the file has no cameras");
+        camera = frame_bounds_camera(scene.world_bounds(), float(width) / height);
+    } else {
+        if (o.camera < 0 || o.camera >= int(scene.cameras.size()))
+            throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " is out of range (the file has " +
+                        std::to_string(scene.cameras.size()) + " perspective camera(s), numbered from 0)");
+        camera = scene.cameras[size_t(o.camera)];
+    }
+
+    std::shared_ptr<SkyImage> sky;
+    if (o.sky.empty()) {
+        sky = default_sky();
+    } else {
+        sky = std::make_shared<SkyImage>(load_sky(o.sky));
+    }
+
+    Accel accel(scene);
+    EnvLight light(sky, o.ground_albedo);
+    if (!o.quiet)
+        std::fprintf(stderr, "scene: %s, %zu triangles, %zu instances; sky: %s (%dx%d), distribution built in %.2f ms\n",
+                     o.scene.c_str(), scene.triangle_count(), scene.instances.size(), sky->source.c_str(), sky->resolution,
+                     sky->resolution, light.last_build_seconds() * 1e3);
+
+    RenderSettings settings;
+    settings.width = width, settings.height = height, settings.spp = o.spp, settings.seed = o.seed;
+    settings.max_depth = o.max_depth, settings.quiet = o.quiet;
+    PathIntegrator integrator(accel, light, settings);
+    RenderResult result = integrator.render(camera);
+
+    Image& image = result.color;
+    image.metadata.numbers["dynsky:spp"] = o.spp;
+    image.metadata.numbers["dynsky:seed"] = double(o.seed);
+    image.metadata.numbers["dynsky:render_seconds"] = result.stats.seconds;
+    image.metadata.numbers["dynsky:sky_distribution_seconds"] = light.last_build_seconds();
+    image.metadata.numbers["dynsky:ground_albedo"] = o.ground_albedo;
+    image.metadata.numbers["dynsky:sky_time"] = sky->time_seconds;
+    image.metadata.strings["dynsky:sky"] = sky->source;
+    image.metadata.strings["dynsky:scene"] = o.scene;
+    image.metadata.strings["dynsky:camera"] = camera.name;
+    float ev = std::isnan(o.exposure) ? auto_exposure_ev(image) : o.exposure;
+    image.metadata.numbers["dynsky:png_exposure_ev"] = ev;
+    if (ext == ".exr") {
+        write_image(o.out, image);
+        std::string png = std::filesystem::path(o.out).replace_extension(".png").string();
+        write_image(png, tonemap_to_display(image, ev));
+        if (!o.quiet) std::fprintf(stderr, "wrote %s and %s\n", o.out.c_str(), png.c_str());
+    } else {
+        write_image(o.out, tonemap_to_display(image, ev));
+        if (!o.quiet) std::fprintf(stderr, "wrote %s\n", o.out.c_str());
+    }
+    if (!o.quiet)
+        std::fprintf(stderr, "rendered %dx%d at %d spp in %.2f s: %.2f M rays/s\n", width, height, o.spp, result.stats.seconds,
+                     result.stats.total_rays() / result.stats.seconds * 1e-6);
+    return 0;
+}
+
+}  // namespace
+
 void register_render_command(CLI::App& app) {
-    app.add_subcommand("render", "Render a glTF 2.0 scene under a fisheye sky");
+    auto o = std::make_shared<RenderOptions>();
+    CLI::App* cmd = app.add_subcommand("render", "Render a glTF 2.0 scene under a fisheye sky (path traced, CPU)");
+    cmd->add_option("scene", o->scene, "Scene: a .gltf or .glb file, or 'builtin' for the built-in plaza")->capture_default_str();
+    cmd->add_option("--sky", o->sky,
+                    "Sky image: canonical fisheye EXR (square, equidistant, north up, east left; see 'dynsky sky').\n"
+                    "Default: a built-in clear sky (Paris, 2026-06-21 16:00 UTC, turbidity 3)");
+    cmd->add_option("--out,-o", o->out, "Output image: .exr (linear, with metadata; a tone-mapped .png is written beside it) or .png")
+        ->capture_default_str();
+    cmd->add_option("--res", o->resolution, "Image size WIDTHxHEIGHT")->capture_default_str();
+    cmd->add_option("--spp", o->spp, "Samples per pixel")->capture_default_str();
+    cmd->add_option("--camera", o->camera, "Index of the glTF perspective camera to use (the scene's bounds are framed when it has none)")
+        ->capture_default_str();
+    cmd->add_option("--seed", o->seed, "Random seed: the same seed gives the same image on any thread count")->capture_default_str();
+    cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")->capture_default_str();
+    cmd->add_option("--ground-albedo", o->ground_albedo,
+                    "Albedo of the ground model below the horizon: a Lambertian plane lit by the sky, radiance albedo * E_sky / pi")
+        ->capture_default_str();
+    cmd->add_option("--max-depth", o->max_depth, "Maximum path length (bounces)")->capture_default_str();
+    cmd->add_option("--exposure", o->exposure,
+                    "Exposure of the PNG in stops (default: automatic, log-average luminance to middle grey; EXR pixels are never scaled)");
+    cmd->add_flag("--quiet,-q", o->quiet, "No progress bar or summary");
+    cmd->callback([o] { run_render(*o); });
 }
 
 }  // namespace dynsky::cli

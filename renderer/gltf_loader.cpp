@@ -18,7 +18,6 @@
 
 #include "renderer/mesh_attributes.h"
 #include "util/error.h"
-#include "util/image.h"
 
 namespace dynsky {
 
@@ -584,14 +583,17 @@ class GltfLoader {
                 return;
             }
             decoded[k].width = img.width, decoded[k].height = img.height;
-            decoded[k].rgba.resize(n);
+            std::vector<float>& rgba = decoded[k].rgba;
+            rgba.resize(n);
+            const unsigned char* src = img.image.data();
+            float* dst = rgba.data();
             if (img.bits == 8) {
-                for (size_t j = 0; j < n; ++j) decoded[k].rgba[j] = float(img.image[j]) * (1.0f / 255.0f);
+                for (size_t j = 0; j < n; ++j) dst[j] = float(src[j]) * (1.0f / 255.0f);
             } else {
                 for (size_t j = 0; j < n; ++j) {
                     uint16_t v;
-                    std::memcpy(&v, &img.image[2 * j], 2);
-                    decoded[k].rgba[j] = float(v) * (1.0f / 65535.0f);
+                    std::memcpy(&v, src + 2 * j, 2);
+                    dst[j] = float(v) * (1.0f / 65535.0f);
                 }
             }
         });
@@ -609,22 +611,30 @@ class GltfLoader {
         }
 
         // One Texture per (image, sampler, colour space); sRGB decoding happens in the constructor.
+        // Per image, the last texture made from it takes its pixels instead of copying them.
+        std::vector<std::vector<size_t>> requests_of_image(images.size());
+        for (size_t r = 0; r < requests_.size(); ++r)
+            requests_of_image[size_t(std::lower_bound(images.begin(), images.end(), requests_[r].image) - images.begin())]
+                .push_back(r);
         scene_.textures.resize(requests_.size());
-        tbb::parallel_for(size_t(0), requests_.size(), [&](size_t r) {
-            const TextureRequest& req = requests_[r];
-            size_t k = size_t(std::lower_bound(images.begin(), images.end(), req.image) - images.begin());
-            TextureWrap ws = TextureWrap::Repeat, wt = TextureWrap::Repeat;
-            TextureFilter filter = TextureFilter::Linear;
-            if (req.sampler >= 0) {
-                const tg::Sampler& s = model_.samplers[size_t(req.sampler)];
-                ws = wrap_mode(s.wrapS), wt = wrap_mode(s.wrapT);
-                // No mip maps: the magnification filter decides; minFilter is ignored.
-                if (s.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST) filter = TextureFilter::Nearest;
+        tbb::parallel_for(size_t(0), images.size(), [&](size_t k) {
+            const std::vector<size_t>& users = requests_of_image[k];
+            for (size_t u = 0; u < users.size(); ++u) {
+                const TextureRequest& req = requests_[users[u]];
+                TextureWrap ws = TextureWrap::Repeat, wt = TextureWrap::Repeat;
+                TextureFilter filter = TextureFilter::Linear;
+                if (req.sampler >= 0) {
+                    const tg::Sampler& s = model_.samplers[size_t(req.sampler)];
+                    ws = wrap_mode(s.wrapS), wt = wrap_mode(s.wrapT);
+                    // No mip maps: the magnification filter decides; minFilter is ignored.
+                    if (s.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST) filter = TextureFilter::Nearest;
+                }
+                const tg::Image& img = model_.images[size_t(req.image)];
+                std::string name = !img.name.empty() ? img.name : !img.uri.empty() ? img.uri : "image " + std::to_string(req.image);
+                std::vector<float> rgba = u + 1 == users.size() ? std::move(decoded[k].rgba) : decoded[k].rgba;
+                scene_.textures[users[u]] = std::make_shared<Texture>(name, decoded[k].width, decoded[k].height,
+                                                                      std::move(rgba), req.srgb, ws, wt, filter);
             }
-            const tg::Image& img = model_.images[size_t(req.image)];
-            std::string name = !img.name.empty() ? img.name : !img.uri.empty() ? img.uri : "image " + std::to_string(req.image);
-            scene_.textures[r] = std::make_shared<Texture>(name, decoded[k].width, decoded[k].height, decoded[k].rgba,
-                                                           req.srgb, ws, wt, filter);
         });
     }
 

@@ -116,6 +116,17 @@ void split_band(double wavelength_nm, int* band, double* frac) {
     }
 }
 
+// A low sun's spectrum lies outside the Rec.709 gamut (negative blue). Desaturate towards the
+// grey of equal luminance just enough to reach the gamut: luminance, so photometric energy, is kept.
+Eigen::Array3d desaturate_into_gamut(const Eigen::Array3d& rgb) {
+    double y = 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
+    if (!(y > 0)) return Eigen::Array3d::Zero();
+    double lowest = rgb.minCoeff();
+    if (lowest >= 0) return rgb;
+    double t = y / (y - lowest);
+    return (y + t * (rgb - y)).max(0.0);
+}
+
 }  // namespace
 
 HosekWilkieData load_hosek_wilkie_data(const std::string& folder, const std::string& cie_csv) {
@@ -291,7 +302,7 @@ Color HosekWilkieSky::solar_radiance_rgb(double gamma) const {
     Eigen::Array3d sum = Eigen::Array3d::Zero();
     double mu_k = 1;
     for (int j = 0; j < 6; ++j, mu_k *= mu) sum += rgb_limb_[j] * mu_k;
-    return sum.max(0.0).cast<float>();
+    return desaturate_into_gamut(sum).cast<float>();
 }
 
 Color HosekWilkieSky::solar_irradiance_rgb(double s0, double s1) const {
@@ -307,7 +318,7 @@ Color HosekWilkieSky::solar_irradiance_rgb(double s0, double s1) const {
         double e = j / 2.0 + 1.0;
         sum += rgb_limb_[j] * ((std::pow(u_hi, e) - std::pow(u_lo, e)) / e);
     }
-    return (kPiD * sin_r * sin_r * sum).max(0.0).cast<float>();
+    return desaturate_into_gamut(kPiD * sin_r * sin_r * sum).cast<float>();
 }
 
 Color HosekWilkieSky::solar_irradiance_rgb() const { return solar_irradiance_rgb(0.0, 1.0); }

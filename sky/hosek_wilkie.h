@@ -73,7 +73,9 @@ class HosekWilkieSky {
     // gamma from the sun's centre (limb darkened), 0 outside the disc; sky not included. Matches
     // the reference arhosekskymodel_solar_radiance_internal2 at this state's sun elevation.
     double solar_spectral_radiance(double wavelength_nm, double gamma) const;
-    // The same integrated to linear Rec.709 RGB, W m^-2 sr^-1 (the sky's unit).
+    // The same integrated to linear Rec.709 RGB, W m^-2 sr^-1 (the sky's unit). A low sun is
+    // redder than Rec.709 can hold (negative blue): such colours are desaturated towards the grey
+    // of the same luminance until no channel is negative, so the luminance is exact.
     Color solar_radiance_rgb(double gamma) const;
     // Direct normal irradiance from the whole disc, W m^-2 in the same unit (integral of
     // solar_radiance_rgb over the disc's solid angle).

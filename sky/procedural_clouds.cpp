@@ -16,7 +16,6 @@ namespace dynsky {
 namespace {
 
 constexpr double kSunHalfAngle = 0.5 * 0.533 * kPiD / 180.0;
-const double kSunSolidAngle = 2.0 * kPiD * (1.0 - std::cos(kSunHalfAngle));
 
 // Henyey-Greenstein phase function (per steradian).
 inline double henyey_greenstein(double cos_theta, double g) {
@@ -156,6 +155,7 @@ struct LayerModel {
 
 struct LayerHit {
     double alpha = 0.0;            // visible opacity (aerial perspective included)
+    double direct = 1.0;           // transmittance of the cloud itself, for the sun disc behind it
     Color radiance = Color::Zero();  // premultiplied by alpha
 };
 
@@ -189,6 +189,7 @@ void validate_procedural_params(const ProceduralSkyParams& p) {
     require(finite(p.visibility_m) && p.visibility_m > 0.0, "visibility must be a positive distance in metres");
     const Vec3d& sun = p.clear_sky.sun_direction;
     require(sun.allFinite() && sun.norm() > 0.0, "the sun direction must be a finite, non-zero vector");
+    validate_clear_sky_params(p.clear_sky);
     for (size_t k = 0; k < p.layers.size(); ++k) {
         const CloudLayer& l = p.layers[k];
         std::string name = "layer " + std::to_string(k) + ": ";
@@ -247,6 +248,7 @@ struct ProceduralSky::Impl {
     Color sky_ambient = Color::Zero();     // cosine-weighted mean radiance of the clear sky
     Color ground_radiance = Color::Zero(); // light reflected by the ground onto cloud bases
     SkyImage clear;                        // cached clear sky (resolution 0: none)
+    SkyImage clear_no_disc;                // the same without the sun disc
 
     explicit Impl(const ProceduralSkyParams& p) : params(p) {
         validate_procedural_params(p);
@@ -264,15 +266,12 @@ struct ProceduralSky::Impl {
 
     void update_lighting() {
         sun = params.clear_sky.sun_direction.normalized();
-        clear = SkyImage();
-        ClearSkyParams with_disc = params.clear_sky, no_disc = params.clear_sky;
-        with_disc.sun_disc = true;
-        no_disc.sun_disc = false;
-        sun_irradiance = Color::Zero();
-        if (sun.y() > 0.0) {
-            Color disc = clear_sky_radiance(with_disc, sun) - clear_sky_radiance(no_disc, sun);
-            sun_irradiance = disc.max(0.0f) * float(kSunSolidAngle);
-        }
+        clear = clear_no_disc = SkyImage();
+        // The sun lights the clouds whether or not the image shows its disc.
+        ClearSkyParams lit = params.clear_sky;
+        lit.sun_disc = true;
+        ClearSkyModel model(lit, /*warn=*/false);
+        sun_irradiance = sun.y() > 0.0 ? model.sun_irradiance() : Color::Zero();
         // Irradiance from the clear sky on a horizontal surface, by midpoint quadrature.
         const int nt = 16, np = 32;
         Eigen::Array3d e = Eigen::Array3d::Zero();
@@ -280,7 +279,7 @@ struct ProceduralSky::Impl {
             double theta = (a + 0.5) * (kPiD / 2) / nt;
             for (int b = 0; b < np; ++b) {
                 double phi = (b + 0.5) * 2 * kPiD / np;
-                Color l = clear_sky_radiance(no_disc, fisheye::direction_from_angles(theta, phi));
+                Color l = model.sky_radiance(fisheye::direction_from_angles(theta, phi));
                 e += l.cast<double>() * std::cos(theta) * std::sin(theta) * (kPiD / 2 / nt) * (2 * kPiD / np);
             }
         }
@@ -291,7 +290,12 @@ struct ProceduralSky::Impl {
     }
 
     const SkyImage& clear_sky(int n) {
-        if (clear.resolution != n) clear = make_clear_sky(params.clear_sky, n);
+        if (clear.resolution != n) {
+            clear = make_clear_sky(params.clear_sky, n);
+            ClearSkyParams no_disc = params.clear_sky;
+            no_disc.sun_disc = false;
+            clear_no_disc = params.clear_sky.sun_disc ? make_clear_sky(no_disc, n) : clear;
+        }
         return clear;
     }
 
@@ -331,6 +335,7 @@ struct ProceduralSky::Impl {
         double alpha = -std::expm1(-tau_view);
         double air = std::exp(-dist / params.visibility_m);
         out.alpha = alpha * air;
+        out.direct = 1.0 - alpha;
         if (out.alpha <= 0.0) return out;
 
         double t_diff = diffuse_transmittance(tau_vertical);
@@ -358,10 +363,13 @@ struct ProceduralSky::Impl {
             double light_extinction = std::min(0.1 * spec.optical_depth, 3.0);
             double t_light = std::exp(-light_extinction * (0.5 * density + 0.5 * toward) / std::max(mu, 0.2));
             double cos_gamma = d.dot(sun);
-            double single = cloud_phase(cos_gamma) * t_light;
+            // Single scattering towards the viewer survives only where the cloud is thin along
+            // the view (tau e^-tau, divided by the alpha it is later multiplied by): bright
+            // silver linings at the edges, dark cores, no sun shining through a thick cloud.
+            double single = cloud_phase(cos_gamma) * t_light * tau_view * std::exp(-tau_view) / alpha;
             // Seen from below a cloud shows its base, lit by what diffuses through it; towards the
             // horizon more and more of its sides, bright where they face the sun.
-            double base = mu / kPiD * t_diff * (0.3 + 0.7 * t_light);
+            double base = mu / kPiD * (0.1 + 0.9 * t_diff) * (0.3 + 0.7 * t_light);
             double dh = std::sqrt(std::max(0.0, 1.0 - d.y() * d.y()));
             double side_facing = dh > 1e-6 ? std::max(0.0, -(d.x() * sun.x() + d.z() * sun.z()) / dh) : 0.0;
             double side = 0.9 * side_facing / kPiD * (0.4 + 0.6 * t_light);
@@ -400,9 +408,19 @@ struct ProceduralSky::Impl {
                     if (d.y() <= 1e-9 || nl == 0) continue;
                     for (size_t k = 0; k < nl; ++k) hits[k] = hit(k, d, time_s, pixel_angle);
                     // Composite from the highest layer down; the lowest is nearest the viewer.
-                    Color c = out.pixel(i, j);
-                    for (size_t k = nl; k-- > 0;) c = c * float(1.0 - hits[k].alpha) + hits[k].radiance;
-                    out.set_pixel(i, j, c);
+                    // Haze between viewer and cloud (aerial perspective) shows the sky's light,
+                    // never the sun's disc, which only the clouds' own transmittance lets through.
+                    bool any = false;
+                    for (size_t k = 0; k < nl; ++k) any = any || hits[k].alpha > 0.0;
+                    if (any) {
+                        Color sky_light = clear_no_disc.pixel(i, j);
+                        Color disc = (out.pixel(i, j) - sky_light).max(0.0f);
+                        for (size_t k = nl; k-- > 0;) {
+                            sky_light = sky_light * float(1.0 - hits[k].alpha) + hits[k].radiance;
+                            disc *= float(hits[k].direct);
+                        }
+                        out.set_pixel(i, j, sky_light + disc);
+                    }
                     if (!flow_out) continue;
                     // The flow is the most visible layer's: its opacity times what the layers
                     // below it let through.

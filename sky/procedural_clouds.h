@@ -35,7 +35,7 @@ struct CloudLayer {
                                      // reports' convention: 270 = westerly, clouds drift east)
     double feature_size_m = 800.0;   // size of the largest cloud features (across the wind)
     double stretch = 1.0;            // elongation along the wind (cirrus streaks: > 1)
-    double optical_depth = 30.0;     // vertical optical depth where the density is 1
+    double optical_depth = 20.0;     // vertical optical depth where the density is 1
     double edge_softness = 1.0;      // width of the density ramp at cloud edges, in noise sigmas
     double evolution_time_s = 900.0; // time for the largest features to change shape; 0 freezes
                                      // the shapes (pure advection)

@@ -39,10 +39,12 @@ void ProgressBar::finish() {
     finished_ = true;
     if (quiet_) return;
     std::lock_guard<std::mutex> lock(mutex_);
+    if (!tty_ && last_drawn_ == done_.load()) return;  // a log already has this line
     draw(done_.load(), true);
 }
 
 void ProgressBar::draw(long long done, bool final) {
+    last_drawn_ = done;
     double frac = std::min(1.0, double(done) / double(total_));
     double t = elapsed_seconds();
     double eta = frac > 0 ? t * (1 - frac) / frac : 0;

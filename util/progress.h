@@ -23,6 +23,7 @@ class ProgressBar {
     std::string label_;
     bool quiet_, finished_ = false, tty_;
     std::atomic<long long> done_{0};
+    long long last_drawn_ = -1;
     std::mutex mutex_;
     std::chrono::steady_clock::time_point start_, last_draw_;
 };

@@ -1,3 +1,642 @@
 #include "renderer/gltf_loader.h"
 
 #include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <map>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "tests/test_support.h"
+#include "util/color.h"
+#include "util/error.h"
+#include "util/image.h"
+
+namespace dynsky {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string read_text(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+void write_bytes(const std::string& path, const std::string& bytes) {
+    std::ofstream out(path, std::ios::binary);
+    out.write(bytes.data(), std::streamsize(bytes.size()));
+}
+
+std::string scene_path(const std::string& relative) { return test::shared_path("scenes/" + relative); }
+
+// The message of the dynsky::Error that loading `path` throws ("" if it loads).
+std::string load_error(const std::string& path) {
+    try {
+        load_gltf(path);
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "";
+}
+
+int instances_of(const Scene& s, int group) {
+    int n = 0;
+    for (const Instance& i : s.instances) n += i.mesh_group == group;
+    return n;
+}
+
+int group_named(const Scene& s, const std::string& name) {
+    for (size_t i = 0; i < s.meshes.size(); ++i)
+        if (s.meshes[i].name == name) return int(i);
+    return -1;
+}
+
+const Material* material_named(const Scene& s, const std::string& name) {
+    for (const Material& m : s.materials)
+        if (m.name == name) return &m;
+    return nullptr;
+}
+
+bool has_warning_containing(const Scene& s, const std::string& text) {
+    for (const std::string& w : s.warnings)
+        if (w.find(text) != std::string::npos) return true;
+    return false;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Real scenes from ../shared/scenes
+
+// The scenes the feature tests below inspect, loaded once per test program (decoding their
+// 2048-pixel textures is most of this file's run time). Others are loaded and dropped.
+const std::set<std::string> kInspected = {
+    "SimpleInstancing/SimpleInstancing.glb", "CesiumMilkTruck/CesiumMilkTruck.glb", "Cameras/Cameras.gltf",
+    "OrientationTest/OrientationTest.glb", "EmissiveStrengthTest/EmissiveStrengthTest.glb",
+    "ClearCoatTest/ClearCoatTest.glb", "GlassBrokenWindow/GlassBrokenWindow.glb"};
+
+const Scene& inspected_scene(const std::string& relative) {
+    static std::map<std::string, Scene> cache;
+    auto it = cache.find(relative);
+    if (it == cache.end()) it = cache.emplace(relative, load_gltf(scene_path(relative))).first;
+    return it->second;
+}
+
+// Scene file -> triangle count, as ../shared/scenes/PROVENANCE.md states them.
+std::map<std::string, size_t> provenance_triangle_counts() {
+    std::string text = read_text(scene_path("PROVENANCE.md"));
+    std::map<std::string, size_t> counts;
+    std::regex section("^## (\\S+)"), triangles("\\*\\*Triangles:\\*\\* ([0-9,]+)"), path_re("`([^`]+\\.gl(b|tf))`"),
+        tile("`([^`]+\\.glb)` ([0-9,]+) tris");
+    auto number = [](std::string s) {
+        s.erase(std::remove(s.begin(), s.end(), ','), s.end());
+        return size_t(std::stoull(s));
+    };
+    std::istringstream in(text);
+    std::string line, folder, file;
+    std::smatch m;
+    while (std::getline(in, line)) {
+        if (std::regex_search(line, m, section)) folder = m[1], file.clear();
+        if (line.find("**Repo / commit / path:**") != std::string::npos && std::regex_search(line, m, path_re))
+            file = fs::path(m[1].str()).filename().string();
+        if (std::regex_search(line, m, triangles) && !file.empty()) counts[folder + "/" + file] = number(m[1]);
+        if (line.find("**Tiles:**") != std::string::npos)
+            for (auto it = std::sregex_iterator(line.begin(), line.end(), tile); it != std::sregex_iterator(); ++it)
+                counts[folder + "/" + (*it)[1].str()] = number((*it)[2].str());
+    }
+    return counts;
+}
+
+TEST(GltfLoader, EverySharedSceneLoadsWithTheTriangleCountProvenanceStates) {
+    DYNSKY_REQUIRE_SHARED();
+    std::map<std::string, size_t> counts = provenance_triangle_counts();
+    // 15 scene folders with one file each, plus the 15 KenneyCityKit tiles.
+    ASSERT_EQ(counts.size(), 30u) << "PROVENANCE.md parse";
+    for (const auto& [file, triangles] : counts) {
+        SCOPED_TRACE(file);
+        ASSERT_TRUE(fs::exists(scene_path(file)));
+        Scene loaded;
+        const Scene& s = kInspected.count(file) ? inspected_scene(file) : (loaded = load_gltf(scene_path(file)));
+        EXPECT_EQ(s.triangle_count(), triangles);
+        EXPECT_FALSE(s.world_bounds().empty());
+        for (const MeshGroup& g : s.meshes)
+            for (const TriangleMesh& m : g.primitives) {
+                size_t n = m.positions.size();
+                ASSERT_EQ(m.normals.size(), n);
+                ASSERT_EQ(m.tangents.size(), n);
+                for (const auto& uv : m.texcoords) ASSERT_TRUE(uv.empty() || uv.size() == n);
+                for (uint32_t i : m.indices) ASSERT_LT(i, n);
+                ASSERT_LT(m.material, int(s.materials.size()));
+            }
+    }
+}
+
+TEST(GltfLoader, SimpleInstancingMakesOneInstancePerGpuInstance) {
+    DYNSKY_REQUIRE_SHARED();
+    const Scene& s = inspected_scene("SimpleInstancing/SimpleInstancing.glb");
+    ASSERT_EQ(s.meshes.size(), 1u);
+    ASSERT_EQ(s.instances.size(), 125u);
+    EXPECT_EQ(instances_of(s, 0), 125);
+    // The TRANSLATION accessor spans [0, 10]^3 (its min/max): 5 x 5 x 5 distinct positions.
+    Vec3 lo = Vec3::Constant(1e9f), hi = Vec3::Constant(-1e9f);
+    std::set<std::tuple<int, int, int>> distinct;
+    for (const Instance& i : s.instances) {
+        Vec3 t = i.transform.translation();
+        lo = lo.cwiseMin(t), hi = hi.cwiseMax(t);
+        distinct.insert({int(std::lround(t.x() * 100)), int(std::lround(t.y() * 100)), int(std::lround(t.z() * 100))});
+    }
+    EXPECT_EQ(distinct.size(), 125u);
+    EXPECT_NEAR((lo - Vec3::Zero()).norm(), 0.0f, 1e-5f);
+    EXPECT_NEAR((hi - Vec3::Constant(10)).norm(), 0.0f, 1e-5f);
+    EXPECT_FALSE(has_warning_containing(s, "EXT_mesh_gpu_instancing"));
+}
+
+TEST(GltfLoader, CesiumMilkTruckBuildsTheWheelMeshOnceForTwoNodes) {
+    DYNSKY_REQUIRE_SHARED();
+    const Scene& s = inspected_scene("CesiumMilkTruck/CesiumMilkTruck.glb");
+    ASSERT_EQ(s.meshes.size(), 2u);  // the file's two meshes, each built once
+    int wheels = group_named(s, "Wheels");
+    ASSERT_GE(wheels, 0);
+    EXPECT_EQ(instances_of(s, wheels), 2);
+    std::vector<Vec3> where;
+    for (const Instance& i : s.instances)
+        if (i.mesh_group == wheels) where.push_back(i.transform.translation());
+    EXPECT_GT((where[0] - where[1]).norm(), 1.0f);  // front and rear axles
+    // Two glTF textures name the same image with the default sampler, both as base colour.
+    EXPECT_EQ(s.textures.size(), 1u);
+    EXPECT_EQ(material_named(s, "wheels")->base_color_texture.texture, material_named(s, "truck")->base_color_texture.texture);
+    EXPECT_TRUE(has_warning_containing(s, "animation"));
+}
+
+TEST(GltfLoader, CamerasFileGivesThePerspectiveCameraAndGeneratedFlatNormals) {
+    DYNSKY_REQUIRE_SHARED();
+    std::vector<std::string> warnings;
+    Scene s = load_gltf(scene_path("Cameras/Cameras.gltf"), &warnings);  // fresh: checks the warnings argument
+    ASSERT_EQ(s.cameras.size(), 1u);
+    const Camera& c = s.cameras[0];
+    EXPECT_NEAR(c.yfov, 0.7f, 1e-6f);
+    EXPECT_NEAR(c.aspect_ratio, 1.0f, 1e-6f);
+    EXPECT_NEAR((c.camera_to_world.translation() - Vec3(0.5f, 0.5f, 3.0f)).norm(), 0.0f, 1e-6f);
+    EXPECT_NEAR((c.camera_to_world.linear() - Eigen::Matrix3f::Identity()).norm(), 0.0f, 1e-6f);
+    bool ortho_warning = false;
+    for (const std::string& w : warnings) ortho_warning |= w.find("orthographic") != std::string::npos;
+    EXPECT_TRUE(ortho_warning);
+    EXPECT_EQ(warnings, s.warnings);
+
+    // No NORMAL in the file: flat normals, one per triangle, following its counter-clockwise winding.
+    ASSERT_EQ(s.meshes.size(), 1u);
+    const TriangleMesh& m = s.meshes[0].primitives[0];
+    ASSERT_EQ(m.triangle_count(), 2u);
+    ASSERT_EQ(m.normals.size(), m.positions.size());
+    for (size_t t = 0; t < m.indices.size(); t += 3) {
+        const Vec3 &a = m.positions[m.indices[t]], &b = m.positions[m.indices[t + 1]], &d = m.positions[m.indices[t + 2]];
+        Vec3 face = (b - a).cross(d - a).normalized();
+        EXPECT_NEAR(std::abs(face.z()), 1.0f, 1e-6f);  // the square lies in z = 0
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR((m.normals[m.indices[t + k]] - face).norm(), 0.0f, 1e-6f);
+    }
+    EXPECT_EQ(s.material(m.material).name, "glTF default");
+    // The square's node rotates by -45 degrees about X (quaternion (-0.383, 0, 0, 0.92375)).
+    ASSERT_EQ(s.instances.size(), 1u);
+    Vec3 y = s.instances[0].transform.linear() * Vec3::UnitY();
+    EXPECT_NEAR(std::atan2(y.z(), y.y()), -kPi / 4, 2e-3f);
+}
+
+TEST(GltfLoader, OrientationTestNodesMatchTheirKnownPlacements) {
+    DYNSKY_REQUIRE_SHARED();
+    const Scene& s = inspected_scene("OrientationTest/OrientationTest.glb");
+    ASSERT_EQ(s.instances.size(), 13u);
+    auto instance = [&](const std::string& mesh) -> const Instance& {
+        int g = group_named(s, mesh);
+        EXPECT_GE(g, 0) << mesh;
+        for (const Instance& i : s.instances)
+            if (i.mesh_group == g) return i;
+        return s.instances[0];
+    };
+    // Node translations (TRS nodes and matrix nodes alike).
+    const std::pair<const char*, Vec3> placements[] = {
+        {"ArrowMeshX1", Vec3(5, 0, 0)},  {"ArrowMeshX2", Vec3(-5, 0, 0)}, {"ArrowMeshY1", Vec3(0, 5, 0)},
+        {"ArrowMeshY2", Vec3(0, -5, 0)}, {"ArrowMeshZ1", Vec3(0, 0, 5)},  {"ArrowMeshZ2", Vec3(0, 0, -5)}};
+    for (const auto& [mesh, t] : placements)
+        EXPECT_NEAR((instance(mesh).transform.translation() - t).norm(), 0.0f, 1e-5f) << mesh;
+    // Each arrow, rotated by its node, touches its target (targets have identity nodes). A wrong
+    // quaternion convention or a transposed matrix points the arrows elsewhere.
+    for (const char* axis : {"X1", "X2", "Y1", "Y2", "Z1", "Z2"}) {
+        const Instance& arrow = instance(std::string("ArrowMesh") + axis);
+        const Instance& target = instance(std::string("TargetMesh") + axis);
+        Bounds3 box;
+        for (const Vec3& p : s.meshes[size_t(target.mesh_group)].primitives[0].positions) box.extend(target.transform * p);
+        float closest = 1e9f;
+        for (const Vec3& p : s.meshes[size_t(arrow.mesh_group)].primitives[0].positions) {
+            Vec3 w = arrow.transform * p;
+            closest = std::min(closest, (w - w.cwiseMax(box.lo).cwiseMin(box.hi)).norm());
+        }
+        EXPECT_LT(closest, 0.02f) << axis;
+    }
+}
+
+TEST(GltfLoader, EmissiveStrengthMultipliesTheEmissiveFactor) {
+    DYNSKY_REQUIRE_SHARED();
+    const Scene& s = inspected_scene("EmissiveStrengthTest/EmissiveStrengthTest.glb");
+    const Color factor(0.1f, 0.5f, 0.9f);  // every material's emissiveFactor in the file
+    for (auto [name, strength] : {std::pair<const char*, float>{"Emit1", 1}, {"Emit2", 2}, {"Emit4", 4}, {"Emit8", 8}, {"Emit16", 16}}) {
+        const Material* m = material_named(s, name);
+        ASSERT_NE(m, nullptr) << name;
+        EXPECT_NEAR((m->emissive - factor * strength).matrix().norm(), 0.0f, 1e-5f) << name;
+    }
+}
+
+TEST(GltfLoader, ClearCoatTestSharesTexturesAndWarnsAboutClearcoat) {
+    DYNSKY_REQUIRE_SHARED();
+    const Scene& s = inspected_scene("ClearCoatTest/ClearCoatTest.glb");
+    EXPECT_TRUE(has_warning_containing(s, "KHR_materials_clearcoat"));
+    // 10 glTF textures over 6 images; the core slots use images 1 (base colour), 2 (metal-rough),
+    // 3 and 4 (normal maps, image 3 through four different glTF textures) and 5 (emissive):
+    // 5 distinct (image, sampler, colour space) combinations.
+    EXPECT_EQ(s.textures.size(), 5u);
+    int shared = material_named(s, "BaseNorm_Base")->normal_texture.texture;
+    EXPECT_GE(shared, 0);
+    for (const char* name : {"BaseNorm_Coated", "SharedNorm_Base", "SharedNorm_Coating"})
+        EXPECT_EQ(material_named(s, name)->normal_texture.texture, shared) << name;
+    EXPECT_NE(material_named(s, "CoatNorm_Coating")->normal_texture.texture, shared);
+    EXPECT_EQ(material_named(s, "Partial_Coating")->alpha_mode, AlphaMode::Blend);
+    EXPECT_TRUE(material_named(s, "LabelMaterial")->emissive_texture.present());
+}
+
+TEST(GltfLoader, GlassBrokenWindowWarnsAboutTransmissionAndKeepsAlphaMask) {
+    DYNSKY_REQUIRE_SHARED();
+    const Scene& s = inspected_scene("GlassBrokenWindow/GlassBrokenWindow.glb");
+    EXPECT_TRUE(has_warning_containing(s, "KHR_materials_transmission"));
+    bool mask = false;
+    for (const Material& m : s.materials) mask |= m.alpha_mode == AlphaMode::Mask;
+    EXPECT_TRUE(mask);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Synthetic files: a small glTF writer with an external .bin
+
+class MiniGltf {
+  public:
+    template <typename T>
+    int view(const std::vector<T>& data) {
+        while (bin_.size() % 4) bin_.push_back('\0');
+        size_t offset = bin_.size();
+        bin_.append(reinterpret_cast<const char*>(data.data()), data.size() * sizeof(T));
+        views_.push_back("{\"buffer\":0,\"byteOffset\":" + std::to_string(offset) +
+                         ",\"byteLength\":" + std::to_string(data.size() * sizeof(T)) + "}");
+        return int(views_.size()) - 1;
+    }
+    int accessor(int view, int component_type, size_t count, const std::string& type, const std::string& extra = "") {
+        accessors_.push_back("{" + (view >= 0 ? "\"bufferView\":" + std::to_string(view) + "," : std::string()) +
+                             "\"componentType\":" + std::to_string(component_type) + ",\"count\":" + std::to_string(count) +
+                             ",\"type\":\"" + type + "\"" + extra + "}");
+        return int(accessors_.size()) - 1;
+    }
+    // Writes NAME.gltf and NAME.bin into dir; `body` holds the remaining top-level members.
+    std::string write(const std::string& dir, const std::string& name, const std::string& body) const {
+        write_bytes(dir + "/" + name + ".bin", bin_);
+        std::string json = "{\"asset\":{\"version\":\"2.0\"}," + body + ",\"buffers\":[{\"uri\":\"" + name +
+                           ".bin\",\"byteLength\":" + std::to_string(bin_.size()) + "}],\"bufferViews\":[" + join(views_) +
+                           "],\"accessors\":[" + join(accessors_) + "]}";
+        std::string path = dir + "/" + name + ".gltf";
+        write_bytes(path, json);
+        return path;
+    }
+
+  private:
+    static std::string join(const std::vector<std::string>& v) {
+        std::string s;
+        for (size_t i = 0; i < v.size(); ++i) s += (i ? "," : "") + v[i];
+        return s;
+    }
+    std::string bin_;
+    std::vector<std::string> views_, accessors_;
+};
+
+constexpr int kFloat = 5126, kUByte = 5121, kUShort = 5123, kUInt = 5125, kByte = 5120, kShort = 5122;
+
+// A unit quad in z = 0 as 4 vertices (0,0) (1,0) (1,1) (0,1).
+std::vector<float> quad_positions() { return {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0}; }
+
+std::string one_node_scene(const std::string& meshes, const std::string& extra = "") {
+    return "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[" + meshes + "]" +
+           (extra.empty() ? "" : "," + extra);
+}
+
+TEST(GltfLoader, StripsAndFansBecomeTriangleListsAndPointsAreSkipped) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    // The unit quad in strip order: (0,0) (1,0) (0,1) (1,1).
+    const std::vector<float> q = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0};
+    int pos = g.accessor(g.view(q), kFloat, 4, "VEC3");
+    int five = g.accessor(g.view(std::vector<float>{0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, -1, 1, 0}), kFloat, 5, "VEC3");
+    std::string prims = "{\"attributes\":{\"POSITION\":" + std::to_string(pos) + "},\"mode\":5},"  // strip, not indexed
+                        "{\"attributes\":{\"POSITION\":" + std::to_string(five) + "},\"mode\":6},"  // fan
+                        "{\"attributes\":{\"POSITION\":" + std::to_string(pos) + "},\"mode\":0},"   // points
+                        "{\"attributes\":{\"POSITION\":" + std::to_string(pos) + "},\"mode\":1}";   // lines
+    Scene s = load_gltf(g.write(dir, "modes", one_node_scene("{\"name\":\"m\",\"primitives\":[" + prims + "]}")));
+    ASSERT_EQ(s.meshes.size(), 1u);
+    ASSERT_EQ(s.meshes[0].primitives.size(), 2u);
+    EXPECT_TRUE(has_warning_containing(s, "points and lines"));
+    // Flat normals unweld vertices (no NORMAL), so compare positions: strip {0,1,2}, {1,3,2}
+    // (glTF 2.0: p_i = {v_i, v_(i+1+i%2), v_(i+2-i%2)}), fan {1,2,0}, {2,3,0}, {3,4,0}.
+    auto corners = [](const TriangleMesh& m) {
+        std::vector<Vec3> c;
+        for (uint32_t i : m.indices) c.push_back(m.positions[i]);
+        return c;
+    };
+    auto v = [&](int i) { return Vec3(q[3 * i], q[3 * i + 1], q[3 * i + 2]); };
+    std::vector<Vec3> strip = corners(s.meshes[0].primitives[0]);
+    std::vector<Vec3> want_strip = {v(0), v(1), v(2), v(1), v(3), v(2)};
+    ASSERT_EQ(strip.size(), want_strip.size());
+    for (size_t i = 0; i < strip.size(); ++i) EXPECT_EQ(strip[i], want_strip[i]) << i;
+    std::vector<Vec3> fan = corners(s.meshes[0].primitives[1]);
+    std::vector<Vec3> five_v = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0), Vec3(0, 1, 0), Vec3(-1, 1, 0)};
+    std::vector<Vec3> want_fan = {five_v[1], five_v[2], five_v[0], five_v[2], five_v[3], five_v[0], five_v[3], five_v[4], five_v[0]};
+    ASSERT_EQ(fan.size(), want_fan.size());
+    for (size_t i = 0; i < fan.size(); ++i) EXPECT_EQ(fan[i], want_fan[i]) << i;
+    // Both keep a counter-clockwise winding seen from +Z, so every flat normal is +Z.
+    for (const TriangleMesh& m : s.meshes[0].primitives)
+        for (const Vec3& n : m.normals) EXPECT_NEAR((n - Vec3::UnitZ()).norm(), 0.0f, 1e-6f);
+}
+
+TEST(GltfLoader, ReadsEveryComponentTypeNormalizedOrNot) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    // KHR_mesh_quantization-style data: SHORT positions (not normalised), BYTE normals and
+    // UBYTE texcoords (normalised), USHORT colours (normalised), UINT and UBYTE indices.
+    int pos = g.accessor(g.view(std::vector<int16_t>{0, 0, 0, 0, 200, 0, 300, -100, 0}), kShort, 3, "VEC3");
+    int nrm = g.accessor(g.view(std::vector<int8_t>{127, 0, 0, 0, -128, 0, 0, 0, 127, 0}), kByte, 3, "VEC3",
+                         ",\"normalized\":true");
+    int uv = g.accessor(g.view(std::vector<uint8_t>{0, 255, 51, 0, 255, 102, 0, 0}), kUByte, 3, "VEC2", ",\"normalized\":true");
+    int col = g.accessor(g.view(std::vector<uint16_t>{65535, 0, 32768, 0, 65535, 0, 0, 0, 65535, 0}), kUShort, 3, "VEC3",
+                         ",\"normalized\":true");
+    int idx32 = g.accessor(g.view(std::vector<uint32_t>{0, 1, 2}), kUInt, 3, "SCALAR");
+    int idx8 = g.accessor(g.view(std::vector<uint8_t>{2, 1, 0, 0}), kUByte, 3, "SCALAR");
+    std::string attrs = "\"attributes\":{\"POSITION\":" + std::to_string(pos) + ",\"NORMAL\":" + std::to_string(nrm) +
+                        ",\"TEXCOORD_0\":" + std::to_string(uv) + ",\"COLOR_0\":" + std::to_string(col) + "}";
+    std::string mesh = "{\"primitives\":[{" + attrs + ",\"indices\":" + std::to_string(idx32) + "},{" + attrs +
+                       ",\"indices\":" + std::to_string(idx8) + "}]}";
+    Scene s = load_gltf(g.write(dir, "types", one_node_scene(mesh, "\"extensionsUsed\":[\"KHR_mesh_quantization\"],"
+                                                                   "\"extensionsRequired\":[\"KHR_mesh_quantization\"]")));
+    ASSERT_EQ(s.meshes[0].primitives.size(), 2u);
+    const TriangleMesh& m = s.meshes[0].primitives[0];
+    EXPECT_EQ(m.positions[1], Vec3(0, 200, 0));
+    EXPECT_EQ(m.positions[2], Vec3(300, -100, 0));
+    EXPECT_NEAR((m.normals[0] - Vec3(1, 0, 0)).norm(), 0.0f, 1e-6f);
+    EXPECT_NEAR((m.normals[1] - Vec3(0, -1, 0)).norm(), 0.0f, 1e-6f);  // -128 clamps to -1
+    EXPECT_NEAR((m.texcoords[0][0] - Vec2(0, 1)).norm(), 0.0f, 1e-6f);
+    EXPECT_NEAR((m.texcoords[0][1] - Vec2(0.2f, 0)).norm(), 0.0f, 1e-6f);
+    EXPECT_NEAR((m.texcoords[0][2] - Vec2(1, 0.4f)).norm(), 0.0f, 1e-6f);
+    EXPECT_NEAR((m.colors[0] - Vec4(1, 0, 32768.0f / 65535, 1)).norm(), 0.0f, 1e-6f);
+    EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 2}));
+    EXPECT_EQ(s.meshes[0].primitives[1].indices, (std::vector<uint32_t>{2, 1, 0}));
+}
+
+TEST(GltfLoader, SparseAccessorsReplaceTheListedElements) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    int base = g.view(quad_positions());
+    int sparse_idx = g.view(std::vector<uint16_t>{3, 1});
+    int sparse_val = g.view(std::vector<float>{7, 8, 9, 4, 5, 6});
+    std::string sparse = ",\"sparse\":{\"count\":2,\"indices\":{\"bufferView\":" + std::to_string(sparse_idx) +
+                         ",\"componentType\":5123},\"values\":{\"bufferView\":" + std::to_string(sparse_val) + "}}";
+    int pos = g.accessor(base, kFloat, 4, "VEC3", sparse);
+    // A sparse accessor without a bufferView: zeros, then the substitutions.
+    int zeros = g.accessor(-1, kFloat, 4, "VEC3", sparse);
+    int idx = g.accessor(g.view(std::vector<uint16_t>{0, 1, 2, 0, 2, 3}), kUShort, 6, "SCALAR");
+    std::string mesh = "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) + ",\"NORMAL\":" +
+                       std::to_string(zeros) + "},\"indices\":" + std::to_string(idx) + "}]}";
+    Scene s = load_gltf(g.write(dir, "sparse", one_node_scene(mesh)));
+    const TriangleMesh& m = s.meshes[0].primitives[0];
+    EXPECT_EQ(m.positions[0], Vec3(0, 0, 0));
+    EXPECT_EQ(m.positions[1], Vec3(4, 5, 6));
+    EXPECT_EQ(m.positions[2], Vec3(1, 1, 0));
+    EXPECT_EQ(m.positions[3], Vec3(7, 8, 9));
+    // NORMAL: (4,5,6) and (7,8,9) normalised at 1 and 3; zero normals at 0 and 2 were repaired.
+    EXPECT_NEAR((m.normals[1] - Vec3(4, 5, 6).normalized()).norm(), 0.0f, 1e-6f);
+    EXPECT_NEAR((m.normals[3] - Vec3(7, 8, 9).normalized()).norm(), 0.0f, 1e-6f);
+    EXPECT_NEAR(m.normals[0].norm(), 1.0f, 1e-5f);
+    EXPECT_TRUE(has_warning_containing(s, "normals were zero"));
+}
+
+// Writes a 2 x 1 PNG: left texel (1, 128/255, 0, 1), right texel (0, 0, 1, 1).
+std::string write_png(const std::string& dir, const std::string& name) {
+    Image img(2, 1, 4);
+    const float px[8] = {1, 128.0f / 255, 0, 1, 0, 0, 1, 1};
+    std::copy(px, px + 8, img.pixels.begin());
+    write_image(dir + "/" + name, img);
+    return name;
+}
+
+TEST(GltfLoader, TexturesAreSharedPerImageSamplerAndColourSpace) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+    int uv = g.accessor(g.view(std::vector<float>{0, 0, 1, 0, 1, 1, 0, 1}), kFloat, 4, "VEC2");
+    int uv1 = g.accessor(g.view(std::vector<float>{0, 0, 2, 0, 2, 2, 0, 2}), kFloat, 4, "VEC2");
+    std::string png = write_png(dir, "t.png");
+    std::string transform =
+        "\"extensions\":{\"KHR_texture_transform\":{\"offset\":[0.25,0.5],\"rotation\":0.3,\"scale\":[2,3],\"texCoord\":1}}";
+    std::string body =
+        "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) + ",\"TEXCOORD_0\":" +
+        std::to_string(uv) + ",\"TEXCOORD_1\":" + std::to_string(uv1) + "},\"material\":1}]}],"
+        "\"images\":[{\"uri\":\"" + png + "\"}],"
+        "\"samplers\":[{\"magFilter\":9728,\"wrapS\":33071,\"wrapT\":33648},{}],"
+        "\"textures\":[{\"source\":0,\"sampler\":0},{\"source\":0,\"sampler\":0},{\"source\":0,\"sampler\":1}],"
+        "\"materials\":["
+        "{\"name\":\"a\",\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0},\"baseColorFactor\":[0.5,0.25,1,0.75],"
+        "\"metallicFactor\":0.2,\"roughnessFactor\":0.7},\"normalTexture\":{\"index\":1,\"scale\":0.5},"
+        "\"occlusionTexture\":{\"index\":0,\"strength\":0.25},\"emissiveTexture\":{\"index\":1},"
+        "\"emissiveFactor\":[1,2,3],\"alphaMode\":\"MASK\",\"alphaCutoff\":0.3,\"doubleSided\":true},"
+        "{\"name\":\"b\",\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":2},"
+        "\"metallicRoughnessTexture\":{\"index\":1," + transform + "}},\"alphaMode\":\"BLEND\"}],"
+        "\"extensionsUsed\":[\"KHR_texture_transform\",\"KHR_materials_clearcoat\"]";
+    Scene s = load_gltf(g.write(dir, "textures", body));
+    EXPECT_TRUE(has_warning_containing(s, "KHR_materials_clearcoat"));
+    ASSERT_EQ(s.materials.size(), 2u);
+    const Material &a = s.materials[0], &b = s.materials[1];
+    // (image 0, sampler 0, sRGB): a.baseColor and a.emissive (textures 0 and 1 are identical);
+    // (image 0, sampler 0, linear): a.normal, a.occlusion, b.metallicRoughness;
+    // (image 0, default sampler, sRGB): b.baseColor.
+    EXPECT_EQ(s.textures.size(), 3u);
+    EXPECT_EQ(a.base_color_texture.texture, a.emissive_texture.texture);
+    EXPECT_EQ(a.normal_texture.texture, a.occlusion_texture.texture);
+    EXPECT_EQ(a.normal_texture.texture, b.metallic_roughness_texture.texture);
+    EXPECT_NE(a.base_color_texture.texture, a.normal_texture.texture);
+    EXPECT_NE(a.base_color_texture.texture, b.base_color_texture.texture);
+    // Colour spaces: the sRGB texture decodes 128/255, the linear one keeps it.
+    const Texture& srgb = *s.textures[size_t(a.base_color_texture.texture)];
+    const Texture& linear = *s.textures[size_t(a.normal_texture.texture)];
+    EXPECT_NEAR(srgb.evaluate(Vec2(0.25f, 0.5f))[1], srgb_to_linear(128.0f / 255), 1e-6f);
+    EXPECT_NEAR(linear.evaluate(Vec2(0.25f, 0.5f))[1], 128.0f / 255, 1e-6f);
+    // Sampler 0: NEAREST, CLAMP_TO_EDGE in u: u = 0.74 is still the right texel; u = -3 the left.
+    EXPECT_NEAR(linear.evaluate(Vec2(0.74f, 0.5f))[2], 1.0f, 1e-6f);
+    EXPECT_NEAR(linear.evaluate(Vec2(-3.0f, 0.5f))[0], 1.0f, 1e-6f);
+    // Default sampler: LINEAR, REPEAT: u = 0.5 blends both texels half and half.
+    EXPECT_NEAR(s.textures[size_t(b.base_color_texture.texture)]->evaluate(Vec2(0.5f, 0.5f))[2], 0.5f, 1e-6f);
+    // Factors and modes.
+    EXPECT_NEAR((a.base_color - Color(0.5f, 0.25f, 1)).matrix().norm(), 0.0f, 1e-7f);
+    EXPECT_FLOAT_EQ(a.base_alpha, 0.75f);
+    EXPECT_FLOAT_EQ(a.metallic, 0.2f);
+    EXPECT_FLOAT_EQ(a.roughness, 0.7f);
+    EXPECT_FLOAT_EQ(a.normal_texture.scale, 0.5f);
+    EXPECT_FLOAT_EQ(a.occlusion_texture.scale, 0.25f);
+    EXPECT_NEAR((a.emissive - Color(1, 2, 3)).matrix().norm(), 0.0f, 1e-7f);
+    EXPECT_EQ(a.alpha_mode, AlphaMode::Mask);
+    EXPECT_FLOAT_EQ(a.alpha_cutoff, 0.3f);
+    EXPECT_TRUE(a.double_sided);
+    EXPECT_EQ(b.alpha_mode, AlphaMode::Blend);
+    EXPECT_FALSE(b.double_sided);
+    // KHR_texture_transform on b's metallicRoughnessTexture, with its texCoord override.
+    EXPECT_EQ(b.metallic_roughness_texture.texcoord, 1);
+    EXPECT_NEAR((b.metallic_roughness_texture.uv_transform -
+                 texture_transform_matrix(Vec2(0.25f, 0.5f), 0.3f, Vec2(2, 3))).norm(), 0.0f, 1e-6f);
+    EXPECT_TRUE(a.base_color_texture.uv_transform.isIdentity());
+    EXPECT_EQ(s.meshes[0].primitives[0].texcoords[1][2], Vec2(2, 2));
+}
+
+TEST(GltfLoader, TextureTransformMatrixFollowsTheExtensionSpec) {
+    // uv' = T(offset) R(rotation) S(scale) uv, rotation counter-clockwise (u towards -v).
+    const float off_u = 0.3f, off_v = -0.2f, rot = 0.7f, su = 1.5f, sv = 0.5f;
+    Eigen::Matrix3f m = texture_transform_matrix(Vec2(off_u, off_v), rot, Vec2(su, sv));
+    for (Vec2 uv : {Vec2(0, 0), Vec2(1, 0), Vec2(0.3f, 0.8f), Vec2(-2, 5)}) {
+        float x = su * uv.x(), y = sv * uv.y();
+        Vec2 want(std::cos(rot) * x + std::sin(rot) * y + off_u, -std::sin(rot) * x + std::cos(rot) * y + off_v);
+        Vec3 got = m * Vec3(uv.x(), uv.y(), 1);
+        EXPECT_NEAR((got.head<2>() - want).norm(), 0.0f, 1e-6f);
+        EXPECT_NEAR(got.z(), 1.0f, 1e-7f);
+    }
+    // The extension's worked example: offset [0, 1], rotation pi/2, scale [0.5, 0.5] "utilizes only
+    // the lower left quadrant of the source image" (v down: u in [0, 0.5], v in [0.5, 1]).
+    Eigen::Matrix3f ex = texture_transform_matrix(Vec2(0, 1), kPi / 2, Vec2(0.5f, 0.5f));
+    for (Vec2 uv : {Vec2(0, 0), Vec2(1, 0), Vec2(0, 1), Vec2(1, 1), Vec2(0.5f, 0.5f)}) {
+        Vec3 t = ex * Vec3(uv.x(), uv.y(), 1);
+        EXPECT_GE(t.x(), -1e-6f);
+        EXPECT_LE(t.x(), 0.5f + 1e-6f);
+        EXPECT_GE(t.y(), 0.5f - 1e-6f);
+        EXPECT_LE(t.y(), 1.0f + 1e-6f);
+    }
+    // Its second example, offset [0, 1] and scale [1, -1], flips v.
+    Vec3 flipped = texture_transform_matrix(Vec2(0, 1), 0, Vec2(1, -1)) * Vec3(0.2f, 0.1f, 1);
+    EXPECT_NEAR((flipped.head<2>() - Vec2(0.2f, 0.9f)).norm(), 0.0f, 1e-6f);
+}
+
+TEST(GltfLoader, NodeMatricesAndTrsComposeParentFirst) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+    // Parent: column-major matrix translating by (10, 0, 0) and scaling x by 2. Child: TRS with
+    // translation (0, 1, 0), 90 degrees about +Z, uniform scale 3. Second child: the same mesh.
+    std::string body =
+        "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":["
+        "{\"matrix\":[2,0,0,0, 0,1,0,0, 0,0,1,0, 10,0,0,1],\"children\":[1,2]},"
+        "{\"translation\":[0,1,0],\"rotation\":[0,0,0.70710678,0.70710678],\"scale\":[3,3,3],\"mesh\":0},"
+        "{\"mesh\":0}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) + "}}]}]";
+    Scene s = load_gltf(g.write(dir, "nodes", body));
+    ASSERT_EQ(s.meshes.size(), 1u);
+    ASSERT_EQ(s.instances.size(), 2u);
+    // Local point (1, 0, 0): child -> scale 3 -> rotate to (0, 3, 0) -> +(0, 1, 0) = (0, 4, 0);
+    // parent -> x * 2 + 10 = (10, 4, 0).
+    EXPECT_NEAR((s.instances[0].transform * Vec3(1, 0, 0) - Vec3(10, 4, 0)).norm(), 0.0f, 1e-5f);
+    EXPECT_NEAR((s.instances[1].transform * Vec3(1, 0, 0) - Vec3(12, 0, 0)).norm(), 0.0f, 1e-5f);
+}
+
+TEST(GltfLoader, UnsupportedExtensionsRequiredFailAndUsedWarn) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+    std::string mesh = "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) + "}}]}";
+    std::string path = g.write(dir, "required", one_node_scene(mesh, "\"extensionsUsed\":[\"KHR_draco_mesh_compression\"],"
+                                                                     "\"extensionsRequired\":[\"KHR_draco_mesh_compression\"]"));
+    std::string e = load_error(path);
+    EXPECT_NE(e.find("required.gltf"), std::string::npos) << e;
+    EXPECT_NE(e.find("KHR_draco_mesh_compression"), std::string::npos) << e;
+    Scene s = load_gltf(g.write(dir, "used", one_node_scene(mesh, "\"extensionsUsed\":[\"KHR_materials_sheen\"]")));
+    EXPECT_TRUE(has_warning_containing(s, "KHR_materials_sheen"));
+    EXPECT_EQ(s.triangle_count(), 1u);  // 4 vertices, not indexed: one triangle, one vertex left over
+    EXPECT_TRUE(has_warning_containing(s, "not a multiple of 3"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bad input: every case throws dynsky::Error naming the file
+
+TEST(GltfLoader, BadInputThrowsAnErrorNamingTheFile) {
+    DYNSKY_REQUIRE_SHARED();
+    std::string dir = test::temp_dir("gltf");
+    std::string box = read_text(scene_path("Box/Box.glb"));
+    ASSERT_GT(box.size(), 1000u);
+
+    struct Case {
+        std::string file, bytes, expect;  // expect: a word the message must contain
+    };
+    std::vector<Case> cases = {
+        {"truncated.glb", box.substr(0, box.size() / 2), "truncated"},
+        {"tiny.glb", box.substr(0, 10), "truncated"},
+        {"invalid.gltf", "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [ {,] }", "JSON"},
+        {"image.glb", read_text(dir + "/" + write_png(dir, "real.png")), "PNG"},
+        {"empty.gltf", "", "empty"},
+    };
+    for (const Case& c : cases) {
+        write_bytes(dir + "/" + c.file, c.bytes);
+        std::string e = load_error(dir + "/" + c.file);
+        EXPECT_NE(e.find(c.file), std::string::npos) << c.file << ": " << e;
+        EXPECT_NE(e.find(c.expect), std::string::npos) << c.file << ": " << e;
+    }
+    std::string e = load_error(dir + "/does_not_exist.glb");
+    EXPECT_NE(e.find("does_not_exist.glb"), std::string::npos) << e;
+}
+
+TEST(GltfLoader, MissingBinAndTextureFilesAreNamed) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+    std::string mesh = "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) + "},\"material\":0}]}";
+    std::string tex = "\"images\":[{\"uri\":\"gone.png\"}],\"textures\":[{\"source\":0}],"
+                      "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}]";
+    std::string path = g.write(dir, "notex", one_node_scene(mesh, tex));
+    std::string e = load_error(path);
+    EXPECT_NE(e.find("notex.gltf"), std::string::npos) << e;
+    EXPECT_NE(e.find("gone.png"), std::string::npos) << e;
+
+    path = g.write(dir, "nobin", one_node_scene(mesh, "\"materials\":[{}]"));
+    fs::remove(dir + "/nobin.bin");
+    e = load_error(path);
+    EXPECT_NE(e.find("nobin.gltf"), std::string::npos) << e;
+    EXPECT_NE(e.find("nobin.bin"), std::string::npos) << e;
+}
+
+TEST(GltfLoader, OutOfRangeAccessorsIndicesAndNodesThrow) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    int view = g.view(quad_positions());
+    int pos = g.accessor(view, kFloat, 4, "VEC3");
+    int too_long = g.accessor(view, kFloat, 5, "VEC3");  // 60 bytes from a 48-byte view
+    int bad_index = g.accessor(g.view(std::vector<uint16_t>{0, 1, 4}), kUShort, 3, "SCALAR");
+    auto mesh = [](int p, int idx) {
+        return "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(p) + "}" +
+               (idx >= 0 ? ",\"indices\":" + std::to_string(idx) : std::string()) + "}]}";
+    };
+    struct Case {
+        std::string name, body, expect;
+    };
+    std::vector<Case> cases = {
+        {"accessor_range", one_node_scene(mesh(too_long, -1)), "out of range"},
+        {"index_range", one_node_scene(mesh(pos, bad_index)), "index 4"},
+        {"no_accessor", one_node_scene(mesh(99, -1)), "accessor 99"},
+        {"no_material", one_node_scene("{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":3}]}"), "material 3"},
+        {"cycle", "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"children\":[1]},{\"children\":[0]}]", "node"},
+        {"no_mesh", "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":5}]", "mesh 5"},
+    };
+    for (const Case& c : cases) {
+        std::string e = load_error(g.write(dir, c.name, c.body));
+        EXPECT_NE(e.find(c.name + ".gltf"), std::string::npos) << c.name << ": " << e;
+        EXPECT_NE(e.find(c.expect), std::string::npos) << c.name << ": " << e;
+    }
+}
+
+}  // namespace
+}  // namespace dynsky

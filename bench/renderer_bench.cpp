@@ -1,0 +1,144 @@
+// Renderer benchmarks. Each reports its ratio against a baseline measured in the same run:
+//  - PathTracerVsEmbree: rays/s of the path tracer at 1280x720 beside rays/s of plain Embree
+//    traversal of the very same rays (recorded, then replayed). Goal: ratio >= 0.5.
+//  - DistributionRebuild: per-frame rebuild of the sky's sampling distribution at N x N beside
+//    one streaming pass over the same bytes (read RGB, write one float per pixel). Goal at 2048:
+//    ratio <= 2.
+// Scenes come from ../shared/scenes (DYNSKY_SHARED_DIR); missing scenes skip their benchmark.
+#include <benchmark/benchmark.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <filesystem>
+
+#include "renderer/gltf_loader.h"
+#include "renderer/integrator.h"
+#include "sky/clear_sky.h"
+#include "sky/fisheye.h"
+
+namespace dynsky {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+std::shared_ptr<SkyImage> bench_sky(int n) {
+    ClearSkyParams p;
+    p.sun_direction = fisheye::direction_from_angles(0.8, 3.6);
+    return std::make_shared<SkyImage>(make_clear_sky(p, n));
+}
+
+// One pass over the sky's bytes, in parallel like the rebuild: read RGB, write a float per pixel.
+double streaming_floor_seconds(const SkyImage& sky, std::vector<float>* out) {
+    const int n = sky.resolution;
+    out->resize(size_t(n) * n);
+    auto t = Clock::now();
+    tbb::parallel_for(tbb::blocked_range<int>(0, n, 8), [&](const tbb::blocked_range<int>& rows) {
+        for (int y = rows.begin(); y != rows.end(); ++y) {
+            const float* p = &sky.rgb[size_t(y) * n * 3];
+            float* o = &(*out)[size_t(y) * n];
+            float acc = 0;
+            for (int x = 0; x < n; ++x) {
+                acc += p[3 * x] + p[3 * x + 1] + p[3 * x + 2];
+                o[x] = acc;
+            }
+        }
+    });
+    return seconds_since(t);
+}
+
+void BM_DistributionRebuild(benchmark::State& state) {
+    const int n = int(state.range(0));
+    auto sky = bench_sky(n);
+    EnvLight light(sky, 0.3f);
+    std::vector<float> scratch;
+    double rebuild = 0, floor = 0;
+    int iterations = 0;
+    for (auto _ : state) {
+        auto t = Clock::now();
+        light.set_sky(sky);
+        double r = seconds_since(t);
+        state.SetIterationTime(r);
+        rebuild += r;
+        floor += streaming_floor_seconds(*sky, &scratch);
+        ++iterations;
+    }
+    state.counters["rebuild_ms"] = 1e3 * rebuild / iterations;
+    state.counters["floor_ms"] = 1e3 * floor / iterations;
+    state.counters["ratio_to_floor"] = rebuild / floor;
+    state.counters["memory_MiB"] = light.distribution().memory_bytes() / 1048576.0;
+}
+BENCHMARK(BM_DistributionRebuild)->Arg(512)->Arg(1024)->Arg(2048)->Arg(4096)->UseManualTime()->Unit(benchmark::kMillisecond);
+
+struct RecordedRay {
+    Ray ray;
+    bool shadow;
+};
+
+void path_tracer_vs_embree(benchmark::State& state, const std::string& relative) {
+    std::string path = std::string(DYNSKY_SHARED_DIR) + "/scenes/" + relative;
+    if (!std::filesystem::exists(path)) {
+        state.SkipWithError(("missing " + path).c_str());
+        for (auto _ : state) {}
+        return;
+    }
+    Scene scene = load_gltf(path);
+    Accel accel(scene);
+    EnvLight light(bench_sky(1024), 0.3f);
+    RenderSettings s;
+    s.width = 1280, s.height = 720, s.spp = int(state.range(0)), s.quiet = true;
+    Camera cam = scene.cameras.empty() ? frame_bounds_camera(scene.world_bounds(), 16.0f / 9) : scene.cameras[0];
+
+    // Record the rays of one render (untimed), then time the render and the replay.
+    tbb::enumerable_thread_specific<std::vector<RecordedRay>> recorded;
+    {
+        PathIntegrator recorder(accel, light, s);
+        recorder.set_ray_observer([&](const Ray& r, bool shadow) { recorded.local().push_back({r, shadow}); });
+        recorder.render(cam);
+    }
+    std::vector<RecordedRay> rays;
+    for (auto& part : recorded) rays.insert(rays.end(), part.begin(), part.end());
+
+    double pt_rays_per_s = 0, embree_rays_per_s = 0;
+    for (auto _ : state) {
+        PathIntegrator pt(accel, light, s);
+        RenderResult r = pt.render(cam);
+        pt_rays_per_s = r.stats.total_rays() / r.stats.seconds;
+        state.SetIterationTime(r.stats.seconds);
+
+        auto t = Clock::now();
+        std::atomic<size_t> hits{0};
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 4096), [&](const tbb::blocked_range<size_t>& range) {
+            size_t h = 0;
+            for (size_t i = range.begin(); i != range.end(); ++i) {
+                float tt;
+                if (rays[i].shadow)
+                    h += accel.occluded(rays[i].ray);
+                else
+                    h += accel.intersect_raw(rays[i].ray, &tt);
+            }
+            hits += h;
+        });
+        embree_rays_per_s = rays.size() / seconds_since(t);
+        benchmark::DoNotOptimize(hits.load());
+    }
+    state.counters["path_tracer_Mrays_s"] = pt_rays_per_s * 1e-6;
+    state.counters["embree_Mrays_s"] = embree_rays_per_s * 1e-6;
+    state.counters["ratio"] = pt_rays_per_s / embree_rays_per_s;
+    state.counters["rays"] = double(rays.size());
+}
+
+void BM_PathTracerVsEmbree_MetalRoughSpheres(benchmark::State& state) {
+    path_tracer_vs_embree(state, "MetalRoughSpheresNoTextures/MetalRoughSpheresNoTextures.glb");
+}
+void BM_PathTracerVsEmbree_FlightHelmet(benchmark::State& state) {
+    path_tracer_vs_embree(state, "FlightHelmet/FlightHelmet.gltf");
+}
+BENCHMARK(BM_PathTracerVsEmbree_MetalRoughSpheres)->Arg(1)->Iterations(2)->UseManualTime()->Unit(benchmark::kSecond);
+BENCHMARK(BM_PathTracerVsEmbree_FlightHelmet)->Arg(1)->Iterations(2)->UseManualTime()->Unit(benchmark::kSecond);
+
+}  // namespace
+}  // namespace dynsky
+
+BENCHMARK_MAIN();

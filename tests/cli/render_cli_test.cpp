@@ -1,0 +1,183 @@
+// End-to-end tests of `dynsky render`: bad input gives a clear error naming the file, a non-zero
+// exit, and no output file; good input gives finite, non-black images.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "sky/sky_image.h"
+#include "tests/test_support.h"
+#include "util/image.h"
+
+namespace dynsky {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string exe() { return DYNSKY_EXE; }
+
+// A small valid sky EXR.
+std::string write_sky(const std::string& dir, const std::string& name, int w, int h, float value) {
+    Image im(w, h, 3);
+    for (auto& v : im.pixels) v = value;
+    std::string path = dir + "/" + name;
+    write_image(path, im);
+    return path;
+}
+
+std::string box_glb() { return test::shared_path("scenes/Box/Box.glb"); }
+
+struct Outcome {
+    test::CommandResult result;
+    bool output_exists;
+};
+
+Outcome render(const std::string& args, const std::string& out) {
+    Outcome o;
+    o.result = test::run_command(exe() + " render " + args + " --res 32x24 --spp 2 -q --out " + out);
+    o.output_exists = fs::exists(out) || fs::exists(fs::path(out).replace_extension(".png"));
+    return o;
+}
+
+void expect_clean_failure(const Outcome& o, const std::string& must_mention) {
+    EXPECT_NE(o.result.exit_code, 0) << o.result.output;
+    EXPECT_NE(o.result.output.find(must_mention), std::string::npos) << "message should name '" << must_mention << "':\n" << o.result.output;
+    EXPECT_NE(o.result.output.find("error"), std::string::npos) << o.result.output;
+    EXPECT_FALSE(o.output_exists) << "a failed render left an output file";
+}
+
+TEST(RenderCli, HelpDescribesEveryOption) {
+    auto r = test::run_command(exe() + " render --help");
+    EXPECT_EQ(r.exit_code, 0);
+    for (const char* opt : {"--sky", "--spp", "--res", "--out", "--camera", "--seed", "--threads", "--ground-albedo"})
+        EXPECT_NE(r.output.find(opt), std::string::npos) << opt;
+}
+
+TEST(RenderCli, MissingSceneFile) {
+    std::string dir = test::temp_dir("render");
+    expect_clean_failure(render(dir + "/nope.glb", dir + "/out.exr"), "nope.glb");
+}
+
+TEST(RenderCli, TruncatedGlb) {
+    DYNSKY_REQUIRE_SHARED();
+    std::string dir = test::temp_dir("render");
+    std::ifstream in(box_glb(), std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), {});
+    std::ofstream(dir + "/cut.glb", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+    expect_clean_failure(render(dir + "/cut.glb", dir + "/out.exr"), "cut.glb");
+}
+
+TEST(RenderCli, InvalidJson) {
+    std::string dir = test::temp_dir("render");
+    std::ofstream(dir + "/bad.gltf") << "{ \"asset\": { \"version\": \"2.0\" }, \"nodes\": [ ";
+    expect_clean_failure(render(dir + "/bad.gltf", dir + "/out.png"), "bad.gltf");
+}
+
+TEST(RenderCli, MissingTexture) {
+    DYNSKY_REQUIRE_SHARED();
+    std::string dir = test::temp_dir("render");
+    // BoxTextured as .gltf with its image pointing at a file that is not there.
+    std::string gltf = R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
+      "meshes":[{"primitives":[{"attributes":{"POSITION":0,"TEXCOORD_0":1},"material":0}]}],
+      "materials":[{"pbrMetallicRoughness":{"baseColorTexture":{"index":0}}}],
+      "textures":[{"source":0}],"images":[{"uri":"missing_texture.png"}],
+      "buffers":[{"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/AAAAAAAAgD8AAAAA","byteLength":60}],
+      "bufferViews":[{"buffer":0,"byteLength":36},{"buffer":0,"byteOffset":36,"byteLength":24}],
+      "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]},
+                   {"bufferView":1,"componentType":5126,"count":3,"type":"VEC2"}]})";
+    std::ofstream(dir + "/tex.gltf") << gltf;
+    expect_clean_failure(render(dir + "/tex.gltf", dir + "/out.exr"), "missing_texture.png");
+}
+
+TEST(RenderCli, BadSkyPixelsAreRejected) {
+    DYNSKY_REQUIRE_SHARED();
+    std::string dir = test::temp_dir("render");
+    struct Case {
+        const char* name;
+        float value;
+        const char* says;
+    } cases[] = {{"nan.exr", std::numeric_limits<float>::quiet_NaN(), "NaN"},
+                 {"inf.exr", std::numeric_limits<float>::infinity(), "infinite"},
+                 {"negative.exr", -1.0f, "negative"},
+                 {"black.exr", 0.0f, "black"}};
+    for (const Case& c : cases) {
+        std::string sky = write_sky(dir, c.name, 16, 16, 1.0f);
+        Image im = read_image(sky);
+        if (std::string(c.name) == "black.exr")
+            for (auto& v : im.pixels) v = 0;
+        else
+            im.at(8, 8, 1) = c.value;
+        write_image(sky, im);
+        Outcome o = render(box_glb() + " --sky " + sky, dir + "/out.exr");
+        expect_clean_failure(o, c.name);
+        EXPECT_NE(o.result.output.find(c.says), std::string::npos) << o.result.output;
+    }
+}
+
+TEST(RenderCli, NonSquareSkyIsRejected) {
+    DYNSKY_REQUIRE_SHARED();
+    std::string dir = test::temp_dir("render");
+    std::string sky = write_sky(dir, "wide.exr", 32, 16, 1.0f);
+    Outcome o = render(box_glb() + " --sky " + sky, dir + "/out.exr");
+    expect_clean_failure(o, "wide.exr");
+    EXPECT_NE(o.result.output.find("square"), std::string::npos) << o.result.output;
+}
+
+TEST(RenderCli, SkyThatIsNotAnImage) {
+    DYNSKY_REQUIRE_SHARED();
+    std::string dir = test::temp_dir("render");
+    std::ofstream(dir + "/sky.exr") << "plain text, not OpenEXR";
+    expect_clean_failure(render(box_glb() + " --sky " + dir + "/sky.exr", dir + "/out.exr"), "sky.exr");
+}
+
+TEST(RenderCli, BadArgumentsFailBeforeRendering) {
+    std::string dir = test::temp_dir("render");
+    expect_clean_failure(render("builtin --camera 7", dir + "/out.exr"), "camera");
+    auto r = test::run_command(exe() + " render builtin --res 12by7 -q --out " + dir + "/o.exr");
+    EXPECT_NE(r.exit_code, 0);
+    EXPECT_NE(r.output.find("12by7"), std::string::npos) << r.output;
+    r = test::run_command(exe() + " render builtin --res 8x8 -q --out " + dir + "/o.tiff");
+    EXPECT_NE(r.exit_code, 0);
+    EXPECT_TRUE(fs::is_empty(dir));
+}
+
+TEST(RenderCli, WritesExrWithMetadataAndPng) {
+    std::string dir = test::temp_dir("render");
+    Outcome o = render("builtin --seed 5", dir + "/plaza.exr");
+    ASSERT_EQ(o.result.exit_code, 0) << o.result.output;
+    Image im = read_image(dir + "/plaza.exr");
+    EXPECT_EQ(im.width, 32);
+    EXPECT_EQ(im.metadata.numbers["dynsky:spp"], 2);
+    EXPECT_EQ(im.metadata.numbers["dynsky:seed"], 5);
+    EXPECT_GT(im.metadata.numbers["dynsky:render_seconds"], 0);
+    EXPECT_FALSE(im.metadata.strings["dynsky:sky"].empty());
+    EXPECT_TRUE(fs::exists(dir + "/plaza.png"));
+}
+
+// Every scene in ../shared/scenes renders to a finite, non-black image.
+TEST(RenderCli, EverySharedSceneRendersFiniteAndNotBlack) {
+    DYNSKY_REQUIRE_SHARED();
+    std::string dir = test::temp_dir("render");
+    std::vector<std::string> scenes;
+    for (auto& e : fs::recursive_directory_iterator(test::shared_path("scenes"))) {
+        std::string ext = e.path().extension().string();
+        if ((ext == ".glb" || ext == ".gltf") && e.path().string().find("/reference/") == std::string::npos)
+            scenes.push_back(e.path().string());
+    }
+    ASSERT_GE(scenes.size(), 16u);
+    for (const std::string& scene : scenes) {
+        std::string out = dir + "/" + fs::path(scene).stem().string() + ".exr";
+        auto r = test::run_command(exe() + " render '" + scene + "' --res 24x16 --spp 2 -q --out " + out);
+        ASSERT_EQ(r.exit_code, 0) << scene << "\n" << r.output;
+        Image im = read_image(out);
+        double sum = 0;
+        for (float v : im.pixels) {
+            ASSERT_TRUE(std::isfinite(v)) << scene;
+            sum += v;
+        }
+        EXPECT_GT(sum, 0) << scene << " rendered black";
+    }
+}
+
+}  // namespace
+}  // namespace dynsky

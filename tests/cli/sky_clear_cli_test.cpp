@@ -1,0 +1,140 @@
+// End-to-end tests of `dynsky sky clear | sun | latlong`.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+
+#include "sky/sky_image.h"
+#include "sky/sun_position.h"
+#include "tests/test_support.h"
+#include "util/image.h"
+
+namespace dynsky {
+namespace {
+
+namespace fs = std::filesystem;
+
+test::CommandResult dynsky(const std::string& args) { return test::run_command(std::string(DYNSKY_EXE) + " " + args); }
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+TEST(SkyClearCli, SunPrintsTheNrelSpaCase) {
+    auto r = dynsky("sky sun --lat 39.742476 --lon -105.1786 --elevation 1830.14 --time 2003-10-17T12:30:30-07:00 "
+                    "--pressure 820 --temperature 11");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_TRUE(contains(r.output, "zenith     50.1116")) << r.output;  // SPA: 50.11162
+    EXPECT_TRUE(contains(r.output, "azimuth    194.340")) << r.output;  // SPA: 194.34024
+    EXPECT_TRUE(contains(r.output, "2003-10-17T19:30:30Z")) << r.output;
+}
+
+TEST(SkyClearCli, ClearWritesASkyAndPreview) {
+    std::string dir = test::temp_dir("skyclear");
+    std::string out = dir + "/sky.exr", png = dir + "/sky.png";
+    auto r = dynsky("sky clear --lat 48.8566 --lon 2.3522 --time 2026-06-21T12:00:00Z --turbidity 2.5 --albedo 0.2 --res 64 --out " +
+                    out + " --preview " + png);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_TRUE(contains(r.output, "azimuth")) << r.output;
+    EXPECT_TRUE(contains(r.output, "W m^-2 sr^-1")) << r.output;
+    ASSERT_TRUE(fs::exists(out));
+    EXPECT_TRUE(fs::exists(png));
+    SkyImage sky = load_sky(out);
+    EXPECT_EQ(sky.resolution, 64);
+    ASSERT_TRUE(sky.sun_direction.has_value());
+    Vec3d expected = compute_sun_position(parse_utc_time("2026-06-21T12:00:00Z"), GeoLocation{48.8566, 2.3522, 0}).direction();
+    EXPECT_NEAR((sky.sun_direction->cast<double>() - expected).norm(), 0.0, 1e-5);
+    EXPECT_TRUE(contains(sky.source, "hosek-wilkie")) << sky.source;
+    EXPECT_TRUE(contains(sky.source, "2026-06-21T12:00:00Z")) << sky.source;
+    // --no-sun: same sky without the disc: the brightest pixel is far dimmer.
+    std::string out2 = dir + "/nosun.exr";
+    r = dynsky("sky clear --lat 48.8566 --lon 2.3522 --time 2026-06-21T12:00:00Z --turbidity 2.5 --albedo 0.2 --no-sun --res 64 --out " +
+               out2);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    SkyImage nosun = load_sky(out2);
+    float a = *std::max_element(sky.rgb.begin(), sky.rgb.end()), b = *std::max_element(nosun.rgb.begin(), nosun.rgb.end());
+    EXPECT_GT(a, 100 * b);
+    fs::remove_all(dir);
+}
+
+TEST(SkyClearCli, NightSunWarnsAndStillWrites) {
+    std::string dir = test::temp_dir("skyclear");
+    auto r = dynsky("sky clear --lat 48.8566 --lon 2.3522 --time 2026-06-21T23:00:00Z --res 32 --out " + dir + "/night.exr");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_TRUE(contains(r.output, "below the horizon")) << r.output;
+    EXPECT_TRUE(fs::exists(dir + "/night.exr"));
+    fs::remove_all(dir);
+}
+
+TEST(SkyClearCli, BadInputFailsAndWritesNothing) {
+    std::string dir = test::temp_dir("skyclear");
+    std::string out = dir + "/sky.exr";
+    const std::string base = "sky clear --lat 10 --lon 20 --res 32 ";
+    struct Case {
+        std::string args, message;
+    };
+    const Case cases[] = {
+        {base + "--time 2026-06-21T12:00:00 --out " + out, "time zone"},
+        {base + "--time 2026-02-30T12:00:00Z --out " + out, "does not exist"},
+        {base + "--time 2026-06-21T12:00:00Z --turbidity 12 --out " + out, "turbidity"},
+        {base + "--time 2026-06-21T12:00:00Z --albedo -1 --out " + out, "albedo"},
+        {base + "--time 2026-06-21T12:00:00Z --out " + dir + "/sky.png", "sky.png"},
+        {"sky clear --lat 95 --lon 20 --res 32 --time 2026-06-21T12:00:00Z --out " + out, "latitude"},
+        {"sky clear --lat 10 --lon 20 --res 0 --time 2026-06-21T12:00:00Z --out " + out, "--res"},
+        {"sky clear --lat 10 --lon 20 --time 2026-06-21T12:00:00Z --out " + out, "--res"},
+    };
+    for (const Case& c : cases) {
+        auto r = dynsky(c.args);
+        EXPECT_NE(r.exit_code, 0) << c.args << "\n" << r.output;
+        EXPECT_TRUE(contains(r.output, c.message)) << c.args << "\n" << r.output;
+        EXPECT_FALSE(fs::exists(out)) << c.args;
+    }
+    EXPECT_TRUE(fs::is_empty(dir));
+    fs::remove_all(dir);
+}
+
+TEST(SkyClearCli, LatLongConvertsASky) {
+    std::string dir = test::temp_dir("skyclear");
+    std::string sky = dir + "/sky.exr", ll = dir + "/ll.exr";
+    ASSERT_EQ(dynsky("sky clear --lat 0 --lon 0 --time 2026-03-20T09:00:00Z --res 48 --out " + sky).exit_code, 0);
+    auto r = dynsky("sky latlong " + sky + " --out " + ll + " --preview " + dir + "/ll.png --ground 0.1,0.2,0.3");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    Image image = read_image(ll);
+    EXPECT_EQ(image.width, 96);  // default 2N
+    EXPECT_EQ(image.height, 48);
+    EXPECT_NEAR(image.at(5, 47, 2), 0.3f, 1e-6);  // ground
+    EXPECT_TRUE(fs::exists(dir + "/ll.png"));
+    EXPECT_TRUE(image.metadata.numbers.count("dynsky:sun_y"));
+    r = dynsky("sky latlong " + sky + " --out " + dir + "/ll2.exr --width 40");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(read_image(dir + "/ll2.exr").width, 40);
+
+    // Bad input: a missing sky, an odd width, a bad ground, a non-EXR output.
+    for (const auto& [args, message] : std::vector<std::pair<std::string, std::string>>{
+             {"sky latlong " + dir + "/missing.exr --out " + dir + "/bad.exr", "missing.exr"},
+             {"sky latlong " + sky + " --out " + dir + "/bad.exr --width 33", "--width"},
+             {"sky latlong " + sky + " --out " + dir + "/bad.exr --ground red", "--ground"},
+             {"sky latlong " + sky + " --out " + dir + "/bad.png", "bad.png"}}) {
+        auto bad = dynsky(args);
+        EXPECT_NE(bad.exit_code, 0) << args << "\n" << bad.output;
+        EXPECT_TRUE(contains(bad.output, message)) << args << "\n" << bad.output;
+        EXPECT_FALSE(fs::exists(dir + "/bad.exr"));
+        EXPECT_FALSE(fs::exists(dir + "/bad.png"));
+    }
+    fs::remove_all(dir);
+}
+
+TEST(SkyClearCli, HelpDescribesOptionsAndUnits) {
+    auto r = dynsky("sky clear --help");
+    EXPECT_EQ(r.exit_code, 0);
+    for (const char* s : {"--lat", "--lon", "--time", "--turbidity", "--albedo", "--no-sun", "--res", "--out", "--preview",
+                          "W m^-2 sr^-1", "EAST positive"})
+        EXPECT_TRUE(contains(r.output, s)) << s << "\n" << r.output;
+    r = dynsky("sky latlong --help");
+    EXPECT_EQ(r.exit_code, 0);
+    for (const char* s : {"--width", "--ground", "Blender", "zenith"}) EXPECT_TRUE(contains(r.output, s)) << s;
+    r = dynsky("sky sun --help");
+    EXPECT_EQ(r.exit_code, 0);
+    EXPECT_TRUE(contains(r.output, "--no-refraction"));
+}
+
+}  // namespace
+}  // namespace dynsky

@@ -1,0 +1,111 @@
+// End-to-end tests of `dynsky sky procedural`.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "sky/sky_image.h"
+#include "tests/test_support.h"
+#include "util/image.h"
+
+namespace dynsky {
+namespace {
+
+namespace fs = std::filesystem;
+
+test::CommandResult procedural(const std::string& args) {
+    return test::run_command(std::string(DYNSKY_EXE) + " sky procedural --quiet " + args);
+}
+
+TEST(SkyProceduralCli, WritesFramesFlowsAndManifest) {
+    std::string dir = test::temp_dir("procedural_cli") + "/seq";
+    auto r = procedural("--seed 3 --coverage 0.4 --duration 20 --dt 10 --res 48 --wind 12,250 "
+                        "--layers cumulus,cirrus --preview --out " + dir);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    for (int k = 0; k < 3; ++k) {
+        char name[32];
+        std::snprintf(name, sizeof name, "_%05d", k);
+        EXPECT_TRUE(fs::exists(dir + "/frame" + name + ".exr")) << name;
+        EXPECT_TRUE(fs::exists(dir + "/flow" + name + ".exr")) << name;
+        EXPECT_TRUE(fs::exists(dir + "/frame" + name + ".png")) << name;
+        EXPECT_TRUE(fs::exists(dir + "/flow" + name + ".png")) << name;
+    }
+    EXPECT_FALSE(fs::exists(dir + "/frame_00003.exr"));
+
+    std::ifstream f(dir + "/manifest.json");
+    nlohmann::json m = nlohmann::json::parse(f);
+    EXPECT_EQ(m["seed"], 3);
+    EXPECT_DOUBLE_EQ(m["dt_s"].get<double>(), 10.0);
+    EXPECT_EQ(m["resolution"], 48);
+    ASSERT_EQ(m["frames"].size(), 3u);
+    EXPECT_DOUBLE_EQ(m["frames"][2]["time_s"].get<double>(), 20.0);
+    EXPECT_EQ(m["frames"][1]["flow"], "flow_00001.exr");
+    EXPECT_EQ(m["layers"].size(), 2u);
+    EXPECT_DOUBLE_EQ(m["layers"][0]["wind_speed_mps"].get<double>(), 12.0);
+
+    SkyImage frame = load_sky(dir + "/frame_00001.exr");
+    EXPECT_EQ(frame.resolution, 48);
+    EXPECT_DOUBLE_EQ(frame.time_seconds, 10.0);
+    ASSERT_TRUE(frame.sun_direction.has_value());
+    Image flow = read_image(dir + "/flow_00001.exr");
+    EXPECT_EQ(flow.channels, 3);
+    EXPECT_DOUBLE_EQ(flow.metadata.numbers["dynsky:flow_dt"], 10.0);
+    // The zenith moves: the wind is 12 m/s from 250 deg, clouds drift east-north-east (image left).
+    EXPECT_LT(flow.at(24, 24, 0), 0.0f);
+}
+
+TEST(SkyProceduralCli, SameSeedSameFiles) {
+    std::string base = test::temp_dir("procedural_cli_seed");
+    for (const char* sub : {"/a", "/b"})
+        ASSERT_EQ(procedural("--seed 9 --duration 0 --dt 1 --res 32 --out " + base + sub).exit_code, 0);
+    Image a = read_image(base + "/a/frame_00000.exr"), b = read_image(base + "/b/frame_00000.exr");
+    EXPECT_TRUE(a.pixels == b.pixels);
+}
+
+TEST(SkyProceduralCli, BadArgumentsLeaveNoOutput) {
+    std::string base = test::temp_dir("procedural_cli_bad");
+    struct Case {
+        std::string args, expect;
+    } cases[] = {
+        {"--coverage 1.5", "coverage"},
+        {"--dt -1", "--dt"},
+        {"--dt 0", "--dt"},
+        {"--res 4", "--res"},
+        {"--mask-image " + base + "/missing.png", base + "/missing.png: no such file"},
+        {"--layers cumulus,nimbus", "nimbus"},
+        {"--wind -3,270", "wind speed"},
+        {"--lat 40 --lon 5", "--time"},
+        {"--lat 40 --lon 5 --time 2024-06-21T12:00", "zone"},
+    };
+    int k = 0;
+    for (const Case& c : cases) {
+        std::string dir = base + "/out" + std::to_string(k++);
+        auto r = procedural("--duration 10 --dt 5 --res 32 " + c.args + " --out " + dir);
+        EXPECT_NE(r.exit_code, 0) << c.args;
+        EXPECT_NE(r.output.find(c.expect), std::string::npos) << c.args << ": " << r.output;
+        EXPECT_FALSE(fs::exists(dir)) << c.args;
+    }
+}
+
+TEST(SkyProceduralCli, SunFromPlaceAndTime) {
+    std::string dir = test::temp_dir("procedural_cli_sun") + "/seq";
+    auto r = procedural("--lat 39.74 --lon -105.18 --time 2024-06-21T18:00:00Z --duration 600 --dt 600 --res 32 --out " + dir);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    // Denver near solar noon in June: the sun is high in the south, and moves over 10 minutes.
+    SkyImage a = load_sky(dir + "/frame_00000.exr"), b = load_sky(dir + "/frame_00001.exr");
+    ASSERT_TRUE(a.sun_direction && b.sun_direction);
+    EXPECT_GT(a.sun_direction->y(), 0.9f);
+    EXPECT_GT((*a.sun_direction - *b.sun_direction).norm(), 0.01f);
+}
+
+TEST(SkyProceduralCli, HelpDescribesOptions) {
+    auto r = test::run_command(std::string(DYNSKY_EXE) + " sky procedural --help");
+    EXPECT_EQ(r.exit_code, 0);
+    for (const char* option : {"--seed", "--coverage", "--duration", "--dt", "--res", "--out", "--wind", "--mask-image",
+                               "--sun-elevation", "--lat", "--preview"})
+        EXPECT_NE(r.output.find(option), std::string::npos) << option;
+}
+
+}  // namespace
+}  // namespace dynsky

@@ -1,0 +1,186 @@
+#include "sky/latlong.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "sky/clear_sky.h"
+#include "sky/fisheye.h"
+#include "util/error.h"
+
+namespace dynsky {
+namespace {
+
+constexpr double kDeg = kPiD / 180.0;
+
+// A smooth, asymmetric, coloured sky as a function of direction.
+Color synthetic(const Vec3d& w) {
+    return Color(float(1.0 + 0.5 * w.x() + 0.3 * w.z() + w.y() * w.y()), float(2.0 - 0.4 * w.z() + 0.2 * w.x() * w.y()),
+                 float(0.5 + std::exp(-2.0 * (1 - w.y()))));
+}
+// Its integral over the upper hemisphere: odd terms in x and z vanish; int y^2 = 2 pi / 3;
+// int exp(-2 (1 - y)) = 2 pi (1 - e^-2) / 2.
+Eigen::Array3d synthetic_integral() {
+    return Eigen::Array3d(2 * kPiD + 2 * kPiD / 3, 4 * kPiD, 0.5 * 2 * kPiD + kPiD * (1 - std::exp(-2.0)));
+}
+
+SkyImage sky_from_function(int n, Color (*f)(const Vec3d&)) {
+    SkyImage sky(n);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            Vec2 uv = fisheye::pixel_center_uv(i, j, n);
+            if (uv.squaredNorm() <= 1) sky.set_pixel(i, j, f(fisheye::direction_from_uv(double(uv.x()), double(uv.y()))));
+        }
+    return sky;
+}
+
+Eigen::Array3d fisheye_integral(const SkyImage& sky) {
+    Eigen::Array3d sum = Eigen::Array3d::Zero();
+    for (int j = 0; j < sky.resolution; ++j)
+        for (int i = 0; i < sky.resolution; ++i)
+            sum += sky.pixel(i, j).cast<double>() * fisheye::pixel_solid_angle(i, j, sky.resolution);
+    return sum;
+}
+
+Eigen::Array3d latlong_upper_integral(const Image& ll) {
+    Eigen::Array3d sum = Eigen::Array3d::Zero();
+    for (int r = 0; r < ll.height / 2; ++r) {
+        double omega = latlong_pixel_solid_angle(r, ll.width, ll.height);
+        for (int c = 0; c < ll.width; ++c)
+            for (int k = 0; k < 3; ++k) sum[k] += ll.at(c, r, k) * omega;
+    }
+    return sum;
+}
+
+TEST(LatLong, LayoutMatchesBlender) {
+    // Named directions: top row zenith, centre column east, u = 0.25 north, 0.75 south, 0 west.
+    EXPECT_NEAR((latlong_direction(0.3, 0.0) - Vec3d(0, 1, 0)).norm(), 0.0, 1e-12);
+    EXPECT_NEAR((latlong_direction(0.5, 0.5) - Vec3d(1, 0, 0)).norm(), 0.0, 1e-12);   // east +X
+    EXPECT_NEAR((latlong_direction(0.25, 0.5) - Vec3d(0, 0, -1)).norm(), 0.0, 1e-12); // north -Z
+    EXPECT_NEAR((latlong_direction(0.75, 0.5) - Vec3d(0, 0, 1)).norm(), 0.0, 1e-12);  // south +Z
+    EXPECT_NEAR((latlong_direction(0.0, 0.5) - Vec3d(-1, 0, 0)).norm(), 0.0, 1e-12);  // west -X
+    // Cycles' direction_to_equirectangular: u = 0.5 - atan2(y, x) / 2 pi, v = 1 - acos(z) / pi
+    // (v up), in Blender's frame after glTF import: (x, y, z)_blender = (x, -z, y)_gltf.
+    std::mt19937 rng(3);
+    std::normal_distribution<double> g;
+    for (int k = 0; k < 1000; ++k) {
+        Vec3d w = Vec3d(g(rng), g(rng), g(rng)).normalized();
+        double bx = w.x(), by = -w.z(), bz = w.y();
+        double bu = 0.5 - std::atan2(by, bx) / (2 * kPiD), bv = 1 - std::acos(bz) / kPiD;
+        double u, v;
+        latlong_uv(w, &u, &v);
+        double du = std::remainder(u - bu, 1.0);
+        EXPECT_NEAR(du, 0.0, 1e-9);
+        EXPECT_NEAR(v, 1 - bv, 1e-9);
+        EXPECT_NEAR((latlong_direction(u, v) - w).norm(), 0.0, 1e-9);
+    }
+}
+
+TEST(LatLong, PixelSolidAnglesCoverTheSphere) {
+    for (int w : {4, 64, 1000}) {
+        double sum = 0;
+        for (int r = 0; r < w / 2; ++r) sum += w * latlong_pixel_solid_angle(r, w, w / 2);
+        EXPECT_NEAR(sum, 4 * kPiD, 1e-9);
+    }
+}
+
+// Fisheye made from a function, then lat-long: every pixel and every lookup is the function
+// within interpolation error; the upper hemisphere's integral is kept.
+TEST(LatLong, RoundTripsASyntheticSky) {
+    const int n = 256;
+    SkyImage sky = sky_from_function(n, synthetic);
+    Image ll = sky_to_latlong(sky, 512, Color(0.1f, 0.2f, 0.3f));
+    ASSERT_EQ(ll.width, 512);
+    ASSERT_EQ(ll.height, 256);
+    double worst = 0, worst_rim = 0;
+    for (int r = 0; r < ll.height / 2; ++r)
+        for (int c = 0; c < ll.width; ++c) {
+            Vec3d w = latlong_direction((c + 0.5) / ll.width, (r + 0.5) / ll.height);
+            Color f = synthetic(w);
+            for (int k = 0; k < 3; ++k) {
+                double rel = std::abs(ll.at(c, r, k) - f[k]) / f[k];
+                (r >= ll.height / 2 - 2 ? worst_rim : worst) = std::max(r >= ll.height / 2 - 2 ? worst_rim : worst, rel);
+            }
+        }
+    // Bilinear of a smooth function over pixels pi/256 wide: ~1e-4; the two rows at the horizon
+    // average over the fisheye's rim, where the disc's edge pixels stand in for the outside.
+    EXPECT_LT(worst, 2e-3);
+    EXPECT_LT(worst_rim, 5e-3);
+    // Lower half: the ground colour.
+    for (int r = ll.height / 2; r < ll.height; r += 17)
+        for (int c = 0; c < ll.width; c += 13) EXPECT_FLOAT_EQ(ll.at(c, r, 2), 0.3f);
+    // Lookups at arbitrary directions above the horizon.
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> U(0, 1);
+    for (int k = 0; k < 2000; ++k) {
+        double theta = std::acos(U(rng) * 0.98 + 0.02), phi = 2 * kPiD * U(rng);
+        Vec3d w = fisheye::direction_from_angles(theta, phi);
+        Color got = sample_latlong(ll, w), f = synthetic(w);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[c], f[c], 3e-3 * f[c]) << theta / kDeg << " " << phi / kDeg;
+    }
+    // Integrals: analytic, fisheye, lat-long.
+    Eigen::Array3d exact = synthetic_integral(), fish = fisheye_integral(sky), lat = latlong_upper_integral(ll);
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(fish[c], exact[c], 2e-3 * exact[c]);
+        EXPECT_NEAR(lat[c], fish[c], 2e-3 * fish[c]);
+    }
+    std::printf("hemisphere integral (G): exact %.5f, fisheye %.5f, lat-long %.5f; worst pixel error %.2g (rim %.2g)\n", exact[1],
+                fish[1], lat[1], worst, worst_rim);
+}
+
+// A clear sky with its sun (one fisheye pixel of ~1e6): neither missed nor doubled, whether the
+// lat-long is coarser, equal or finer than the fisheye.
+TEST(LatLong, KeepsTheSunsEnergy) {
+    ClearSkyParams params;
+    params.sun_direction = fisheye::direction_from_angles(50 * kDeg, 120 * kDeg);
+    SkyImage sky = make_clear_sky(params, 256);
+    Eigen::Array3d fish = fisheye_integral(sky);
+    for (int width : {256, 512, 1024}) {
+        Image ll = sky_to_latlong(sky, width);
+        Eigen::Array3d lat = latlong_upper_integral(ll);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(lat[c], fish[c], 0.005 * fish[c]) << "width " << width << " channel " << c;
+        std::printf("sky with sun, N 256 -> lat-long %d: integral ratio %.5f (G)\n", width, lat[1] / fish[1]);
+        // The brightest lat-long pixel is the sun's.
+        int bc = 0, br = 0;
+        for (int r = 0; r < ll.height; ++r)
+            for (int c = 0; c < ll.width; ++c)
+                if (ll.at(c, r, 1) > ll.at(bc, br, 1)) bc = c, br = r;
+        double u, v;
+        latlong_uv(params.sun_direction, &u, &v);
+        EXPECT_LE(std::abs(bc - (u * width - 0.5)), 1.5) << width;
+        EXPECT_LE(std::abs(br - (v * width / 2 - 0.5)), 1.5) << width;
+    }
+}
+
+TEST(LatLong, CarriesMetadataAndRejectsBadWidths) {
+    SkyImage sky = sky_from_function(32, synthetic);
+    sky.time_seconds = 12.5;
+    sky.sun_direction = Vec3(0, 1, 0);
+    sky.source = "test";
+    Image ll = sky_to_latlong(sky, 64);
+    EXPECT_DOUBLE_EQ(ll.metadata.numbers.at("dynsky:time"), 12.5);
+    EXPECT_DOUBLE_EQ(ll.metadata.numbers.at("dynsky:sun_y"), 1.0);
+    EXPECT_EQ(ll.metadata.strings.at("dynsky:source"), "test");
+    EXPECT_THROW(sky_to_latlong(sky, 63), Error);
+    EXPECT_THROW(sky_to_latlong(sky, 2), Error);
+}
+
+TEST(LatLong, SampleSkyIsBilinearInsideTheDisc) {
+    SkyImage sky = sky_from_function(64, synthetic);
+    // At a pixel centre the lookup returns that pixel.
+    for (int j = 10; j < 54; j += 7)
+        for (int i = 10; i < 54; i += 5) {
+            Vec2 uv = fisheye::pixel_center_uv(i, j, 64);
+            if (uv.squaredNorm() > 0.9) continue;
+            Color got = sample_sky(sky, fisheye::direction_from_uv(double(uv.x()), double(uv.y())));
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[c], sky.pixel(i, j)[c], 1e-5);
+        }
+    EXPECT_EQ(sample_sky(sky, Vec3d(0, -1, 0)).matrix().norm(), 0.0f);
+    // On the horizon itself the rim pixels stand in: finite and close to the function.
+    Color rim = sample_sky(sky, Vec3d(1, 0, 0));
+    EXPECT_NEAR(rim[1], synthetic(Vec3d(1, 0, 0))[1], 0.05);
+}
+
+}  // namespace
+}  // namespace dynsky
