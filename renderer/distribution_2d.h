@@ -1,6 +1,8 @@
 // Piecewise-constant 2D distribution over a W x H grid (row CDFs plus a marginal over rows),
 // sampled by two binary searches (pbrt-v4's PiecewiseConstant2D). Built for per-frame rebuilds:
-// rows are built in parallel and in one pass over the weights, with no allocation once sized.
+// only unnormalised row prefix sums are stored (no weight copy, no normalisation pass), rows are
+// built in parallel, and storage is reused while the size is unchanged. A cell's pdf is read from
+// the same prefix sums the binary search uses, so sample() and pdf() agree to the last bit.
 #pragma once
 
 #include <cstddef>
@@ -14,13 +16,13 @@ class Distribution2D {
   public:
     Distribution2D() = default;
 
-    // weights: W * H non-negative values, row-major. Reuses storage when the size is unchanged.
+    // weights: W * H non-negative finite values, row-major.
     void build(const float* weights, int width, int height);
 
-    // Builds from a functor weight(x, y) evaluated once per cell, fused with the row pass (saves
-    // writing and re-reading a weight image).
-    template <typename WeightFn>
-    void build_with(int width, int height, WeightFn&& weight);
+    // Builds from a functor row_weights(y, float* out) that writes row y's W weights into the
+    // distribution's own storage (then prefix-summed in place, while in cache).
+    template <typename RowFn>
+    void build_rows(int width, int height, RowFn&& row_weights);
 
     // Sample (x, y) in [0, 1)^2; *pdf per unit area of [0, 1]^2. Returns false when the
     // distribution is empty (all weights zero).
@@ -31,19 +33,18 @@ class Distribution2D {
 
     int width() const { return width_; }
     int height() const { return height_; }
-    // Sum of weights times cell area (the integral of the piecewise-constant function over [0,1]^2).
-    double integral() const { return integral_; }
-    bool empty() const { return !(integral_ > 0); }
+    // Integral of the piecewise-constant function over [0,1]^2 (sum of weights / (W H)).
+    double integral() const { return total_ / (double(width_) * height_); }
+    bool empty() const { return !(total_ > 0); }
     size_t memory_bytes() const;
 
   private:
+    const float* row(int y) const { return &row_prefix_[size_t(y) * (width_ + 1)]; }
     void finish_marginal();
     int width_ = 0, height_ = 0;
-    std::vector<float> weights_;      // W * H copy of the function (for pdf lookups)
-    std::vector<float> row_cdf_;      // H rows of W + 1 entries, normalised per row
-    std::vector<double> row_sum_;     // H row sums (double: keeps 4096^2 sums exact enough)
-    std::vector<float> marginal_cdf_; // H + 1 entries
-    double integral_ = 0;
+    std::vector<float> row_prefix_;    // H rows of W + 1 unnormalised prefix sums (first is 0)
+    std::vector<double> marginal_;     // H + 1 prefix sums of the row totals
+    double total_ = 0;
 };
 
 }  // namespace dynsky

@@ -56,6 +56,9 @@ class EnvLight {
 
     std::shared_ptr<const SkyImage> sky_;
     Distribution2D distribution_;
+    std::vector<Eigen::Array3d> row_irradiance_;
+    std::vector<uint16_t> solid_angle_table_;  // per pixel (jacobian, cos x jacobian), fixed point
+    int table_resolution_ = 0;
     float ground_albedo_;
     Color ground_radiance_ = Color::Zero();
     Color sky_irradiance_ = Color::Zero();
