@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
     dynsky::cli::register_sky_clear_commands(*sky);
     dynsky::cli::register_sky_import_commands(*sky);
     dynsky::cli::register_sky_procedural_command(*sky);
+    dynsky::cli::register_sky_model_commands(*sky);
     dynsky::cli::register_bench_commands(app);
 
     try {

@@ -19,6 +19,7 @@ void Distribution2D::finish_marginal() {
         marginal_[size_t(y) + 1] = total;
     }
     total_ = total;
+    pdf_scale_ = total > 0 ? float(double(width_) * height_ / total) : 0.0f;
 }
 
 // Index i with cdf[i] <= t < cdf[i + 1] among n cells, never landing on an empty cell.
@@ -59,10 +60,9 @@ bool Distribution2D::sample(const Vec2& u, Vec2* xy, float* pdf, int* cell_x, in
 }
 
 float Distribution2D::cell_pdf(int x, int y) const {
-    if (empty()) return 0.0f;
     const float* p = row(y);
     // P(row) P(cell | row) W H = (row total / total) ((p[x+1] - p[x]) / row total) W H.
-    return float(double(p[x + 1] - p[x]) * (double(width_) * height_) / total_);
+    return (p[x + 1] - p[x]) * pdf_scale_;
 }
 
 float Distribution2D::pdf(const Vec2& xy) const {

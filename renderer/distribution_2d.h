@@ -45,6 +45,7 @@ class Distribution2D {
     std::vector<float> row_prefix_;    // H rows of W + 1 unnormalised prefix sums (first is 0)
     std::vector<double> marginal_;     // H + 1 prefix sums of the row totals
     double total_ = 0;
+    float pdf_scale_ = 0;  // W H / total: turns a prefix-sum difference into a pdf
 };
 
 }  // namespace dynsky

@@ -232,10 +232,13 @@ class GltfLoader {
         std::error_code ec;
         if (!fs::exists(path_, ec)) fail("no such file");
         if (!fs::is_regular_file(path_, ec)) fail("not a regular file");
-        std::ifstream in(path_, std::ios::binary);
+        std::ifstream in(path_, std::ios::binary | std::ios::ate);
         if (!in) fail(std::string("cannot open: ") + std::strerror(errno));
-        std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-        if (in.bad()) fail("read error");
+        std::streamoff size = in.tellg();
+        if (size < 0) fail("cannot determine the file size");
+        std::vector<unsigned char> bytes(static_cast<size_t>(size));
+        in.seekg(0);
+        if (!in.read(reinterpret_cast<char*>(bytes.data()), size)) fail("read error");
         return bytes;
     }
 

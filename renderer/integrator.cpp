@@ -21,7 +21,7 @@ PathIntegrator::PathIntegrator(const Accel& accel, const EnvLight& light, const 
     : accel_(accel), light_(light), settings_(settings) {}
 
 Ray PathIntegrator::camera_ray(const Camera& camera, float aspect, float px, float py) const {
-    float tan_half = std::tan(camera.yfov / 2);
+    float tan_half = tan_half_fov_;
     float x = (2 * px / settings_.width - 1) * tan_half * aspect;
     float y = (1 - 2 * py / settings_.height) * tan_half;
     Ray ray;
@@ -50,7 +50,10 @@ bool PathIntegrator::passes_through(const SurfaceHit& hit, float u) const {
 float PathIntegrator::transmittance(const Ray& shadow_ray, RenderStats* stats) const {
     if (observer_) observer_(shadow_ray, true);
     ++stats->shadow_rays;
-    if (!accel_.has_non_opaque_materials()) return accel_.occluded(shadow_ray) ? 0.0f : 1.0f;
+    // Most shadow rays reach the sky unblocked: one any-hit query settles those, also in scenes
+    // with alpha; only blocked rays walk the surfaces to see whether alpha lets them through.
+    if (!accel_.occluded(shadow_ray)) return 1.0f;
+    if (!accel_.has_non_opaque_materials()) return 0.0f;
     // Walk through the surfaces along the ray; blended ones attenuate by (1 - alpha).
     Ray ray = shadow_ray;
     float tr = 1.0f;
@@ -162,6 +165,7 @@ RenderResult PathIntegrator::render(const Camera& camera) const {
     RenderResult result;
     result.color = Image(w, h, 3);
     if (settings_.compute_variance) result.variance = Image(w, h, 3);
+    tan_half_fov_ = std::tan(camera.yfov / 2);
     const float aspect = float(w) / h;  // the image decides; glTF aspectRatio only matters to rasterisers
     const int tiles_x = (w + ts - 1) / ts, tiles_y = (h + ts - 1) / ts;
     ProgressBar progress(tiles_x * tiles_y, "render", settings_.quiet);

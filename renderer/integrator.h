@@ -66,6 +66,7 @@ class PathIntegrator {
     const EnvLight& light_;
     RenderSettings settings_;
     RayObserver observer_;
+    mutable float tan_half_fov_ = 0;  // of the camera being rendered
 };
 
 // Offset for spawning rays off a surface: relative to the magnitude of the position.

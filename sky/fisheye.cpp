@@ -10,7 +10,14 @@ Vec3d direction_from_uv(double u, double v) {
     return Vec3d(-u * s, std::cos(theta), v * s);
 }
 
-Vec3 direction_from_uv(const Vec2& uv) { return direction_from_uv(double(uv.x()), double(uv.y())).cast<float>(); }
+// Float versions for renderers' hot paths (single-precision trig; about 1e-6 accurate).
+Vec3 direction_from_uv(const Vec2& uv) {
+    float r2 = uv.squaredNorm();
+    float r = std::sqrt(r2);
+    float theta = r * (kPi / 2);
+    float s = r > 1e-4f ? std::sin(theta) / r : (kPi / 2) * (1 - theta * theta / 6);
+    return Vec3(-uv.x() * s, std::cos(theta), uv.y() * s);
+}
 
 bool uv_from_direction(const Vec3d& w, double* u, double* v) {
     if (w.y() < 0.0) return false;
@@ -24,9 +31,11 @@ bool uv_from_direction(const Vec3d& w, double* u, double* v) {
 }
 
 bool uv_from_direction(const Vec3& w, Vec2* uv) {
-    double u, v;
-    if (!uv_from_direction(w.cast<double>(), &u, &v)) return false;
-    *uv = Vec2(float(u), float(v));
+    if (w.y() < 0) return false;
+    float sin_theta = std::sqrt(w.x() * w.x() + w.z() * w.z());
+    float theta = std::atan2(sin_theta, w.y());
+    float k = sin_theta > 1e-4f ? (2 / kPi) * theta / sin_theta : (2 / kPi) * (1 + theta * theta / 6);
+    *uv = Vec2(-w.x() * k, w.z() * k);
     return true;
 }
 

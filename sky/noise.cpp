@@ -17,7 +17,7 @@ inline float wrap(double x) { return float(x - kPeriod * std::floor(x / kPeriod)
 
 }  // namespace
 
-uint64_t mix_bits(uint64_t x) {
+uint64_t noise_hash(uint64_t x) {
     x += 0x9e3779b97f4a7c15ull;
     x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
     x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
@@ -31,9 +31,9 @@ const FractalNoise::OctaveStats& FractalNoise::octave_stats() {
         const int n = 20000;
         uint64_t state = 12345;
         for (int k = 0; k < n; ++k) {
-            double x = unit_from_bits(state = mix_bits(state)) * kPeriod;
-            double y = unit_from_bits(state = mix_bits(state)) * kPeriod;
-            double t = unit_from_bits(state = mix_bits(state)) * kPeriod;
+            double x = noise_unit(state = noise_hash(state)) * kPeriod;
+            double y = noise_unit(state = noise_hash(state)) * kPeriod;
+            double t = noise_unit(state = noise_hash(state)) * kPeriod;
             double v = stb_perlin_noise3_seed(float(x), float(y), float(t), 0, 0, 0, k & 255);
             sum += v, sum2 += v * v, abs_sum += std::abs(v);
         }
@@ -49,7 +49,7 @@ const FractalNoise::OctaveStats& FractalNoise::octave_stats() {
 
 FractalNoise::FractalNoise(uint64_t seed, int octaves, double gain, int billow_from) {
     const OctaveStats& stats = octave_stats();
-    uint64_t state = mix_bits(seed ^ 0x5eedc10dull);
+    uint64_t state = noise_hash(seed ^ 0x5eedc10dull);
     double frequency = 1.0, amplitude = 1.0, variance = 0.0;
     for (int k = 0; k < octaves; ++k) {
         Octave o;
@@ -57,12 +57,12 @@ FractalNoise::FractalNoise(uint64_t seed, int octaves, double gain, int billow_f
         o.amplitude = float(amplitude);
         // Small eddies live shorter: Kolmogorov's turnover time scales as size^(2/3).
         o.time_rate = std::pow(frequency, 2.0 / 3.0);
-        o.offset_x = unit_from_bits(state = mix_bits(state)) * kPeriod;
-        o.offset_y = unit_from_bits(state = mix_bits(state)) * kPeriod;
-        o.offset_t = unit_from_bits(state = mix_bits(state)) * kPeriod;
-        double angle = unit_from_bits(state = mix_bits(state)) * 2.0 * 3.14159265358979323846;
+        o.offset_x = noise_unit(state = noise_hash(state)) * kPeriod;
+        o.offset_y = noise_unit(state = noise_hash(state)) * kPeriod;
+        o.offset_t = noise_unit(state = noise_hash(state)) * kPeriod;
+        double angle = noise_unit(state = noise_hash(state)) * 2.0 * 3.14159265358979323846;
         o.cos_r = std::cos(angle), o.sin_r = std::sin(angle);
-        o.seed = (unsigned char)(mix_bits(state = mix_bits(state)) & 255);
+        o.seed = (unsigned char)(noise_hash(state = noise_hash(state)) & 255);
         o.billow = k >= billow_from;
         // Billowy octaves get twice the amplitude: |noise| spreads about half as much as noise.
         if (o.billow) o.amplitude *= 2.0f;

@@ -56,8 +56,8 @@ class FractalNoise {
 };
 
 // A 64-bit mixing function (SplitMix64 finaliser): seeds to well-spread pseudo-random bits.
-uint64_t mix_bits(uint64_t x);
+uint64_t noise_hash(uint64_t x);
 // Uniform double in [0, 1) from hashed bits.
-inline double unit_from_bits(uint64_t bits) { return double(bits >> 11) * (1.0 / 9007199254740992.0); }
+inline double noise_unit(uint64_t bits) { return double(bits >> 11) * (1.0 / 9007199254740992.0); }
 
 }  // namespace dynsky

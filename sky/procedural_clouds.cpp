@@ -68,8 +68,8 @@ struct LayerModel {
     double mask_half_extent = 0.0;        // metres
 
     LayerModel(const CloudLayer& layer, uint64_t seed, double coverage)
-        : spec(layer), noise(seed, layer.octaves, layer.gain, layer.billow_from), warp(mix_bits(seed), 2, 0.5),
-          patch(mix_bits(seed + 1), 3, 0.5) {
+        : spec(layer), noise(seed, layer.octaves, layer.gain, layer.billow_from), warp(noise_hash(seed), 2, 0.5),
+          patch(noise_hash(seed + 1), 3, 0.5) {
         // The wind blows towards the opposite of where it comes from: azimuth from + 180 deg.
         double from = layer.wind_from_deg * kPiD / 180.0;
         along_x = -std::sin(from), along_z = std::cos(from);
@@ -91,12 +91,12 @@ struct LayerModel {
         if (coverage <= 0.0) return std::numeric_limits<double>::infinity();
         const int n = 8192;
         std::vector<float> values(n);
-        uint64_t state = mix_bits(0xc0fe1a6eull);
+        uint64_t state = noise_hash(0xc0fe1a6eull);
         for (int k = 0; k < n; ++k) {
             // Points spread over thousands of features and a long time: the field's statistics.
-            double x = unit_from_bits(state = mix_bits(state)) * 2048.0 * spec.feature_size_m;
-            double z = unit_from_bits(state = mix_bits(state)) * 2048.0 * spec.feature_size_m;
-            double t = unit_from_bits(state = mix_bits(state)) * 256.0 * spec.evolution_time_s;
+            double x = noise_unit(state = noise_hash(state)) * 2048.0 * spec.feature_size_m;
+            double z = noise_unit(state = noise_hash(state)) * 2048.0 * spec.feature_size_m;
+            double t = noise_unit(state = noise_hash(state)) * 256.0 * spec.evolution_time_s;
             values[k] = field(x, z, t, 0.0).value;
         }
         std::sort(values.begin(), values.end());
@@ -123,8 +123,8 @@ struct LayerModel {
         // come in patches (a large, round field added to the streaks before the threshold).
         double w = warp.evaluate(a * spec.stretch / 6.0, b / 6.0, time / 6.0).value;
         FractalNoise::Sample s = noise.evaluate(a, b + 0.6 * w / warp.sigma(), time, footprint / across);
-        const double patch_size = 8.0 * along;
-        FractalNoise::Sample p = patch.evaluate(qx / patch_size, qz / patch_size, time / 8.0, footprint / patch_size);
+        const double patch_size = 5.0 * along;
+        FractalNoise::Sample p = patch.evaluate(qx / patch_size, qz / patch_size, time / 5.0, footprint / patch_size);
         s.value += float(kPatchWeight * noise.sigma() / patch.sigma()) * p.value;
         s.removed_sigma = std::hypot(s.removed_sigma, float(kPatchWeight * noise.sigma() / patch.sigma()) * p.removed_sigma);
         return s;
@@ -140,8 +140,12 @@ struct LayerModel {
             double value = sample_mask(m, (mu + 1.0) * 0.5 * m.width, (mv + 1.0) * 0.5 * m.height);
             if (spec.mask_detail <= 0.0) return clamp(value, 0.0, 1.0);
             FractalNoise::Sample s = field(qx, qz, t, footprint);
+            // The noise erodes the soft edges and gives the inside lumps of varying thickness
+            // (a uniform inside would shade as a flat grey card).
             double erosion = clamp(0.5 + s.value / (4.0 * field_sigma), 0.0, 1.0);
-            return clamp((value - spec.mask_detail * erosion) / (1.0 - spec.mask_detail), 0.0, 1.0);
+            double eroded = clamp((value - spec.mask_detail * erosion) / (1.0 - spec.mask_detail), 0.0, 1.0);
+            double lumps = clamp(0.5 + s.value / (3.0 * field_sigma), 0.0, 1.0);
+            return eroded * std::max(0.0, 1.0 - 2.0 * spec.mask_detail * (1.0 - lumps));
         }
         if (!std::isfinite(threshold)) return 0.0;
         FractalNoise::Sample s = field(qx, qz, t, footprint);
@@ -172,8 +176,8 @@ CloudLayer cirrus_layer() {
     c.wind_from_deg = 260.0;
     c.feature_size_m = 600.0;
     c.stretch = 10.0;
-    c.optical_depth = 1.5;
-    c.edge_softness = 1.5;
+    c.optical_depth = 0.8;
+    c.edge_softness = 1.0;
     c.evolution_time_s = 1800.0;
     c.octaves = 6;
     c.gain = 0.6;
@@ -223,12 +227,20 @@ Image load_cloud_mask(const std::string& path) {
     Image in = read_image(path);  // throws "PATH: no such file" etc.
     Image mask(in.width, in.height, 1);
     bool has_alpha = in.channels == 2 || in.channels >= 4;
+    int alpha_channel = in.channels == 2 ? 1 : 3;
     int colours = has_alpha ? in.channels - 1 : in.channels;
+    if (has_alpha) {
+        // Many tools save grey drawings as RGBA with an opaque alpha: then the grey is the density.
+        bool opaque = true;
+        for (int y = 0; y < in.height && opaque; ++y)
+            for (int x = 0; x < in.width && opaque; ++x) opaque = in.at(x, y, alpha_channel) >= 1.0f;
+        has_alpha = !opaque;
+    }
     for (int y = 0; y < in.height; ++y)
         for (int x = 0; x < in.width; ++x) {
             float v = 0;
             if (has_alpha) {
-                v = in.at(x, y, in.channels == 2 ? 1 : 3);
+                v = in.at(x, y, alpha_channel);
             } else {
                 for (int c = 0; c < colours; ++c) v += in.at(x, y, c);
                 v /= float(colours);
@@ -242,6 +254,7 @@ Image load_cloud_mask(const std::string& path) {
 struct ProceduralSky::Impl {
     ProceduralSkyParams params;
     std::vector<LayerModel> layers;  // sorted by altitude, lowest (nearest the viewer) first
+    std::vector<size_t> sorted_index;  // params.layers[k] is layers[sorted_index[k]]
     // Lighting from the clear sky, for the current sun.
     Vec3d sun = Vec3d(0, 1, 0);
     Color sun_irradiance = Color::Zero();  // on a surface facing the sun, above the clouds
@@ -256,9 +269,11 @@ struct ProceduralSky::Impl {
         for (size_t k = 0; k < order.size(); ++k) order[k] = k;
         std::stable_sort(order.begin(), order.end(),
                          [&](size_t a, size_t b) { return p.layers[a].altitude_m < p.layers[b].altitude_m; });
+        sorted_index.resize(order.size());
+        for (size_t s = 0; s < order.size(); ++s) sorted_index[order[s]] = s;
         for (size_t k : order) {
             const CloudLayer& l = p.layers[k];
-            uint64_t seed = mix_bits(p.seed * 0x100000001b3ull + 0x632be59bd9b4e019ull * (k + 1));
+            uint64_t seed = noise_hash(p.seed * 0x100000001b3ull + 0x632be59bd9b4e019ull * (k + 1));
             layers.emplace_back(l, seed, l.coverage.value_or(p.coverage));
         }
         update_lighting();
@@ -343,13 +358,17 @@ struct ProceduralSky::Impl {
                                    ground_radiance.cast<double>() * 0.6);
         if (sun.y() > 0.0) {
             double mu = sun.y();
-            double above = std::exp(-sun_depth_above(k, px, pz, t, footprint));
+            // Shadows of higher layers are soft (the sun is half a degree wide, and they are far):
+            // their fine octaves would cost time and change nothing.
+            double above = std::exp(-sun_depth_above(k, px, pz, t, std::max(footprint, 100.0)));
             // Density toward the sun inside the layer: cloud edges facing the sun are lit through
             // little cloud and glow; the far sides and thick cores are dark.
             // Offsets grow geometrically so that both small puffs and whole clouds shade.
             double sh = std::sqrt(sun.x() * sun.x() + sun.z() * sun.z());
             double toward = density;
-            if (sh > 1e-6) {
+            double light_extinction = std::min(0.1 * spec.optical_depth, 3.0);
+            // Thin layers (cirrus) barely shade themselves: skip the samples.
+            if (sh > 1e-6 && light_extinction > 0.5) {
                 double light_path = std::min(spec.thickness_m * sh / mu, 2.0 * spec.feature_size_m);
                 double sx = sun.x() / sh, sz = sun.z() / sh;
                 double sum = 0.0;
@@ -360,7 +379,6 @@ struct ProceduralSky::Impl {
                 }
                 toward = sum / 3.0;
             }
-            double light_extinction = std::min(0.1 * spec.optical_depth, 3.0);
             double t_light = std::exp(-light_extinction * (0.5 * density + 0.5 * toward) / std::max(mu, 0.2));
             double cos_gamma = d.dot(sun);
             // Single scattering towards the viewer survives only where the cloud is thin along
@@ -471,6 +489,12 @@ SkyImage ProceduralSky::render(double time_s, int resolution, Image* flow_out, d
 }
 
 double ProceduralSky::sun_transmittance(double time_s) const { return impl_->sun_transmittance(time_s); }
+
+double ProceduralSky::layer_density(size_t layer, double x_m, double z_m, double time_s) const {
+    require(layer < impl_->layers.size(), "layer " + std::to_string(layer) + " does not exist");
+    const LayerModel& l = impl_->layers[impl_->sorted_index[layer]];
+    return l.density(x_m - l.wind_x * time_s, z_m - l.wind_z * time_s, time_s, 0.0);
+}
 
 void ProceduralSky::set_sun_direction(const Vec3d& sun_direction) {
     require(sun_direction.allFinite() && sun_direction.norm() > 0.0, "the sun direction must be a finite, non-zero vector");

@@ -68,7 +68,8 @@ struct ProceduralSkyParams {
 void validate_procedural_params(const ProceduralSkyParams& params);
 
 // Reads a grey or grey+alpha image as a cloud density mask (1 channel, [0, 1]): the alpha channel
-// when there is one (2 or 4 channels), else the mean of the colour channels, as encoded. Throws
+// when there is one (2 or 4 channels) that is not opaque everywhere, else the mean of the colour
+// channels, as encoded (8-bit files are not sRGB-decoded: the drawing's grey is the density). Throws
 // dynsky::Error "PATH: problem" for a missing or unreadable file.
 Image load_cloud_mask(const std::string& path);
 
@@ -96,6 +97,10 @@ class ProceduralSky {
 
     SkyImage render(double time_s, int resolution, Image* flow_out = nullptr, double dt = 1.0);
     double sun_transmittance(double time_s) const;
+    // Cloud density in [0, 1] of layer `layer` (index into params().layers) at the world point
+    // (x_m, its altitude, z_m) at time_s, unfiltered (a point, not a pixel). For cloud shadows on
+    // the ground, or to check coverage: the fraction of points with density > 0 is the coverage.
+    double layer_density(size_t layer, double x_m, double z_m, double time_s) const;
     // Changes the sun (e.g. following the sun's path over a long sequence); clouds are unchanged.
     void set_sun_direction(const Vec3d& sun_direction);
     const ProceduralSkyParams& params() const;

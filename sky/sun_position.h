@@ -7,8 +7,8 @@
 // (ch. 22), apparent sidereal time (ch. 12), the sun's parallax for an observer on the
 // ellipsoid (ch. 40) and, optionally, Saemundsson's refraction formula with its pressure and
 // temperature correction (ch. 16). TT - UT comes from the Espenak & Meeus (2006) polynomials.
-// Measured against PyEphem (full VSOP87) over 1950-2050 and against the NREL SPA reference case,
-// see tests/sky/sun_position_test.cpp and docs/sky.md: errors are a few thousandths of a degree.
+// Measured against PyEphem (full VSOP87) at 1468 random times and places 1950-2050: worst 0.00035
+// deg; NREL SPA reference case: +0.00002 deg zenith, +0.00006 deg azimuth (docs/sky.md).
 // The input is taken as UT1 (|UT1 - UTC| < 0.9 s, at most 0.004 deg of hour angle).
 #pragma once
 

@@ -86,6 +86,23 @@ TEST(Texture, SrgbTexturesAreDecodedToLinearExceptAlpha) {
     EXPECT_NEAR(l.evaluate(Vec2(0.5f, 0.5f))[0], 0.5f, 1e-7f);
 }
 
+TEST(Texture, EightBitSrgbValuesDecodeLikeTheTransferFunction) {
+    // Every 8-bit code k / 255 (as an image loader produces them), one texel per code.
+    std::vector<float> rgba;
+    for (int k = 0; k < 256; ++k) {
+        float v = float(k) * (1.0f / 255.0f);
+        rgba.insert(rgba.end(), {v, v, v, v});
+    }
+    Texture t("codes", 256, 1, rgba, true, TextureWrap::ClampToEdge, TextureWrap::ClampToEdge, TextureFilter::Nearest);
+    for (int k = 0; k < 256; ++k) {
+        double v = k / 255.0;
+        double want = v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+        Vec4 got = t.evaluate(Vec2((k + 0.5f) / 256.0f, 0.5f));
+        EXPECT_NEAR(got[0], want, 1e-6) << k;
+        EXPECT_NEAR(got[3], v, 1e-7) << k;
+    }
+}
+
 TEST(Texture, NonFiniteCoordinatesDoNotCrash) {
     Texture l = ramp(4, 4, TextureWrap::Repeat, TextureWrap::MirroredRepeat, TextureFilter::Linear);
     Vec4 v = l.evaluate(Vec2(std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()));

@@ -138,21 +138,22 @@ TEST(ProceduralClouds, CoverageIncreasesCloudFractionMonotonically) {
     EXPECT_GT(cloud_fraction(flow, 0.0), 0.99) << "full coverage is overcast";
 }
 
-TEST(ProceduralClouds, CoverageIsTheCloudFractionOverhead) {
-    // Averaged over seeds, the fraction of the overhead sky with any cloud is the coverage.
-    for (double c : {0.25, 0.6}) {
-        int cloudy = 0, total = 0;
-        for (uint64_t seed = 1; seed <= 12; ++seed) {
-            Image flow;
-            render_procedural_sky(base_params(seed, c), 0.0, 64, &flow, 1.0);
-            for (int y = 0; y < 64; ++y)
-                for (int x = 0; x < 64; ++x) {
-                    if (fisheye::pixel_center_uv(x, y, 64).norm() > 0.4f) continue;  // within 36 deg of the zenith
-                    ++total;
-                    cloudy += flow.at(x, y, 2) > 0.0f;
-                }
+TEST(ProceduralClouds, CoverageIsTheFractionOfTheLayerWithCloud) {
+    // Points spread over a square of the layer 100 km (cumulus) or 300 km (cirrus, whose
+    // streaks come in patches about 20 km wide) across.
+    for (double c : {0.1, 0.25, 0.6, 0.9}) {
+        ProceduralSkyParams p = base_params(17, c);
+        p.layers.push_back(cirrus_layer());
+        ProceduralSky sky(p);
+        for (size_t layer = 0; layer < 2; ++layer) {
+            int cloudy = 0;
+            const int n = 100;
+            const double spacing = layer == 0 ? 1000.0 : 3000.0;
+            for (int a = 0; a < n; ++a)
+                for (int b = 0; b < n; ++b)
+                    cloudy += sky.layer_density(layer, (a - n / 2) * spacing + 0.37, (b - n / 2) * spacing + 0.61, 30.0) > 0.0;
+            EXPECT_NEAR(double(cloudy) / (n * n), c, 0.04) << "coverage " << c << ", layer " << layer;
         }
-        EXPECT_NEAR(double(cloudy) / total, c, 0.12) << "coverage " << c;
     }
 }
 
@@ -276,6 +277,14 @@ TEST(ProceduralClouds, LoadsGreyAndAlphaMasks) {
     Image a = load_cloud_mask(dir + "/alpha.exr");
     EXPECT_FLOAT_EQ(a.at(2, 1, 0), 0.5f);
     EXPECT_FLOAT_EQ(a.at(1, 0, 0), 0.0f);
+    Image opaque(4, 2, 4);  // RGBA saved by a paint program: alpha 1 everywhere, grey is the density
+    for (int y = 0; y < 2; ++y)
+        for (int x = 0; x < 4; ++x) opaque.at(x, y, 3) = 1.0f;
+    opaque.at(3, 1, 0) = opaque.at(3, 1, 1) = opaque.at(3, 1, 2) = 0.75f;
+    write_image(dir + "/opaque.exr", opaque);
+    Image o = load_cloud_mask(dir + "/opaque.exr");
+    EXPECT_FLOAT_EQ(o.at(3, 1, 0), 0.75f);
+    EXPECT_FLOAT_EQ(o.at(0, 0, 0), 0.0f);
 }
 
 template <typename F>

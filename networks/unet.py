@@ -1,0 +1,136 @@
+"""The two UNets of the medium-timescale cloud model (Satilmis & Bashford-Rogers, "Deep Dynamic
+Cloud Lighting"): xi(I) = CloudNet(I concat FlowNet(I)).
+
+Architecture as in the paper: encoder blocks are 4x4 stride-2 convolutions + BatchNorm +
+LeakyReLU(0.2); decoder blocks are x2 bilinear upsampling + 3x3 convolution + BatchNorm + ReLU,
+each concatenated with the encoder features of the same size (skips). Width and depth are
+parameters so that small configurations can be compared (networks/sweep.py).
+
+Everything here exports to ONNX in the form OpenCV 4.6's importer runs exactly (../shared/NOTES.md):
+opset 11, fixed input size, Resize with constant scales (nn.Upsample(scale_factor=2)), Conv,
+BatchNorm, LeakyRelu, Relu, Concat, Tanh, Sigmoid, Add, Slice with constant bounds.
+"""
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+
+
+class EncoderBlock(nn.Module):
+    def __init__(self, cin, cout, norm=True):
+        super().__init__()
+        self.conv = nn.Conv2d(cin, cout, 4, stride=2, padding=1, bias=not norm)
+        self.norm = nn.BatchNorm2d(cout) if norm else nn.Identity()
+        self.act = nn.LeakyReLU(0.2)
+
+    def forward(self, x):
+        return self.act(self.norm(self.conv(x)))
+
+
+class DecoderBlock(nn.Module):
+    def __init__(self, cin, cout):
+        super().__init__()
+        self.up = nn.Upsample(scale_factor=2, mode="bilinear", align_corners=False)
+        self.conv = nn.Conv2d(cin, cout, 3, padding=1, bias=False)
+        self.norm = nn.BatchNorm2d(cout)
+        self.act = nn.ReLU()
+
+    def forward(self, x, skip):
+        x = self.act(self.norm(self.conv(self.up(x))))
+        return torch.cat([x, skip], dim=1) if skip is not None else x
+
+
+class UNet(nn.Module):
+    """widths[k] is the channel count after encoder block k (len(widths) = depth); the input size
+    must be divisible by 2^depth. The last decoder block upsamples back to full resolution and a
+    1x1 convolution maps to out_channels (no activation: the wrappers below add theirs)."""
+
+    def __init__(self, in_channels, out_channels, widths=(16, 32, 64, 64)):
+        super().__init__()
+        self.widths = tuple(int(w) for w in widths)
+        self.encoders = nn.ModuleList()
+        cin = in_channels
+        for k, w in enumerate(self.widths):
+            # pix2pix's convention: no normalisation on the first block (it sees raw pixels).
+            self.encoders.append(EncoderBlock(cin, w, norm=k > 0))
+            cin = w
+        self.decoders = nn.ModuleList()
+        depth = len(self.widths)
+        for k in reversed(range(depth)):
+            skip = self.widths[k - 1] if k > 0 else in_channels
+            cout = self.widths[k - 1] if k > 0 else max(self.widths[0] // 2, 8)
+            self.decoders.append(DecoderBlock(cin, cout))
+            cin = cout + skip
+        self.head = nn.Conv2d(cin, out_channels, 1)
+
+    def forward(self, x):
+        skips = [x]
+        for enc in self.encoders:
+            x = enc(x)
+            skips.append(x)
+        skips.pop()  # the bottleneck is not a skip
+        for dec in self.decoders:
+            x = dec(x, skips.pop())
+        return self.head(x)
+
+
+class FlowNet(nn.Module):
+    """Sky image in [0,1] (3 channels) -> flow (3 channels): (cos, sin) of the direction, in
+    [-1, 1] via tanh, and the normalised magnitude in [0, 1] via sigmoid (encoding: dataset.py)."""
+
+    def __init__(self, widths=(16, 32, 64, 64)):
+        super().__init__()
+        self.unet = UNet(3, 3, widths)
+
+    def forward(self, image):
+        y = self.unet(image)
+        return torch.cat([torch.tanh(y[:, 0:2]), torch.sigmoid(y[:, 2:3])], dim=1)
+
+
+class CloudNet(nn.Module):
+    """Image (3) concat flow (3) -> the next image. Predicts a bounded change (tanh) added to the
+    input image, so the identity (persistence) is easy to represent and a recursive rollout
+    cannot drift by more than the learnt per-step change. The caller clamps to [0, 1]."""
+
+    def __init__(self, widths=(16, 32, 64, 64)):
+        super().__init__()
+        self.unet = UNet(6, 3, widths)
+
+    def forward(self, image_and_flow):
+        return image_and_flow[:, 0:3] + torch.tanh(self.unet(image_and_flow))
+
+
+class CloudModel(nn.Module):
+    """One medium step xi on [0,1] images, with the sky-disc mask applied so pixels outside the
+    disc stay 0 (what the canonical image holds there)."""
+
+    def __init__(self, flow_widths, cloud_widths):
+        super().__init__()
+        self.flownet = FlowNet(flow_widths)
+        self.cloudnet = CloudNet(cloud_widths)
+
+    def forward(self, image, disc):
+        flow = self.flownet(image)
+        nxt = self.cloudnet(torch.cat([image, flow], dim=1))
+        return torch.clamp(nxt, 0.0, 1.0) * disc, flow
+
+
+def parameter_count(module):
+    return sum(p.numel() for p in module.parameters())
+
+
+def step_flops(resolution, flow_widths, cloud_widths):
+    """Multiply-accumulates of one step (both networks), by running a forward pass with hooks."""
+    macs = [0]
+
+    def hook(mod, inp, out):
+        if isinstance(mod, nn.Conv2d):
+            k = mod.kernel_size[0] * mod.kernel_size[1] * mod.in_channels // mod.groups
+            macs[0] += out.numel() * k
+
+    model = CloudModel(flow_widths, cloud_widths).eval()
+    handles = [m.register_forward_hook(hook) for m in model.modules() if isinstance(m, nn.Conv2d)]
+    with torch.no_grad():
+        model(torch.zeros(1, 3, resolution, resolution), torch.ones(1, 1, resolution, resolution))
+    for h in handles:
+        h.remove()
+    return macs[0]

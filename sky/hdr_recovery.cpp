@@ -1,0 +1,250 @@
+#include "sky/hdr_recovery.h"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+#include "sky/clear_sky.h"
+#include "sky/fisheye.h"
+#include "util/color.h"
+#include "util/error.h"
+
+namespace dynsky {
+
+namespace {
+
+constexpr double kDeg = kPiD / 180.0;
+
+double angle_between(const Vec3d& a, const Vec3d& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
+
+double median_of(std::vector<double> v) {
+    if (v.empty()) return 0;
+    size_t k = v.size() / 2;
+    std::nth_element(v.begin(), v.begin() + k, v.end());
+    return v[k];
+}
+
+}  // namespace
+
+std::string HdrCalibrationReport::summary() const {
+    std::ostringstream s;
+    s.precision(4);
+    s << "HDR calibration: " << method << ", scale " << scale << " W m^-2 sr^-1 per unit";
+    s.precision(3);
+    s << ", clear pixels " << clear_fraction * 100 << "% of the disc (ratio spread " << ratio_spread * 100 << "%)";
+    s << ", sun elevation " << sun_elevation_deg << " deg";
+    if (sun_offset_deg >= 0) s << ", clipped sun seen " << sun_offset_deg << " deg from the computed one";
+    s << (sun_restored ? ", sun disc restored" : (sun_visible ? ", sun seen" : ", sun not seen (not restored)"));
+    return s.str();
+}
+
+SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& params, HdrCalibrationReport* report_out) {
+    if (!photo.display_referred)
+        throw_file_error(photo.photo_path, "HDR recovery is for 8-bit (display-referred) photographs; this one is already linear HDR");
+    validate_location(params.location);
+    const SkyImage& in = photo.sky;
+    const int n = in.resolution;
+    HdrCalibrationReport rep;
+
+    SunPosition sp = compute_sun_position(params.time, params.location);
+    rep.computed_sun = sp.direction();
+    rep.sun_elevation_deg = sp.elevation_deg();
+    rep.used_sun = rep.computed_sun;
+
+    // Directions of the pixels, once.
+    std::vector<Vec3d> dir(size_t(n) * n);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            Vec2 uv = fisheye::pixel_center_uv(i, j, n);
+            dir[size_t(j) * n + i] = fisheye::direction_from_uv(double(uv.x()), double(uv.y()));
+        }
+
+    // The sun as the photo shows it: the clipped blob nearest the computed sun, within the search cone.
+    cv::Mat clipped(n, n, CV_8U);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) clipped.at<unsigned char>(j, i) = photo.clipped[size_t(j) * n + i] ? 255 : 0;
+    cv::Mat labels;
+    int blobs = cv::connectedComponents(clipped, labels, 8, CV_32S);
+    std::vector<double> nearest(size_t(std::max(blobs, 1)), 1e9);
+    std::vector<Vec3d> centroid(size_t(std::max(blobs, 1)), Vec3d::Zero());
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            int l = labels.at<int>(j, i);
+            if (l <= 0) continue;
+            const Vec3d& w = dir[size_t(j) * n + i];
+            nearest[size_t(l)] = std::min(nearest[size_t(l)], angle_between(w, rep.computed_sun));
+            centroid[size_t(l)] += w;
+        }
+    int sun_blob = -1;
+    for (int l = 1; l < blobs; ++l)
+        if (nearest[size_t(l)] <= params.sun_search_deg * kDeg && (sun_blob < 0 || nearest[size_t(l)] < nearest[size_t(sun_blob)]))
+            sun_blob = l;
+    if (sun_blob > 0 && rep.computed_sun.y() > -0.02) {
+        Vec3d seen = centroid[size_t(sun_blob)].normalized();
+        rep.sun_visible = true;
+        rep.sun_offset_deg = angle_between(seen, rep.computed_sun) / kDeg;
+        if (params.use_observed_sun) rep.used_sun = seen;
+    }
+
+    // Encoded values for the cloud rule (the photo's own, up to resampling).
+    auto encoded = [&](size_t p) {
+        const float* c = &in.rgb[p * 3];
+        return Color(linear_to_srgb(c[0]), linear_to_srgb(c[1]), linear_to_srgb(c[2]));
+    };
+
+    // A sun behind the shadow band (or another filled obstruction): seen if the sky next to the
+    // obstruction near the sun, 4-15 degrees out, is mostly clear or clipped.
+    if (!rep.sun_visible && rep.computed_sun.y() > 0) {
+        double sx, sy;
+        if (fisheye::uv_from_direction(rep.computed_sun, &sx, &sy)) {
+            int si = std::clamp(int((sx + 1) / 2 * n), 0, n - 1), sj = std::clamp(int((sy + 1) / 2 * n), 0, n - 1);
+            if (photo.not_sky[size_t(sj) * n + si]) {
+                long long around = 0, bright_or_clear = 0;
+                for (size_t p = 0; p < dir.size(); ++p) {
+                    if (photo.not_sky[p] || !in.in_disc(int(p % n), int(p / n))) continue;
+                    double a = angle_between(dir[p], rep.computed_sun);
+                    if (a < 4 * kDeg || a > 15 * kDeg) continue;
+                    ++around;
+                    Color e = encoded(p);
+                    if (photo.clipped[p] || !is_cloud(e[0], e[1], e[2], params.clear_rule)) ++bright_or_clear;
+                }
+                rep.sun_visible = around > 0 && bright_or_clear * 2 >= around;
+            }
+        }
+    }
+
+    ClearSkyParams model_params;
+    model_params.sun_direction = rep.used_sun;
+    model_params.turbidity = params.turbidity;
+    model_params.ground_albedo = params.ground_albedo;
+    model_params.sun_disc = true;
+    ClearSkyModel model(model_params);
+
+    // Calibration on clear pixels; subsampled so a 2048^2 import evaluates ~40k model pixels.
+    long long disc = 0;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) disc += in.in_disc(i, j) ? 1 : 0;
+    int stride = std::max(1, int(std::sqrt(double(disc) / 40000.0)));
+    std::vector<double> ratios;
+    long long clear = 0;
+    double sum_model = 0, sum_photo = 0;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            size_t p = size_t(j) * n + i;
+            if (!in.in_disc(i, j) || photo.not_sky[p] || photo.clipped[p]) continue;
+            const Vec3d& w = dir[p];
+            if (angle_between(w, rep.used_sun) < params.exclude_sun_deg * kDeg) continue;
+            if (std::acos(std::clamp(w.y(), -1.0, 1.0)) > params.max_zenith_deg * kDeg) continue;
+            Color e = encoded(p);
+            bool is_clear = !is_cloud(e[0], e[1], e[2], params.clear_rule);
+            if (is_clear) ++clear;
+            if ((i % stride) || (j % stride)) continue;
+            double y_photo = luminance(in.pixel(i, j));
+            double y_model = luminance(model.sky_radiance(w));
+            sum_model += y_model;
+            sum_photo += y_photo;
+            if (is_clear && y_photo > 1e-4) ratios.push_back(y_model / y_photo);
+        }
+    rep.clear_pixels = clear;
+    rep.clear_fraction = disc ? double(clear) / double(disc) : 0;
+    if (rep.clear_fraction >= params.min_clear_fraction && ratios.size() >= 20) {
+        rep.method = "clear-sky pixels";
+        rep.scale = median_of(ratios);
+        std::vector<double> dev;
+        for (double r : ratios) dev.push_back(std::abs(r - rep.scale));
+        rep.ratio_spread = median_of(dev) / rep.scale;
+    } else {
+        rep.method = "mean-luminance fallback";
+        if (!(sum_photo > 0)) throw_file_error(photo.photo_path, "the photograph's sky is black: nothing to calibrate");
+        rep.scale = sum_model / sum_photo;
+    }
+
+    SkyImage out = in;
+    for (float& v : out.rgb) v = float(v * rep.scale);
+
+    if (params.restore_sun && rep.sun_visible && rep.used_sun.y() > 0) {
+        // The model's sky + disc, splatted energy-conserving at this resolution (make_clear_sky).
+        SkyImage m = make_clear_sky(model_params, n);
+        double pixel_deg = 180.0 / n;
+        double disc_reach = (kHosekWilkieSolarRadius / kDeg + 2 * pixel_deg) * kDeg;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                size_t p = size_t(j) * n + i;
+                if (!in.in_disc(i, j)) continue;
+                bool in_blob = sun_blob > 0 && labels.at<int>(j, i) == sun_blob;
+                bool on_disc = angle_between(dir[p], rep.used_sun) <= disc_reach;
+                if (!in_blob && !on_disc) continue;
+                Color c = out.pixel(i, j).max(m.pixel(i, j));
+                out.set_pixel(i, j, c);
+            }
+        rep.sun_restored = true;
+    }
+    out.sun_direction = rep.used_sun.cast<float>();
+    out.source = in.source + " (hdr: " + rep.method + ")";
+    if (report_out) *report_out = rep;
+    return out;
+}
+
+void validate_unit_map(const UnitMapParams& p) {
+    if (!(p.scale > 0) || !std::isfinite(p.scale)) throw Error("unit map: scale must be positive and finite");
+    if (!(p.max_radiance > p.scale) || !std::isfinite(p.max_radiance))
+        throw Error("unit map: max_radiance must be finite and larger than scale");
+}
+
+float radiance_to_unit(float radiance, const UnitMapParams& p) {
+    double x = std::clamp(double(radiance), 0.0, p.max_radiance);
+    return float(std::log1p(x / p.scale) / std::log1p(p.max_radiance / p.scale));
+}
+
+float unit_to_radiance(float unit, const UnitMapParams& p) {
+    double y = std::clamp(double(unit), 0.0, 1.0);
+    return float(p.scale * std::expm1(y * std::log1p(p.max_radiance / p.scale)));
+}
+
+Image hdr_to_unit(const SkyImage& sky, const UnitMapParams& params) {
+    validate_unit_map(params);
+    int n = sky.resolution;
+    Image out(n, n, 3);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            if (!sky.in_disc(i, j)) continue;
+            Color c = sky.pixel(i, j);
+            for (int k = 0; k < 3; ++k) out.at(i, j, k) = radiance_to_unit(c[k], params);
+        }
+    out.metadata.numbers["dynsky:unit_scale"] = params.scale;
+    out.metadata.numbers["dynsky:unit_max"] = params.max_radiance;
+    out.metadata.numbers["dynsky:time"] = sky.time_seconds;
+    if (sky.sun_direction) {
+        out.metadata.numbers["dynsky:sun_x"] = sky.sun_direction->x();
+        out.metadata.numbers["dynsky:sun_y"] = sky.sun_direction->y();
+        out.metadata.numbers["dynsky:sun_z"] = sky.sun_direction->z();
+    }
+    return out;
+}
+
+SkyImage unit_to_hdr(const Image& unit, const UnitMapParams& params) {
+    validate_unit_map(params);
+    const auto& num = unit.metadata.numbers;
+    auto differs = [](double a, double b) { return std::abs(a - b) > 1e-6 * std::max(std::abs(a), std::abs(b)); };
+    if (auto it = num.find("dynsky:unit_scale"); it != num.end() && differs(it->second, params.scale))
+        throw Error("unit image was encoded with scale " + std::to_string(it->second) + ", decoding with " +
+                    std::to_string(params.scale));
+    if (auto it = num.find("dynsky:unit_max"); it != num.end() && differs(it->second, params.max_radiance))
+        throw Error("unit image was encoded with max " + std::to_string(it->second) + ", decoding with " +
+                    std::to_string(params.max_radiance));
+    SkyImage sky = sky_from_image(unit, "unit image");
+    for (int j = 0; j < sky.resolution; ++j)
+        for (int i = 0; i < sky.resolution; ++i) {
+            if (!sky.in_disc(i, j)) {
+                sky.set_pixel(i, j, Color::Zero());
+                continue;
+            }
+            Color c = sky.pixel(i, j);
+            for (int k = 0; k < 3; ++k) c[k] = unit_to_radiance(c[k], params);
+            sky.set_pixel(i, j, c);
+        }
+    return sky;
+}
+
+}  // namespace dynsky

@@ -1,0 +1,82 @@
+// From a display-referred photograph to plausible absolute radiance, and the [0, 1] encoding the
+// cloud-motion networks consume.
+//
+// recover_hdr (inverse tone mapping, docs/sky-import.md):
+//  1. the photo is already linear (sRGB-decoded by sky/photo_import.h), but its scale is unknown;
+//  2. the clear-sky model (sky/clear_sky.h, Hosek-Wilkie, W m^-2 sr^-1) is evaluated for the sun's
+//     position at the photo's time and place;
+//  3. on the photo's CLEAR pixels (cloud rule says clear, not clipped, not filled, away from the sun
+//     and the horizon) the ratio model luminance / photo luminance is taken; its median is the
+//     scale applied to the whole photo (colours keep the camera's white balance);
+//     with too few clear pixels (overcast) the scale instead matches the photo's mean luminance to
+//     the clear model's: a weak, documented fallback;
+//  4. the sun: clipped pixels near the sun (the sun seen, saturated) get max(scaled photo, model
+//     sky + disc), which restores the disc's true radiance and the aureole's clipped core. A sun
+//     hidden by a shadow band counts as seen if the sky around the band near it is clear or clipped.
+//
+// UnitMap: y = log(1 + x / scale) / log(1 + max_radiance / scale), per channel, clamped to [0, 1];
+// exactly invertible below max_radiance (which by default exceeds any sun pixel the model makes).
+#pragma once
+
+#include <string>
+
+#include "sky/cloud_mask.h"
+#include "sky/photo_import.h"
+#include "sky/sky_image.h"
+#include "sky/sun_position.h"
+#include "util/image.h"
+
+namespace dynsky {
+
+struct HdrCalibrationParams {
+    UtcTime time;              // when the photo was taken (UTC)
+    GeoLocation location;      // where
+    double turbidity = 3.0;    // clear-sky model parameters (sky/clear_sky.h)
+    double ground_albedo = 0.3;
+    // Which pixels are clear sky for the calibration; the paper's 0.46 is too strict for most
+    // cameras (docs/sky-import.md), WSISEG's best threshold is the default here.
+    CloudMaskParams clear_rule{CloudRule::RedBlueRatio, kWsisegBestRedBlueThreshold};
+    double exclude_sun_deg = 15;       // skip the aureole: its clipping and forward scattering
+    double max_zenith_deg = 78;        // skip the haze and obstructions near the horizon
+    double min_clear_fraction = 0.01;  // of the disc, to trust the clear-pixel calibration
+    bool restore_sun = true;
+    double sun_search_deg = 3;         // a clipped blob this close to the computed sun is the sun
+    bool use_observed_sun = true;      // place the sun where the photo shows it (if seen)
+};
+
+struct HdrCalibrationReport {
+    std::string method;              // "clear-sky pixels" or "mean-luminance fallback"
+    double scale = 0;                // radiance (W m^-2 sr^-1) per linear photo unit
+    long long clear_pixels = 0;      // pixels used (before subsampling)
+    double clear_fraction = 0;       // of the disc
+    double ratio_spread = 0;         // median absolute deviation / median of the per-pixel ratios
+    bool sun_visible = false;        // clipped sun found, or sun behind the band with clear sky around
+    bool sun_restored = false;
+    double sun_offset_deg = -1;      // angle between the clipped sun seen and the computed sun (-1: not seen)
+    double sun_elevation_deg = 0;    // computed
+    Vec3d computed_sun = Vec3d::UnitY(), used_sun = Vec3d::UnitY();
+    std::string summary() const;     // one line for people
+};
+
+// Absolute radiance from an imported LDR photo (throws dynsky::Error if the photo was not
+// display-referred: HDR input already has its own scale). Sets sun_direction on the result.
+SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& params,
+                     HdrCalibrationReport* report = nullptr);
+
+// The forward map to [0, 1] and back. Defaults: radiance in W m^-2 sr^-1 (the clear-sky model's
+// unit), scale 1 (a clear sky is 1-25 there, so the sky spans about 0.05-0.2 of the range),
+// max 1e7 (above the model's brightest sun pixel, about 3e6).
+struct UnitMapParams {
+    double scale = 1.0;
+    double max_radiance = 1e7;
+};
+void validate_unit_map(const UnitMapParams& params);
+float radiance_to_unit(float radiance, const UnitMapParams& params);
+float unit_to_radiance(float unit, const UnitMapParams& params);
+
+// Whole images: N x N x 3, 0 outside the disc; the parameters travel as metadata
+// ("dynsky:unit_scale", "dynsky:unit_max") and unit_to_hdr checks them when present.
+Image hdr_to_unit(const SkyImage& sky, const UnitMapParams& params = {});
+SkyImage unit_to_hdr(const Image& unit, const UnitMapParams& params = {});
+
+}  // namespace dynsky

@@ -1,0 +1,618 @@
+#include "sky/photo_import.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/photo.hpp>
+#include <regex>
+#include <sstream>
+
+#include "sky/fisheye.h"
+#include "util/color.h"
+#include "util/error.h"
+
+namespace dynsky {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double kDeg = kPiD / 180.0;
+
+std::string fmt(double v, int digits = 1) {
+    std::ostringstream s;
+    s.precision(digits);
+    s << std::fixed << v;
+    return s.str();
+}
+
+// The rotation taking the camera's optical axis to the zenith (the smallest one), as a matrix.
+Eigen::Matrix3d world_to_camera(double tilt_deg, double tilt_azimuth_deg) {
+    if (tilt_deg == 0) return Eigen::Matrix3d::Identity();
+    Vec3d axis = fisheye::direction_from_angles(tilt_deg * kDeg, tilt_azimuth_deg * kDeg);
+    return Eigen::Quaterniond::FromTwoVectors(axis, Vec3d::UnitY()).toRotationMatrix();
+}
+
+bool is_display_encoded(const std::string& path, const std::string& encoding) {
+    if (encoding == "srgb") return true;
+    if (encoding == "linear") return false;
+    if (encoding != "auto") throw Error("unknown input encoding '" + encoding + "' (use auto, srgb or linear)");
+    std::string ext = file_extension(path);
+    return !(ext == ".exr" || ext == ".hdr" || ext == ".pfm" || ext == ".tif" || ext == ".tiff");
+}
+
+// RGB float image (3 channels, RGB order) from any channel count.
+cv::Mat to_rgb_mat(const Image& image, const std::string& name) {
+    if (image.channels != 1 && image.channels < 3)
+        throw_file_error(name, "has " + std::to_string(image.channels) + " channels; a sky photograph needs 1 (grey) or 3+ (RGB)");
+    cv::Mat out(image.height, image.width, CV_32FC3);
+    for (int y = 0; y < image.height; ++y) {
+        cv::Vec3f* row = out.ptr<cv::Vec3f>(y);
+        for (int x = 0; x < image.width; ++x) {
+            for (int c = 0; c < 3; ++c) {
+                float v = image.at(x, y, image.channels == 1 ? 0 : c);
+                if (!std::isfinite(v))
+                    throw_file_error(name, "pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") is " +
+                                               (std::isnan(v) ? "NaN" : "infinite") + ": a photograph must hold finite values");
+                if (v < 0)
+                    throw_file_error(name, "pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") is negative (" +
+                                               std::to_string(v) + "): a photograph cannot hold negative light");
+                row[x][c] = v;
+            }
+        }
+    }
+    return out;
+}
+
+// 8-bit grey for geometry work: display-encoded values as they are; linear ones normalised by
+// their 99th percentile and sRGB-encoded (a crude tone map, enough to see the circle's edge).
+cv::Mat display_grey(const cv::Mat& rgb, bool display_referred) {
+    cv::Mat grey(rgb.rows, rgb.cols, CV_32F);
+    for (int y = 0; y < rgb.rows; ++y)
+        for (int x = 0; x < rgb.cols; ++x) {
+            const cv::Vec3f& p = rgb.at<cv::Vec3f>(y, x);
+            grey.at<float>(y, x) = (p[0] + p[1] + p[2]) / 3.0f;
+        }
+    if (!display_referred) {
+        std::vector<float> v(grey.begin<float>(), grey.end<float>());
+        size_t k = size_t(0.99 * (v.size() - 1));
+        std::nth_element(v.begin(), v.begin() + k, v.end());
+        float scale = v[k] > 0 ? 1.0f / v[k] : 1.0f;
+        for (auto it = grey.begin<float>(); it != grey.end<float>(); ++it) *it = linear_to_srgb(*it * scale);
+    }
+    cv::Mat out;
+    grey.convertTo(out, CV_8U, 255.0);
+    return out;
+}
+
+cv::Mat image_to_grey8(const Image& image, bool display_referred) {
+    return display_grey(to_rgb_mat(image, "image"), display_referred);
+}
+
+// The encoded level at which the photo saturates: the highest "plateau" of its per-pixel channel
+// maximum (a spike in the histogram, as sensor clipping makes), or 1 if there is none.
+double find_clip_level(const cv::Mat& rgb_encoded, const SkyCircle& circle) {
+    std::vector<double> hist(256, 0.0);
+    double r2 = circle.radius * circle.radius;
+    double total = 0;
+    for (int y = 0; y < rgb_encoded.rows; ++y)
+        for (int x = 0; x < rgb_encoded.cols; ++x) {
+            double dx = x - circle.center_x, dy = y - circle.center_y;
+            if (dx * dx + dy * dy > r2) continue;
+            const cv::Vec3f& p = rgb_encoded.at<cv::Vec3f>(y, x);
+            int b = std::clamp(int(std::lround(std::max({p[0], p[1], p[2]}) * 255.0f)), 0, 255);
+            hist[b] += 1;
+            total += 1;
+        }
+    double min_count = std::max(20.0, 2e-4 * total);
+    for (int b = 255; b >= 64; --b) {
+        double plateau = hist[b] + (b > 0 ? hist[b - 1] : 0) + (b < 255 ? hist[b + 1] : 0);
+        if (plateau < min_count) continue;
+        double below = 0;
+        for (int k = b - 6; k <= b - 2; ++k) below += k >= 0 ? hist[k] : 0;
+        below /= 5;
+        // Clipping piles pixels up at one level; a natural histogram top falls off smoothly.
+        if (hist[b] >= 3 * below + 1) return (b - 2) / 255.0;
+        return 1.0;  // the top populated level is not a spike: not clipped
+    }
+    return 1.0;
+}
+
+}  // namespace
+
+LensLaw parse_lens_law(const std::string& name) {
+    if (name == "equidistant") return LensLaw::Equidistant;
+    if (name == "equisolid") return LensLaw::Equisolid;
+    if (name == "orthographic") return LensLaw::Orthographic;
+    if (name == "stereographic") return LensLaw::Stereographic;
+    throw Error("unknown lens law '" + name + "' (use equidistant, equisolid, orthographic or stereographic)");
+}
+
+const char* lens_law_name(LensLaw law) {
+    switch (law) {
+        case LensLaw::Equidistant: return "equidistant";
+        case LensLaw::Equisolid: return "equisolid";
+        case LensLaw::Orthographic: return "orthographic";
+        case LensLaw::Stereographic: return "stereographic";
+    }
+    return "?";
+}
+
+double lens_radius(LensLaw law, double theta) {
+    switch (law) {
+        case LensLaw::Equidistant: return theta / (kPiD / 2);
+        case LensLaw::Equisolid: return std::sqrt(2.0) * std::sin(theta / 2);
+        case LensLaw::Orthographic: return std::sin(std::min(theta, kPiD / 2));
+        case LensLaw::Stereographic: return std::tan(theta / 2);
+    }
+    return 0;
+}
+
+double lens_angle(LensLaw law, double r) {
+    switch (law) {
+        case LensLaw::Equidistant: return r * (kPiD / 2);
+        case LensLaw::Equisolid: return 2 * std::asin(std::min(1.0, r / std::sqrt(2.0)));
+        case LensLaw::Orthographic: return std::asin(std::min(1.0, r));
+        case LensLaw::Stereographic: return 2 * std::atan(r);
+    }
+    return 0;
+}
+
+bool PhotoGeometry::project(const Vec3d& direction, double* x, double* y) const {
+    Vec3d v = world_to_camera(tilt_deg, tilt_azimuth_deg) * direction.normalized();
+    double theta = std::acos(std::clamp(v.y(), -1.0, 1.0));
+    if (theta > kPiD / 2 + 1e-9) return false;
+    double phi = std::atan2(v.x(), -v.z());
+    double r = circle.radius * lens_radius(lens, theta);
+    double psi = north_deg * kDeg + (mirrored ? phi : -phi);
+    *x = circle.center_x + r * std::sin(psi);
+    *y = circle.center_y - r * std::cos(psi);
+    return true;
+}
+
+bool PhotoGeometry::unproject(double x, double y, Vec3d* direction) const {
+    double dx = x - circle.center_x, dy = y - circle.center_y;
+    double r = std::sqrt(dx * dx + dy * dy) / circle.radius;
+    if (r > 1.0) return false;
+    double theta = lens_angle(lens, r);
+    double psi = std::atan2(dx, -dy);
+    double phi = mirrored ? psi - north_deg * kDeg : north_deg * kDeg - psi;
+    Vec3d v = fisheye::direction_from_angles(theta, phi);
+    *direction = world_to_camera(tilt_deg, tilt_azimuth_deg).transpose() * v;
+    return true;
+}
+
+SkyCircle find_sky_circle(const Image& photo, const std::string& name, double min_fraction, double max_fraction) {
+    if (!(min_fraction > 0 && max_fraction > min_fraction))
+        throw Error("sky circle search: the radius range must satisfy 0 < min < max (got " + fmt(min_fraction, 3) +
+                    ", " + fmt(max_fraction, 3) + ")");
+    cv::Mat grey = image_to_grey8(photo, true);
+    int shorter_side = std::min(photo.width, photo.height);
+    {
+        // Lens circle on a black surround (fisheye cameras such as the Mobotix): the lit region's
+        // outline, fitted with an ellipse (robust to the dark objects that dent it at the rim).
+        std::vector<unsigned char> v(grey.begin<unsigned char>(), grey.end<unsigned char>());
+        size_t k = size_t(0.99 * (v.size() - 1));
+        std::nth_element(v.begin(), v.begin() + k, v.end());
+        double p99 = v[k];
+        int cw = std::max(1, grey.cols / 12), ch = std::max(1, grey.rows / 12);
+        double corner = 0;
+        for (cv::Rect r : {cv::Rect(0, 0, cw, ch), cv::Rect(grey.cols - cw, 0, cw, ch), cv::Rect(0, grey.rows - ch, cw, ch),
+                           cv::Rect(grey.cols - cw, grey.rows - ch, cw, ch)}) {
+            cv::Mat patch = grey(r).clone();
+            std::vector<unsigned char> pv(patch.begin<unsigned char>(), patch.end<unsigned char>());
+            std::nth_element(pv.begin(), pv.begin() + pv.size() * 3 / 4, pv.end());
+            corner = std::max(corner, double(pv[pv.size() * 3 / 4]));
+        }
+        if (p99 >= 8 && corner <= std::max(2.0, 0.03 * p99)) {
+            cv::Mat lit = grey > corner + 2;
+            cv::morphologyEx(lit, lit, cv::MORPH_OPEN, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(7, 7)));
+            std::vector<std::vector<cv::Point>> contours;
+            cv::findContours(lit, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+            size_t best = 0;
+            double best_area = 0;
+            for (size_t i = 0; i < contours.size(); ++i) {
+                double a = cv::contourArea(contours[i]);
+                if (a > best_area) best_area = a, best = i;
+            }
+            if (contours.size() && contours[best].size() >= 5) {
+                // The convex hull bridges the dents; resampled evenly so fitEllipse weighs the rim
+                // uniformly rather than by how many contour points each stretch happens to have.
+                std::vector<cv::Point> hull;
+                cv::convexHull(contours[best], hull);
+                std::vector<cv::Point2f> rim;
+                for (size_t i = 0; i < hull.size(); ++i) {
+                    cv::Point2f p = hull[i], q = hull[(i + 1) % hull.size()];
+                    int steps = std::max(1, int(cv::norm(q - p)));
+                    for (int t = 0; t < steps; ++t) rim.push_back(p + (q - p) * (float(t) / steps));
+                }
+                cv::RotatedRect e = cv::fitEllipse(rim);
+                double r = 0.25 * (e.size.width + e.size.height);
+                double aspect = std::min(e.size.width, e.size.height) / std::max(e.size.width, e.size.height);
+                if (aspect > 0.9 && r >= min_fraction * shorter_side && r <= max_fraction * shorter_side)
+                    return SkyCircle{e.center.x, e.center.y, r};
+            }
+        }
+    }
+    double scale = std::min(1.0, 400.0 / std::max(grey.cols, grey.rows));
+    cv::Mat small;
+    cv::resize(grey, small, cv::Size(), scale, scale, cv::INTER_AREA);
+    // Stretch so the 99th percentile is white: dark exposures (the Mobotix) get the same edge
+    // contrast as bright ones.
+    {
+        std::vector<unsigned char> v(small.begin<unsigned char>(), small.end<unsigned char>());
+        size_t k = size_t(0.99 * (v.size() - 1));
+        std::nth_element(v.begin(), v.begin() + k, v.end());
+        if (v[k] > 0) small.convertTo(small, CV_8U, 255.0 / v[k]);
+    }
+    cv::GaussianBlur(small, small, cv::Size(0, 0), 2.0);
+    int shorter = std::min(photo.width, photo.height);
+    int min_r = int(std::floor(min_fraction * shorter * scale)), max_r = int(std::ceil(max_fraction * shorter * scale));
+    std::vector<cv::Vec3f> circles;
+    // Canny high threshold 60 and 20 votes at this scale: the sky's rim is the image's strongest
+    // circular edge for every camera we have; a smooth or uniform picture gives no candidate.
+    cv::HoughCircles(small, circles, cv::HOUGH_GRADIENT, 1, std::min(small.cols, small.rows), 60, 20, std::max(1, min_r),
+                     std::max(2, max_r));
+    if (circles.empty())
+        throw_file_error(name, "no sky circle found (looked for a circle of radius " + fmt(min_fraction * shorter, 0) + "-" +
+                                   fmt(max_fraction * shorter, 0) +
+                                   " px); give its centre and radius (--center X,Y --radius R)");
+    SkyCircle c;
+    c.center_x = (circles[0][0] + 0.5) / scale - 0.5;
+    c.center_y = (circles[0][1] + 0.5) / scale - 0.5;
+    c.radius = circles[0][2] / scale;
+    if (c.center_x < 0 || c.center_y < 0 || c.center_x > photo.width - 1 || c.center_y > photo.height - 1)
+        throw_file_error(name, "the circle found lies outside the photograph: give --center and --radius");
+    return c;
+}
+
+std::vector<unsigned char> load_not_sky_mask(const std::string& path, MaskLayout layout, int photo_width,
+                                             int photo_height) {
+    Image mask = read_image(path);
+    std::vector<unsigned char> out(size_t(photo_width) * photo_height, 0);
+    auto value = [&](int x, int y, int c) { return mask.at(x, y, std::min(c, mask.channels - 1)); };
+    if (layout == MaskLayout::PhotoBlackIsNotSky) {
+        if (mask.width != photo_width || mask.height != photo_height)
+            throw_file_error(path, "mask is " + std::to_string(mask.width) + "x" + std::to_string(mask.height) +
+                                       " but the photograph is " + std::to_string(photo_width) + "x" +
+                                       std::to_string(photo_height) + ": a mask must have the photo's size");
+        int nc = std::min(mask.channels, 3);
+        for (int y = 0; y < photo_height; ++y)
+            for (int x = 0; x < photo_width; ++x) {
+                bool black = true;
+                for (int c = 0; c < nc; ++c) black = black && value(x, y, c) <= 0.5f / 255.0f;
+                out[size_t(y) * photo_width + x] = black ? 1 : 0;
+            }
+        return out;
+    }
+    // Alonso's planar layout: photo pixel -> equidistant angle about (640, 480), radius 480 ->
+    // point on the plane at height h = 0.1 of the plane's width -> mask pixel.
+    if (mask.channels < 3) throw_file_error(path, "the Mobotix background mask must be an RGB image (green = not sky)");
+    const double cx = 640, cy = 480, r0 = 480, h = 0.1;
+    const int d = mask.width;
+    if (mask.height != d) throw_file_error(path, "the Mobotix background mask must be square (it is 512 x 512 as shipped)");
+    auto green = [&](int i, int j) { return value(j, i, 1) > 0.9f && value(j, i, 0) < 0.1f && value(j, i, 2) < 0.1f; };
+    for (int y = 0; y < photo_height; ++y)
+        for (int x = 0; x < photo_width; ++x) {
+            double dx = x - cx, dy = y - cy, rho = std::sqrt(dx * dx + dy * dy) / r0;
+            if (rho >= 1.0 || rho == 0) continue;
+            double alpha = rho * kPiD / 2;
+            double plane = h * std::tan(alpha) * d;  // distance from the plane's centre, mask pixels
+            double di = dy / (rho * r0) * plane, dj = dx / (rho * r0) * plane;
+            double m = std::max(std::abs(di), std::abs(dj));
+            // Off the square: take the object at its edge along the same ray (masts reach the horizon).
+            if (m > d / 2.0 - 1) {
+                di *= (d / 2.0 - 1) / m;
+                dj *= (d / 2.0 - 1) / m;
+            }
+            int i = std::clamp(int(d / 2.0 + di), 0, d - 1), j = std::clamp(int(d / 2.0 + dj), 0, d - 1);
+            out[size_t(y) * photo_width + x] = green(i, j) ? 1 : 0;
+        }
+    return out;
+}
+
+std::vector<unsigned char> detect_dark_obstructions(const Image& encoded_photo, const SkyCircle& circle, double darkness) {
+    cv::Mat grey = image_to_grey8(encoded_photo, true);
+    cv::Mat disc = cv::Mat::zeros(grey.size(), CV_8U);
+    cv::circle(disc, cv::Point2d(circle.center_x, circle.center_y), int(circle.radius * 0.98), 255, cv::FILLED);
+    std::vector<unsigned char> values;
+    for (int y = 0; y < grey.rows; ++y)
+        for (int x = 0; x < grey.cols; ++x)
+            if (disc.at<unsigned char>(y, x)) values.push_back(grey.at<unsigned char>(y, x));
+    std::vector<unsigned char> out(size_t(grey.cols) * grey.rows, 0);
+    if (values.empty()) return out;
+    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+    double median = values[values.size() / 2];
+    cv::Mat dark = (grey < darkness * median) & disc;
+    // Opening drops speckle; only pieces that are a sizeable part of the disc count as objects.
+    cv::morphologyEx(dark, dark, cv::MORPH_OPEN, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5)));
+    cv::Mat labels, stats, centroids;
+    cv::connectedComponentsWithStats(dark, labels, stats, centroids, 8);
+    double min_area = 0.002 * kPiD * circle.radius * circle.radius;
+    cv::Mat keep = cv::Mat::zeros(grey.size(), CV_8U);
+    for (int y = 0; y < grey.rows; ++y)
+        for (int x = 0; x < grey.cols; ++x) {
+            int l = labels.at<int>(y, x);
+            if (l > 0 && stats.at<int>(l, cv::CC_STAT_AREA) >= min_area) keep.at<unsigned char>(y, x) = 255;
+        }
+    cv::dilate(keep, keep, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5)));
+    for (int y = 0; y < grey.rows; ++y)
+        for (int x = 0; x < grey.cols; ++x) out[size_t(y) * grey.cols + x] = keep.at<unsigned char>(y, x) ? 1 : 0;
+    return out;
+}
+
+ImportedPhoto import_photo(const std::string& path, const PhotoImportParams& params) {
+    Image photo = read_image(path);
+    ImportedPhoto result = import_photo_image(photo, path, params);
+    result.photo_path = path;
+    return result;
+}
+
+ImportedPhoto import_photo_image(const Image& photo, const std::string& name, const PhotoImportParams& params,
+                                 const Image* extra_not_sky) {
+    const int n = params.resolution;
+    if (n < 8 || n > 16384) throw Error("sky resolution " + std::to_string(n) + " is not in 8..16384 pixels");
+    if (photo.empty()) throw_file_error(name, "image has no pixels");
+
+    ImportedPhoto out;
+    out.photo_path = name;
+    out.display_referred = is_display_encoded(name, params.encoding);
+    cv::Mat rgb = to_rgb_mat(photo, name);
+
+    // Geometry: the circle given, or found.
+    out.geometry.lens = params.lens;
+    out.geometry.north_deg = params.north_deg;
+    out.geometry.mirrored = params.mirrored;
+    out.geometry.tilt_deg = params.tilt_deg;
+    out.geometry.tilt_azimuth_deg = params.tilt_azimuth_deg;
+    if (params.circle) {
+        out.geometry.circle = *params.circle;
+        if (!(params.circle->radius > 0)) throw Error("the sky circle's radius must be positive");
+    } else {
+        if (out.display_referred) {
+            out.geometry.circle = find_sky_circle(photo, name, params.min_radius_fraction, params.max_radius_fraction);
+        } else {
+            // HDR: find the circle on a tone-mapped copy.
+            cv::Mat g = display_grey(rgb, false);
+            Image enc(g.cols, g.rows, 1);
+            for (int y = 0; y < g.rows; ++y)
+                for (int x = 0; x < g.cols; ++x) enc.at(x, y, 0) = g.at<unsigned char>(y, x) / 255.0f;
+            out.geometry.circle = find_sky_circle(enc, name, params.min_radius_fraction, params.max_radius_fraction);
+        }
+        out.circle_detected = true;
+    }
+    const SkyCircle circle = out.geometry.circle;
+
+    // Not-sky mask in the photo's grid (0/1), from the file, the caller and detection.
+    cv::Mat not_sky = cv::Mat::zeros(rgb.size(), CV_8U);
+    if (!params.mask_path.empty()) {
+        auto m = load_not_sky_mask(params.mask_path, params.mask_layout, photo.width, photo.height);
+        for (int y = 0; y < rgb.rows; ++y)
+            for (int x = 0; x < rgb.cols; ++x) not_sky.at<unsigned char>(y, x) = m[size_t(y) * rgb.cols + x];
+    }
+    if (extra_not_sky) {
+        if (extra_not_sky->width != photo.width || extra_not_sky->height != photo.height)
+            throw_file_error(name, "the not-sky mask given does not have the photograph's size");
+        for (int y = 0; y < rgb.rows; ++y)
+            for (int x = 0; x < rgb.cols; ++x)
+                if (extra_not_sky->at(x, y, 0) > 0.5f) not_sky.at<unsigned char>(y, x) = 1;
+    }
+    if (params.detect_obstructions) {
+        Image enc = photo;
+        if (!out.display_referred) {
+            cv::Mat g = display_grey(rgb, false);
+            enc = Image(g.cols, g.rows, 1);
+            for (int y = 0; y < g.rows; ++y)
+                for (int x = 0; x < g.cols; ++x) enc.at(x, y, 0) = g.at<unsigned char>(y, x) / 255.0f;
+        }
+        auto m = detect_dark_obstructions(enc, circle);
+        for (int y = 0; y < rgb.rows; ++y)
+            for (int x = 0; x < rgb.cols; ++x)
+                if (m[size_t(y) * rgb.cols + x]) not_sky.at<unsigned char>(y, x) = 1;
+    }
+    if (params.mask_dilate_px > 0 && cv::countNonZero(not_sky) > 0) {
+        int k = 2 * params.mask_dilate_px + 1;
+        cv::dilate(not_sky, not_sky, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
+    }
+
+    // Saturation, judged on the encoded values, then linear light.
+    cv::Mat clipped = cv::Mat::zeros(rgb.size(), CV_8U);
+    out.clip_level = 1.0;
+    if (out.display_referred) {
+        out.clip_level = params.clip_level >= 0 ? params.clip_level : find_clip_level(rgb, circle);
+        float level = float(out.clip_level);
+        for (int y = 0; y < rgb.rows; ++y)
+            for (int x = 0; x < rgb.cols; ++x) {
+                cv::Vec3f& p = rgb.at<cv::Vec3f>(y, x);
+                if (std::max({p[0], p[1], p[2]}) >= level - 0.5f / 255.0f) clipped.at<unsigned char>(y, x) = 1;
+                for (int c = 0; c < 3; ++c) p[c] = srgb_to_linear(std::min(p[c], 1.0f));
+            }
+    }
+
+    // Downsampling a lot: area-average first so that remap's bilinear taps see ~1 photo pixel per
+    // output pixel (otherwise it aliases).
+    SkyCircle c = circle;
+    double ratio = circle.radius / (n / 2.0);
+    cv::Mat src = rgb, src_not_sky, src_clipped;
+    not_sky.convertTo(src_not_sky, CV_32F);
+    clipped.convertTo(src_clipped, CV_32F);
+    if (ratio > 1.5) {
+        double f = 1.0 / ratio;
+        cv::Size size(std::max(1, int(std::lround(rgb.cols * f))), std::max(1, int(std::lround(rgb.rows * f))));
+        double fx = double(size.width) / rgb.cols, fy = double(size.height) / rgb.rows;
+        cv::resize(rgb, src, size, 0, 0, cv::INTER_AREA);
+        cv::resize(src_not_sky, src_not_sky, size, 0, 0, cv::INTER_AREA);
+        cv::resize(src_clipped, src_clipped, size, 0, 0, cv::INTER_AREA);
+        c.center_x = (circle.center_x + 0.5) * fx - 0.5;
+        c.center_y = (circle.center_y + 0.5) * fy - 0.5;
+        c.radius = circle.radius * std::sqrt(fx * fy);
+    }
+    PhotoGeometry g = out.geometry;
+    g.circle = c;
+
+    // Canonical pixel -> photo pixel. Pixels beyond the horizon take the horizon's value along their
+    // ray, so the inpainting below sees plausible neighbours at the rim instead of black.
+    cv::Mat map_x(n, n, CV_32F), map_y(n, n, CV_32F);
+    cv::Mat unseen = cv::Mat::zeros(n, n, CV_8U);
+    const double rmax = 1.0 - 0.25 / n;
+    const Eigen::Matrix3d to_cam = world_to_camera(g.tilt_deg, g.tilt_azimuth_deg);
+    tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
+        for (int j = rows.begin(); j < rows.end(); ++j)
+            for (int i = 0; i < n; ++i) {
+                Vec2 uv = fisheye::pixel_center_uv(i, j, n);
+                double u = uv.x(), v = uv.y(), r = std::sqrt(u * u + v * v);
+                if (r > rmax) u *= rmax / r, v *= rmax / r;
+                Vec3d w = to_cam * fisheye::direction_from_uv(u, v);
+                double theta = std::acos(std::clamp(w.y(), -1.0, 1.0));
+                double x = -1, y = -1;
+                bool ok = theta <= kPiD / 2 + 1e-9;
+                if (ok) {
+                    double phi = std::atan2(w.x(), -w.z());
+                    double rr = g.circle.radius * lens_radius(g.lens, theta);
+                    double psi = g.north_deg * kDeg + (g.mirrored ? phi : -phi);
+                    x = g.circle.center_x + rr * std::sin(psi);
+                    y = g.circle.center_y - rr * std::cos(psi);
+                    ok = x >= -0.5 && y >= -0.5 && x <= src.cols - 0.5 && y <= src.rows - 0.5;
+                }
+                map_x.at<float>(j, i) = float(x);
+                map_y.at<float>(j, i) = float(y);
+                if (!ok) unseen.at<unsigned char>(j, i) = 1;
+            }
+    });
+    cv::Mat sky, sky_not_sky, sky_clipped;
+    cv::remap(src, sky, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    cv::remap(src_not_sky, sky_not_sky, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(1.0));
+    cv::remap(src_clipped, sky_clipped, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0.0));
+
+    // Any obstruction in a pixel's bilinear footprint taints it: fill it.
+    cv::Mat fill = (sky_not_sky > 0.01f) | (unseen > 0);
+    out.not_sky.assign(size_t(n) * n, 0);
+    out.clipped.assign(size_t(n) * n, 0);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            out.not_sky[size_t(j) * n + i] = fill.at<unsigned char>(j, i) ? 1 : 0;
+            out.clipped[size_t(j) * n + i] = sky_clipped.at<float>(j, i) > 0.25f ? 1 : 0;
+        }
+
+    if (cv::countNonZero(fill) > 0) {
+        if (params.inpaint) {
+            // Telea's fast-marching inpainting, one float channel at a time (cv::inpaint takes
+            // 32-bit float only single-channel); radius scales with the output so the fill looks alike.
+            double radius = std::max(3.0, n / 170.0);
+            std::vector<cv::Mat> ch(3);
+            cv::split(sky, ch);
+            tbb::parallel_for(0, 3, [&](int k) {
+                cv::Mat filled;
+                cv::inpaint(ch[k], fill, filled, radius, cv::INPAINT_TELEA);
+                ch[k] = filled;
+            });
+            cv::merge(ch, sky);
+        } else {
+            sky.setTo(cv::Scalar::all(0), fill);
+        }
+    }
+
+    out.sky = SkyImage(n);
+    out.sky.source = "photo:" + name;
+    for (int j = 0; j < n; ++j) {
+        const cv::Vec3f* row = sky.ptr<cv::Vec3f>(j);
+        for (int i = 0; i < n; ++i) {
+            if (!out.sky.in_disc(i, j)) {
+                out.not_sky[size_t(j) * n + i] = 0;
+                out.clipped[size_t(j) * n + i] = 0;
+                continue;
+            }
+            out.sky.set_pixel(i, j, Color(std::max(0.0f, row[i][0]), std::max(0.0f, row[i][1]), std::max(0.0f, row[i][2])));
+        }
+    }
+    return out;
+}
+
+CameraPreset camera_preset(const std::string& name) {
+    CameraPreset p;
+    p.name = name;
+    if (name == "arm-tsi") {
+        // ARM SGP C1 Total Sky Imager (TSI-880): a camera looking down at a hemispherical mirror.
+        // Geometry fitted to the TSI's own sun marker in tsi_cloudmask/ (212 frames, 0.07 px rms):
+        // equisolid (r = R sqrt2 sin(theta/2), what a convex mirror seen from afar gives), north
+        // up, mirrored; the shadow band's angle agrees with the sun's azimuth within 1 degree.
+        p.params.lens = LensLaw::Equisolid;
+        p.params.mirrored = true;
+        p.params.north_deg = 0.0;
+        p.params.circle = SkyCircle{243.1, 317.5, 230.8};
+        p.params.mask_layout = MaskLayout::PhotoBlackIsNotSky;
+        p.params.min_radius_fraction = 0.45;
+        p.params.max_radius_fraction = 0.52;
+        p.latitude_deg = 36.605;
+        p.longitude_deg = -97.485;
+        p.elevation_m = 318;
+        p.filename_utc_offset_hours = 0;
+        p.sun_search_deg = 3;
+        return p;
+    }
+    if (name == "mobotix") {
+        // Mobotix at Ecole des Mines, Sophia Antipolis. Lens circle measured on the photographs;
+        // equidistant as the source project assumed. North is uncertain (docs/sky-import.md): the
+        // morning sun puts it at the bottom of the photo (about 180-195 deg), but the midday sun
+        // track cannot be matched by any level camera at 43.6 N, so HDR recovery searches widely
+        // for the sun.
+        p.params.lens = LensLaw::Equidistant;
+        p.params.mirrored = false;
+        p.params.north_deg = 185.0;
+        p.params.circle = SkyCircle{642.0, 479.0, 468.0};
+        p.params.mask_layout = MaskLayout::AlonsoPlanarGreenIsNotSky;
+        p.params.mask_dilate_px = 3;
+        p.params.min_radius_fraction = 0.46;
+        p.params.max_radius_fraction = 0.52;
+        p.latitude_deg = 43.614;
+        p.longitude_deg = 7.071;
+        p.elevation_m = 140;
+        p.filename_utc_offset_hours = 2;  // CEST: see docs/sky-import.md (dawn brightening)
+        p.sun_search_deg = 35;
+        return p;
+    }
+    std::string names;
+    for (const auto& n : camera_preset_names()) names += (names.empty() ? "" : ", ") + n;
+    throw Error("unknown camera preset '" + name + "' (known: " + names + ")");
+}
+
+std::vector<std::string> camera_preset_names() { return {"arm-tsi", "mobotix"}; }
+
+std::string find_preset_mask(const std::string& preset, const std::string& photo_path) {
+    fs::path photo(photo_path);
+    fs::path set_dir = photo.parent_path().parent_path();
+    std::error_code ec;
+    if (preset == "arm-tsi") {
+        std::smatch m;
+        std::string file = photo.filename().string();
+        if (!std::regex_search(file, m, std::regex("(\\d{14}Z)"))) return "";
+        fs::path mask = set_dir / "tsi_cloudmask" / ("tsicldmask_sgpC1_" + m[1].str() + ".png");
+        return fs::exists(mask, ec) ? mask.string() : "";
+    }
+    if (preset == "mobotix") {
+        fs::path mask = set_dir / "background_mask.png";
+        return fs::exists(mask, ec) ? mask.string() : "";
+    }
+    return "";
+}
+
+std::string time_from_file_name(const std::string& path, double utc_offset_hours) {
+    std::string file = fs::path(path).filename().string();
+    std::smatch m;
+    if (std::regex_search(file, m, std::regex("(\\d{4})(\\d{2})(\\d{2})(\\d{2})(\\d{2})(\\d{2})Z")))
+        return m[1].str() + "-" + m[2].str() + "-" + m[3].str() + "T" + m[4].str() + ":" + m[5].str() + ":" + m[6].str() + "Z";
+    if (std::regex_search(file, m, std::regex("(\\d{4})-(\\d{2})-(\\d{2})_(\\d{2})_(\\d{2})(?:_(\\d{2}))?"))) {
+        int minutes = int(std::lround(std::abs(utc_offset_hours) * 60));
+        char zone[16];
+        std::snprintf(zone, sizeof zone, "%c%02d:%02d", utc_offset_hours < 0 ? '-' : '+', minutes / 60, minutes % 60);
+        std::string sec = m[6].matched ? m[6].str() : "00";
+        return m[1].str() + "-" + m[2].str() + "-" + m[3].str() + "T" + m[4].str() + ":" + m[5].str() + ":" + sec + zone;
+    }
+    return "";
+}
+
+}  // namespace dynsky

@@ -1,0 +1,159 @@
+// Importing an all-sky photograph into the canonical fisheye sky (../shared/CONVENTIONS.md).
+//
+// A camera's photograph differs from the canonical image in: where its sky circle is (centre and
+// radius), its lens law, where north is (rotation), mirroring (mirror imagers such as the Total
+// Sky Imager show the sky reversed), optionally a tilt of the optical axis, and which pixels are not
+// sky at all (masts, shadow band, camera arm, rooftops). PhotoImportParams holds each of these;
+// import_photo() resamples the photograph into the canonical image with cv::remap, fills the
+// non-sky pixels with cv::inpaint and decodes 8-bit (display-referred, sRGB) values to linear.
+//
+// The result is linear but RELATIVE: an 8-bit photograph has lost its exposure, so values are the
+// decoded [0, 1] numbers (HDR input keeps its own scale). sky/hdr_recovery.h turns it into
+// absolute radiance.
+//
+// Photo pixel coordinates follow OpenCV: pixel (x, y) has its centre at (x, y), x to the right,
+// y down, (0, 0) the top-left pixel's centre.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sky/sky_image.h"
+#include "util/image.h"
+#include "util/math.h"
+
+namespace dynsky {
+
+// How a lens maps the angle theta off its axis to the distance from the image centre. Normalised
+// here so that r = 1 at theta = 90 degrees: the sky circle's radius is the horizon of a level camera.
+//   equidistant    r = theta / (pi/2)             (the canonical image's own law)
+//   equisolid      r = sqrt(2) sin(theta / 2)     (equal-area; a convex mirror seen from afar)
+//   orthographic   r = sin(theta)
+//   stereographic  r = tan(theta / 2)
+enum class LensLaw { Equidistant, Equisolid, Orthographic, Stereographic };
+
+LensLaw parse_lens_law(const std::string& name);  // throws dynsky::Error listing the valid names
+const char* lens_law_name(LensLaw law);
+double lens_radius(LensLaw law, double theta);     // theta in [0, pi/2] (beyond: extrapolated)
+double lens_angle(LensLaw law, double r);          // inverse, r >= 0
+
+// The sky circle in a photograph, in pixels: r = 1 of the lens law lies at `radius` from the centre.
+struct SkyCircle {
+    double center_x = 0, center_y = 0, radius = 0;
+};
+
+// Where the sky is in the photo and how the photo is oriented. Directions map to pixels as:
+// world direction -> camera frame (undo the tilt) -> angle off the axis theta and camera azimuth phi
+// -> r = radius * lens_radius(theta) -> image angle psi measured CLOCKWISE from the photo's top as
+// displayed: psi = north_deg - phi (normal camera looking up: east is counter-clockwise from north)
+// or psi = north_deg + phi (mirrored) -> (x, y) = centre + r (sin psi, -cos psi).
+struct PhotoGeometry {
+    SkyCircle circle;
+    LensLaw lens = LensLaw::Equidistant;
+    double north_deg = 0;        // where north appears, clockwise from the photo's top (0: north up)
+    bool mirrored = false;       // true: east is clockwise from north in the photo (mirror imagers)
+    double tilt_deg = 0;         // zenith angle of the optical axis (0: level camera)
+    double tilt_azimuth_deg = 0; // azimuth the axis leans towards (only with tilt_deg != 0)
+
+    // Photo pixel of a world direction; false if the direction is outside the lens's 180 deg field.
+    bool project(const Vec3d& direction, double* x, double* y) const;
+    // World direction of a photo pixel; false outside the sky circle.
+    bool unproject(double x, double y, Vec3d* direction) const;
+};
+
+// How a non-sky mask file is laid out and coded.
+enum class MaskLayout {
+    // Same pixel grid as the photograph; black (every channel 0) = not sky, anything else = sky.
+    // This is how the TSI's own per-frame masks (tsi_cloudmask/) code "not sky" (palette index 0).
+    PhotoBlackIsNotSky,
+    // The Mobotix background_mask.png of MariusAlonso/Irradiance-forecast-using-Fish-Eye-images:
+    // 512 x 512 in that project's "planar" projection (an equidistant fisheye of radius 480 px at
+    // (640, 480) projected onto a horizontal plane at height 0.1 of the plane's width); pure green =
+    // not sky. Objects that leave the plane's square are extended radially to the horizon.
+    AlonsoPlanarGreenIsNotSky,
+};
+
+struct PhotoImportParams {
+    int resolution = 512;                 // N of the N x N canonical output
+    std::optional<SkyCircle> circle;      // none: found automatically (find_sky_circle)
+    double min_radius_fraction = 0.30;    // automatic search range for the radius, as fractions of
+    double max_radius_fraction = 0.55;    //   the photo's shorter side
+    LensLaw lens = LensLaw::Equidistant;
+    double north_deg = 0;
+    bool mirrored = false;
+    double tilt_deg = 0, tilt_azimuth_deg = 0;
+    std::string mask_path;                // non-sky mask file ("": none)
+    MaskLayout mask_layout = MaskLayout::PhotoBlackIsNotSky;
+    int mask_dilate_px = 2;               // grow the mask (photo pixels) to cover object edges
+    bool detect_obstructions = false;     // also find dark obstructions (detect_dark_obstructions)
+    bool inpaint = true;                  // fill non-sky pixels (cv::inpaint, Telea); else leave 0
+    // Input encoding: "auto" (8-bit formats are sRGB-encoded, .exr/.hdr/.pfm are linear), "srgb", "linear".
+    std::string encoding = "auto";
+    // Saturation: a pixel is "clipped" if its largest channel is within 2/255 of this encoded level.
+    // < 0: automatic (the photo's own maximum, if a plateau of pixels sits there; see the docs).
+    double clip_level = -1;
+};
+
+// A photograph after import.
+struct ImportedPhoto {
+    SkyImage sky;                      // linear, relative to the photo (see the file comment)
+    PhotoGeometry geometry;            // the geometry used, with the circle found or given
+    bool circle_detected = false;      // true if the circle was found automatically
+    bool display_referred = true;      // true if the photo was sRGB-decoded (8-bit input)
+    std::vector<unsigned char> not_sky;  // N*N: 1 where the sky was hidden and has been filled
+    std::vector<unsigned char> clipped;  // N*N: 1 where the photo was saturated (LDR input only)
+    double clip_level = 1.0;           // encoded level treated as saturation (1: none found)
+    std::string photo_path;
+};
+
+// Whole pipeline from a file. Throws dynsky::Error naming the file on unreadable input, NaN/Inf
+// pixels, no detectable sky circle, a mask of the wrong size, ...
+ImportedPhoto import_photo(const std::string& path, const PhotoImportParams& params);
+
+// Same on an image already in memory (`name` is used in messages and as the sky's source).
+// `extra_not_sky`, if given, is a photo-sized 1-channel image, > 0.5 = not sky (added to the mask file).
+ImportedPhoto import_photo_image(const Image& photo, const std::string& name, const PhotoImportParams& params,
+                                 const Image* extra_not_sky = nullptr);
+
+// Finds the sky circle: the strongest circle (cv::HoughCircles on a blurred, downscaled grey copy)
+// with a radius in [min_fraction, max_fraction] of the shorter side. `photo` holds display-encoded
+// values in [0, 1] (for HDR, a log-compressed copy). Throws dynsky::Error naming `name` if none.
+SkyCircle find_sky_circle(const Image& photo, const std::string& name, double min_fraction = 0.30,
+                          double max_fraction = 0.55);
+
+// Dark, sky-blocking objects (shadow band, arm, masts) inside the circle: pixels much darker than
+// the sky's median brightness, kept in large connected pieces. Returns a photo-sized 0/1 mask.
+// A heuristic: deep cloud shadows on dark overcast can be taken for obstructions (see docs).
+std::vector<unsigned char> detect_dark_obstructions(const Image& encoded_photo, const SkyCircle& circle,
+                                                    double darkness = 0.45);
+
+// Reads a mask file into the photo's grid as 0/1 (1 = not sky). Throws naming the mask file.
+std::vector<unsigned char> load_not_sky_mask(const std::string& path, MaskLayout layout, int photo_width,
+                                             int photo_height);
+
+// Camera presets for the real data sets in ../shared/skies (docs/sky-import.md says how each was
+// measured): "arm-tsi" (ARM SGP C1 Total Sky Imager) and "mobotix" (Mobotix, Sophia Antipolis).
+// Unknown names throw dynsky::Error listing the valid ones.
+struct CameraPreset {
+    std::string name;
+    PhotoImportParams params;     // geometry and mask handling (resolution left at the default)
+    double latitude_deg = 0, longitude_deg = 0, elevation_m = 0;
+    // Offset of the file names' clock from UTC, hours (local = UTC + offset). TSI names are UTC.
+    double filename_utc_offset_hours = 0;
+    double sun_search_deg = 3;    // how far from the computed sun a seen sun may lie (HDR recovery)
+};
+CameraPreset camera_preset(const std::string& name);
+std::vector<std::string> camera_preset_names();
+
+// For presets: the per-frame or per-camera mask that belongs to `photo_path` in the layout of
+// ../shared/skies ("" if none is found): arm-tsi -> ../tsi_cloudmask/tsicldmask_sgpC1_<stamp>.png,
+// mobotix -> ../background_mask.png.
+std::string find_preset_mask(const std::string& preset, const std::string& photo_path);
+
+// The frame time encoded in a file name, ISO 8601 with an explicit zone, or "" if none is
+// recognised: "..._YYYYMMDDhhmmssZ.jpg" (UTC) and "YYYY-MM-DD_hh_mm.jpg" (clock with the given
+// utc_offset_hours, written as "+hh:mm").
+std::string time_from_file_name(const std::string& path, double utc_offset_hours = 0);
+
+}  // namespace dynsky
