@@ -111,8 +111,9 @@ void run_import(const ImportOptions& o) {
     if (!o.mask.empty()) {
         params.mask_path = o.mask;
         if (o.mask_layout == "photo") params.mask_layout = MaskLayout::PhotoBlackIsNotSky;
+        else if (o.mask_layout == "tsi") params.mask_layout = MaskLayout::TsiCloudMask;
         else if (o.mask_layout == "alonso-planar") params.mask_layout = MaskLayout::AlonsoPlanarGreenIsNotSky;
-        else throw Error("--mask-layout '" + o.mask_layout + "': use photo or alonso-planar");
+        else throw Error("--mask-layout '" + o.mask_layout + "': use photo, tsi or alonso-planar");
     }
     if (o.detect) params.detect_obstructions = true;
     if (o.no_inpaint) params.inpaint = false;
@@ -146,6 +147,9 @@ void run_import(const ImportOptions& o) {
                 ++disc;
                 filled += imported.not_sky[size_t(j) * o.resolution + i];
             }
+    if (imported.display_referred)
+        std::printf("saturation: %s\n", imported.clip_level < 1.0 ? ("clipped at encoded level " + std::to_string(imported.clip_level)).c_str()
+                                                                   : "no clipping plateau found");
     std::printf("not-sky pixels filled: %.1f%% of the disc%s%s\n", disc ? 100.0 * filled / disc : 0.0,
                 params.mask_path.empty() ? "" : (" (mask " + params.mask_path + ")").c_str(),
                 params.inpaint ? "" : " (left black: --no-inpaint)");
@@ -260,7 +264,8 @@ void register_sky_import_commands(CLI::App& sky) {
     io->tilt_az_opt = imp->add_option("--tilt-azimuth", io->tilt_azimuth, "Azimuth the optical axis leans towards, degrees east of north");
     imp->add_option("--mask", io->mask, "Non-sky mask image (photo-sized; black = not sky unless --mask-layout says otherwise)");
     imp->add_option("--mask-layout", io->mask_layout,
-                    "photo (default: photo-sized, black = not sky) or alonso-planar (the Mobotix background_mask.png)");
+                    "photo (default: photo-sized, black = not sky), tsi (a TSI tsi_cloudmask/ frame: black inside its circle, "
+                    "extended radially beyond) or alonso-planar (the Mobotix background_mask.png)");
     imp->add_flag("--no-preset-mask", io->no_preset_mask, "Do not look for the preset's mask beside the photo");
     imp->add_flag("--detect-obstructions", io->detect, "Also detect dark obstructions (shadow band, arm, masts) and fill them");
     imp->add_flag("--no-inpaint", io->no_inpaint, "Leave non-sky pixels black instead of filling them");

@@ -95,31 +95,77 @@ cv::Mat image_to_grey8(const Image& image, bool display_referred) {
 
 // The encoded level at which the photo saturates: the highest "plateau" of its per-pixel channel
 // maximum (a spike in the histogram, as sensor clipping makes), or 1 if there is none.
-double find_clip_level(const cv::Mat& rgb_encoded, const SkyCircle& circle) {
+// Judged on sky pixels within 0.9 of the radius: burnt-in captions and lamps at the rim are not sky.
+double find_clip_level(const cv::Mat& rgb_encoded, const SkyCircle& circle, const cv::Mat& not_sky) {
     std::vector<double> hist(256, 0.0);
-    double r2 = circle.radius * circle.radius;
+    double r2 = 0.81 * circle.radius * circle.radius;
     double total = 0;
     for (int y = 0; y < rgb_encoded.rows; ++y)
         for (int x = 0; x < rgb_encoded.cols; ++x) {
             double dx = x - circle.center_x, dy = y - circle.center_y;
-            if (dx * dx + dy * dy > r2) continue;
+            if (dx * dx + dy * dy > r2 || not_sky.at<unsigned char>(y, x)) continue;
             const cv::Vec3f& p = rgb_encoded.at<cv::Vec3f>(y, x);
             int b = std::clamp(int(std::lround(std::max({p[0], p[1], p[2]}) * 255.0f)), 0, 255);
             hist[b] += 1;
             total += 1;
         }
+    // The plateau: the bin standing highest above the bins just below it (JPEG noise spreads
+    // a few counts above it too; they must not outnumber it).
     double min_count = std::max(20.0, 2e-4 * total);
-    for (int b = 255; b >= 64; --b) {
-        double plateau = hist[b] + (b > 0 ? hist[b - 1] : 0) + (b < 255 ? hist[b + 1] : 0);
-        if (plateau < min_count) continue;
+    int best = -1;
+    double best_ratio = 0;
+    for (int b = 64; b < 256; ++b) {
+        if (hist[b] < min_count) continue;
         double below = 0;
-        for (int k = b - 6; k <= b - 2; ++k) below += k >= 0 ? hist[k] : 0;
-        below /= 5;
-        // Clipping piles pixels up at one level; a natural histogram top falls off smoothly.
-        if (hist[b] >= 3 * below + 1) return (b - 2) / 255.0;
-        return 1.0;  // the top populated level is not a spike: not clipped
+        for (int k = b - 8; k <= b - 3; ++k) below += hist[k];
+        double ratio = hist[b] / (below / 6 + 1);
+        if (ratio > best_ratio) best_ratio = ratio, best = b;
     }
-    return 1.0;
+    fprintf(stderr, "DEBUG clip best %d ratio %f total %f\n", best, best_ratio, total);
+    if (best < 0 || best_ratio < 3) return 1.0;
+    double above = 0;
+    for (int b = best + 1; b < 256; ++b) above += hist[b];
+    if (above > hist[best]) return 1.0;
+    return (best - 2) / 255.0;
+}
+
+// Telea's fast-marching inpainting of a 3-channel float image where fill != 0, in place.
+// cv::inpaint takes float only one channel at a time, and its Telea path misbehaves on small
+// values (OpenCV 4.6 fills a 0.2-0.4 ramp with 1.0 and -0.3): each channel is scaled so its 99th
+// percentile is 255 first. Above 512 px the fill is computed at 512 and upsampled: inpainting is
+// smooth anyway, and its cost grows with the filled area (seconds at 2048^2).
+void inpaint_float(cv::Mat& rgb, const cv::Mat& fill) {
+    const int work = 512;
+    cv::Mat src = rgb, mask = fill;
+    bool reduced = rgb.cols > work;
+    if (reduced) {
+        cv::resize(rgb, src, cv::Size(work, work), 0, 0, cv::INTER_AREA);
+        cv::Mat m;
+        fill.convertTo(m, CV_32F);
+        cv::resize(m, m, cv::Size(work, work), 0, 0, cv::INTER_AREA);
+        mask = m > 0.01f;
+    }
+    std::vector<cv::Mat> ch(3);
+    cv::split(src, ch);
+    tbb::parallel_for(0, 3, [&](int k) {
+        std::vector<float> known;
+        for (int y = 0; y < ch[k].rows; ++y)
+            for (int x = 0; x < ch[k].cols; ++x)
+                if (!mask.at<unsigned char>(y, x)) known.push_back(ch[k].at<float>(y, x));
+        float scale = 1.0f;
+        if (!known.empty()) {
+            size_t q = size_t(0.99 * (known.size() - 1));
+            std::nth_element(known.begin(), known.begin() + q, known.end());
+            if (known[q] > 0) scale = 255.0f / known[q];
+        }
+        cv::Mat filled;
+        cv::inpaint(ch[k] * scale, mask, filled, 3.0, cv::INPAINT_TELEA);
+        ch[k] = cv::max(filled / scale, 0.0f);
+    });
+    cv::Mat result;
+    cv::merge(ch, result);
+    if (reduced) cv::resize(result, result, rgb.size(), 0, 0, cv::INTER_LINEAR);
+    result.copyTo(rgb, fill);
 }
 
 }  // namespace
@@ -275,7 +321,7 @@ std::vector<unsigned char> load_not_sky_mask(const std::string& path, MaskLayout
     Image mask = read_image(path);
     std::vector<unsigned char> out(size_t(photo_width) * photo_height, 0);
     auto value = [&](int x, int y, int c) { return mask.at(x, y, std::min(c, mask.channels - 1)); };
-    if (layout == MaskLayout::PhotoBlackIsNotSky) {
+    if (layout == MaskLayout::PhotoBlackIsNotSky || layout == MaskLayout::TsiCloudMask) {
         if (mask.width != photo_width || mask.height != photo_height)
             throw_file_error(path, "mask is " + std::to_string(mask.width) + "x" + std::to_string(mask.height) +
                                        " but the photograph is " + std::to_string(photo_width) + "x" +
@@ -287,6 +333,27 @@ std::vector<unsigned char> load_not_sky_mask(const std::string& path, MaskLayout
                 for (int c = 0; c < nc; ++c) black = black && value(x, y, c) <= 0.5f / 255.0f;
                 out[size_t(y) * photo_width + x] = black ? 1 : 0;
             }
+        if (layout == MaskLayout::TsiCloudMask) {
+            cv::Mat sky(photo_height, photo_width, CV_8U);
+            for (int y = 0; y < photo_height; ++y)
+                for (int x = 0; x < photo_width; ++x) sky.at<unsigned char>(y, x) = out[size_t(y) * photo_width + x] ? 0 : 255;
+            std::vector<cv::Point> points;
+            cv::findNonZero(sky, points);
+            if (points.empty()) throw_file_error(path, "the TSI mask marks no pixel as sky");
+            cv::Point2f c;
+            float r;
+            cv::minEnclosingCircle(points, c, r);
+            std::vector<unsigned char> inside = out;
+            double reach = r - 2.0;
+            for (int y = 0; y < photo_height; ++y)
+                for (int x = 0; x < photo_width; ++x) {
+                    double dx = x - c.x, dy = y - c.y, d = std::sqrt(dx * dx + dy * dy);
+                    if (d <= reach) continue;
+                    int sx = std::clamp(int(std::lround(c.x + dx / d * reach)), 0, photo_width - 1);
+                    int sy = std::clamp(int(std::lround(c.y + dy / d * reach)), 0, photo_height - 1);
+                    out[size_t(y) * photo_width + x] = inside[size_t(sy) * photo_width + sx];
+                }
+        }
         return out;
     }
     // Alonso's planar layout: photo pixel -> equidistant angle about (640, 480), radius 480 ->
@@ -423,7 +490,7 @@ ImportedPhoto import_photo_image(const Image& photo, const std::string& name, co
     cv::Mat clipped = cv::Mat::zeros(rgb.size(), CV_8U);
     out.clip_level = 1.0;
     if (out.display_referred) {
-        out.clip_level = params.clip_level >= 0 ? params.clip_level : find_clip_level(rgb, circle);
+        out.clip_level = params.clip_level >= 0 ? params.clip_level : find_clip_level(rgb, circle, not_sky);
         float level = float(out.clip_level);
         for (int y = 0; y < rgb.rows; ++y)
             for (int x = 0; x < rgb.cols; ++x) {
@@ -499,21 +566,10 @@ ImportedPhoto import_photo_image(const Image& photo, const std::string& name, co
         }
 
     if (cv::countNonZero(fill) > 0) {
-        if (params.inpaint) {
-            // Telea's fast-marching inpainting, one float channel at a time (cv::inpaint takes
-            // 32-bit float only single-channel); radius scales with the output so the fill looks alike.
-            double radius = std::max(3.0, n / 170.0);
-            std::vector<cv::Mat> ch(3);
-            cv::split(sky, ch);
-            tbb::parallel_for(0, 3, [&](int k) {
-                cv::Mat filled;
-                cv::inpaint(ch[k], fill, filled, radius, cv::INPAINT_TELEA);
-                ch[k] = filled;
-            });
-            cv::merge(ch, sky);
-        } else {
+        if (params.inpaint)
+            inpaint_float(sky, fill);
+        else
             sky.setTo(cv::Scalar::all(0), fill);
-        }
     }
 
     out.sky = SkyImage(n);
@@ -544,7 +600,7 @@ CameraPreset camera_preset(const std::string& name) {
         p.params.mirrored = true;
         p.params.north_deg = 0.0;
         p.params.circle = SkyCircle{243.1, 317.5, 230.8};
-        p.params.mask_layout = MaskLayout::PhotoBlackIsNotSky;
+        p.params.mask_layout = MaskLayout::TsiCloudMask;
         p.params.min_radius_fraction = 0.45;
         p.params.max_radius_fraction = 0.52;
         p.latitude_deg = 36.605;
@@ -562,8 +618,8 @@ CameraPreset camera_preset(const std::string& name) {
         // for the sun.
         p.params.lens = LensLaw::Equidistant;
         p.params.mirrored = false;
-        p.params.north_deg = 185.0;
-        p.params.circle = SkyCircle{642.0, 479.0, 468.0};
+        p.params.north_deg = 190.0;
+        p.params.circle = SkyCircle{654.7, 479.4, 485.8};
         p.params.mask_layout = MaskLayout::AlonsoPlanarGreenIsNotSky;
         p.params.mask_dilate_px = 3;
         p.params.min_radius_fraction = 0.46;

@@ -67,6 +67,10 @@ enum class MaskLayout {
     // Same pixel grid as the photograph; black (every channel 0) = not sky, anything else = sky.
     // This is how the TSI's own per-frame masks (tsi_cloudmask/) code "not sky" (palette index 0).
     PhotoBlackIsNotSky,
+    // The TSI's own per-frame masks (tsi_cloudmask/): photo-sized, black = not sky (shadow band,
+    // arm) inside the mask's own circle (about 81 deg zenith); the TSI leaves everything beyond it
+    // black, so there each pixel takes the value found just inside that circle along the same ray.
+    TsiCloudMask,
     // The Mobotix background_mask.png of MariusAlonso/Irradiance-forecast-using-Fish-Eye-images:
     // 512 x 512 in that project's "planar" projection (an equidistant fisheye of radius 480 px at
     // (640, 480) projected onto a horizontal plane at height 0.1 of the plane's width); pure green =

@@ -21,13 +21,6 @@ ProceduralSkyParams base_params(uint64_t seed = 7, double coverage = 0.5) {
     return p;
 }
 
-cv::Mat channel_mat(const Image& image, int channel) {
-    cv::Mat m(image.height, image.width, CV_32F);
-    for (int y = 0; y < image.height; ++y)
-        for (int x = 0; x < image.width; ++x) m.at<float>(y, x) = image.at(x, y, channel);
-    return m;
-}
-
 cv::Mat luminance_mat(const SkyImage& sky) {
     cv::Mat m(sky.resolution, sky.resolution, CV_32F);
     for (int y = 0; y < sky.resolution; ++y)
