@@ -100,6 +100,28 @@ Color EnvLight::radiance(const Vec3& w) const {
     return Color(p[0], p[1], p[2]);
 }
 
+Color EnvLight::radiance_filtered(const Vec3& w) const {
+    if (w.y() < 0) return ground_radiance_;
+    Vec2 uv;
+    fisheye::uv_from_direction(w, &uv);
+    const int n = sky_->resolution;
+    // Continuous pixel coordinates (pixel centres at integers), clamped to the disc's pixels.
+    float fx = (uv.x() + 1) * 0.5f * n - 0.5f, fy = (uv.y() + 1) * 0.5f * n - 0.5f;
+    int x0 = int(std::floor(fx)), y0 = int(std::floor(fy));
+    float tx = fx - x0, ty = fy - y0;
+    Color sum = Color::Zero();
+    float weight = 0;
+    for (int dy = 0; dy < 2; ++dy)
+        for (int dx = 0; dx < 2; ++dx) {
+            int x = x0 + dx, y = y0 + dy;
+            if (x < 0 || y < 0 || x >= n || y >= n || !sky_->in_disc(x, y)) continue;  // no black from outside
+            float wgt = (dx ? tx : 1 - tx) * (dy ? ty : 1 - ty);
+            sum += wgt * sky_->pixel(x, y);
+            weight += wgt;
+        }
+    return weight > 0 ? Color(sum / weight) : radiance(w);
+}
+
 float EnvLight::pdf(const Vec3& w) const {
     if (w.y() < 0) return (1 - sky_probability_) / (2 * kPi);
     if (distribution_.empty()) return 0;

@@ -7,12 +7,19 @@
 //
 // Ground (below the horizon): a uniform Lambertian ground lit by the sky, radiance
 // L_ground = albedo * E_sky / pi, with E_sky the sky's irradiance on a horizontal plane.
-// Light samples pick the sky or the ground in proportion to their power.
+// Light samples pick the sky or the ground in proportion to their power. The sky part is sampled
+// by a SkySampler (renderer/sky_sampler.h) chosen by option; all of them share the radiance
+// lookup here and report pdfs that match it.
+//
+// Pixels that are NaN, infinite or negative (validate_sky rejects them at load; skies made in
+// memory may still hold them) are treated as black, in sampling and in radiance() alike, and
+// counted (bad_pixel_count), so they never reach an image.
 #pragma once
 
 #include <memory>
 
 #include "renderer/distribution_2d.h"
+#include "renderer/sky_sampler.h"
 #include "sky/sky_image.h"
 
 namespace dynsky {
@@ -25,8 +32,9 @@ struct EnvLightSample {
 
 class EnvLight {
   public:
-    explicit EnvLight(float ground_albedo = 0.3f) : ground_albedo_(ground_albedo) {}
-    EnvLight(std::shared_ptr<const SkyImage> sky, float ground_albedo);
+    explicit EnvLight(float ground_albedo = 0.3f, const SkySamplerOptions& sampler = recommended_sky_sampler());
+    EnvLight(std::shared_ptr<const SkyImage> sky, float ground_albedo,
+             const SkySamplerOptions& sampler = recommended_sky_sampler());
 
     // The per-frame path: point at a new sky and rebuild the distribution (storage is reused
     // when the resolution is unchanged). The scene is untouched.
@@ -34,6 +42,9 @@ class EnvLight {
     double last_build_seconds() const { return build_seconds_; }
 
     Color radiance(const Vec3& w) const;
+    // Bilinear radiance, for the sky seen directly by the camera: a camera ray carries no MIS
+    // weight, so it need not match the pdf, and a low-resolution sky then looks smooth, not blocky.
+    Color radiance_filtered(const Vec3& w) const;
     float pdf(const Vec3& w) const;
     bool sample(float u_choice, const Vec2& u, EnvLightSample* out) const;
 
@@ -42,7 +53,14 @@ class EnvLight {
     Color sky_irradiance() const { return sky_irradiance_; }   // on a horizontal plane, W m^-2 per channel
     float sky_probability() const { return sky_probability_; }
     const SkyImage& sky() const { return *sky_; }
-    const Distribution2D& distribution() const { return distribution_; }
+    // The CDF of the "cdf" sampler (an empty one for other samplers).
+    const Distribution2D& distribution() const;
+    const SkySampler& sampler() const { return *sampler_; }
+    const SkySamplerOptions& sampler_options() const { return sampler_options_; }
+    // Pixels treated as black because they were NaN, infinite or negative in the last sky.
+    size_t bad_pixel_count() const { return bad_pixels_; }
+    // Bytes held for sampling: weights, solid-angle table and the sampler's own tables.
+    size_t memory_bytes() const;
 
     // dw / (du dv) = (pi^2/4) sin(theta)/theta as a polynomial in theta^2 = (pi^2/4) r^2:
     // no sqrt or sin per pixel, which keeps the per-frame rebuild near memory bandwidth.
@@ -55,7 +73,11 @@ class EnvLight {
     int lookup_pixel(const Vec2& uv) const;
 
     std::shared_ptr<const SkyImage> sky_;
-    Distribution2D distribution_;
+    SkySamplerOptions sampler_options_;
+    std::unique_ptr<SkySampler> sampler_;
+    std::vector<float> weights_;               // per pixel luminance x jacobian (fixed-point scale)
+    std::vector<size_t> row_bad_;
+    size_t bad_pixels_ = 0;
     std::vector<Eigen::Array3d> row_irradiance_;
     std::vector<uint16_t> solid_angle_table_;  // per pixel (jacobian, cos x jacobian), fixed point
     int table_resolution_ = 0;

@@ -94,10 +94,12 @@ Color PathIntegrator::trace(const Ray& camera_ray_in, Rng& rng, RenderStats* sta
         }
         if (!found) {
             Vec3 w = ray.direction.normalized();
-            Color le = light_.radiance(w);
             if (depth == 0) {
-                L += beta * le;
-            } else if (use_bsdf_hits) {
+                L += beta * light_.radiance_filtered(w);
+                break;
+            }
+            Color le = light_.radiance(w);
+            if (use_bsdf_hits) {
                 float weight = settings_.strategy == LightStrategy::Mis ? power_heuristic(prev_bsdf_pdf, light_.pdf(w)) : 1.0f;
                 L += beta * le * weight;
             }
