@@ -48,26 +48,45 @@ Texture::Texture(std::string name, int width, int height, std::vector<float> rgb
     if (width_ <= 0 || height_ <= 0 || rgba_.size() != size_t(width_) * size_t(height_) * 4)
         throw Error("texture '" + name_ + "': " + std::to_string(rgba_.size()) + " floats do not make a " +
                     std::to_string(width_) + " x " + std::to_string(height_) + " RGBA image");
-    if (srgb) {
-        // Decode once here so that every lookup (and the bilinear blend) works in linear values;
-        // alpha is linear in glTF and stays untouched. Values that are exactly k / 255 (8-bit
-        // images, nearly all textures) come from a table: pow() per texel dominated load times.
-        static const std::vector<float> table = [] {
-            std::vector<float> t(256);
-            for (int k = 0; k < 256; ++k) t[size_t(k)] = srgb_to_linear(float(k) * (1.0f / 255.0f));
-            return t;
-        }();
+    // 8-bit sources (nearly every glTF texture) are kept as bytes and decoded by table on lookup:
+    // the same values as decoding up front, at a quarter of the memory.
+    static const std::vector<float> srgb_table = [] {
+        std::vector<float> t(256);
+        for (int k = 0; k < 256; ++k) t[size_t(k)] = srgb_to_linear(float(k) * (1.0f / 255.0f));
+        return t;
+    }();
+    static const std::vector<float> linear_table = [] {
+        std::vector<float> t(256);
+        for (int k = 0; k < 256; ++k) t[size_t(k)] = float(k) * (1.0f / 255.0f);
+        return t;
+    }();
+    bool eight_bit = true;
+    for (float v : rgba_) {
+        int k = v >= 0.0f && v <= 1.0f ? int(v * 255.0f + 0.5f) : -1;
+        if (k < 0 || float(k) * (1.0f / 255.0f) != v) {
+            eight_bit = false;
+            break;
+        }
+    }
+    if (eight_bit) {
+        bytes_.resize(rgba_.size());
+        for (size_t i = 0; i < rgba_.size(); ++i) bytes_[i] = uint8_t(int(rgba_[i] * 255.0f + 0.5f));
+        decode_rgb_ = srgb ? srgb_table.data() : linear_table.data();
+        std::vector<float>().swap(rgba_);
+    } else if (srgb) {
+        // Alpha is linear in glTF and stays untouched.
         for (size_t i = 0; i < rgba_.size(); i += 4)
-            for (size_t c = 0; c < 3; ++c) {
-                float& v = rgba_[i + c];
-                int k = v >= 0.0f && v <= 1.0f ? int(v * 255.0f + 0.5f) : -1;
-                v = k >= 0 && float(k) * (1.0f / 255.0f) == v ? table[size_t(k)] : srgb_to_linear(v);
-            }
+            for (size_t c = 0; c < 3; ++c) rgba_[i + c] = srgb_to_linear(rgba_[i + c]);
     }
 }
 
 Vec4 Texture::texel(int x, int y) const {
-    const float* p = &rgba_[(size_t(y) * size_t(width_) + size_t(x)) * 4];
+    size_t i = (size_t(y) * size_t(width_) + size_t(x)) * 4;
+    if (!bytes_.empty()) {
+        const uint8_t* b = &bytes_[i];
+        return Vec4(decode_rgb_[b[0]], decode_rgb_[b[1]], decode_rgb_[b[2]], float(b[3]) * (1.0f / 255.0f));
+    }
+    const float* p = &rgba_[i];
     return Vec4(p[0], p[1], p[2], p[3]);
 }
 

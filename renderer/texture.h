@@ -1,6 +1,7 @@
 // Image textures with glTF samplers: wrap modes, nearest or bilinear filtering, and colour space.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,7 @@ class Texture {
     Vec4 evaluate(const Vec2& uv) const;
 
     int width() const { return width_; }
+    size_t memory_bytes() const { return rgba_.capacity() * sizeof(float) + bytes_.capacity(); }
     int height() const { return height_; }
     const std::string& name() const { return name_; }
 
@@ -30,7 +32,9 @@ class Texture {
     Vec4 texel(int x, int y) const;
     std::string name_;
     int width_, height_;
-    std::vector<float> rgba_;
+    std::vector<float> rgba_;          // float storage (HDR or 16-bit sources)
+    std::vector<uint8_t> bytes_;       // 8-bit storage: 4x less memory and cache traffic
+    const float* decode_rgb_ = nullptr;  // byte -> linear value for RGB (sRGB or linear table)
     TextureWrap wrap_s_, wrap_t_;
     TextureFilter filter_;
 };
