@@ -78,28 +78,26 @@ static void setup_ray(const Ray& ray, RTCRay* r) {
     r->mask = 0xFFFFFFFFu, r->flags = 0, r->time = 0, r->id = 0;
 }
 
-bool Accel::intersect_raw(const Ray& ray, float* t) const {
+bool Accel::trace_closest(const Ray& ray, RTCRayHit* rh) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
+    setup_ray(ray, &rh->ray);
+    rh->hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(top_, &ctx, rh);
+    return rh->hit.geomID != RTC_INVALID_GEOMETRY_ID;
+}
+
+bool Accel::intersect_raw(const Ray& ray, float* t) const {
     RTCRayHit rh;
-    setup_ray(ray, &rh.ray);
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(top_, &ctx, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    if (!trace_closest(ray, &rh)) return false;
     *t = rh.ray.tfar;
     return true;
 }
 
 bool Accel::intersect(const Ray& ray, SurfaceHit* hit) const {
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
     RTCRayHit rh;
-    setup_ray(ray, &rh.ray);
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(top_, &ctx, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    if (!trace_closest(ray, &rh)) return false;
 
     int inst = int(rh.hit.instID[0]);
     const Instance& instance = scene_.instances[size_t(inst)];

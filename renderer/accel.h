@@ -46,6 +46,7 @@ class Accel {
     Bounds3 bounds() const { return bounds_; }
 
   private:
+    bool trace_closest(const Ray& ray, RTCRayHit* rh) const;
     const Scene& scene_;
     RTCDevice device_ = nullptr;
     RTCScene top_ = nullptr;
