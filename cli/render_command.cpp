@@ -33,6 +33,7 @@ struct RenderOptions {
     int max_depth = 8;
     float exposure = std::numeric_limits<float>::quiet_NaN();  // NaN: automatic
     bool quiet = false;
+    std::string sampler = sky_sampler_name(recommended_sky_sampler()) + "+mis";
 };
 
 void parse_resolution(const std::string& text, int* w, int* h) {
@@ -62,6 +63,7 @@ int run_render(const RenderOptions& o) {
     std::string ext = file_extension(o.out);
     if (ext != ".exr" && ext != ".png") throw Error(o.out + ": output must end in .exr or .png");
     if (o.spp < 1) throw Error("--spp must be at least 1");
+    const SkySamplerOptions sampler = parse_sky_sampler(o.sampler);
     if (!(o.ground_albedo >= 0 && o.ground_albedo <= 1)) throw Error("--ground-albedo must be in [0, 1]");
 
     std::unique_ptr<tbb::global_control> threads;
@@ -95,7 +97,7 @@ int run_render(const RenderOptions& o) {
     }
 
     Accel accel(scene);
-    EnvLight light(sky, o.ground_albedo);
+    EnvLight light(sky, o.ground_albedo, sampler);
     if (!o.quiet)
         std::fprintf(stderr, "scene: %s, %zu triangles, %zu instances; sky: %s (%dx%d), distribution built in %.2f ms\n",
                      o.scene.c_str(), scene.triangle_count(), scene.instances.size(), sky->source.c_str(), sky->resolution,
@@ -157,6 +159,11 @@ void register_render_command(CLI::App& app) {
     cmd->add_option("--max-depth", o->max_depth, "Maximum path length (bounces)")->capture_default_str();
     cmd->add_option("--exposure", o->exposure,
                     "Exposure of the PNG in stops (default: automatic, log-average luminance to middle grey; EXR pixels are never scaled)");
+    cmd->add_option("--sampler", o->sampler,
+                    "Sky importance sampler: uniform, cosine, cdf, alias, mip, sun+cdf, sun+alias, sun+mip; pixel-based ones "
+                    "with '+mis' for MIS compensation (the renderer combines light and BSDF sampling by MIS). "
+                    "See docs/sampling/README.md")
+        ->capture_default_str();
     cmd->add_flag("--quiet,-q", o->quiet, "No progress bar or summary");
     cmd->callback([o] { run_render(*o); });
 }

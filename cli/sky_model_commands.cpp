@@ -152,6 +152,8 @@ std::vector<unsigned char> stack_mask(const std::vector<cv::Mat>& mats) {
 struct TrainingDataOptions {
     std::string sequence, procedural, shared, out;
     int resolution = 128, import_resolution = 256;
+    NetworkFormParams form;
+    std::string cloud_rule = "rb";
     bool quiet = false;
 };
 
@@ -162,6 +164,9 @@ void run_training_data(const TrainingDataOptions& o) {
     if (o.resolution < 8 || o.import_resolution < o.resolution || o.import_resolution % o.resolution != 0)
         throw Error("--res must be >= 8 and divide --import-res");
     if (fs::exists(o.out) && !fs::is_directory(o.out)) throw_file_error(o.out, "exists and is not a folder");
+    NetworkFormParams form = o.form;
+    form.cloud_rule.rule = parse_cloud_rule(o.cloud_rule);
+    validate_unit_map(form.unit_map);
 
     const int n = o.resolution, big = o.import_resolution;
     std::vector<NetworkFrame> frames, frames_big;
@@ -176,7 +181,7 @@ void run_training_data(const TrainingDataOptions& o) {
         meta["preset"] = seq.preset;
         ProgressBar progress(long(seq.photos.size()), "import " + seq.name, o.quiet);
         for (size_t k = 0; k < seq.photos.size(); ++k) {
-            frames_big.push_back(network_frame_from_photo(seq.photos[k], seq.preset, big, big));
+            frames_big.push_back(network_frame_from_photo(seq.photos[k], seq.preset, big, big, form));
             frames_big.back().time_seconds = k * dt;
             names.push_back(fs::path(seq.photos[k]).filename().string());
             progress.advance();
@@ -190,7 +195,10 @@ void run_training_data(const TrainingDataOptions& o) {
         ProgressBar progress(long(m.at("frames").size()), "procedural frames", o.quiet);
         for (const auto& fr : m.at("frames")) {
             SkyImage sky = load_sky((fs::path(o.procedural) / fr.at("image").get<std::string>()).string());
-            frames_big.push_back(network_frame(sky, {}, big));
+            if (sky.resolution != big)
+                throw_file_error(o.procedural, "frames are " + std::to_string(sky.resolution) + " px; generate them at --import-res " +
+                                                   std::to_string(big));
+            frames_big.push_back(network_frame(sky, {}, big, form));
             frames_big.back().time_seconds = fr.at("time_s").get<double>();
             names.push_back(fr.at("image").get<std::string>());
             Image flow = read_image((fs::path(o.procedural) / fr.at("flow").get<std::string>()).string());
@@ -231,10 +239,15 @@ void run_training_data(const TrainingDataOptions& o) {
     meta["frame_count"] = t;
     meta["times_s"] = times;
     meta["frames"] = names;
-    meta["images"] = "networks' [0, 1] form (sky/hdr_recovery.h forward map), area-averaged from the import resolution";
     meta["flow_farneback"] = "OpenCV calcOpticalFlowFarneback (pyr 0.5, 3 levels, window 15, 3 iterations, poly 5 / 1.2) "
                              "frame k -> k+1 on the luminance at the import resolution, area-averaged to N, pixels of N";
-    meta["cloud"] = "sky/cloud_mask.h rule on the [0, 1] image at N";
+    meta["unit_scale"] = form.unit_map.scale;
+    meta["unit_max"] = form.unit_map.max_radiance;
+    meta["cloud_rule"] = cloud_rule_name(form.cloud_rule.rule);
+    meta["cloud_threshold"] = form.cloud_rule.threshold;
+    meta["images"] = "hdr_to_unit (sky/hdr_recovery.h): log(1 + L / unit_scale) / log(1 + unit_max / unit_scale)";
+    meta["cloud"] = "sky/cloud_mask.h rule on the sky encoded as a camera would (encode_sky_for_mask) at the import "
+                    "resolution, then majority over the pixels under each pixel of N";
     write_text_atomic(path("meta.json"), meta.dump(2) + "\n");
     if (!o.quiet) std::printf("wrote %zu frames at %d px to %s\n", count, n, o.out.c_str());
 }
@@ -282,13 +295,13 @@ void run_predict(const PredictOptions& o) {
                 }
                 lum += luminance(c), ++count;
             }
-        cv::Mat unit = to_network_form(s, n);
+        cv::Mat unit = to_network_form(s, model.info().form, n);
         cv::Mat finite_unit = unit.clone();
         cv::patchNaNs(finite_unit, 0.0);
         double mn, mx;
         cv::minMaxLoc(finite_unit.reshape(1), &mn, &mx, nullptr, nullptr, cv::repeat(disc, 1, 3).reshape(1, n));
         cv::Scalar mean = cv::mean(finite_unit, disc);
-        double coverage = double(cv::countNonZero(network_cloud_mask(finite_unit) & disc)) / cv::countNonZero(disc);
+        double coverage = double(cv::countNonZero(network_cloud_mask(finite_unit, model.info().form) & disc)) / cv::countNonZero(disc);
         char line[256];
         std::snprintf(line, sizeof line, "%d,%.3f,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%ld\n", k, s.time_seconds,
                       count ? lum / count : 0.0, (mean[0] + mean[1] + mean[2]) / 3, mn, mx, coverage,
@@ -413,7 +426,7 @@ void run_evaluate(const EvaluateOptions& o) {
     std::vector<NetworkFrame> frames, frames_big;
     ProgressBar progress(hi - lo + 1, "import held-out frames", o.quiet);
     for (int k = lo - 1; k < hi; ++k) {
-        frames_big.push_back(network_frame_from_photo(seq.photos[k], seq.preset, big, big));
+        frames_big.push_back(network_frame_from_photo(seq.photos[k], seq.preset, big, big, info.form));
         frames.push_back(resample_frame(frames_big.back(), n));
         progress.advance();
     }
@@ -432,7 +445,7 @@ void run_evaluate(const EvaluateOptions& o) {
         for (int h = 1; h <= hmax; ++h) {
             NetworkStep s = model.step_network(state);
             if (h == 1) append_magnitudes(model.decode_flow(s.flow), frame(t).cloud & frame(t).valid, &flownet_mag);
-            append_magnitudes(farneback_flow(state, s.next), network_cloud_mask(state) & frame(t).valid, &rollout_mag);
+            append_magnitudes(farneback_flow(state, s.next), network_cloud_mask(state, info.form) & frame(t).valid, &rollout_mag);
             state = s.next;
             if (!std::binary_search(horizons.begin(), horizons.end(), h)) continue;
             const cv::Mat& truth = frame(t + h).image;
@@ -545,6 +558,15 @@ void register_sky_model_commands(CLI::App& sky) {
         cmd->add_option("--import-res", o->import_resolution,
                         "Resolution frames are imported (and Farneback flow computed) at; a multiple of --res")
             ->capture_default_str();
+        cmd->add_option("--unit-scale", o->form.unit_map.scale,
+                        "HDR -> [0, 1] log map (sky/hdr_recovery.h): radiance scale, W m^-2 sr^-1")
+            ->capture_default_str();
+        cmd->add_option("--unit-max", o->form.unit_map.max_radiance,
+                        "HDR -> [0, 1] log map: radiance that maps to 1 (brighter clips; the sun is re-inserted on output)")
+            ->capture_default_str();
+        cmd->add_option("--cloud-rule", o->cloud_rule, "Cloud mask rule: rb (red / blue > t) or nbr ((b - r) / (b + r) < t)")
+            ->capture_default_str();
+        cmd->add_option("--cloud-threshold", o->form.cloud_rule.threshold, "Cloud mask threshold t")->capture_default_str();
         cmd->add_option("--out", o->out, "Output folder")->required();
         cmd->add_flag("--quiet", o->quiet, "No progress bars or summary");
         cmd->callback([o]() { run_training_data(*o); });

@@ -42,7 +42,7 @@ class DecoderBlock(nn.Module):
 class UNet(nn.Module):
     """widths[k] is the channel count after encoder block k (len(widths) = depth); the input size
     must be divisible by 2^depth. The last decoder block upsamples back to full resolution and a
-    1x1 convolution maps to out_channels (no activation: the wrappers below add theirs)."""
+    3x3 convolution maps to out_channels (no activation: the wrappers below add theirs)."""
 
     def __init__(self, in_channels, out_channels, widths=(16, 32, 64, 64)):
         super().__init__()
@@ -60,7 +60,9 @@ class UNet(nn.Module):
             cout = self.widths[k - 1] if k > 0 else max(self.widths[0] // 2, 8)
             self.decoders.append(DecoderBlock(cin, cout))
             cin = cout + skip
-        self.head = nn.Conv2d(cin, out_channels, 1)
+        # 3x3, not 1x1: the output layer sees the input's own spatial derivatives at full
+        # resolution, which is what moving an edge by a pixel or two amounts to.
+        self.head = nn.Conv2d(cin, out_channels, 3, padding=1)
 
     def forward(self, x):
         skips = [x]

@@ -1,6 +1,9 @@
 #include "renderer/env_light.h"
 
+#include <tbb/parallel_for.h>
+
 #include <chrono>
+#include <limits>
 
 #include "renderer/sampling.h"
 #include "sky/fisheye.h"
@@ -8,9 +11,26 @@
 
 namespace dynsky {
 
-EnvLight::EnvLight(std::shared_ptr<const SkyImage> sky, float ground_albedo) : ground_albedo_(ground_albedo) {
+EnvLight::EnvLight(float ground_albedo, const SkySamplerOptions& sampler)
+    : sampler_options_(sampler), sampler_(make_sky_sampler(sampler)), ground_albedo_(ground_albedo) {}
+
+EnvLight::EnvLight(std::shared_ptr<const SkyImage> sky, float ground_albedo, const SkySamplerOptions& sampler)
+    : EnvLight(ground_albedo, sampler) {
     set_sky(std::move(sky));
 }
+
+const Distribution2D& EnvLight::distribution() const {
+    static const Distribution2D empty;
+    const Distribution2D* d = sampler_->distribution();
+    return d ? *d : empty;
+}
+
+size_t EnvLight::memory_bytes() const {
+    return weights_.capacity() * sizeof(float) + solid_angle_table_.capacity() * sizeof(uint16_t) + sampler_->memory_bytes();
+}
+
+// Radiance as sampled: NaN, infinite and negative channels count as 0.
+static inline float sane(float x) { return x >= 0 && x <= std::numeric_limits<float>::max() ? x : 0.0f; }
 
 float EnvLight::jacobian_from_r2(float r2) {
     // sin(x)/x = sum (-1)^k x^(2k) / (2k+1)!, x^2 = (pi^2/4) r^2 <= 2.47: error < 1e-9 with 7 terms.
@@ -53,18 +73,37 @@ void EnvLight::set_sky(std::shared_ptr<const SkyImage> sky) {
         table_resolution_ = n;
     }
     row_irradiance_.assign(size_t(n), Eigen::Array3d::Zero());
-    distribution_.build_rows(n, n, [&](int j, float* w) {
-        const float* row = rgb + size_t(j) * n * 3;
-        const uint16_t* t = &solid_angle_table_[size_t(j) * n * 2];
-        float er = 0, eg = 0, eb = 0;
-        for (int i = 0; i < n; ++i) {
-            float r = row[3 * i], g = row[3 * i + 1], b = row[3 * i + 2];
-            float jac = float(t[2 * i]), cjac = float(t[2 * i + 1]);
-            w[i] = (0.2126f * r + 0.7152f * g + 0.0722f * b) * jac;
-            er += r * cjac, eg += g * cjac, eb += b * cjac;
+    row_bad_.assign(size_t(n), 0);
+    weights_.resize(size_t(n) * n);
+    tbb::parallel_for(tbb::blocked_range<int>(0, n, 16), [&](const tbb::blocked_range<int>& rows) {
+        for (int j = rows.begin(); j != rows.end(); ++j) {
+            const float* row = rgb + size_t(j) * n * 3;
+            const uint16_t* t = &solid_angle_table_[size_t(j) * n * 2];
+            float* w = &weights_[size_t(j) * n];
+            float er = 0, eg = 0, eb = 0;
+            size_t bad = 0;
+            for (int i = 0; i < n; ++i) {
+                float r0 = row[3 * i], g0 = row[3 * i + 1], b0 = row[3 * i + 2];
+                float r = sane(r0), g = sane(g0), b = sane(b0);
+                bad += (r != r0) | (g != g0) | (b != b0);  // NaN != NaN too
+                float jac = float(t[2 * i]), cjac = float(t[2 * i + 1]);
+                w[i] = (0.2126f * r + 0.7152f * g + 0.0722f * b) * jac;
+                er += r * cjac, eg += g * cjac, eb += b * cjac;
+            }
+            row_irradiance_[size_t(j)] = Eigen::Array3d(er, eg, eb) * double(kFromFixed);
+            row_bad_[size_t(j)] = bad;
         }
-        row_irradiance_[size_t(j)] = Eigen::Array3d(er, eg, eb) * double(kFromFixed);
     });
+    bad_pixels_ = 0;
+    for (size_t b : row_bad_) bad_pixels_ += b;
+    double total_weight = 0;
+    for (int j = 0; j < n; ++j) {
+        const float* w = &weights_[size_t(j) * n];
+        double row = 0;
+        for (int i = 0; i < n; ++i) row += w[i];
+        total_weight += row;
+    }
+    if (sampler_options_.mis_compensation) compensate_for_mis(total_weight);
     Eigen::Array3d e = Eigen::Array3d::Zero();
     for (const auto& part : row_irradiance_) e += part;
     sky_irradiance_ = (e * double(du * du)).cast<float>();
@@ -72,9 +111,10 @@ void EnvLight::set_sky(std::shared_ptr<const SkyImage> sky) {
 
     // Power (luminance x solid angle) decides how often each part is sampled.
     // Weights carry the fixed-point scale of the table; integral over [0,1]^2 -> over [-1,1]^2.
-    double sky_power = distribution_.integral() * 4.0 * (kPiD * kPiD / 4) / 65535.0;
+    double sky_power = total_weight * double(du) * du * double(kFromFixed);
     double ground_power = double(luminance(ground_radiance_)) * 2 * kPiD;
     sky_probability_ = sky_power + ground_power > 0 ? float(sky_power / (sky_power + ground_power)) : 1.0f;
+    sampler_->build(*sky_, weights_, n);
     build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
@@ -97,7 +137,7 @@ Color EnvLight::radiance(const Vec3& w) const {
     Vec2 uv;
     fisheye::uv_from_direction(w, &uv);
     const float* p = &sky_->rgb[size_t(lookup_pixel(uv)) * 3];
-    return Color(p[0], p[1], p[2]);
+    return Color(sane(p[0]), sane(p[1]), sane(p[2]));
 }
 
 Color EnvLight::radiance_filtered(const Vec3& w) const {
@@ -124,31 +164,15 @@ Color EnvLight::radiance_filtered(const Vec3& w) const {
 
 float EnvLight::pdf(const Vec3& w) const {
     if (w.y() < 0) return (1 - sky_probability_) / (2 * kPi);
-    if (distribution_.empty()) return 0;
-    Vec2 uv;
-    fisheye::uv_from_direction(w, &uv);
-    Vec2 xy = 0.5f * (uv + Vec2::Ones());
-    float pdf_uv = distribution_.pdf(xy) * 0.25f;
-    return sky_probability_ * pdf_uv / jacobian_from_r2(uv.squaredNorm());
+    return sky_probability_ * sampler_->pdf(w);
 }
 
 bool EnvLight::sample(float u_choice, const Vec2& u, EnvLightSample* out) const {
     if (u_choice < sky_probability_) {
-        Vec2 xy;
-        float pdf_xy;
-        if (!distribution_.sample(u, &xy, &pdf_xy)) return false;
-        Vec2 uv = 2.0f * xy - Vec2::Ones();
-        float r2 = uv.squaredNorm();
-        if (r2 > 1.0f) return false;  // the part of a rim pixel below the horizon
-        out->wi = fisheye::direction_from_uv(uv);
-        // Radiance and pdf through the same lookup that radiance() and pdf() use, so a direction
-        // that rounds across a pixel edge still reports matching values (no fireflies).
-        Vec2 uv_back;
-        fisheye::uv_from_direction(out->wi, &uv_back);
-        const float* p = &sky_->rgb[size_t(lookup_pixel(uv_back)) * 3];
-        out->radiance = Color(p[0], p[1], p[2]);
-        out->pdf = sky_probability_ * distribution_.pdf(0.5f * (uv_back + Vec2::Ones())) * 0.25f /
-                   jacobian_from_r2(uv_back.squaredNorm());
+        float pdf;
+        if (!sampler_->sample(u, &out->wi, &pdf)) return false;
+        out->radiance = radiance(out->wi);
+        out->pdf = sky_probability_ * pdf;
         return out->pdf > 0;
     }
     Vec3 h = sample_uniform_hemisphere(u);  // about +Z; map +Z to -Y (down)
@@ -156,6 +180,33 @@ bool EnvLight::sample(float u_choice, const Vec2& u, EnvLightSample* out) const 
     out->radiance = ground_radiance_;
     out->pdf = (1 - sky_probability_) / (2 * kPi);
     return out->pdf > 0;
+}
+
+void EnvLight::compensate_for_mis(double total_weight) {
+    // Karlik et al. 2019 as in pbrt-v4: sample max(L - mean L, 0), where BSDF sampling already
+    // does well on the rest; uniform in solid angle if that leaves nothing. Same fixed-point
+    // scale as the weights: mean = sum(L jac) / sum(jac).
+    const int n = table_resolution_;
+    double jac_sum = 0;
+    for (size_t k = 0; k < solid_angle_table_.size(); k += 2) jac_sum += solid_angle_table_[k];
+    const float mean = jac_sum > 0 ? float(total_weight / jac_sum) : 0.0f;
+    std::vector<double> row_sum(size_t(n), 0.0);
+    tbb::parallel_for(tbb::blocked_range<int>(0, n, 16), [&](const tbb::blocked_range<int>& rows) {
+        for (int j = rows.begin(); j != rows.end(); ++j) {
+            float* w = &weights_[size_t(j) * n];
+            const uint16_t* t = &solid_angle_table_[size_t(j) * n * 2];
+            float s = 0;
+            for (int i = 0; i < n; ++i) {
+                w[i] = std::max(w[i] - mean * float(t[2 * i]), 0.0f);
+                s += w[i];
+            }
+            row_sum[size_t(j)] = s;
+        }
+    });
+    double left = 0;
+    for (double r : row_sum) left += r;
+    if (!(left > 0))
+        for (size_t k = 0; k < weights_.size(); ++k) weights_[k] = float(solid_angle_table_[2 * k]);
 }
 
 }  // namespace dynsky

@@ -71,6 +71,7 @@ class EnvLight {
     // Pixel holding the radiance of uv (with r <= 1): itself, or for rim pixels whose centre lies
     // outside the disc, the nearest pixel inward.
     int lookup_pixel(const Vec2& uv) const;
+    void compensate_for_mis(double total_weight);
 
     std::shared_ptr<const SkyImage> sky_;
     SkySamplerOptions sampler_options_;

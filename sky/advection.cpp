@@ -122,6 +122,37 @@ cv::Mat estimate_sky_flow(const SkyImage& from, const SkyImage& to, const SkyFlo
     return out;
 }
 
+namespace {
+
+cv::Vec2f sample_flow(const cv::Mat& flow, double x, double y) {
+    const int n = flow.cols;
+    x = std::clamp(x, 0.0, n - 1.0), y = std::clamp(y, 0.0, n - 1.0);
+    int x0 = std::min(int(x), n - 2), y0 = std::min(int(y), n - 2);
+    float fx = float(x - x0), fy = float(y - y0);
+    return (1 - fy) * ((1 - fx) * flow.at<cv::Vec2f>(y0, x0) + fx * flow.at<cv::Vec2f>(y0, x0 + 1)) +
+           fy * ((1 - fx) * flow.at<cv::Vec2f>(y0 + 1, x0) + fx * flow.at<cv::Vec2f>(y0 + 1, x0 + 1));
+}
+
+// The sky with every pixel outside the disc holding the rim's value along its radius, so that
+// bilinear lookups at the horizon never mix in the black corners.
+cv::Mat extend_past_rim(const cv::Mat& src) {
+    const int n = src.cols;
+    const double r_in = 1.0 - 1.5 / n;
+    cv::Mat map_x(n, n, CV_32FC1), map_y(n, n, CV_32FC1);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            double u = 2.0 * (i + 0.5) / n - 1.0, v = 2.0 * (j + 0.5) / n - 1.0, r = std::sqrt(u * u + v * v);
+            if (r > r_in) u *= r_in / r, v *= r_in / r;
+            map_x.at<float>(j, i) = float((u + 1.0) * n / 2.0 - 0.5);
+            map_y.at<float>(j, i) = float((v + 1.0) * n / 2.0 - 0.5);
+        }
+    cv::Mat out;
+    cv::remap(src, out, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    return out;
+}
+
+}  // namespace
+
 SkyImage advect_great_arc(const SkyImage& sky, const cv::Mat& flow, double fraction) {
     const int n = sky.resolution;
     if (flow.type() != CV_32FC2 || flow.rows != n || flow.cols != n)
@@ -129,35 +160,41 @@ SkyImage advect_great_arc(const SkyImage& sky, const cv::Mat& flow, double fract
     SkyImage out = sky;
     if (fraction == 0.0) return out;
     cv::Mat map_x(n, n, CV_32FC1), map_y(n, n, CV_32FC1);
-    // Sources just past the rim are pulled onto the last ring, so content is not darkened by the
-    // black outside the disc as it enters from the horizon.
-    const double r_max = 1.0 - 1.0 / n;
+    // The flow belongs to where content starts: output pixel q shows the source p whose own arc,
+    // followed for `fraction`, ends at q. Found by fixed-point iteration from p = q (a few steps
+    // suffice for flows that vary smoothly); each step rotates q back along p's arc.
+    constexpr int kIterations = 8;
     tbb::parallel_for(0, n, [&](int j) {
         for (int i = 0; i < n; ++i) {
-            cv::Vec2f f = flow.at<cv::Vec2f>(j, i);
-            Vec3d d = direction_from_pixel(i, j, n);
-            Vec3d t = direction_from_pixel(i + f[0], j + f[1], n);
-            Vec3d c = d.cross(t);
-            double s = c.norm();
+            const Vec3d d = direction_from_pixel(i, j, n);
+            double px = i, py = j;
             Vec3d src = d;
-            if (s > 1e-12) {
-                Vec3d axis = c / s;
-                double g = -fraction * std::atan2(s, d.dot(t));
-                src = d * std::cos(g) + axis.cross(d) * std::sin(g);  // axis is perpendicular to d
+            for (int it = 0; it < kIterations; ++it) {
+                cv::Vec2f f = sample_flow(flow, px, py);
+                Vec3d from = direction_from_pixel(px, py, n), to = direction_from_pixel(px + f[0], py + f[1], n);
+                Vec3d c = from.cross(to);
+                double s = c.norm();
+                if (s < 1e-12) {
+                    src = d;
+                } else {
+                    Vec3d axis = c / s;
+                    double g = -fraction * std::atan2(s, from.dot(to));
+                    // Rodrigues (q need not be perpendicular to the axis).
+                    src = d * std::cos(g) + axis.cross(d) * std::sin(g) + axis * axis.dot(d) * (1 - std::cos(g));
+                }
+                double nx, ny;
+                pixel_from_direction(src, n, &nx, &ny);
+                if (std::abs(nx - px) < 1e-3 && std::abs(ny - py) < 1e-3) break;
+                px = nx, py = ny;
             }
             double x, y;
             pixel_from_direction(src, n, &x, &y);
-            double u = 2.0 * (x + 0.5) / n - 1.0, v = 2.0 * (y + 0.5) / n - 1.0, r = std::sqrt(u * u + v * v);
-            if (r > r_max) {
-                u *= r_max / r, v *= r_max / r;
-                x = (u + 1.0) * n / 2.0 - 0.5, y = (v + 1.0) * n / 2.0 - 0.5;
-            }
             map_x.at<float>(j, i) = float(x);
             map_y.at<float>(j, i) = float(y);
         }
     });
     cv::Mat dst(n, n, CV_32FC3, out.rgb.data());
-    cv::remap(sky_mat(sky), dst, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    cv::remap(extend_past_rim(sky_mat(sky)), dst, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
     clear_outside_disc(&out);
     return out;
 }

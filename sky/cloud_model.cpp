@@ -14,7 +14,6 @@
 #include "sky/hdr_recovery.h"
 #include "sky/photo_import.h"
 #include "sky/sky_metrics.h"
-#include "util/color.h"
 #include "util/error.h"
 
 namespace dynsky {
@@ -89,14 +88,12 @@ cv::Mat run_net(cv::dnn::Net& net, const cv::Mat& blob, const std::string& what)
     }
 }
 
-// The sun cannot be held by the [0, 1] form: pixels the forward map saturates (and that hold a
-// real bright source: the disc of the sun and its immediate aureole).
+// The [0, 1] form cannot hold the sun: pixels where the forward map clips any channel (the sun's
+// disc and the brightest aureole) are taken from the input sky instead.
 cv::Mat saturated_pixels(const cv::Mat& unit) {
-    cv::Mat grey;
     std::vector<cv::Mat> ch;
     cv::split(unit, ch);
-    cv::Mat m = (ch[0] >= 0.999f) & (ch[1] >= 0.999f) & (ch[2] >= 0.999f);
-    return m;
+    return (ch[0] >= 0.999f) | (ch[1] >= 0.999f) | (ch[2] >= 0.999f);
 }
 
 }  // namespace
@@ -117,13 +114,24 @@ CloudModel CloudModel::load(const std::string& folder) {
         info.flow_scale = j.at("flow_scale").get<double>();
         info.flow_widths = j.value("flow_widths", std::vector<int>{});
         info.cloud_widths = j.value("cloud_widths", std::vector<int>{});
+        info.form.unit_map.scale = j.value("unit_scale", info.form.unit_map.scale);
+        info.form.unit_map.max_radiance = j.value("unit_max", info.form.unit_map.max_radiance);
+        info.form.cloud_rule.rule = parse_cloud_rule(j.value("cloud_rule", std::string("rb")));
+        info.form.cloud_rule.threshold = j.value("cloud_threshold", info.form.cloud_rule.threshold);
     } catch (const nlohmann::json::exception& e) {
         throw_file_error(json_path, std::string("not a valid model description: ") + e.what());
+    } catch (const Error& e) {
+        throw_file_error(json_path, e.what());
     }
     if (info.resolution < 8 || info.resolution > 4096)
         throw_file_error(json_path, "resolution " + std::to_string(info.resolution) + " is not in 8..4096");
     if (!(info.dt_seconds > 0)) throw_file_error(json_path, "dt_s must be a positive number of seconds");
     if (!(info.flow_scale > 0)) throw_file_error(json_path, "flow_scale must be positive");
+    try {
+        validate_unit_map(info.form.unit_map);
+    } catch (const Error& e) {
+        throw_file_error(json_path, e.what());
+    }
 
     const std::string flow_path = (fs::path(folder) / "flownet.onnx").string();
     const std::string cloud_path = (fs::path(folder) / "cloudnet.onnx").string();
@@ -189,7 +197,7 @@ void CloudModel::rollout(const SkyImage& sky, int steps, const std::function<voi
     validate_sky(sky, sky.source.empty() ? std::string("input sky") : sky.source);
     if (steps < 0) throw Error("cloud model: the number of steps must be >= 0");
     const int n = info_.resolution, big = sky.resolution;
-    cv::Mat state = to_network_form(sky);
+    cv::Mat state = to_network_form(sky, info_.form);
     const cv::Mat disc_big = sky_disc_mask(big);
     const cv::Mat sun = saturated_pixels(state);
     const bool has_sun = cv::countNonZero(sun) > 0;
@@ -215,7 +223,7 @@ void CloudModel::rollout(const SkyImage& sky, int steps, const std::function<voi
             cv::min(cv::max(state, 0.0), 1.0, state);
             state.setTo(cv::Scalar::all(0), ~disc_big);
         }
-        SkyImage next = from_network_form(state, sky);
+        SkyImage next = from_network_form(state, sky, info_.form);
         next.time_seconds = sky.time_seconds + k * info_.dt_seconds;
         if (has_sun) {
             // Re-insert the input's sun, dimmed by how much the prediction darkened its pixels
@@ -242,15 +250,11 @@ void CloudModel::rollout(const SkyImage& sky, int steps, const std::function<voi
 
 // ---- The networks' [0, 1] form ----
 
-cv::Mat to_network_form(const SkyImage& sky, int resolution) {
+cv::Mat to_network_form(const SkyImage& sky, const NetworkFormParams& form, int resolution) {
     const int n = sky.resolution;
+    Image unit = hdr_to_unit(sky, form.unit_map);
     cv::Mat image(n, n, CV_32FC3);
-    // TEMPORARY stand-in until sky/hdr_recovery.h lands: sRGB encoding of the radiance.
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) {
-            Color c = sky.in_disc(i, j) ? sky.pixel(i, j) : Color(0, 0, 0);
-            image.at<cv::Vec3f>(j, i) = cv::Vec3f(linear_to_srgb(c[0]), linear_to_srgb(c[1]), linear_to_srgb(c[2]));
-        }
+    std::copy(unit.pixels.begin(), unit.pixels.end(), image.ptr<float>());
     if (resolution > 0 && resolution != n) {
         cv::resize(image, image, cv::Size(resolution, resolution), 0, 0, cv::INTER_AREA);
         image.setTo(cv::Scalar::all(0), ~sky_disc_mask(resolution));
@@ -258,31 +262,40 @@ cv::Mat to_network_form(const SkyImage& sky, int resolution) {
     return image;
 }
 
-SkyImage from_network_form(const cv::Mat& image, const SkyImage& like) {
+SkyImage from_network_form(const cv::Mat& image, const SkyImage& like, const NetworkFormParams& form) {
     if (image.rows != like.resolution || image.cols != like.resolution || image.type() != CV_32FC3)
         throw Error("from_network_form: the image must be CV_32FC3 at the sky's resolution");
-    SkyImage out(like.resolution);
+    Image unit(image.cols, image.rows, 3);
+    cv::Mat c = image.isContinuous() ? image : image.clone();
+    std::copy(c.ptr<float>(), c.ptr<float>() + unit.pixels.size(), unit.pixels.begin());
+    SkyImage out = unit_to_hdr(unit, form.unit_map);
     out.time_seconds = like.time_seconds;
     out.sun_direction = like.sun_direction;
     out.source = like.source;
-    for (int j = 0; j < out.resolution; ++j)
-        for (int i = 0; i < out.resolution; ++i) {
-            if (!out.in_disc(i, j)) continue;
-            cv::Vec3f v = image.at<cv::Vec3f>(j, i);
-            out.set_pixel(i, j, Color(srgb_to_linear(v[0]), srgb_to_linear(v[1]), srgb_to_linear(v[2])));
-        }
     return out;
 }
 
-cv::Mat network_cloud_mask(const cv::Mat& image) {
-    // TEMPORARY stand-in until sky/cloud_mask.h lands: red / blue > 0.46.
-    cv::Mat m(image.size(), CV_8UC1);
-    for (int y = 0; y < image.rows; ++y)
-        for (int x = 0; x < image.cols; ++x) {
-            cv::Vec3f v = image.at<cv::Vec3f>(y, x);
-            m.at<uint8_t>(y, x) = v[2] > 1e-4f && v[0] / v[2] > 0.46f ? 255 : 0;
-        }
-    return m & sky_disc_mask(image.rows);
+namespace {
+// I_cm of an HDR sky at its own resolution, CV_8UC1 255 = cloud.
+cv::Mat cloud_mask_of_sky(const SkyImage& sky, const NetworkFormParams& form) {
+    const int n = sky.resolution;
+    std::vector<unsigned char> in_disc(size_t(n) * n);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) in_disc[size_t(j) * n + i] = sky.in_disc(i, j);
+    Image mask = cloud_mask(encode_sky_for_mask(sky), form.cloud_rule, &in_disc);
+    cv::Mat m(n, n, CV_8UC1);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) m.at<uint8_t>(j, i) = mask.at(i, j, 0) > 0.7f ? 255 : 0;
+    return m;
+}
+}  // namespace
+
+cv::Mat network_cloud_mask(const cv::Mat& image, const NetworkFormParams& form) {
+    SkyImage like(image.rows);
+    cv::Mat clean;
+    cv::min(cv::max(image, 0.0), 1.0, clean);
+    cv::patchNaNs(clean, 0.0);
+    return cloud_mask_of_sky(from_network_form(clean, like, form), form);
 }
 
 NetworkFrame resample_frame(const NetworkFrame& frame, int resolution) {
@@ -293,38 +306,60 @@ NetworkFrame resample_frame(const NetworkFrame& frame, int resolution) {
     const cv::Mat disc = sky_disc_mask(n);
     cv::resize(frame.image, f.image, cv::Size(n, n), 0, 0, cv::INTER_AREA);
     f.image.setTo(cv::Scalar::all(0), ~disc);
-    cv::Mat seen;
+    cv::Mat seen, cloud;
     frame.valid.convertTo(seen, CV_32F, 1.0 / 255.0);
     cv::resize(seen, seen, cv::Size(n, n), 0, 0, cv::INTER_AREA);
     f.valid = (seen > 0.999f) & disc;
-    f.cloud = network_cloud_mask(f.image);
+    frame.cloud.convertTo(cloud, CV_32F, 1.0 / 255.0);
+    cv::resize(cloud, cloud, cv::Size(n, n), 0, 0, cv::INTER_AREA);
+    f.cloud = (cloud > 0.5f) & disc;
     return f;
 }
 
-NetworkFrame network_frame(const SkyImage& sky, const std::vector<unsigned char>& not_sky, int resolution) {
+NetworkFrame network_frame(const SkyImage& sky, const std::vector<unsigned char>& not_sky, int resolution,
+                           const NetworkFormParams& form) {
     const int big = sky.resolution;
     if (!not_sky.empty() && not_sky.size() != size_t(big) * big)
         throw Error("network_frame: the not-sky mask does not match the sky's resolution");
     NetworkFrame f;
     f.time_seconds = sky.time_seconds;
-    f.image = to_network_form(sky);
+    f.image = to_network_form(sky, form);
     f.valid = sky_disc_mask(big);
     if (!not_sky.empty())
         for (int j = 0; j < big; ++j)
             for (int i = 0; i < big; ++i)
                 if (not_sky[size_t(j) * big + i]) f.valid.at<uint8_t>(j, i) = 0;
-    f.cloud = network_cloud_mask(f.image);
+    f.cloud = cloud_mask_of_sky(sky, form);
     return resample_frame(f, resolution > 0 ? resolution : big);
 }
 
-NetworkFrame network_frame_from_photo(const std::string& path, const std::string& preset, int import_resolution,
-                                      int resolution) {
+SkyImage import_preset_photo(const std::string& path, const std::string& preset, int import_resolution,
+                             std::vector<unsigned char>* not_sky) {
+    // The same steps, with the same defaults, as `dynsky sky import --preset P` (cli/sky_import_commands.cpp).
     CameraPreset cam = camera_preset(preset);
     PhotoImportParams params = cam.params;
     params.resolution = import_resolution;
     params.mask_path = find_preset_mask(preset, path);
+    if (params.mask_path.empty()) params.detect_obstructions = true;
     ImportedPhoto photo = import_photo(path, params);
-    return network_frame(photo.sky, photo.not_sky, resolution);
+    SkyImage sky = photo.sky;
+    const std::string time = time_from_file_name(path, cam.filename_utc_offset_hours);
+    if (!time.empty() && photo.display_referred) {
+        HdrCalibrationParams hp;
+        hp.time = parse_utc_time(time);
+        hp.location = GeoLocation{cam.latitude_deg, cam.longitude_deg, cam.elevation_m};
+        hp.sun_search_deg = cam.sun_search_deg;
+        sky = recover_hdr(photo, hp);
+    }
+    if (not_sky) *not_sky = photo.not_sky;
+    return sky;
+}
+
+NetworkFrame network_frame_from_photo(const std::string& path, const std::string& preset, int import_resolution,
+                                      int resolution, const NetworkFormParams& form) {
+    std::vector<unsigned char> not_sky;
+    SkyImage sky = import_preset_photo(path, preset, import_resolution, &not_sky);
+    return network_frame(sky, not_sky, resolution, form);
 }
 
 // ---- .npy ----

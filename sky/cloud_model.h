@@ -19,9 +19,23 @@
 #include <string>
 #include <vector>
 
+#include "sky/cloud_mask.h"
+#include "sky/hdr_recovery.h"
 #include "sky/sky_image.h"
 
 namespace dynsky {
+
+// How skies become what the networks see: sky/hdr_recovery.h's log map HDR -> [0, 1] (its
+// parameters are the model's: stored in model.json and the dataset's meta.json) and the cloud rule
+// for I_cm (sky/cloud_mask.h, on the sky encoded as a camera would: encode_sky_for_mask).
+// Defaults: the log map spans 0..300 W m^-2 sr^-1 (the sky and sunlit clouds of the ARM and
+// procedural sequences reach about 100; only the sun and its nearest aureole clip), and red/blue >
+// 0.75 (WSISEG's best threshold; on the ARM day it calls 53 % of the sky cloud, the imager's own
+// masks 55 %, while the paper's 0.46 calls 79 %).
+struct NetworkFormParams {
+    UnitMapParams unit_map{1.0, 300.0};
+    CloudMaskParams cloud_rule{CloudRule::RedBlueRatio, kWsisegBestRedBlueThreshold};
+};
 
 struct CloudModelInfo {
     std::string name;
@@ -29,6 +43,7 @@ struct CloudModelInfo {
     double dt_seconds = 0.0;       // Delta t of one medium step
     double flow_scale = 0.04;      // magnitude channel 1 = flow_scale * N pixels per step
     std::vector<int> flow_widths, cloud_widths;
+    NetworkFormParams form;
     std::string folder;
 };
 
@@ -73,11 +88,11 @@ class CloudModel {
     cv::Mat disc_;  // CV_8UC1 sky disc at N
 };
 
-// The [0, 1] form of an HDR sky at its own resolution (CV_32FC3, 0 outside the disc) and back.
-// These wrap sky/hdr_recovery.h's forward and inverse maps; to_network_form also resamples to
-// `resolution` (area average) when it is given and differs.
-cv::Mat to_network_form(const SkyImage& sky, int resolution = 0);
-SkyImage from_network_form(const cv::Mat& image, const SkyImage& like);
+// The [0, 1] form of an HDR sky (CV_32FC3, 0 outside the disc) and back: sky/hdr_recovery.h's
+// hdr_to_unit / unit_to_hdr. to_network_form also area-resamples to `resolution` when it is given
+// and differs; from_network_form takes time, sun and source from `like`.
+cv::Mat to_network_form(const SkyImage& sky, const NetworkFormParams& form, int resolution = 0);
+SkyImage from_network_form(const cv::Mat& image, const SkyImage& like, const NetworkFormParams& form);
 
 // A frame as the networks see it, at their resolution N.
 struct NetworkFrame {
@@ -90,21 +105,26 @@ struct NetworkFrame {
 // From a sky of any resolution. `not_sky` (sky.resolution^2 values, 1 = hidden by the camera's arm,
 // band or masts and filled in by the import) may be empty (everything seen). A pixel at N is valid
 // only if every input pixel under it was seen.
-NetworkFrame network_frame(const SkyImage& sky, const std::vector<unsigned char>& not_sky, int resolution);
+NetworkFrame network_frame(const SkyImage& sky, const std::vector<unsigned char>& not_sky, int resolution,
+                           const NetworkFormParams& form);
 
 // The same frame at another resolution: image area-averaged (0 outside the new disc), a pixel valid
-// only if all pixels under it were, cloud mask recomputed from the resampled image.
+// only if all pixels under it were, cloud where most of the pixels under it were.
 NetworkFrame resample_frame(const NetworkFrame& frame, int resolution);
 
-// The cloud mask (sky/cloud_mask.h's rule) of an image in the [0, 1] form, CV_8UC1 255 = cloud,
-// 0 outside the disc.
-cv::Mat network_cloud_mask(const cv::Mat& image);
+// The cloud mask of an image in the [0, 1] form (mapped back to HDR, encoded as a camera would,
+// the rule applied), CV_8UC1 255 = cloud, 0 outside the disc.
+cv::Mat network_cloud_mask(const cv::Mat& image, const NetworkFormParams& form);
 
 // A photograph from one of the camera presets (sky/photo_import.h: "arm-tsi", "mobotix"), imported
-// at import_resolution exactly as `dynsky sky import --preset P` does (the preset's per-frame mask
-// included), then as above.
+// at import_resolution exactly as `dynsky sky import --preset P --res R` does (the preset's mask,
+// HDR calibrated from the file name's time and the preset's place), then as above. The import's
+// not-sky pixels (arm, shadow band, masts) are what the frame marks as not valid.
 NetworkFrame network_frame_from_photo(const std::string& path, const std::string& preset, int import_resolution,
-                                      int resolution);
+                                      int resolution, const NetworkFormParams& form);
+// The HDR sky of the same import (what `dynsky sky import --preset P` writes), with its not-sky mask.
+SkyImage import_preset_photo(const std::string& path, const std::string& preset, int import_resolution,
+                             std::vector<unsigned char>* not_sky = nullptr);
 
 // .npy files (NumPy's format, little-endian float32 or uint8, C order): how the Python side and
 // the C++ side exchange datasets and reference input/output pairs.

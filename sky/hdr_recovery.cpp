@@ -66,7 +66,7 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
         for (int i = 0; i < n; ++i) clipped.at<unsigned char>(j, i) = photo.clipped[size_t(j) * n + i] ? 255 : 0;
     cv::Mat labels;
     int blobs = cv::connectedComponents(clipped, labels, 8, CV_32S);
-    std::vector<double> nearest(size_t(std::max(blobs, 1)), 1e9);
+    std::vector<double> nearest(size_t(std::max(blobs, 1)), 1e9), solid_angle(size_t(std::max(blobs, 1)), 0.0);
     std::vector<Vec3d> centroid(size_t(std::max(blobs, 1)), Vec3d::Zero());
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
@@ -75,10 +75,25 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
             const Vec3d& w = dir[size_t(j) * n + i];
             nearest[size_t(l)] = std::min(nearest[size_t(l)], angle_between(w, rep.computed_sun));
             centroid[size_t(l)] += w;
+            solid_angle[size_t(l)] += fisheye::pixel_solid_angle(i, j, n);
         }
+    // A clipped sun and its aureole stay well inside a 20 degree cone; a larger blob is a
+    // saturated overcast or cloud field, not a sun to place.
+    const double max_sun_sr = 2 * kPiD * (1 - std::cos(20 * kDeg));
+    // Where the computed sun falls on a filled obstruction (the TSI's shadow band exists to hide
+    // it), clipped clouds beside the obstruction are not the sun: see the band rule below instead.
+    bool sun_hidden = false;
+    {
+        double sx, sy;
+        if (fisheye::uv_from_direction(rep.computed_sun, &sx, &sy)) {
+            int si = std::clamp(int((sx + 1) / 2 * n), 0, n - 1), sj = std::clamp(int((sy + 1) / 2 * n), 0, n - 1);
+            sun_hidden = photo.not_sky[size_t(sj) * n + si] != 0;
+        }
+    }
     int sun_blob = -1;
-    for (int l = 1; l < blobs; ++l)
-        if (nearest[size_t(l)] <= params.sun_search_deg * kDeg && (sun_blob < 0 || nearest[size_t(l)] < nearest[size_t(sun_blob)]))
+    for (int l = 1; l < blobs && !sun_hidden; ++l)
+        if (nearest[size_t(l)] <= params.sun_search_deg * kDeg && solid_angle[size_t(l)] <= max_sun_sr &&
+            (sun_blob < 0 || nearest[size_t(l)] < nearest[size_t(sun_blob)]))
             sun_blob = l;
     if (sun_blob > 0 && rep.computed_sun.y() > -0.02) {
         Vec3d seen = centroid[size_t(sun_blob)].normalized();
@@ -95,23 +110,17 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
 
     // A sun behind the shadow band (or another filled obstruction): seen if the sky next to the
     // obstruction near the sun, 4-15 degrees out, is mostly clear or clipped.
-    if (!rep.sun_visible && rep.computed_sun.y() > 0) {
-        double sx, sy;
-        if (fisheye::uv_from_direction(rep.computed_sun, &sx, &sy)) {
-            int si = std::clamp(int((sx + 1) / 2 * n), 0, n - 1), sj = std::clamp(int((sy + 1) / 2 * n), 0, n - 1);
-            if (photo.not_sky[size_t(sj) * n + si]) {
-                long long around = 0, bright_or_clear = 0;
-                for (size_t p = 0; p < dir.size(); ++p) {
-                    if (photo.not_sky[p] || !in.in_disc(int(p % n), int(p / n))) continue;
-                    double a = angle_between(dir[p], rep.computed_sun);
-                    if (a < 4 * kDeg || a > 15 * kDeg) continue;
-                    ++around;
-                    Color e = encoded(p);
-                    if (photo.clipped[p] || !is_cloud(e[0], e[1], e[2], params.clear_rule)) ++bright_or_clear;
-                }
-                rep.sun_visible = around > 0 && bright_or_clear * 2 >= around;
-            }
+    if (sun_hidden && rep.computed_sun.y() > 0) {
+        long long around = 0, bright_or_clear = 0;
+        for (size_t p = 0; p < dir.size(); ++p) {
+            if (photo.not_sky[p] || !in.in_disc(int(p % n), int(p / n))) continue;
+            double a = angle_between(dir[p], rep.computed_sun);
+            if (a < 4 * kDeg || a > 15 * kDeg) continue;
+            ++around;
+            Color e = encoded(p);
+            if (photo.clipped[p] || !is_cloud(e[0], e[1], e[2], params.clear_rule)) ++bright_or_clear;
         }
+        rep.sun_visible = around > 0 && bright_or_clear * 2 >= around;
     }
 
     ClearSkyParams model_params;
@@ -132,12 +141,13 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
             size_t p = size_t(j) * n + i;
-            if (!in.in_disc(i, j) || photo.not_sky[p] || photo.clipped[p]) continue;
+            if (!in.in_disc(i, j) || photo.not_sky[p]) continue;
             const Vec3d& w = dir[p];
             if (angle_between(w, rep.used_sun) < params.exclude_sun_deg * kDeg) continue;
             if (std::acos(std::clamp(w.y(), -1.0, 1.0)) > params.max_zenith_deg * kDeg) continue;
             Color e = encoded(p);
-            bool is_clear = !is_cloud(e[0], e[1], e[2], params.clear_rule);
+            // Clipped pixels are only lower bounds: never calibrate on them.
+            bool is_clear = !photo.clipped[p] && !is_cloud(e[0], e[1], e[2], params.clear_rule);
             if (is_clear) ++clear;
             if ((i % stride) || (j % stride)) continue;
             double y_photo = luminance(in.pixel(i, j));

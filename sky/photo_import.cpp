@@ -109,24 +109,17 @@ double find_clip_level(const cv::Mat& rgb_encoded, const SkyCircle& circle, cons
             hist[b] += 1;
             total += 1;
         }
-    // The plateau: the bin standing highest above the bins just below it (JPEG noise spreads
-    // a few counts above it too; they must not outnumber it).
+    // The plateau: the highest bin standing at least 3x above the bins just below it, and not
+    // outnumbered by the counts above it (JPEG noise spreads a few values past the clip level).
     double min_count = std::max(20.0, 2e-4 * total);
-    int best = -1;
-    double best_ratio = 0;
-    for (int b = 64; b < 256; ++b) {
-        if (hist[b] < min_count) continue;
+    double above = 0;
+    for (int b = 255; b >= 64; above += hist[b], --b) {
+        if (hist[b] < min_count || above > hist[b]) continue;
         double below = 0;
         for (int k = b - 8; k <= b - 3; ++k) below += hist[k];
-        double ratio = hist[b] / (below / 6 + 1);
-        if (ratio > best_ratio) best_ratio = ratio, best = b;
+        if (hist[b] >= 3 * (below / 6 + 1)) return (b - 2) / 255.0;
     }
-    fprintf(stderr, "DEBUG clip best %d ratio %f total %f\n", best, best_ratio, total);
-    if (best < 0 || best_ratio < 3) return 1.0;
-    double above = 0;
-    for (int b = best + 1; b < 256; ++b) above += hist[b];
-    if (above > hist[best]) return 1.0;
-    return (best - 2) / 255.0;
+    return 1.0;
 }
 
 // Telea's fast-marching inpainting of a 3-channel float image where fill != 0, in place.
@@ -334,15 +327,35 @@ std::vector<unsigned char> load_not_sky_mask(const std::string& path, MaskLayout
                 out[size_t(y) * photo_width + x] = black ? 1 : 0;
             }
         if (layout == MaskLayout::TsiCloudMask) {
+            // The TSI draws its sun marker (a yellow, sometimes white, disc) on the band: small
+            // islands of "sky" inside the obstructions are such markers, not sky; yellow never is.
+            cv::Mat open_sky(photo_height, photo_width, CV_8U);
+            for (int y = 0; y < photo_height; ++y)
+                for (int x = 0; x < photo_width; ++x) {
+                    bool yellow = value(x, y, 0) > 0.9f && value(x, y, 1) > 0.9f && value(x, y, 2) < 0.1f;
+                    if (yellow) out[size_t(y) * photo_width + x] = 1;
+                    open_sky.at<unsigned char>(y, x) = out[size_t(y) * photo_width + x] ? 0 : 255;
+                }
+            cv::Mat labels, stats, centroids;
+            cv::connectedComponentsWithStats(open_sky, labels, stats, centroids, 4);
+            double island = 0.01 * cv::countNonZero(open_sky);
+            for (int y = 0; y < photo_height; ++y)
+                for (int x = 0; x < photo_width; ++x) {
+                    int l = labels.at<int>(y, x);
+                    if (l > 0 && stats.at<int>(l, cv::CC_STAT_AREA) < island) out[size_t(y) * photo_width + x] = 1;
+                }
             cv::Mat sky(photo_height, photo_width, CV_8U);
             for (int y = 0; y < photo_height; ++y)
                 for (int x = 0; x < photo_width; ++x) sky.at<unsigned char>(y, x) = out[size_t(y) * photo_width + x] ? 0 : 255;
             std::vector<cv::Point> points;
             cv::findNonZero(sky, points);
             if (points.empty()) throw_file_error(path, "the TSI mask marks no pixel as sky");
+            // The hull first: minEnclosingCircle on ~10^5 raw points takes seconds in OpenCV 4.6.
+            std::vector<cv::Point> hull;
+            cv::convexHull(points, hull);
             cv::Point2f c;
             float r;
-            cv::minEnclosingCircle(points, c, r);
+            cv::minEnclosingCircle(hull, c, r);
             std::vector<unsigned char> inside = out;
             double reach = r - 2.0;
             for (int y = 0; y < photo_height; ++y)
@@ -385,7 +398,7 @@ std::vector<unsigned char> load_not_sky_mask(const std::string& path, MaskLayout
 std::vector<unsigned char> detect_dark_obstructions(const Image& encoded_photo, const SkyCircle& circle, double darkness) {
     cv::Mat grey = image_to_grey8(encoded_photo, true);
     cv::Mat disc = cv::Mat::zeros(grey.size(), CV_8U);
-    cv::circle(disc, cv::Point2d(circle.center_x, circle.center_y), int(circle.radius * 0.98), 255, cv::FILLED);
+    cv::circle(disc, cv::Point2d(circle.center_x, circle.center_y), int(circle.radius * 1.02), 255, cv::FILLED);
     std::vector<unsigned char> values;
     for (int y = 0; y < grey.rows; ++y)
         for (int x = 0; x < grey.cols; ++x)
@@ -467,6 +480,10 @@ ImportedPhoto import_photo_image(const Image& photo, const std::string& name, co
         for (int y = 0; y < rgb.rows; ++y)
             for (int x = 0; x < rgb.cols; ++x)
                 if (extra_not_sky->at(x, y, 0) > 0.5f) not_sky.at<unsigned char>(y, x) = 1;
+    }
+    for (const auto& r : params.not_sky_rects) {
+        cv::Rect rect = cv::Rect(r[0], r[1], r[2], r[3]) & cv::Rect(0, 0, rgb.cols, rgb.rows);
+        if (rect.area() > 0) not_sky(rect).setTo(1);
     }
     if (params.detect_obstructions) {
         Image enc = photo;
@@ -601,6 +618,7 @@ CameraPreset camera_preset(const std::string& name) {
         p.params.north_deg = 0.0;
         p.params.circle = SkyCircle{243.1, 317.5, 230.8};
         p.params.mask_layout = MaskLayout::TsiCloudMask;
+        p.params.mask_dilate_px = 4;  // the band's blurred edge lies just outside the TSI's polygon
         p.params.min_radius_fraction = 0.45;
         p.params.max_radius_fraction = 0.52;
         p.latitude_deg = 36.605;
@@ -622,6 +640,10 @@ CameraPreset camera_preset(const std::string& name) {
         p.params.circle = SkyCircle{654.7, 479.4, 485.8};
         p.params.mask_layout = MaskLayout::AlonsoPlanarGreenIsNotSky;
         p.params.mask_dilate_px = 3;
+        // The shipped mask stops near 82 deg: the rooftops beyond it are found as dark objects.
+        p.params.detect_obstructions = true;
+        // The burnt-in capture time (top right) and the logo (top left) reach into the circle.
+        p.params.not_sky_rects = {{700, 0, 580, 30}, {0, 0, 40, 32}};
         p.params.min_radius_fraction = 0.46;
         p.params.max_radius_fraction = 0.52;
         p.latitude_deg = 43.614;

@@ -15,6 +15,7 @@
 // y down, (0, 0) the top-left pixel's centre.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -91,6 +92,8 @@ struct PhotoImportParams {
     MaskLayout mask_layout = MaskLayout::PhotoBlackIsNotSky;
     int mask_dilate_px = 2;               // grow the mask (photo pixels) to cover object edges
     bool detect_obstructions = false;     // also find dark obstructions (detect_dark_obstructions)
+    // Photo rectangles that are never sky, {x, y, width, height} in pixels (burnt-in captions).
+    std::vector<std::array<int, 4>> not_sky_rects;
     bool inpaint = true;                  // fill non-sky pixels (cv::inpaint, Telea); else leave 0
     // Input encoding: "auto" (8-bit formats are sRGB-encoded, .exr/.hdr/.pfm are linear), "srgb", "linear".
     std::string encoding = "auto";

@@ -147,12 +147,14 @@ void insert_sun(SkyImage* sky, const SunPatch& patch, const Vec3d& direction, do
 
 SkyImage blend_skies(const SkyImage& a, const SkyImage& b, double w) {
     if (a.resolution != b.resolution) throw Error("blend_skies: resolutions differ");
-    SkyImage out = a;
-    if (w == 0.0) return out;
+    if (w == 0.0) return a;
+    SkyImage out;  // metadata from a; pixels written once below (no copy of a's to overwrite)
+    out.resolution = a.resolution, out.time_seconds = a.time_seconds, out.sun_direction = a.sun_direction, out.source = a.source;
     if (w == 1.0) {
         out.rgb = b.rgb;
         return out;
     }
+    out.rgb.resize(a.rgb.size());
     const float wa = float(1.0 - w), wb = float(w);
     const size_t count = a.rgb.size(), chunk = 1 << 16;
     tbb::parallel_for(size_t(0), (count + chunk - 1) / chunk, [&](size_t c) {

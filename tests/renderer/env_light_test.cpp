@@ -119,13 +119,13 @@ TEST(EnvLight, SamplerMatchesItsDensityOnARealSkyChiSquare) {
     DYNSKY_REQUIRE_SHARED();
     auto sky = real_photo_sky(128);
     ASSERT_TRUE(sky);
-    EnvLight light(sky, 0.3f);
+    EnvLight light(sky, 0.3f, parse_sky_sampler("cdf"));  // expected counts come from its 2D CDF
     check_sampler_chi_square(light, 4, 500000);
 }
 
 TEST(EnvLight, SamplerMatchesItsDensityOnATinySunSkyChiSquare) {
     auto sky = tiny_sun_sky(512, fisheye::direction_from_angles(0.9, 2.2), 1.6e5);
-    EnvLight light(sky, 0.2f);
+    EnvLight light(sky, 0.2f, parse_sky_sampler("cdf"));
     check_sampler_chi_square(light, 16, 500000);
 }
 
@@ -194,7 +194,8 @@ TEST(EnvLight, RebuildFollowsTheNewSky) {
     for (int k = 0; k < 2000; ++k) {
         EnvLightSample s;
         if (!light.sample(rng.uniform(), rng.uniform2(), &s)) continue;
-        near_b += s.wi.dot(b->sun_direction.value()) > 0.999f;
+        // Within 11 degrees: the sun split samples a cone with a margin around the sun's pixels.
+        near_b += s.wi.dot(b->sun_direction.value()) > 0.98f;
         near_a += s.wi.dot(a->sun_direction.value()) > 0.999f;
     }
     EXPECT_GT(near_b, 1000);  // the sun holds most of the power; the dim sky the rest

@@ -1,0 +1,116 @@
+// Sky samplers: per-frame rebuild (EnvLight::set_sky) beside the streaming floor, memory, and the
+// cost of one sample() and one pdf() call. Wall and CPU time are both reported (the machine is
+// shared); the ratio to the floor is measured in the same iterations.
+#include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+
+#include "renderer/env_light.h"
+#include "renderer/sampling.h"
+#include "sky/clear_sky.h"
+#include "sky/fisheye.h"
+
+namespace dynsky {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::shared_ptr<SkyImage> bench_sky(int n) {
+    static std::map<int, std::shared_ptr<SkyImage>> cache;
+    auto& s = cache[n];
+    if (!s) {
+        ClearSkyParams p;
+        p.sun_direction = fisheye::direction_from_angles(55 * kPiD / 180, 200 * kPiD / 180);
+        s = std::make_shared<SkyImage>(make_clear_sky(p, n));
+    }
+    return s;
+}
+
+const char* kNames[] = {"cdf", "alias", "mip", "sun+cdf", "sun+alias", "sun+mip", "sun+alias+mis", "mip+mis"};
+
+// One parallel pass reading the RGB image and writing one float per pixel.
+double streaming_floor(const SkyImage& sky, std::vector<float>* out) {
+    const int n = sky.resolution;
+    out->resize(size_t(n) * n);
+    auto t = Clock::now();
+    tbb::parallel_for(tbb::blocked_range<int>(0, n, 16), [&](const tbb::blocked_range<int>& r) {
+        for (int j = r.begin(); j != r.end(); ++j) {
+            const float* p = &sky.rgb[size_t(j) * n * 3];
+            float* o = &(*out)[size_t(j) * n];
+            for (int i = 0; i < n; ++i) o[i] = 0.2126f * p[3 * i] + 0.7152f * p[3 * i + 1] + 0.0722f * p[3 * i + 2];
+        }
+    });
+    benchmark::DoNotOptimize(out->data());
+    return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+// Args: sampler index, N, threads (0: all).
+void BM_Rebuild(benchmark::State& state) {
+    const std::string name = kNames[state.range(0)];
+    const int n = int(state.range(1)), threads = int(state.range(2));
+    std::unique_ptr<tbb::global_control> gc;
+    if (threads > 0) gc = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
+    auto sky = bench_sky(n);
+    EnvLight light(sky, 0.3f, parse_sky_sampler(name));
+    std::vector<float> scratch;
+    double rebuild = 0, floor = 0;
+    for (auto _ : state) {
+        auto t = Clock::now();
+        light.set_sky(sky);
+        double r = std::chrono::duration<double>(Clock::now() - t).count();
+        state.SetIterationTime(r);
+        rebuild += r;
+        floor += streaming_floor(*sky, &scratch);
+    }
+    state.SetLabel(name + (threads ? " 1 thread" : " all threads"));
+    state.counters["floor_ms"] = 1e3 * floor / double(state.iterations());
+    state.counters["ratio_to_floor"] = rebuild / floor;
+    state.counters["memory_MiB"] = light.memory_bytes() / 1048576.0;
+}
+
+void rebuild_args(benchmark::internal::Benchmark* b) {
+    for (int s = 0; s < int(std::size(kNames)); ++s)
+        for (int n : {256, 512, 1024, 2048, 4096})
+            for (int t : {1, 0}) b->Args({s, n, t});
+}
+BENCHMARK(BM_Rebuild)->Apply(rebuild_args)->UseManualTime()->Unit(benchmark::kMillisecond);
+
+// Per-call cost of sample() and pdf() (1024 px sky), random uniforms precomputed.
+void BM_SampleAndPdf(benchmark::State& state) {
+    const std::string name = state.range(0) < 0 ? "uniform" : kNames[state.range(0)];
+    EnvLight light(bench_sky(1024), 0.0f, parse_sky_sampler(name));
+    Rng rng(1, 2);
+    std::vector<Vec2> us(4096);
+    for (auto& u : us) u = rng.uniform2();
+    const bool pdf_only = state.range(1) != 0;
+    std::vector<Vec3> dirs;
+    for (const Vec2& u : us) {
+        EnvLightSample s;
+        if (light.sample(0.5f, u, &s)) dirs.push_back(s.wi);
+    }
+    size_t k = 0;
+    float acc = 0;
+    for (auto _ : state) {
+        if (pdf_only) {
+            acc += light.pdf(dirs[k++ % dirs.size()]);
+        } else {
+            EnvLightSample s;
+            light.sample(0.5f, us[k++ % us.size()], &s);
+            acc += s.pdf;
+        }
+    }
+    benchmark::DoNotOptimize(acc);
+    state.SetLabel(name + (pdf_only ? " pdf" : " sample"));
+}
+void call_args(benchmark::internal::Benchmark* b) {
+    for (int s = -1; s < int(std::size(kNames)); ++s)
+        for (int p : {0, 1}) b->Args({s, p});
+}
+BENCHMARK(BM_SampleAndPdf)->Apply(call_args);
+
+}  // namespace
+}  // namespace dynsky
+
+BENCHMARK_MAIN();

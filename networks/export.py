@@ -1,0 +1,162 @@
+"""Writing a trained model as a folder the C++ side loads (sky/cloud_model.h):
+
+  flownet.onnx, cloudnet.onnx   opset 11, fixed 1 x C x N x N input, constant Resize scales (the
+                                form OpenCV 4.6's importer runs exactly, ../shared/NOTES.md)
+  model.json                    resolution, Delta t, flow encoding scale, widths, training facts
+  split.json                    the frames trained on and held out, per sequence
+  reference_*.npy               one held-out input and PyTorch's outputs of both networks, for the
+                                C++ test that checks OpenCV agrees within 1e-4
+  MODEL_CARD.md                 data, split, Delta t, resolution, widths, epochs, metrics
+  training_log.json             per-epoch losses and held-out PSNR
+"""
+import datetime
+import json
+import os
+
+import numpy as np
+import onnx
+import torch
+
+import data as D
+import unet as U
+
+
+def export_onnx(model, n, folder, opset=11):
+    model.eval()
+    paths = {}
+    for name, net, channels, iname, oname in (("flownet", model.flownet, 3, "image", "flow"),
+                                              ("cloudnet", model.cloudnet, 6, "image_and_flow", "next")):
+        path = os.path.join(folder, name + ".onnx")
+        torch.onnx.export(net, torch.zeros(1, channels, n, n), path, opset_version=opset, input_names=[iname],
+                          output_names=[oname], do_constant_folding=True)
+        check_onnx_for_opencv(path)
+        paths[name] = path
+    return paths
+
+
+def check_onnx_for_opencv(path):
+    """The importer rules of ../shared/NOTES.md: opset >= 11, no run-time shapes, Resize scales constant."""
+    m = onnx.load(path)
+    onnx.checker.check_model(m)
+    opset = max(o.version for o in m.opset_import if o.domain in ("", "ai.onnx"))
+    assert opset >= 11, f"{path}: opset {opset} < 11"
+    ops = {n.op_type for n in m.graph.node}
+    assert "Shape" not in ops and "Upsample" not in ops, f"{path}: dynamic shapes or old Upsample in {ops}"
+    consts = {i.name for i in m.graph.initializer} | {o for n in m.graph.node if n.op_type == "Constant" for o in n.output}
+    for node in m.graph.node:
+        if node.op_type == "Resize":
+            assert all(i == "" or i in consts for i in node.input[1:]), f"{path}: Resize with computed scales"
+            mode = [a.s.decode() for a in node.attribute if a.name == "mode"]
+            assert mode == ["linear"], f"{path}: Resize mode {mode}"
+    dims = [d.dim_value for d in m.graph.input[0].type.tensor_type.shape.dim]
+    assert all(d > 0 for d in dims), f"{path}: input size not fixed: {dims}"
+    return sorted(ops)
+
+
+@torch.no_grad()
+def write_reference(model, image, folder):
+    """image (N, N, 3) float32 -> reference_input/flow/next.npy (HWC float32; next before clamping)."""
+    model.eval()
+    x = torch.from_numpy(np.ascontiguousarray(image)).permute(2, 0, 1)[None].float()
+    f = model.flownet(x)
+    nxt = model.cloudnet(torch.cat([x, f], 1))
+    np.save(os.path.join(folder, "reference_input.npy"), image.astype(np.float32))
+    np.save(os.path.join(folder, "reference_flow.npy"), f[0].permute(1, 2, 0).numpy().astype(np.float32))
+    np.save(os.path.join(folder, "reference_next.npy"), nxt[0].permute(1, 2, 0).numpy().astype(np.float32))
+
+
+def write_model_folder(model, seqs, split, log, args, horizons=(1, 2, 3, 6)):
+    import train as T
+    folder = args.out
+    os.makedirs(folder, exist_ok=True)
+    n = seqs[0].resolution
+    paths = export_onnx(model, n, folder)
+    ops = sorted(set(check_onnx_for_opencv(paths["flownet"])) | set(check_onnx_for_opencv(paths["cloudnet"])))
+    real = [s for s in seqs if "preset" in s.meta]
+    ref_seq = real[0] if real else seqs[0]
+    write_reference(model, ref_seq.images[split[ref_seq.name]["heldout"][0]], folder)
+    used_split = {s.name: split[s.name] for s in seqs}
+    with open(os.path.join(folder, "split.json"), "w") as f:
+        json.dump(used_split, f, indent=2)
+    metrics = T.evaluate_heldout(model, seqs, split, horizons)
+    cpu = T.cpu_time_per_step(model, n, threads=1)
+    fw, cw = T.parse_widths(args.flow_widths), T.parse_widths(args.cloud_widths)
+    info = {
+        "format": "dynsky-cloud-model",
+        "version": 1,
+        "name": args.name or os.path.basename(os.path.normpath(folder)),
+        "resolution": n,
+        "import_resolution": int(seqs[0].meta.get("import_resolution", n)),
+        "dt_s": float(seqs[0].meta["dt_s"]),
+        "flow_scale": D.FLOW_SCALE,
+        "flow_widths": list(fw),
+        "cloud_widths": list(cw),
+        "flow_encoding": "ch0, ch1 = (cos, sin) of the direction (+x right, +y down); ch2 = min(|flow| / (flow_scale N), 1); "
+                         "flow = Farneback flow frame k -> k+1 times the cloud mask",
+        "onnx_opset": 11,
+        "onnx_ops": ops,
+        "trained_on": [s.name for s in seqs],
+        "epochs": args.epochs,
+        "unroll": args.unroll,
+        "seed": args.seed,
+        "parameters": U.parameter_count(model),
+        "macs_per_step": U.step_flops(n, fw, cw),
+        "pytorch_cpu_seconds_per_step_1_thread": cpu,
+        "heldout_psnr_python": metrics,
+        "created": datetime.datetime.utcnow().strftime("%Y-%m-%dT%H:%M:%SZ"),
+    }
+    with open(os.path.join(folder, "model.json"), "w") as f:
+        json.dump(info, f, indent=2)
+    with open(os.path.join(folder, "training_log.json"), "w") as f:
+        json.dump(log, f, indent=1)
+    write_model_card(folder, info, seqs, used_split, log, metrics, args)
+    return info
+
+
+def write_model_card(folder, info, seqs, split, log, metrics, args):
+    lines = [f"# Model card: {info['name']}", "",
+             "The medium-timescale cloud model of Satilmis & Bashford-Rogers, \"Deep Dynamic Cloud Lighting\": "
+             "one step moves the clouds of a sky forward by Delta t, xi(I) = CloudNet(I concat FlowNet(I)). "
+             "Run it with `dynsky sky predict --model " + folder + "` (docs/networks.md).", "",
+             "## What it is", "",
+             f"- Input/output: {info['resolution']} x {info['resolution']} canonical fisheye (equidistant, north up, "
+             "east left), RGB in the networks' [0, 1] form (sky/hdr_recovery.h forward map); 0 outside the disc.",
+             f"- Delta t = {info['dt_s']:g} s per step; predictions recurse for longer horizons.",
+             f"- FlowNet widths {info['flow_widths']}, CloudNet widths {info['cloud_widths']} (UNet: 4x4 stride-2 "
+             "conv + BatchNorm + LeakyReLU(0.2) down; bilinear x2 + 3x3 conv + BatchNorm + ReLU up; skips; 3x3 output conv). "
+             "CloudNet predicts tanh-bounded change added to its input.",
+             f"- {info['parameters']:,} parameters, {info['macs_per_step'] / 1e6:.1f} M multiply-adds per step; "
+             f"PyTorch CPU time per step (1 thread, this machine): {info['pytorch_cpu_seconds_per_step_1_thread'] * 1e3:.1f} ms.",
+             f"- ONNX opset 11, fixed input size; operators: {', '.join(info['onnx_ops'])}.", "",
+             "## Data and split", ""]
+    for s in seqs:
+        sp = split[s.name]
+        lines.append(f"- `{s.name}`: {s.meta['source']}; {len(s)} frames every {s.meta['dt_s']:g} s, imported at "
+                     f"{s.meta.get('import_resolution', '?')} px and area-averaged to {s.resolution} px. Training frames "
+                     f"{sp['train'][0]}..{sp['train'][1] - 1}, held out (the last 20 % in time) {sp['heldout'][0]}.."
+                     f"{sp['heldout'][1] - 1}.")
+    lines += ["- Real photographs: ARM SGP C1 Total Sky Imager, 2017-05-24 (US DOE ARM user facility; "
+              "../shared/skies/PROVENANCE.md). The photographs are not shipped; only weights trained on them.",
+              "- Targets: the next real frame, and the Farneback flow (OpenCV) frame -> next masked by the cloud "
+              "mask, encoded as (cos, sin, magnitude / (flow_scale N)), flow_scale = "
+              f"{info['flow_scale']} (networks/data.py). Pixels hidden by the camera's arm and shadow band are "
+              "left out of every loss and metric.", "",
+              "## Training", "",
+              f"- `/usr/bin/python3 networks/train.py {' '.join(getattr(args, 'argv_text', '').split())}`" if getattr(args, 'argv_text', '') else
+              "- networks/train.py (see training_log.json for the arguments' effect per epoch)",
+              f"- {args.epochs} epochs, batch {args.batch}, Adam lr {args.lr} with cosine decay, seed {args.seed}, "
+              f"{args.unroll} recursive steps per window (each prediction fed back), loss = image MSE + cosine "
+              f"similarity + {args.flow_weight} x (flow MSE + direction cosine similarity on cloud pixels); CPU only.",
+              "", "## Held-out results (PyTorch, mean per-frame PSNR over seen sky pixels)", "",
+              "| sequence | horizon | model PSNR | persistence PSNR |", "|---|---:|---:|---:|"]
+    for name, r in metrics.items():
+        for h, v in r.items():
+            lines.append(f"| {name} | {h} | {v['model']:.2f} dB | {v['persistence']:.2f} dB |")
+    lines += ["", "The full comparison with persistence and Farneback extrapolation (PSNR and SSIM, computed by "
+              "`dynsky sky evaluate` with OpenCV) is in docs/networks.md.", "",
+              "## Limits", "",
+              "- Trained on one day of one camera: it has learnt that day's wind. It sees one frame, so it cannot "
+              "know a different day's wind except from cloud shapes; expect persistence-like behaviour elsewhere.",
+              "- The [0, 1] form cannot hold the sun; `dynsky sky predict` re-inserts the input's sun.", ""]
+    with open(os.path.join(folder, "MODEL_CARD.md"), "w") as f:
+        f.write("\n".join(lines))

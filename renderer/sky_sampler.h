@@ -1,0 +1,68 @@
+// Importance samplers for the sky above the horizon, behind one interface (EnvLight uses it).
+//
+// Every sampler is built per frame from per-pixel weights that EnvLight computes in one streaming
+// pass: w(i, j) = luminance x dw/(du dv) at the pixel centre (0 for pixels whose centre lies
+// outside the disc), i.e. proportional to the power each pixel sends. Pixel-based samplers pick a
+// pixel in proportion to w and a point uniformly inside it, so their density is constant per
+// pixel in (u, v) and p_w = p_uv / J(theta); pdf() recomputes it from the direction alone, and
+// sample() reports pdf(wi) of the direction it returns, so the two agree exactly.
+//
+// Methods (pbrt-v4 / Mitsuba names where they exist):
+//   uniform  uniform hemisphere (ignores the sky)          cosine  cos(theta) about the zenith
+//   cdf      piecewise-constant 2D CDF (row CDFs + marginal, two binary searches)
+//   alias    Walker/Vose alias tables: one over rows, one per row (rows built in parallel)
+//   mip      hierarchical warp down a MIP pyramid of the weights (Clarberg et al. 2005)
+//   sun+X    sun/sky split: the sun disc (SkyImage::sun_direction or the brightest compact spot)
+//            is cut out of X's weights and sampled as a uniform cone, mixed by power
+//   X+mis    MIS compensation (Karlik et al. 2019, as pbrt-v4): weights from max(L - mean L, 0),
+//            all-ones if nothing is left. Only valid when BSDF sampling covers the rest (MIS).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "sky/sky_image.h"
+#include "util/math.h"
+
+namespace dynsky {
+
+enum class SkySamplerMethod { Uniform, Cosine, Cdf, Alias, Mip };
+
+struct SkySamplerOptions {
+    SkySamplerMethod method = SkySamplerMethod::Alias;
+    bool sun_split = false;
+    bool mis_compensation = false;
+};
+
+// "sun+alias+mis" etc. and back; parse throws dynsky::Error listing the valid names.
+std::string sky_sampler_name(const SkySamplerOptions& options);
+SkySamplerOptions parse_sky_sampler(const std::string& name);
+// Every method, each without and with the sun split (uniform/cosine only without), no "+mis".
+std::vector<std::string> sky_sampler_base_names();
+// The default the renderer uses (chosen from docs/sampling/README.md's measurements), without
+// MIS compensation; the render command adds "+mis" since it always combines strategies by MIS.
+SkySamplerOptions recommended_sky_sampler();
+
+class SkySampler {
+  public:
+    virtual ~SkySampler() = default;
+    // weights: n x n, finite, >= 0 (see the file comment). A sampler may change them in place (the
+    // sun split zeroes the sun) and read them later instead of copying: they must stay alive and
+    // unchanged until the next build.
+    virtual void build(const SkyImage& sky, std::vector<float>& weights, int n) = 0;
+    // A direction above the horizon and its density per unit solid angle (= pdf(wi)); false when
+    // no sample is produced (empty sky, a sample outside the disc), which counts as zero.
+    virtual bool sample(const Vec2& u, Vec3* wi, float* pdf) const = 0;
+    // Density per unit solid angle of sampling w (0 below the horizon).
+    virtual float pdf(const Vec3& w) const = 0;
+    virtual size_t memory_bytes() const = 0;
+    // The sun cone of a sun split (cos of its half-angle, probability); probability 0 if none.
+    virtual float sun_probability() const { return 0; }
+    // The 2D CDF of the "cdf" method (tests compare against it); null for the others.
+    virtual const class Distribution2D* distribution() const { return nullptr; }
+};
+
+std::unique_ptr<SkySampler> make_sky_sampler(const SkySamplerOptions& options);
+
+}  // namespace dynsky

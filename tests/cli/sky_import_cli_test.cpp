@@ -1,0 +1,101 @@
+// End-to-end: dynsky sky import | mask.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "sky/sky_image.h"
+#include "tests/test_support.h"
+#include "util/image.h"
+
+namespace dynsky {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string exe() { return DYNSKY_EXE; }
+
+TEST(SkyImportCli, HelpDescribesTheOptions) {
+    auto r = test::run_command(exe() + " sky import --help");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    for (const char* word : {"--preset", "--center", "--radius", "--lens", "--north", "--mirror", "--mask", "--time", "--lat",
+                             "--lon", "--hdr", "--res", "--out", "--preview", "equisolid"})
+        EXPECT_NE(r.output.find(word), std::string::npos) << word;
+    r = test::run_command(exe() + " sky mask --help");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("--threshold"), std::string::npos);
+}
+
+TEST(SkyImportCli, ImportsATsiFrameWithItsPreset) {
+    DYNSKY_REQUIRE_SHARED();
+    std::string dir = test::temp_dir("sky-import-cli");
+    std::string photo = test::shared_path("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg");
+    auto r = test::run_command(exe() + " sky import " + photo + " --preset arm-tsi --res 96 --out " + dir + "/tsi.exr --preview " +
+                               dir + "/tsi.png");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("clear-sky pixels"), std::string::npos) << r.output;
+    SkyImage sky = load_sky(dir + "/tsi.exr");
+    EXPECT_EQ(sky.resolution, 96);
+    ASSERT_TRUE(sky.sun_direction.has_value());
+    EXPECT_GT(sky.sun_direction->y(), 0.8f);  // 65 degrees up at 17:00 UTC
+    EXPECT_TRUE(fs::exists(dir + "/tsi.png"));
+    fs::remove_all(dir);
+}
+
+TEST(SkyImportCli, BadInputFailsNamingTheFileAndWritesNothing) {
+    std::string dir = test::temp_dir("sky-import-cli-bad");
+    std::string out = dir + "/out.exr";
+    auto r = test::run_command(exe() + " sky import " + dir + "/missing.jpg --res 64 --out " + out);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find(dir + "/missing.jpg"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out));
+
+    Image grey(200, 150, 3);
+    std::fill(grey.pixels.begin(), grey.pixels.end(), 0.5f);
+    write_image(dir + "/grey.png", grey);
+    r = test::run_command(exe() + " sky import " + dir + "/grey.png --res 64 --out " + out);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("no sky circle found"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out));
+
+    std::ofstream(dir + "/fake.png") << "plain text";
+    r = test::run_command(exe() + " sky import " + dir + "/fake.png --res 64 --out " + out);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find(dir + "/fake.png"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out));
+
+    r = test::run_command(exe() + " sky import " + dir + "/grey.png --res 64 --out " + dir + "/out.png");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find(".exr"), std::string::npos) << r.output;
+
+    r = test::run_command(exe() + " sky import " + dir + "/grey.png --center 100,75 --radius 70 --hdr calibrated --res 64 --out " + out);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("--time"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out));
+    fs::remove_all(dir);
+}
+
+TEST(SkyImportCli, MaskOfAWsisegPhoto) {
+    DYNSKY_REQUIRE_SHARED();
+    std::string dir = test::temp_dir("sky-mask-cli");
+    std::string photo = test::shared_path("skies/wsiseg/images/ASC100-1006_201.png");
+    auto r = test::run_command(exe() + " sky mask " + photo + " --threshold 0.75 --out " + dir + "/mask.png");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    Image m = read_image(dir + "/mask.png");
+    long cloud = 0, clear = 0, none = 0, other = 0;
+    for (float v : m.pixels) {
+        int b = int(std::lround(v * 255));
+        if (b == 255) ++cloud;
+        else if (b == 100) ++clear;
+        else if (b == 0) ++none;
+        else ++other;
+    }
+    EXPECT_EQ(other, 0);
+    EXPECT_GT(cloud, 1000);
+    EXPECT_GT(clear, 1000);
+    EXPECT_GT(none, 1000);  // outside the sky circle
+    fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace dynsky

@@ -1,0 +1,172 @@
+// Great-arc advection (the paper's Lambda) against rotations of the sphere, whose paths are known
+// analytically, and the flow estimate against a known rotation.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "sky/advection.h"
+#include "sky/fisheye.h"
+
+namespace dynsky {
+namespace {
+
+Vec3d unit_from_angles_deg(double zenith_deg, double azimuth_deg) {
+    return fisheye::direction_from_angles(zenith_deg * kPiD / 180, azimuth_deg * kPiD / 180);
+}
+
+// Background 1 plus a Gaussian blob (angular sigma) of height 10 around `centre`.
+SkyImage blob_sky(int n, const Vec3d& centre, double sigma_deg) {
+    SkyImage sky(n);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            if (!sky.in_disc(i, j)) continue;
+            double a = std::acos(std::clamp(direction_from_pixel(i, j, n).dot(centre), -1.0, 1.0)) * 180 / kPiD;
+            float v = float(1.0 + 10.0 * std::exp(-0.5 * a * a / (sigma_deg * sigma_deg)));
+            sky.set_pixel(i, j, Color(v, v, v));
+        }
+    return sky;
+}
+
+// Solid-angle-weighted centroid direction and integral of (radiance - background).
+void blob_moments(const SkyImage& sky, Vec3d* centroid, double* integral) {
+    Vec3d sum = Vec3d::Zero();
+    double total = 0;
+    for (int j = 0; j < sky.resolution; ++j)
+        for (int i = 0; i < sky.resolution; ++i) {
+            if (!sky.in_disc(i, j)) continue;
+            double w = std::max(0.0, double(sky.pixel(i, j)[0]) - 1.0) * fisheye::pixel_solid_angle(i, j, sky.resolution);
+            sum += w * direction_from_pixel(i, j, sky.resolution);
+            total += w;
+        }
+    *centroid = sum.normalized();
+    *integral = total;
+}
+
+double angle_deg(const Vec3d& a, const Vec3d& b) {
+    return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180 / kPiD;
+}
+
+TEST(Advection, PixelDirectionRoundTrip) {
+    for (double x : {0.0, 10.3, 63.5, 127.0})
+        for (double y : {0.0, 40.7, 100.0}) {
+            double x2, y2;
+            pixel_from_direction(direction_from_pixel(x, y, 128), 128, &x2, &y2);
+            EXPECT_NEAR(x, x2, 1e-9);
+            EXPECT_NEAR(y, y2, 1e-9);
+        }
+    // Same mapping as sky/fisheye.h at pixel centres.
+    Vec3 w = fisheye::direction_from_uv(fisheye::pixel_center_uv(17, 90, 128));
+    EXPECT_LT((direction_from_pixel(17, 90, 128) - w.cast<double>()).norm(), 1e-6);
+}
+
+TEST(Advection, ZeroFractionIsIdentity) {
+    SkyImage sky = blob_sky(64, unit_from_angles_deg(30, 45), 5);
+    cv::Mat flow = rotation_flow(64, Vec3d(1, 0, 0), 0.3);
+    EXPECT_EQ(advect_great_arc(sky, flow, 0.0).rgb, sky.rgb);
+}
+
+// A feature carried by a rotation about a tilted axis passes 20 degrees from the zenith: half of
+// the flow must put it on the great circle, at the analytic half-way rotation, not on the straight
+// image line between the start and end pixels.
+TEST(Advection, FeatureFollowsGreatCircleAcrossZenith) {
+    const int n = 256;
+    const Vec3d axis = unit_from_angles_deg(70, 90);  // 20 degrees above the eastern horizon
+    const double beta = 120 * kPiD / 180;
+    // Start: on the circle perpendicular to the axis, 60 degrees before its highest point.
+    Vec3d top = Eigen::AngleAxisd(kPiD / 2, Vec3d(0, 0, 1)) * axis;  // perpendicular, highest point
+    ASSERT_NEAR(top.dot(axis), 0.0, 1e-12);
+    Vec3d start = Eigen::AngleAxisd(-beta / 2, axis) * top;
+    SkyImage sky = blob_sky(n, start, 3.0);
+    cv::Mat flow = rotation_flow(n, axis, beta);
+    for (double f : {1.0 / 3.0, 0.5, 2.0 / 3.0}) {
+        SkyImage moved = advect_great_arc(sky, flow, f);
+        Vec3d centroid;
+        double integral;
+        blob_moments(moved, &centroid, &integral);
+        Vec3d analytic = Eigen::AngleAxisd(f * beta, axis) * start;
+        // Straight image line between start and end pixels, at the same fraction.
+        double x0, y0, x1, y1;
+        pixel_from_direction(start, n, &x0, &y0);
+        pixel_from_direction(Eigen::AngleAxisd(beta, axis) * start, n, &x1, &y1);
+        Vec3d straight = direction_from_pixel(x0 + f * (x1 - x0), y0 + f * (y1 - y0), n);
+        EXPECT_LT(angle_deg(centroid, analytic), 0.7) << "fraction " << f;
+        EXPECT_GT(angle_deg(straight, analytic), 5.0) << "the test must tell the two paths apart";
+    }
+}
+
+// A cloud carried from the zenith to 65 degrees keeps its solid angle along a great arc; shifting
+// the image in a straight line by the same pixel displacement shrinks it by sinc(theta) (~20%).
+TEST(Advection, NearHorizonAreaIsNotStretched) {
+    const int n = 256;
+    SkyImage sky = blob_sky(n, Vec3d(0, 1, 0), 4.0);
+    Vec3d c0;
+    double i0;
+    blob_moments(sky, &c0, &i0);
+    const double angle = 65 * kPiD / 180;
+    SkyImage moved = advect_great_arc(sky, rotation_flow(n, Vec3d(1, 0, 0), angle), 1.0);
+    Vec3d c1;
+    double i1;
+    blob_moments(moved, &c1, &i1);
+    EXPECT_NEAR(i1 / i0, 1.0, 0.03);
+    EXPECT_LT(angle_deg(c1, Eigen::AngleAxisd(angle, Vec3d(1, 0, 0)) * Vec3d(0, 1, 0)), 0.5);
+
+    double x0, y0, x1, y1;
+    pixel_from_direction(Vec3d(0, 1, 0), n, &x0, &y0);
+    pixel_from_direction(Eigen::AngleAxisd(angle, Vec3d(1, 0, 0)) * Vec3d(0, 1, 0), n, &x1, &y1);
+    cv::Mat src(n, n, CV_32FC3, sky.rgb.data()), dst;
+    cv::Mat shift = (cv::Mat_<double>(2, 3) << 1, 0, x1 - x0, 0, 1, y1 - y0);
+    cv::warpAffine(src, dst, shift, src.size(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    SkyImage shifted(n);
+    std::memcpy(shifted.rgb.data(), dst.data, shifted.rgb.size() * sizeof(float));
+    clear_outside_disc(&shifted);
+    Vec3d c2;
+    double i2;
+    blob_moments(shifted, &c2, &i2);
+    double expected = fisheye::sinc(angle);  // the straight shift's solid-angle ratio
+    EXPECT_NEAR(i2 / i0, expected, 0.03);
+    EXPECT_LT(i2 / i0, 0.85);
+}
+
+// Textured sky rotated by a known small rotation: the Farneback estimate matches the rotation's
+// flow, and a large featureless disc (the inside of a big cloud) gets its surroundings' motion.
+TEST(Advection, FlowEstimateMatchesKnownRotationAndFillsHoles) {
+    const int n = 256;
+    SkyImage sky(n);
+    cv::Mat noise(n, n, CV_32FC1);
+    cv::RNG rng(7);
+    rng.fill(noise, cv::RNG::UNIFORM, 0.0, 1.0);
+    cv::GaussianBlur(noise, noise, cv::Size(0, 0), 2.5);
+    cv::normalize(noise, noise, 0.2, 5.0, cv::NORM_MINMAX);
+    const int hi = 150, hj = 110, hr = 22;  // the featureless hole
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            float v = (i - hi) * (i - hi) + (j - hj) * (j - hj) < hr * hr ? 3.0f : noise.at<float>(j, i);
+            sky.set_pixel(i, j, Color(v, v, v));
+        }
+    clear_outside_disc(&sky);
+    cv::Mat truth = rotation_flow(n, Vec3d(0.3, 0.2, 1).normalized(), 2.5 * kPiD / 180);
+    SkyImage next = advect_great_arc(sky, truth, 1.0);
+    SkyFlowParams params;
+    params.work_resolution = n;
+    cv::Mat est = estimate_sky_flow(sky, next, params);
+    std::vector<double> errors;
+    double hole_error = 0;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            double u = 2.0 * (i + 0.5) / n - 1, v = 2.0 * (j + 0.5) / n - 1;
+            if (u * u + v * v > 0.75 * 0.75) continue;
+            // The truth is the backward map's flow; for a small rotation forward and backward agree to O(angle^2).
+            double e = cv::norm(est.at<cv::Vec2f>(j, i) - truth.at<cv::Vec2f>(j, i));
+            if (i == hi && j == hj) hole_error = e;
+            errors.push_back(e);
+        }
+    std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
+    double truth_mag = cv::norm(truth.at<cv::Vec2f>(hj, hi));
+    EXPECT_GT(truth_mag, 3.0);
+    EXPECT_LT(errors[errors.size() / 2], 0.5) << "median endpoint error, pixels";
+    EXPECT_LT(hole_error, 0.35 * truth_mag) << "hole centre: flow filled from the surroundings";
+}
+
+}  // namespace
+}  // namespace dynsky

@@ -1,0 +1,422 @@
+#include "sky/photo_import.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "sky/fisheye.h"
+#include "sky/sun_position.h"
+#include "tests/test_support.h"
+#include "util/color.h"
+#include "util/error.h"
+
+namespace dynsky {
+namespace {
+
+constexpr double kDeg = kPiD / 180.0;
+
+// A smooth, asymmetric sky pattern (no symmetry a wrong rotation or mirror could hide behind).
+Color pattern(const Vec3d& w) {
+    double theta = std::acos(std::clamp(w.y(), -1.0, 1.0));
+    double phi = std::atan2(w.x(), -w.z());
+    return Color(float(0.5 + 0.35 * std::sin(phi) * std::sin(theta)),          // east bright
+                 float(0.5 + 0.35 * std::cos(phi) * std::sin(theta)),          // north bright
+                 float(0.45 + 0.3 * std::cos(2 * theta) + 0.1 * std::sin(3 * phi + 0.4)));
+}
+
+// The test's own forward model of a camera: photo pixel -> world direction, written from the
+// definitions in photo_import.h, independently of its code.
+struct TestCamera {
+    double cx, cy, radius, north_deg;
+    LensLaw law;
+    bool mirrored;
+    double tilt_deg = 0, tilt_az_deg = 0;
+
+    bool direction(double x, double y, Vec3d* w) const {
+        double dx = x - cx, dy = y - cy, r = std::hypot(dx, dy) / radius;
+        if (r > 1.0) return false;
+        double theta;
+        switch (law) {
+            case LensLaw::Equidistant: theta = r * kPiD / 2; break;
+            case LensLaw::Equisolid: theta = 2 * std::asin(r / std::sqrt(2.0)); break;
+            case LensLaw::Orthographic: theta = std::asin(r); break;
+            default: theta = 2 * std::atan(r); break;
+        }
+        double psi = std::atan2(dx, -dy);  // clockwise from the top
+        double phi = mirrored ? psi - north_deg * kDeg : north_deg * kDeg - psi;
+        Vec3d v(std::sin(theta) * std::sin(phi), std::cos(theta), -std::sin(theta) * std::cos(phi));
+        if (tilt_deg != 0) {
+            // Camera frame -> world: the rotation taking the zenith to the optical axis.
+            double t = tilt_deg * kDeg, a = tilt_az_deg * kDeg;
+            Vec3d axis(std::sin(t) * std::sin(a), std::cos(t), -std::sin(t) * std::cos(a));
+            v = Eigen::Quaterniond::FromTwoVectors(Vec3d::UnitY(), axis) * v;
+        }
+        *w = v;
+        return true;
+    }
+};
+
+// Renders the pattern through the camera; outside the circle a dark grey "housing".
+Image render_photo(const TestCamera& cam, int width, int height, bool srgb) {
+    Image photo(width, height, 3);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            Vec3d w;
+            Color c = cam.direction(x, y, &w) ? pattern(w) : Color(0.05f, 0.05f, 0.05f);
+            for (int k = 0; k < 3; ++k) {
+                float v = c[k];
+                if (srgb) v = std::round(linear_to_srgb(v) * 255.0f) / 255.0f;  // an 8-bit camera
+                photo.at(x, y, k) = v;
+            }
+        }
+    return photo;
+}
+
+// RMS difference between an import and the pattern, over the disc up to max_r (76 deg: nearer the
+// rim the bilinear taps mix in the housing, most of all for the orthographic law, which squeezes
+// the last degrees into a pixel or two).
+double rms_error(const SkyImage& sky, double max_r = 0.85, const std::vector<unsigned char>* skip = nullptr) {
+    int n = sky.resolution;
+    double sum = 0;
+    long count = 0;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            Vec2 uv = fisheye::pixel_center_uv(i, j, n);
+            if (uv.norm() > max_r) continue;
+            if (skip && (*skip)[size_t(j) * n + i]) continue;
+            Color d = sky.pixel(i, j) - pattern(fisheye::direction_from_uv(double(uv.x()), double(uv.y())));
+            sum += (d * d).sum() / 3;
+            ++count;
+        }
+    return std::sqrt(sum / count);
+}
+
+PhotoImportParams params_for(const TestCamera& cam, int n, bool srgb) {
+    PhotoImportParams p;
+    p.resolution = n;
+    p.circle = SkyCircle{cam.cx, cam.cy, cam.radius};
+    p.lens = cam.law;
+    p.north_deg = cam.north_deg;
+    p.mirrored = cam.mirrored;
+    p.tilt_deg = cam.tilt_deg;
+    p.tilt_azimuth_deg = cam.tilt_az_deg;
+    p.encoding = srgb ? "srgb" : "linear";
+    return p;
+}
+
+TEST(LensLaw, RadiusAndAngleAreInverseAndNormalised) {
+    for (LensLaw law : {LensLaw::Equidistant, LensLaw::Equisolid, LensLaw::Orthographic, LensLaw::Stereographic}) {
+        EXPECT_NEAR(lens_radius(law, kPiD / 2), 1.0, 1e-12) << lens_law_name(law);
+        EXPECT_EQ(parse_lens_law(lens_law_name(law)), law);
+        for (double t = 0; t < kPiD / 2 - 1e-6; t += 0.05) EXPECT_NEAR(lens_angle(law, lens_radius(law, t)), t, 1e-9);
+    }
+    EXPECT_NEAR(lens_radius(LensLaw::Equisolid, kPiD / 3), std::sqrt(2.0) * 0.5, 1e-12);
+    EXPECT_NEAR(lens_radius(LensLaw::Orthographic, kPiD / 6), 0.5, 1e-12);
+    EXPECT_NEAR(lens_radius(LensLaw::Stereographic, kPiD / 4), std::tan(kPiD / 8), 1e-12);
+    EXPECT_THROW(parse_lens_law("fisheye"), Error);
+}
+
+TEST(PhotoGeometry, ProjectMatchesTheTestCamera) {
+    TestCamera cam{300.2, 201.7, 180.0, 37.0, LensLaw::Equisolid, true, 15.0, 120.0};
+    PhotoGeometry g;
+    g.circle = {cam.cx, cam.cy, cam.radius};
+    g.lens = cam.law;
+    g.north_deg = cam.north_deg;
+    g.mirrored = cam.mirrored;
+    g.tilt_deg = cam.tilt_deg;
+    g.tilt_azimuth_deg = cam.tilt_az_deg;
+    for (double x = 150; x < 450; x += 37)
+        for (double y = 60; y < 350; y += 41) {
+            Vec3d w;
+            if (!cam.direction(x, y, &w)) continue;
+            double px, py;
+            ASSERT_TRUE(g.project(w, &px, &py));
+            EXPECT_NEAR(px, x, 1e-6);
+            EXPECT_NEAR(py, y, 1e-6);
+            Vec3d back;
+            ASSERT_TRUE(g.unproject(x, y, &back));
+            EXPECT_NEAR((back - w).norm(), 0.0, 1e-9);
+        }
+}
+
+// The core check: a synthetic photo made with each lens law, rotated and mirrored, imports back to
+// the canonical pattern; the same photo imported with a wrong parameter does not.
+TEST(PhotoImport, SyntheticPhotosOfEveryLensLawRecoverTheCanonicalSky) {
+    const int n = 128;
+    for (LensLaw law : {LensLaw::Equidistant, LensLaw::Equisolid, LensLaw::Orthographic, LensLaw::Stereographic}) {
+        for (bool mirrored : {false, true}) {
+            TestCamera cam{221.3, 168.6, 150.0, mirrored ? 213.0 : 71.0, law, mirrored};
+            Image photo = render_photo(cam, 440, 340, false);
+            ImportedPhoto imp = import_photo_image(photo, "synthetic", params_for(cam, n, false));
+            double err = rms_error(imp.sky);
+            EXPECT_LT(err, 0.01) << lens_law_name(law) << (mirrored ? " mirrored" : "");
+
+            // Wrong north by 10 degrees, wrong mirroring, wrong law: clearly worse.
+            PhotoImportParams bad = params_for(cam, n, false);
+            bad.north_deg += 10;
+            EXPECT_GT(rms_error(import_photo_image(photo, "synthetic", bad).sky), 3 * err + 0.01);
+            bad = params_for(cam, n, false);
+            bad.mirrored = !mirrored;
+            EXPECT_GT(rms_error(import_photo_image(photo, "synthetic", bad).sky), 3 * err + 0.01);
+            bad = params_for(cam, n, false);
+            bad.lens = law == LensLaw::Equidistant ? LensLaw::Orthographic : LensLaw::Equidistant;
+            EXPECT_GT(rms_error(import_photo_image(photo, "synthetic", bad).sky), 3 * err + 0.01);
+        }
+    }
+}
+
+TEST(PhotoImport, EightBitSrgbPhotoIsDecodedToLinear) {
+    TestCamera cam{200.0, 150.0, 140.0, 0.0, LensLaw::Equidistant, false};
+    Image photo = render_photo(cam, 400, 300, true);
+    PhotoImportParams p = params_for(cam, 96, true);
+    ImportedPhoto imp = import_photo_image(photo, "synthetic.png", p);
+    EXPECT_TRUE(imp.display_referred);
+    EXPECT_LT(rms_error(imp.sky), 0.01);
+    // Without the decode the values would be the encoded ones: far off.
+    p.encoding = "linear";
+    EXPECT_GT(rms_error(import_photo_image(photo, "synthetic.png", p).sky), 0.1);
+}
+
+TEST(PhotoImport, TiltedCameraIsUndone) {
+    TestCamera cam{210.0, 160.0, 150.0, 20.0, LensLaw::Equidistant, false, 25.0, 140.0};
+    Image photo = render_photo(cam, 420, 320, false);
+    ImportedPhoto imp = import_photo_image(photo, "tilted", params_for(cam, 128, false));
+    // Directions the tilted lens never saw are filled (and flagged); the rest matches.
+    long unseen = 0;
+    for (unsigned char f : imp.not_sky) unseen += f;
+    EXPECT_GT(unseen, 0);
+    // Skip the unseen part and two pixels around it (there the bilinear taps reach past the lens's rim).
+    std::vector<unsigned char> skip = imp.not_sky;
+    for (int j = 0; j < 128; ++j)
+        for (int i = 0; i < 128; ++i)
+            for (int dj = -2; dj <= 2; ++dj)
+                for (int di = -2; di <= 2; ++di) {
+                    int a = std::clamp(i + di, 0, 127), b = std::clamp(j + dj, 0, 127);
+                    if (imp.not_sky[size_t(b) * 128 + a]) skip[size_t(j) * 128 + i] = 1;
+                }
+    EXPECT_LT(rms_error(imp.sky, 0.85, &skip), 0.01);
+    PhotoImportParams level = params_for(cam, 128, false);
+    level.tilt_deg = 0;
+    EXPECT_GT(rms_error(import_photo_image(photo, "tilted", level).sky, 0.85), 0.05);
+}
+
+TEST(PhotoImport, MaskedObstructionIsInpaintedPlausibly) {
+    TestCamera cam{200.0, 150.0, 140.0, 0.0, LensLaw::Equidistant, false};
+    Image photo = render_photo(cam, 400, 300, false);
+    Image mast(400, 300, 1);
+    for (int y = 40; y < 150; ++y)
+        for (int x = 190; x < 204; ++x) {
+            mast.at(x, y, 0) = 1.0f;
+            for (int k = 0; k < 3; ++k) photo.at(x, y, k) = 0.02f;  // a black mast across the sky
+        }
+    PhotoImportParams p = params_for(cam, 128, false);
+    ImportedPhoto with_mask = import_photo_image(photo, "mast", p, &mast);
+    ImportedPhoto without = import_photo_image(photo, "mast", p);
+    // Over the filled pixels: the fill is close to the hidden sky, the raw mast is not.
+    double fill_err = 0, raw_err = 0;
+    long count = 0;
+    for (int j = 0; j < 128; ++j)
+        for (int i = 0; i < 128; ++i) {
+            if (!with_mask.not_sky[size_t(j) * 128 + i]) continue;
+            Vec2 uv = fisheye::pixel_center_uv(i, j, 128);
+            if (uv.norm() > 0.95) continue;
+            Color truth = pattern(fisheye::direction_from_uv(double(uv.x()), double(uv.y())));
+            fill_err += (with_mask.sky.pixel(i, j) - truth).abs().mean();
+            raw_err += (without.sky.pixel(i, j) - truth).abs().mean();
+            ++count;
+        }
+    ASSERT_GT(count, 50);
+    EXPECT_LT(fill_err / count, 0.04);
+    EXPECT_GT(raw_err / count, 0.3);
+    p.inpaint = false;
+    ImportedPhoto black = import_photo_image(photo, "mast", p, &mast);
+    for (size_t q = 0; q < black.not_sky.size(); ++q)
+        if (black.not_sky[q]) {
+            EXPECT_EQ(black.sky.rgb[q * 3], 0.0f);
+        }
+}
+
+TEST(PhotoImport, StrongDownsamplingAveragesInsteadOfAliasing) {
+    // A fine checkerboard far above the output's Nyquist rate must import as its mean (0.5), not
+    // as a beat pattern.
+    const int w = 1600, h = 1600, n = 64;
+    Image photo(w, h, 3);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int k = 0; k < 3; ++k) photo.at(x, y, k) = ((x / 3 + y / 3) % 2) ? 0.9f : 0.1f;
+    PhotoImportParams p;
+    p.resolution = n;
+    p.circle = SkyCircle{799.5, 799.5, 780.0};
+    p.encoding = "linear";
+    ImportedPhoto imp = import_photo_image(photo, "checker", p);
+    double worst = 0;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+            if (fisheye::pixel_center_uv(i, j, n).norm() < 0.9) worst = std::max(worst, double(std::abs(imp.sky.pixel(i, j)[0] - 0.5f)));
+    EXPECT_LT(worst, 0.08);
+}
+
+TEST(SkyCircle, FoundOnSyntheticPhotos) {
+    // Black surround (a fisheye camera: the lit region's outline) and a noisy dark-grey surround
+    // (the Hough transform's case).
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> noise(-0.04f, 0.04f);
+    for (int kind = 0; kind < 2; ++kind) {
+        TestCamera cam{331.4, 242.8, 205.0, 0.0, LensLaw::Equidistant, false};
+        Image photo(640, 480, 3);
+        for (int y = 0; y < 480; ++y)
+            for (int x = 0; x < 640; ++x) {
+                double r = std::hypot(x - cam.cx, y - cam.cy);
+                Vec3d w;
+                Color c = Color::Constant(kind == 0 ? 0.0f : 0.12f);
+                if (cam.direction(x, y, &w)) c = pattern(w) * 0.8f + 0.1f;
+                float e = kind == 0 && r > cam.radius ? 0.0f : noise(rng);
+                for (int k = 0; k < 3; ++k) photo.at(x, y, k) = std::clamp(c[k] + e, 0.0f, 1.0f);
+            }
+        SkyCircle c = find_sky_circle(photo, "synthetic", 0.3, 0.55);
+        EXPECT_NEAR(c.center_x, cam.cx, 3.0) << kind;  // Hough votes at 400 px: 1.6 px cells here
+        EXPECT_NEAR(c.center_y, cam.cy, 3.0) << kind;
+        EXPECT_NEAR(c.radius, cam.radius, 3.0) << kind;
+    }
+}
+
+TEST(PhotoImport, RealSequencesImportWithTheSkyCircleWhereExpected) {
+    DYNSKY_REQUIRE_SHARED();
+    // TSI: the circle found on the photo vs the one fitted to the TSI's own sun marker.
+    std::string tsi = test::shared_path("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg");
+    CameraPreset tp = camera_preset("arm-tsi");
+    SkyCircle found = find_sky_circle(read_image(tsi), tsi, tp.params.min_radius_fraction, tp.params.max_radius_fraction);
+    EXPECT_NEAR(found.center_x, tp.params.circle->center_x, 4.0);
+    EXPECT_NEAR(found.center_y, tp.params.circle->center_y, 4.0);
+    EXPECT_NEAR(found.radius, tp.params.circle->radius, 8.0);  // the visible edge lies a few px beyond 90 deg
+
+    // Mobotix: found vs the preset (the lens circle on its black surround).
+    std::string mob = test::shared_path("skies/mobotix_sophia_20200812_morning/images/2020-08-12_12_00.jpg");
+    CameraPreset mp = camera_preset("mobotix");
+    SkyCircle mfound = find_sky_circle(read_image(mob), mob, mp.params.min_radius_fraction, mp.params.max_radius_fraction);
+    EXPECT_NEAR(mfound.center_x, mp.params.circle->center_x, 4.0);
+    EXPECT_NEAR(mfound.center_y, mp.params.circle->center_y, 4.0);
+    EXPECT_NEAR(mfound.radius, mp.params.circle->radius, 4.0);
+
+    // Whole imports with the presets and their masks.
+    for (auto [path, preset] : {std::pair{tsi, std::string("arm-tsi")}, std::pair{mob, std::string("mobotix")}}) {
+        PhotoImportParams p = camera_preset(preset).params;
+        p.resolution = 128;
+        p.mask_path = find_preset_mask(preset, path);
+        ASSERT_FALSE(p.mask_path.empty()) << preset;
+        ImportedPhoto imp = import_photo(path, p);
+        long filled = 0, disc = 0;
+        for (int j = 0; j < 128; ++j)
+            for (int i = 0; i < 128; ++i)
+                if (imp.sky.in_disc(i, j)) ++disc, filled += imp.not_sky[size_t(j) * 128 + i];
+        double frac = double(filled) / disc;
+        EXPECT_GT(frac, 0.03) << preset;  // the arm and band / the rooftops and masts
+        EXPECT_LT(frac, 0.35) << preset;
+        EXPECT_NO_THROW(validate_sky(imp.sky, preset));
+    }
+}
+
+// The arm-tsi geometry against independent evidence: the TSI marks its computed sun with a yellow
+// disc in its masks; our projection of the sun (sky/sun_position.h) must land on it.
+TEST(PhotoImport, TsiPresetPutsTheSunOnTheTsisOwnSunMarker) {
+    DYNSKY_REQUIRE_SHARED();
+    PhotoGeometry g;
+    CameraPreset tp = camera_preset("arm-tsi");
+    g.circle = *tp.params.circle;
+    g.lens = tp.params.lens;
+    g.north_deg = tp.params.north_deg;
+    g.mirrored = tp.params.mirrored;
+    int checked = 0;
+    for (const char* stamp : {"20170524154000Z", "20170524163000Z", "20170524172000Z"}) {
+        std::string path = test::shared_path(std::string("skies/arm_tsi_sgp_20170524/tsi_cloudmask/tsicldmask_sgpC1_") + stamp + ".png");
+        Image m = read_image(path);
+        double sx = 0, sy = 0, count = 0;
+        for (int y = 0; y < m.height; ++y)
+            for (int x = 0; x < m.width; ++x)
+                if (m.at(x, y, 0) > 0.9f && m.at(x, y, 1) > 0.9f && m.at(x, y, 2) < 0.1f) sx += x, sy += y, count += 1;
+        if (count < 100) continue;  // marker drawn in another colour in this frame
+        SunPosition sun = compute_sun_position(parse_utc_time(time_from_file_name(path)), {36.605, -97.485, 318});
+        double px, py;
+        ASSERT_TRUE(g.project(sun.direction(), &px, &py));
+        EXPECT_NEAR(px, sx / count, 1.5) << stamp;
+        EXPECT_NEAR(py, sy / count, 1.5) << stamp;
+        ++checked;
+    }
+    EXPECT_GE(checked, 2);
+}
+
+TEST(PhotoImport, PresetsFileNamesAndTimes) {
+    EXPECT_EQ(time_from_file_name("a/b/tsi_sgpC1_20170524154030Z.jpg"), "2017-05-24T15:40:30Z");
+    EXPECT_EQ(time_from_file_name("x/2020-08-12_10_07.jpg", 2.0), "2020-08-12T10:07:00+02:00");
+    EXPECT_EQ(time_from_file_name("x/2020-08-12_10_07.jpg", -5.5), "2020-08-12T10:07:00-05:30");
+    EXPECT_EQ(time_from_file_name("holiday.jpg"), "");
+    EXPECT_EQ(camera_preset_names().size(), 2u);
+    EXPECT_TRUE(camera_preset("arm-tsi").params.mirrored);
+    EXPECT_EQ(camera_preset("mobotix").filename_utc_offset_hours, 2.0);
+    try {
+        camera_preset("gopro");
+        FAIL();
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("arm-tsi"), std::string::npos);
+    }
+}
+
+TEST(PhotoImport, BadInputGivesErrorsNamingTheFile) {
+    std::string dir = test::temp_dir("photo-import");
+    auto expect_error = [](const std::string& path, const std::string& words, const PhotoImportParams& p) {
+        try {
+            import_photo(path, p);
+            ADD_FAILURE() << "no error for " << path;
+        } catch (const Error& e) {
+            std::string msg = e.what();
+            EXPECT_NE(msg.find(path), std::string::npos) << msg;
+            EXPECT_NE(msg.find(words), std::string::npos) << msg;
+        }
+    };
+    PhotoImportParams p;
+    p.resolution = 64;
+    expect_error(dir + "/missing.jpg", "no such file", p);
+
+    std::string text = dir + "/notes.jpg";
+    std::ofstream(text) << "not a photograph";
+    expect_error(text, "not a readable image", p);
+
+    // Uniform grey: no circle to find.
+    Image grey(320, 240, 3);
+    std::fill(grey.pixels.begin(), grey.pixels.end(), 0.5f);
+    std::string grey_path = dir + "/grey.png";
+    write_image(grey_path, grey);
+    expect_error(grey_path, "no sky circle found", p);
+
+    // NaN in an HDR photo.
+    Image hdr(64, 64, 3);
+    std::fill(hdr.pixels.begin(), hdr.pixels.end(), 1.0f);
+    hdr.at(10, 12, 1) = std::nanf("");
+    std::string nan_path = dir + "/nan.exr";
+    write_image(nan_path, hdr);
+    p.circle = SkyCircle{32, 32, 30};
+    expect_error(nan_path, "NaN", p);
+
+    // A mask of the wrong size names the mask.
+    std::string photo_path = dir + "/ok.exr";
+    std::fill(hdr.pixels.begin(), hdr.pixels.end(), 1.0f);
+    write_image(photo_path, hdr);
+    std::string mask_path = dir + "/mask.png";
+    write_image(mask_path, Image(10, 10, 3));
+    p.mask_path = mask_path;
+    try {
+        import_photo(photo_path, p);
+        ADD_FAILURE() << "no error for the mask";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find(mask_path), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("size"), std::string::npos) << e.what();
+    }
+    std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace dynsky

@@ -1,0 +1,127 @@
+// Gamma (the short timescale between medium steps) and the timeline's caching and sun handling.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "sky/clear_sky.h"
+#include "sky/fisheye.h"
+#include "sky/sky_timeline.h"
+
+namespace dynsky {
+namespace {
+
+SkyImage textured_sky(int n, int seed) {
+    SkyImage sky(n);
+    cv::Mat noise(n, n, CV_32FC1);
+    cv::RNG rng(seed);
+    rng.fill(noise, cv::RNG::UNIFORM, 0.0, 1.0);
+    cv::GaussianBlur(noise, noise, cv::Size(0, 0), 2.0);
+    cv::normalize(noise, noise, 0.5, 4.0, cv::NORM_MINMAX);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            float v = noise.at<float>(j, i);
+            sky.set_pixel(i, j, Color(v, 0.9f * v, 1.2f * v));
+        }
+    clear_outside_disc(&sky);
+    sky.source = "test texture";
+    return sky;
+}
+
+// Wraps a model and counts how often xi runs.
+class CountingModel : public MediumStepModel {
+  public:
+    explicit CountingModel(int* calls) : calls_(calls) {}
+    SkyImage step(const std::vector<std::shared_ptr<const SkyImage>>& h, double dt) override {
+        ++*calls_;
+        return inner_.step(h, dt);
+    }
+    std::string name() const override { return "counting"; }
+
+  private:
+    int* calls_;
+    FlowExtrapolationStepModel inner_{270.0, 0.3};
+};
+
+TEST(SkyTimeline, GammaReproducesMediumStepsAndKeys) {
+    int calls = 0;
+    SkyTimeline timeline(textured_sky(96, 1), std::make_unique<CountingModel>(&calls), 10.0);
+    const SkyImage s0 = *timeline.step(0), s1 = *timeline.step(1), s2 = *timeline.step(2);
+    EXPECT_NE(s0.rgb, s1.rgb);
+    EXPECT_EQ(timeline.sky_at(0.0).rgb, s0.rgb);
+    EXPECT_EQ(timeline.sky_at(10.0).rgb, s1.rgb);
+    EXPECT_EQ(timeline.sky_at(20.0).rgb, s2.rgb);
+    EXPECT_DOUBLE_EQ(timeline.sky_at(20.0).time_seconds, 20.0);
+    // Frames a rate would give (k / 3 fps) land on the keys: the advected images, independently made.
+    cv::Mat f0 = estimate_sky_flow(s0, s1);
+    EXPECT_EQ(timeline.sky_at(10.0 / 3.0).rgb, advect_great_arc(s0, f0, 1.0 / 3.0).rgb);
+    EXPECT_EQ(timeline.sky_at(20.0 / 3.0).rgb, advect_great_arc(s1, f0, -1.0 / 3.0).rgb);
+    cv::Mat f1 = estimate_sky_flow(s1, s2);
+    EXPECT_EQ(timeline.sky_at(10.0 + 10.0 / 3.0).rgb, advect_great_arc(s1, f1, 1.0 / 3.0).rgb);
+    // Half-way: the even blend of the two keys.
+    SkyImage mid = timeline.sky_at(15.0), k1 = advect_great_arc(s1, f1, 1.0 / 3.0), k2 = advect_great_arc(s2, f1, -1.0 / 3.0);
+    for (size_t k = 0; k < mid.rgb.size(); k += 97) EXPECT_NEAR(mid.rgb[k], 0.5f * (k1.rgb[k] + k2.rgb[k]), 1e-5f);
+    // Continuity: approaching a key from either side converges to it (no jump inside an interval).
+    SkyImage a = timeline.sky_at(10.0 / 3.0 - 1e-4), b = timeline.sky_at(10.0 / 3.0 + 1e-4), k = timeline.sky_at(10.0 / 3.0);
+    for (size_t q = 0; q < k.rgb.size(); q += 53) {
+        EXPECT_NEAR(a.rgb[q], k.rgb[q], 1e-3f);
+        EXPECT_NEAR(b.rgb[q], k.rgb[q], 1e-3f);
+    }
+    EXPECT_EQ(calls, 2);  // frames at any rate do not rerun the model
+}
+
+TEST(SkyTimeline, StepsDoNotDependOnTheOrderFramesAreAskedFor) {
+    int ca = 0, cb = 0;
+    SkyTimeline a(textured_sky(64, 2), std::make_unique<CountingModel>(&ca), 5.0);
+    SkyTimeline b(textured_sky(64, 2), std::make_unique<CountingModel>(&cb), 5.0);
+    SkyImage late = a.sky_at(17.5);
+    for (double t = 0; t <= 17.5; t += 2.5) b.sky_at(t);
+    EXPECT_EQ(b.sky_at(17.5).rgb, late.rgb);
+    EXPECT_EQ(ca, cb);
+}
+
+TEST(SkyTimeline, SunIsCutOutAndFollowsTheClock) {
+    ClearSkyParams p;
+    SunClock clock{parse_utc_time("2026-06-21T10:00:00Z"), GeoLocation{48.85, 2.35, 0}};
+    p.sun_direction = compute_sun_position(clock.start, clock.where).direction();
+    SkyImage clear = make_clear_sky(p, 256);
+    auto energy = [](const SkyImage& s) {
+        double e = 0;
+        for (int j = 0; j < s.resolution; ++j)
+            for (int i = 0; i < s.resolution; ++i) e += luminance(s.pixel(i, j)) * fisheye::pixel_solid_angle(i, j, s.resolution);
+        return e;
+    };
+    SkyImage cut = clear;
+    SunPatch patch = remove_sun(&cut);
+    ASSERT_FALSE(patch.empty());
+    EXPECT_LT(energy(cut), 0.6 * energy(clear)) << "the sun dominates a clear sky's energy";
+    insert_sun(&cut, patch, p.sun_direction);
+    EXPECT_NEAR(energy(cut) / energy(clear), 1.0, 1e-4);
+
+    SkyTimeline timeline(clear, std::make_unique<FlowExtrapolationStepModel>(), 3600.0, clock);  // one step: fast
+    const double t = 3600.0;
+    Vec3d expected = compute_sun_position(add_seconds(clock.start, t), clock.where).direction();
+    EXPECT_LT((*timeline.sun_direction_at(t) - expected).norm(), 1e-9);
+    EXPECT_GT(std::acos(expected.dot(p.sun_direction)) * 180 / kPiD, 10.0);
+    // The brightest pixel of the frame an hour later is at the new sun.
+    SkyImage later = timeline.sky_at(t);
+    int bi = 0, bj = 0;
+    float best = -1;
+    for (int j = 0; j < later.resolution; ++j)
+        for (int i = 0; i < later.resolution; ++i)
+            if (luminance(later.pixel(i, j)) > best) best = luminance(later.pixel(i, j)), bi = i, bj = j;
+    double angle = std::acos(std::clamp(direction_from_pixel(bi, bj, 256).dot(expected), -1.0, 1.0)) * 180 / kPiD;
+    EXPECT_LT(angle, 1.0);
+}
+
+TEST(SkyTimeline, AddSecondsCrossesDays) {
+    UtcTime t = add_seconds(parse_utc_time("2026-12-31T23:59:30Z"), 45.5);
+    EXPECT_EQ(t.year, 2027);
+    EXPECT_EQ(t.month, 1);
+    EXPECT_EQ(t.day, 1);
+    EXPECT_EQ(t.minute, 0);
+    EXPECT_NEAR(t.second, 15.5, 1e-9);
+}
+
+}  // namespace
+}  // namespace dynsky
