@@ -47,12 +47,14 @@ void BM_AnimationFrameSplit(benchmark::State& state) {
     EnvLight light(0.3f);
     double sky_s = 0, build_s = 0, render_s = 0;
     int frames = 0;
+    std::shared_ptr<SkyImage> buffers[2] = {std::make_shared<SkyImage>(), std::make_shared<SkyImage>()};
     for (auto _ : state) {
         double t = (1 + frames % 118) / fps;  // frames inside interval 0 (not on a step)
         double a = now_s();
-        auto sky = std::make_shared<const SkyImage>(timeline.sky_at(t));
+        std::shared_ptr<SkyImage>& buffer = buffers[frames % 2];  // as dynsky animate does
+        timeline.sky_at(t, buffer.get());
         double b = now_s();
-        light.set_sky(sky);
+        light.set_sky(buffer);
         double c = now_s();
         RenderSettings s;
         s.width = 480, s.height = 270, s.spp = 16, s.quiet = true;
@@ -79,8 +81,9 @@ void BM_GammaFrame(benchmark::State& state) {
     SkyTimeline timeline(cloudy_input(n), std::make_unique<FlowExtrapolationStepModel>(), 10.0);
     timeline.key_third(0);
     int k = 0;
+    SkyImage s;
     for (auto _ : state) {
-        SkyImage s = timeline.sky_at(0.5 + 0.01 * (k++ % 900));
+        timeline.sky_at(0.5 + 0.01 * (k++ % 900), &s);
         benchmark::DoNotOptimize(s.rgb.data());
     }
 }

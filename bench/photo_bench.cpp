@@ -6,6 +6,7 @@
 // Photographs come from ../shared/skies (DYNSKY_SHARED_DIR); without them the benchmarks skip.
 #include <benchmark/benchmark.h>
 
+#include <ctime>
 #include <filesystem>
 
 #include "sky/hdr_recovery.h"
@@ -23,6 +24,12 @@ const Camera kCameras[] = {
     {"mobotix", "skies/mobotix_sophia_20200812_morning/images/2020-08-12_12_00.jpg"},        // 1280 x 960
 };
 
+double process_cpu_seconds() {
+    timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
 void import_bench(benchmark::State& state, const Camera& cam, bool hdr) {
     std::string path = std::string(DYNSKY_SHARED_DIR) + "/" + cam.photo;
     if (!std::filesystem::exists(path)) {
@@ -37,6 +44,7 @@ void import_bench(benchmark::State& state, const Camera& cam, bool hdr) {
     hp.time = parse_utc_time(time_from_file_name(path, preset.filename_utc_offset_hours));
     hp.location = {preset.latitude_deg, preset.longitude_deg, preset.elevation_m};
     hp.sun_search_deg = preset.sun_search_deg;
+    double cpu0 = process_cpu_seconds();
     for (auto _ : state) {
         ImportedPhoto imp = import_photo(path, params);
         if (hdr) {
@@ -45,6 +53,8 @@ void import_bench(benchmark::State& state, const Camera& cam, bool hdr) {
         }
         benchmark::DoNotOptimize(imp.sky.rgb.data());
     }
+    // CPU seconds of all threads per import: what the work costs, whatever else shares the machine.
+    state.counters["cpu_s_all_threads"] = (process_cpu_seconds() - cpu0) / double(state.iterations());
     state.counters["out_Mpix"] = double(params.resolution) * params.resolution / 1e6;
 }
 

@@ -28,7 +28,7 @@ std::shared_ptr<SkyImage> bench_sky(int n) {
     return s;
 }
 
-const char* kNames[] = {"cdf", "alias", "mip", "sun+cdf", "sun+alias", "sun+mip", "sun+alias+mis", "mip+mis"};
+const char* kNames[] = {"cdf", "alias", "mip", "sun+cdf", "sun+alias", "sun+mip", "sun+alias+mis", "mip+mis", "alias+mis", "cdf+mis"};
 
 // One parallel pass reading the RGB image and writing one float per pixel.
 double streaming_floor(const SkyImage& sky, std::vector<float>* out) {

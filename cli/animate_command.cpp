@@ -162,15 +162,20 @@ int run_animate(const AnimateOptions& o) {
     if (timings.tellp() == 0) timings << "frame,time_s,sky_ms,distribution_ms,render_ms,medium_steps_so_far\n";
     double sum_sky = 0, sum_build = 0, sum_render = 0;
     int rendered = 0, skipped = 0;
+    std::shared_ptr<SkyImage> sky_buffers[2];
     for (int k = first; k <= last; ++k) {
         if (frame_complete(o.out, k)) {
             ++skipped;
             continue;
         }
         const double t = k / o.fps;
+        // Two sky buffers, alternated: the light keeps the last frame's while the next is written.
+        std::shared_ptr<SkyImage>& buffer = sky_buffers[k % 2];
+        if (!buffer || buffer.use_count() > 1) buffer = std::make_shared<SkyImage>();
         auto t0 = std::chrono::steady_clock::now();
-        auto sky = std::make_shared<const SkyImage>(timeline.sky_at(t));
+        timeline.sky_at(t, buffer.get());
         double sky_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        std::shared_ptr<const SkyImage> sky = buffer;
         light.set_sky(sky);
 
         RenderSettings settings;

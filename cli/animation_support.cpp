@@ -31,7 +31,9 @@ void add_sky_source_options(CLI::App* cmd, SkySourceOptions* o) {
                     "'network:FOLDER' (the trained FlowNet+CloudNet, sky/cloud_model.h), or 'auto'\n"
                     "(procedural for procedural input, else flow)")
         ->capture_default_str();
-    cmd->add_option("--dt", o->dt, "Delta t: seconds between medium steps (the paper's 10 s)")->capture_default_str();
+    cmd->add_option("--dt", o->dt,
+                    "Delta t: seconds between medium steps (0: a network model's own Delta t from its model.json, else the paper's 10 s)")
+        ->capture_default_str();
     cmd->add_option("--sky-res", o->sky_resolution, "Resolution N of skies made here (procedural, clear)")->capture_default_str();
     cmd->add_option("--time", o->time,
                     "UTC time of t = 0, ISO 8601 (e.g. 2026-06-21T16:00:00Z): the sun follows the clock from there.\n"
@@ -97,7 +99,7 @@ ProceduralSkyParams procedural_params(const SkySourceOptions& o, uint64_t seed, 
 }  // namespace
 
 SkyTimeline make_sky_timeline(const SkySourceOptions& o) {
-    if (!(o.dt > 0)) throw Error("--dt must be positive");
+    if (!(o.dt >= 0)) throw Error("--dt must be positive (or 0: automatic)");
     if (o.sky_resolution < 16 || o.sky_resolution > 8192) throw Error("--sky-res must be 16..8192");
     if (!(o.coverage >= 0 && o.coverage <= 1)) throw Error("--coverage must be in [0, 1]");
     GeoLocation where{o.latitude, o.longitude, 0};
@@ -152,7 +154,12 @@ SkyTimeline make_sky_timeline(const SkySourceOptions& o) {
             throw Error("--model '" + model_name + "': expected auto, procedural, flow or network:FOLDER");
         }
     }
-    return SkyTimeline(std::move(input), std::move(model), o.dt, clock);
+    double dt = o.dt;
+    if (dt == 0) dt = model->native_dt_seconds() > 0 ? model->native_dt_seconds() : 10.0;
+    else if (model->native_dt_seconds() > 0 && std::abs(dt - model->native_dt_seconds()) > 1e-9)
+        std::fprintf(stderr, "dynsky: warning: --dt %g s, but the network was trained for Delta t = %g s\n", dt,
+                     model->native_dt_seconds());
+    return SkyTimeline(std::move(input), std::move(model), dt, clock);
 }
 
 float exposure_for_irradiance(const Color& irradiance) {

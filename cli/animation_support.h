@@ -22,7 +22,7 @@ struct SceneOptions {
 struct SkySourceOptions {
     std::string sky = "procedural";  // procedural[:SEED] | clear | FILE.exr
     std::string model = "auto";      // auto | procedural | flow | network:FOLDER
-    double dt = 10.0;                // Delta t of the medium steps, seconds
+    double dt = 0.0;                 // Delta t of the medium steps, seconds; 0: the network's, else 10
     int sky_resolution = 1024;       // for skies made here (procedural, clear)
     std::string time;                // ISO 8601 UTC of t = 0 (the sun follows it)
     double latitude = 48.8566, longitude = 2.3522;

@@ -259,7 +259,9 @@ void register_sky_import_commands(CLI::App& sky) {
     io->lens_opt = imp->add_option("--lens", io->lens, "Lens law: equidistant (default), equisolid, orthographic, stereographic");
     io->north_opt = imp->add_option("--north", io->north,
                                     "Where north appears in the photo, degrees clockwise from its top (default 0: north up)");
-    imp->add_flag("--mirror", io->mirror, "The photo is mirror-reversed (east clockwise from north), as mirror imagers (TSI) show the sky");
+    imp->add_flag("--mirror", io->mirror,
+                  "The photo is mirror-reversed (east clockwise from north), as mirror imagers (TSI) show the sky "
+                  "(arm-tsi sets it already)");
     io->tilt_opt = imp->add_option("--tilt", io->tilt, "Zenith angle of the camera's optical axis, degrees (default 0: level)");
     io->tilt_az_opt = imp->add_option("--tilt-azimuth", io->tilt_azimuth, "Azimuth the optical axis leans towards, degrees east of north");
     imp->add_option("--mask", io->mask, "Non-sky mask image (photo-sized; black = not sky unless --mask-layout says otherwise)");

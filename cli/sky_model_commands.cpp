@@ -334,7 +334,7 @@ void run_predict(const PredictOptions& o) {
 struct EvaluateOptions {
     std::string model, sequence, shared, horizons = "1,2,3,6", report = "docs/cloud-model-evaluation.md",
                                          histogram = "docs/cloud-model-flow-histogram.png";
-    int import_resolution = 0;
+    int import_resolution = 0, limit = 0;
     bool quiet = false;
 };
 
@@ -409,7 +409,8 @@ void run_evaluate(const EvaluateOptions& o) {
     nlohmann::json split = read_json(split_path);
     if (!split.contains(seq.name))
         throw_file_error(split_path, "has no split for sequence '" + seq.name + "': the model was not trained on it");
-    const int lo = split[seq.name].at("heldout").at(0).get<int>(), hi = split[seq.name].at("heldout").at(1).get<int>();
+    const int lo = split[seq.name].at("heldout").at(0).get<int>();
+    int hi = split[seq.name].at("heldout").at(1).get<int>();
     if (lo < 1 || hi > int(seq.photos.size()) || hi - lo < 2)
         throw_file_error(split_path, "held-out range does not fit the sequence's " + std::to_string(seq.photos.size()) + " frames");
     if (std::abs(seq.dt_s - info.dt_seconds) > 1e-6)
@@ -417,6 +418,8 @@ void run_evaluate(const EvaluateOptions& o) {
                     std::to_string(seq.dt_s) + " s");
     const int hmax = horizons.back();
     if (hi - lo <= hmax) throw Error("--horizons: the held-out part has only " + std::to_string(hi - lo) + " frames");
+    if (o.limit < 0) throw Error("--limit: must be >= 0");
+    if (o.limit > 0) hi = std::min(hi, lo + o.limit + hmax);  // only the frames the first --limit starts need
 
     nlohmann::json mj = read_json((fs::path(o.model) / "model.json").string());
     const int n = info.resolution;
@@ -541,6 +544,8 @@ void register_sky_model_commands(CLI::App& sky) {
         cmd->add_option("--import-res", o->import_resolution,
                         "Resolution the photographs are imported at before area-averaging to the model's\n"
                         "(default: the model's training value)");
+        cmd->add_option("--limit", o->limit, "Score only the first K held-out start frames (0: all; for quick checks)")
+            ->capture_default_str();
         cmd->add_flag("--quiet", o->quiet, "No progress bars; the table is still written");
         cmd->callback([o]() { run_evaluate(*o); });
     }

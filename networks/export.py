@@ -29,9 +29,30 @@ def export_onnx(model, n, folder, opset=11):
         path = os.path.join(folder, name + ".onnx")
         torch.onnx.export(net, torch.zeros(1, channels, n, n), path, opset_version=opset, input_names=[iname],
                           output_names=[oname], do_constant_folding=True)
+        inline_constant_identities(path)
         check_onnx_for_opencv(path)
         paths[name] = path
     return paths
+
+
+def inline_constant_identities(path):
+    """Constant folding shares equal tensors (e.g. the biases of untrained BatchNorms) through Identity
+    nodes; copy the tensor instead so the graph holds only operators OpenCV's importer runs."""
+    m = onnx.load(path)
+    inits = {i.name: i for i in m.graph.initializer}
+    keep = []
+    for node in m.graph.node:
+        if node.op_type == "Identity" and node.input[0] in inits:
+            t = onnx.TensorProto()
+            t.CopyFrom(inits[node.input[0]])
+            t.name = node.output[0]
+            m.graph.initializer.append(t)
+        else:
+            keep.append(node)
+    if len(keep) != len(m.graph.node):
+        del m.graph.node[:]
+        m.graph.node.extend(keep)
+        onnx.save(m, path)
 
 
 def check_onnx_for_opencv(path):
@@ -41,7 +62,9 @@ def check_onnx_for_opencv(path):
     opset = max(o.version for o in m.opset_import if o.domain in ("", "ai.onnx"))
     assert opset >= 11, f"{path}: opset {opset} < 11"
     ops = {n.op_type for n in m.graph.node}
-    assert "Shape" not in ops and "Upsample" not in ops, f"{path}: dynamic shapes or old Upsample in {ops}"
+    allowed = {"Conv", "BatchNormalization", "LeakyRelu", "Relu", "Resize", "Concat", "Tanh", "Sigmoid", "Add", "Slice",
+               "Constant"}
+    assert ops <= allowed, f"{path}: operators outside what OpenCV's importer is known to run: {sorted(ops - allowed)}"
     consts = {i.name for i in m.graph.initializer} | {o for n in m.graph.node if n.op_type == "Constant" for o in n.output}
     for node in m.graph.node:
         if node.op_type == "Resize":
@@ -89,6 +112,11 @@ def write_model_folder(model, seqs, split, log, args, horizons=(1, 2, 3, 6)):
         "import_resolution": int(seqs[0].meta.get("import_resolution", n)),
         "dt_s": float(seqs[0].meta["dt_s"]),
         "flow_scale": D.FLOW_SCALE,
+        # The [0, 1] form the networks were trained on (sky/hdr_recovery.h log map, sky/cloud_mask.h rule).
+        "unit_scale": float(seqs[0].meta.get("unit_scale", 1.0)),
+        "unit_max": float(seqs[0].meta.get("unit_max", 300.0)),
+        "cloud_rule": seqs[0].meta.get("cloud_rule", "rb"),
+        "cloud_threshold": float(seqs[0].meta.get("cloud_threshold", 0.75)),
         "flow_widths": list(fw),
         "cloud_widths": list(cw),
         "flow_encoding": "ch0, ch1 = (cos, sin) of the direction (+x right, +y down); ch2 = min(|flow| / (flow_scale N), 1); "

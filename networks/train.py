@@ -105,11 +105,14 @@ def evaluate_heldout(model, seqs, split, horizons=(1,), max_windows=None):
     for s in seqs:
         lo, hi = split[s.name]["heldout"]
         disc = torch.from_numpy(s.disc.astype(np.float32))[None, None]
-        H = max(horizons)
+        hs = [h for h in horizons if hi - lo > h]
+        if not hs:
+            continue
+        H = max(hs)
         starts = list(range(lo, hi - H))
         if max_windows and len(starts) > max_windows:
             starts = starts[:: int(math.ceil(len(starts) / max_windows))]
-        res = {h: {"model": [], "persistence": []} for h in horizons}
+        res = {h: {"model": [], "persistence": []} for h in hs}
         for b in range(0, len(starts), 16):
             st = starts[b:b + 16]
             x = torch.from_numpy(np.stack([s.images[i] for i in st])).permute(0, 3, 1, 2)

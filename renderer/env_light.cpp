@@ -74,13 +74,14 @@ void EnvLight::set_sky(std::shared_ptr<const SkyImage> sky) {
     }
     row_irradiance_.assign(size_t(n), Eigen::Array3d::Zero());
     row_bad_.assign(size_t(n), 0);
+    row_weight_.assign(size_t(n), 0.0);
     weights_.resize(size_t(n) * n);
     tbb::parallel_for(tbb::blocked_range<int>(0, n, 16), [&](const tbb::blocked_range<int>& rows) {
         for (int j = rows.begin(); j != rows.end(); ++j) {
             const float* row = rgb + size_t(j) * n * 3;
             const uint16_t* t = &solid_angle_table_[size_t(j) * n * 2];
             float* w = &weights_[size_t(j) * n];
-            float er = 0, eg = 0, eb = 0;
+            float er = 0, eg = 0, eb = 0, wsum = 0;
             size_t bad = 0;
             for (int i = 0; i < n; ++i) {
                 float r0 = row[3 * i], g0 = row[3 * i + 1], b0 = row[3 * i + 2];
@@ -88,21 +89,18 @@ void EnvLight::set_sky(std::shared_ptr<const SkyImage> sky) {
                 bad += (r != r0) | (g != g0) | (b != b0);  // NaN != NaN too
                 float jac = float(t[2 * i]), cjac = float(t[2 * i + 1]);
                 w[i] = (0.2126f * r + 0.7152f * g + 0.0722f * b) * jac;
+                wsum += w[i];
                 er += r * cjac, eg += g * cjac, eb += b * cjac;
             }
             row_irradiance_[size_t(j)] = Eigen::Array3d(er, eg, eb) * double(kFromFixed);
+            row_weight_[size_t(j)] = wsum;
             row_bad_[size_t(j)] = bad;
         }
     });
     bad_pixels_ = 0;
     for (size_t b : row_bad_) bad_pixels_ += b;
-    double total_weight = 0;
-    for (int j = 0; j < n; ++j) {
-        const float* w = &weights_[size_t(j) * n];
-        double row = 0;
-        for (int i = 0; i < n; ++i) row += w[i];
-        total_weight += row;
-    }
+    double total_weight = 0;  // row sums come from the parallel pass above: no serial re-read
+    for (double row : row_weight_) total_weight += row;
     if (sampler_options_.mis_compensation) compensate_for_mis(total_weight);
     Eigen::Array3d e = Eigen::Array3d::Zero();
     for (const auto& part : row_irradiance_) e += part;

@@ -80,6 +80,7 @@ class EnvLight {
     std::vector<size_t> row_bad_;
     size_t bad_pixels_ = 0;
     std::vector<Eigen::Array3d> row_irradiance_;
+    std::vector<double> row_weight_;
     std::vector<uint16_t> solid_angle_table_;  // per pixel (jacobian, cos x jacobian), fixed point
     int table_resolution_ = 0;
     float ground_albedo_;

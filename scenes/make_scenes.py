@@ -8,6 +8,18 @@ Run from the repository root:  /usr/bin/python3 scenes/make_scenes.py
 Standard library only (json, struct, math, shutil)."""
 import json, math, os, shutil, struct
 
+KENNEY_LICENSE = '''# License of the Kenney tiles in this folder
+
+`kenney-*.bin` (geometry from the City Kit tiles' .glb files) and `Textures/colormap.png` are from
+Kenney's City Kit, KenneyNL/Starter-Kit-City-Builder @ 48458e6f343d6369ac015c77476eb262b964df2b,
+`models/*.glb` (via ../shared/scenes/KenneyCityKit; see its PROVENANCE.md).
+
+License: CC0 1.0 Universal (public domain dedication), as stated upstream: the repository README
+says "Sprites and 3D Models (CC0 licensed)"; the repository's MIT LICENSE.md covers its Godot code,
+not the models. Credit (not required by CC0): Kenney, www.kenney.nl.
+https://creativecommons.org/publicdomain/zero/1.0/
+'''
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 KENNEY = os.path.normpath(os.path.join(HERE, '..', '..', 'shared', 'scenes', 'KenneyCityKit'))
 
@@ -186,7 +198,8 @@ class Builder:
         if self.tiles:
             os.makedirs(os.path.join(self.folder, 'Textures'), exist_ok=True)
             shutil.copy(os.path.join(KENNEY, 'Textures', 'colormap.png'), os.path.join(self.folder, 'Textures', 'colormap.png'))
-            shutil.copy(os.path.join(KENNEY, 'reference', 'source_LICENSE.md'), os.path.join(self.folder, 'KENNEY_LICENSE.md'))
+            with open(os.path.join(self.folder, 'KENNEY_LICENSE.md'), 'w') as f:
+                f.write(KENNEY_LICENSE)
         with open(os.path.join(self.folder, name + '.gltf'), 'w') as f:
             json.dump(self.doc, f, indent=1)
 

@@ -159,13 +159,17 @@ SkyImage advect_great_arc(const SkyImage& sky, const cv::Mat& flow, double fract
         throw Error("advect_great_arc: flow must be " + std::to_string(n) + "x" + std::to_string(n) + " CV_32FC2");
     SkyImage out = sky;
     if (fraction == 0.0) return out;
-    cv::Mat map_x(n, n, CV_32FC1), map_y(n, n, CV_32FC1);
+    // The lookup maps are smooth (the flow is), so they are computed on a grid of at most 512^2 and
+    // resized: the per-pixel trigonometry then costs the same for 1024 and 2048 skies.
+    const int m = std::min(n, 512);
+    cv::Mat map_x(m, m, CV_32FC1), map_y(m, m, CV_32FC1);
     // The flow belongs to where content starts: output pixel q shows the source p whose own arc,
     // followed for `fraction`, ends at q. Found by fixed-point iteration from p = q (a few steps
     // suffice for flows that vary smoothly); each step rotates q back along p's arc.
     constexpr int kIterations = 8;
-    tbb::parallel_for(0, n, [&](int j) {
-        for (int i = 0; i < n; ++i) {
+    tbb::parallel_for(0, m, [&](int cj) {
+        for (int ci = 0; ci < m; ++ci) {
+            const double i = (ci + 0.5) * n / m - 0.5, j = (cj + 0.5) * n / m - 0.5;
             const Vec3d d = direction_from_pixel(i, j, n);
             double px = i, py = j;
             Vec3d src = d;
@@ -189,10 +193,14 @@ SkyImage advect_great_arc(const SkyImage& sky, const cv::Mat& flow, double fract
             }
             double x, y;
             pixel_from_direction(src, n, &x, &y);
-            map_x.at<float>(j, i) = float(x);
-            map_y.at<float>(j, i) = float(y);
+            map_x.at<float>(cj, ci) = float(x);
+            map_y.at<float>(cj, ci) = float(y);
         }
     });
+    if (m != n) {
+        cv::resize(map_x, map_x, cv::Size(n, n), 0, 0, cv::INTER_LINEAR);
+        cv::resize(map_y, map_y, cv::Size(n, n), 0, 0, cv::INTER_LINEAR);
+    }
     cv::Mat dst(n, n, CV_32FC3, out.rgb.data());
     cv::remap(extend_past_rim(sky_mat(sky)), dst, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
     clear_outside_disc(&out);

@@ -1,6 +1,7 @@
 #include "sky/hdr_recovery.h"
 
 #include <algorithm>
+#include <map>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -34,6 +35,7 @@ std::string HdrCalibrationReport::summary() const {
     s.precision(3);
     s << ", clear pixels " << clear_fraction * 100 << "% of the disc (ratio spread " << ratio_spread * 100 << "%)";
     s << ", sun elevation " << sun_elevation_deg << " deg";
+    if (sun_elevation_deg < 0) s << " (below the horizon: the model is a sunset sky, the scale is unreliable)";
     if (sun_offset_deg >= 0) s << ", clipped sun seen " << sun_offset_deg << " deg from the computed one";
     s << (sun_restored ? ", sun disc restored" : (sun_visible ? ", sun seen" : ", sun not seen (not restored)"));
     return s.str();
@@ -52,13 +54,10 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     rep.sun_elevation_deg = sp.elevation_deg();
     rep.used_sun = rep.computed_sun;
 
-    // Directions of the pixels, once.
-    std::vector<Vec3d> dir(size_t(n) * n);
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) {
-            Vec2 uv = fisheye::pixel_center_uv(i, j, n);
-            dir[size_t(j) * n + i] = fisheye::direction_from_uv(double(uv.x()), double(uv.y()));
-        }
+    auto dir = [n](size_t p) {
+        Vec2 uv = fisheye::pixel_center_uv(int(p % n), int(p / n), n);
+        return fisheye::direction_from_uv(double(uv.x()), double(uv.y()));
+    };
 
     // The sun as the photo shows it: the clipped blob nearest the computed sun, within the search cone.
     cv::Mat clipped(n, n, CV_8U);
@@ -72,7 +71,7 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
         for (int i = 0; i < n; ++i) {
             int l = labels.at<int>(j, i);
             if (l <= 0) continue;
-            const Vec3d& w = dir[size_t(j) * n + i];
+            const Vec3d w = dir(size_t(j) * n + i);
             nearest[size_t(l)] = std::min(nearest[size_t(l)], angle_between(w, rep.computed_sun));
             centroid[size_t(l)] += w;
             solid_angle[size_t(l)] += fisheye::pixel_solid_angle(i, j, n);
@@ -112,9 +111,10 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     // obstruction near the sun, 4-15 degrees out, is mostly clear or clipped.
     if (sun_hidden && rep.computed_sun.y() > 0) {
         long long around = 0, bright_or_clear = 0;
-        for (size_t p = 0; p < dir.size(); ++p) {
-            if (photo.not_sky[p] || !in.in_disc(int(p % n), int(p / n))) continue;
-            double a = angle_between(dir[p], rep.computed_sun);
+        for (size_t p = 0; p < size_t(n) * n; ++p) {
+            if (photo.not_sky[p]) continue;
+            if (!in.in_disc(int(p % n), int(p / n))) continue;
+            double a = angle_between(dir(p), rep.computed_sun);
             if (a < 4 * kDeg || a > 15 * kDeg) continue;
             ++around;
             Color e = encoded(p);
@@ -141,23 +141,22 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
             size_t p = size_t(j) * n + i;
-            if (!in.in_disc(i, j) || photo.not_sky[p]) continue;
-            const Vec3d& w = dir[p];
+            if ((i % stride) || (j % stride) || !in.in_disc(i, j) || photo.not_sky[p]) continue;
+            const Vec3d w = dir(p);
             if (angle_between(w, rep.used_sun) < params.exclude_sun_deg * kDeg) continue;
             if (std::acos(std::clamp(w.y(), -1.0, 1.0)) > params.max_zenith_deg * kDeg) continue;
             Color e = encoded(p);
             // Clipped pixels are only lower bounds: never calibrate on them.
             bool is_clear = !photo.clipped[p] && !is_cloud(e[0], e[1], e[2], params.clear_rule);
             if (is_clear) ++clear;
-            if ((i % stride) || (j % stride)) continue;
             double y_photo = luminance(in.pixel(i, j));
             double y_model = luminance(model.sky_radiance(w));
             sum_model += y_model;
             sum_photo += y_photo;
             if (is_clear && y_photo > 1e-4) ratios.push_back(y_model / y_photo);
         }
-    rep.clear_pixels = clear;
-    rep.clear_fraction = disc ? double(clear) / double(disc) : 0;
+    rep.clear_pixels = clear * stride * stride;  // counted on the subsample
+    rep.clear_fraction = disc ? std::min(1.0, double(rep.clear_pixels) / double(disc)) : 0;
     if (rep.clear_fraction >= params.min_clear_fraction && ratios.size() >= 20) {
         rep.method = "clear-sky pixels";
         rep.scale = median_of(ratios);
@@ -174,20 +173,49 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     for (float& v : out.rgb) v = float(v * rep.scale);
 
     if (params.restore_sun && rep.sun_visible && rep.used_sun.y() > 0) {
-        // The model's sky + disc, splatted energy-conserving at this resolution (make_clear_sky).
-        SkyImage m = make_clear_sky(model_params, n);
-        double pixel_deg = 180.0 / n;
-        double disc_reach = (kHosekWilkieSolarRadius / kDeg + 2 * pixel_deg) * kDeg;
-        for (int j = 0; j < n; ++j)
-            for (int i = 0; i < n; ++i) {
-                size_t p = size_t(j) * n + i;
-                if (!in.in_disc(i, j)) continue;
-                bool in_blob = sun_blob > 0 && labels.at<int>(j, i) == sun_blob;
-                bool on_disc = angle_between(dir[p], rep.used_sun) <= disc_reach;
-                if (!in_blob && !on_disc) continue;
-                Color c = out.pixel(i, j).max(m.pixel(i, j));
-                out.set_pixel(i, j, c);
+        // The disc, splatted conserving its energy exactly as make_clear_sky does (equal-area rings
+        // of the limb-darkened disc, each ring's irradiance split over sectors, each sector's share
+        // added as radiance to the pixel holding it), but only onto the few pixels it touches:
+        // a full make_clear_sky costs seconds at 2048^2.
+        std::map<size_t, Color> disc;
+        const Vec3d& sd = model.sun_direction();
+        Vec3d t = (std::abs(sd.x()) < 0.9 ? Vec3d::UnitX() : Vec3d::UnitY()).cross(sd).normalized();
+        Vec3d b = sd.cross(t);
+        const double radius_px = kHosekWilkieSolarRadius / (kPiD / n);
+        const int rings = std::max(16, int(std::ceil(5 * radius_px)));
+        const int sectors = std::max(32, int(std::ceil(4 * kPiD * radius_px)));
+        const double sin_r = std::sin(kHosekWilkieSolarRadius);
+        for (int r = 0; r < rings; ++r) {
+            double s0 = std::sqrt(double(r) / rings), s1 = std::sqrt(double(r + 1) / rings);
+            Color share = model.model().solar_irradiance_rgb(s0, s1) / float(sectors);
+            double gamma = std::asin(std::sqrt(0.5 * (s0 * s0 + s1 * s1)) * sin_r);
+            for (int k = 0; k < sectors; ++k) {
+                double phi = 2 * kPiD * (k + 0.5) / sectors;
+                Vec3d w = std::cos(gamma) * sd + std::sin(gamma) * (std::cos(phi) * t + std::sin(phi) * b);
+                double u, v;
+                if (!fisheye::uv_from_direction(w, &u, &v)) continue;
+                int i = std::clamp(int(std::floor((u + 1) / 2 * n)), 0, n - 1);
+                int j = std::clamp(int(std::floor((v + 1) / 2 * n)), 0, n - 1);
+                double omega = fisheye::pixel_solid_angle(i, j, n);
+                if (omega <= 0) continue;
+                auto it = disc.emplace(size_t(j) * n + i, Color::Zero()).first;
+                it->second += share / float(omega);
             }
+        }
+        // Clipped pixels of the sun's blob and the disc's pixels: the model's sky + disc where it
+        // exceeds what the photo could record.
+        auto restore = [&](size_t p, const Color& sun) {
+            Color m = model.sky_radiance(dir(p)) + sun;
+            int i = int(p % n), j = int(p / n);
+            out.set_pixel(i, j, out.pixel(i, j).max(m));
+        };
+        for (const auto& [p, sun] : disc) restore(p, sun);
+        if (sun_blob > 0)
+            for (int j = 0; j < n; ++j)
+                for (int i = 0; i < n; ++i) {
+                    size_t p = size_t(j) * n + i;
+                    if (labels.at<int>(j, i) == sun_blob && !disc.count(p)) restore(p, Color::Zero());
+                }
         rep.sun_restored = true;
     }
     out.sun_direction = rep.used_sun.cast<float>();

@@ -89,6 +89,15 @@ cv::Mat display_grey(const cv::Mat& rgb, bool display_referred) {
     return out;
 }
 
+// An HDR photo as a display-encoded grey Image, for the geometry helpers.
+Image tone_mapped_grey(const cv::Mat& rgb_linear) {
+    cv::Mat g = display_grey(rgb_linear, false);
+    Image enc(g.cols, g.rows, 1);
+    for (int y = 0; y < g.rows; ++y)
+        for (int x = 0; x < g.cols; ++x) enc.at(x, y, 0) = g.at<unsigned char>(y, x) / 255.0f;
+    return enc;
+}
+
 cv::Mat image_to_grey8(const Image& image, bool display_referred) {
     return display_grey(to_rgb_mat(image, "image"), display_referred);
 }
@@ -453,16 +462,8 @@ ImportedPhoto import_photo_image(const Image& photo, const std::string& name, co
         out.geometry.circle = *params.circle;
         if (!(params.circle->radius > 0)) throw Error("the sky circle's radius must be positive");
     } else {
-        if (out.display_referred) {
-            out.geometry.circle = find_sky_circle(photo, name, params.min_radius_fraction, params.max_radius_fraction);
-        } else {
-            // HDR: find the circle on a tone-mapped copy.
-            cv::Mat g = display_grey(rgb, false);
-            Image enc(g.cols, g.rows, 1);
-            for (int y = 0; y < g.rows; ++y)
-                for (int x = 0; x < g.cols; ++x) enc.at(x, y, 0) = g.at<unsigned char>(y, x) / 255.0f;
-            out.geometry.circle = find_sky_circle(enc, name, params.min_radius_fraction, params.max_radius_fraction);
-        }
+        out.geometry.circle = find_sky_circle(out.display_referred ? photo : tone_mapped_grey(rgb), name,
+                                              params.min_radius_fraction, params.max_radius_fraction);
         out.circle_detected = true;
     }
     const SkyCircle circle = out.geometry.circle;
@@ -486,14 +487,7 @@ ImportedPhoto import_photo_image(const Image& photo, const std::string& name, co
         if (rect.area() > 0) not_sky(rect).setTo(1);
     }
     if (params.detect_obstructions) {
-        Image enc = photo;
-        if (!out.display_referred) {
-            cv::Mat g = display_grey(rgb, false);
-            enc = Image(g.cols, g.rows, 1);
-            for (int y = 0; y < g.rows; ++y)
-                for (int x = 0; x < g.cols; ++x) enc.at(x, y, 0) = g.at<unsigned char>(y, x) / 255.0f;
-        }
-        auto m = detect_dark_obstructions(enc, circle);
+        auto m = detect_dark_obstructions(out.display_referred ? photo : tone_mapped_grey(rgb), circle);
         for (int y = 0; y < rgb.rows; ++y)
             for (int x = 0; x < rgb.cols; ++x)
                 if (m[size_t(y) * rgb.cols + x]) not_sky.at<unsigned char>(y, x) = 1;
@@ -543,25 +537,15 @@ ImportedPhoto import_photo_image(const Image& photo, const std::string& name, co
     cv::Mat map_x(n, n, CV_32F), map_y(n, n, CV_32F);
     cv::Mat unseen = cv::Mat::zeros(n, n, CV_8U);
     const double rmax = 1.0 - 0.25 / n;
-    const Eigen::Matrix3d to_cam = world_to_camera(g.tilt_deg, g.tilt_azimuth_deg);
     tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
         for (int j = rows.begin(); j < rows.end(); ++j)
             for (int i = 0; i < n; ++i) {
                 Vec2 uv = fisheye::pixel_center_uv(i, j, n);
                 double u = uv.x(), v = uv.y(), r = std::sqrt(u * u + v * v);
                 if (r > rmax) u *= rmax / r, v *= rmax / r;
-                Vec3d w = to_cam * fisheye::direction_from_uv(u, v);
-                double theta = std::acos(std::clamp(w.y(), -1.0, 1.0));
                 double x = -1, y = -1;
-                bool ok = theta <= kPiD / 2 + 1e-9;
-                if (ok) {
-                    double phi = std::atan2(w.x(), -w.z());
-                    double rr = g.circle.radius * lens_radius(g.lens, theta);
-                    double psi = g.north_deg * kDeg + (g.mirrored ? phi : -phi);
-                    x = g.circle.center_x + rr * std::sin(psi);
-                    y = g.circle.center_y - rr * std::cos(psi);
-                    ok = x >= -0.5 && y >= -0.5 && x <= src.cols - 0.5 && y <= src.rows - 0.5;
-                }
+                bool ok = g.project(fisheye::direction_from_uv(u, v), &x, &y) && x >= -0.5 && y >= -0.5 &&
+                          x <= src.cols - 0.5 && y <= src.rows - 0.5;
                 map_x.at<float>(j, i) = float(x);
                 map_y.at<float>(j, i) = float(y);
                 if (!ok) unseen.at<unsigned char>(j, i) = 1;

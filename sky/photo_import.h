@@ -123,9 +123,11 @@ ImportedPhoto import_photo(const std::string& path, const PhotoImportParams& par
 ImportedPhoto import_photo_image(const Image& photo, const std::string& name, const PhotoImportParams& params,
                                  const Image* extra_not_sky = nullptr);
 
-// Finds the sky circle: the strongest circle (cv::HoughCircles on a blurred, downscaled grey copy)
-// with a radius in [min_fraction, max_fraction] of the shorter side. `photo` holds display-encoded
-// values in [0, 1] (for HDR, a log-compressed copy). Throws dynsky::Error naming `name` if none.
+// Finds the sky circle, radius in [min_fraction, max_fraction] of the photo's shorter side.
+// A lens circle on a black surround (fisheye cameras): the lit region's outline (threshold,
+// largest contour, convex hull, cv::fitEllipse). Otherwise the strongest circular edge
+// (cv::HoughCircles on a contrast-stretched, blurred copy about 400 px wide). `photo` holds
+// display-encoded values in [0, 1]. Throws dynsky::Error naming `name` if no circle is found.
 SkyCircle find_sky_circle(const Image& photo, const std::string& name, double min_fraction = 0.30,
                           double max_fraction = 0.55);
 

@@ -29,6 +29,7 @@ class NetworkStepModel : public MediumStepModel {
         return next;
     }
     std::string name() const override { return "network:" + model_.info().folder; }
+    double native_dt_seconds() const override { return model_.info().dt_seconds; }
 
   private:
     CloudModel model_;
@@ -145,21 +146,26 @@ void insert_sun(SkyImage* sky, const SunPatch& patch, const Vec3d& direction, do
     }
 }
 
-SkyImage blend_skies(const SkyImage& a, const SkyImage& b, double w) {
+void blend_skies(const SkyImage& a, const SkyImage& b, double w, SkyImage* out) {
     if (a.resolution != b.resolution) throw Error("blend_skies: resolutions differ");
-    if (w == 0.0) return a;
-    SkyImage out;  // metadata from a; pixels written once below (no copy of a's to overwrite)
-    out.resolution = a.resolution, out.time_seconds = a.time_seconds, out.sun_direction = a.sun_direction, out.source = a.source;
-    if (w == 1.0) {
-        out.rgb = b.rgb;
-        return out;
+    out->resolution = a.resolution, out->time_seconds = a.time_seconds, out->sun_direction = a.sun_direction;
+    out->source = a.source;
+    out->rgb.resize(a.rgb.size());
+    if (w == 0.0 || w == 1.0) {
+        std::copy((w == 0.0 ? a : b).rgb.begin(), (w == 0.0 ? a : b).rgb.end(), out->rgb.begin());
+        return;
     }
-    out.rgb.resize(a.rgb.size());
     const float wa = float(1.0 - w), wb = float(w);
     const size_t count = a.rgb.size(), chunk = 1 << 16;
+    float* o = out->rgb.data();
     tbb::parallel_for(size_t(0), (count + chunk - 1) / chunk, [&](size_t c) {
-        for (size_t k = c * chunk, e = std::min(count, k + chunk); k < e; ++k) out.rgb[k] = wa * a.rgb[k] + wb * b.rgb[k];
+        for (size_t k = c * chunk, e = std::min(count, k + chunk); k < e; ++k) o[k] = wa * a.rgb[k] + wb * b.rgb[k];
     });
+}
+
+SkyImage blend_skies(const SkyImage& a, const SkyImage& b, double w) {
+    SkyImage out;
+    blend_skies(a, b, w, &out);
     return out;
 }
 
@@ -229,6 +235,12 @@ const SkyImage& SkyTimeline::key_two_thirds(int i) { return interval(i).two_thir
 const cv::Mat& SkyTimeline::flow(int i) { return interval(i).flow; }
 
 SkyImage SkyTimeline::sky_at(double t) {
+    SkyImage out;
+    sky_at(t, &out);
+    return out;
+}
+
+void SkyTimeline::sky_at(double t, SkyImage* out) {
     if (!(t >= 0)) throw Error("sky timeline: time must be >= 0 (got " + std::to_string(t) + ")");
     double x = t / dt_;
     int i = int(std::floor(x + 1e-9));
@@ -237,31 +249,29 @@ SkyImage SkyTimeline::sky_at(double t) {
     s = snap(snap(s, 1.0 / 3.0), 2.0 / 3.0);
     if (s < 1e-9) s = 0;
 
-    SkyImage out;
     if (s == 0) {
         auto a = step(i);
         auto t0 = std::chrono::steady_clock::now();
-        out = *a;
+        blend_skies(*a, *a, 0.0, out);
         timings_.gamma_seconds = seconds_since(t0);
     } else {
         Interval& iv = interval(i);
         auto a = step(i), b = step(i + 1);
         auto t0 = std::chrono::steady_clock::now();
-        if (s < 1.0 / 3.0) out = blend_skies(*a, iv.third, 3.0 * s);
-        else if (s < 2.0 / 3.0) out = blend_skies(iv.third, iv.two_thirds, s == 1.0 / 3.0 ? 0.0 : 3.0 * s - 1.0);
-        else out = blend_skies(iv.two_thirds, *b, s == 2.0 / 3.0 ? 0.0 : 3.0 * s - 2.0);
+        if (s < 1.0 / 3.0) blend_skies(*a, iv.third, 3.0 * s, out);
+        else if (s < 2.0 / 3.0) blend_skies(iv.third, iv.two_thirds, s == 1.0 / 3.0 ? 0.0 : 3.0 * s - 1.0, out);
+        else blend_skies(iv.two_thirds, *b, s == 2.0 / 3.0 ? 0.0 : 3.0 * s - 2.0, out);
         timings_.gamma_seconds = seconds_since(t0);
     }
     auto t0 = std::chrono::steady_clock::now();
-    out.time_seconds = input_time_ + t;
+    out->time_seconds = input_time_ + t;
     auto sun = sun_direction_at(t);
     if (sun) {
-        out.sun_direction = sun->cast<float>();
-        insert_sun(&out, suns_[size_t(i)], *sun, 1.0 - s);
-        if (s > 0) insert_sun(&out, suns_[size_t(i) + 1], *sun, s);
+        out->sun_direction = sun->cast<float>();
+        insert_sun(out, suns_[size_t(i)], *sun, 1.0 - s);
+        if (s > 0) insert_sun(out, suns_[size_t(i) + 1], *sun, s);
     }
     timings_.gamma_seconds += seconds_since(t0);
-    return out;
 }
 
 }  // namespace dynsky

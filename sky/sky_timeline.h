@@ -44,6 +44,8 @@ class MediumStepModel {
     virtual bool makes_own_sun() const { return false; }
     // Where the sun is for the next step (models that make their own sun follow it).
     virtual void set_sun_direction(const Vec3d&) {}
+    // The Delta t the model was made for (a trained network's), 0 when any is fine.
+    virtual double native_dt_seconds() const { return 0.0; }
 };
 
 // Flow extrapolation: Farneback flow of the last two steps, applied once more (great-arc
@@ -113,6 +115,9 @@ class SkyTimeline {
 
     // Gamma at t (seconds since the input; t >= 0). Computes and caches the steps it needs.
     SkyImage sky_at(double t);
+    // The same into *out, reusing its pixel storage: per-frame use without allocating (and
+    // page-faulting) 50 MB for every 2048 sky.
+    void sky_at(double t, SkyImage* out);
     // The medium step S_i (i >= 0).
     std::shared_ptr<const SkyImage> step(int i);
     // The key images of interval i: at s = 1/3 and 2/3.
@@ -145,7 +150,8 @@ class SkyTimeline {
     SkyTimelineTimings timings_;
 };
 
-// Upsilon: (1 - w) a + w b, pixel by pixel (same resolution).
+// Upsilon: (1 - w) a + w b, pixel by pixel (same resolution); metadata from a.
 SkyImage blend_skies(const SkyImage& a, const SkyImage& b, double w);
+void blend_skies(const SkyImage& a, const SkyImage& b, double w, SkyImage* out);
 
 }  // namespace dynsky

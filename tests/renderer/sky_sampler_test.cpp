@@ -169,12 +169,18 @@ void check_chi_square(const EnvLight& light, int block, int samples, const std::
         int i = std::clamp(int((uv.x() + 1) / 2 * n), 0, n - 1), j = std::clamp(int((uv.y() + 1) / 2 * n), 0, n - 1);
         observed[size_t((j / block) * bins + i / block)] += 1;
     }
+    // The quadrature misses about 0.1% of a cone barely wider than a pixel, which would dominate
+    // the "no sample" bin: test the rejection rate by itself (within 0.5%), and the shape of the
+    // accepted samples by chi-square, expected counts scaled to the accepted total.
+    double rejected = observed.back();
+    EXPECT_NEAR(rejected / samples, std::max(0.0, 1 - mass), 5e-3) << what;
+    observed.pop_back(), expected.pop_back();
+    double accepted_expected = 0;
+    for (double e : expected) accepted_expected += e;
+    if (!(accepted_expected > 0)) return;
+    for (double& e : expected) e *= (samples - rejected) / accepted_expected;
     auto r = test::chi_square_test(observed, expected);
     EXPECT_GT(r.p_value, 1e-4) << what << ": " << r.summary();
-    if (getenv("DBG") && r.p_value <= 1e-4) printf("mass %.6f\n", mass);
-    if (getenv("DBG") && r.p_value <= 1e-4)
-        for (size_t b = 0; b < observed.size(); ++b)
-            if (std::abs(observed[b] - expected[b]) > 3 * std::sqrt(expected[b] + 1)) printf("bin %zu obs %g exp %g\n", b, observed[b], expected[b]);
 }
 
 TEST(SkySampler, NamesRoundTripAndBadNamesAreRejected) {

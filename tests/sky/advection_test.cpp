@@ -128,6 +128,22 @@ TEST(Advection, NearHorizonAreaIsNotStretched) {
     EXPECT_LT(i2 / i0, 0.85);
 }
 
+// Above 512 the lookup maps are computed coarsely and resized: a 1024 sky still moves exactly.
+TEST(Advection, HighResolutionSkyMovesToTheAnalyticPlace) {
+    const int n = 1024;
+    Vec3d start = unit_from_angles_deg(40, 30);
+    SkyImage sky = blob_sky(n, start, 2.0);
+    const Vec3d axis(1, 0, 0);
+    const double angle = 10 * kPiD / 180;
+    SkyImage moved = advect_great_arc(sky, rotation_flow(n, axis, angle), 1.0);
+    Vec3d c0, c1;
+    double i0, i1;
+    blob_moments(sky, &c0, &i0);
+    blob_moments(moved, &c1, &i1);
+    EXPECT_LT(angle_deg(c1, Eigen::AngleAxisd(angle, axis) * c0), 0.1);
+    EXPECT_NEAR(i1 / i0, 1.0, 0.01);
+}
+
 // Textured sky rotated by a known small rotation: the Farneback estimate matches the rotation's
 // flow, and a large featureless disc (the inside of a big cloud) gets its surroundings' motion.
 TEST(Advection, FlowEstimateMatchesKnownRotationAndFillsHoles) {

@@ -109,10 +109,10 @@ TEST(CloudMask, AgreementWithWsisegHumanLabels) {
     const double margin = 0.01;
     EXPECT_GT(paper_all.accuracy(), 0.5682 - margin);
     EXPECT_GT(paper_all.cloud_iou(), 0.5599 - margin);
-    EXPECT_GT(held_out[1].accuracy(), 0.9161 - margin);
-    EXPECT_GT(held_out[1].cloud_iou(), 0.8515 - margin);
-    EXPECT_GT(held_out[0].accuracy(), 0.9300 - margin);
-    EXPECT_GT(held_out[0].cloud_iou(), 0.8865 - margin);
+    EXPECT_GT(held_out[1].accuracy(), 0.9169 - margin);
+    EXPECT_GT(held_out[1].cloud_iou(), 0.8531 - margin);
+    EXPECT_GT(held_out[0].accuracy(), 0.9306 - margin);
+    EXPECT_GT(held_out[0].cloud_iou(), 0.8876 - margin);
     // The tuned rule is the one the code recommends, and it beats the paper's on held-out images.
     EXPECT_NEAR(tuned[0], kWsisegBestRedBlueThreshold, 0.03);
     EXPECT_NEAR(tuned[1], kWsisegBestRedBlueThreshold, 0.03);

@@ -1,0 +1,136 @@
+// End-to-end tests of `dynsky sky predict | evaluate | training-data`.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "sky/cloud_model.h"
+#include "sky/fisheye.h"
+#include "sky/procedural_clouds.h"
+#include "sky/sky_image.h"
+#include "tests/test_support.h"
+#include "util/data_path.h"
+
+namespace dynsky {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string dynsky(const std::string& args) { return std::string(DYNSKY_EXE) + " " + args; }
+std::string shipped_model() { return data_path("networks/models/arm_tsi"); }
+
+std::string small_sky(const std::string& dir, int n) {
+    ProceduralSkyParams p;
+    p.seed = 4;
+    p.clear_sky.sun_direction = fisheye::direction_from_angles(0.8, 2.0);
+    SkyImage sky = render_procedural_sky(p, 0.0, n);
+    std::string path = dir + "/in.exr";
+    save_sky(path, sky);
+    return path;
+}
+
+TEST(SkyModelCli, PredictWritesStepsAndStats) {
+    const std::string dir = test::temp_dir("predict");
+    const std::string in = small_sky(dir, 48);
+    auto r = test::run_command(dynsky("sky predict --quiet --model " + shipped_model() + " --in " + in + " --steps 4 --every 2 --out " +
+                                      dir + "/out --stats " + dir + "/stats.csv"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/out/step_0001.exr"));
+    ASSERT_TRUE(fs::exists(dir + "/out/step_0002.exr"));
+    ASSERT_TRUE(fs::exists(dir + "/out/step_0004.exr"));
+    SkyImage s4 = load_sky(dir + "/out/step_0004.exr");
+    EXPECT_EQ(s4.resolution, 48);
+    EXPECT_DOUBLE_EQ(s4.time_seconds, 4 * 30.0);
+    std::ifstream f(dir + "/stats.csv");
+    std::string header, line;
+    std::getline(f, header);
+    EXPECT_EQ(header.rfind("step,time_s,mean_luminance", 0), 0u) << header;
+    int rows = 0;
+    while (std::getline(f, line)) {
+        ++rows;
+        EXPECT_EQ(line.substr(line.rfind(',') + 1), "0") << "non-finite pixels in " << line;
+    }
+    EXPECT_EQ(rows, 5);  // step 0 (the input) and 4 steps
+    fs::remove_all(dir);
+}
+
+TEST(SkyModelCli, PredictBadInputsFailClearlyAndWriteNothing) {
+    const std::string dir = test::temp_dir("predict_bad");
+    const std::string in = small_sky(dir, 32);
+    auto r = test::run_command(dynsky("sky predict --model " + dir + "/no_model --in " + in + " --out " + dir + "/o1"));
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.output.find("no_model: model folder not found"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/o1"));
+    r = test::run_command(dynsky("sky predict --model " + shipped_model() + " --in " + dir + "/missing.exr --out " + dir + "/o2"));
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.output.find("missing.exr"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/o2"));
+    r = test::run_command(dynsky("sky predict --model " + shipped_model() + " --in " + in + " --steps 0 --out " + dir + "/o3"));
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.output.find("--steps"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/o3"));
+    fs::remove_all(dir);
+}
+
+TEST(SkyModelCli, EvaluateWritesTheTableWithBothBaselines) {
+    DYNSKY_REQUIRE_SHARED();
+    const std::string dir = test::temp_dir("evaluate");
+    auto r = test::run_command(dynsky("sky evaluate --quiet --model " + shipped_model() +
+                                      " --sequence arm-tsi --horizons 1,2 --limit 3 --shared " + test::shared_path("") +
+                                      " --report " + dir + "/eval.md --histogram " + dir + "/hist.png"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    std::ifstream f(dir + "/eval.md");
+    std::stringstream ss;
+    ss << f.rdbuf();
+    const std::string md = ss.str();
+    EXPECT_NE(md.find("| 1 | 30 s |"), std::string::npos) << md;
+    EXPECT_NE(md.find("| 2 | 60 s |"), std::string::npos) << md;
+    EXPECT_NE(md.find("Farneback PSNR"), std::string::npos) << md;
+    EXPECT_NE(md.find("persistence PSNR"), std::string::npos) << md;
+    EXPECT_EQ(md.find("nan"), std::string::npos) << md;
+    EXPECT_TRUE(fs::exists(dir + "/hist.png"));
+    fs::remove_all(dir);
+}
+
+TEST(SkyModelCli, EvaluateRejectsBadArguments) {
+    auto r = test::run_command(dynsky("sky evaluate --model " + shipped_model() + " --sequence nowhere"));
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.output.find("unknown sequence 'nowhere'"), std::string::npos) << r.output;
+    r = test::run_command(dynsky("sky evaluate --model " + shipped_model() + " --sequence arm-tsi --horizons 1,x"));
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.output.find("--horizons: 'x'"), std::string::npos) << r.output;
+}
+
+TEST(SkyModelCli, TrainingDataImportsExactlyAsSkyImport) {
+    // The dataset builder imports in-process (it needs the not-sky mask); the sky it sees must be
+    // the one `dynsky sky import --preset arm-tsi` writes.
+    DYNSKY_REQUIRE_SHARED();
+    const std::string dir = test::temp_dir("import_same");
+    const std::string photo = test::shared_path("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg");
+    auto r = test::run_command(dynsky("sky import --preset arm-tsi --res 64 " + photo + " --out " + dir + "/cli.exr"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    SkyImage cli = load_sky(dir + "/cli.exr");
+    SkyImage lib = import_preset_photo(photo, "arm-tsi", 64);
+    ASSERT_EQ(cli.resolution, lib.resolution);
+    double worst = 0;
+    for (size_t k = 0; k < cli.rgb.size(); ++k)
+        worst = std::max(worst, double(std::abs(cli.rgb[k] - lib.rgb[k])) / (1e-3 + std::abs(lib.rgb[k])));
+    EXPECT_LT(worst, 1e-5);  // EXR float round trip
+    fs::remove_all(dir);
+}
+
+TEST(SkyModelCli, TrainingDataNeedsOneSource) {
+    const std::string dir = test::temp_dir("training_data_bad");
+    auto r = test::run_command(dynsky("sky training-data --out " + dir + "/o"));
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.output.find("exactly one of --sequence"), std::string::npos) << r.output;
+    r = test::run_command(dynsky("sky training-data --procedural " + dir + "/none --out " + dir + "/o"));
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.output.find("manifest.json: not found"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/o"));
+    fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace dynsky
