@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
-# The main job: install what is missing, build, and render the built-in plaza under the built-in
-# clear sky into out/demo/. Extra arguments go to `dynsky render` (e.g. --spp 256 --res 1920x1080).
+# The main job: install what is missing, build, and render the Tower scene under a moving cloudy
+# sky (procedural cumulus over a Hosek-Wilkie clear sky, Paris, 2026-06-21 16:00 UTC) into
+# out/demo/: numbered EXR/PNG frames, animation.mp4, sky.mp4 and contact_sheet.png.
+# Extra arguments go to `dynsky animate` (e.g. --spp 64 --res 1280x720, or
+# --model network:networks/models/arm_tsi to move the clouds with the shipped networks).
+# Rerunning resumes: finished frames are kept.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
 scripts/build.sh
-mkdir -p out/demo
-build/cli/dynsky render builtin --res 960x540 --spp 64 --out out/demo/plaza.exr "$@"
-echo "demo: open out/demo/plaza.png (linear HDR in out/demo/plaza.exr)"
+build/cli/dynsky animate scenes/tower/tower.gltf --duration 60 --fps 0.5 --spp 16 --res 480x270 --out out/demo "$@"
+echo "demo: open out/demo/animation.mp4 and out/demo/contact_sheet.png"
