@@ -63,7 +63,7 @@ def check_onnx_for_opencv(path):
     assert opset >= 11, f"{path}: opset {opset} < 11"
     ops = {n.op_type for n in m.graph.node}
     allowed = {"Conv", "BatchNormalization", "LeakyRelu", "Relu", "Resize", "Concat", "Tanh", "Sigmoid", "Add", "Slice",
-               "Constant"}
+               "Constant", "Mul", "Div", "Exp"}
     assert ops <= allowed, f"{path}: operators outside what OpenCV's importer is known to run: {sorted(ops - allowed)}"
     consts = {i.name for i in m.graph.initializer} | {o for n in m.graph.node if n.op_type == "Constant" for o in n.output}
     for node in m.graph.node:

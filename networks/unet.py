@@ -106,27 +106,71 @@ class FlowNet(nn.Module):
         return torch.cat([torch.tanh(y[:, 0:2]), torch.sigmoid(y[:, 2:3])], dim=1)
 
 
-class CloudNet(nn.Module):
-    """Image (3) concat flow (3) -> the next image. Predicts a bounded change (tanh) added to the
-    input image, so the identity (persistence) is easy to represent and a recursive rollout
-    cannot drift by more than the learnt per-step change. The caller clamps to [0, 1]."""
+class LocalKernelWarp(nn.Module):
+    """Moves pixels by predicted per-pixel k x k kernels: out(x) = sum_j w_j(x) I(x + o_j) with
+    w_j = e_j / sum e, e_j = exp(4 tanh(logit_j)) (a softmax over the k^2 offsets, bounded).
 
-    def __init__(self, widths=(16, 32, 64, 64)):
+    Why: a plain UNet cannot warp, and cloud motion in the fisheye is a position-dependent shift of
+    1-4 px per step at 64 px. A convex combination of neighbours can represent any such sub-pixel
+    shift, and it cannot create values outside the input's range, so recursive rollouts cannot run
+    away (kernel-prediction networks, e.g. Niklaus et al. 2017, "Video Frame Interpolation via
+    Adaptive Convolution"). Built from Conv (fixed one-hot shift kernels), Tanh, Exp, Mul, Div and
+    Concat on tensors of equal shape, which OpenCV's ONNX importer runs."""
+
+    def __init__(self, k=5):
         super().__init__()
-        self.unet = UNet(6, 3, widths)
+        self.k = k
+        shifts = torch.zeros(k * k, 1, k, k)
+        for j in range(k * k):
+            shifts[j, 0, j // k, j % k] = 1.0
+        self.register_buffer("shifts", shifts)
+        self.register_buffer("ones", torch.ones(1, k * k, 1, 1))
+
+    def forward(self, image, logits):
+        e = torch.exp(4.0 * torch.tanh(logits))
+        norm = F.conv2d(e, self.ones)
+        out = []
+        for c in range(image.shape[1]):
+            neighbours = F.conv2d(image[:, c:c + 1], self.shifts, padding=self.k // 2)
+            out.append(F.conv2d(neighbours * e, self.ones) / norm)
+        return torch.cat(out, dim=1)
+
+
+class CloudNet(nn.Module):
+    """Image (3) concat flow (3) -> the next image: the UNet predicts, per pixel, k x k kernel
+    weights that move the input's pixels (LocalKernelWarp) and a small bounded change (0.1 tanh)
+    for clouds that form, grow or fade. Starts as the identity (persistence). The caller clamps to
+    [0, 1]. kernel=0 gives the plain residual form (input + tanh(UNet)) of the first experiments."""
+
+    def __init__(self, widths=(16, 32, 64, 64), kernel=5):
+        super().__init__()
+        self.kernel = kernel
+        if kernel:
+            self.unet = UNet(6, kernel * kernel + 3, widths)
+            self.warp = LocalKernelWarp(kernel)
+            with torch.no_grad():  # start at the identity: the centre tap dominates
+                self.unet.head.bias.zero_()
+                self.unet.head.bias[(kernel * kernel) // 2] = 1.0
+        else:
+            self.unet = UNet(6, 3, widths)
 
     def forward(self, image_and_flow):
-        return image_and_flow[:, 0:3] + torch.tanh(self.unet(image_and_flow))
+        y = self.unet(image_and_flow)
+        image = image_and_flow[:, 0:3]
+        if not self.kernel:
+            return image + torch.tanh(y)
+        kk = self.kernel * self.kernel
+        return self.warp(image, y[:, 0:kk]) + 0.1 * torch.tanh(y[:, kk:kk + 3])
 
 
 class CloudModel(nn.Module):
     """One medium step xi on [0,1] images, with the sky-disc mask applied so pixels outside the
     disc stay 0 (what the canonical image holds there)."""
 
-    def __init__(self, flow_widths, cloud_widths):
+    def __init__(self, flow_widths, cloud_widths, kernel=5):
         super().__init__()
         self.flownet = FlowNet(flow_widths)
-        self.cloudnet = CloudNet(cloud_widths)
+        self.cloudnet = CloudNet(cloud_widths, kernel)
 
     def forward(self, image, disc):
         flow = self.flownet(image)
@@ -138,7 +182,7 @@ def parameter_count(module):
     return sum(p.numel() for p in module.parameters())
 
 
-def step_flops(resolution, flow_widths, cloud_widths):
+def step_flops(resolution, flow_widths, cloud_widths, kernel=5):
     """Multiply-accumulates of one step (both networks), by running a forward pass with hooks."""
     macs = [0]
 
@@ -147,7 +191,7 @@ def step_flops(resolution, flow_widths, cloud_widths):
             k = mod.kernel_size[0] * mod.kernel_size[1] * mod.in_channels // mod.groups
             macs[0] += out.numel() * k
 
-    model = CloudModel(flow_widths, cloud_widths).eval()
+    model = CloudModel(flow_widths, cloud_widths, kernel).eval()
     handles = [m.register_forward_hook(hook) for m in model.modules() if isinstance(m, nn.Conv2d)]
     with torch.no_grad():
         model(torch.zeros(1, 3, resolution, resolution), torch.ones(1, 1, resolution, resolution))
