@@ -245,6 +245,8 @@ void register_animate_command(CLI::App& app) {
         "animate",
         "Render a scene under a moving sky: numbered linear EXR + PNG frames, sky frames, MP4s and a contact sheet.\n"
         "Resumable: frames already complete in --out are kept and skipped; kill it at any moment and run it again.");
+    // A repeated option takes its last value, so wrappers (scripts/demo.sh) can be overridden.
+    cmd->option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
     add_scene_options(cmd, &o->scene);
     add_sky_source_options(cmd, &o->sky);
     cmd->add_option("--duration", o->duration, "Length of the animation in seconds of sky time")->capture_default_str();
