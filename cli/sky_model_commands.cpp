@@ -402,9 +402,9 @@ void append_magnitudes(const cv::Mat& flow, const cv::Mat& mask, std::vector<flo
 
 void run_evaluate(const EvaluateOptions& o) {
     const std::vector<int> horizons = parse_int_list(o.horizons, "--horizons");
+    RealSequence seq = real_sequence(o.sequence, o.shared.empty() ? default_shared_dir() : o.shared);
     CloudModel model = CloudModel::load(o.model);
     const CloudModelInfo& info = model.info();
-    RealSequence seq = real_sequence(o.sequence, o.shared.empty() ? default_shared_dir() : o.shared);
     const std::string split_path = (fs::path(o.model) / "split.json").string();
     nlohmann::json split = read_json(split_path);
     if (!split.contains(seq.name))

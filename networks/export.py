@@ -22,7 +22,11 @@ import unet as U
 
 
 def export_onnx(model, n, folder, opset=11):
-    model.eval()
+    import copy
+    model = copy.deepcopy(model).eval()
+    for m in model.modules():
+        if isinstance(m, U.UNet):
+            m.freeze_position(n)
     paths = {}
     for name, net, channels, iname, oname in (("flownet", model.flownet, 3, "image", "flow"),
                                               ("cloudnet", model.cloudnet, 6, "image_and_flow", "next")):
@@ -119,6 +123,7 @@ def write_model_folder(model, seqs, split, log, args, horizons=(1, 2, 3, 6)):
         "cloud_threshold": float(seqs[0].meta.get("cloud_threshold", 0.75)),
         "flow_widths": list(fw),
         "cloud_widths": list(cw),
+        "warp_kernel": args.kernel,
         "flow_encoding": "ch0, ch1 = (cos, sin) of the direction (+x right, +y down); ch2 = min(|flow| / (flow_scale N), 1); "
                          "flow = Farneback flow frame k -> k+1 times the cloud mask",
         "onnx_opset": 11,
@@ -128,7 +133,7 @@ def write_model_folder(model, seqs, split, log, args, horizons=(1, 2, 3, 6)):
         "unroll": args.unroll,
         "seed": args.seed,
         "parameters": U.parameter_count(model),
-        "macs_per_step": U.step_flops(n, fw, cw),
+        "macs_per_step": U.step_flops(n, fw, cw, args.kernel),
         "pytorch_cpu_seconds_per_step_1_thread": cpu,
         "heldout_psnr_python": metrics,
         "created": datetime.datetime.utcnow().strftime("%Y-%m-%dT%H:%M:%SZ"),
@@ -152,7 +157,9 @@ def write_model_card(folder, info, seqs, split, log, metrics, args):
              f"- Delta t = {info['dt_s']:g} s per step; predictions recurse for longer horizons.",
              f"- FlowNet widths {info['flow_widths']}, CloudNet widths {info['cloud_widths']} (UNet: 4x4 stride-2 "
              "conv + BatchNorm + LeakyReLU(0.2) down; bilinear x2 + 3x3 conv + BatchNorm + ReLU up; skips; 3x3 output conv). "
-             "CloudNet predicts tanh-bounded change added to its input.",
+             f"CloudNet's output moves the input's pixels with predicted per-pixel {args.kernel} x {args.kernel} kernels "
+             "(a softmax over the neighbours) plus a 0.1 tanh-bounded change; both UNets also see each pixel's (u, v) "
+             "position (docs/networks.md says why).",
              f"- {info['parameters']:,} parameters, {info['macs_per_step'] / 1e6:.1f} M multiply-adds per step; "
              f"PyTorch CPU time per step (1 thread, this machine): {info['pytorch_cpu_seconds_per_step_1_thread'] * 1e3:.1f} ms.",
              f"- ONNX opset 11, fixed input size; operators: {', '.join(info['onnx_ops'])}.", "",

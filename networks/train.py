@@ -174,7 +174,7 @@ def train(args):
     train_w = Windows(seqs, split, "train", args.unroll, weights)
     disc = torch.from_numpy(D.disc_mask(n).astype(np.float32))[None, None]
     fw, cw = parse_widths(args.flow_widths), parse_widths(args.cloud_widths)
-    model = U.CloudModel(fw, cw)
+    model = U.CloudModel(fw, cw, args.kernel)
     opt = torch.optim.Adam(model.parameters(), lr=args.lr)
     steps_per_epoch = max(1, len(train_w.items) // args.batch)
     total_steps = steps_per_epoch * args.epochs
@@ -232,6 +232,7 @@ def main(argv=None):
     p.add_argument("--res", type=int, default=0, help="train at this resolution (area-downscaled); 0: the dataset's")
     p.add_argument("--flow-widths", default="16,32,64,64", help="FlowNet encoder widths (depth = count)")
     p.add_argument("--cloud-widths", default="16,32,64,64", help="CloudNet encoder widths (depth = count)")
+    p.add_argument("--kernel", type=int, default=5, help="CloudNet's per-pixel warp kernel size (odd; 0: plain residual)")
     p.add_argument("--epochs", type=int, default=30)
     p.add_argument("--batch", type=int, default=8)
     p.add_argument("--unroll", type=int, default=3, help="recursive steps per training window (K)")
@@ -247,6 +248,8 @@ def main(argv=None):
     p.add_argument("--no-export", action="store_true", help="train only (no ONNX / model card)")
     p.add_argument("--name", default="", help="model name for the card (default: the folder name)")
     args = p.parse_args(argv)
+    # For the model card: the from-scratch command (a resumed run reproduces it).
+    args.argv_text = " ".join(a for a in (argv if argv is not None else sys.argv[1:]) if a != "--resume")
     model, seqs, split, log = train(args)
     if not args.no_export:
         import export as E

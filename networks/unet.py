@@ -40,30 +40,32 @@ class DecoderBlock(nn.Module):
         return torch.cat([x, skip], dim=1) if skip is not None else x
 
 
-def coordinate_planes(x):
-    """(u, v) of every pixel centre in [-1, 1] (sky/fisheye.h), as 2 constant channels.
-
-    A deviation from the paper, measured on the ARM sequence: the fisheye makes cloud motion
-    strongly depend on where in the image a cloud is (warping held-out frames by the per-pixel mean
-    training flow gives 27.5 dB at 64 px, by the global mean flow 21.5 dB, persistence 22.0 dB), and
-    a UNet alone is translation-equivariant. The planes are constants in the exported graph."""
-    n = int(x.shape[-1])
+def coordinate_planes(n, batch=1):
+    """(u, v) of every pixel centre in [-1, 1] (sky/fisheye.h), as a 1 x 2 x n x n tensor."""
     c = (np.arange(n, dtype=np.float32) + 0.5) * (2.0 / n) - 1.0
     planes = torch.from_numpy(np.stack([np.tile(c[None, :], (n, 1)), np.tile(c[:, None], (1, n))])[None])
-    return planes if x.shape[0] == 1 else planes.expand(x.shape[0], 2, n, n)
+    return planes if batch == 1 else planes.expand(batch, 2, n, n)
 
 
 class UNet(nn.Module):
     """widths[k] is the channel count after encoder block k (len(widths) = depth); the input size
     must be divisible by 2^depth. The last decoder block upsamples back to full resolution and a
-    3x3 convolution maps to out_channels (no activation: the wrappers below add theirs)."""
+    3x3 convolution maps to out_channels (no activation: the wrappers below add theirs).
+
+    Position (a deviation from the paper, measured on the ARM sequence): the fisheye makes cloud
+    motion depend strongly on where in the image a cloud is (warping held-out frames by the
+    per-pixel mean training flow gives 27.5 dB at 64 px, by the global mean flow 21.5 dB,
+    persistence 22.0 dB), and a UNet alone is translation-equivariant. So the first convolution and
+    the output convolution also see the pixel's (u, v), as if two coordinate planes were
+    concatenated to their inputs. They are added as separate convolutions of the planes because
+    OpenCV 4.6 mis-runs an ONNX Concat with a constant input, while Add of a constant tensor is
+    exact; freeze_position() turns them into such constants before export."""
 
     def __init__(self, in_channels, out_channels, widths=(16, 32, 64, 64), coords=True):
         super().__init__()
         self.widths = tuple(int(w) for w in widths)
         self.coords = coords
         self.encoders = nn.ModuleList()
-        in_channels += 2 if coords else 0
         cin = in_channels
         for k, w in enumerate(self.widths):
             # pix2pix's convention: no normalisation on the first block (it sees raw pixels).
@@ -79,18 +81,40 @@ class UNet(nn.Module):
         # 3x3, not 1x1: the output layer sees the input's own spatial derivatives at full
         # resolution, which is what moving an edge by a pixel or two amounts to.
         self.head = nn.Conv2d(cin, out_channels, 3, padding=1)
+        if coords:
+            self.pos_in = nn.Conv2d(2, self.widths[0], 4, stride=2, padding=1, bias=False)
+            self.pos_out = nn.Conv2d(2, out_channels, 3, padding=1, bias=False)
+        self.frozen = None
+
+    def position_terms(self, n):
+        planes = coordinate_planes(n)
+        return self.pos_in(planes), self.pos_out(planes)
+
+    def freeze_position(self, n):
+        """For export: the position terms become constant tensors (ONNX Add of an initializer)."""
+        if self.coords:
+            with torch.no_grad():
+                a, b = self.position_terms(n)
+            self.frozen = (a.detach().clone(), b.detach().clone())
 
     def forward(self, x):
         if self.coords:
-            x = torch.cat([x, coordinate_planes(x)], dim=1)
+            pin, pout = self.frozen if self.frozen is not None else self.position_terms(int(x.shape[-1]))
         skips = [x]
-        for enc in self.encoders:
+        enc0 = self.encoders[0]
+        h = enc0.conv(x)
+        if self.coords:
+            h = h + pin
+        x = enc0.act(enc0.norm(h))
+        skips.append(x)
+        for enc in self.encoders[1:]:
             x = enc(x)
             skips.append(x)
         skips.pop()  # the bottleneck is not a skip
         for dec in self.decoders:
             x = dec(x, skips.pop())
-        return self.head(x)
+        y = self.head(x)
+        return y + pout if self.coords else y
 
 
 class FlowNet(nn.Module):

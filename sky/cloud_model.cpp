@@ -1,6 +1,8 @@
 #include "sky/cloud_model.h"
 
+#include <opencv2/core/utils/logger.hpp>
 #include <opencv2/imgproc.hpp>
+#include <opencv2/photo.hpp>
 
 #include <cmath>
 #include <cstring>
@@ -64,7 +66,14 @@ cv::Mat from_blob(const cv::Mat& blob, const std::string& what) {
     return out;
 }
 
+// OpenCV logs its own lines about a bad model before throwing; we report the problem ourselves.
+struct QuietOpenCv {
+    cv::utils::logging::LogLevel old = cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
+    ~QuietOpenCv() { cv::utils::logging::setLogLevel(old); }
+};
+
 cv::dnn::Net read_onnx(const std::string& path) {
+    QuietOpenCv quiet;
     if (!fs::exists(path)) throw_file_error(path, "model file not found");
     if (fs::file_size(path) == 0) throw_file_error(path, "model file is empty");
     try {
@@ -140,7 +149,9 @@ CloudModel CloudModel::load(const std::string& folder) {
     const int n = info.resolution;
     model.disc_ = sky_disc_mask(n);
 
-    // One run on zeros: a network that does not take (or give) N x N images fails here, not later.
+    // One run on zeros: a network that does not take (or give) N x N images fails here, not later,
+    // with our message (OpenCV's own log lines about the failure are silenced meanwhile).
+    QuietOpenCv quiet;
     cv::Mat zero(n, n, CV_32FC3, cv::Scalar::all(0));
     cv::Mat f = from_blob(run_net(model.flownet_, to_blob({zero}), flow_path), flow_path);
     if (f.rows != n || f.cols != n || f.channels() != 3)
@@ -199,8 +210,24 @@ void CloudModel::rollout(const SkyImage& sky, int steps, const std::function<voi
     const int n = info_.resolution, big = sky.resolution;
     cv::Mat state = to_network_form(sky, info_.form);
     const cv::Mat disc_big = sky_disc_mask(big);
-    const cv::Mat sun = saturated_pixels(state);
+    // The sun (and any pixel the map clips) is not the networks' business: it is filled from its
+    // surroundings before the first step, so it is neither moved nor smeared like a cloud, and the
+    // input's radiance is put back into every output. The model does not predict the sun being
+    // covered by cloud; a rollout keeps the input's sun as it is.
+    cv::Mat sun = saturated_pixels(state);
     const bool has_sun = cv::countNonZero(sun) > 0;
+    if (has_sun) {
+        cv::dilate(sun, sun, cv::Mat());
+        std::vector<cv::Mat> ch;
+        cv::split(state, ch);
+        for (cv::Mat& c : ch) {
+            cv::Mat filled;
+            cv::inpaint(c, sun, filled, 3.0, cv::INPAINT_TELEA);
+            c = filled;
+        }
+        cv::merge(ch, state);
+        state.setTo(cv::Scalar::all(0), ~disc_big);
+    }
     for (int k = 1; k <= steps; ++k) {
         cv::Mat small = state;
         if (big != n) {
@@ -225,25 +252,10 @@ void CloudModel::rollout(const SkyImage& sky, int steps, const std::function<voi
         }
         SkyImage next = from_network_form(state, sky, info_.form);
         next.time_seconds = sky.time_seconds + k * info_.dt_seconds;
-        if (has_sun) {
-            // Re-insert the input's sun, dimmed by how much the prediction darkened its pixels
-            // (a cloud moving over the sun): the mean predicted value there, 1 when still saturated.
-            double sum = 0;
-            int count = 0;
+        if (has_sun)
             for (int y = 0; y < big; ++y)
                 for (int x = 0; x < big; ++x)
-                    if (sun.at<uint8_t>(y, x)) {
-                        cv::Vec3f v = state.at<cv::Vec3f>(y, x);
-                        sum += (v[0] + v[1] + v[2]) / 3.0, ++count;
-                    }
-            const float t = float(std::clamp(sum / count, 0.0, 1.0));
-            for (int y = 0; y < big; ++y)
-                for (int x = 0; x < big; ++x)
-                    if (sun.at<uint8_t>(y, x)) {
-                        Color in = sky.pixel(x, y), now = next.pixel(x, y);
-                        next.set_pixel(x, y, now.max(in * t));
-                    }
-        }
+                    if (sun.at<uint8_t>(y, x)) next.set_pixel(x, y, sky.pixel(x, y));
         on_step(k, next);
     }
 }
