@@ -309,6 +309,8 @@ void run_predict(const PredictOptions& o) {
         csv << line;
     };
     if (!o.stats.empty()) stats_row(0, sky);
+    // One exposure for every preview (the input's), so they do not flicker.
+    const float preview_ev = auto_exposure_ev(sky_to_image(sky));
     ProgressBar progress(o.steps, "predict", o.quiet);
     int written = 0;
     model.rollout(sky, o.steps, [&](int k, const SkyImage& s) {
@@ -316,7 +318,8 @@ void run_predict(const PredictOptions& o) {
             char name[32];
             std::snprintf(name, sizeof name, "step_%04d", k);
             std::string base = (fs::path(o.out) / name).string();
-            save_sky(base + ".exr", s, o.preview ? base + ".png" : "");
+            save_sky(base + ".exr", s);
+            if (o.preview) write_image(base + ".png", tonemap_to_display(sky_to_image(s), preview_ev));
             ++written;
         }
         if (!o.stats.empty()) stats_row(k, s);
@@ -332,8 +335,8 @@ void run_predict(const PredictOptions& o) {
 // ---- dynsky sky evaluate ----
 
 struct EvaluateOptions {
-    std::string model, sequence, shared, horizons = "1,2,3,6", report = "docs/cloud-model-evaluation.md",
-                                         histogram = "docs/cloud-model-flow-histogram.png";
+    std::string model, sequence, shared, horizons = "1,2,3,6", report = "docs/networks-evaluation.md",
+                                         histogram = "docs/networks-flow-histogram.png";
     int import_resolution = 0, limit = 0;
     bool quiet = false;
 };
@@ -524,7 +527,7 @@ void register_sky_model_commands(CLI::App& sky) {
         cmd->add_option("--stats", o->stats,
                         "CSV of per-step statistics (mean luminance, mean/min/max of the [0,1] form, cloud\n"
                         "coverage, high-frequency energy, non-finite pixel count), step 0 = the input");
-        cmd->add_flag("--preview", o->preview, "Also write tone-mapped PNGs beside the EXRs");
+        cmd->add_flag("--preview", o->preview, "Also write tone-mapped PNGs beside the EXRs (the input's auto exposure)");
         cmd->add_flag("--quiet", o->quiet, "No progress bar or summary");
         cmd->callback([o]() { run_predict(*o); });
     }

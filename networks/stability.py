@@ -35,6 +35,7 @@ def summarise(stats):
                 "min_ratio_to_start": min(v) / v[0] if v[0] else None}
     return {"steps": int(stats["step"][-1]), "nonfinite_pixels_total": int(sum(stats["nonfinite"])),
             "unit_min": min(stats["min_unit"]), "unit_max": max(stats["max_unit"]),
+            "mean_unit": rel("mean_unit"),
             "mean_luminance": rel("mean_luminance"), "cloud_coverage": rel("cloud_coverage"),
             "hf_energy": rel("hf_energy")}
 

@@ -239,11 +239,13 @@ void CloudModel::rollout(const SkyImage& sky, int steps, const std::function<voi
             state = s.next;
         } else {
             // Carry the change back: the coarse prediction, plus the input's finer detail (what the
-            // coarse image does not hold) advected along the predicted flow.
+            // coarse image does not hold) moved the way the model moved the coarse image. That
+            // motion is measured (Farneback between the model's input and output): it is smooth
+            // and covers clear sky too, unlike FlowNet's cloud-masked flow, whose edges tear detail.
             cv::Mat up_small, up_next, up_flow;
             cv::resize(small, up_small, cv::Size(big, big), 0, 0, cv::INTER_LINEAR);
             cv::resize(s.next, up_next, cv::Size(big, big), 0, 0, cv::INTER_LINEAR);
-            cv::resize(decode_flow(s.flow), up_flow, cv::Size(big, big), 0, 0, cv::INTER_LINEAR);
+            cv::resize(farneback_flow(small, s.next), up_flow, cv::Size(big, big), 0, 0, cv::INTER_LINEAR);
             up_flow *= double(big) / n;
             cv::Mat detail = advect_by_flow(state - up_small, up_flow, 1.0);
             state = up_next + detail;

@@ -71,8 +71,8 @@ class CloudModel {
     NetworkStep step_network(const cv::Mat& image);
 
     // xi on an HDR sky of any resolution: forward map, step at N, carry the change back (the
-    // image's finer detail is advected by the predicted flow), inverse map, sun re-inserted from
-    // the input; time advanced by Delta t. The input is validated (validate_sky).
+    // image's finer detail is advected the way the model moved the coarse image), inverse map,
+    // sun re-inserted from the input; time advanced by Delta t. The input is validated.
     SkyImage step(const SkyImage& sky);
 
     // K recursive steps from `sky`; on_step(k, sky_k) is called for k = 1..K (the state stays in
