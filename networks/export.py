@@ -132,6 +132,7 @@ def write_model_folder(model, seqs, split, log, args, horizons=(1, 2, 3, 6)):
         "epochs": args.epochs,
         "unroll": args.unroll,
         "seed": args.seed,
+        "loss": loss_record(args),
         "parameters": U.parameter_count(model),
         "macs_per_step": U.step_flops(n, fw, cw, args.kernel),
         "pytorch_cpu_seconds_per_step_1_thread": cpu,
@@ -144,6 +145,22 @@ def write_model_folder(model, seqs, split, log, args, horizons=(1, 2, 3, 6)):
         json.dump(log, f, indent=1)
     write_model_card(folder, info, seqs, used_split, log, metrics, args)
     return info
+
+
+def loss_record(args):
+    """The training loss's weights for model.json (networks/train.py step_losses)."""
+    cw = getattr(args, "cos_weight", 0.5)
+    return {"image": f"MSE + {0.1 * cw:g} x (1 - cos of RGB vectors)",
+            "flow": f"MSE + {cw:g} x (1 - cos of directions, cloud pixels)",
+            "flow_weight": args.flow_weight, "cos_weight": cw}
+
+
+def loss_text(args):
+    cw = getattr(args, "cos_weight", 0.5)
+    if cw == 0:
+        return f"image MSE + {args.flow_weight} x flow MSE (MSE only: no cosine-similarity terms, --cos-weight 0)"
+    return (f"image MSE + {0.1 * cw:g} x (1 - cosine similarity of RGB vectors) + {args.flow_weight} x (flow MSE + "
+            f"{cw:g} x (1 - cosine similarity of directions) on cloud pixels) (--cos-weight {cw:g})")
 
 
 def write_model_card(folder, info, seqs, split, log, metrics, args):
@@ -180,8 +197,7 @@ def write_model_card(folder, info, seqs, split, log, metrics, args):
               f"- `/usr/bin/python3 networks/train.py {' '.join(getattr(args, 'argv_text', '').split())}`" if getattr(args, 'argv_text', '') else
               "- networks/train.py (see training_log.json for the arguments' effect per epoch)",
               f"- {args.epochs} epochs, batch {args.batch}, Adam lr {args.lr} with cosine decay, seed {args.seed}, "
-              f"{args.unroll} recursive steps per window (each prediction fed back), loss = image MSE + cosine "
-              f"similarity + {args.flow_weight} x (flow MSE + direction cosine similarity on cloud pixels); CPU only.",
+              f"{args.unroll} recursive steps per window (each prediction fed back), loss = {loss_text(args)}; CPU only.",
               "", "## Held-out results (PyTorch, mean per-frame PSNR over seen sky pixels)", "",
               "| sequence | horizon | model PSNR | persistence PSNR |", "|---|---:|---:|---:|"]
     for name, r in metrics.items():

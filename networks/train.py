@@ -84,13 +84,13 @@ def step_losses(pred_img, pred_flow, tgt_img, tgt_flow, valid, cos_weight=0.5):
     return img_loss, flow_loss, img_mse
 
 
-def rollout_loss(model, imgs, valid, flow, disc, flow_weight):
+def rollout_loss(model, imgs, valid, flow, disc, flow_weight, cos_weight=0.5):
     k = flow.shape[1]
     x = imgs[:, 0]
     total, mse0 = 0.0, None
     for t in range(k):
         x, f = model(x, disc)
-        il, fl, mse = step_losses(x, f, imgs[:, t + 1], flow[:, t], valid[:, t + 1] * valid[:, t])
+        il, fl, mse = step_losses(x, f, imgs[:, t + 1], flow[:, t], valid[:, t + 1] * valid[:, t], cos_weight)
         total = total + il + flow_weight * fl
         if t == 0:
             mse0 = mse
@@ -200,7 +200,7 @@ def train(args):
         losses, mses = [], []
         for b in range(steps_per_epoch):
             imgs, valid, flow = train_w.batch(order[b * args.batch:(b + 1) * args.batch])
-            loss, mse0 = rollout_loss(model, imgs, valid, flow, disc, args.flow_weight)
+            loss, mse0 = rollout_loss(model, imgs, valid, flow, disc, args.flow_weight, args.cos_weight)
             opt.zero_grad()
             loss.backward()
             torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)
@@ -238,6 +238,9 @@ def main(argv=None):
     p.add_argument("--unroll", type=int, default=3, help="recursive steps per training window (K)")
     p.add_argument("--lr", type=float, default=2e-3)
     p.add_argument("--flow-weight", type=float, default=0.1, help="weight of the flow loss against the image loss")
+    p.add_argument("--cos-weight", type=float, default=0.5,
+                   help="weight of the cosine-similarity terms: image 0.1 x this x (1 - cos of RGB vectors), flow "
+                        "this x (1 - cos of directions); 0: MSE only (the loss ablation, networks/ablation.py)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--max-steps", type=int, default=0, help="stop each epoch after this many batches (tests)")
