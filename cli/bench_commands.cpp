@@ -22,10 +22,12 @@
 #include "renderer/gltf_loader.h"
 #include "renderer/integrator.h"
 #include "renderer/sky_sampler.h"
+#include "renderer/streaming_floor.h"
 #include "sky/clear_sky.h"
 #include "sky/fisheye.h"
 #include "sky/photo_import.h"
 #include "sky/procedural_clouds.h"
+#include "util/data_path.h"
 #include "util/error.h"
 
 #ifndef DYNSKY_SHARED_DIR_DEFAULT
@@ -45,7 +47,13 @@ struct BenchOptions {
     std::string out = "sampling-report";
     std::string cache;   // "" : OUT/cache
     std::string shared = DYNSKY_SHARED_DIR_DEFAULT;
+    int seeds = 0;       // 0: 2 in quick mode, 4 otherwise
+    std::vector<std::string> skies, scenes, samplers, parts;  // empty: all
 };
+
+bool selected(const std::vector<std::string>& list, const std::string& name) {
+    return list.empty() || std::find(list.begin(), list.end(), name) != list.end();
+}
 
 struct NamedSky {
     std::string name, description;
@@ -67,6 +75,7 @@ RenderResult render(const Accel& accel, const EnvLight& light, const Camera& cam
 
 struct ErrorStats {
     double rmse = 0, rel_mse = 0, firefly_share = 0;
+    double trimmed_rmse = 0;  // without the 0.1% of pixels with the largest error (rare fireflies)
 };
 
 // RMSE and relative MSE (per channel, (x - r)^2 / (r^2 + 1e-2 mean^2)); firefly share: fraction of
@@ -78,6 +87,7 @@ ErrorStats compare(const Image& img, const Image& ref) {
     mean /= double(ref.pixels.size());
     const double eps = 1e-2 * mean * mean + 1e-12;
     std::vector<std::pair<float, double>> by_brightness(pixels);
+    std::vector<double> pixel_se(pixels);
     double se = 0, rel = 0;
     for (size_t p = 0; p < pixels; ++p) {
         double e = 0;
@@ -87,6 +97,7 @@ ErrorStats compare(const Image& img, const Image& ref) {
             rel += d * d / (double(ref.pixels[3 * p + c]) * ref.pixels[3 * p + c] + eps);
         }
         se += e;
+        pixel_se[p] = e;
         float lum = 0.2126f * img.pixels[3 * p] + 0.7152f * img.pixels[3 * p + 1] + 0.0722f * img.pixels[3 * p + 2];
         by_brightness[p] = {lum, e};
     }
@@ -97,6 +108,14 @@ ErrorStats compare(const Image& img, const Image& ref) {
     for (size_t k = 0; k < top; ++k) top_e += by_brightness[k].second;
     ErrorStats s;
     s.rmse = std::sqrt(se / (3.0 * pixels));
+    // Trimmed as in path-guiding comparisons (Mueller et al. 2017): a handful of fireflies (paths
+    // that reach a tiny sun through a glossy bounce, which no sky sampler can help) otherwise
+    // decide the whole error and its spp curve stops falling within any affordable run.
+    const size_t keep = pixels - std::max<size_t>(1, pixels / 1000);
+    std::nth_element(pixel_se.begin(), pixel_se.begin() + long(keep), pixel_se.end());
+    double kept = 0;
+    for (size_t k = 0; k < keep; ++k) kept += pixel_se[k];
+    s.trimmed_rmse = std::sqrt(kept / (3.0 * double(keep)));
     s.rel_mse = rel / (3.0 * pixels);
     s.firefly_share = se > 0 ? top_e / se : 0;
     return s;
@@ -210,81 +229,38 @@ Image reference(const Accel& accel, const NamedScene& sc, const NamedSky& sky, i
     return img;
 }
 
+// One render of the accuracy study: a frame's rebuild and render timed apart.
 struct Run {
     std::string scene, sky, sampler;
-    int spp;
-    double seconds, rmse, rel_mse, firefly;
+    int spp, seed;
+    double render_seconds, rebuild_seconds, rmse, rel_mse, firefly, trimmed_rmse;
 };
 
-// Streaming floor: one read of the image writing one float per pixel (what any rebuild must do).
-double streaming_floor(const SkyImage& sky, std::vector<float>* out) {
-    const int n = sky.resolution;
-    out->resize(size_t(n) * n);
-    auto t = Clock::now();
-    tbb::parallel_for(tbb::blocked_range<int>(0, n, 16), [&](const tbb::blocked_range<int>& r) {
-        for (int j = r.begin(); j != r.end(); ++j) {
-            const float* p = &sky.rgb[size_t(j) * n * 3];
-            float* o = &(*out)[size_t(j) * n];
-            for (int i = 0; i < n; ++i) o[i] = 0.2126f * p[3 * i] + 0.7152f * p[3 * i + 1] + 0.0722f * p[3 * i + 2];
-        }
-    });
-    return seconds_since(t);
-}
+// A sampler's results on one scene and sky: per spp level, the RMSE of every seed, and its cost
+// model: seconds per frame = rebuild + spp x seconds per spp, both pooled over all its renders
+// (robust against the load of a shared machine, which a single render's time is not).
+struct Curve {
+    std::vector<double> spp;
+    std::vector<std::vector<double>> rmse;  // [spp level][seed]: trimmed RMSE (see compare)
+    std::vector<double> rel_mse, firefly, full_rmse;   // means per spp level (full_rmse: untrimmed)
+    double seconds_per_spp = 0, rebuild_seconds = 0;
+    double mean_rmse(size_t level) const {
+        double s = 0;
+        for (double e : rmse[level]) s += e;
+        return s / double(rmse[level].size());
+    }
+    double std_rmse(size_t level) const {
+        double m = mean_rmse(level), s = 0;
+        for (double e : rmse[level]) s += (e - m) * (e - m);
+        return rmse[level].size() > 1 ? std::sqrt(s / double(rmse[level].size() - 1)) : 0.0;
+    }
+    double seconds_at(double spp_value) const { return rebuild_seconds + spp_value * seconds_per_spp; }
+};
 
 double median(std::vector<double> v) {
     std::sort(v.begin(), v.end());
     return v[v.size() / 2];
 }
-
-const char* kChartScript = R"PY(
-import csv, sys, os
-import matplotlib
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
-out = sys.argv[1]
-rows = list(csv.DictReader(open(os.path.join(out, "accuracy.csv"))))
-groups = {}
-for r in rows:
-    groups.setdefault((r["scene"], r["sky"]), {}).setdefault(r["sampler"], []).append(r)
-for (scene, sky), by in groups.items():
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
-    for name, rs in sorted(by.items()):
-        rs.sort(key=lambda r: int(r["spp"]))
-        style = "-" if name.endswith("+mis") else "--"
-        axes[0].loglog([int(r["spp"]) for r in rs], [float(r["rmse"]) for r in rs], style, marker="o", ms=3, label=name)
-        axes[1].loglog([float(r["seconds"]) for r in rs], [float(r["rmse"]) for r in rs], style, marker="o", ms=3, label=name)
-    axes[0].set_xlabel("samples per pixel"); axes[1].set_xlabel("wall time (s)")
-    for a in axes: a.set_ylabel("RMSE"); a.grid(True, which="both", alpha=0.3)
-    axes[1].legend(fontsize=6, ncol=2)
-    fig.suptitle("%s scene, %s sky" % (scene, sky))
-    fig.tight_layout(); fig.savefig(os.path.join(out, "rmse_%s_%s.png" % (scene, sky)), dpi=90); plt.close(fig)
-rows = list(csv.DictReader(open(os.path.join(out, "rebuild.csv"))))
-fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
-for k, threads in enumerate(["1", "all"]):
-    by = {}
-    for r in rows:
-        if r["threads"] == threads: by.setdefault(r["sampler"], []).append(r)
-    for name, rs in sorted(by.items()):
-        rs.sort(key=lambda r: int(r["n"]))
-        axes[k].loglog([int(r["n"]) for r in rs], [float(r["ms"]) for r in rs], marker="o", ms=3, label=name)
-    axes[k].set_title("rebuild, %s thread(s)" % threads); axes[k].set_xlabel("sky resolution N"); axes[k].set_ylabel("ms")
-    axes[k].grid(True, which="both", alpha=0.3)
-axes[1].legend(fontsize=7)
-fig.tight_layout(); fig.savefig(os.path.join(out, "rebuild.png"), dpi=90); plt.close(fig)
-rows = list(csv.DictReader(open(os.path.join(out, "failures.csv"))))
-cases = sorted(set(r["case"] for r in rows)); names = sorted(set(r["sampler"] for r in rows))
-fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
-w = 0.8 / max(1, len(names))
-for i, name in enumerate(names):
-    vals = {r["case"]: r for r in rows if r["sampler"] == name}
-    xs = [c + i * w for c in range(len(cases))]
-    axes[0].bar(xs, [float(vals[c]["rel_mse"]) if c in vals else 0 for c in cases], w, label=name)
-    axes[1].bar(xs, [float(vals[c]["firefly"]) if c in vals else 0 for c in cases], w, label=name)
-for a, t in zip(axes, ["relative MSE (log)", "share of squared error in brightest 0.1% pixels"]):
-    a.set_xticks([c + 0.4 for c in range(len(cases))]); a.set_xticklabels(cases, rotation=30, fontsize=7); a.set_title(t)
-axes[0].set_yscale("log"); axes[1].legend(fontsize=6, ncol=2)
-fig.tight_layout(); fig.savefig(os.path.join(out, "failures.png"), dpi=90); plt.close(fig)
-)PY";
 
 std::string machine_description() {
     std::string cpu = "unknown CPU";
@@ -304,7 +280,6 @@ int run_sampling_bench(const BenchOptions& o) {
     fs::path out(o.out);
     fs::create_directories(out);
     fs::path cache = o.cache.empty() ? out / "cache" : fs::path(o.cache);
-    fs::create_directories(cache);
     std::string notes;
 
     const int sky_n = o.quick ? 256 : 1024;
@@ -312,96 +287,148 @@ int run_sampling_bench(const BenchOptions& o) {
     const int depth = o.quick ? 3 : 5;
     const int ref_spp = o.quick ? 384 : 4096;
     const std::vector<int> spps = o.quick ? std::vector<int>{1, 4, 16} : std::vector<int>{1, 2, 4, 8, 16, 32, 64};
-    const std::vector<std::string> samplers = samplers_under_mis();
+    const int seeds = o.seeds > 0 ? o.seeds : (o.quick ? 2 : 4);
+    std::vector<std::string> samplers;
+    for (const std::string& name : samplers_under_mis())
+        if (selected(o.samplers, name)) samplers.push_back(name);
+    for (const std::string& name : o.samplers) parse_sky_sampler(name);  // a clear error for a bad name
+    if (!o.samplers.empty() && !selected(o.samplers, "cdf"))
+        notes += "- plain cdf (the baseline of every speed-up) was not selected: no speed-ups\n";
+    const bool run_accuracy = selected(o.parts, "accuracy"), run_rebuild = selected(o.parts, "rebuild"),
+               run_failures = selected(o.parts, "failures");
+    if (run_accuracy) fs::create_directories(cache);
 
     std::fprintf(stderr, "sampling bench: skies...\n");
-    std::vector<NamedSky> skies = make_skies(sky_n, o, &notes);
+    std::vector<NamedSky> skies;
+    for (NamedSky& s : make_skies(sky_n, o, &notes))
+        if (selected(o.skies, s.name)) skies.push_back(std::move(s));
     std::fprintf(stderr, "sampling bench: scenes...\n");
-    std::vector<NamedScene> scenes = make_scenes(o, float(w) / h, &notes);
+    std::vector<NamedScene> scenes;
+    for (NamedScene& s : make_scenes(o, float(w) / h, &notes))
+        if (selected(o.scenes, s.name)) scenes.push_back(std::move(s));
 
     // ---- Accuracy against time ----
     std::vector<Run> runs;
-    std::ostringstream acc_csv;
-    acc_csv << "scene,sky,sampler,spp,seconds,rmse,rel_mse,firefly\n";
-    for (const NamedScene& sc : scenes) {
-        Accel accel(sc.scene);
-        for (const NamedSky& sky : skies) {
-            std::fprintf(stderr, "sampling bench: %s / %s (reference %d spp)\n", sc.name.c_str(), sky.name.c_str(), ref_spp);
-            Image ref = reference(accel, sc, sky, w, h, ref_spp, depth, cache);
-            for (const std::string& name : samplers) {
-                EnvLight light(sky.sky, 0.3f, parse_sky_sampler(name));
-                for (int spp : spps) {
-                    auto t = Clock::now();
-                    light.set_sky(sky.sky);  // a frame: rebuild, then render
-                    RenderResult r = render(accel, light, sc.camera, w, h, spp, 7, depth);
-                    double secs = seconds_since(t);
-                    ErrorStats e = compare(r.color, ref);
-                    runs.push_back({sc.name, sky.name, name, spp, secs, e.rmse, e.rel_mse, e.firefly_share});
-                    acc_csv << sc.name << "," << sky.name << "," << name << "," << spp << "," << secs << "," << e.rmse << ","
-                            << e.rel_mse << "," << e.firefly_share << "\n";
+    std::ostringstream acc_csv, sum_csv, eq;
+    acc_csv << "scene,sky,sampler,spp,seed,render_seconds,rebuild_seconds,rmse,rel_mse,firefly,trimmed_rmse\n";
+    sum_csv << "scene,sky,sampler,spp,seconds,trimmed_rmse,trimmed_rmse_std,rmse,rel_mse,firefly\n";
+    eq << "| scene | sky | sampler | trimmed RMSE at cdf's time | rel. MSE at max spp | time to cdf's error (ms) | speed-up vs cdf "
+          "[min, max over seeds] | spp gain vs cdf | ms per spp | fireflies |\n|---|---|---|---|---|---|---|---|---|---|\n";
+    std::map<std::string, std::vector<double>> speedups, sunny_speedups, spp_gains, sunny_spp_gains;
+    std::map<std::string, std::vector<double>> sunny_low, sunny_high;  // per-seed extremes of the sunny speed-ups
+    // Spp needed to reach `target` on a curve (log-log; the Monte Carlo rate outside the range).
+    auto monotone = [](std::vector<double> err) {  // noise: keep an error curve from rising
+        for (size_t k = 1; k < err.size(); ++k) err[k] = std::min(err[k], err[k - 1]);
+        return err;
+    };
+    auto spp_to_reach = [&](const std::vector<double>& spp, std::vector<double> err, double target) {
+        err = monotone(err);
+        std::vector<double> er(err.rbegin(), err.rend()), sr(spp.rbegin(), spp.rend());
+        for (size_t k = 1; k < er.size(); ++k) er[k] = std::max(er[k], er[k - 1]);
+        return loglog_at(er, sr, target, -2.0);
+    };
+    if (run_accuracy)
+        for (const NamedScene& sc : scenes) {
+            Accel accel(sc.scene);
+            for (const NamedSky& sky : skies) {
+                std::fprintf(stderr, "sampling bench: %s / %s (reference %d spp)\n", sc.name.c_str(), sky.name.c_str(), ref_spp);
+                Image ref = reference(accel, sc, sky, w, h, ref_spp, depth, cache);
+                std::map<std::string, std::unique_ptr<EnvLight>> lights;
+                for (const std::string& name : samplers) lights[name] = std::make_unique<EnvLight>(sky.sky, 0.3f, parse_sky_sampler(name));
+                // Samplers interleaved inside each (seed, spp): the machine's load falls on all alike.
+                for (int seed = 0; seed < seeds; ++seed)
+                    for (int spp : spps)
+                        for (const std::string& name : samplers) {
+                            EnvLight& light = *lights[name];
+                            auto t0 = Clock::now();
+                            light.set_sky(sky.sky);  // a frame: rebuild, then render
+                            double rebuild = seconds_since(t0);
+                            auto t1 = Clock::now();
+                            RenderResult r = render(accel, light, sc.camera, w, h, spp, 7 + 7919 * uint64_t(seed), depth);
+                            double secs = seconds_since(t1);
+                            ErrorStats e = compare(r.color, ref);
+                            runs.push_back({sc.name, sky.name, name, spp, seed, secs, rebuild, e.rmse, e.rel_mse, e.firefly_share,
+                                            e.trimmed_rmse});
+                            acc_csv << sc.name << "," << sky.name << "," << name << "," << spp << "," << seed << "," << secs << ","
+                                    << rebuild << "," << e.rmse << "," << e.rel_mse << "," << e.firefly_share << "," << e.trimmed_rmse
+                                    << "\n";
+                        }
+                // Curves and the cost model.
+                std::map<std::string, Curve> curves;
+                for (const std::string& name : samplers) {
+                    Curve& c = curves[name];
+                    double secs = 0, spp_total = 0;
+                    std::vector<double> rebuilds;
+                    for (int spp : spps) {
+                        c.spp.push_back(spp);
+                        c.rmse.emplace_back();
+                        double rel = 0, ff = 0, full = 0;
+                        for (const Run& r : runs)
+                            if (r.scene == sc.name && r.sky == sky.name && r.sampler == name && r.spp == spp) {
+                                c.rmse.back().push_back(r.trimmed_rmse);
+                                rel += r.rel_mse / seeds, ff += r.firefly / seeds, full += r.rmse / seeds;
+                                secs += r.render_seconds, spp_total += spp;
+                                rebuilds.push_back(r.rebuild_seconds);
+                            }
+                        c.rel_mse.push_back(rel), c.firefly.push_back(ff), c.full_rmse.push_back(full);
+                    }
+                    c.seconds_per_spp = secs / spp_total;
+                    c.rebuild_seconds = median(rebuilds);
+                    for (size_t k = 0; k < c.spp.size(); ++k)
+                        sum_csv << sc.name << "," << sky.name << "," << name << "," << c.spp[k] << "," << c.seconds_at(c.spp[k]) << ","
+                                << c.mean_rmse(k) << "," << c.std_rmse(k) << "," << c.full_rmse[k] << "," << c.rel_mse[k] << ","
+                                << c.firefly[k] << "\n";
+                }
+                if (!curves.count("cdf")) continue;
+                const Curve& cdf = curves["cdf"];
+                const size_t top = cdf.spp.size() - 1;
+                std::vector<double> cdf_mean(cdf.spp.size());
+                for (size_t k = 0; k < cdf_mean.size(); ++k) cdf_mean[k] = cdf.mean_rmse(k);
+                const double target = monotone(cdf_mean).back(), t_cdf = cdf.seconds_at(cdf.spp[top]);
+                for (const std::string& name : samplers) {
+                    const Curve& c = curves[name];
+                    std::vector<double> mean(c.spp.size());
+                    for (size_t k = 0; k < mean.size(); ++k) mean[k] = c.mean_rmse(k);
+                    double need = spp_to_reach(c.spp, mean, target);
+                    double speedup = t_cdf / c.seconds_at(need), gain = cdf.spp[top] / need;
+                    // Per seed: both curves of that seed, so the spread shows the Monte Carlo noise.
+                    double lo = 1e300, hi = 0;
+                    for (int k = 0; k < seeds; ++k) {
+                        std::vector<double> ek(c.spp.size()), ck(cdf.spp.size());
+                        for (size_t l = 0; l < ek.size(); ++l) ek[l] = c.rmse[l][size_t(k)], ck[l] = cdf.rmse[l][size_t(k)];
+                        double sk = t_cdf / c.seconds_at(spp_to_reach(c.spp, ek, monotone(ck).back()));
+                        lo = std::min(lo, sk), hi = std::max(hi, sk);
+                    }
+                    double spp_at_equal_time = std::max((t_cdf - c.rebuild_seconds) / c.seconds_per_spp, 1e-3);
+                    double e_at = loglog_at(c.spp, mean, spp_at_equal_time, -0.5);
+                    speedups[name].push_back(speedup), spp_gains[name].push_back(gain);
+                    if (sky.name == "clear") {
+                        sunny_speedups[name].push_back(speedup), sunny_spp_gains[name].push_back(gain);
+                        sunny_low[name].push_back(lo), sunny_high[name].push_back(hi);
+                    }
+                    eq << "| " << sc.name << " | " << sky.name << " | " << name << " | " << fmt("%.4g", e_at) << " | "
+                       << fmt("%.3g", c.rel_mse.back()) << " | " << fmt("%.3g", 1e3 * c.seconds_at(need)) << " | " << fmt("%.2f", speedup)
+                       << " [" << fmt("%.2f", lo) << ", " << fmt("%.2f", hi) << "] | " << fmt("%.2f", gain) << " | "
+                       << fmt("%.3g", 1e3 * c.seconds_per_spp) << " | " << fmt("%.2f", c.firefly.back()) << " |\n";
                 }
             }
         }
+    if (run_accuracy) {
+        write_file(out / "accuracy.csv", acc_csv.str());
+        write_file(out / "accuracy_summary.csv", sum_csv.str());
     }
-    write_file(out / "accuracy.csv", acc_csv.str());
-
-    // Equal-time and time-to-error tables, per scene and sky, against "cdf+mis".
-    std::ostringstream eq;
-    eq << "| scene | sky | sampler | RMSE at cdf's time | rel. MSE at max spp | time to cdf's error (s) | speed-up vs cdf | spp gain vs cdf | fireflies |\n"
-          "|---|---|---|---|---|---|---|---|---|\n";
-    std::map<std::string, std::vector<double>> speedups;  // sampler -> speed-ups over all cases
-    std::map<std::string, std::vector<double>> sunny_speedups;
-    std::map<std::string, std::vector<double>> spp_gains, sunny_spp_gains;  // same at equal spp
-    for (const NamedScene& sc : scenes)
-        for (const NamedSky& sky : skies) {
-            auto series = [&](const std::string& name, std::vector<double>* t, std::vector<double>* e, const Run** last,
-                              std::vector<double>* spp = nullptr) {
-                for (const Run& r : runs)
-                    if (r.scene == sc.name && r.sky == sky.name && r.sampler == name) {
-                        t->push_back(r.seconds), e->push_back(r.rmse), *last = &r;
-                        if (spp) spp->push_back(r.spp);
-                    }
-            };
-            std::vector<double> tc, ec;
-            const Run* last_cdf = nullptr;
-            series("cdf", &tc, &ec, &last_cdf);
-            if (tc.size() < 2) continue;
-            double t_ref = tc.back(), e_target = ec.back();
-            for (const std::string& name : samplers) {
-                std::vector<double> t, e, sp;
-                const Run* last = nullptr;
-                series(name, &t, &e, &last, &sp);
-                if (t.size() < 2) continue;
-                double e_at = loglog_at(t, e, t_ref, -0.5);
-                // Time to reach the target error: invert the (decreasing) error curve.
-                std::vector<double> er(e.rbegin(), e.rend()), tr(t.rbegin(), t.rend());
-                // Noise can make the curve non-monotone: keep its running minimum.
-                for (size_t k = 1; k < er.size(); ++k) er[k] = std::max(er[k], er[k - 1]);
-                double t_at = loglog_at(er, tr, e_target, -2.0);
-                double speedup = t_ref / t_at;
-                // The same at equal samples (deterministic: no timing noise): spp needed for cdf's error.
-                std::vector<double> spr(sp.rbegin(), sp.rend());
-                double spp_at = loglog_at(er, spr, e_target, -2.0);
-                double spp_gain = double(spps.back()) / spp_at;
-                spp_gains[name].push_back(spp_gain);
-                if (sky.name == "clear") sunny_spp_gains[name].push_back(spp_gain);
-                speedups[name].push_back(speedup);
-                if (sky.name == "clear") sunny_speedups[name].push_back(speedup);
-                eq << "| " << sc.name << " | " << sky.name << " | " << name << " | " << fmt("%.4g", e_at) << " | "
-                   << fmt("%.3g", last->rel_mse) << " | " << fmt("%.3g", t_at) << " | " << fmt("%.2f", speedup) << " | "
-                   << fmt("%.2f", spp_gain) << " | "
-                   << fmt("%.2f", last->firefly) << " |\n";
-            }
-        }
 
     // ---- Rebuild cost ----
     std::fprintf(stderr, "sampling bench: rebuild timings\n");
     std::vector<int> sizes = o.quick ? std::vector<int>{256, 1024, 2048} : std::vector<int>{256, 512, 1024, 2048, 4096};
+    if (!run_rebuild) sizes.clear();
     std::ostringstream rb_csv, rb;
     rb_csv << "sampler,n,threads,ms,ratio_to_floor,memory_mib\n";
     rb << "| sampler | N | threads | rebuild ms | floor ms | ratio to floor | memory MiB |\n|---|---|---|---|---|---|---|\n";
     std::map<std::string, double> ratio_2048;
-    std::vector<std::string> build_names = {"cdf", "alias", "mip", "sun+cdf", "sun+alias", "sun+mip", "cdf+mis", "alias+mis", "mip+mis"};
+    std::vector<std::string> build_names;
+    for (const std::string& name : {"cdf", "alias", "mip", "sun+cdf", "sun+alias", "sun+mip", "cdf+mis", "alias+mis", "mip+mis"})
+        if (selected(o.samplers, name)) build_names.push_back(name);
     for (int n : sizes) {
         auto sky = clear_sky(n);
         for (int threads : {1, 0}) {
@@ -410,13 +437,14 @@ int run_sampling_bench(const BenchOptions& o) {
             const int reps = n >= 2048 ? 3 : 7;
             for (const std::string& name : build_names) {
                 EnvLight light(sky, 0.3f, parse_sky_sampler(name));
+                light.set_sky(sky);  // steady state: a frame's buffers are allocated by the first two frames
                 std::vector<float> scratch;
                 std::vector<double> rs, fs_;
                 for (int k = 0; k < reps; ++k) {
                     auto t = Clock::now();
                     light.set_sky(sky);
                     rs.push_back(seconds_since(t));
-                    fs_.push_back(streaming_floor(*sky, &scratch));  // interleaved: same load on the machine
+                    fs_.push_back(time_streaming_floor(*sky, &scratch));  // interleaved: same load on the machine
                 }
                 double r = median(rs), f = median(fs_);
                 std::string th = threads == 1 ? "1" : "all";
@@ -427,18 +455,18 @@ int run_sampling_bench(const BenchOptions& o) {
             }
             std::vector<float> scratch;
             std::vector<double> fs_;
-            for (int k = 0; k < reps; ++k) fs_.push_back(streaming_floor(*sky, &scratch));
+            for (int k = 0; k < reps; ++k) fs_.push_back(time_streaming_floor(*sky, &scratch));
             rb_csv << "floor," << n << "," << (threads == 1 ? "1" : "all") << "," << median(fs_) * 1e3 << ",1,0\n";
         }
     }
-    write_file(out / "rebuild.csv", rb_csv.str());
+    if (run_rebuild) write_file(out / "rebuild.csv", rb_csv.str());
 
     // ---- Failure cases (on the plaza, or the first scene) ----
     std::fprintf(stderr, "sampling bench: failure cases\n");
     std::ostringstream fl_csv, fl;
     fl_csv << "case,sampler,rmse,rel_mse,firefly\n";
     fl << "| case | sampler | RMSE | rel. MSE | firefly share |\n|---|---|---|---|---|\n";
-    {
+    if (run_failures && !scenes.empty()) {
         const NamedScene& sc = scenes.back();
         Accel accel(sc.scene);
         const int n = 128, spp = o.quick ? 8 : 32;
@@ -494,66 +522,90 @@ int run_sampling_bench(const BenchOptions& o) {
             }
         }
     }
-    write_file(out / "failures.csv", fl_csv.str());
+    if (run_failures) write_file(out / "failures.csv", fl_csv.str());
 
     // ---- Charts ----
-    fs::path script = out / "charts.py";
-    write_file(script, kChartScript);
-    std::string cmd = "/usr/bin/python3 '" + script.string() + "' '" + out.string() + "' 2>&1";
+    std::string script = data_path("bench/sampling_charts.py");
+    std::string cmd = "/usr/bin/python3 '" + script + "' '" + out.string() + "' 2>&1";
     int rc = std::system(cmd.c_str());
     if (rc != 0) notes += "- chart script failed (exit " + std::to_string(rc) + "); tables are complete\n";
 
-    // ---- Recommendation: fastest median time-to-error over all cases, among MIS samplers ----
+    // ---- Recommendation: fastest median time to plain cdf's error over all cases ----
     auto med = [](std::vector<double> v) { return v.empty() ? 0.0 : median(std::move(v)); };
     std::string best;
     double best_speed = 0;
-    // Chosen at equal spp (deterministic); the wall-time speed-ups beside it are too noisy on a
-    // shared machine at quick-mode sizes to rank samplers that differ by less than ~1.5x.
-    for (const auto& [name, v] : spp_gains)
+    for (const auto& [name, v] : speedups)
         if (med(v) > best_speed) best_speed = med(v), best = name;
     std::string def = sky_sampler_name(recommended_sky_sampler()) + "+mis";
+    std::string command = "dynsky bench sampling" + std::string(o.quick ? " --quick" : "") + " --seeds " + std::to_string(seeds);
+    auto list_option = [&](const char* flag, const std::vector<std::string>& v) {
+        if (v.empty()) return;
+        command += std::string(" ") + flag + " ";
+        for (size_t k = 0; k < v.size(); ++k) command += (k ? "," : "") + v[k];
+    };
+    list_option("--skies", o.skies), list_option("--scenes", o.scenes), list_option("--samplers", o.samplers);
+    list_option("--parts", o.parts);
+    command += " --out " + o.out;
 
     std::ostringstream md;
     md << "# Sky importance sampling benchmark\n\n"
-       << "Produced by `dynsky bench sampling" << (o.quick ? " --quick" : "") << " --out " << o.out << "` in "
-       << fmt("%.0f", seconds_since(start)) << " s.\n\n"
+       << "Produced by `" << command << "` in " << fmt("%.0f", seconds_since(start)) << " s.\n\n"
        << "Machine: " << machine_description() << ".\n\n"
-       << "Settings: sky " << sky_n << "x" << sky_n << ", image " << w << "x" << h << ", max depth " << depth
-       << ", reference " << ref_spp << " spp (sun+cdf+mis, cached in " << cache.string() << "), MIS (power heuristic) throughout.\n\n"
-       << "## Recommendation\n\n"
-       << "Best median gain at equal samples per pixel over all scenes and skies: **" << best << "** ("
-       << fmt("%.2f", best_speed) << "x fewer spp than plain cdf for cdf's error; median wall-time speed-up "
-       << fmt("%.2f", med(speedups[best])) << "x). The renderer's default is **" << def
-       << "** (EnvLight: without +mis, the render command adds it).\n\n"
-       << "Under the clear (sunny) sky, median over the scenes of the default's speed-up to plain cdf's error: "
-       << fmt("%.2f", med(sunny_speedups[def])) << "x (goal: >= 2x).\n\n"
-       << "Rebuild at 2048 of the default (" << def << "), all threads: " << fmt("%.2f", ratio_2048[def])
-       << "x the streaming floor (goal: <= 2x); plain cdf: " << fmt("%.2f", ratio_2048["cdf"]) << "x.\n\n"
-       << "Median speed-up to plain cdf's error over all scene x sky cases (one seed per point: differences "
-          "below about 1.5x are within run-to-run noise; the tiny quick-mode renders take milliseconds, so wall "
-          "times are dominated by the machine's load). The spp gain is the same ratio at equal samples per pixel "
-          "(deterministic, no timing noise; it ignores the per-sample cost):\n\n"
-          "| sampler | median speed-up | sunny (clear) median | median spp gain | sunny spp gain |\n|---|---|---|---|---|\n";
-    for (const auto& [name, v] : speedups)
-        md << "| " << name << " | " << fmt("%.2f", med(v)) << " | " << fmt("%.2f", med(sunny_speedups[name])) << " | "
-           << fmt("%.2f", med(spp_gains[name])) << " | " << fmt("%.2f", med(sunny_spp_gains[name])) << " |\n";
-    md << "\n## Skies\n\n";
-    for (const NamedSky& s : skies) md << "- " << s.name << ": " << s.description << "\n";
-    md << "\n## Scenes\n\n";
-    for (const NamedScene& s : scenes) md << "- " << s.name << ": " << s.description << "\n";
-    md << "\n## Equal time and time to error\n\n"
-       << "Baseline: plain cdf (the previous renderer). RMSE interpolated (log-log) at the wall time cdf takes at its "
-          "highest spp; time for each sampler to reach cdf's error at that spp; speed-up = cdf's time / that time. "
-          "Outside the measured range the curves are extended at the Monte Carlo rate (RMSE ~ t^-1/2). Wall time "
-          "includes the per-frame rebuild. Rel. MSE also shows bias: a biased sampler stalls above the others.\n\n"
-       << eq.str() << "\n";
-    for (const NamedScene& sc : scenes)
-        for (const NamedSky& sky : skies) md << "![" << sc.name << " " << sky.name << "](rmse_" << sc.name << "_" << sky.name << ".png)\n";
-    md << "\n## Per-frame rebuild\n\nMedian of repeated rebuilds (EnvLight::set_sky: weights + sampler tables) of a clear sky, "
+       << "Settings: sky " << sky_n << "x" << sky_n << ", image " << w << "x" << h << ", max depth " << depth << ", " << seeds
+       << " seeds per point, reference " << ref_spp << " spp (sun+cdf+mis, cached in " << cache.string()
+       << "), MIS (power heuristic) throughout" << (run_accuracy || run_failures ? "" : " (accuracy and failures not run)") << ".\n\n";
+    if (run_accuracy) {
+        md << "## Recommendation\n\n"
+           << "Best median speed-up to plain cdf's error over the scenes and skies measured: **" << best << "** ("
+           << fmt("%.2f", best_speed) << "x; " << fmt("%.2f", med(spp_gains[best]))
+           << "x fewer spp). The renderer's default is **" << def << "** (EnvLight: without +mis, the render command adds it).\n\n"
+           << "Under the clear (sunny) sky, median over the scenes of the default's speed-up to plain cdf's error: "
+           << fmt("%.2f", med(sunny_speedups[def])) << "x (per-seed range of the scenes' speed-ups: " << fmt("%.2f", med(sunny_low[def]))
+           << "x to " << fmt("%.2f", med(sunny_high[def])) << "x, medians over the scenes; goal: >= 2x).\n\n";
+    }
+    if (run_rebuild)
+        md << "Rebuild at 2048 of the default (" << def << "), all threads: " << fmt("%.2f", ratio_2048[def])
+           << "x the streaming floor (goal: <= 2x); plain cdf: " << fmt("%.2f", ratio_2048["cdf"]) << "x.\n\n";
+    if (run_accuracy) {
+        md << "How time is measured: every render is timed apart from its frame's rebuild; a sampler's cost is modelled as "
+              "rebuild + spp x (seconds per spp), both pooled over all its renders of that scene and sky (samplers interleaved "
+              "in the same loop, so the machine's load falls on all alike). Error = RMSE without the 0.1% of pixels with the largest error "
+              "(as in path-guiding comparisons, e.g. Mueller et al. 2017: otherwise a handful of fireflies, paths that reach "
+              "the tiny sun through a glossy bounce, which no sky sampler helps, decide the whole error; the untrimmed RMSE "
+              "and the fireflies' share are in the tables and CSV files). Time to error = that cost at the spp where the "
+              "sampler's mean error (over seeds) reaches plain cdf's mean error at its highest spp; speed-up = cdf's time / that "
+              "time; the bracket is the range of the same speed-up computed from each seed's curves alone. The spp gain is "
+              "the same ratio at equal samples per pixel.\n\n"
+              "| sampler | median speed-up | sunny (clear) median | sunny per-seed range | median spp gain | sunny spp gain |\n"
+              "|---|---|---|---|---|---|\n";
+        for (const auto& [name, v] : speedups)
+            md << "| " << name << " | " << fmt("%.2f", med(v)) << " | " << fmt("%.2f", med(sunny_speedups[name])) << " | "
+               << fmt("%.2f", med(sunny_low[name])) << " - " << fmt("%.2f", med(sunny_high[name])) << " | "
+               << fmt("%.2f", med(spp_gains[name])) << " | " << fmt("%.2f", med(sunny_spp_gains[name])) << " |\n";
+    }
+    if (run_accuracy) {
+        md << "\n## Skies\n\n";
+        for (const NamedSky& s : skies) md << "- " << s.name << ": " << s.description << "\n";
+        md << "\n## Scenes\n\n";
+        for (const NamedScene& s : scenes) md << "- " << s.name << ": " << s.description << "\n";
+    }
+    if (run_accuracy) {
+        md << "\n## Equal time and time to error\n\n"
+           << "Baseline: plain cdf. Trimmed RMSE (mean over seeds) interpolated log-log at the time cdf takes for its highest spp; "
+              "time for each sampler to reach cdf's error there (modelled as above); outside the measured range the "
+              "curves go on at the Monte Carlo rate. Rel. MSE also shows bias: a biased sampler stalls above the others. "
+              "Charts: mean trimmed RMSE with one standard deviation over seeds, against spp and against modelled frame time.\n\n"
+           << eq.str() << "\n";
+        for (const NamedScene& sc : scenes)
+            for (const NamedSky& sky : skies)
+                md << "![" << sc.name << " " << sky.name << "](rmse_" << sc.name << "_" << sky.name << ".png)\n";
+    }
+    if (run_rebuild) md << "\n## Per-frame rebuild\n\nMedian of repeated rebuilds (EnvLight::set_sky: weights + sampler tables) of a clear sky, "
           "beside the streaming floor (one parallel pass reading the RGB image and writing one float per pixel) "
           "measured interleaved in the same run.\n\n"
-       << rb.str() << "\n![rebuild](rebuild.png)\n\n"
-       << "## Failure cases\n\nPlaza, " << w << "x" << h << ", 128x128 skies; reference " << ref_spp / 2 << " spp with sun+cdf+mis. "
+       << rb.str() << "\n![rebuild](rebuild.png)\n\n";
+    if (run_failures)
+        md << "## Failure cases\n\nPlaza, " << w << "x" << h << ", 128x128 skies; reference " << ref_spp / 2 << " spp with sun+cdf+mis. "
        << "Firefly share: fraction of the squared error held by the brightest 0.1% of pixels.\n\n"
        << fl.str() << "\n![failures](failures.png)\n\n";
     if (!notes.empty()) md << "## Notes\n\n" << notes << "\n";
@@ -574,6 +626,19 @@ void register_bench_commands(CLI::App& app) {
     s->add_option("--out,-o", o->out, "Report folder (created)")->capture_default_str();
     s->add_option("--cache", o->cache, "Folder for cached reference renders (default: OUT/cache)");
     s->add_option("--shared", o->shared, "The shared data folder (scenes, photographs)")->capture_default_str();
+    s->add_option("--seeds", o->seeds, "Renders per point with different seeds (error bars; default 2 with --quick, else 4)")
+        ->check(CLI::Range(1, 64));
+    s->add_option("--skies", o->skies, "Only these skies: clear, cumulus, overcast, photo (default all)")
+        ->delimiter(',')
+        ->check(CLI::IsMember({"clear", "cumulus", "overcast", "photo"}));
+    s->add_option("--scenes", o->scenes, "Only these scenes: diffuse, glossy, plaza (default all)")
+        ->delimiter(',')
+        ->check(CLI::IsMember({"diffuse", "glossy", "plaza"}));
+    s->add_option("--samplers", o->samplers, "Only these samplers, e.g. cdf,cdf+mis,alias+mis (default all; "
+                                             "plain cdf is the baseline of every speed-up)")->delimiter(',');
+    s->add_option("--parts", o->parts, "Only these parts: accuracy, rebuild, failures (default all)")
+        ->delimiter(',')
+        ->check(CLI::IsMember({"accuracy", "rebuild", "failures"}));
     s->callback([o] { run_sampling_bench(*o); });
 }
 

@@ -1,21 +1,74 @@
 #include "renderer/distribution_2d.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace dynsky {
 
 void Distribution2D::build(const float* weights, int width, int height) {
-    build_rows(width, height, [&](int y, float* out) {
-        std::copy(weights + size_t(y) * width, weights + size_t(y + 1) * width, out);
+    std::vector<float> copy(weights, weights + size_t(width) * height);
+    build_in_place(&copy, width, height);
+}
+
+void Distribution2D::build_in_place(std::vector<float>* weights, int width, int height, const uint16_t* baseline,
+                                    float offset) {
+    width_ = width, height_ = height, blocks_ = (width + kBlock - 1) / kBlock;
+    baseline_ = offset > 0 ? baseline : nullptr;
+    offset_ = offset;
+    weights_.swap(*weights);
+    weights_.resize(size_t(width) * height);
+    block_sums_.resize(size_t(blocks_) * height);
+    marginal_.resize(size_t(height) + 1);
+    tbb::parallel_for(tbb::blocked_range<int>(0, height, 16), [&](const tbb::blocked_range<int>& rows) {
+        for (int y = rows.begin(); y != rows.end(); ++y) sum_blocks(y);
     });
+    finish_marginal();
+}
+
+void Distribution2D::sum_blocks(int y) {
+    const size_t row = size_t(y) * width_;
+    const float* w = &weights_[row];
+    float* out = &block_sums_[size_t(y) * blocks_];
+    float acc = 0;  // a running sum of non-negative terms: never decreases
+    int b = 0;
+#if defined(__SSE2__)
+    if (baseline_) {  // the MIS-compensated weights, computed on the fly: the pass only reads
+        const uint16_t* base = baseline_ + row;
+        const __m128 f = _mm_set1_ps(offset_), zero = _mm_setzero_ps();
+        const __m128i zi = _mm_setzero_si128();
+        alignas(16) float lanes[4];
+        for (; (b + 1) * kBlock <= width_; ++b) {
+            __m128 s = zero;
+            for (int x = b * kBlock; x < (b + 1) * kBlock; x += 8) {
+                __m128i j8 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(base + x));
+                __m128 j0 = _mm_cvtepi32_ps(_mm_unpacklo_epi16(j8, zi)), j1 = _mm_cvtepi32_ps(_mm_unpackhi_epi16(j8, zi));
+                s = _mm_add_ps(s, _mm_max_ps(_mm_sub_ps(_mm_loadu_ps(w + x), _mm_mul_ps(f, j0)), zero));
+                s = _mm_add_ps(s, _mm_max_ps(_mm_sub_ps(_mm_loadu_ps(w + x + 4), _mm_mul_ps(f, j1)), zero));
+            }
+            _mm_store_ps(lanes, s);
+            out[b] = acc += (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
+        }
+    }
+#endif
+    for (; b < blocks_; ++b) {
+        const int lo = b * kBlock, hi = std::min(lo + kBlock, width_);
+        float s = 0;
+        for (int x = lo; x < hi; ++x) s += cell_weight(row + x);  // vectorised (reassociation allowed here)
+        out[b] = acc += s;
+    }
 }
 
 void Distribution2D::finish_marginal() {
     double total = 0;
     marginal_[0] = 0;
     for (int y = 0; y < height_; ++y) {
-        total += row(y)[width_];
+        total += block_sums_[size_t(y) * blocks_ + blocks_ - 1];
         marginal_[size_t(y) + 1] = total;
     }
     total_ = total;
@@ -32,6 +85,15 @@ static int find_interval(const T* cdf, int n, T t) {
     return i;
 }
 
+// The same over inclusive running sums s[0..n) (block b spans [s[b-1], s[b]), s[-1] = 0).
+static int find_block(const float* s, int n, float t) {
+    int b = std::min(int(std::upper_bound(s, s + n, t) - s), n - 1);
+    auto lower = [&](int i) { return i > 0 ? s[i - 1] : 0.0f; };
+    while (b < n - 1 && s[b] <= lower(b)) ++b;
+    while (b > 0 && s[b] <= lower(b)) --b;
+    return b;
+}
+
 // (cell + frac) / n can round up into the next cell in float when cell is large: keep it inside.
 static float in_cell(int cell, float frac, int n) {
     float v = (cell + frac) / n;
@@ -46,23 +108,33 @@ bool Distribution2D::sample(const Vec2& u, Vec2* xy, float* pdf, int* cell_x, in
     int y = find_interval(marginal_.data(), height_, ty);
     double m0 = marginal_[size_t(y)], m1 = marginal_[size_t(y) + 1];
     float dy = m1 > m0 ? float((ty - m0) / (m1 - m0)) : 0.5f;
-    const float* p = row(y);
-    float tx = u.x() * p[width_];
-    int x = find_interval(p, width_, tx);
-    float c0 = p[x], c1 = p[x + 1];
-    float dx = c1 > c0 ? (tx - c0) / (c1 - c0) : 0.5f;
+    const float* bs = &block_sums_[size_t(y) * blocks_];
+    float tx = u.x() * bs[blocks_ - 1];
+    int b = find_block(bs, blocks_, tx);
+    float t = tx - (b > 0 ? bs[b - 1] : 0.0f);
+    // Walk the block's cells; rounding can leave t past the last one: then take the last lit cell.
+    const int lo = b * kBlock, hi = std::min(lo + kBlock, width_);
+    const size_t row = size_t(y) * width_;
+    int x = -1, last_lit = lo;
+    float wx = 0;
+    for (int k = lo; k < hi; ++k) {
+        const float wk = cell_weight(row + k);
+        if (!(wk > 0)) continue;
+        last_lit = k, wx = wk;
+        if (t < wk) {
+            x = k;
+            break;
+        }
+        t -= wk;
+    }
+    if (x < 0) x = last_lit, t = wx;
+    float dx = wx > 0 ? t / wx : 0.5f;
     dx = std::clamp(dx, 0.0f, 0x1.fffffep-1f), dy = std::clamp(dy, 0.0f, 0x1.fffffep-1f);
     *xy = Vec2(in_cell(x, dx, width_), in_cell(y, dy, height_));
     *pdf = cell_pdf(x, y);
     if (cell_x) *cell_x = x;
     if (cell_y) *cell_y = y;
     return *pdf > 0;
-}
-
-float Distribution2D::cell_pdf(int x, int y) const {
-    const float* p = row(y);
-    // P(row) P(cell | row) W H = (row total / total) ((p[x+1] - p[x]) / row total) W H.
-    return (p[x + 1] - p[x]) * pdf_scale_;
 }
 
 float Distribution2D::pdf(const Vec2& xy) const {
@@ -72,7 +144,7 @@ float Distribution2D::pdf(const Vec2& xy) const {
 }
 
 size_t Distribution2D::memory_bytes() const {
-    return row_prefix_.capacity() * sizeof(float) + marginal_.capacity() * sizeof(double);
+    return weights_.capacity() * sizeof(float) + block_sums_.capacity() * sizeof(float) + marginal_.capacity() * sizeof(double);
 }
 
 }  // namespace dynsky

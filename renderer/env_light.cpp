@@ -2,6 +2,11 @@
 
 #include <tbb/parallel_for.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+#include <algorithm>
 #include <chrono>
 #include <limits>
 
@@ -26,11 +31,94 @@ const Distribution2D& EnvLight::distribution() const {
 }
 
 size_t EnvLight::memory_bytes() const {
-    return weights_.capacity() * sizeof(float) + solid_angle_table_.capacity() * sizeof(uint16_t) + sampler_->memory_bytes();
+    return weights_.capacity() * sizeof(float) + (jacobian_table_.capacity() + jacobian_pair_table_.capacity()) * sizeof(uint16_t) +
+           sampler_->memory_bytes();
 }
 
 // Radiance as sampled: NaN, infinite and negative channels count as 0.
 static inline float sane(float x) { return x >= 0 && x <= std::numeric_limits<float>::max() ? x : 0.0f; }
+
+namespace {
+
+// Row stride of the pair table: groups of four pixels, (jac x 4, cos x jac x 4), the last one padded.
+inline size_t pair_row_stride(int n) { return 2 * size_t((n + 3) & ~3); }
+
+struct RowSums {
+    float w = 0, er = 0, eg = 0, eb = 0;  // sum of weights, of RGB x cos x jacobian
+    int bad = 0;                          // pixels with a NaN, infinite or negative channel
+};
+
+// One row of the per-frame pass: weights w = luminance x jacobian, and the sums. Checks every
+// channel (sane) and counts bad pixels; the slow path, taken only for rows that hold bad values.
+// jt: the row's (jacobian, cos x jacobian) pairs, grouped by four: pixel i's at 2 (i & ~3) + (i & 3), +4.
+RowSums weigh_row_checked(const float* rgb, const uint16_t* jt, int n, float* w) {
+    RowSums s;
+    for (int i = 0; i < n; ++i) {
+        float r0 = rgb[3 * i], g0 = rgb[3 * i + 1], b0 = rgb[3 * i + 2];
+        float r = sane(r0), g = sane(g0), b = sane(b0);
+        s.bad += (r != r0) | (g != g0) | (b != b0);  // NaN != NaN too
+        const int at = 2 * (i & ~3) + (i & 3);
+        float jac = float(jt[at]), cjac = float(jt[at + 4]);
+        w[i] = (0.2126f * r + 0.7152f * g + 0.0722f * b) * jac;
+        s.w += w[i];
+        s.er += r * cjac, s.eg += g * cjac, s.eb += b * cjac;
+    }
+    return s;
+}
+
+// The same assuming a sane row, without per-channel checks: false (the row must be redone by
+// weigh_row_checked) if it held a NaN, an infinity or a negative value. A NaN or an infinity in any
+// channel makes its weight non-finite (NaN x 0 = NaN, Inf x 0 = NaN off the disc), and so the sum
+// of weights; a negative value sets a sign bit in the OR of all channels (-0 too, which only costs
+// the slow path). This keeps the common case at a few instructions per pixel.
+bool weigh_row_fast(const float* rgb, const uint16_t* jt, int n, float* w, RowSums* out) {
+    RowSums s;
+    float lowest = 0;
+    int i = 0;
+#if defined(__SSE2__)
+    {
+        // Four pixels a step: three loads deinterleaved by shuffles into R, G and B lanes.
+        const __m128 kr = _mm_set1_ps(0.2126f), kg = _mm_set1_ps(0.7152f), kb = _mm_set1_ps(0.0722f);
+        const __m128i zero = _mm_setzero_si128();
+        __m128 vw = _mm_setzero_ps(), vr = vw, vg = vw, vb = vw, vsign = vw;
+        for (; i + 4 <= n; i += 4) {
+            __m128 a = _mm_loadu_ps(rgb + 3 * i), b = _mm_loadu_ps(rgb + 3 * i + 4), c = _mm_loadu_ps(rgb + 3 * i + 8);
+            __m128 t0 = _mm_shuffle_ps(a, b, _MM_SHUFFLE(1, 0, 3, 0));  // r0 r1 g1 b1
+            __m128 t1 = _mm_shuffle_ps(b, c, _MM_SHUFFLE(2, 1, 3, 2));  // r2 g2 r3 g3
+            __m128 r = _mm_shuffle_ps(t0, t1, _MM_SHUFFLE(2, 0, 1, 0));
+            __m128 g = _mm_shuffle_ps(_mm_shuffle_ps(a, t0, _MM_SHUFFLE(2, 2, 1, 1)), t1, _MM_SHUFFLE(3, 1, 2, 0));
+            __m128 bl = _mm_shuffle_ps(_mm_shuffle_ps(a, t0, _MM_SHUFFLE(3, 3, 2, 2)), _mm_shuffle_ps(c, c, _MM_SHUFFLE(3, 3, 0, 0)),
+                                       _MM_SHUFFLE(2, 0, 2, 0));
+            __m128i pairs = _mm_loadu_si128(reinterpret_cast<const __m128i*>(jt + 2 * i));  // jac x 4, cos x jac x 4
+            __m128 jac = _mm_cvtepi32_ps(_mm_unpacklo_epi16(pairs, zero)), cjac = _mm_cvtepi32_ps(_mm_unpackhi_epi16(pairs, zero));
+            __m128 wi = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(kr, r), _mm_mul_ps(kg, g)), _mm_mul_ps(kb, bl)), jac);
+            _mm_storeu_ps(w + i, wi);
+            vw = _mm_add_ps(vw, wi);
+            vr = _mm_add_ps(vr, _mm_mul_ps(r, cjac)), vg = _mm_add_ps(vg, _mm_mul_ps(g, cjac)), vb = _mm_add_ps(vb, _mm_mul_ps(bl, cjac));
+            vsign = _mm_or_ps(vsign, _mm_or_ps(a, _mm_or_ps(b, c)));
+        }
+        alignas(16) float lanes[4][4];
+        _mm_store_ps(lanes[0], vw), _mm_store_ps(lanes[1], vr), _mm_store_ps(lanes[2], vg), _mm_store_ps(lanes[3], vb);
+        for (int k = 0; k < 4; ++k) s.w += lanes[0][k], s.er += lanes[1][k], s.eg += lanes[2][k], s.eb += lanes[3][k];
+        if (_mm_movemask_ps(vsign) != 0) return false;
+    }
+#endif
+    for (; i < n; ++i) {
+        float r = rgb[3 * i], g = rgb[3 * i + 1], b = rgb[3 * i + 2];
+        const int at = 2 * (i & ~3) + (i & 3);
+        float jac = float(jt[at]), cjac = float(jt[at + 4]);
+        w[i] = (0.2126f * r + 0.7152f * g + 0.0722f * b) * jac;
+        s.w += w[i];
+        s.er += r * cjac, s.eg += g * cjac, s.eb += b * cjac;
+        lowest = std::min({lowest, r, g, b});
+    }
+    *out = s;
+    const float kMax = std::numeric_limits<float>::max();
+    // Finite, non-negative sums of finite, non-negative values; anything else: redo the row.
+    return lowest >= 0 && s.w >= 0 && s.w <= kMax && s.er <= kMax && s.eg <= kMax && s.eb <= kMax;
+}
+
+}  // namespace
 
 float EnvLight::jacobian_from_r2(float r2) {
     // sin(x)/x = sum (-1)^k x^(2k) / (2k+1)!, x^2 = (pi^2/4) r^2 <= 2.47: error < 1e-9 with 7 terms.
@@ -55,20 +143,26 @@ void EnvLight::set_sky(std::shared_ptr<const SkyImage> sky) {
     const float du = 2.0f / n;
 
     // Per-pixel solid angle (0 outside the disc) and cos x solid angle depend only on N: tabulated
-    // once, as 16-bit fixed point pairs (relative precision 2e-5, plenty for importance weights
-    // and the ground's irradiance), so the per-frame pass is a branch-free stream that reads
-    // 4 bytes of table per pixel beside the 12 of the image, and vectorises.
+    // once, as 16-bit fixed point (relative precision 2e-5, plenty for importance weights and the
+    // ground's irradiance), so the per-frame pass is a branch-free stream that reads 4 bytes of
+    // table per pixel beside the 12 of the image, and vectorises.
     constexpr float kTableMax = kPi * kPi / 4;  // the largest jacobian (at the zenith)
     constexpr float kToFixed = 65535.0f / kTableMax, kFromFixed = kTableMax / 65535.0f;
     if (table_resolution_ != n) {
-        solid_angle_table_.assign(size_t(n) * n * 2, 0);
+        jacobian_table_.assign(size_t(n) * n, 0);
+        jacobian_pair_table_.assign(size_t(n) * pair_row_stride(n), 0);
+        jacobian_table_sum_ = 0;
         for (int j = 0; j < n; ++j)
             for (int i = 0; i < n; ++i) {
                 float u = (i + 0.5f) * du - 1.0f, v = (j + 0.5f) * du - 1.0f, r2 = u * u + v * v;
                 if (r2 > 1.0f) continue;  // centre below the horizon: the rim is looked up inward
                 float jac = jacobian_from_r2(r2);
-                solid_angle_table_[2 * (size_t(j) * n + i)] = uint16_t(std::lround(jac * kToFixed));
-                solid_angle_table_[2 * (size_t(j) * n + i) + 1] = uint16_t(std::lround(jac * cos_theta_from_r2(r2) * kToFixed));
+                const size_t k = size_t(j) * n + i;
+                // Pairs in groups of four pixels, (jac x 4, cos x jac x 4): one load and two unpacks.
+                const size_t g = size_t(j) * pair_row_stride(n) + 2 * (i & ~3) + (i & 3);
+                jacobian_table_[k] = jacobian_pair_table_[g] = uint16_t(std::lround(jac * kToFixed));
+                jacobian_pair_table_[g + 4] = uint16_t(std::lround(jac * cos_theta_from_r2(r2) * kToFixed));
+                jacobian_table_sum_ += jacobian_table_[k];
             }
         table_resolution_ = n;
     }
@@ -78,30 +172,20 @@ void EnvLight::set_sky(std::shared_ptr<const SkyImage> sky) {
     weights_.resize(size_t(n) * n);
     tbb::parallel_for(tbb::blocked_range<int>(0, n, 16), [&](const tbb::blocked_range<int>& rows) {
         for (int j = rows.begin(); j != rows.end(); ++j) {
+            const uint16_t* jt = &jacobian_pair_table_[size_t(j) * pair_row_stride(n)];
             const float* row = rgb + size_t(j) * n * 3;
-            const uint16_t* t = &solid_angle_table_[size_t(j) * n * 2];
             float* w = &weights_[size_t(j) * n];
-            float er = 0, eg = 0, eb = 0, wsum = 0;
-            size_t bad = 0;
-            for (int i = 0; i < n; ++i) {
-                float r0 = row[3 * i], g0 = row[3 * i + 1], b0 = row[3 * i + 2];
-                float r = sane(r0), g = sane(g0), b = sane(b0);
-                bad += (r != r0) | (g != g0) | (b != b0);  // NaN != NaN too
-                float jac = float(t[2 * i]), cjac = float(t[2 * i + 1]);
-                w[i] = (0.2126f * r + 0.7152f * g + 0.0722f * b) * jac;
-                wsum += w[i];
-                er += r * cjac, eg += g * cjac, eb += b * cjac;
-            }
-            row_irradiance_[size_t(j)] = Eigen::Array3d(er, eg, eb) * double(kFromFixed);
-            row_weight_[size_t(j)] = wsum;
-            row_bad_[size_t(j)] = bad;
+            RowSums sums;
+            if (!weigh_row_fast(row, jt, n, w, &sums)) sums = weigh_row_checked(row, jt, n, w);
+            row_irradiance_[size_t(j)] = Eigen::Array3d(sums.er, sums.eg, sums.eb) * double(kFromFixed);
+            row_weight_[size_t(j)] = sums.w;
+            row_bad_[size_t(j)] = size_t(sums.bad);
         }
     });
     bad_pixels_ = 0;
     for (size_t b : row_bad_) bad_pixels_ += b;
     double total_weight = 0;  // row sums come from the parallel pass above: no serial re-read
     for (double row : row_weight_) total_weight += row;
-    if (sampler_options_.mis_compensation) compensate_for_mis(total_weight);
     Eigen::Array3d e = Eigen::Array3d::Zero();
     for (const auto& part : row_irradiance_) e += part;
     sky_irradiance_ = (e * double(du * du)).cast<float>();
@@ -112,7 +196,25 @@ void EnvLight::set_sky(std::shared_ptr<const SkyImage> sky) {
     double sky_power = total_weight * double(du) * du * double(kFromFixed);
     double ground_power = double(luminance(ground_radiance_)) * 2 * kPiD;
     sky_probability_ = sky_power + ground_power > 0 ? float(sky_power / (sky_power + ground_power)) : 1.0f;
-    sampler_->build(*sky_, weights_, n);
+
+    SkyWeights weights;
+    weights.values = &weights_;
+    weights.jacobian = jacobian_table_.data();
+    weights.n = n;
+    // MIS compensation (Karlik et al. 2019 as in pbrt-v4): sample max(L - mean L, 0), where BSDF
+    // sampling already does well on the rest. The sampler applies it in its own pass over the
+    // weights; in weight units, L jac - mean jac with mean = sum(L jac) / sum(jac).
+    if (sampler_options_.mis_compensation && jacobian_table_sum_ > 0)
+        weights.mis_floor = float(total_weight / jacobian_table_sum_);
+    sampler_->build(*sky_, weights);
+    if (sampler_options_.mis_compensation && !sampler_->has_weight() && total_weight > 0) {
+        // A uniform sky leaves nothing above its mean: sample uniformly in solid angle instead.
+        weights_.resize(size_t(n) * n);  // a sampler may have taken the buffer
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) weights_[size_t(j) * n + i] = float(jacobian_table_[size_t(j) * n + i]);
+        weights.mis_floor = 0;
+        sampler_->build(*sky_, weights);
+    }
     build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
@@ -178,33 +280,6 @@ bool EnvLight::sample(float u_choice, const Vec2& u, EnvLightSample* out) const 
     out->radiance = ground_radiance_;
     out->pdf = (1 - sky_probability_) / (2 * kPi);
     return out->pdf > 0;
-}
-
-void EnvLight::compensate_for_mis(double total_weight) {
-    // Karlik et al. 2019 as in pbrt-v4: sample max(L - mean L, 0), where BSDF sampling already
-    // does well on the rest; uniform in solid angle if that leaves nothing. Same fixed-point
-    // scale as the weights: mean = sum(L jac) / sum(jac).
-    const int n = table_resolution_;
-    double jac_sum = 0;
-    for (size_t k = 0; k < solid_angle_table_.size(); k += 2) jac_sum += solid_angle_table_[k];
-    const float mean = jac_sum > 0 ? float(total_weight / jac_sum) : 0.0f;
-    std::vector<double> row_sum(size_t(n), 0.0);
-    tbb::parallel_for(tbb::blocked_range<int>(0, n, 16), [&](const tbb::blocked_range<int>& rows) {
-        for (int j = rows.begin(); j != rows.end(); ++j) {
-            float* w = &weights_[size_t(j) * n];
-            const uint16_t* t = &solid_angle_table_[size_t(j) * n * 2];
-            float s = 0;
-            for (int i = 0; i < n; ++i) {
-                w[i] = std::max(w[i] - mean * float(t[2 * i]), 0.0f);
-                s += w[i];
-            }
-            row_sum[size_t(j)] = s;
-        }
-    });
-    double left = 0;
-    for (double r : row_sum) left += r;
-    if (!(left > 0))
-        for (size_t k = 0; k < weights_.size(); ++k) weights_[k] = float(solid_angle_table_[2 * k]);
 }
 
 }  // namespace dynsky

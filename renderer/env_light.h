@@ -71,7 +71,6 @@ class EnvLight {
     // Pixel holding the radiance of uv (with r <= 1): itself, or for rim pixels whose centre lies
     // outside the disc, the nearest pixel inward.
     int lookup_pixel(const Vec2& uv) const;
-    void compensate_for_mis(double total_weight);
 
     std::shared_ptr<const SkyImage> sky_;
     SkySamplerOptions sampler_options_;
@@ -81,7 +80,11 @@ class EnvLight {
     size_t bad_pixels_ = 0;
     std::vector<Eigen::Array3d> row_irradiance_;
     std::vector<double> row_weight_;
-    std::vector<uint16_t> solid_angle_table_;  // per pixel (jacobian, cos x jacobian), fixed point
+    // Per pixel dw/(du dv) in fixed point (0 off the disc), alone (read by the samplers' pass) and
+    // paired with cos(theta) dw/(du dv) (one stream beside the image in the first pass).
+    std::vector<uint16_t> jacobian_table_;
+    std::vector<uint16_t> jacobian_pair_table_;
+    double jacobian_table_sum_ = 0;
     int table_resolution_ = 0;
     float ground_albedo_;
     Color ground_radiance_ = Color::Zero();

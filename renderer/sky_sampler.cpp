@@ -3,6 +3,10 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <algorithm>
 #include <cmath>
 
@@ -13,6 +17,30 @@
 #include "util/error.h"
 
 namespace dynsky {
+
+void SkyWeights::finish_row(int j, float* row) const {
+    if (!(mis_floor > 0)) return;
+    const uint16_t* jac = jacobian + size_t(j) * n;
+    int i = 0;
+#if defined(__SSE2__)
+    // Explicit: GCC 12 leaves this loop scalar, and it is a whole pass per frame.
+    const __m128 f = _mm_set1_ps(mis_floor), zero = _mm_setzero_ps();
+    const __m128i zi = _mm_setzero_si128();
+    for (; i + 4 <= n; i += 4) {
+        __m128 jf = _mm_cvtepi32_ps(_mm_unpacklo_epi16(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(jac + i)), zi));
+        _mm_storeu_ps(row + i, _mm_max_ps(_mm_sub_ps(_mm_loadu_ps(row + i), _mm_mul_ps(f, jf)), zero));
+    }
+#endif
+    for (; i < n; ++i) row[i] = std::max(row[i] - mis_floor * float(jac[i]), 0.0f);
+}
+
+void SkyWeights::apply_compensation() {
+    if (!(mis_floor > 0)) return;
+    tbb::parallel_for(tbb::blocked_range<int>(0, n, 16), [&](const tbb::blocked_range<int>& rows) {
+        for (int j = rows.begin(); j != rows.end(); ++j) finish_row(j, &(*values)[size_t(j) * n]);
+    });
+    mis_floor = 0;
+}
 
 namespace {
 
@@ -28,7 +56,7 @@ float in_cell(int cell, double frac, int n) {
 
 class UniformSampler : public SkySampler {
   public:
-    void build(const SkyImage&, std::vector<float>&, int) override {}
+    void build(const SkyImage&, SkyWeights&) override {}
     bool sample(const Vec2& u, Vec3* wi, float* pdf) const override {
         Vec3 h = sample_uniform_hemisphere(u);
         *wi = Vec3(h.x(), h.z(), h.y());
@@ -41,7 +69,7 @@ class UniformSampler : public SkySampler {
 
 class CosineSampler : public SkySampler {
   public:
-    void build(const SkyImage&, std::vector<float>&, int) override {}
+    void build(const SkyImage&, SkyWeights&) override {}
     bool sample(const Vec2& u, Vec3* wi, float* pdf) const override {
         Vec3 h = sample_cosine_hemisphere(u);
         *wi = Vec3(h.x(), h.z(), h.y());
@@ -75,6 +103,7 @@ class PixelSampler : public SkySampler {
     }
     // Sum of the weights the sampler was built on (after any sun cut-out).
     double total() const { return total_; }
+    bool has_weight() const override { return total_ > 0; }
 
   protected:
     // A point in [0, 1)^2 (x right, y down, pixel grid n x n).
@@ -87,10 +116,12 @@ class PixelSampler : public SkySampler {
 
 class CdfSampler : public PixelSampler {
   public:
-    void build(const SkyImage&, std::vector<float>& w, int n) override {
-        n_ = n;
-        dist_.build(w.data(), n, n);
-        total_ = dist_.integral() * double(n) * n;
+    // One read-only pass over the weights (compensated where they are read, not written back).
+    void build(const SkyImage&, SkyWeights& w) override {
+        n_ = w.n;
+        dist_.build_in_place(w.values, n_, n_, w.jacobian, w.mis_floor);
+        w.mis_floor = 0;  // values now hold the distribution's old buffer: nothing to read there
+        total_ = dist_.integral() * double(n_) * n_;
     }
     size_t memory_bytes() const override { return dist_.memory_bytes(); }
     const Distribution2D* distribution() const override { return &dist_; }
@@ -155,19 +186,24 @@ inline int alias_pick(const float* prob, const uint16_t* alias, int n, double u,
 // table's remainder places the point inside the pixel, so both uniforms stay stratified.
 class AliasSampler : public PixelSampler {
   public:
-    void build(const SkyImage&, std::vector<float>& w, int n) override {
+    void build(const SkyImage&, SkyWeights& weights) override {
+        const int n = weights.n;
         if (n > 65536) throw Error("alias sky sampler: resolution above 65536");
         n_ = n;
+        std::vector<float>& w = *weights.values;
         weights_ = &w;
         prob_.resize(size_t(n) * n), alias_.resize(size_t(n) * n);
         row_total_.resize(size_t(n));
         tbb::parallel_for(tbb::blocked_range<int>(0, n, 16), [&](const tbb::blocked_range<int>& r) {
             std::vector<int> small, large;
             std::vector<double> scaled;
-            for (int j = r.begin(); j != r.end(); ++j)
+            for (int j = r.begin(); j != r.end(); ++j) {
+                weights.finish_row(j, &w[size_t(j) * n]);  // in place: cell_pdf reads the final weights
                 row_total_[size_t(j)] = float(build_alias(&w[size_t(j) * n], n, &prob_[size_t(j) * n],
                                                           &alias_[size_t(j) * n], &small, &large, &scaled));
+            }
         });
+        weights.mis_floor = 0;
         std::vector<int> small, large;
         std::vector<double> scaled;
         row_prob_.resize(size_t(n)), row_alias_.resize(size_t(n));
@@ -201,7 +237,10 @@ class AliasSampler : public PixelSampler {
 // down choosing a column half by u.x and a row half by u.y at each level, rescaling each uniform.
 class MipSampler : public PixelSampler {
   public:
-    void build(const SkyImage&, std::vector<float>& w, int n) override {
+    void build(const SkyImage&, SkyWeights& weights) override {
+        weights.apply_compensation();
+        const int n = weights.n;
+        std::vector<float>& w = *weights.values;
         n_ = n;
         weights_ = &w;
         size_ = 1;
@@ -289,10 +328,11 @@ class SunSplitSampler : public SkySampler {
   public:
     explicit SunSplitSampler(std::unique_ptr<PixelSampler> base) : base_(std::move(base)) {}
 
-    void build(const SkyImage& sky, std::vector<float>& w, int n) override {
+    void build(const SkyImage& sky, SkyWeights& weights) override {
         sun_probability_ = 0;
-        double removed = find_and_remove_sun(sky, w, n);
-        base_->build(sky, w, n);
+        weights.apply_compensation();  // the sun is found in the final weights
+        double removed = find_and_remove_sun(sky, *weights.values, weights.n);
+        base_->build(sky, weights);
         double rest = base_->total();
         if (removed > 0) sun_probability_ = float(removed / (removed + rest));
         cone_pdf_ = sun_probability_ > 0 ? float(1 / (2 * kPiD * one_minus_cos_)) : 0.0f;
@@ -323,6 +363,7 @@ class SunSplitSampler : public SkySampler {
     }
     size_t memory_bytes() const override { return base_->memory_bytes(); }
     float sun_probability() const override { return sun_probability_; }
+    bool has_weight() const override { return sun_probability_ > 0 || base_->has_weight(); }
 
   private:
     // Finds the sun (given direction, else the brightest pixel if it stands far above the mean),
@@ -473,10 +514,11 @@ SkySamplerOptions parse_sky_sampler(const std::string& name) {
 }
 
 SkySamplerOptions recommended_sky_sampler() {
-    // docs/sampling/README.md: alias (+mis under MIS) had the best median time to the plain CDF's
-    // error over the scenes and skies measured; the sun split lost everywhere (see there why).
+    // docs/sampling/README.md: with MIS compensation the CDF reaches plain cdf's error soonest
+    // under a sunny sky and rebuilds closest to the streaming floor (alias tables sample no faster
+    // here and cost several times more to build); the sun split lost everywhere (see there why).
     SkySamplerOptions o;
-    o.method = SkySamplerMethod::Alias;
+    o.method = SkySamplerMethod::Cdf;
     o.sun_split = false;
     o.mis_compensation = false;
     return o;

@@ -18,6 +18,7 @@
 //            all-ones if nothing is left. Only valid when BSDF sampling covers the rest (MIS).
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -44,13 +45,32 @@ std::vector<std::string> sky_sampler_base_names();
 // MIS compensation; the render command adds "+mis" since it always combines strategies by MIS.
 SkySamplerOptions recommended_sky_sampler();
 
+// The per-pixel weights EnvLight hands to a sampler's build (one streaming pass over the image).
+struct SkyWeights {
+    std::vector<float>* values = nullptr;  // n x n, finite, >= 0 (see the file comment)
+    const uint16_t* jacobian = nullptr;    // n x n fixed-point dw/(du dv), the scale of values (0 off the disc)
+    int n = 0;
+    // MIS compensation still to apply: the final weight is max(value - mis_floor x jacobian, 0).
+    // Samplers fuse it into their own pass over the weights (one pass per frame less) and store the
+    // final weights back into values wherever they read values later.
+    float mis_floor = 0;
+
+    // Turns row j's values (values' own row, or wherever a sampler moved them) into its final
+    // weights in place.
+    void finish_row(int j, float* row) const;
+    // Applies mis_floor to every value in place (for samplers that need all final weights before
+    // they start), then sets it to 0.
+    void apply_compensation();
+};
+
 class SkySampler {
   public:
     virtual ~SkySampler() = default;
-    // weights: n x n, finite, >= 0 (see the file comment). A sampler may change them in place (the
-    // sun split zeroes the sun) and read them later instead of copying: they must stay alive and
-    // unchanged until the next build.
-    virtual void build(const SkyImage& sky, std::vector<float>& weights, int n) = 0;
+    // A sampler may change the weights in place (compensation, the sun split zeroing the sun) and
+    // read them later instead of copying: they must stay alive and unchanged until the next build.
+    virtual void build(const SkyImage& sky, SkyWeights& weights) = 0;
+    // False when the build left nothing to sample (every final weight 0).
+    virtual bool has_weight() const { return true; }
     // A direction above the horizon and its density per unit solid angle (= pdf(wi)); false when
     // no sample is produced (empty sky, a sample outside the disc), which counts as zero.
     virtual bool sample(const Vec2& u, Vec3* wi, float* pdf) const = 0;

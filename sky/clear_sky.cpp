@@ -74,6 +74,32 @@ Color ClearSkyModel::sun_radiance(const Vec3d& w_in) const {
 
 Color ClearSkyModel::sun_irradiance() const { return params_.sun_disc ? model_.solar_irradiance_rgb() : Color::Zero(); }
 
+void ClearSkyModel::splat_sun_disc(int n, const std::function<void(int, int, const Color&)>& add) const {
+    const Vec3d& s = sun_direction();
+    Vec3d t = (std::abs(s.x()) < 0.9 ? Vec3d::UnitX() : Vec3d::UnitY()).cross(s).normalized();
+    Vec3d b = s.cross(t);
+    const double radius_px = kHosekWilkieSolarRadius / (kPiD / n);
+    const int rings = std::max(16, int(std::ceil(5 * radius_px)));
+    const int sectors = std::max(32, int(std::ceil(4 * kPiD * radius_px)));
+    const double sin_r = std::sin(kHosekWilkieSolarRadius);
+    for (int r = 0; r < rings; ++r) {
+        double s0 = std::sqrt(double(r) / rings), s1 = std::sqrt(double(r + 1) / rings);
+        Color share = model().solar_irradiance_rgb(s0, s1) / float(sectors);
+        double gamma = std::asin(std::sqrt(0.5 * (s0 * s0 + s1 * s1)) * sin_r);
+        for (int k = 0; k < sectors; ++k) {
+            double phi = 2 * kPiD * (k + 0.5) / sectors;
+            Vec3d w = std::cos(gamma) * s + std::sin(gamma) * (std::cos(phi) * t + std::sin(phi) * b);
+            double u, v;
+            if (!fisheye::uv_from_direction(w, &u, &v)) continue;  // below the horizon
+            int i = std::clamp(int(std::floor((u + 1) / 2 * n)), 0, n - 1);
+            int j = std::clamp(int(std::floor((v + 1) / 2 * n)), 0, n - 1);
+            double omega = fisheye::pixel_solid_angle(i, j, n);
+            if (omega <= 0) continue;  // the pixel's centre is outside the disc: it holds no sky
+            add(i, j, share / float(omega));
+        }
+    }
+}
+
 SkyImage make_clear_sky(const ClearSkyParams& params, int resolution) {
     if (resolution < 1 || resolution > 32768)
         throw Error("sky resolution " + std::to_string(resolution) + " is not in 1..32768 pixels");
@@ -92,35 +118,8 @@ SkyImage make_clear_sky(const ClearSkyParams& params, int resolution) {
         }
     });
 
-    if (params.sun_disc) {
-        // Splat the disc: equal-area rings in s = sin(gamma)/sin(R), each ring's exact irradiance
-        // split over its sectors, each sector's share added to the pixel holding its centre as
-        // radiance (share / pixel solid angle). Rings and sectors are fine enough for ~0.2-pixel
-        // spacing at any resolution.
-        const Vec3d& s = model.sun_direction();
-        Vec3d t = (std::abs(s.x()) < 0.9 ? Vec3d::UnitX() : Vec3d::UnitY()).cross(s).normalized();
-        Vec3d b = s.cross(t);
-        const double radius_px = kHosekWilkieSolarRadius / (kPiD / n);
-        const int rings = std::max(16, int(std::ceil(5 * radius_px)));
-        const int sectors = std::max(32, int(std::ceil(4 * kPiD * radius_px)));
-        const double sin_r = std::sin(kHosekWilkieSolarRadius);
-        for (int r = 0; r < rings; ++r) {
-            double s0 = std::sqrt(double(r) / rings), s1 = std::sqrt(double(r + 1) / rings);
-            Color share = model.model().solar_irradiance_rgb(s0, s1) / float(sectors);
-            double gamma = std::asin(std::sqrt(0.5 * (s0 * s0 + s1 * s1)) * sin_r);
-            for (int k = 0; k < sectors; ++k) {
-                double phi = 2 * kPiD * (k + 0.5) / sectors;
-                Vec3d w = std::cos(gamma) * s + std::sin(gamma) * (std::cos(phi) * t + std::sin(phi) * b);
-                double u, v;
-                if (!fisheye::uv_from_direction(w, &u, &v)) continue;  // below the horizon
-                int i = std::clamp(int(std::floor((u + 1) / 2 * n)), 0, n - 1);
-                int j = std::clamp(int(std::floor((v + 1) / 2 * n)), 0, n - 1);
-                double omega = fisheye::pixel_solid_angle(i, j, n);
-                if (omega <= 0) continue;  // the pixel's centre is outside the disc: it holds no sky
-                sky.set_pixel(i, j, sky.pixel(i, j) + share / float(omega));
-            }
-        }
-    }
+    if (params.sun_disc)
+        model.splat_sun_disc(n, [&](int i, int j, const Color& c) { sky.set_pixel(i, j, sky.pixel(i, j) + c); });
 
     sky.sun_direction = model.sun_direction().cast<float>();
     std::ostringstream source;

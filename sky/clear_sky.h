@@ -10,6 +10,7 @@
 // The result is a sunset sky, not a twilight or night sky.
 #pragma once
 
+#include <functional>
 #include <string>
 
 #include "sky/hosek_wilkie.h"
@@ -42,6 +43,11 @@ class ClearSkyModel {
     Color radiance(const Vec3d& w) const { return sky_radiance(w) + sun_radiance(w); }
     // Direct normal irradiance from the whole disc, W m^-2 (0 without sun_disc).
     Color sun_irradiance() const;
+    // The disc as fisheye pixels of an N x N sky, conserving its energy: equal-area rings of the
+    // limb-darkened disc, each ring's irradiance split over sectors, each sector's share added as
+    // radiance (share / pixel solid angle) to the pixel holding it; ~0.2-pixel spacing at any N.
+    // Calls add(i, j, radiance) per sector above the horizon (a pixel may come several times).
+    void splat_sun_disc(int n, const std::function<void(int, int, const Color&)>& add) const;
 
     const Vec3d& sun_direction() const { return sun_; }             // true sun, unit
     const Vec3d& model_sun_direction() const { return model_sun_; }  // raised to the horizon if below

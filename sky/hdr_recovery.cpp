@@ -173,35 +173,12 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     for (float& v : out.rgb) v = float(v * rep.scale);
 
     if (params.restore_sun && rep.sun_visible && rep.used_sun.y() > 0) {
-        // The disc, splatted conserving its energy exactly as make_clear_sky does (equal-area rings
-        // of the limb-darkened disc, each ring's irradiance split over sectors, each sector's share
-        // added as radiance to the pixel holding it), but only onto the few pixels it touches:
-        // a full make_clear_sky costs seconds at 2048^2.
+        // The disc, splatted conserving its energy exactly as make_clear_sky does, but only onto
+        // the few pixels it touches: a full make_clear_sky costs seconds at 2048^2.
         std::map<size_t, Color> disc;
-        const Vec3d& sd = model.sun_direction();
-        Vec3d t = (std::abs(sd.x()) < 0.9 ? Vec3d::UnitX() : Vec3d::UnitY()).cross(sd).normalized();
-        Vec3d b = sd.cross(t);
-        const double radius_px = kHosekWilkieSolarRadius / (kPiD / n);
-        const int rings = std::max(16, int(std::ceil(5 * radius_px)));
-        const int sectors = std::max(32, int(std::ceil(4 * kPiD * radius_px)));
-        const double sin_r = std::sin(kHosekWilkieSolarRadius);
-        for (int r = 0; r < rings; ++r) {
-            double s0 = std::sqrt(double(r) / rings), s1 = std::sqrt(double(r + 1) / rings);
-            Color share = model.model().solar_irradiance_rgb(s0, s1) / float(sectors);
-            double gamma = std::asin(std::sqrt(0.5 * (s0 * s0 + s1 * s1)) * sin_r);
-            for (int k = 0; k < sectors; ++k) {
-                double phi = 2 * kPiD * (k + 0.5) / sectors;
-                Vec3d w = std::cos(gamma) * sd + std::sin(gamma) * (std::cos(phi) * t + std::sin(phi) * b);
-                double u, v;
-                if (!fisheye::uv_from_direction(w, &u, &v)) continue;
-                int i = std::clamp(int(std::floor((u + 1) / 2 * n)), 0, n - 1);
-                int j = std::clamp(int(std::floor((v + 1) / 2 * n)), 0, n - 1);
-                double omega = fisheye::pixel_solid_angle(i, j, n);
-                if (omega <= 0) continue;
-                auto it = disc.emplace(size_t(j) * n + i, Color::Zero()).first;
-                it->second += share / float(omega);
-            }
-        }
+        model.splat_sun_disc(n, [&](int i, int j, const Color& c) {
+            disc.emplace(size_t(j) * n + i, Color::Zero()).first->second += c;
+        });
         // Clipped pixels of the sun's blob and the disc's pixels: the model's sky + disc where it
         // exceeds what the photo could record.
         auto restore = [&](size_t p, const Color& sun) {

@@ -1,0 +1,90 @@
+#!/usr/bin/python3
+"""Charts of `dynsky bench sampling` (run by it): reads the CSV files in the report folder given
+as the only argument and writes PNGs beside them. Parts that were not run are skipped."""
+import csv
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+out = sys.argv[1]
+
+
+def rows_of(name):
+    path = os.path.join(out, name)
+    if not os.path.exists(path):
+        return []
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+# Error against spp and against modelled frame time, mean and one standard deviation over seeds.
+groups = {}
+for r in rows_of("accuracy_summary.csv"):
+    groups.setdefault((r["scene"], r["sky"]), {}).setdefault(r["sampler"], []).append(r)
+for (scene, sky), by in groups.items():
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    for name, rs in sorted(by.items()):
+        rs.sort(key=lambda r: int(r["spp"]))
+        style = "-" if name.endswith("+mis") else "--"
+        e = [float(r["trimmed_rmse"]) for r in rs]
+        sd = [float(r["trimmed_rmse_std"]) for r in rs]
+        for ax, key in zip(axes, ["spp", "seconds"]):
+            x = [float(r[key]) * (1e3 if key == "seconds" else 1) for r in rs]
+            ax.errorbar(x, e, yerr=sd, fmt=style, marker="o", ms=3, capsize=2, label=name)
+    axes[0].set_xlabel("samples per pixel")
+    axes[1].set_xlabel("modelled frame time (ms): rebuild + spp x ms per spp")
+    for a in axes:
+        a.set_xscale("log"), a.set_yscale("log")
+        a.set_ylabel("RMSE without the worst 0.1% pixels")
+        a.grid(True, which="both", alpha=0.3)
+    axes[1].legend(fontsize=6, ncol=2)
+    fig.suptitle("%s scene, %s sky" % (scene, sky))
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "rmse_%s_%s.png" % (scene, sky)), dpi=90)
+    plt.close(fig)
+
+rows = rows_of("rebuild.csv")
+if rows:
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    for k, threads in enumerate(["1", "all"]):
+        by = {}
+        for r in rows:
+            if r["threads"] == threads:
+                by.setdefault(r["sampler"], []).append(r)
+        for name, rs in sorted(by.items()):
+            rs.sort(key=lambda r: int(r["n"]))
+            style = "k:" if name == "floor" else "-"
+            axes[k].loglog([int(r["n"]) for r in rs], [float(r["ms"]) for r in rs], style, marker="o", ms=3, label=name)
+        axes[k].set_title("rebuild, %s thread(s)" % threads)
+        axes[k].set_xlabel("sky resolution N")
+        axes[k].set_ylabel("ms")
+        axes[k].grid(True, which="both", alpha=0.3)
+    axes[1].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "rebuild.png"), dpi=90)
+    plt.close(fig)
+
+rows = rows_of("failures.csv")
+if rows:
+    cases = sorted(set(r["case"] for r in rows))
+    names = sorted(set(r["sampler"] for r in rows))
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    w = 0.8 / max(1, len(names))
+    for i, name in enumerate(names):
+        vals = {r["case"]: r for r in rows if r["sampler"] == name}
+        xs = [c + i * w for c in range(len(cases))]
+        axes[0].bar(xs, [float(vals[c]["rel_mse"]) if c in vals else 0 for c in cases], w, label=name)
+        axes[1].bar(xs, [float(vals[c]["firefly"]) if c in vals else 0 for c in cases], w, label=name)
+    for a, t in zip(axes, ["relative MSE (log)", "share of squared error in brightest 0.1% pixels"]):
+        a.set_xticks([c + 0.4 for c in range(len(cases))])
+        a.set_xticklabels(cases, rotation=30, fontsize=7)
+        a.set_title(t)
+    axes[0].set_yscale("log")
+    axes[1].legend(fontsize=6, ncol=2)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "failures.png"), dpi=90)
+    plt.close(fig)
