@@ -8,6 +8,7 @@
 #include "renderer/builtin_scene.h"
 #include "renderer/gltf_loader.h"
 #include "sky/clear_sky.h"
+#include "util/data_path.h"
 #include "util/error.h"
 
 namespace dynsky::cli {
@@ -28,8 +29,9 @@ void add_sky_source_options(CLI::App* cmd, SkySourceOptions* o) {
     cmd->add_option("--model", o->model,
                     "Medium-step model xi: 'procedural' (the procedural sky's own next frame; procedural input only),\n"
                     "'flow' (extrapolate the Farneback flow of the last two steps; a uniform drift first),\n"
-                    "'network:FOLDER' (the trained FlowNet+CloudNet, sky/cloud_model.h), or 'auto'\n"
-                    "(procedural for procedural input, else flow)")
+                    "'network:FOLDER' (the trained FlowNet+CloudNet, sky/cloud_model.h), or 'auto': the shipped network\n"
+                    "(networks/models/arm_tsi, Delta t 30 s) when it is installed, else procedural for procedural input and flow\n"
+                    "for others")
         ->capture_default_str();
     cmd->add_option("--dt", o->dt,
                     "Delta t: seconds between medium steps (0: a network model's own Delta t from its model.json, else the paper's 10 s)")
@@ -113,7 +115,22 @@ SkyTimeline make_sky_timeline(const SkySourceOptions& o) {
     if (model_name != "auto" && model_name != "flow" && model_name != "procedural" && model_name.rfind("network:", 0) != 0)
         throw Error("--model '" + model_name + "': expected auto, procedural, flow or network:FOLDER");
     std::unique_ptr<MediumStepModel> model;
-    if (model_name.rfind("network:", 0) == 0) model = make_network_step_model(model_name.substr(8));  // fails early
+    if (model_name == "auto") {
+        // The paper's model: the shipped FlowNet + CloudNet, when the data files are where they belong.
+        std::string folder;
+        try {
+            folder = data_path("networks/models/arm_tsi/model.json");
+            folder = folder.substr(0, folder.size() - std::string("/model.json").size());
+        } catch (const Error&) {
+            std::fprintf(stderr, "dynsky: note: the shipped cloud model is not installed; clouds move by %s\n",
+                         o.sky.rfind("procedural", 0) == 0 ? "the procedural sky's own motion" : "flow extrapolation");
+        }
+        if (!folder.empty()) {
+            model = make_network_step_model(folder);
+            model_name = "network:" + folder;
+        }
+    }
+    if (model_name.rfind("network:", 0) == 0 && !model) model = make_network_step_model(model_name.substr(8));  // fails early
     SkyImage input;
     if (o.sky.rfind("procedural", 0) == 0) {
         uint64_t seed = 0;

@@ -16,7 +16,7 @@ namespace fs = std::filesystem;
 // 8 frames at 8 fps, Delta t 0.5 s: two medium-step boundaries and Gamma's keys in between.
 std::string animate(const std::string& out, const std::string& extra = "") {
     return std::string(DYNSKY_EXE) +
-           " animate builtin --sky procedural:3 --sky-res 96 --res 64x36 --spp 2 --duration 1 --fps 8 --dt 0.5"
+           " animate builtin --sky procedural:3 --model procedural --sky-res 96 --res 64x36 --spp 2 --duration 1 --fps 8 --dt 0.5"
            " --no-video --quiet --threads 2 --out " + out + " " + extra;
 }
 
@@ -69,6 +69,21 @@ TEST(AnimateCli, FrameRangesEqualOneRun) {
     ASSERT_EQ(test::run_command(animate(parts, "--frames 0-4")).exit_code, 0);
     expect_same_frames(full, parts, 8);
     EXPECT_TRUE(fs::exists(parts + "/contact_sheet.png"));
+    fs::remove_all(dir);
+}
+
+// The main job's default moves the clouds with the shipped networks (issue 4), recorded per frame.
+TEST(AnimateCli, DefaultModelIsTheShippedNetwork) {
+    std::string dir = test::temp_dir("animate_default_model");
+    auto r = test::run_command(std::string(DYNSKY_EXE) + " animate builtin --sky-res 96 --res 32x18 --spp 1 --duration 30 --fps 0.05 "
+                               "--quiet --out " + dir + " 2>&1");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    for (int k = 0; k < 2; ++k) {
+        Image img = read_image(frame(dir, k));
+        const std::string& model = img.metadata.strings["dynsky:sky_model"];
+        EXPECT_EQ(model.rfind("network:", 0), 0u) << model;
+        EXPECT_NE(model.find("networks/models/arm_tsi"), std::string::npos) << model;
+    }
     fs::remove_all(dir);
 }
 
