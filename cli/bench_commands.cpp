@@ -21,6 +21,7 @@
 #include "renderer/builtin_scene.h"
 #include "renderer/gltf_loader.h"
 #include "renderer/integrator.h"
+#include "renderer/sampling.h"
 #include "renderer/sky_sampler.h"
 #include "renderer/streaming_floor.h"
 #include "sky/clear_sky.h"
@@ -29,6 +30,7 @@
 #include "sky/procedural_clouds.h"
 #include "util/data_path.h"
 #include "util/error.h"
+#include "util/text_file.h"
 
 #ifndef DYNSKY_SHARED_DIR_DEFAULT
 #define DYNSKY_SHARED_DIR_DEFAULT "../shared"
@@ -184,6 +186,8 @@ std::vector<NamedScene> make_scenes(const BenchOptions& o, float aspect, std::st
     gltf("diffuse", "Box/Box.glb", "Khronos Box (diffuse), framed");
     gltf("glossy", "MetalRoughSpheresNoTextures/MetalRoughSpheresNoTextures.glb", "Khronos MetalRoughSpheresNoTextures (glossy)");
     add("plaza", "built-in plaza (renderer/builtin_scene.h)", make_builtin_scene());
+    // The House animation scene shipped with dynsky (Kenney CC0 buildings, its own camera).
+    add("house", "scenes/house/house.gltf (Kenney buildings, textured; its camera)", load_gltf(data_path("scenes/house/house.gltf")));
     return scenes;
 }
 
@@ -204,17 +208,6 @@ std::string fmt(const char* f, double v) {
     char buf[64];
     std::snprintf(buf, sizeof buf, f, v);
     return buf;
-}
-
-void write_file(const fs::path& path, const std::string& text) {
-    fs::path tmp = path;
-    tmp += ".tmp";
-    {
-        std::ofstream f(tmp);
-        if (!f) throw_file_error(path.string(), "cannot write");
-        f << text;
-    }
-    fs::rename(tmp, path);
 }
 
 // Reference image cache: EXR per (scene, sky, size, spp, depth).
@@ -414,8 +407,8 @@ int run_sampling_bench(const BenchOptions& o) {
             }
         }
     if (run_accuracy) {
-        write_file(out / "accuracy.csv", acc_csv.str());
-        write_file(out / "accuracy_summary.csv", sum_csv.str());
+        write_text_atomic((out / "accuracy.csv").string(), acc_csv.str());
+        write_text_atomic((out / "accuracy_summary.csv").string(), sum_csv.str());
     }
 
     // ---- Rebuild cost ----
@@ -426,8 +419,9 @@ int run_sampling_bench(const BenchOptions& o) {
     rb_csv << "sampler,n,threads,ms,ratio_to_floor,memory_mib\n";
     rb << "| sampler | N | threads | rebuild ms | floor ms | ratio to floor | memory MiB |\n|---|---|---|---|---|---|---|\n";
     std::map<std::string, double> ratio_2048;
+    std::ostringstream per_call;  // sample() and pdf() cost at 1024, one thread
     std::vector<std::string> build_names;
-    for (const std::string& name : {"cdf", "alias", "mip", "sun+cdf", "sun+alias", "sun+mip", "cdf+mis", "alias+mis", "mip+mis"})
+    for (const char* name : {"cdf", "alias", "mip", "sun+cdf", "sun+alias", "sun+mip", "cdf+mis", "alias+mis", "mip+mis"})
         if (selected(o.samplers, name)) build_names.push_back(name);
     for (int n : sizes) {
         auto sky = clear_sky(n);
@@ -452,6 +446,30 @@ int run_sampling_bench(const BenchOptions& o) {
                 rb << "| " << name << " | " << n << " | " << th << " | " << fmt("%.2f", r * 1e3) << " | " << fmt("%.2f", f * 1e3) << " | "
                    << fmt("%.2f", r / f) << " | " << fmt("%.1f", light.memory_bytes() / 1048576.0) << " |\n";
                 if (n == 2048 && threads == 0) ratio_2048[name] = r / f;
+                if (n == 1024 && threads == 1) {
+                    // Cost of one sample() and one pdf() call (uniforms and directions prepared first).
+                    const int calls = 200000;
+                    Rng rng(5, 1);
+                    std::vector<Vec2> us(4096);
+                    for (Vec2& u : us) u = rng.uniform2();
+                    std::vector<Vec3> dirs;
+                    for (const Vec2& u : us) {
+                        EnvLightSample ls;
+                        if (light.sample(0.5f, u, &ls)) dirs.push_back(ls.wi);
+                    }
+                    double acc = 0;
+                    auto t0 = Clock::now();
+                    for (int k = 0; k < calls; ++k) {
+                        EnvLightSample ls;
+                        if (light.sample(0.5f, us[size_t(k) % us.size()], &ls)) acc += ls.pdf;
+                    }
+                    double sample_ns = seconds_since(t0) * 1e9 / calls;
+                    t0 = Clock::now();
+                    for (int k = 0; dirs.size() && k < calls; ++k) acc += light.pdf(dirs[size_t(k) % dirs.size()]);
+                    double pdf_ns = seconds_since(t0) * 1e9 / calls;
+                    if (!std::isfinite(acc)) notes += "- non-finite pdf sum: " + name + "\n";
+                    per_call << "| " << name << " | " << fmt("%.0f", sample_ns) << " | " << fmt("%.0f", pdf_ns) << " |\n";
+                }
             }
             std::vector<float> scratch;
             std::vector<double> fs_;
@@ -459,15 +477,21 @@ int run_sampling_bench(const BenchOptions& o) {
             rb_csv << "floor," << n << "," << (threads == 1 ? "1" : "all") << "," << median(fs_) * 1e3 << ",1,0\n";
         }
     }
-    if (run_rebuild) write_file(out / "rebuild.csv", rb_csv.str());
+    if (run_rebuild) write_text_atomic((out / "rebuild.csv").string(), rb_csv.str());
 
     // ---- Failure cases (on the plaza, or the first scene) ----
     std::fprintf(stderr, "sampling bench: failure cases\n");
     std::ostringstream fl_csv, fl;
     fl_csv << "case,sampler,rmse,rel_mse,firefly\n";
     fl << "| case | sampler | RMSE | rel. MSE | firefly share |\n|---|---|---|---|---|\n";
+    std::string failure_scene;
     if (run_failures && !scenes.empty()) {
-        const NamedScene& sc = scenes.back();
+        // The plaza (small, open: the sky is seen directly and through bounces), else the last scene.
+        const NamedScene* chosen = &scenes.back();
+        for (const NamedScene& candidate : scenes)
+            if (candidate.name == "plaza") chosen = &candidate;
+        const NamedScene& sc = *chosen;
+        failure_scene = sc.name;
         Accel accel(sc.scene);
         const int n = 128, spp = o.quick ? 8 : 32;
         Vec3 sun = fisheye::direction_from_angles(0.8, 2.0).cast<float>();
@@ -522,7 +546,7 @@ int run_sampling_bench(const BenchOptions& o) {
             }
         }
     }
-    if (run_failures) write_file(out / "failures.csv", fl_csv.str());
+    if (run_failures) write_text_atomic((out / "failures.csv").string(), fl_csv.str());
 
     // ---- Charts ----
     std::string script = data_path("bench/sampling_charts.py");
@@ -603,13 +627,16 @@ int run_sampling_bench(const BenchOptions& o) {
     if (run_rebuild) md << "\n## Per-frame rebuild\n\nMedian of repeated rebuilds (EnvLight::set_sky: weights + sampler tables) of a clear sky, "
           "beside the streaming floor (one parallel pass reading the RGB image and writing one float per pixel) "
           "measured interleaved in the same run.\n\n"
-       << rb.str() << "\n![rebuild](rebuild.png)\n\n";
+       << rb.str() << "\n![rebuild](rebuild.png)\n\n"
+       << "Cost of one call at N = 1024, one thread (EnvLight::sample with the sky chosen, EnvLight::pdf of sampled directions; "
+          "both include the fisheye mapping and the pdf lookup):\n\n| sampler | sample() ns | pdf() ns |\n|---|---|---|\n"
+       << per_call.str() << "\n";
     if (run_failures)
-        md << "## Failure cases\n\nPlaza, " << w << "x" << h << ", 128x128 skies; reference " << ref_spp / 2 << " spp with sun+cdf+mis. "
+        md << "## Failure cases\n\n" << failure_scene << " scene, " << w << "x" << h << ", 128x128 skies; reference " << ref_spp / 2 << " spp with sun+cdf+mis. "
        << "Firefly share: fraction of the squared error held by the brightest 0.1% of pixels.\n\n"
        << fl.str() << "\n![failures](failures.png)\n\n";
     if (!notes.empty()) md << "## Notes\n\n" << notes << "\n";
-    write_file(out / "README.md", md.str());
+    write_text_atomic((out / "README.md").string(), md.str());
     std::fprintf(stderr, "wrote %s (%.0f s)\n", (out / "README.md").c_str(), seconds_since(start));
     return 0;
 }
@@ -631,9 +658,9 @@ void register_bench_commands(CLI::App& app) {
     s->add_option("--skies", o->skies, "Only these skies: clear, cumulus, overcast, photo (default all)")
         ->delimiter(',')
         ->check(CLI::IsMember({"clear", "cumulus", "overcast", "photo"}));
-    s->add_option("--scenes", o->scenes, "Only these scenes: diffuse, glossy, plaza (default all)")
+    s->add_option("--scenes", o->scenes, "Only these scenes: diffuse, glossy, plaza, house (default all)")
         ->delimiter(',')
-        ->check(CLI::IsMember({"diffuse", "glossy", "plaza"}));
+        ->check(CLI::IsMember({"diffuse", "glossy", "plaza", "house"}));
     s->add_option("--samplers", o->samplers, "Only these samplers, e.g. cdf,cdf+mis,alias+mis (default all; "
                                              "plain cdf is the baseline of every speed-up)")->delimiter(',');
     s->add_option("--parts", o->parts, "Only these parts: accuracy, rebuild, failures (default all)")

@@ -20,6 +20,7 @@
 #include "sky/sky_metrics.h"
 #include "util/data_path.h"
 #include "util/error.h"
+#include "util/text_file.h"
 #include "util/image.h"
 #include "util/math.h"
 #include "util/progress.h"
@@ -29,22 +30,6 @@ namespace dynsky::cli {
 namespace {
 
 namespace fs = std::filesystem;
-
-void write_text_atomic(const std::string& path, const std::string& text) {
-    fs::path target(path);
-    if (!target.parent_path().empty()) fs::create_directories(target.parent_path());
-    fs::path tmp = target.parent_path() / (".tmp-" + target.filename().string() + "-" + std::to_string(::getpid()));
-    {
-        std::ofstream f(tmp);
-        f << text;
-        if (!f) {
-            std::error_code ec;
-            fs::remove(tmp, ec);
-            throw_file_error(path, "could not write the file");
-        }
-    }
-    fs::rename(tmp, target);
-}
 
 std::vector<int> parse_int_list(const std::string& text, const std::string& option) {
     std::vector<int> out;

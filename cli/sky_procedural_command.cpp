@@ -17,6 +17,7 @@
 #include "sky/procedural_clouds.h"
 #include "sky/sun_position.h"
 #include "util/error.h"
+#include "util/text_file.h"
 #include "util/image.h"
 #include "util/progress.h"
 
@@ -73,22 +74,6 @@ Image flow_preview(const Image& flow, double max_speed) {
     Image out(flow.width, flow.height, 3);
     std::copy(rgb.ptr<float>(), rgb.ptr<float>() + out.pixels.size(), out.pixels.begin());
     return out;
-}
-
-// Text files are written like images: a temporary name, then a rename.
-void write_text_atomic(const std::string& path, const std::string& text) {
-    fs::path target(path);
-    fs::path tmp = target.parent_path() / (".tmp-" + target.filename().string() + "-" + std::to_string(::getpid()));
-    {
-        std::ofstream f(tmp);
-        f << text;
-        if (!f) {
-            std::error_code ec;
-            fs::remove(tmp, ec);
-            throw_file_error(path, "could not write the file");
-        }
-    }
-    fs::rename(tmp, target);
 }
 
 CloudLayer make_layer(const std::string& name, const ProceduralOptions& o) {
