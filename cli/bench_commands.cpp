@@ -270,6 +270,7 @@ std::string machine_description() {
 
 int run_sampling_bench(const BenchOptions& o) {
     auto start = Clock::now();
+    for (const std::string& name : o.samplers) parse_sky_sampler(name);  // a clear error before any output
     fs::path out(o.out);
     fs::create_directories(out);
     fs::path cache = o.cache.empty() ? out / "cache" : fs::path(o.cache);
@@ -284,7 +285,6 @@ int run_sampling_bench(const BenchOptions& o) {
     std::vector<std::string> samplers;
     for (const std::string& name : samplers_under_mis())
         if (selected(o.samplers, name)) samplers.push_back(name);
-    for (const std::string& name : o.samplers) parse_sky_sampler(name);  // a clear error for a bad name
     if (!o.samplers.empty() && !selected(o.samplers, "cdf"))
         notes += "- plain cdf (the baseline of every speed-up) was not selected: no speed-ups\n";
     const bool run_accuracy = selected(o.parts, "accuracy"), run_rebuild = selected(o.parts, "rebuild"),
@@ -326,10 +326,53 @@ int run_sampling_bench(const BenchOptions& o) {
             for (const NamedSky& sky : skies) {
                 std::fprintf(stderr, "sampling bench: %s / %s (reference %d spp)\n", sc.name.c_str(), sky.name.c_str(), ref_spp);
                 Image ref = reference(accel, sc, sky, w, h, ref_spp, depth, cache);
+                // A finished case is kept in the cache (its rows, timings included), so a long run
+                // that is stopped resumes at the first unfinished case: no finished work is lost.
+                std::string key = sc.name + "_" + sky.name + "_" + std::to_string(w) + "x" + std::to_string(h) + "_d" +
+                                  std::to_string(depth) + "_n" + std::to_string(sky_n) + "_s" + std::to_string(seeds) + "_spp";
+                for (int spp : spps) key += "-" + std::to_string(spp);
+                std::string sampler_list;
+                for (const std::string& name : samplers) sampler_list += name + ";";
+                key += "_" + std::to_string(std::hash<std::string>{}(sampler_list) % 1000000007ULL);
+                const fs::path case_file = cache / ("runs_" + key + ".csv");
+                std::ostringstream case_csv;
+                bool resumed = false;
+                if (fs::exists(case_file)) {
+                    std::ifstream in(case_file);
+                    std::string line;
+                    std::vector<Run> loaded;
+                    while (std::getline(in, line)) {
+                        std::istringstream ls(line);
+                        Run r;
+                        std::string field;
+                        std::vector<std::string> f;
+                        while (std::getline(ls, field, ',')) f.push_back(field);
+                        if (f.size() != 11) continue;
+                        try {
+                            r = {f[0], f[1], f[2], std::stoi(f[3]), std::stoi(f[4]), std::stod(f[5]), std::stod(f[6]), std::stod(f[7]),
+                                 std::stod(f[8]), std::stod(f[9]), std::stod(f[10])};
+                        } catch (const std::exception&) {
+                            continue;
+                        }
+                        loaded.push_back(r);
+                    }
+                    if (loaded.size() == samplers.size() * spps.size() * size_t(seeds)) {
+                        for (const Run& r : loaded) {
+                            runs.push_back(r);
+                            acc_csv << r.scene << "," << r.sky << "," << r.sampler << "," << r.spp << "," << r.seed << ","
+                                    << r.render_seconds << "," << r.rebuild_seconds << "," << r.rmse << "," << r.rel_mse << ","
+                                    << r.firefly << "," << r.trimmed_rmse << "\n";
+                        }
+                        resumed = true;
+                        std::fprintf(stderr, "sampling bench: %s / %s: finished earlier, read from %s\n", sc.name.c_str(),
+                                     sky.name.c_str(), case_file.c_str());
+                    }
+                }
                 std::map<std::string, std::unique_ptr<EnvLight>> lights;
-                for (const std::string& name : samplers) lights[name] = std::make_unique<EnvLight>(sky.sky, 0.3f, parse_sky_sampler(name));
+                if (!resumed)
+                    for (const std::string& name : samplers) lights[name] = std::make_unique<EnvLight>(sky.sky, 0.3f, parse_sky_sampler(name));
                 // Samplers interleaved inside each (seed, spp): the machine's load falls on all alike.
-                for (int seed = 0; seed < seeds; ++seed)
+                for (int seed = 0; !resumed && seed < seeds; ++seed)
                     for (int spp : spps)
                         for (const std::string& name : samplers) {
                             EnvLight& light = *lights[name];
@@ -342,10 +385,13 @@ int run_sampling_bench(const BenchOptions& o) {
                             ErrorStats e = compare(r.color, ref);
                             runs.push_back({sc.name, sky.name, name, spp, seed, secs, rebuild, e.rmse, e.rel_mse, e.firefly_share,
                                             e.trimmed_rmse});
-                            acc_csv << sc.name << "," << sky.name << "," << name << "," << spp << "," << seed << "," << secs << ","
-                                    << rebuild << "," << e.rmse << "," << e.rel_mse << "," << e.firefly_share << "," << e.trimmed_rmse
-                                    << "\n";
+                            std::ostringstream row;
+                            row << sc.name << "," << sky.name << "," << name << "," << spp << "," << seed << "," << secs << ","
+                                << rebuild << "," << e.rmse << "," << e.rel_mse << "," << e.firefly_share << "," << e.trimmed_rmse << "\n";
+                            acc_csv << row.str();
+                            case_csv << row.str();
                         }
+                if (!resumed) write_text_atomic(case_file.string(), case_csv.str());
                 // Curves and the cost model.
                 std::map<std::string, Curve> curves;
                 for (const std::string& name : samplers) {
@@ -649,7 +695,10 @@ void register_bench_commands(CLI::App& app) {
     auto o = std::make_shared<BenchOptions>();
     CLI::App* s = bench->add_subcommand("sampling", "Sky importance sampling: accuracy vs time, rebuild cost, failure cases; "
                                                     "writes README.md, CSV files and PNG charts into --out");
-    s->add_flag("--quick", o->quick, "Small images, 256 px skies, 512-spp references, 1/4/16 spp (CI; about a minute)");
+    s->add_flag("--quick", o->quick,
+                "Small: 32x24 images, 256 px skies, 384-spp references, 1/4/16 spp, depth 3 (CI; about 30 s). Without it: "
+                "160x120, 1024 px skies, 4096-spp references, 1-64 spp, depth 5; everything at 4 seeds takes over an hour "
+                "on 2 cores, so pick with --skies, --scenes, --samplers and --parts (docs/sampling/README.md lists the runs)");
     s->add_option("--out,-o", o->out, "Report folder (created)")->capture_default_str();
     s->add_option("--cache", o->cache, "Folder for cached reference renders (default: OUT/cache)");
     s->add_option("--shared", o->shared, "The shared data folder (scenes, photographs)")->capture_default_str();
