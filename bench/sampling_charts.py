@@ -26,23 +26,27 @@ groups = {}
 for r in rows_of("accuracy_summary.csv"):
     groups.setdefault((r["scene"], r["sky"]), {}).setdefault(r["sampler"], []).append(r)
 for (scene, sky), by in groups.items():
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    fig, axes = plt.subplots(1, 3, figsize=(16, 4.4))
     for name, rs in sorted(by.items()):
         rs.sort(key=lambda r: int(r["spp"]))
         style = "-" if name.endswith("+mis") else "--"
         e = [float(r["trimmed_rmse"]) for r in rs]
         sd = [float(r["trimmed_rmse_std"]) for r in rs]
-        for ax, key in zip(axes, ["spp", "seconds"]):
-            x = [float(r[key]) * (1e3 if key == "seconds" else 1) for r in rs]
-            ax.errorbar(x, e, yerr=sd, fmt=style, marker="o", ms=3, capsize=2, label=name)
+        t = [1e3 * float(r["seconds"]) for r in rs]
+        axes[0].errorbar([float(r["spp"]) for r in rs], e, yerr=sd, fmt=style, marker="o", ms=3, capsize=2, label=name)
+        axes[1].errorbar(t, e, yerr=sd, fmt=style, marker="o", ms=3, capsize=2, label=name)
+        axes[2].plot(t, [float(r["rel_mse"]) for r in rs], style, marker="o", ms=3, label=name)
     axes[0].set_xlabel("samples per pixel")
     axes[1].set_xlabel("modelled frame time (ms): rebuild + spp x ms per spp")
+    axes[2].set_xlabel("modelled frame time (ms)")
+    axes[0].set_ylabel("RMSE without the worst 0.1% pixels")
+    axes[1].set_ylabel("RMSE without the worst 0.1% pixels")
+    axes[2].set_ylabel("relative MSE (all pixels, mean over seeds)")
     for a in axes:
         a.set_xscale("log"), a.set_yscale("log")
-        a.set_ylabel("RMSE without the worst 0.1% pixels")
         a.grid(True, which="both", alpha=0.3)
     axes[1].legend(fontsize=6, ncol=2)
-    fig.suptitle("%s scene, %s sky" % (scene, sky))
+    fig.suptitle("%s scene, %s sky (error bars: one standard deviation over seeds)" % (scene, sky))
     fig.tight_layout()
     fig.savefig(os.path.join(out, "rmse_%s_%s.png" % (scene, sky)), dpi=90)
     plt.close(fig)
