@@ -52,7 +52,7 @@ void add_sky_source_options(CLI::App* cmd, SkySourceOptions* o) {
 void parse_frame_size(const std::string& text, int* w, int* h) {
     std::smatch m;
     if (!std::regex_match(text, m, std::regex("^([0-9]+)x([0-9]+)$")))
-        throw Error("--res '" + text + "': expected WIDTHxHEIGHT, e.g. 640x360");
+        throw Error("--res '" + text + "': expected WIDTHxHEIGHT, e.g. 1280x720");
     *w = std::stoi(m[1]), *h = std::stoi(m[2]);
     if (*w < 1 || *h < 1 || *w > 16384 || *h > 16384) throw Error("--res '" + text + "': each side must be 1..16384");
 }
@@ -73,7 +73,7 @@ LoadedScene load_scene(const SceneOptions& o, float aspect_ratio) {
     } else {
         if (o.camera < 0 || o.camera >= int(out.scene.cameras.size()))
             throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " is out of range (the file has " +
-                        std::to_string(out.scene.cameras.size()) + " camera(s), numbered from 0)");
+                        std::to_string(out.scene.cameras.size()) + " perspective camera(s), numbered from 0)");
         out.camera = out.scene.cameras[size_t(o.camera)];
     }
     return out;

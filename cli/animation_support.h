@@ -1,5 +1,6 @@
-// What `dynsky animate` and `dynsky compare` share: the scene and camera, and the moving sky
-// (input sky + medium-step model + sun clock -> SkyTimeline, sky/sky_timeline.h).
+// What the rendering commands share: the frame size and the scene and camera (`render`, `animate`,
+// `compare`), and the moving sky (input sky + medium-step model + sun clock -> SkyTimeline,
+// sky/sky_timeline.h; `animate`, `compare`).
 #pragma once
 
 #include <CLI/CLI.hpp>

@@ -6,8 +6,8 @@
 #include <limits>
 #include <filesystem>
 #include <memory>
-#include <regex>
 
+#include "cli/animation_support.h"
 #include "cli/commands.h"
 #include "renderer/builtin_scene.h"
 #include "renderer/gltf_loader.h"
@@ -36,14 +36,6 @@ struct RenderOptions {
     std::string sampler = sky_sampler_name(recommended_sky_sampler()) + "+mis";
 };
 
-void parse_resolution(const std::string& text, int* w, int* h) {
-    std::smatch m;
-    std::regex re("^([0-9]+)x([0-9]+)$");
-    if (!std::regex_match(text, m, re)) throw Error("--res '" + text + "': expected WIDTHxHEIGHT, e.g. 1280x720");
-    *w = std::stoi(m[1]), *h = std::stoi(m[2]);
-    if (*w < 1 || *h < 1 || *w > 16384 || *h > 16384) throw Error("--res '" + text + "': each side must be 1..16384");
-}
-
 // The default sky when --sky is not given: a clear afternoon over Paris at the summer solstice.
 std::shared_ptr<SkyImage> default_sky() {
     ClearSkyParams p;
@@ -59,35 +51,18 @@ int run_render(const RenderOptions& o) {
     // Everything that can be wrong with the input is checked before any pixel is traced, so a
     // bad run leaves no output behind.
     int width, height;
-    parse_resolution(o.resolution, &width, &height);
+    parse_frame_size(o.resolution, &width, &height);
     std::string ext = file_extension(o.out);
     if (ext != ".exr" && ext != ".png") throw Error(o.out + ": output must end in .exr or .png");
     if (o.spp < 1) throw Error("--spp must be at least 1");
     const SkySamplerOptions sampler = parse_sky_sampler(o.sampler);
-    if (!(o.ground_albedo >= 0 && o.ground_albedo <= 1)) throw Error("--ground-albedo must be in [0, 1]");
 
     std::unique_ptr<tbb::global_control> threads;
     if (o.threads > 0) threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
 
-    Scene scene;
-    if (o.scene == "builtin") {
-        scene = make_builtin_scene();
-    } else {
-        scene = load_gltf(o.scene);
-        for (const std::string& w : scene.warnings) std::fprintf(stderr, "dynsky: warning: %s\n", w.c_str());
-    }
-    if (scene.instances.empty()) throw Error(o.scene + ": the scene has no triangles to render");
-
-    Camera camera;
-    if (scene.cameras.empty()) {
-        if (o.camera != 0) throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " asked for, but the file has no cameras");
-        camera = frame_bounds_camera(scene.world_bounds(), float(width) / height);
-    } else {
-        if (o.camera < 0 || o.camera >= int(scene.cameras.size()))
-            throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " is out of range (the file has " +
-                        std::to_string(scene.cameras.size()) + " perspective camera(s), numbered from 0)");
-        camera = scene.cameras[size_t(o.camera)];
-    }
+    LoadedScene loaded = load_scene(SceneOptions{o.scene, o.camera, o.ground_albedo}, float(width) / height);
+    const Scene& scene = loaded.scene;
+    const Camera& camera = loaded.camera;
 
     std::shared_ptr<SkyImage> sky;
     if (o.sky.empty()) {
