@@ -12,7 +12,6 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
-#include <unistd.h>
 
 #include "cli/commands.h"
 #include "sky/cloud_model.h"
@@ -154,7 +153,7 @@ void run_training_data(const TrainingDataOptions& o) {
     validate_unit_map(form.unit_map);
 
     const int n = o.resolution, big = o.import_resolution;
-    std::vector<NetworkFrame> frames, frames_big;
+    std::vector<NetworkFrame> frames_big;
     std::vector<cv::Mat> exact;
     std::vector<std::string> names;
     nlohmann::ordered_json meta;
@@ -428,10 +427,11 @@ void run_evaluate(const EvaluateOptions& o) {
     std::map<int, Scores> sm, sp, sf;
     std::vector<float> real_mag, rollout_mag, flownet_mag;
     ProgressBar progress2(hi - hmax - lo, "evaluate", o.quiet);
+    // The flow of the pair ending at t (the baseline's) is the one measured from t at the step before.
+    cv::Mat flow = lo + hmax < hi ? flow_at(farneback_flow(frame_big(lo - 1).image, frame_big(lo).image), n) : cv::Mat();
     for (int t = lo; t + hmax < hi; ++t) {
-        const cv::Mat flow = flow_at(farneback_flow(frame_big(t - 1).image, frame_big(t).image), n);
-        append_magnitudes(flow_at(farneback_flow(frame_big(t).image, frame_big(t + 1).image), n),
-                          frame(t).cloud & frame(t).valid & frame(t + 1).valid, &real_mag);
+        cv::Mat next_flow = flow_at(farneback_flow(frame_big(t).image, frame_big(t + 1).image), n);
+        append_magnitudes(next_flow, frame(t).cloud & frame(t).valid & frame(t + 1).valid, &real_mag);
         cv::Mat state = frame(t).image;
         for (int h = 1; h <= hmax; ++h) {
             NetworkStep s = model.step_network(state);
@@ -445,6 +445,7 @@ void run_evaluate(const EvaluateOptions& o) {
             sp[h].add(compare_images(frame(t).image, truth, mask));
             sf[h].add(compare_images(advect_by_flow(frame(t).image, flow, h), truth, mask));
         }
+        flow = next_flow;
         progress2.advance();
     }
     progress2.finish();
