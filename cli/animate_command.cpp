@@ -57,12 +57,6 @@ bool frame_complete(const std::string& dir, int k) {
            fs::exists(frame_name(dir, "sky", k, ".png"));
 }
 
-std::string shell_quote(const std::string& s) {
-    std::string out = "'";
-    for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return out + "'";
-}
-
 // ffmpeg (Debian's) through a subprocess, to a temporary name renamed when complete.
 bool make_video(const std::string& dir, const char* prefix, double fps, const std::string& out, bool quiet) {
     std::string tmp = (fs::path(dir) / (std::string(".partial.") + fs::path(out).filename().string())).string();

@@ -57,6 +57,12 @@ void parse_frame_size(const std::string& text, int* w, int* h) {
     if (*w < 1 || *h < 1 || *w > 16384 || *h > 16384) throw Error("--res '" + text + "': each side must be 1..16384");
 }
 
+std::string shell_quote(const std::string& s) {
+    std::string out = "'";
+    for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return out + "'";
+}
+
 LoadedScene load_scene(const SceneOptions& o, float aspect_ratio) {
     if (!(o.ground_albedo >= 0 && o.ground_albedo <= 1)) throw Error("--ground-albedo must be in [0, 1]");
     LoadedScene out;

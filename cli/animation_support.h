@@ -41,6 +41,8 @@ void add_scene_options(CLI::App* cmd, SceneOptions* o);
 void add_sky_source_options(CLI::App* cmd, SkySourceOptions* o);
 
 void parse_frame_size(const std::string& text, int* w, int* h);
+// s as one word for /bin/sh (single quotes; a quote inside becomes '\'').
+std::string shell_quote(const std::string& s);
 LoadedScene load_scene(const SceneOptions& o, float aspect_ratio);
 // Validates everything (files, ranges) before any rendering.
 SkyTimeline make_sky_timeline(const SkySourceOptions& o);

@@ -17,6 +17,7 @@
 #include <sstream>
 #include <thread>
 
+#include "cli/animation_support.h"
 #include "cli/commands.h"
 #include "renderer/builtin_scene.h"
 #include "renderer/gltf_loader.h"
@@ -596,7 +597,7 @@ int run_sampling_bench(const BenchOptions& o) {
 
     // ---- Charts ----
     std::string script = data_path("bench/sampling_charts.py");
-    std::string cmd = "/usr/bin/python3 '" + script + "' '" + out.string() + "' 2>&1";
+    std::string cmd = "/usr/bin/python3 " + shell_quote(script) + " " + shell_quote(out.string()) + " 2>&1";
     int rc = std::system(cmd.c_str());
     if (rc != 0) notes += "- chart script failed (exit " + std::to_string(rc) + "); tables are complete\n";
 

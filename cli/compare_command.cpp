@@ -19,6 +19,7 @@
 #include "renderer/integrator.h"
 #include "sky/clear_sky.h"
 #include "util/error.h"
+#include "util/text_file.h"
 
 namespace dynsky::cli {
 
@@ -48,12 +49,6 @@ if logy == '1': ax.set_yscale('log')
 ax.set_title(title); ax.set_xlabel(xlabel); ax.set_ylabel(ylabel); ax.grid(alpha=0.3); ax.legend(fontsize=8)
 fig.tight_layout(); fig.savefig(out)
 )PY";
-
-std::string shell_quote(const std::string& s) {
-    std::string out = "'";
-    for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return out + "'";
-}
 
 void make_chart(const std::string& csv, const std::string& png, const std::string& title, const std::string& xlabel,
                 const std::string& ylabel, bool logy) {
@@ -202,7 +197,7 @@ int run_compare(const CompareOptions& o) {
     // Illuminance over time at the chosen points, under both skies (the sun follows the clock).
     std::string csv = (fs::path(o.out) / "illuminance.csv").string();
     {
-        std::ofstream f(csv);
+        std::ostringstream f;  // written whole at the end: a stopped run leaves no half table
         f << "time_s,clear sky horizontal (lx / 100),cloudy sky horizontal (lx / 100)";
         for (size_t p = 0; p < points.size(); ++p) f << ",cloudy point " << p + 1 << " (cd/m2),clear point " << p + 1 << " (cd/m2)";
         f << '\n';
@@ -221,6 +216,7 @@ int run_compare(const CompareOptions& o) {
             f << '\n';
             std::fprintf(stderr, "chart frame %d/%d (t = %.1f s)\n", k + 1, o.chart_frames, t);
         }
+        write_text_atomic(csv, f.str());
     }
     make_chart(csv, (fs::path(o.out) / "illuminance.png").string(),
                "Clear vs cloudy sky: illuminance and luminance at chosen points", "time (s)", "lux / 100, cd/m^2", true);
@@ -246,7 +242,7 @@ int run_temporal(const TemporalOptions& o) {
     auto files = frame_files(o.folder);
     if (files.size() < 3) throw_file_error(o.folder, "needs at least 3 frame_NNNN.exr files");
     std::string csv = (fs::path(o.folder) / "temporal.csv").string();
-    std::ofstream f(csv);
+    std::ostringstream f;  // written whole once every frame is read: a bad frame leaves no table
     f << "time_s,relative change (%),boundary\n";
     Image prev = read_image(files[0]);
     double sum_b = 0, sum_w = 0;
@@ -270,7 +266,7 @@ int run_temporal(const TemporalOptions& o) {
         f << t1 << ',' << change << ',' << (boundary ? 1 : 0) << '\n';
         prev = std::move(cur);
     }
-    f.close();
+    write_text_atomic(csv, f.str());
     make_chart(csv, (fs::path(o.folder) / "temporal.png").string(),
                "Frame-to-frame change (shaded: pairs across a medium-step boundary)", "time of the later frame (s)",
                "mean |dL| / L (%)", false);
