@@ -43,10 +43,7 @@ namespace {
 // Row stride of the pair table: groups of four pixels, (jac x 4, cos x jac x 4), the last one padded.
 inline size_t pair_row_stride(int n) { return 2 * size_t((n + 3) & ~3); }
 
-struct RowSums {
-    float w = 0, er = 0, eg = 0, eb = 0;  // sum of weights, of RGB x cos x jacobian
-    int bad = 0;                          // pixels with a NaN, infinite or negative channel
-};
+using RowSums = EnvLight::RowSums;
 
 // One row of the per-frame pass: weights w = luminance x jacobian, and the sums. Checks every
 // channel (sane) and counts bad pixels; the slow path, taken only for rows that hold bad values.
@@ -166,28 +163,25 @@ void EnvLight::set_sky(std::shared_ptr<const SkyImage> sky) {
             }
         table_resolution_ = n;
     }
-    row_irradiance_.assign(size_t(n), Eigen::Array3d::Zero());
-    row_bad_.assign(size_t(n), 0);
-    row_weight_.assign(size_t(n), 0.0);
+    row_sums_.resize(size_t(n));
     weights_.resize(size_t(n) * n);
     tbb::parallel_for(tbb::blocked_range<int>(0, n, 16), [&](const tbb::blocked_range<int>& rows) {
         for (int j = rows.begin(); j != rows.end(); ++j) {
             const uint16_t* jt = &jacobian_pair_table_[size_t(j) * pair_row_stride(n)];
             const float* row = rgb + size_t(j) * n * 3;
             float* w = &weights_[size_t(j) * n];
-            RowSums sums;
+            RowSums& sums = row_sums_[size_t(j)];
             if (!weigh_row_fast(row, jt, n, w, &sums)) sums = weigh_row_checked(row, jt, n, w);
-            row_irradiance_[size_t(j)] = Eigen::Array3d(sums.er, sums.eg, sums.eb) * double(kFromFixed);
-            row_weight_[size_t(j)] = sums.w;
-            row_bad_[size_t(j)] = size_t(sums.bad);
         }
     });
     bad_pixels_ = 0;
-    for (size_t b : row_bad_) bad_pixels_ += b;
     double total_weight = 0;  // row sums come from the parallel pass above: no serial re-read
-    for (double row : row_weight_) total_weight += row;
     Eigen::Array3d e = Eigen::Array3d::Zero();
-    for (const auto& part : row_irradiance_) e += part;
+    for (const RowSums& row : row_sums_) {
+        bad_pixels_ += size_t(row.bad);
+        total_weight += row.w;
+        e += Eigen::Array3d(row.er, row.eg, row.eb) * double(kFromFixed);
+    }
     sky_irradiance_ = (e * double(du * du)).cast<float>();
     ground_radiance_ = ground_albedo_ * sky_irradiance_ * kInvPi;
 

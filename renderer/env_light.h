@@ -67,6 +67,13 @@ class EnvLight {
     static float jacobian_from_r2(float r2);
     static float cos_theta_from_r2(float r2);
 
+    // What the per-frame pass sums per row (rows run in parallel; the totals are added in row
+    // order, so the result does not depend on the thread count). Public only for that pass's helpers.
+    struct RowSums {
+        float w = 0, er = 0, eg = 0, eb = 0;  // sum of weights, of RGB x cos x jacobian (fixed-point scale)
+        int bad = 0;                          // pixels with a NaN, infinite or negative channel
+    };
+
   private:
     // Pixel holding the radiance of uv (with r <= 1): itself, or for rim pixels whose centre lies
     // outside the disc, the nearest pixel inward.
@@ -76,10 +83,8 @@ class EnvLight {
     SkySamplerOptions sampler_options_;
     std::unique_ptr<SkySampler> sampler_;
     std::vector<float> weights_;               // per pixel luminance x jacobian (fixed-point scale)
-    std::vector<size_t> row_bad_;
+    std::vector<RowSums> row_sums_;
     size_t bad_pixels_ = 0;
-    std::vector<Eigen::Array3d> row_irradiance_;
-    std::vector<double> row_weight_;
     // Per pixel dw/(du dv) in fixed point (0 off the disc), alone (read by the samplers' pass) and
     // paired with cos(theta) dw/(du dv) (one stream beside the image in the first pass).
     std::vector<uint16_t> jacobian_table_;

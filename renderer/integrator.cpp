@@ -20,8 +20,7 @@ Vec3 offset_ray_origin(const Vec3& p, const Vec3& n, const Vec3& w) {
 PathIntegrator::PathIntegrator(const Accel& accel, const EnvLight& light, const RenderSettings& settings)
     : accel_(accel), light_(light), settings_(settings) {}
 
-Ray PathIntegrator::camera_ray(const Camera& camera, float aspect, float px, float py) const {
-    float tan_half = tan_half_fov_;
+Ray PathIntegrator::camera_ray(const Camera& camera, float tan_half, float aspect, float px, float py) const {
     float x = (2 * px / settings_.width - 1) * tan_half * aspect;
     float y = (1 - 2 * py / settings_.height) * tan_half;
     Ray ray;
@@ -167,7 +166,7 @@ RenderResult PathIntegrator::render(const Camera& camera) const {
     RenderResult result;
     result.color = Image(w, h, 3);
     if (settings_.compute_variance) result.variance = Image(w, h, 3);
-    tan_half_fov_ = std::tan(camera.yfov / 2);
+    const float tan_half = std::tan(camera.yfov / 2);
     const float aspect = float(w) / h;  // the image decides; glTF aspectRatio only matters to rasterisers
     const int tiles_x = (w + ts - 1) / ts, tiles_y = (h + ts - 1) / ts;
     ProgressBar progress(tiles_x * tiles_y, "render", settings_.quiet);
@@ -183,7 +182,7 @@ RenderResult PathIntegrator::render(const Camera& camera) const {
                 Eigen::Array3d sum = Eigen::Array3d::Zero(), sum2 = Eigen::Array3d::Zero();
                 for (int s = 0; s < settings_.spp; ++s) {
                     Vec2 jitter = rng.uniform2();
-                    Ray ray = camera_ray(camera, aspect, x + jitter.x(), y + jitter.y());
+                    Ray ray = camera_ray(camera, tan_half, aspect, x + jitter.x(), y + jitter.y());
                     ++stats.camera_rays;
                     Color c = trace(ray, rng, &stats);
                     if (!c.allFinite()) c = Color::Zero();  // never let one bad path poison a pixel

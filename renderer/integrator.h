@@ -55,7 +55,8 @@ class PathIntegrator {
     void set_ray_observer(RayObserver observer) { observer_ = std::move(observer); }
 
   private:
-    Ray camera_ray(const Camera& camera, float aspect, float px, float py) const;
+    // tan_half: tan(yfov / 2) of the camera, computed once per render.
+    Ray camera_ray(const Camera& camera, float tan_half, float aspect, float px, float py) const;
     // Visibility along a shadow ray through alpha-tested and blended surfaces (transmittance).
     float transmittance(const Ray& ray, RenderStats* stats) const;
     // Whether a hit is skipped by alpha (MASK below cutoff, or BLEND chosen as transparent).
@@ -66,7 +67,6 @@ class PathIntegrator {
     const EnvLight& light_;
     RenderSettings settings_;
     RayObserver observer_;
-    mutable float tan_half_fov_ = 0;  // of the camera being rendered
 };
 
 // Offset for spawning rays off a surface: relative to the magnitude of the position.

@@ -243,11 +243,15 @@ class MipSampler : public PixelSampler {
         std::vector<float>& w = *weights.values;
         n_ = n;
         weights_ = &w;
-        size_ = 1;
-        while (size_ < n) size_ *= 2;
-        levels_.clear();
-        // levels_[0] is size_/2 square, ..., the last one 1x1. Level 0 reads the weights directly.
-        for (int s = size_ / 2; s >= 1; s /= 2) levels_.emplace_back(size_t(s) * s, 0.0f);
+        int size = 1;
+        while (size < n) size *= 2;
+        // levels_[0] is size/2 square, ..., the last one 1x1. Level 0 reads the weights directly.
+        // Every entry is written below, so the pyramid is only reallocated when the size changes.
+        if (size != size_ || levels_.empty() != (size == 1)) {
+            size_ = size;
+            levels_.clear();
+            for (int s = size_ / 2; s >= 1; s /= 2) levels_.emplace_back(size_t(s) * s, 0.0f);
+        }
         if (levels_.empty()) {  // n == 1
             total_ = w[0];
         } else {
@@ -517,11 +521,7 @@ SkySamplerOptions recommended_sky_sampler() {
     // docs/sampling/README.md: with MIS compensation the CDF reaches plain cdf's error soonest
     // under a sunny sky and rebuilds closest to the streaming floor (alias tables sample no faster
     // here and cost several times more to build); the sun split lost everywhere (see there why).
-    SkySamplerOptions o;
-    o.method = SkySamplerMethod::Cdf;
-    o.sun_split = false;
-    o.mis_compensation = false;
-    return o;
+    return SkySamplerOptions{};
 }
 
 std::unique_ptr<SkySampler> make_sky_sampler(const SkySamplerOptions& o) {

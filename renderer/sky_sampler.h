@@ -31,7 +31,7 @@ namespace dynsky {
 enum class SkySamplerMethod { Uniform, Cosine, Cdf, Alias, Mip };
 
 struct SkySamplerOptions {
-    SkySamplerMethod method = SkySamplerMethod::Alias;
+    SkySamplerMethod method = SkySamplerMethod::Cdf;  // the defaults are recommended_sky_sampler()
     bool sun_split = false;
     bool mis_compensation = false;
 };

@@ -323,7 +323,7 @@ TEST(SkySampler, AllSamplersConvergeToTheSameImage) {
     Camera cam = frame_bounds_camera(scene.world_bounds(), 4.0f / 3);
     EnvLight ref_light(sky, 0.3f, parse_sky_sampler("cdf"));
     RenderResult ref = PathIntegrator(accel, ref_light, rs).render(cam);
-    for (const std::string& name : {"uniform", "cosine", "alias+mis", "mip+mis", "sun+alias+mis", "sun+mip", "sun+cdf+mis"}) {
+    for (const std::string name : {"uniform", "cosine", "alias+mis", "mip+mis", "sun+alias+mis", "sun+mip", "sun+cdf+mis"}) {
         EnvLight light(sky, 0.3f, parse_sky_sampler(name));
         RenderSettings s2 = rs;
         s2.seed = 99;
