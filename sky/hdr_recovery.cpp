@@ -207,25 +207,37 @@ void validate_unit_map(const UnitMapParams& p) {
         throw Error("unit map: max_radiance must be finite and larger than scale");
 }
 
-float radiance_to_unit(float radiance, const UnitMapParams& p) {
+namespace {
+
+// log(1 + max / scale): the map's range in log units, computed once per image, not per channel.
+double unit_log_range(const UnitMapParams& p) { return std::log1p(p.max_radiance / p.scale); }
+
+float to_unit(float radiance, const UnitMapParams& p, double log_range) {
     double x = std::clamp(double(radiance), 0.0, p.max_radiance);
-    return float(std::log1p(x / p.scale) / std::log1p(p.max_radiance / p.scale));
+    return float(std::log1p(x / p.scale) / log_range);
 }
 
-float unit_to_radiance(float unit, const UnitMapParams& p) {
+float from_unit(float unit, const UnitMapParams& p, double log_range) {
     double y = std::clamp(double(unit), 0.0, 1.0);
-    return float(p.scale * std::expm1(y * std::log1p(p.max_radiance / p.scale)));
+    return float(p.scale * std::expm1(y * log_range));
 }
+
+}  // namespace
+
+float radiance_to_unit(float radiance, const UnitMapParams& p) { return to_unit(radiance, p, unit_log_range(p)); }
+
+float unit_to_radiance(float unit, const UnitMapParams& p) { return from_unit(unit, p, unit_log_range(p)); }
 
 Image hdr_to_unit(const SkyImage& sky, const UnitMapParams& params) {
     validate_unit_map(params);
+    const double log_range = unit_log_range(params);
     int n = sky.resolution;
     Image out(n, n, 3);
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
             if (!sky.in_disc(i, j)) continue;
             Color c = sky.pixel(i, j);
-            for (int k = 0; k < 3; ++k) out.at(i, j, k) = radiance_to_unit(c[k], params);
+            for (int k = 0; k < 3; ++k) out.at(i, j, k) = to_unit(c[k], params, log_range);
         }
     out.metadata.numbers["dynsky:unit_scale"] = params.scale;
     out.metadata.numbers["dynsky:unit_max"] = params.max_radiance;
@@ -249,6 +261,7 @@ SkyImage unit_to_hdr(const Image& unit, const UnitMapParams& params) {
         throw Error("unit image was encoded with max " + std::to_string(it->second) + ", decoding with " +
                     std::to_string(params.max_radiance));
     SkyImage sky = sky_from_image(unit, "unit image");
+    const double log_range = unit_log_range(params);
     for (int j = 0; j < sky.resolution; ++j)
         for (int i = 0; i < sky.resolution; ++i) {
             if (!sky.in_disc(i, j)) {
@@ -256,7 +269,7 @@ SkyImage unit_to_hdr(const Image& unit, const UnitMapParams& params) {
                 continue;
             }
             Color c = sky.pixel(i, j);
-            for (int k = 0; k < 3; ++k) c[k] = unit_to_radiance(c[k], params);
+            for (int k = 0; k < 3; ++k) c[k] = from_unit(c[k], params, log_range);
             sky.set_pixel(i, j, c);
         }
     return sky;
