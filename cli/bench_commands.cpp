@@ -31,7 +31,7 @@
 #include "sky/procedural_clouds.h"
 #include "util/data_path.h"
 #include "util/error.h"
-#include "util/text_file.h"
+#include "util/atomic_file.h"
 
 #ifndef DYNSKY_SHARED_DIR_DEFAULT
 #define DYNSKY_SHARED_DIR_DEFAULT "../shared"
@@ -392,7 +392,7 @@ int run_sampling_bench(const BenchOptions& o) {
                             acc_csv << row.str();
                             case_csv << row.str();
                         }
-                if (!resumed) write_text_atomic(case_file.string(), case_csv.str());
+                if (!resumed) write_file_atomic(case_file.string(), case_csv.str());
                 // Curves and the cost model.
                 std::map<std::string, Curve> curves;
                 for (const std::string& name : samplers) {
@@ -454,8 +454,8 @@ int run_sampling_bench(const BenchOptions& o) {
             }
         }
     if (run_accuracy) {
-        write_text_atomic((out / "accuracy.csv").string(), acc_csv.str());
-        write_text_atomic((out / "accuracy_summary.csv").string(), sum_csv.str());
+        write_file_atomic((out / "accuracy.csv").string(), acc_csv.str());
+        write_file_atomic((out / "accuracy_summary.csv").string(), sum_csv.str());
     }
 
     // ---- Rebuild cost ----
@@ -524,7 +524,7 @@ int run_sampling_bench(const BenchOptions& o) {
             rb_csv << "floor," << n << "," << (threads == 1 ? "1" : "all") << "," << median(fs_) * 1e3 << ",1,0\n";
         }
     }
-    if (run_rebuild) write_text_atomic((out / "rebuild.csv").string(), rb_csv.str());
+    if (run_rebuild) write_file_atomic((out / "rebuild.csv").string(), rb_csv.str());
 
     // ---- Failure cases (on the plaza, or the first scene) ----
     std::fprintf(stderr, "sampling bench: failure cases\n");
@@ -593,7 +593,7 @@ int run_sampling_bench(const BenchOptions& o) {
             }
         }
     }
-    if (run_failures) write_text_atomic((out / "failures.csv").string(), fl_csv.str());
+    if (run_failures) write_file_atomic((out / "failures.csv").string(), fl_csv.str());
 
     // ---- Charts ----
     std::string script = data_path("bench/sampling_charts.py");
@@ -683,7 +683,7 @@ int run_sampling_bench(const BenchOptions& o) {
        << "Firefly share: fraction of the squared error held by the brightest 0.1% of pixels.\n\n"
        << fl.str() << "\n![failures](failures.png)\n\n";
     if (!notes.empty()) md << "## Notes\n\n" << notes << "\n";
-    write_text_atomic((out / "README.md").string(), md.str());
+    write_file_atomic((out / "README.md").string(), md.str());
     std::fprintf(stderr, "wrote %s (%.0f s)\n", (out / "README.md").c_str(), seconds_since(start));
     return 0;
 }

@@ -19,7 +19,7 @@
 #include "renderer/integrator.h"
 #include "sky/clear_sky.h"
 #include "util/error.h"
-#include "util/text_file.h"
+#include "util/atomic_file.h"
 
 namespace dynsky::cli {
 
@@ -216,7 +216,7 @@ int run_compare(const CompareOptions& o) {
             f << '\n';
             std::fprintf(stderr, "chart frame %d/%d (t = %.1f s)\n", k + 1, o.chart_frames, t);
         }
-        write_text_atomic(csv, f.str());
+        write_file_atomic(csv, f.str());
     }
     make_chart(csv, (fs::path(o.out) / "illuminance.png").string(),
                "Clear vs cloudy sky: illuminance and luminance at chosen points", "time (s)", "lux / 100, cd/m^2", true);
@@ -266,7 +266,7 @@ int run_temporal(const TemporalOptions& o) {
         f << t1 << ',' << change << ',' << (boundary ? 1 : 0) << '\n';
         prev = std::move(cur);
     }
-    write_text_atomic(csv, f.str());
+    write_file_atomic(csv, f.str());
     make_chart(csv, (fs::path(o.folder) / "temporal.png").string(),
                "Frame-to-frame change (shaded: pairs across a medium-step boundary)", "time of the later frame (s)",
                "mean |dL| / L (%)", false);

@@ -19,7 +19,7 @@
 #include "sky/sky_metrics.h"
 #include "util/data_path.h"
 #include "util/error.h"
-#include "util/text_file.h"
+#include "util/atomic_file.h"
 #include "util/image.h"
 #include "util/math.h"
 #include "util/progress.h"
@@ -232,7 +232,7 @@ void run_training_data(const TrainingDataOptions& o) {
     meta["images"] = "hdr_to_unit (sky/hdr_recovery.h): log(1 + L / unit_scale) / log(1 + unit_max / unit_scale)";
     meta["cloud"] = "sky/cloud_mask.h rule on the sky encoded as a camera would (encode_sky_for_mask) at the import "
                     "resolution, then majority over the pixels under each pixel of N";
-    write_text_atomic(path("meta.json"), meta.dump(2) + "\n");
+    write_file_atomic(path("meta.json"), meta.dump(2) + "\n");
     if (!o.quiet) std::printf("wrote %zu frames at %d px to %s\n", count, n, o.out.c_str());
 }
 
@@ -310,7 +310,7 @@ void run_predict(const PredictOptions& o) {
         progress.advance();
     });
     progress.finish();
-    if (!o.stats.empty()) write_text_atomic(o.stats, csv.str());
+    if (!o.stats.empty()) write_file_atomic(o.stats, csv.str());
     if (!o.quiet)
         std::printf("wrote %d predicted skies (Delta t = %g s, %d steps) to %s\n", written, model.info().dt_seconds,
                     o.steps, o.out.c_str());
@@ -490,7 +490,7 @@ void run_evaluate(const EvaluateOptions& o) {
                    "flow magnitude on cloud pixels (px per step at " + std::to_string(n) + " px)", top,
                    {{"real frames (Farneback)", real_mag}, {"model rollout (Farneback)", rollout_mag},
                     {"FlowNet output", flownet_mag}});
-    write_text_atomic(o.report, md.str());
+    write_file_atomic(o.report, md.str());
     if (!o.quiet) std::printf("%s\nwrote %s and %s\n", md.str().c_str(), o.report.c_str(), o.histogram.c_str());
 }
 

@@ -15,7 +15,7 @@
 #include "sky/procedural_clouds.h"
 #include "sky/sun_position.h"
 #include "util/error.h"
-#include "util/text_file.h"
+#include "util/atomic_file.h"
 #include "util/image.h"
 #include "util/progress.h"
 
@@ -224,7 +224,7 @@ void run_procedural(const ProceduralOptions& o, bool use_location) {
     progress.finish();
     manifest["frames"] = frame_list;
     // Written last: a manifest means the sequence is complete.
-    write_text_atomic((fs::path(o.out) / "manifest.json").string(), manifest.dump(2) + "\n");
+    write_file_atomic((fs::path(o.out) / "manifest.json").string(), manifest.dump(2) + "\n");
     if (!o.quiet)
         std::printf("wrote %d frames, their flows and manifest.json to %s\n", frames, o.out.c_str());
 }

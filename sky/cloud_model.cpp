@@ -10,12 +10,12 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
-#include <unistd.h>
 
 #include "sky/fisheye.h"
 #include "sky/hdr_recovery.h"
 #include "sky/photo_import.h"
 #include "sky/sky_metrics.h"
+#include "util/atomic_file.h"
 #include "util/error.h"
 
 namespace dynsky {
@@ -434,28 +434,17 @@ NpyArray read_npy(const std::string& path) {
 
 namespace {
 void write_npy_raw(const std::string& path, const std::vector<size_t>& shape, const char* descr, const void* data,
-                   size_t bytes) {
+                   size_t bytes_count) {
     std::string dict = std::string("{'descr': '") + descr + "', 'fortran_order': False, 'shape': (";
     for (size_t i = 0; i < shape.size(); ++i) dict += std::to_string(shape[i]) + (shape.size() == 1 || i + 1 < shape.size() ? "," : "");
     dict += "), }";
     size_t total = 10 + dict.size() + 1;
     dict += std::string((64 - total % 64) % 64, ' ') + "\n";
-    fs::path target(path);
-    fs::path tmp = target.parent_path() / (".tmp-" + target.filename().string() + "-" + std::to_string(::getpid()));
-    {
-        std::ofstream f(tmp, std::ios::binary);
-        f.write("\x93NUMPY\x01\x00", 8);
-        unsigned char len[2] = {static_cast<unsigned char>(dict.size() & 0xff), static_cast<unsigned char>(dict.size() >> 8)};
-        f.write(reinterpret_cast<char*>(len), 2);
-        f << dict;
-        f.write(static_cast<const char*>(data), std::streamsize(bytes));
-        if (!f) {
-            std::error_code ec;
-            fs::remove(tmp, ec);
-            throw_file_error(path, "could not write the file");
-        }
-    }
-    fs::rename(tmp, target);
+    std::string bytes("\x93NUMPY\x01\x00", 8);
+    bytes += char(dict.size() & 0xff), bytes += char(dict.size() >> 8);
+    bytes += dict;
+    bytes.append(static_cast<const char*>(data), bytes_count);
+    write_file_atomic(path, bytes);
 }
 size_t element_count(const std::vector<size_t>& shape) {
     size_t n = 1;

@@ -1,4 +1,4 @@
-#include "util/text_file.h"
+#include "util/atomic_file.h"
 
 #include <unistd.h>
 
@@ -9,15 +9,15 @@
 
 namespace dynsky {
 
-void write_text_atomic(const std::string& path, const std::string& text) {
+void write_file_atomic(const std::string& path, const std::string& bytes) {
     namespace fs = std::filesystem;
     fs::path target(path);
     std::error_code ec;
     if (!target.parent_path().empty()) fs::create_directories(target.parent_path(), ec);
     fs::path tmp = target.parent_path() / (".tmp-" + target.filename().string() + "-" + std::to_string(::getpid()));
     {
-        std::ofstream f(tmp);
-        f << text;
+        std::ofstream f(tmp, std::ios::binary);
+        f.write(bytes.data(), std::streamsize(bytes.size()));
         f.flush();
         if (!f) {
             fs::remove(tmp, ec);
