@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "cli/commands.h"
+#include "cli/sky_output.h"
 #include "sky/clear_sky.h"
 #include "sky/latlong.h"
 #include "sky/sky_image.h"
@@ -62,29 +63,6 @@ SunPosition sun_from(const SunOptions& o, UtcTime* t) {
         throw Error(std::string("--lat/--lon/--elevation: ") + e.what());
     }
     return compute_sun_position(*t, where, !o.no_refraction, o.pressure_mbar, o.temperature_c);
-}
-
-void check_extension(const std::string& option, const std::string& path, const std::string& ext) {
-    if (file_extension(path) != ext) throw_file_error(path, option + " must name a " + ext + " file");
-}
-
-// Previews: expose so the median sky pixel lands at 18% grey (a clear sky is ~5-30 W m^-2 sr^-1,
-// far above the display range), then the usual ACES curve.
-void write_preview(const std::string& path, const Image& linear) {
-    std::vector<float> lum;
-    lum.reserve(linear.pixels.size() / 3);
-    for (int y = 0; y < linear.height; ++y)
-        for (int x = 0; x < linear.width; ++x) {
-            float l = 0.2126f * linear.at(x, y, 0) + 0.7152f * linear.at(x, y, 1) + 0.0722f * linear.at(x, y, 2);
-            if (l > 0) lum.push_back(l);
-        }
-    float ev = 0;
-    if (!lum.empty()) {
-        std::nth_element(lum.begin(), lum.begin() + lum.size() / 2, lum.end());
-        ev = std::log2(0.18f / lum[lum.size() / 2]);
-    }
-    write_image(path, tonemap_to_display(linear, ev));
-    std::printf("preview: %s (exposure %+.2f EV)\n", path.c_str(), ev);
 }
 
 void print_sun(const SunPosition& s, const UtcTime& t, const SunOptions& o) {

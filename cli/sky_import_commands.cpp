@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "cli/commands.h"
+#include "cli/sky_output.h"
 #include "sky/cloud_mask.h"
 #include "sky/hdr_recovery.h"
 #include "sky/photo_import.h"
@@ -38,10 +39,6 @@ struct MaskOptions {
     bool whole_image = false;
 };
 
-void check_extension(const std::string& option, const std::string& path, const std::string& ext) {
-    if (file_extension(path) != ext) throw_file_error(path, option + " must name a " + ext + " file");
-}
-
 SkyCircle parse_center(const std::string& text, double radius) {
     double x = 0, y = 0;
     char comma = 0, extra = 0;
@@ -50,23 +47,6 @@ SkyCircle parse_center(const std::string& text, double radius) {
         throw Error("--center '" + text + "': expected X,Y in photo pixels (e.g. --center 243.1,317.5)");
     if (!(radius > 0)) throw Error("--center needs --radius R (pixels from the centre to the horizon)");
     return SkyCircle{x, y, radius};
-}
-
-// Exposes so the median sky luminance lands at 18% grey, then ACES and sRGB.
-void write_preview(const std::string& path, const Image& linear) {
-    std::vector<float> lum;
-    for (int y = 0; y < linear.height; ++y)
-        for (int x = 0; x < linear.width; ++x) {
-            float l = luminance(Color(linear.at(x, y, 0), linear.at(x, y, 1), linear.at(x, y, 2)));
-            if (l > 0) lum.push_back(l);
-        }
-    float ev = 0;
-    if (!lum.empty()) {
-        std::nth_element(lum.begin(), lum.begin() + lum.size() / 2, lum.end());
-        ev = std::log2(0.18f / lum[lum.size() / 2]);
-    }
-    write_image(path, tonemap_to_display(linear, ev));
-    std::printf("preview: %s (exposure %+.2f EV)\n", path.c_str(), ev);
 }
 
 void run_import(const ImportOptions& o) {
