@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -143,22 +144,26 @@ std::shared_ptr<SkyImage> clear_sky(int n) {
     return s;
 }
 
+// The skies selected by --skies (only those are made: a 1024 px procedural sky costs seconds).
 std::vector<NamedSky> make_skies(int n, const BenchOptions& o, std::string* notes) {
     std::vector<NamedSky> skies;
-    skies.push_back({"clear", "Hosek-Wilkie clear sky, turbidity 3, sun at 35 deg elevation (make_clear_sky)", clear_sky(n)});
+    if (selected(o.skies, "clear"))
+        skies.push_back({"clear", "Hosek-Wilkie clear sky, turbidity 3, sun at 35 deg elevation (make_clear_sky)", clear_sky(n)});
     ProceduralSkyParams cu;
     cu.clear_sky.sun_direction = fisheye::direction_from_angles(50 * kPiD / 180, 120 * kPiD / 180);
     cu.coverage = 0.5;
     cu.seed = 3;
-    skies.push_back({"cumulus", "procedural broken cumulus, coverage 0.5, sun at 40 deg (render_procedural_sky)",
+    if (selected(o.skies, "cumulus"))
+        skies.push_back({"cumulus", "procedural broken cumulus, coverage 0.5, sun at 40 deg (render_procedural_sky)",
                      std::make_shared<SkyImage>(render_procedural_sky(cu, 0.0, n))});
     ProceduralSkyParams ov = cu;
     ov.coverage = 1.0;
     ov.layers[0].optical_depth = 60;
-    skies.push_back({"overcast", "procedural overcast, coverage 1.0, optical depth 60 (render_procedural_sky)",
+    if (selected(o.skies, "overcast"))
+        skies.push_back({"overcast", "procedural overcast, coverage 1.0, optical depth 60 (render_procedural_sky)",
                      std::make_shared<SkyImage>(render_procedural_sky(ov, 0.0, n))});
     std::string photo = o.shared + "/skies/mobotix_sophia_20200812_morning/images/2020-08-12_10_00.jpg";
-    try {
+    if (selected(o.skies, "photo")) try {
         PhotoImportParams pp;
         pp.resolution = n;
         ImportedPhoto imp = import_photo(photo, pp);
@@ -170,25 +175,29 @@ std::vector<NamedSky> make_skies(int n, const BenchOptions& o, std::string* note
     return skies;
 }
 
+// The scenes selected by --scenes (only those are loaded).
 std::vector<NamedScene> make_scenes(const BenchOptions& o, float aspect, std::string* notes) {
     std::vector<NamedScene> scenes;
-    auto add = [&](const std::string& name, const std::string& desc, Scene s) {
+    auto add = [&](const std::string& name, const std::string& desc, const std::function<Scene()>& make) {
+        if (!selected(o.scenes, name)) return;
+        Scene s = make();
         Camera cam = s.cameras.empty() ? frame_bounds_camera(s.world_bounds(), aspect) : s.cameras[0];
         scenes.push_back({name, desc, std::move(s), cam});
     };
     auto gltf = [&](const std::string& name, const std::string& rel, const std::string& desc) {
         std::string path = o.shared + "/scenes/" + rel;
+        if (!selected(o.scenes, name)) return;
         if (!fs::exists(path)) {
             *notes += "- scene " + name + " skipped: " + path + " not found\n";
             return;
         }
-        add(name, desc, load_gltf(path));
+        add(name, desc, [&] { return load_gltf(path); });
     };
     gltf("diffuse", "Box/Box.glb", "Khronos Box (diffuse), framed");
     gltf("glossy", "MetalRoughSpheresNoTextures/MetalRoughSpheresNoTextures.glb", "Khronos MetalRoughSpheresNoTextures (glossy)");
-    add("plaza", "built-in plaza (renderer/builtin_scene.h)", make_builtin_scene());
+    add("plaza", "built-in plaza (renderer/builtin_scene.h)", [] { return make_builtin_scene(); });
     // The House animation scene shipped with dynsky (Kenney CC0 buildings, its own camera).
-    add("house", "scenes/house/house.gltf (Kenney buildings, textured; its camera)", load_gltf(data_path("scenes/house/house.gltf")));
+    add("house", "scenes/house/house.gltf (Kenney buildings, textured; its camera)", [] { return load_gltf(data_path("scenes/house/house.gltf")); });
     return scenes;
 }
 
@@ -292,14 +301,17 @@ int run_sampling_bench(const BenchOptions& o) {
                run_failures = selected(o.parts, "failures");
     if (run_accuracy) fs::create_directories(cache);
 
-    std::fprintf(stderr, "sampling bench: skies...\n");
+    // Skies serve the accuracy part, scenes also the failure cases: neither is made for others.
     std::vector<NamedSky> skies;
-    for (NamedSky& s : make_skies(sky_n, o, &notes))
-        if (selected(o.skies, s.name)) skies.push_back(std::move(s));
-    std::fprintf(stderr, "sampling bench: scenes...\n");
+    if (run_accuracy) {
+        std::fprintf(stderr, "sampling bench: skies...\n");
+        skies = make_skies(sky_n, o, &notes);
+    }
     std::vector<NamedScene> scenes;
-    for (NamedScene& s : make_scenes(o, float(w) / h, &notes))
-        if (selected(o.scenes, s.name)) scenes.push_back(std::move(s));
+    if (run_accuracy || run_failures) {
+        std::fprintf(stderr, "sampling bench: scenes...\n");
+        scenes = make_scenes(o, float(w) / h, &notes);
+    }
 
     // ---- Accuracy against time ----
     std::vector<Run> runs;
@@ -459,7 +471,7 @@ int run_sampling_bench(const BenchOptions& o) {
     }
 
     // ---- Rebuild cost ----
-    std::fprintf(stderr, "sampling bench: rebuild timings\n");
+    if (run_rebuild) std::fprintf(stderr, "sampling bench: rebuild timings\n");
     std::vector<int> sizes = o.quick ? std::vector<int>{256, 1024, 2048} : std::vector<int>{256, 512, 1024, 2048, 4096};
     if (!run_rebuild) sizes.clear();
     std::ostringstream rb_csv, rb;
@@ -527,7 +539,7 @@ int run_sampling_bench(const BenchOptions& o) {
     if (run_rebuild) write_file_atomic((out / "rebuild.csv").string(), rb_csv.str());
 
     // ---- Failure cases (on the plaza, or the first scene) ----
-    std::fprintf(stderr, "sampling bench: failure cases\n");
+    if (run_failures) std::fprintf(stderr, "sampling bench: failure cases\n");
     std::ostringstream fl_csv, fl;
     fl_csv << "case,sampler,rmse,rel_mse,firefly\n";
     fl << "| case | sampler | RMSE | rel. MSE | firefly share |\n|---|---|---|---|---|\n";
