@@ -9,6 +9,8 @@
 #include <emmintrin.h>
 #endif
 
+#include "renderer/sampling.h"
+
 namespace dynsky {
 
 void Distribution2D::build(const float* weights, int width, int height) {
@@ -92,14 +94,6 @@ static int find_block(const float* s, int n, float t) {
     while (b < n - 1 && s[b] <= lower(b)) ++b;
     while (b > 0 && s[b] <= lower(b)) --b;
     return b;
-}
-
-// (cell + frac) / n can round up into the next cell in float when cell is large: keep it inside.
-static float in_cell(int cell, float frac, int n) {
-    float v = (cell + frac) / n;
-    float hi = std::nextafter(float(cell + 1) / n, 0.0f);
-    while (int(hi * n) > cell) hi = std::nextafter(hi, 0.0f);
-    return std::clamp(v, float(cell) / n, hi);
 }
 
 bool Distribution2D::sample(const Vec2& u, Vec2* xy, float* pdf, int* cell_x, int* cell_y) const {

@@ -1,6 +1,8 @@
 // Random numbers and the warps the integrator needs.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 #include "util/math.h"
@@ -35,6 +37,16 @@ class Rng {
   private:
     uint64_t state_, inc_;
 };
+
+// (cell + frac) / n in [0, 1), computed in Frac's precision, kept inside the cell: in float the
+// quotient can round up into the next cell when cell is large.
+template <typename Frac>
+inline float in_cell(int cell, Frac frac, int n) {
+    float v = float((cell + frac) / n);
+    float hi = std::nextafter(float(cell + 1) / n, 0.0f);
+    while (int(hi * n) > cell) hi = std::nextafter(hi, 0.0f);
+    return std::clamp(v, float(cell) / n, hi);
+}
 
 // 64-bit mix (splitmix64 finaliser), for deriving per-pixel seeds.
 inline uint64_t mix_bits(uint64_t v) {

@@ -44,14 +44,6 @@ void SkyWeights::apply_compensation() {
 
 namespace {
 
-// (cell + frac) / n, kept inside the cell despite float rounding.
-float in_cell(int cell, double frac, int n) {
-    float v = float((cell + frac) / n);
-    float lo = float(cell) / n, hi = std::nextafter(float(cell + 1) / n, 0.0f);
-    while (int(hi * n) > cell) hi = std::nextafter(hi, 0.0f);
-    return std::clamp(v, lo, hi);
-}
-
 // ---- Samplers that ignore the sky ----
 
 class UniformSampler : public SkySampler {
