@@ -48,7 +48,9 @@ TEST(MetalRoughBsdf, NeverReflectsMoreThanItReceives) {
                 EXPECT_LE(a.maxCoeff(), 1.0f + 5e-3f) << "metallic " << metallic << " roughness " << roughness << " theta " << theta;
                 EXPECT_GT(a.minCoeff(), 0.3f);
                 // A white dielectric reflects everything: what the specular lobe does not, the base does.
-                if (metallic == 0) EXPECT_NEAR(a[0], 1.0f, 1e-2f) << "roughness " << roughness << " theta " << theta;
+                if (metallic == 0) {
+                    EXPECT_NEAR(a[0], 1.0f, 1e-2f) << "roughness " << roughness << " theta " << theta;
+                }
             }
 }
 
