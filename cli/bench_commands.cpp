@@ -260,11 +260,6 @@ struct Curve {
     double seconds_at(double spp_value) const { return rebuild_seconds + spp_value * seconds_per_spp; }
 };
 
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
-}
-
 std::string machine_description() {
     std::string cpu = "unknown CPU";
     std::ifstream f("/proc/cpuinfo");

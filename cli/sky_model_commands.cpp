@@ -475,17 +475,13 @@ void run_evaluate(const EvaluateOptions& o) {
                       Scores::mean(sm[h].mse), Scores::mean(sp[h].mse), Scores::mean(sf[h].mse), sm[h].psnr.size());
         md << line;
     }
-    auto median = [](std::vector<float> v) {
-        if (v.empty()) return 0.0f;
-        std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-        return v[v.size() / 2];
-    };
+    auto median_or_0 = [](const std::vector<float>& v) { return v.empty() ? 0.0f : median(v); };
     std::snprintf(line, sizeof line,
                   "\nFlow magnitude on cloud pixels, pixels per step at %d px (median): real frames (Farneback) %.3f, "
                   "model rollout frames (Farneback) %.3f, FlowNet output %.3f. Histogram: `%s`.\n",
-                  n, median(real_mag), median(rollout_mag), median(flownet_mag), o.histogram.c_str());
+                  n, median_or_0(real_mag), median_or_0(rollout_mag), median_or_0(flownet_mag), o.histogram.c_str());
     md << line;
-    float top = std::max({median(real_mag), median(rollout_mag), median(flownet_mag), 0.05f}) * 4.0f;
+    float top = std::max({median_or_0(real_mag), median_or_0(rollout_mag), median_or_0(flownet_mag), 0.05f}) * 4.0f;
     draw_histogram(o.histogram, "Cloud motion per step, " + seq.name + " held-out (" + info.name + ")",
                    "flow magnitude on cloud pixels (px per step at " + std::to_string(n) + " px)", top,
                    {{"real frames (Farneback)", real_mag}, {"model rollout (Farneback)", rollout_mag},

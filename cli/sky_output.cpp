@@ -24,8 +24,7 @@ void write_preview(const std::string& path, const Image& linear) {
         }
     float ev = 0;
     if (!lum.empty()) {
-        std::nth_element(lum.begin(), lum.begin() + lum.size() / 2, lum.end());
-        ev = std::log2(0.18f / lum[lum.size() / 2]);
+        ev = std::log2(0.18f / median(std::move(lum)));
     }
     write_image(path, tonemap_to_display(linear, ev));
     std::printf("preview: %s (exposure %+.2f EV)\n", path.c_str(), ev);

@@ -146,9 +146,8 @@ void run_procedural(const ProceduralOptions& o, bool use_location) {
         for (int j = 0; j < 64; ++j)
             for (int i = 0; i < 64; ++i)
                 if (clear.in_disc(i, j)) lum.push_back(luminance(clear.pixel(i, j)));
-        std::nth_element(lum.begin(), lum.begin() + lum.size() / 2, lum.end());
-        float median = lum[lum.size() / 2];
-        if (median > 0) preview_ev = std::log2(0.2f / median);
+        const float median_lum = median(std::move(lum));
+        if (median_lum > 0) preview_ev = std::log2(0.2f / median_lum);
     }
 
     fs::create_directories(o.out);

@@ -66,9 +66,8 @@ Image encode_sky_for_mask(const SkyImage& sky) {
             if (sky.in_disc(i, j)) lum.push_back(luminance(sky.pixel(i, j)));
     float scale = 1.0f;
     if (!lum.empty()) {
-        size_t k = size_t(0.99 * (lum.size() - 1));
-        std::nth_element(lum.begin(), lum.begin() + k, lum.end());
-        if (lum[k] > 0) scale = 1.0f / lum[k];
+        const float p99 = quantile(std::move(lum), 0.99);
+        if (p99 > 0) scale = 1.0f / p99;
     }
     Image out(n, n, 3);
     for (int j = 0; j < n; ++j)

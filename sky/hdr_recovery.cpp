@@ -19,12 +19,7 @@ constexpr double kDeg = kPiD / 180.0;
 
 double angle_between(const Vec3d& a, const Vec3d& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
 
-double median_of(std::vector<double> v) {
-    if (v.empty()) return 0;
-    size_t k = v.size() / 2;
-    std::nth_element(v.begin(), v.begin() + k, v.end());
-    return v[k];
-}
+double median_of(std::vector<double> v) { return v.empty() ? 0.0 : median(std::move(v)); }
 
 }  // namespace
 

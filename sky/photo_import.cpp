@@ -78,10 +78,8 @@ cv::Mat display_grey(const cv::Mat& rgb, bool display_referred) {
             grey.at<float>(y, x) = (p[0] + p[1] + p[2]) / 3.0f;
         }
     if (!display_referred) {
-        std::vector<float> v(grey.begin<float>(), grey.end<float>());
-        size_t k = size_t(0.99 * (v.size() - 1));
-        std::nth_element(v.begin(), v.begin() + k, v.end());
-        float scale = v[k] > 0 ? 1.0f / v[k] : 1.0f;
+        const float p99 = quantile(std::vector<float>(grey.begin<float>(), grey.end<float>()), 0.99);
+        float scale = p99 > 0 ? 1.0f / p99 : 1.0f;
         for (auto it = grey.begin<float>(); it != grey.end<float>(); ++it) *it = linear_to_srgb(*it * scale);
     }
     cv::Mat out;
@@ -243,10 +241,7 @@ SkyCircle find_sky_circle(const Image& photo, const std::string& name, double mi
     {
         // Lens circle on a black surround (fisheye cameras such as the Mobotix): the lit region's
         // outline, fitted with an ellipse (robust to the dark objects that dent it at the rim).
-        std::vector<unsigned char> v(grey.begin<unsigned char>(), grey.end<unsigned char>());
-        size_t k = size_t(0.99 * (v.size() - 1));
-        std::nth_element(v.begin(), v.begin() + k, v.end());
-        double p99 = v[k];
+        double p99 = quantile(std::vector<unsigned char>(grey.begin<unsigned char>(), grey.end<unsigned char>()), 0.99);
         int cw = std::max(1, grey.cols / 12), ch = std::max(1, grey.rows / 12);
         double corner = 0;
         for (cv::Rect r : {cv::Rect(0, 0, cw, ch), cv::Rect(grey.cols - cw, 0, cw, ch), cv::Rect(0, grey.rows - ch, cw, ch),
@@ -292,10 +287,8 @@ SkyCircle find_sky_circle(const Image& photo, const std::string& name, double mi
     // Stretch so the 99th percentile is white: dark exposures (the Mobotix) get the same edge
     // contrast as bright ones.
     {
-        std::vector<unsigned char> v(small.begin<unsigned char>(), small.end<unsigned char>());
-        size_t k = size_t(0.99 * (v.size() - 1));
-        std::nth_element(v.begin(), v.begin() + k, v.end());
-        if (v[k] > 0) small.convertTo(small, CV_8U, 255.0 / v[k]);
+        const unsigned char p99 = quantile(std::vector<unsigned char>(small.begin<unsigned char>(), small.end<unsigned char>()), 0.99);
+        if (p99 > 0) small.convertTo(small, CV_8U, 255.0 / p99);
     }
     cv::GaussianBlur(small, small, cv::Size(0, 0), 2.0);
     int shorter = std::min(photo.width, photo.height);
@@ -414,9 +407,8 @@ std::vector<unsigned char> detect_dark_obstructions(const Image& encoded_photo, 
             if (disc.at<unsigned char>(y, x)) values.push_back(grey.at<unsigned char>(y, x));
     std::vector<unsigned char> out(size_t(grey.cols) * grey.rows, 0);
     if (values.empty()) return out;
-    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-    double median = values[values.size() / 2];
-    cv::Mat dark = (grey < darkness * median) & disc;
+    const double median_grey = median(std::move(values));
+    cv::Mat dark = (grey < darkness * median_grey) & disc;
     // Opening drops speckle; only pieces that are a sizeable part of the disc count as objects.
     cv::morphologyEx(dark, dark, cv::MORPH_OPEN, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5)));
     cv::Mat labels, stats, centroids;

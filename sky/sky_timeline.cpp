@@ -100,8 +100,7 @@ SunPatch remove_sun(SkyImage* sky) {
         for (int i = i0; i <= i1; ++i)
             if (sky->in_disc(i, j)) around.push_back(luminance(sky->pixel(i, j)));
     if (around.empty()) return patch;
-    std::nth_element(around.begin(), around.begin() + around.size() / 2, around.end());
-    const float threshold = 20.0f * std::max(around[around.size() / 2], 1e-6f);
+    const float threshold = 20.0f * std::max(median(std::move(around)), 1e-6f);
 
     const int w = i1 - i0 + 1, h = j1 - j0 + 1;
     cv::Mat mask = cv::Mat::zeros(h, w, CV_8UC1);

@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace dynsky {
 
@@ -17,6 +18,20 @@ using Color = Eigen::Array3f;  // linear RGB, Rec.709 primaries
 constexpr float kPi = 3.14159265358979323846f;
 constexpr double kPiD = 3.14159265358979323846;
 constexpr float kInvPi = 1.0f / kPi;
+
+// Order statistics of a sample (taken by value and reordered; it must not be empty): the value of
+// rank n / 2, and of rank floor(q (n - 1)) for q in [0, 1].
+template <typename T>
+T median(std::vector<T> v) {
+    std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+    return v[v.size() / 2];
+}
+template <typename T>
+T quantile(std::vector<T> v, double q) {
+    const size_t k = size_t(q * double(v.size() - 1));
+    std::nth_element(v.begin(), v.begin() + long(k), v.end());
+    return v[k];
+}
 
 inline float luminance(const Color& c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
 
