@@ -13,7 +13,10 @@
 #include "renderer/gltf_loader.h"
 #include "renderer/integrator.h"
 #include "sky/procedural_clouds.h"
-#include "sky/sky_timeline.h"
+#include "motion/sky_timeline.h"
+#include "motion/flow_extrapolation_model.h"
+#include "motion/network_step_model.h"
+#include "motion/procedural_step_model.h"
 
 namespace dynsky {
 namespace {

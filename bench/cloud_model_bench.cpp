@@ -1,4 +1,4 @@
-// CPU time of the cloud model (sky/cloud_model.h, OpenCV dnn) per medium step, against the
+// CPU time of the cloud model (motion/cloud_model.h, OpenCV dnn) per medium step, against the
 // Farneback-extrapolation baseline at the same size, and the sky-level step at 512 px (resampling,
 // detail advection, HDR maps and sun re-insertion included).
 //
@@ -9,10 +9,11 @@
 
 #include <cstdlib>
 
-#include "sky/cloud_model.h"
+#include "motion/cloud_model.h"
 #include "sky/fisheye.h"
 #include "sky/procedural_clouds.h"
-#include "sky/sky_metrics.h"
+#include "motion/advection.h"
+#include "motion/metrics.h"
 #include "util/data_path.h"
 
 namespace dynsky {

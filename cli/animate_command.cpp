@@ -21,6 +21,7 @@
 #include "cli/commands.h"
 #include "renderer/integrator.h"
 #include "util/error.h"
+#include "util/exposure.h"
 
 namespace dynsky::cli {
 
@@ -149,7 +150,7 @@ int run_animate(const AnimateOptions& o) {
     auto sky0 = std::make_shared<const SkyImage>(timeline.sky_at(0.0));
     light.set_sky(sky0);
     const float ev = std::isnan(o.exposure) ? exposure_for_irradiance(light.sky_irradiance()) : o.exposure;
-    const float sky_ev = auto_exposure_ev(sky_to_image(*sky0));
+    const float sky_ev = exposure_log_average(sky_to_image(*sky0));
 
     Accel accel(scene.scene);
     std::ofstream timings((fs::path(o.out) / "timings.csv").string(), std::ios::app);

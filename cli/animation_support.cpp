@@ -5,6 +5,9 @@
 #include <filesystem>
 #include <regex>
 
+#include "motion/flow_extrapolation_model.h"
+#include "motion/network_step_model.h"
+#include "motion/procedural_step_model.h"
 #include "renderer/builtin_scene.h"
 #include "renderer/gltf_loader.h"
 #include "sky/clear_sky.h"
@@ -29,7 +32,7 @@ void add_sky_source_options(CLI::App* cmd, SkySourceOptions* o) {
     cmd->add_option("--model", o->model,
                     "Medium-step model xi: 'procedural' (the procedural sky's own next frame; procedural input only),\n"
                     "'flow' (extrapolate the Farneback flow of the last two steps; a uniform drift first),\n"
-                    "'network:FOLDER' (the trained FlowNet+CloudNet, sky/cloud_model.h), or 'auto': the shipped network\n"
+                    "'network:FOLDER' (the trained FlowNet+CloudNet, motion/cloud_model.h), or 'auto': the shipped network\n"
                     "(networks/models/arm_tsi, Delta t 30 s) when it is installed, else procedural for procedural input and flow\n"
                     "for others")
         ->capture_default_str();
@@ -183,12 +186,6 @@ SkyTimeline make_sky_timeline(const SkySourceOptions& o) {
         std::fprintf(stderr, "dynsky: warning: --dt %g s, but the network was trained for Delta t = %g s\n", dt,
                      model->native_dt_seconds());
     return SkyTimeline(std::move(input), std::move(model), dt, clock);
-}
-
-float exposure_for_irradiance(const Color& irradiance) {
-    double e = luminance(irradiance);
-    if (!(e > 0)) return 0.0f;
-    return float(std::log2(0.18 * kPiD / (0.4 * e)));
 }
 
 }  // namespace dynsky::cli

@@ -1,6 +1,6 @@
 // What the rendering commands share: the frame size and the scene and camera (`render`, `animate`,
 // `compare`), and the moving sky (input sky + medium-step model + sun clock -> SkyTimeline,
-// sky/sky_timeline.h; `animate`, `compare`).
+// motion/sky_timeline.h; `animate`, `compare`).
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -10,7 +10,7 @@
 #include "renderer/accel.h"
 #include "renderer/env_light.h"
 #include "renderer/scene.h"
-#include "sky/sky_timeline.h"
+#include "motion/sky_timeline.h"
 
 namespace dynsky::cli {
 
@@ -48,8 +48,5 @@ LoadedScene load_scene(const SceneOptions& o, float aspect_ratio);
 SkyTimeline make_sky_timeline(const SkySourceOptions& o);
 // The UTC time of t = 0 (the default when --time is not given: 2026-06-21T16:00:00Z).
 UtcTime start_time(const SkySourceOptions& o);
-// PNG exposure (stops) that shows a grey (albedo 0.4) horizontal surface under irradiance E as
-// middle grey: one fixed exposure for a whole animation.
-float exposure_for_irradiance(const Color& irradiance);
 
 }  // namespace dynsky::cli

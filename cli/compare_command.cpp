@@ -16,6 +16,7 @@
 
 #include "cli/animation_support.h"
 #include "cli/commands.h"
+#include "util/exposure.h"
 #include "renderer/integrator.h"
 #include "sky/clear_sky.h"
 #include "util/error.h"

@@ -15,6 +15,7 @@
 #include "sky/clear_sky.h"
 #include "sky/sun_position.h"
 #include "util/error.h"
+#include "util/exposure.h"
 
 namespace dynsky::cli {
 
@@ -94,7 +95,7 @@ int run_render(const RenderOptions& o) {
     image.metadata.strings["dynsky:sky"] = sky->source;
     image.metadata.strings["dynsky:scene"] = o.scene;
     image.metadata.strings["dynsky:camera"] = camera.name;
-    float ev = std::isnan(o.exposure) ? auto_exposure_ev(image) : o.exposure;
+    float ev = std::isnan(o.exposure) ? exposure_log_average(image) : o.exposure;
     image.metadata.numbers["dynsky:png_exposure_ev"] = ev;
     if (ext == ".exr") {
         write_image(o.out, image);

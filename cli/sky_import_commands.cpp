@@ -10,6 +10,7 @@
 #include "sky/cloud_mask.h"
 #include "sky/hdr_recovery.h"
 #include "sky/photo_import.h"
+#include "sky/preset_import.h"
 #include "sky/sky_image.h"
 #include "sky/sun_position.h"
 #include "util/color.h"
@@ -62,7 +63,9 @@ void run_import(const ImportOptions& o) {
     double lat = o.lat, lon = o.lon, elevation = o.elevation, utc_offset = o.utc_offset, sun_search = 3;
     bool have_location = o.lat_opt->count() && o.lon_opt->count();
     if (!o.preset.empty()) {
-        CameraPreset preset = camera_preset(o.preset);
+        // The preset's decisions (sky/preset_import.h), then the options that override them.
+        PresetImportPlan plan = plan_preset_import(o.preset, o.photo, o.resolution);
+        const CameraPreset& preset = plan.preset;
         params = preset.params;
         if (!o.lat_opt->count()) lat = preset.latitude_deg;
         if (!o.lon_opt->count()) lon = preset.longitude_deg;
@@ -71,11 +74,11 @@ void run_import(const ImportOptions& o) {
         sun_search = preset.sun_search_deg;
         have_location = true;
         if (o.mask.empty() && !o.no_preset_mask) {
-            params.mask_path = find_preset_mask(o.preset, o.photo);
-            if (params.mask_path.empty())
+            if (!plan.mask_found)
                 std::fprintf(stderr, "dynsky: warning: no %s mask found beside %s%s\n", o.preset.c_str(), o.photo.c_str(),
                              params.detect_obstructions ? "" : "; detecting dark obstructions instead");
-            if (params.mask_path.empty()) params.detect_obstructions = true;
+            params.mask_path = plan.params.mask_path;
+            params.detect_obstructions = plan.params.detect_obstructions;
         }
     }
     params.resolution = o.resolution;

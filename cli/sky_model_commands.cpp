@@ -1,4 +1,4 @@
-// dynsky sky predict | evaluate | training-data: the medium-timescale cloud model (sky/cloud_model.h)
+// dynsky sky predict | evaluate | training-data: the medium-timescale cloud model (motion/cloud_model.h)
 // run on skies, scored against real sequences and the two baselines, and the C++ half of the
 // training-set builder (networks/dataset.py drives it; docs/networks.md).
 #include <opencv2/imgproc.hpp>
@@ -14,11 +14,16 @@
 #include <sstream>
 
 #include "cli/commands.h"
-#include "sky/cloud_model.h"
+#include "motion/cloud_model.h"
 #include "sky/sky_image.h"
-#include "sky/sky_metrics.h"
+#include "motion/advection.h"
+#include "motion/metrics.h"
+#include "motion/sun_patch.h"
+#include "sky/preset_import.h"
+#include "util/npy.h"
 #include "util/data_path.h"
 #include "util/error.h"
+#include "util/exposure.h"
 #include "util/atomic_file.h"
 #include "util/image.h"
 #include "util/math.h"
@@ -294,7 +299,7 @@ void run_predict(const PredictOptions& o) {
     };
     if (!o.stats.empty()) stats_row(0, sky);
     // One exposure for every preview (the input's), so they do not flicker.
-    const float preview_ev = auto_exposure_ev(sky_to_image(sky));
+    const float preview_ev = exposure_log_average(sky_to_image(sky));
     ProgressBar progress(o.steps, "predict", o.quiet);
     int written = 0;
     model.rollout(sky, o.steps, [&](int k, const SkyImage& s) {

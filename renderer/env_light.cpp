@@ -239,21 +239,10 @@ Color EnvLight::radiance_filtered(const Vec3& w) const {
     Vec2 uv;
     fisheye::uv_from_direction(w, &uv);
     const int n = sky_->resolution;
-    // Continuous pixel coordinates (pixel centres at integers), clamped to the disc's pixels.
-    float fx = (uv.x() + 1) * 0.5f * n - 0.5f, fy = (uv.y() + 1) * 0.5f * n - 0.5f;
-    int x0 = int(std::floor(fx)), y0 = int(std::floor(fy));
-    float tx = fx - x0, ty = fy - y0;
-    Color sum = Color::Zero();
-    float weight = 0;
-    for (int dy = 0; dy < 2; ++dy)
-        for (int dx = 0; dx < 2; ++dx) {
-            int x = x0 + dx, y = y0 + dy;
-            if (x < 0 || y < 0 || x >= n || y >= n || !sky_->in_disc(x, y)) continue;  // no black from outside
-            float wgt = (dx ? tx : 1 - tx) * (dy ? ty : 1 - ty);
-            sum += wgt * sky_->pixel(x, y);
-            weight += wgt;
-        }
-    return weight > 0 ? Color(sum / weight) : radiance(w);
+    // Continuous pixel coordinates (pixel centres at integers); no black from outside the disc.
+    const float fx = (uv.x() + 1) * 0.5f * n - 0.5f, fy = (uv.y() + 1) * 0.5f * n - 0.5f;
+    Color c;
+    return fisheye::bilinear_in_disc(sky_->rgb.data(), n, fx, fy, &c) ? c : radiance(w);
 }
 
 float EnvLight::pdf(const Vec3& w) const {

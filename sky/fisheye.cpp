@@ -1,5 +1,7 @@
 #include "sky/fisheye.h"
 
+#include <algorithm>
+
 namespace dynsky::fisheye {
 
 Vec3d direction_from_uv(double u, double v) {
@@ -59,4 +61,33 @@ double pixel_solid_angle(int i, int j, int n) {
     return solid_angle_jacobian(r * kPiD / 2.0) * du * du;
 }
 
+Vec3d direction_from_pixel(double x, double y, int n) {
+    double u = 2.0 * (x + 0.5) / n - 1.0, v = 2.0 * (y + 0.5) / n - 1.0;
+    double r = std::sqrt(u * u + v * v);
+    double theta = r * kPiD / 2, phi = std::atan2(-u, -v);
+    double s = std::sin(theta);
+    return Vec3d(s * std::sin(phi), std::cos(theta), -s * std::cos(phi));
+}
+
+void pixel_from_direction(const Vec3d& w, int n, double* x, double* y) {
+    double theta = std::acos(std::clamp(w.y() / w.norm(), -1.0, 1.0));
+    double phi = std::atan2(w.x(), -w.z());
+    double r = 2.0 * theta / kPiD;
+    double u = -r * std::sin(phi), v = -r * std::cos(phi);
+    *x = (u + 1.0) * n / 2.0 - 0.5;
+    *y = (v + 1.0) * n / 2.0 - 0.5;
+}
+
 }  // namespace dynsky::fisheye
+
+namespace dynsky {
+
+cv::Mat sky_disc_mask(int resolution) {
+    cv::Mat mask(resolution, resolution, CV_8UC1);
+    for (int j = 0; j < resolution; ++j)
+        for (int i = 0; i < resolution; ++i)
+            mask.at<uint8_t>(j, i) = fisheye::pixel_center_uv(i, j, resolution).squaredNorm() <= 1.0f ? 255 : 0;
+    return mask;
+}
+
+}  // namespace dynsky

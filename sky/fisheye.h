@@ -3,7 +3,11 @@
 // World frame: +Y up, north -Z, east +X. Zenith angle theta = acos(y), azimuth phi = atan2(x, -z).
 // Image plane (u, v) in [-1, 1]^2, v down, north at the top, east at the LEFT:
 //   u = -r sin(phi), v = -r cos(phi), r = 2 theta / pi.
+// Pixel coordinates: continuous (x, y) = (column, row) with pixel (i, j)'s centre at (i, j), OpenCV's
+// convention; u = 2 (x + 0.5) / N - 1. The sky disc is the pixels whose centre has r <= 1.
 #pragma once
+
+#include <opencv2/core.hpp>
 
 #include "util/math.h"
 
@@ -41,4 +45,40 @@ double pixel_solid_angle(int i, int j, int n);
 inline double pdf_solid_angle_from_uv(double pdf_uv, double theta) { return pdf_uv / solid_angle_jacobian(theta); }
 inline double pdf_uv_from_solid_angle(double pdf_w, double theta) { return pdf_w * solid_angle_jacobian(theta); }
 
+// Direction <-> continuous pixel coordinates of an N x N fisheye, for any direction (below the
+// horizon gives r > 1). Double precision, for image warps and the motion code.
+Vec3d direction_from_pixel(double x, double y, int n);
+void pixel_from_direction(const Vec3d& w, int n, double* x, double* y);
+
+// Bilinear lookup of an N x N x 3 fisheye (row-major floats) that uses only the neighbours whose
+// centres lie inside the disc, renormalising their weights (so the black corners never darken the
+// rim). x, y as above. Returns false when no neighbour is inside (the caller picks a fallback).
+template <typename Real>
+bool bilinear_in_disc(const float* rgb, int n, Real x, Real y, Color* out) {
+    const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
+    const Real tx = x - x0, ty = y - y0;
+    Color sum = Color::Zero();
+    Real weight = 0;
+    for (int dy = 0; dy < 2; ++dy)
+        for (int dx = 0; dx < 2; ++dx) {
+            const int i = x0 + dx, j = y0 + dy;
+            if (i < 0 || j < 0 || i >= n || j >= n || pixel_center_uv(i, j, n).squaredNorm() > 1.0f) continue;
+            const Real w = (dx ? tx : 1 - tx) * (dy ? ty : 1 - ty);
+            const float* p = &rgb[(size_t(j) * n + i) * 3];
+            sum += Color(p[0], p[1], p[2]) * float(w);
+            weight += w;
+        }
+    // (The float lookup of the renderer keeps any positive weight; the double one needs 1e-12.)
+    if (!(weight > (sizeof(Real) == sizeof(float) ? Real(0) : Real(1e-12)))) return false;
+    *out = sum / float(weight);
+    return true;
+}
+
 }  // namespace dynsky::fisheye
+
+namespace dynsky {
+
+// The sky disc of an N x N image as a CV_8UC1 mask (255 inside).
+cv::Mat sky_disc_mask(int resolution);
+
+}  // namespace dynsky

@@ -31,20 +31,8 @@ Color sample_sky(const SkyImage& sky, const Vec3d& w) {
     if (!fisheye::uv_from_direction(w, &u, &v)) return Color::Zero();
     const int n = sky.resolution;
     double x = (u + 1) / 2 * n - 0.5, y = (v + 1) / 2 * n - 0.5;
-    int i0 = int(std::floor(x)), j0 = int(std::floor(y));
-    double fx = x - i0, fy = y - j0;
-    Color sum = Color::Zero();
-    double weight = 0;
-    for (int dj = 0; dj < 2; ++dj) {
-        for (int di = 0; di < 2; ++di) {
-            int i = i0 + di, j = j0 + dj;
-            if (i < 0 || j < 0 || i >= n || j >= n || !sky.in_disc(i, j)) continue;
-            double wgt = (di ? fx : 1 - fx) * (dj ? fy : 1 - fy);
-            sum += sky.pixel(i, j) * float(wgt);
-            weight += wgt;
-        }
-    }
-    if (weight > 1e-12) return sum / float(weight);
+    Color c;
+    if (fisheye::bilinear_in_disc(sky.rgb.data(), n, x, y, &c)) return c;
     // At the very rim no neighbour's centre is inside the disc: take the nearest pixel inside.
     double r = std::sqrt(u * u + v * v), k = r > 0 ? std::min(1.0, (1.0 - 1.0 / n) / r) : 1.0;
     int i = std::clamp(int(std::floor((u * k + 1) / 2 * n)), 0, n - 1);

@@ -2,6 +2,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <ctime>
 #include <cstdio>
 
 #include "sky/fisheye.h"
@@ -349,6 +350,21 @@ SunPosition compute_sun_position(const UtcTime& t, const GeoLocation& where, boo
     s.zenith_deg = 90.0 - (e0 + de);
     s.azimuth_deg = azimuth;
     return s;
+}
+
+UtcTime add_seconds(const UtcTime& t, double seconds) {
+    std::tm tm{};
+    tm.tm_year = t.year - 1900, tm.tm_mon = t.month - 1, tm.tm_mday = t.day;
+    tm.tm_hour = t.hour, tm.tm_min = t.minute, tm.tm_sec = 0;
+    double total = t.second + seconds;
+    double whole = std::floor(total);
+    time_t base = timegm(&tm) + time_t(whole);
+    std::tm out{};
+    gmtime_r(&base, &out);
+    UtcTime r;
+    r.year = out.tm_year + 1900, r.month = out.tm_mon + 1, r.day = out.tm_mday;
+    r.hour = out.tm_hour, r.minute = out.tm_min, r.second = out.tm_sec + (total - whole);
+    return r;
 }
 
 }  // namespace dynsky

@@ -32,6 +32,9 @@ UtcTime parse_utc_time(const std::string& iso8601);
 // "2026-06-21T12:00:00Z".
 std::string format_utc_time(const UtcTime& t);
 
+// t plus a number of seconds (may be negative or fractional), normalised to a calendar time.
+UtcTime add_seconds(const UtcTime& t, double seconds);
+
 // Julian date (UT) of a UTC time.
 double julian_date(const UtcTime& t);
 

@@ -97,22 +97,6 @@ void write_image(const std::string& path, const Image& image) {
     fs::rename(tmp, target);
 }
 
-float auto_exposure_ev(const Image& linear) {
-    if (linear.channels < 3) return 0.0f;
-    double sum_log = 0;
-    size_t count = 0;
-    for (size_t p = 0; p < size_t(linear.width) * linear.height; ++p) {
-        const float* c = &linear.pixels[p * linear.channels];
-        float y = 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
-        if (!(y > 0) || !std::isfinite(y)) continue;
-        sum_log += std::log(double(y) + 1e-6);
-        ++count;
-    }
-    if (count == 0) return 0.0f;
-    double log_avg = std::exp(sum_log / count);
-    return float(std::log2(0.18 / log_avg));
-}
-
 Image tonemap_to_display(const Image& linear, float exposure_ev) {
     Image out(linear.width, linear.height, std::min(linear.channels, 3));
     float scale = std::exp2(exposure_ev);

@@ -35,11 +35,8 @@ Image read_image(const std::string& path);
 void write_image(const std::string& path, const Image& image);
 
 // Linear radiance to an 8-bit-ready display image: exposure (2^ev), ACES filmic, sRGB encode.
+// The exposure policies (which ev) are util/exposure.h.
 Image tonemap_to_display(const Image& linear, float exposure_ev = 0.0f);
-
-// Exposure (in stops) that maps the image's log-average luminance to middle grey (0.18), the
-// usual auto-exposure of photographic tone mapping (Reinhard et al. 2002). 0 for a black image.
-float auto_exposure_ev(const Image& linear);
 
 // Lower-cased extension with the dot (".exr"), or "" if none.
 std::string file_extension(const std::string& path);

@@ -5,7 +5,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "sky/cloud_model.h"
+#include "motion/cloud_model.h"
+#include "sky/preset_import.h"
 #include "sky/fisheye.h"
 #include "sky/procedural_clouds.h"
 #include "sky/sky_image.h"

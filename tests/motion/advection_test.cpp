@@ -5,7 +5,7 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
-#include "sky/advection.h"
+#include "motion/advection.h"
 #include "sky/fisheye.h"
 
 namespace dynsky {
@@ -21,7 +21,7 @@ SkyImage blob_sky(int n, const Vec3d& centre, double sigma_deg) {
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
             if (!sky.in_disc(i, j)) continue;
-            double a = std::acos(std::clamp(direction_from_pixel(i, j, n).dot(centre), -1.0, 1.0)) * 180 / kPiD;
+            double a = std::acos(std::clamp(fisheye::direction_from_pixel(i, j, n).dot(centre), -1.0, 1.0)) * 180 / kPiD;
             float v = float(1.0 + 10.0 * std::exp(-0.5 * a * a / (sigma_deg * sigma_deg)));
             sky.set_pixel(i, j, Color(v, v, v));
         }
@@ -36,7 +36,7 @@ void blob_moments(const SkyImage& sky, Vec3d* centroid, double* integral) {
         for (int i = 0; i < sky.resolution; ++i) {
             if (!sky.in_disc(i, j)) continue;
             double w = std::max(0.0, double(sky.pixel(i, j)[0]) - 1.0) * fisheye::pixel_solid_angle(i, j, sky.resolution);
-            sum += w * direction_from_pixel(i, j, sky.resolution);
+            sum += w * fisheye::direction_from_pixel(i, j, sky.resolution);
             total += w;
         }
     *centroid = sum.normalized();
@@ -51,13 +51,13 @@ TEST(Advection, PixelDirectionRoundTrip) {
     for (double x : {0.0, 10.3, 63.5, 127.0})
         for (double y : {0.0, 40.7, 100.0}) {
             double x2, y2;
-            pixel_from_direction(direction_from_pixel(x, y, 128), 128, &x2, &y2);
+            fisheye::pixel_from_direction(fisheye::direction_from_pixel(x, y, 128), 128, &x2, &y2);
             EXPECT_NEAR(x, x2, 1e-9);
             EXPECT_NEAR(y, y2, 1e-9);
         }
     // Same mapping as sky/fisheye.h at pixel centres.
     Vec3 w = fisheye::direction_from_uv(fisheye::pixel_center_uv(17, 90, 128));
-    EXPECT_LT((direction_from_pixel(17, 90, 128) - w.cast<double>()).norm(), 1e-6);
+    EXPECT_LT((fisheye::direction_from_pixel(17, 90, 128) - w.cast<double>()).norm(), 1e-6);
 }
 
 TEST(Advection, ZeroFractionIsIdentity) {
@@ -87,9 +87,9 @@ TEST(Advection, FeatureFollowsGreatCircleAcrossZenith) {
         Vec3d analytic = Eigen::AngleAxisd(f * beta, axis) * start;
         // Straight image line between start and end pixels, at the same fraction.
         double x0, y0, x1, y1;
-        pixel_from_direction(start, n, &x0, &y0);
-        pixel_from_direction(Eigen::AngleAxisd(beta, axis) * start, n, &x1, &y1);
-        Vec3d straight = direction_from_pixel(x0 + f * (x1 - x0), y0 + f * (y1 - y0), n);
+        fisheye::pixel_from_direction(start, n, &x0, &y0);
+        fisheye::pixel_from_direction(Eigen::AngleAxisd(beta, axis) * start, n, &x1, &y1);
+        Vec3d straight = fisheye::direction_from_pixel(x0 + f * (x1 - x0), y0 + f * (y1 - y0), n);
         EXPECT_LT(angle_deg(centroid, analytic), 0.7) << "fraction " << f;
         EXPECT_GT(angle_deg(straight, analytic), 5.0) << "the test must tell the two paths apart";
     }
@@ -112,8 +112,8 @@ TEST(Advection, NearHorizonAreaIsNotStretched) {
     EXPECT_LT(angle_deg(c1, Eigen::AngleAxisd(angle, Vec3d(1, 0, 0)) * Vec3d(0, 1, 0)), 0.5);
 
     double x0, y0, x1, y1;
-    pixel_from_direction(Vec3d(0, 1, 0), n, &x0, &y0);
-    pixel_from_direction(Eigen::AngleAxisd(angle, Vec3d(1, 0, 0)) * Vec3d(0, 1, 0), n, &x1, &y1);
+    fisheye::pixel_from_direction(Vec3d(0, 1, 0), n, &x0, &y0);
+    fisheye::pixel_from_direction(Eigen::AngleAxisd(angle, Vec3d(1, 0, 0)) * Vec3d(0, 1, 0), n, &x1, &y1);
     cv::Mat src(n, n, CV_32FC3, sky.rgb.data()), dst;
     cv::Mat shift = (cv::Mat_<double>(2, 3) << 1, 0, x1 - x0, 0, 1, y1 - y0);
     cv::warpAffine(src, dst, shift, src.size(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);

@@ -6,7 +6,11 @@
 
 #include "sky/clear_sky.h"
 #include "sky/fisheye.h"
-#include "sky/sky_timeline.h"
+#include "motion/advection.h"
+#include "motion/sky_timeline.h"
+#include "motion/flow_extrapolation_model.h"
+#include "motion/network_step_model.h"
+#include "motion/procedural_step_model.h"
 
 namespace dynsky {
 namespace {
@@ -110,7 +114,7 @@ TEST(SkyTimeline, SunIsCutOutAndFollowsTheClock) {
     for (int j = 0; j < later.resolution; ++j)
         for (int i = 0; i < later.resolution; ++i)
             if (luminance(later.pixel(i, j)) > best) best = luminance(later.pixel(i, j)), bi = i, bj = j;
-    double angle = std::acos(std::clamp(direction_from_pixel(bi, bj, 256).dot(expected), -1.0, 1.0)) * 180 / kPiD;
+    double angle = std::acos(std::clamp(fisheye::direction_from_pixel(bi, bj, 256).dot(expected), -1.0, 1.0)) * 180 / kPiD;
     EXPECT_LT(angle, 1.0);
 }
 

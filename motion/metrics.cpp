@@ -1,7 +1,6 @@
-#include "sky/sky_metrics.h"
+#include "motion/metrics.h"
 
 #include <opencv2/imgproc.hpp>
-#include <opencv2/video/tracking.hpp>
 
 #include <cmath>
 #include <string>
@@ -24,22 +23,7 @@ void check_pair(const cv::Mat& a, const cv::Mat& b, const cv::Mat& mask, const c
     if (cv::countNonZero(mask) == 0) throw Error(std::string(what) + ": the mask selects no pixel");
 }
 
-cv::Mat to_grey(const cv::Mat& image) {
-    if (image.channels() == 1) return image;
-    cv::Mat grey;
-    cv::cvtColor(image, grey, image.channels() == 4 ? cv::COLOR_RGBA2GRAY : cv::COLOR_RGB2GRAY);
-    return grey;
-}
-
 }  // namespace
-
-cv::Mat sky_disc_mask(int resolution) {
-    cv::Mat mask(resolution, resolution, CV_8UC1);
-    for (int j = 0; j < resolution; ++j)
-        for (int i = 0; i < resolution; ++i)
-            mask.at<uint8_t>(j, i) = fisheye::pixel_center_uv(i, j, resolution).squaredNorm() <= 1.0f ? 255 : 0;
-    return mask;
-}
 
 double masked_mse(const cv::Mat& a, const cv::Mat& b, const cv::Mat& mask) {
     check_pair(a, b, mask, "mse");
@@ -99,37 +83,13 @@ ImageComparison compare_images(const cv::Mat& prediction, const cv::Mat& truth, 
     return r;
 }
 
-cv::Mat farneback_flow(const cv::Mat& from, const cv::Mat& to, const FarnebackParams& p) {
-    if (from.empty() || from.size() != to.size() || from.type() != to.type())
-        throw Error("farneback_flow: the two images differ in size or type, or are empty");
-    cv::Mat g0, g1;
-    // On the 0-255 scale of the 8-bit frames the usual parameters were tuned for.
-    to_grey(from).convertTo(g0, CV_32F, 255.0);
-    to_grey(to).convertTo(g1, CV_32F, 255.0);
-    cv::Mat flow;
-    cv::calcOpticalFlowFarneback(g0, g1, flow, p.pyr_scale, p.levels, p.winsize, p.iterations, p.poly_n,
-                                 p.poly_sigma, 0);
-    return flow;
-}
-
-cv::Mat advect_by_flow(const cv::Mat& image, const cv::Mat& flow, double steps) {
-    if (flow.type() != CV_32FC2 || flow.size() != image.size())
-        throw Error("advect_by_flow: the flow must be CV_32FC2 of the image's size");
-    cv::Mat map(flow.size(), CV_32FC2);
-    for (int y = 0; y < flow.rows; ++y) {
-        const cv::Vec2f* f = flow.ptr<cv::Vec2f>(y);
-        cv::Vec2f* m = map.ptr<cv::Vec2f>(y);
-        for (int x = 0; x < flow.cols; ++x)
-            m[x] = cv::Vec2f(float(x - steps * f[x][0]), float(y - steps * f[x][1]));
-    }
-    cv::Mat out;
-    cv::remap(image, out, map, cv::noArray(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar::all(0));
-    return out;
-}
-
-cv::Mat extrapolate_farneback(const cv::Mat& previous, const cv::Mat& current, int steps,
-                              const FarnebackParams& params) {
-    return advect_by_flow(current, farneback_flow(previous, current, params), steps);
+double high_frequency_energy(const cv::Mat& image, const cv::Mat& mask) {
+    cv::Mat blurred, diff;
+    cv::GaussianBlur(image, blurred, cv::Size(0, 0), 2.0, 2.0, cv::BORDER_REFLECT);
+    cv::subtract(image, blurred, diff);
+    diff = diff.mul(diff);
+    cv::Scalar s = cv::sum(diff.setTo(0, ~mask));
+    return (s[0] + s[1] + s[2]) / (3.0 * cv::countNonZero(mask));
 }
 
 }  // namespace dynsky

@@ -1,6 +1,6 @@
 // The shipped cloud model through OpenCV's dnn: agreement with PyTorch, skill on held-out real
 // frames, rollout stability, the sky-level step, and clear errors for bad models and inputs.
-#include "sky/cloud_model.h"
+#include "motion/cloud_model.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -13,7 +13,11 @@
 #include "sky/clear_sky.h"
 #include "sky/fisheye.h"
 #include "sky/procedural_clouds.h"
-#include "sky/sky_metrics.h"
+#include "motion/advection.h"
+#include "motion/metrics.h"
+#include "motion/sun_patch.h"
+#include "sky/preset_import.h"
+#include "util/npy.h"
 #include "tests/test_support.h"
 #include "util/data_path.h"
 #include "util/error.h"

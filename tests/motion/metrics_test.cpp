@@ -1,5 +1,6 @@
 // Metrics against closed forms, and the Farneback baseline against known motion.
-#include "sky/sky_metrics.h"
+#include "motion/advection.h"
+#include "motion/metrics.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>

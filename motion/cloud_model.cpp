@@ -1,4 +1,4 @@
-#include "sky/cloud_model.h"
+#include "motion/cloud_model.h"
 
 #include <opencv2/core/utils/logger.hpp>
 #include <opencv2/imgproc.hpp>
@@ -13,8 +13,9 @@
 
 #include "sky/fisheye.h"
 #include "sky/hdr_recovery.h"
-#include "sky/photo_import.h"
-#include "sky/sky_metrics.h"
+#include "motion/advection.h"
+#include "motion/metrics.h"
+#include "motion/sun_patch.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
 
@@ -95,14 +96,6 @@ cv::Mat run_net(cv::dnn::Net& net, const cv::Mat& blob, const std::string& what)
         throw Error(what + ": the network failed to run on a " + std::to_string(blob.size[1]) + " x " +
                     std::to_string(blob.size[2]) + " x " + std::to_string(blob.size[3]) + " input (" + e.err + ")");
     }
-}
-
-// The [0, 1] form cannot hold the sun: pixels where the forward map clips any channel (the sun's
-// disc and the brightest aureole) are taken from the input sky instead.
-cv::Mat saturated_pixels(const cv::Mat& unit) {
-    std::vector<cv::Mat> ch;
-    cv::split(unit, ch);
-    return (ch[0] >= 0.999f) | (ch[1] >= 0.999f) | (ch[2] >= 0.999f);
 }
 
 }  // namespace
@@ -214,20 +207,8 @@ void CloudModel::rollout(const SkyImage& sky, int steps, const std::function<voi
     // surroundings before the first step, so it is neither moved nor smeared like a cloud, and the
     // input's radiance is put back into every output. The model does not predict the sun being
     // covered by cloud; a rollout keeps the input's sun as it is.
-    cv::Mat sun = saturated_pixels(state);
+    const cv::Mat sun = fill_saturated_pixels(&state);
     const bool has_sun = cv::countNonZero(sun) > 0;
-    if (has_sun) {
-        cv::dilate(sun, sun, cv::Mat());
-        std::vector<cv::Mat> ch;
-        cv::split(state, ch);
-        for (cv::Mat& c : ch) {
-            cv::Mat filled;
-            cv::inpaint(c, sun, filled, 3.0, cv::INPAINT_TELEA);
-            c = filled;
-        }
-        cv::merge(ch, state);
-        state.setTo(cv::Scalar::all(0), ~disc_big);
-    }
     for (int k = 1; k <= steps; ++k) {
         cv::Mat small = state;
         if (big != n) {
@@ -254,210 +235,9 @@ void CloudModel::rollout(const SkyImage& sky, int steps, const std::function<voi
         }
         SkyImage next = from_network_form(state, sky, info_.form);
         next.time_seconds = sky.time_seconds + k * info_.dt_seconds;
-        if (has_sun)
-            for (int y = 0; y < big; ++y)
-                for (int x = 0; x < big; ++x)
-                    if (sun.at<uint8_t>(y, x)) next.set_pixel(x, y, sky.pixel(x, y));
+        if (has_sun) restore_pixels(&next, sky, sun);
         on_step(k, next);
     }
-}
-
-// ---- The networks' [0, 1] form ----
-
-cv::Mat to_network_form(const SkyImage& sky, const NetworkFormParams& form, int resolution) {
-    const int n = sky.resolution;
-    Image unit = hdr_to_unit(sky, form.unit_map);
-    cv::Mat image(n, n, CV_32FC3);
-    std::copy(unit.pixels.begin(), unit.pixels.end(), image.ptr<float>());
-    if (resolution > 0 && resolution != n) {
-        cv::resize(image, image, cv::Size(resolution, resolution), 0, 0, cv::INTER_AREA);
-        image.setTo(cv::Scalar::all(0), ~sky_disc_mask(resolution));
-    }
-    return image;
-}
-
-SkyImage from_network_form(const cv::Mat& image, const SkyImage& like, const NetworkFormParams& form) {
-    if (image.rows != like.resolution || image.cols != like.resolution || image.type() != CV_32FC3)
-        throw Error("from_network_form: the image must be CV_32FC3 at the sky's resolution");
-    Image unit(image.cols, image.rows, 3);
-    cv::Mat c = image.isContinuous() ? image : image.clone();
-    std::copy(c.ptr<float>(), c.ptr<float>() + unit.pixels.size(), unit.pixels.begin());
-    SkyImage out = unit_to_hdr(unit, form.unit_map);
-    out.time_seconds = like.time_seconds;
-    out.sun_direction = like.sun_direction;
-    out.source = like.source;
-    return out;
-}
-
-namespace {
-// I_cm of an HDR sky at its own resolution, CV_8UC1 255 = cloud.
-cv::Mat cloud_mask_of_sky(const SkyImage& sky, const NetworkFormParams& form) {
-    const int n = sky.resolution;
-    std::vector<unsigned char> in_disc(size_t(n) * n);
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) in_disc[size_t(j) * n + i] = sky.in_disc(i, j);
-    Image mask = cloud_mask(encode_sky_for_mask(sky), form.cloud_rule, &in_disc);
-    cv::Mat m(n, n, CV_8UC1);
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) m.at<uint8_t>(j, i) = mask.at(i, j, 0) > 0.7f ? 255 : 0;
-    return m;
-}
-}  // namespace
-
-cv::Mat network_cloud_mask(const cv::Mat& image, const NetworkFormParams& form) {
-    SkyImage like(image.rows);
-    cv::Mat clean;
-    cv::min(cv::max(image, 0.0), 1.0, clean);
-    cv::patchNaNs(clean, 0.0);
-    return cloud_mask_of_sky(from_network_form(clean, like, form), form);
-}
-
-NetworkFrame resample_frame(const NetworkFrame& frame, int resolution) {
-    const int n = resolution;
-    if (frame.image.rows == n) return frame;
-    NetworkFrame f;
-    f.time_seconds = frame.time_seconds;
-    const cv::Mat disc = sky_disc_mask(n);
-    cv::resize(frame.image, f.image, cv::Size(n, n), 0, 0, cv::INTER_AREA);
-    f.image.setTo(cv::Scalar::all(0), ~disc);
-    cv::Mat seen, cloud;
-    frame.valid.convertTo(seen, CV_32F, 1.0 / 255.0);
-    cv::resize(seen, seen, cv::Size(n, n), 0, 0, cv::INTER_AREA);
-    f.valid = (seen > 0.999f) & disc;
-    frame.cloud.convertTo(cloud, CV_32F, 1.0 / 255.0);
-    cv::resize(cloud, cloud, cv::Size(n, n), 0, 0, cv::INTER_AREA);
-    f.cloud = (cloud > 0.5f) & disc;
-    return f;
-}
-
-NetworkFrame network_frame(const SkyImage& sky, const std::vector<unsigned char>& not_sky, int resolution,
-                           const NetworkFormParams& form) {
-    const int big = sky.resolution;
-    if (!not_sky.empty() && not_sky.size() != size_t(big) * big)
-        throw Error("network_frame: the not-sky mask does not match the sky's resolution");
-    NetworkFrame f;
-    f.time_seconds = sky.time_seconds;
-    f.image = to_network_form(sky, form);
-    f.valid = sky_disc_mask(big);
-    if (!not_sky.empty())
-        for (int j = 0; j < big; ++j)
-            for (int i = 0; i < big; ++i)
-                if (not_sky[size_t(j) * big + i]) f.valid.at<uint8_t>(j, i) = 0;
-    f.cloud = cloud_mask_of_sky(sky, form);
-    return resample_frame(f, resolution > 0 ? resolution : big);
-}
-
-SkyImage import_preset_photo(const std::string& path, const std::string& preset, int import_resolution,
-                             std::vector<unsigned char>* not_sky) {
-    // The same steps, with the same defaults, as `dynsky sky import --preset P` (cli/sky_import_commands.cpp).
-    CameraPreset cam = camera_preset(preset);
-    PhotoImportParams params = cam.params;
-    params.resolution = import_resolution;
-    params.mask_path = find_preset_mask(preset, path);
-    if (params.mask_path.empty()) params.detect_obstructions = true;
-    ImportedPhoto photo = import_photo(path, params);
-    SkyImage sky = photo.sky;
-    const std::string time = time_from_file_name(path, cam.filename_utc_offset_hours);
-    if (!time.empty() && photo.display_referred) {
-        HdrCalibrationParams hp;
-        hp.time = parse_utc_time(time);
-        hp.location = GeoLocation{cam.latitude_deg, cam.longitude_deg, cam.elevation_m};
-        hp.sun_search_deg = cam.sun_search_deg;
-        sky = recover_hdr(photo, hp);
-    }
-    if (not_sky) *not_sky = photo.not_sky;
-    return sky;
-}
-
-NetworkFrame network_frame_from_photo(const std::string& path, const std::string& preset, int import_resolution,
-                                      int resolution, const NetworkFormParams& form) {
-    std::vector<unsigned char> not_sky;
-    SkyImage sky = import_preset_photo(path, preset, import_resolution, &not_sky);
-    return network_frame(sky, not_sky, resolution, form);
-}
-
-// ---- .npy ----
-
-NpyArray read_npy(const std::string& path) {
-    std::ifstream f(path, std::ios::binary);
-    if (!f) throw_file_error(path, "cannot open the file");
-    char magic[8];
-    f.read(magic, 8);
-    if (!f || std::memcmp(magic, "\x93NUMPY", 6) != 0) throw_file_error(path, "not a .npy file");
-    uint32_t header_len = 0;
-    if (magic[6] == 1) {
-        unsigned char b[2];
-        f.read(reinterpret_cast<char*>(b), 2);
-        header_len = b[0] | (b[1] << 8);
-    } else {
-        unsigned char b[4];
-        f.read(reinterpret_cast<char*>(b), 4);
-        header_len = b[0] | (b[1] << 8) | (b[2] << 16) | (uint32_t(b[3]) << 24);
-    }
-    std::string header(header_len, '\0');
-    f.read(header.data(), header_len);
-    if (!f) throw_file_error(path, "truncated .npy header");
-    auto field = [&](const std::string& key) {
-        size_t p = header.find("'" + key + "'");
-        if (p == std::string::npos) throw_file_error(path, ".npy header lacks '" + key + "'");
-        return header.substr(header.find(':', p) + 1);
-    };
-    std::string descr = field("descr");
-    bool is_f4 = descr.find("<f4") != std::string::npos, is_u1 = descr.find("|u1") != std::string::npos ||
-                                                                   descr.find("|b1") != std::string::npos;
-    if (!is_f4 && !is_u1) throw_file_error(path, "only float32 and uint8 .npy files are supported");
-    std::string order = field("fortran_order");
-    if (order.substr(0, order.find(',')).find("True") != std::string::npos)
-        throw_file_error(path, "Fortran-order .npy is not supported");
-    std::string s = field("shape");
-    s = s.substr(s.find('(') + 1, s.find(')') - s.find('(') - 1);
-    NpyArray a;
-    std::stringstream ss(s);
-    std::string item;
-    size_t count = 1;
-    while (std::getline(ss, item, ',')) {
-        if (item.find_first_not_of(" ") == std::string::npos) continue;
-        a.shape.push_back(std::stoull(item));
-        count *= a.shape.back();
-    }
-    a.data.resize(count);
-    if (is_f4) {
-        f.read(reinterpret_cast<char*>(a.data.data()), std::streamsize(count * 4));
-    } else {
-        std::vector<unsigned char> b(count);
-        f.read(reinterpret_cast<char*>(b.data()), std::streamsize(count));
-        for (size_t i = 0; i < count; ++i) a.data[i] = b[i];
-    }
-    if (!f) throw_file_error(path, "truncated .npy data");
-    return a;
-}
-
-namespace {
-void write_npy_raw(const std::string& path, const std::vector<size_t>& shape, const char* descr, const void* data,
-                   size_t bytes_count) {
-    std::string dict = std::string("{'descr': '") + descr + "', 'fortran_order': False, 'shape': (";
-    for (size_t i = 0; i < shape.size(); ++i) dict += std::to_string(shape[i]) + (shape.size() == 1 || i + 1 < shape.size() ? "," : "");
-    dict += "), }";
-    size_t total = 10 + dict.size() + 1;
-    dict += std::string((64 - total % 64) % 64, ' ') + "\n";
-    std::string bytes("\x93NUMPY\x01\x00", 8);
-    bytes += char(dict.size() & 0xff), bytes += char(dict.size() >> 8);
-    bytes += dict;
-    bytes.append(static_cast<const char*>(data), bytes_count);
-    write_file_atomic(path, bytes);
-}
-size_t element_count(const std::vector<size_t>& shape) {
-    size_t n = 1;
-    for (size_t s : shape) n *= s;
-    return n;
-}
-}  // namespace
-
-void write_npy(const std::string& path, const std::vector<size_t>& shape, const float* data) {
-    write_npy_raw(path, shape, "<f4", data, element_count(shape) * 4);
-}
-void write_npy(const std::string& path, const std::vector<size_t>& shape, const unsigned char* data) {
-    write_npy_raw(path, shape, "|u1", data, element_count(shape));
 }
 
 }  // namespace dynsky

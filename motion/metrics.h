@@ -1,6 +1,6 @@
-// Comparing predicted skies with real ones, and the two baselines every cloud model must beat:
+// Comparing predicted skies with real ones. The two baselines every cloud model must beat are
 // persistence (the next frame is the current one) and Farneback extrapolation (the current frame
-// advected by the optical flow of the previous pair, constant velocity).
+// advected by the optical flow of the previous pair, constant velocity: motion/advection.h).
 //
 // Images here are the networks' [0, 1] form (sky/hdr_recovery.h), CV_32FC3 or CV_32FC1, N x N.
 // Every metric is taken only over the pixels set in a CV_8UC1 mask (normally the sky disc, minus
@@ -15,6 +15,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "sky/fisheye.h"  // sky_disc_mask
+
 namespace dynsky {
 
 constexpr double kMaxPsnr = 100.0;
@@ -25,35 +27,15 @@ struct ImageComparison {
     double ssim = 0.0;
 };
 
-// The sky disc of an N x N canonical image (pixel centres with r <= 1) as a CV_8UC1 mask (255 in).
-cv::Mat sky_disc_mask(int resolution);
-
 // Throw dynsky::Error when sizes, types or the mask do not match, or the mask is empty.
 double masked_mse(const cv::Mat& a, const cv::Mat& b, const cv::Mat& mask);
 double psnr_from_mse(double mse);
 double masked_ssim(const cv::Mat& a, const cv::Mat& b, const cv::Mat& mask);
 ImageComparison compare_images(const cv::Mat& prediction, const cv::Mat& truth, const cv::Mat& mask);
 
-// Dense optical flow from `from` to `to` (OpenCV's Farneback on the luminance), CV_32FC2 in
-// pixels: the content at x in `from` is near x + flow(x) in `to`.
-struct FarnebackParams {
-    double pyr_scale = 0.5;
-    int levels = 3;
-    int winsize = 15;
-    int iterations = 3;
-    int poly_n = 5;
-    double poly_sigma = 1.2;
-};
-cv::Mat farneback_flow(const cv::Mat& from, const cv::Mat& to, const FarnebackParams& params = {});
-
-// Advects an image along a flow field for `steps` steps at constant velocity:
-// out(x) = image(x - steps * flow(x)) (bilinear; outside the image reads 0). The backward lookup
-// through the flow at the destination is the usual first-order stand-in for forward splatting.
-cv::Mat advect_by_flow(const cv::Mat& image, const cv::Mat& flow, double steps);
-
-// The Farneback-extrapolation baseline: the flow of previous -> current, applied `steps` times to
-// current.
-cv::Mat extrapolate_farneback(const cv::Mat& previous, const cv::Mat& current, int steps,
-                              const FarnebackParams& params = {});
+// High-frequency energy: mean squared difference between the image and its Gaussian blur (sigma
+// 2 px), over the mask's pixels and the channels. A rollout that blurs loses it; one that runs away
+// gains it.
+double high_frequency_energy(const cv::Mat& image, const cv::Mat& mask);
 
 }  // namespace dynsky

@@ -1,0 +1,128 @@
+#include "motion/advection.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "sky/fisheye.h"
+#include "util/error.h"
+
+namespace dynsky {
+
+namespace {
+
+cv::Mat sky_mat(const SkyImage& sky) {
+    cv::Mat m(sky.resolution, sky.resolution, CV_32FC3, const_cast<float*>(sky.rgb.data()));
+    return m;  // a view; callers clone when they keep it
+}
+
+}  // namespace
+
+namespace {
+
+cv::Vec2f sample_flow(const cv::Mat& flow, double x, double y) {
+    const int n = flow.cols;
+    x = std::clamp(x, 0.0, n - 1.0), y = std::clamp(y, 0.0, n - 1.0);
+    int x0 = std::min(int(x), n - 2), y0 = std::min(int(y), n - 2);
+    float fx = float(x - x0), fy = float(y - y0);
+    return (1 - fy) * ((1 - fx) * flow.at<cv::Vec2f>(y0, x0) + fx * flow.at<cv::Vec2f>(y0, x0 + 1)) +
+           fy * ((1 - fx) * flow.at<cv::Vec2f>(y0 + 1, x0) + fx * flow.at<cv::Vec2f>(y0 + 1, x0 + 1));
+}
+
+// The sky with every pixel outside the disc holding the rim's value along its radius, so that
+// bilinear lookups at the horizon never mix in the black corners.
+cv::Mat extend_past_rim(const cv::Mat& src) {
+    const int n = src.cols;
+    const double r_in = 1.0 - 1.5 / n;
+    cv::Mat map_x(n, n, CV_32FC1), map_y(n, n, CV_32FC1);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            double u = 2.0 * (i + 0.5) / n - 1.0, v = 2.0 * (j + 0.5) / n - 1.0, r = std::sqrt(u * u + v * v);
+            if (r > r_in) u *= r_in / r, v *= r_in / r;
+            map_x.at<float>(j, i) = float((u + 1.0) * n / 2.0 - 0.5);
+            map_y.at<float>(j, i) = float((v + 1.0) * n / 2.0 - 0.5);
+        }
+    cv::Mat out;
+    cv::remap(src, out, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    return out;
+}
+
+}  // namespace
+
+SkyImage advect_great_arc(const SkyImage& sky, const cv::Mat& flow, double fraction) {
+    const int n = sky.resolution;
+    if (flow.type() != CV_32FC2 || flow.rows != n || flow.cols != n)
+        throw Error("advect_great_arc: flow must be " + std::to_string(n) + "x" + std::to_string(n) + " CV_32FC2");
+    SkyImage out = sky;
+    if (fraction == 0.0) return out;
+    // The lookup maps are smooth (the flow is), so they are computed on a grid of at most 512^2 and
+    // resized: the per-pixel trigonometry then costs the same for 1024 and 2048 skies.
+    const int m = std::min(n, 512);
+    cv::Mat map_x(m, m, CV_32FC1), map_y(m, m, CV_32FC1);
+    // The flow belongs to where content starts: output pixel q shows the source p whose own arc,
+    // followed for `fraction`, ends at q. Found by fixed-point iteration from p = q (a few steps
+    // suffice for flows that vary smoothly); each step rotates q back along p's arc.
+    constexpr int kIterations = 8;
+    tbb::parallel_for(0, m, [&](int cj) {
+        for (int ci = 0; ci < m; ++ci) {
+            const double i = (ci + 0.5) * n / m - 0.5, j = (cj + 0.5) * n / m - 0.5;
+            const Vec3d d = fisheye::direction_from_pixel(i, j, n);
+            double px = i, py = j;
+            Vec3d src = d;
+            for (int it = 0; it < kIterations; ++it) {
+                cv::Vec2f f = sample_flow(flow, px, py);
+                Vec3d from = fisheye::direction_from_pixel(px, py, n), to = fisheye::direction_from_pixel(px + f[0], py + f[1], n);
+                Vec3d c = from.cross(to);
+                double s = c.norm();
+                if (s < 1e-12) {
+                    src = d;
+                } else {
+                    Vec3d axis = c / s;
+                    double g = -fraction * std::atan2(s, from.dot(to));
+                    // Rodrigues (q need not be perpendicular to the axis).
+                    src = d * std::cos(g) + axis.cross(d) * std::sin(g) + axis * axis.dot(d) * (1 - std::cos(g));
+                }
+                double nx, ny;
+                fisheye::pixel_from_direction(src, n, &nx, &ny);
+                if (std::abs(nx - px) < 1e-3 && std::abs(ny - py) < 1e-3) break;
+                px = nx, py = ny;
+            }
+            double x, y;
+            fisheye::pixel_from_direction(src, n, &x, &y);
+            map_x.at<float>(cj, ci) = float(x);
+            map_y.at<float>(cj, ci) = float(y);
+        }
+    });
+    if (m != n) {
+        cv::resize(map_x, map_x, cv::Size(n, n), 0, 0, cv::INTER_LINEAR);
+        cv::resize(map_y, map_y, cv::Size(n, n), 0, 0, cv::INTER_LINEAR);
+    }
+    cv::Mat dst(n, n, CV_32FC3, out.rgb.data());
+    cv::remap(extend_past_rim(sky_mat(sky)), dst, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    clear_outside_disc(&out);
+    return out;
+}
+
+cv::Mat advect_by_flow(const cv::Mat& image, const cv::Mat& flow, double steps) {
+    if (flow.type() != CV_32FC2 || flow.size() != image.size())
+        throw Error("advect_by_flow: the flow must be CV_32FC2 of the image's size");
+    cv::Mat map(flow.size(), CV_32FC2);
+    for (int y = 0; y < flow.rows; ++y) {
+        const cv::Vec2f* f = flow.ptr<cv::Vec2f>(y);
+        cv::Vec2f* m = map.ptr<cv::Vec2f>(y);
+        for (int x = 0; x < flow.cols; ++x)
+            m[x] = cv::Vec2f(float(x - steps * f[x][0]), float(y - steps * f[x][1]));
+    }
+    cv::Mat out;
+    cv::remap(image, out, map, cv::noArray(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar::all(0));
+    return out;
+}
+
+cv::Mat extrapolate_farneback(const cv::Mat& previous, const cv::Mat& current, int steps,
+                              const FarnebackParams& params) {
+    return advect_by_flow(current, farneback_flow(previous, current, params), steps);
+}
+
+}  // namespace dynsky

@@ -1,0 +1,33 @@
+// Moving sky pixels along a flow field (motion/flow.h): on the sphere (the paper's Lambda) and, for
+// the networks' small images and the baselines, in the image plane.
+//
+// Great-arc advection does NOT shift pixels along straight image lines: a pixel's displacement names
+// a target direction on the sphere, and the content moves along the great arc between the two
+// directions (rotation about the axis perpendicular to both), so clouds keep their solid angle and
+// follow great circles across the zenith and near the horizon (sky/fisheye.h does the mapping).
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include "motion/flow.h"
+#include "sky/sky_image.h"
+
+namespace dynsky {
+
+// The sky with its content moved by `fraction` of the flow along great arcs (fraction may be
+// negative: backwards). Backward mapping: output pixel q takes the input at q's direction rotated
+// by -fraction of the arc from q to q + flow(q), sampled bilinearly. fraction 0 returns the input.
+// Time and sun are copied from the input.
+SkyImage advect_great_arc(const SkyImage& sky, const cv::Mat& flow, double fraction);
+
+// Advects an image along a flow field for `steps` steps at constant velocity:
+// out(x) = image(x - steps * flow(x)) (bilinear; outside the image reads 0). The backward lookup
+// through the flow at the destination is the usual first-order stand-in for forward splatting.
+cv::Mat advect_by_flow(const cv::Mat& image, const cv::Mat& flow, double steps);
+
+// The Farneback-extrapolation baseline: the flow of previous -> current, applied `steps` times to
+// current.
+cv::Mat extrapolate_farneback(const cv::Mat& previous, const cv::Mat& current, int steps,
+                              const FarnebackParams& params = {});
+
+}  // namespace dynsky

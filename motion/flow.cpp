@@ -1,0 +1,153 @@
+#include "motion/flow.h"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+
+#include "sky/fisheye.h"
+#include "util/error.h"
+
+namespace dynsky {
+
+namespace {
+
+cv::Mat sky_mat(const SkyImage& sky) {
+    cv::Mat m(sky.resolution, sky.resolution, CV_32FC3, const_cast<float*>(sky.rgb.data()));
+    return m;  // a view; callers clone when they keep it
+}
+
+// 1 inside the disc shrunk by margin_px, else 0 (CV_32FC1).
+cv::Mat disc_weight(int n, double margin_px) {
+    cv::Mat m(n, n, CV_32FC1);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            double u = 2.0 * (i + 0.5) / n - 1.0, v = 2.0 * (j + 0.5) / n - 1.0;
+            double r_px = std::sqrt(u * u + v * v) * n / 2.0;
+            m.at<float>(j, i) = r_px <= n / 2.0 - margin_px ? 1.0f : 0.0f;
+        }
+    return m;
+}
+
+cv::Mat to_grey(const cv::Mat& image) {
+    if (image.channels() == 1) return image;
+    cv::Mat grey;
+    cv::cvtColor(image, grey, image.channels() == 4 ? cv::COLOR_RGBA2GRAY : cv::COLOR_RGB2GRAY);
+    return grey;
+}
+
+}  // namespace
+
+cv::Mat farneback(const cv::Mat& from, const cv::Mat& to, const FarnebackParams& p) {
+    cv::Mat flow;
+    cv::calcOpticalFlowFarneback(from, to, flow, p.pyr_scale, p.levels, p.winsize, p.iterations, p.poly_n,
+                                 p.poly_sigma, 0);
+    return flow;
+}
+
+cv::Mat farneback_flow(const cv::Mat& from, const cv::Mat& to, const FarnebackParams& p) {
+    if (from.empty() || from.size() != to.size() || from.type() != to.type())
+        throw Error("farneback_flow: the two images differ in size or type, or are empty");
+    cv::Mat g0, g1;
+    // On the 0-255 scale of the 8-bit frames the usual parameters were tuned for.
+    to_grey(from).convertTo(g0, CV_32F, 255.0);
+    to_grey(to).convertTo(g1, CV_32F, 255.0);
+    return farneback(g0, g1, p);
+}
+
+cv::Mat fill_flow_holes(const cv::Mat& flow, const cv::Mat& confidence, double sigma_px) {
+    CV_Assert(flow.type() == CV_32FC2 && confidence.type() == CV_32FC1 && flow.size() == confidence.size());
+    cv::Mat c2;
+    cv::merge(std::vector<cv::Mat>{confidence, confidence}, c2);
+    cv::Mat weighted = flow.mul(c2), num, den;
+    cv::GaussianBlur(weighted, num, cv::Size(0, 0), sigma_px, sigma_px, cv::BORDER_REFLECT);
+    cv::GaussianBlur(confidence, den, cv::Size(0, 0), sigma_px, sigma_px, cv::BORDER_REFLECT);
+    cv::Mat out(flow.size(), CV_32FC2);
+    for (int j = 0; j < flow.rows; ++j)
+        for (int i = 0; i < flow.cols; ++i) {
+            float c = confidence.at<float>(j, i), d = den.at<float>(j, i);
+            cv::Vec2f filled = d > 1e-4f ? num.at<cv::Vec2f>(j, i) / d : cv::Vec2f(0, 0);
+            out.at<cv::Vec2f>(j, i) = c * flow.at<cv::Vec2f>(j, i) + (1.0f - c) * filled;
+        }
+    return out;
+}
+
+cv::Mat estimate_sky_flow(const SkyImage& from, const SkyImage& to, const SkyFlowParams& params) {
+    if (from.resolution != to.resolution || from.resolution < 8)
+        throw Error("estimate_sky_flow: the two skies must have the same resolution (got " +
+                    std::to_string(from.resolution) + " and " + std::to_string(to.resolution) + ")");
+    const int n = from.resolution, w = std::min(params.work_resolution, n);
+    // Log luminance at the working size, one mapping for both images so brightness is comparable.
+    auto log_lum = [&](const SkyImage& s) {
+        cv::Mat small;
+        cv::resize(sky_mat(s), small, cv::Size(w, w), 0, 0, cv::INTER_AREA);
+        cv::Mat lum(w, w, CV_32FC1);
+        for (int j = 0; j < w; ++j)
+            for (int i = 0; i < w; ++i) {
+                cv::Vec3f p = small.at<cv::Vec3f>(j, i);
+                lum.at<float>(j, i) = std::log(std::max(0.2126f * p[0] + 0.7152f * p[1] + 0.0722f * p[2], 0.0f) + 1e-3f);
+            }
+        return lum;
+    };
+    cv::Mat a = log_lum(from), b = log_lum(to);
+    cv::Mat disc = disc_weight(w, 1.5);
+    std::vector<float> values;
+    for (int j = 0; j < w; ++j)
+        for (int i = 0; i < w; ++i)
+            if (disc.at<float>(j, i) > 0) values.push_back(a.at<float>(j, i)), values.push_back(b.at<float>(j, i));
+    std::sort(values.begin(), values.end());
+    float lo = values[values.size() / 100], hi = values[values.size() * 99 / 100];
+    if (hi - lo < 1e-3f) hi = lo + 1e-3f;
+    auto to8 = [&](const cv::Mat& m, cv::Mat* unit) {
+        *unit = (m - lo) / (hi - lo);
+        cv::Mat c;
+        cv::min(cv::max(*unit, 0.0), 1.0, c);
+        *unit = c.mul(disc);
+        cv::Mat out;
+        unit->convertTo(out, CV_8UC1, 255.0);
+        return out;
+    };
+    cv::Mat ua, ub;
+    cv::Mat a8 = to8(a, &ua), b8 = to8(b, &ub);
+    cv::Mat flow;
+    FarnebackParams fp = params.farneback;
+    fp.winsize = std::max(5, w * fp.winsize / 512);
+    flow = farneback(a8, b8, fp);
+
+    // Confidence: texture to track in the first image (Farneback's estimate means nothing on flat areas).
+    cv::Mat gx, gy, grad;
+    cv::Sobel(ua, gx, CV_32F, 1, 0, 3, 1.0 / 8);
+    cv::Sobel(ua, gy, CV_32F, 0, 1, 3, 1.0 / 8);
+    cv::magnitude(gx, gy, grad);
+    cv::blur(grad, grad, cv::Size(5, 5));
+    cv::Mat conf = grad / params.min_texture;
+    cv::min(conf, 1.0, conf);
+    conf = conf.mul(disc_weight(w, 3.0));
+    cv::Mat filled = fill_flow_holes(flow, conf, params.fill_sigma * w);
+    cv::Mat out;
+    cv::resize(filled, out, cv::Size(n, n), 0, 0, cv::INTER_LINEAR);
+    out *= double(n) / w;
+    return out;
+}
+
+cv::Mat rotation_flow(int n, const Vec3d& axis, double angle) {
+    Eigen::AngleAxisd rot(angle, axis.normalized());
+    Eigen::Matrix3d r = rot.toRotationMatrix();
+    cv::Mat flow(n, n, CV_32FC2);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            double x, y;
+            fisheye::pixel_from_direction(r * fisheye::direction_from_pixel(i, j, n), n, &x, &y);
+            flow.at<cv::Vec2f>(j, i) = cv::Vec2f(float(x - i), float(y - j));
+        }
+    return flow;
+}
+
+cv::Mat flow_at_resolution(const cv::Mat& flow, int n) {
+    if (flow.rows == n) return flow;
+    cv::Mat small;
+    cv::resize(flow, small, cv::Size(n, n), 0, 0, cv::INTER_AREA);
+    return small * (double(n) / flow.rows);
+}
+
+}  // namespace dynsky

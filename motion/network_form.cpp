@@ -1,0 +1,101 @@
+#include "motion/network_form.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include "sky/fisheye.h"
+#include "sky/preset_import.h"
+#include "util/error.h"
+
+namespace dynsky {
+
+cv::Mat to_network_form(const SkyImage& sky, const NetworkFormParams& form, int resolution) {
+    const int n = sky.resolution;
+    Image unit = hdr_to_unit(sky, form.unit_map);
+    cv::Mat image(n, n, CV_32FC3);
+    std::copy(unit.pixels.begin(), unit.pixels.end(), image.ptr<float>());
+    if (resolution > 0 && resolution != n) {
+        cv::resize(image, image, cv::Size(resolution, resolution), 0, 0, cv::INTER_AREA);
+        image.setTo(cv::Scalar::all(0), ~sky_disc_mask(resolution));
+    }
+    return image;
+}
+
+SkyImage from_network_form(const cv::Mat& image, const SkyImage& like, const NetworkFormParams& form) {
+    if (image.rows != like.resolution || image.cols != like.resolution || image.type() != CV_32FC3)
+        throw Error("from_network_form: the image must be CV_32FC3 at the sky's resolution");
+    Image unit(image.cols, image.rows, 3);
+    cv::Mat c = image.isContinuous() ? image : image.clone();
+    std::copy(c.ptr<float>(), c.ptr<float>() + unit.pixels.size(), unit.pixels.begin());
+    SkyImage out = unit_to_hdr(unit, form.unit_map);
+    out.time_seconds = like.time_seconds;
+    out.sun_direction = like.sun_direction;
+    out.source = like.source;
+    return out;
+}
+
+namespace {
+// I_cm of an HDR sky at its own resolution, CV_8UC1 255 = cloud.
+cv::Mat cloud_mask_of_sky(const SkyImage& sky, const NetworkFormParams& form) {
+    const int n = sky.resolution;
+    std::vector<unsigned char> in_disc(size_t(n) * n);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) in_disc[size_t(j) * n + i] = sky.in_disc(i, j);
+    Image mask = cloud_mask(encode_sky_for_mask(sky), form.cloud_rule, &in_disc);
+    cv::Mat m(n, n, CV_8UC1);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) m.at<uint8_t>(j, i) = mask.at(i, j, 0) > 0.7f ? 255 : 0;
+    return m;
+}
+}  // namespace
+
+cv::Mat network_cloud_mask(const cv::Mat& image, const NetworkFormParams& form) {
+    SkyImage like(image.rows);
+    cv::Mat clean;
+    cv::min(cv::max(image, 0.0), 1.0, clean);
+    cv::patchNaNs(clean, 0.0);
+    return cloud_mask_of_sky(from_network_form(clean, like, form), form);
+}
+
+NetworkFrame resample_frame(const NetworkFrame& frame, int resolution) {
+    const int n = resolution;
+    if (frame.image.rows == n) return frame;
+    NetworkFrame f;
+    f.time_seconds = frame.time_seconds;
+    const cv::Mat disc = sky_disc_mask(n);
+    cv::resize(frame.image, f.image, cv::Size(n, n), 0, 0, cv::INTER_AREA);
+    f.image.setTo(cv::Scalar::all(0), ~disc);
+    cv::Mat seen, cloud;
+    frame.valid.convertTo(seen, CV_32F, 1.0 / 255.0);
+    cv::resize(seen, seen, cv::Size(n, n), 0, 0, cv::INTER_AREA);
+    f.valid = (seen > 0.999f) & disc;
+    frame.cloud.convertTo(cloud, CV_32F, 1.0 / 255.0);
+    cv::resize(cloud, cloud, cv::Size(n, n), 0, 0, cv::INTER_AREA);
+    f.cloud = (cloud > 0.5f) & disc;
+    return f;
+}
+
+NetworkFrame network_frame(const SkyImage& sky, const std::vector<unsigned char>& not_sky, int resolution,
+                           const NetworkFormParams& form) {
+    const int big = sky.resolution;
+    if (!not_sky.empty() && not_sky.size() != size_t(big) * big)
+        throw Error("network_frame: the not-sky mask does not match the sky's resolution");
+    NetworkFrame f;
+    f.time_seconds = sky.time_seconds;
+    f.image = to_network_form(sky, form);
+    f.valid = sky_disc_mask(big);
+    if (!not_sky.empty())
+        for (int j = 0; j < big; ++j)
+            for (int i = 0; i < big; ++i)
+                if (not_sky[size_t(j) * big + i]) f.valid.at<uint8_t>(j, i) = 0;
+    f.cloud = cloud_mask_of_sky(sky, form);
+    return resample_frame(f, resolution > 0 ? resolution : big);
+}
+
+NetworkFrame network_frame_from_photo(const std::string& path, const std::string& preset, int import_resolution,
+                                      int resolution, const NetworkFormParams& form) {
+    std::vector<unsigned char> not_sky;
+    SkyImage sky = import_preset_photo(path, preset, import_resolution, &not_sky);
+    return network_frame(sky, not_sky, resolution, form);
+}
+
+}  // namespace dynsky

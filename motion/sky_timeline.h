@@ -1,0 +1,94 @@
+// A sky at any time t from one input sky and a medium-timescale model (the paper's xi and Gamma).
+//
+// Medium steps: S_0 = the input, S_{i+1} = xi(S_0..S_i), one every Delta t, computed in order
+// and cached (deterministic: the same steps whichever frames are asked for first). Between two
+// steps, Gamma (the short timescale) builds two key images from the flow F_i re-estimated on the
+// steps themselves (motion/advection.h, Farneback):
+//   s = 0    S_i
+//   s = 1/3  Lambda(S_i, F_i, +1/3)       the earlier step advected forward a third of the way
+//   s = 2/3  Lambda(S_{i+1}, F_i, -1/3)   the later step advected backward a third of the way
+//   s = 1    S_{i+1}
+// and blends linearly (Upsilon) between consecutive keys, s = (t - i Delta t) / Delta t. Gamma is
+// exactly S_i at t = i Delta t and exactly S_{i+1} at (i+1) Delta t; frames at any rate cost one
+// blend each, the model runs once per Delta t.
+//
+// The sun is taken out of the input before any step (motion/sun_patch.h) and put back into every frame at the sun's direction for that time: fixed, or
+// following the clock when the timeline knows where and when the input was taken (SunClock).
+// Models that make their own sun (ProceduralStepModel) keep it.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "motion/flow.h"
+#include "motion/step_model.h"
+#include "motion/sun_patch.h"
+#include "sky/sky_image.h"
+#include "sky/sun_position.h"
+
+namespace dynsky {
+
+// Where and when the input sky was taken: the sun then follows the clock.
+struct SunClock {
+    UtcTime start;  // UTC of t = 0
+    GeoLocation where;
+};
+
+struct SkyTimelineTimings {
+    double medium_seconds = 0;  // xi, flow estimation and the two key images, summed over this run
+    int medium_steps = 0;       // steps computed by this run
+    double gamma_seconds = 0;   // the last sky_at's blend and sun insertion
+};
+
+class SkyTimeline {
+  public:
+    SkyTimeline(SkyImage input, std::unique_ptr<MediumStepModel> model, double dt_seconds,
+                std::optional<SunClock> clock = std::nullopt, SkyFlowParams flow_params = {});
+
+    // Gamma at t (seconds since the input; t >= 0). Computes and caches the steps it needs.
+    SkyImage sky_at(double t);
+    // The same into *out, reusing its pixel storage: per-frame use without allocating (and
+    // page-faulting) 50 MB for every 2048 sky.
+    void sky_at(double t, SkyImage* out);
+    // The medium step S_i (i >= 0).
+    std::shared_ptr<const SkyImage> step(int i);
+    // The key images of interval i: at s = 1/3 and 2/3.
+    const SkyImage& key_third(int i);
+    const SkyImage& key_two_thirds(int i);
+    const cv::Mat& flow(int i);  // F_i: from S_i to S_{i+1}
+
+    double dt() const { return dt_; }
+    const SkyTimelineTimings& timings() const { return timings_; }
+    const MediumStepModel& model() const { return *model_; }
+    // The sun direction at t (the input's, or the clock's); nullopt when unknown.
+    std::optional<Vec3d> sun_direction_at(double t) const;
+
+  private:
+    struct Interval {
+        cv::Mat flow;
+        SkyImage third, two_thirds;
+    };
+    Interval& interval(int i);
+
+    std::unique_ptr<MediumStepModel> model_;
+    double dt_;
+    std::optional<SunClock> clock_;
+    SkyFlowParams flow_params_;
+    std::vector<std::shared_ptr<const SkyImage>> steps_;
+    std::map<int, Interval> intervals_;
+    std::vector<SunPatch> suns_;  // per step: the sun cut out of it (all the input's for models without a sun)
+    std::optional<Vec3d> input_sun_;
+    double input_time_ = 0;
+    SkyTimelineTimings timings_;
+};
+
+// Upsilon: (1 - w) a + w b, pixel by pixel (same resolution); metadata from a.
+SkyImage blend_skies(const SkyImage& a, const SkyImage& b, double w);
+void blend_skies(const SkyImage& a, const SkyImage& b, double w, SkyImage* out);
+
+}  // namespace dynsky

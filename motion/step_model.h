@@ -1,0 +1,30 @@
+// xi, the medium-timescale step model: the next medium step of a sky from the steps so far
+// (glossary: "medium step", "step model"). Implementations, each in its own file with its
+// parameters first: flow_extrapolation_model.h, procedural_step_model.h, network_step_model.h.
+// motion/sky_timeline.h calls them once per Delta t.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "sky/sky_image.h"
+
+namespace dynsky {
+
+class MediumStepModel {
+  public:
+    virtual ~MediumStepModel() = default;
+    // history.back() is the latest step (at least one). The result's time must be
+    // history.back().time_seconds + dt.
+    virtual SkyImage step(const std::vector<std::shared_ptr<const SkyImage>>& history, double dt) = 0;
+    virtual std::string name() const = 0;
+    // True when the model's skies already hold the right sun (the timeline then leaves it alone).
+    virtual bool makes_own_sun() const { return false; }
+    // Where the sun is for the next step (models that make their own sun follow it).
+    virtual void set_sun_direction(const Vec3d&) {}
+    // The Delta t the model was made for (a trained network's), 0 when any is fine.
+    virtual double native_dt_seconds() const { return 0.0; }
+};
+
+}  // namespace dynsky

@@ -1,0 +1,108 @@
+#include "motion/sun_patch.h"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/photo.hpp>
+
+#include "sky/fisheye.h"
+
+namespace dynsky {
+
+namespace {
+
+cv::Mat saturated_pixels(const cv::Mat& unit) {
+    std::vector<cv::Mat> ch;
+    cv::split(unit, ch);
+    return (ch[0] >= 0.999f) | (ch[1] >= 0.999f) | (ch[2] >= 0.999f);
+}
+
+}  // namespace
+
+SunPatch remove_sun(SkyImage* sky) {
+    SunPatch patch;
+    if (!sky->sun_direction || sky->sun_direction->y() <= 0) return patch;
+    const int n = sky->resolution;
+    double x, y;
+    fisheye::pixel_from_direction(sky->sun_direction->cast<double>(), n, &x, &y);
+    const int ci = int(std::lround(x)), cj = int(std::lround(y));
+    const int radius = int(std::ceil(n / 180.0)) + 2, margin = 3 * radius;
+    const int i0 = std::max(0, ci - margin), i1 = std::min(n - 1, ci + margin);
+    const int j0 = std::max(0, cj - margin), j1 = std::min(n - 1, cj + margin);
+    if (i1 <= i0 || j1 <= j0) return patch;
+    std::vector<float> around;
+    for (int j = j0; j <= j1; ++j)
+        for (int i = i0; i <= i1; ++i)
+            if (sky->in_disc(i, j)) around.push_back(luminance(sky->pixel(i, j)));
+    if (around.empty()) return patch;
+    const float threshold = 20.0f * std::max(median(std::move(around)), 1e-6f);
+
+    const int w = i1 - i0 + 1, h = j1 - j0 + 1;
+    cv::Mat mask = cv::Mat::zeros(h, w, CV_8UC1);
+    for (int j = j0; j <= j1; ++j)
+        for (int i = i0; i <= i1; ++i)
+            if ((i - ci) * (i - ci) + (j - cj) * (j - cj) <= radius * radius && sky->in_disc(i, j) &&
+                luminance(sky->pixel(i, j)) > threshold)
+                mask.at<uint8_t>(j - j0, i - i0) = 255;
+    if (cv::countNonZero(mask) == 0) return patch;
+    cv::dilate(mask, mask, cv::Mat());  // the disc's soft limb too
+    cv::Mat filled[3];
+    for (int c = 0; c < 3; ++c) {
+        cv::Mat channel(h, w, CV_32FC1);
+        for (int j = 0; j < h; ++j)
+            for (int i = 0; i < w; ++i)
+                channel.at<float>(j, i) = std::log(sky->rgb[(size_t(j + j0) * n + i + i0) * 3 + c] + 1e-6f);
+        cv::inpaint(channel, mask, filled[c], 3, cv::INPAINT_TELEA);
+    }
+    for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i) {
+            if (!mask.at<uint8_t>(j, i) || !sky->in_disc(i + i0, j + j0)) continue;
+            Color before = sky->pixel(i + i0, j + j0), after;
+            for (int c = 0; c < 3; ++c)
+                after[c] = std::min(before[c], std::max(std::exp(filled[c].at<float>(j, i)) - 1e-6f, 0.0f));
+            sky->set_pixel(i + i0, j + j0, after);
+            patch.di.push_back(i + i0 - ci), patch.dj.push_back(j + j0 - cj);
+            patch.excess.push_back(before - after);
+        }
+    return patch;
+}
+
+void insert_sun(SkyImage* sky, const SunPatch& patch, const Vec3d& direction, double weight) {
+    if (patch.empty() || direction.y() <= 0 || weight == 0.0) return;
+    const int n = sky->resolution;
+    double x, y;
+    fisheye::pixel_from_direction(direction, n, &x, &y);
+    const int ci = int(std::lround(x)), cj = int(std::lround(y));
+    for (size_t k = 0; k < patch.di.size(); ++k) {
+        int i = ci + patch.di[k], j = cj + patch.dj[k];
+        if (i < 0 || j < 0 || i >= n || j >= n || !sky->in_disc(i, j)) continue;
+        sky->set_pixel(i, j, sky->pixel(i, j) + float(weight) * patch.excess[k]);
+    }
+}
+
+cv::Mat fill_saturated_pixels(cv::Mat* unit) {
+    cv::Mat& state = *unit;
+    const cv::Mat disc_big = sky_disc_mask(state.rows);
+    cv::Mat sun = saturated_pixels(state);
+    if (cv::countNonZero(sun) > 0) {
+        cv::dilate(sun, sun, cv::Mat());
+        std::vector<cv::Mat> ch;
+        cv::split(state, ch);
+        for (cv::Mat& c : ch) {
+            cv::Mat filled;
+            cv::inpaint(c, sun, filled, 3.0, cv::INPAINT_TELEA);
+            c = filled;
+        }
+        cv::merge(ch, state);
+        state.setTo(cv::Scalar::all(0), ~disc_big);
+    }
+    return sun;
+}
+
+void restore_pixels(SkyImage* sky, const SkyImage& from, const cv::Mat& mask) {
+    for (int y = 0; y < sky->resolution; ++y)
+        for (int x = 0; x < sky->resolution; ++x)
+            if (mask.at<uint8_t>(y, x)) sky->set_pixel(x, y, from.pixel(x, y));
+}
+
+}  // namespace dynsky

@@ -1,0 +1,33 @@
+// The import of one photograph by a camera preset (sky/photo_import.h's CameraPreset): every
+// decision a preset makes, in one place, for `dynsky sky import --preset P`, the training-set
+// builder and the evaluation of cloud models alike.
+//
+// Decisions: the preset's geometry; its mask file found beside the photo (find_preset_mask), else
+// detection of dark obstructions; the place; the time from the file name on the preset's clock;
+// HDR calibration against the clear-sky model (sky/hdr_recovery.h) when the time is known.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "sky/photo_import.h"
+#include "sky/sun_position.h"
+
+namespace dynsky {
+
+struct PresetImportPlan {
+    CameraPreset preset;
+    PhotoImportParams params;   // preset geometry, resolution, mask or detection
+    GeoLocation location;       // the preset's place
+    std::string time;           // ISO 8601 from the file name ("" if none)
+    bool mask_found = false;    // the preset's mask file lies beside the photo
+};
+
+PresetImportPlan plan_preset_import(const std::string& preset, const std::string& photo, int resolution);
+
+// The HDR sky exactly as `dynsky sky import --preset P --res R` writes it, with the import's
+// not-sky mask (1 = hidden by the arm, band or masts and filled in) when asked for.
+SkyImage import_preset_photo(const std::string& path, const std::string& preset, int import_resolution,
+                             std::vector<unsigned char>* not_sky = nullptr);
+
+}  // namespace dynsky
