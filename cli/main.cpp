@@ -1,8 +1,10 @@
 // dynsky: moving HDR skies and the scenes they light. One program, subcommands.
 #include <cstdio>
 #include <exception>
+#include <functional>
 
 #include "cli/commands.h"
+#include "cli/options.h"
 #include "util/error.h"
 
 int main(int argc, char** argv) {
@@ -23,6 +25,13 @@ int main(int argc, char** argv) {
     dynsky::cli::register_bench_commands(app);
     dynsky::cli::register_animate_command(app);
     dynsky::cli::register_compare_command(app);
+    // The same -q,--quiet on every command (those without their own silence stdout).
+    std::function<void(CLI::App*)> add_quiet = [&](CLI::App* cmd) {
+        auto subs = cmd->get_subcommands({});
+        for (CLI::App* sub : subs) add_quiet(sub);
+        if (subs.empty() && cmd->get_option_no_throw("--quiet") == nullptr) dynsky::cli::add_quiet_flag(cmd);
+    };
+    add_quiet(&app);
 
     try {
         app.parse(argc, argv);

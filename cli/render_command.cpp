@@ -7,7 +7,8 @@
 #include <filesystem>
 #include <memory>
 
-#include "cli/animation_support.h"
+#include "frame/scene_spec.h"
+#include "util/parse.h"
 #include "cli/commands.h"
 #include "renderer/builtin_scene.h"
 #include "renderer/gltf_loader.h"
@@ -61,7 +62,7 @@ int run_render(const RenderOptions& o) {
     std::unique_ptr<tbb::global_control> threads;
     if (o.threads > 0) threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
 
-    LoadedScene loaded = load_scene(SceneOptions{o.scene, o.camera, o.ground_albedo}, float(width) / height);
+    LoadedScene loaded = load_scene(SceneSpec{o.scene, o.camera, o.ground_albedo}, float(width) / height);
     const Scene& scene = loaded.scene;
     const Camera& camera = loaded.camera;
 

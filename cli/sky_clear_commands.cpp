@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "cli/commands.h"
+#include "cli/options.h"
 #include "cli/sky_output.h"
 #include "sky/clear_sky.h"
 #include "sky/latlong.h"
@@ -31,7 +32,7 @@ struct ClearOptions {
     SunOptions sun;
     double turbidity = 3.0, albedo = 0.3;
     bool no_sun = false;
-    int resolution = 0;
+    int resolution = 1024;
     std::string out, preview;
 };
 
@@ -152,8 +153,9 @@ void register_sky_clear_commands(CLI::App& sky) {
     clear->add_option("--turbidity", clear_opts->turbidity, "Atmospheric turbidity, 1..10 (2: very clear, 3: clear, 6+: hazy; default 3)");
     clear->add_option("--albedo", clear_opts->albedo, "Ground albedo seen by the sky model, 0..1 (default 0.3)");
     clear->add_flag("--no-sun", clear_opts->no_sun, "Leave the solar disc out (sky only)");
-    clear->add_option("--res", clear_opts->resolution, "Fisheye size N in pixels (N x N), 16..16384")->required();
-    clear->add_option("--out", clear_opts->out, "Output sky, .exr")->required();
+    clear->add_option("--sky-res", clear_opts->resolution, "Fisheye size N in pixels (N x N), 16..16384")->capture_default_str();
+    add_hidden_alias(clear, "--res", &clear_opts->resolution);
+    clear->add_option("--out,-o", clear_opts->out, "Output sky, .exr")->required();
     clear->add_option("--preview", clear_opts->preview, "Also write a tone-mapped .png preview (auto exposure)");
     clear->callback([clear_opts] { run_clear(*clear_opts); });
 
@@ -180,7 +182,7 @@ void register_sky_clear_commands(CLI::App& sky) {
         "Blender's Environment Texture mapping for a world with north = +Y, where Blender's glTF importer puts\n"
         "our north (-Z). Energy-preserving: a one-pixel sun is neither missed nor doubled.");
     ll->add_option("sky", ll_opts->sky, "Input fisheye sky (.exr)")->required();
-    ll->add_option("--out", ll_opts->out, "Output lat-long image, .exr")->required();
+    ll->add_option("--out,-o", ll_opts->out, "Output lat-long image, .exr")->required();
     ll->add_option("--width", ll_opts->width, "Width W in pixels, even (height W/2); default 2N for an N x N sky");
     ll->add_option("--ground", ll_opts->ground,
                    "Radiance of the lower half: one value or R,G,B in W m^-2 sr^-1 (default 0, black)");

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "cli/commands.h"
+#include "cli/options.h"
 #include "cli/sky_output.h"
 #include "sky/cloud_mask.h"
 #include "sky/hdr_recovery.h"
@@ -27,7 +28,7 @@ struct ImportOptions {
     bool mirror = false, auto_circle = false, no_preset_mask = false, detect = false, no_inpaint = false;
     std::string time, hdr = "auto";
     double lat = 0, lon = 0, elevation = 0, utc_offset = 0, turbidity = 3.0;
-    int resolution = 0;
+    int resolution = 512;
     std::string out, preview;
     // Set by CLI11 when given, so presets can be overridden option by option.
     CLI::Option *lens_opt = nullptr, *north_opt = nullptr, *lat_opt = nullptr, *lon_opt = nullptr, *elev_opt = nullptr,
@@ -267,8 +268,9 @@ void register_sky_import_commands(CLI::App& sky) {
                     "none: linear relative values; calibrated: absolute radiance (W m^-2 sr^-1) from the clear-sky model and "
                     "the sun restored; auto (default): calibrated when time and place are known");
     imp->add_option("--turbidity", io->turbidity, "Clear-sky model turbidity for the calibration (default 3)");
-    imp->add_option("--res", io->resolution, "Output fisheye size N (N x N pixels), 16..16384")->required();
-    imp->add_option("--out", io->out, "Output sky, .exr")->required();
+    imp->add_option("--sky-res", io->resolution, "Output fisheye size N (N x N pixels), 16..16384")->capture_default_str();
+    add_hidden_alias(imp, "--res", &io->resolution);
+    imp->add_option("--out,-o", io->out, "Output sky, .exr")->required();
     imp->add_option("--preview", io->preview, "Also write a tone-mapped .png preview");
     imp->callback([io] { run_import(*io); });
 
@@ -279,7 +281,7 @@ void register_sky_import_commands(CLI::App& sky) {
         "written as a PNG: 255 cloud, 100 clear sky, 0 not sky (the WSISEG coding). The paper's threshold is\n"
         "0.46; on WSISEG's human labels 0.75 agrees far better (docs/sky-import.md).");
     mask->add_option("input", mo->input, "Photograph (JPEG/PNG) or canonical sky (.exr)")->required();
-    mask->add_option("--out", mo->out, "Output mask, .png")->required();
+    mask->add_option("--out,-o", mo->out, "Output mask, .png")->required();
     mask->add_option("--threshold", mo->threshold, "Rule threshold (default 0.46, the paper's r/b)");
     mask->add_option("--rule", mo->rule, "rb: cloud if r/b > threshold (default); nbr: cloud if (b-r)/(b+r) < threshold");
     mask->add_option("--preset", mo->preset, "Camera preset for the sky circle and non-sky mask (" + presets + ")");

@@ -61,7 +61,7 @@ def main(argv=None):
     proc_dir = os.path.join(tmp, "proc")
     subprocess.run([args.dynsky, "sky", "procedural", "--seed", "7", "--coverage", "0.5", "--duration", "0", "--res",
                     str(args.res), "--sun-elevation", "50", "--sun-azimuth", "200", "--quiet", "--out", proc_dir], check=True)
-    inputs = {"real (ARM TSI, held-out frame)": real, "procedural (seed 7)": os.path.join(proc_dir, "frame_00000.exr")}
+    inputs = {"real (ARM TSI, held-out frame)": real, "procedural (seed 7)": os.path.join(proc_dir, "frame_0000.exr")}
     results = {}
     for label, sky in inputs.items():
         stats_path = os.path.join(tmp, f"stats_{len(results)}.csv")

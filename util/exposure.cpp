@@ -21,7 +21,7 @@ float exposure_log_average(const Image& linear) {
     return float(std::log2(0.18 / log_avg));
 }
 
-float exposure_median(const Image& linear) {
+float exposure_median(const Image& linear, float middle_grey) {
     std::vector<float> lum;
     lum.reserve(linear.pixels.size() / 3);
     for (int y = 0; y < linear.height; ++y)
@@ -30,7 +30,7 @@ float exposure_median(const Image& linear) {
             if (l > 0) lum.push_back(l);
         }
     if (lum.empty()) return 0.0f;
-    return std::log2(0.18f / median(std::move(lum)));
+    return std::log2(middle_grey / median(std::move(lum)));
 }
 
 float exposure_for_irradiance(const Color& irradiance) {

@@ -18,8 +18,9 @@ namespace dynsky {
 // Log-average luminance to 0.18. 0 for a black image or one with fewer than 3 channels.
 float exposure_log_average(const Image& linear);
 
-// Median of the positive luminances to 0.18. 0 when no pixel is positive.
-float exposure_median(const Image& linear);
+// Median of the positive luminances to middle_grey (0.18; procedural previews use 0.2). 0 when no
+// pixel is positive.
+float exposure_median(const Image& linear, float middle_grey = 0.18f);
 
 // 0.4 * E / pi (the radiance of a grey horizontal surface) to 0.18. 0 for E <= 0.
 float exposure_for_irradiance(const Color& irradiance);

@@ -132,7 +132,7 @@ TEST(SkyClearCli, LatLongConvertsASky) {
 TEST(SkyClearCli, HelpDescribesOptionsAndUnits) {
     auto r = dynsky("sky clear --help");
     EXPECT_EQ(r.exit_code, 0);
-    for (const char* s : {"--lat", "--lon", "--time", "--turbidity", "--albedo", "--no-sun", "--res", "--out", "--preview",
+    for (const char* s : {"--lat", "--lon", "--time", "--turbidity", "--albedo", "--no-sun", "--sky-res", "--out", "--preview",
                           "W m^-2 sr^-1", "EAST positive"})
         EXPECT_TRUE(contains(r.output, s)) << s << "\n" << r.output;
     r = dynsky("sky latlong --help");

@@ -19,7 +19,7 @@ TEST(SkyImportCli, HelpDescribesTheOptions) {
     auto r = test::run_command(exe() + " sky import --help");
     EXPECT_EQ(r.exit_code, 0) << r.output;
     for (const char* word : {"--preset", "--center", "--radius", "--lens", "--north", "--mirror", "--mask", "--time", "--lat",
-                             "--lon", "--hdr", "--res", "--out", "--preview", "equisolid"})
+                             "--lon", "--hdr", "--sky-res", "--out", "--preview", "equisolid"})
         EXPECT_NE(r.output.find(word), std::string::npos) << word;
 }
 

@@ -25,13 +25,13 @@ TEST(SkyProceduralCli, WritesFramesFlowsAndManifest) {
     ASSERT_EQ(r.exit_code, 0) << r.output;
     for (int k = 0; k < 3; ++k) {
         char name[32];
-        std::snprintf(name, sizeof name, "_%05d", k);
+        std::snprintf(name, sizeof name, "_%04d", k);
         EXPECT_TRUE(fs::exists(dir + "/frame" + name + ".exr")) << name;
         EXPECT_TRUE(fs::exists(dir + "/flow" + name + ".exr")) << name;
         EXPECT_TRUE(fs::exists(dir + "/frame" + name + ".png")) << name;
         EXPECT_TRUE(fs::exists(dir + "/flow" + name + ".png")) << name;
     }
-    EXPECT_FALSE(fs::exists(dir + "/frame_00003.exr"));
+    EXPECT_FALSE(fs::exists(dir + "/frame_0003.exr"));
 
     std::ifstream f(dir + "/manifest.json");
     nlohmann::json m = nlohmann::json::parse(f);
@@ -40,15 +40,15 @@ TEST(SkyProceduralCli, WritesFramesFlowsAndManifest) {
     EXPECT_EQ(m["resolution"], 48);
     ASSERT_EQ(m["frames"].size(), 3u);
     EXPECT_DOUBLE_EQ(m["frames"][2]["time_s"].get<double>(), 20.0);
-    EXPECT_EQ(m["frames"][1]["flow"], "flow_00001.exr");
+    EXPECT_EQ(m["frames"][1]["flow"], "flow_0001.exr");
     EXPECT_EQ(m["layers"].size(), 2u);
     EXPECT_DOUBLE_EQ(m["layers"][0]["wind_speed_mps"].get<double>(), 12.0);
 
-    SkyImage frame = load_sky(dir + "/frame_00001.exr");
+    SkyImage frame = load_sky(dir + "/frame_0001.exr");
     EXPECT_EQ(frame.resolution, 48);
     EXPECT_DOUBLE_EQ(frame.time_seconds, 10.0);
     ASSERT_TRUE(frame.sun_direction.has_value());
-    Image flow = read_image(dir + "/flow_00001.exr");
+    Image flow = read_image(dir + "/flow_0001.exr");
     EXPECT_EQ(flow.channels, 3);
     EXPECT_DOUBLE_EQ(flow.metadata.numbers["dynsky:flow_dt"], 10.0);
     // The zenith moves: the wind is 12 m/s from 250 deg, clouds drift east-north-east (image left).
@@ -81,7 +81,7 @@ TEST(SkyProceduralCli, SunFromPlaceAndTime) {
     auto r = procedural("--lat 39.74 --lon -105.18 --time 2024-06-21T18:00:00Z --duration 600 --dt 600 --res 32 --out " + dir);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     // Denver near solar noon in June: the sun is high in the south, and moves over 10 minutes.
-    SkyImage a = load_sky(dir + "/frame_00000.exr"), b = load_sky(dir + "/frame_00001.exr");
+    SkyImage a = load_sky(dir + "/frame_0000.exr"), b = load_sky(dir + "/frame_0001.exr");
     ASSERT_TRUE(a.sun_direction && b.sun_direction);
     EXPECT_GT(a.sun_direction->y(), 0.9f);
     EXPECT_GT((*a.sun_direction - *b.sun_direction).norm(), 0.01f);
@@ -90,7 +90,7 @@ TEST(SkyProceduralCli, SunFromPlaceAndTime) {
 TEST(SkyProceduralCli, HelpDescribesOptions) {
     auto r = test::run_command(std::string(DYNSKY_EXE) + " sky procedural --help");
     EXPECT_EQ(r.exit_code, 0);
-    for (const char* option : {"--seed", "--coverage", "--duration", "--dt", "--res", "--out", "--wind", "--mask-image",
+    for (const char* option : {"--seed", "--coverage", "--duration", "--dt", "--sky-res", "--out", "--wind", "--mask-image",
                                "--sun-elevation", "--lat", "--preview"})
         EXPECT_NE(r.output.find(option), std::string::npos) << option;
 }

@@ -1,0 +1,26 @@
+// Options that mean the same in every rendering command (`render`, `animate`, `compare`): the
+// scene (frame/scene_spec.h) and the moving sky (frame/sky_source.h). The commands bind them to
+// the frame stage's specs; logic lives there.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include "frame/scene_spec.h"
+#include "frame/sky_source.h"
+
+namespace dynsky::cli {
+
+void add_scene_options(CLI::App* cmd, SceneSpec* o);
+
+// An old spelling of an option, kept working but left out of --help (glossary: one name per thing).
+template <typename T>
+CLI::Option* add_hidden_alias(CLI::App* cmd, const std::string& old_name, T* variable) {
+    return cmd->add_option(old_name, *variable)->group("");
+}
+
+// -q,--quiet for commands whose report goes to stdout: silences stdout (warnings and errors still
+// reach stderr).
+void add_quiet_flag(CLI::App* cmd);
+void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m);
+
+}  // namespace dynsky::cli

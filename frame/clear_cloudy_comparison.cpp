@@ -1,0 +1,169 @@
+#include "frame/clear_cloudy_comparison.h"
+
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <opencv2/imgproc.hpp>
+#include <regex>
+#include <sstream>
+
+#include "renderer/accel.h"
+#include "renderer/env_light.h"
+#include "renderer/integrator.h"
+#include "sky/clear_sky.h"
+#include "util/atomic_file.h"
+#include "util/chart.h"
+#include "util/error.h"
+#include "util/exposure.h"
+
+namespace dynsky {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+Image render_frame(const Accel& accel, EnvLight& light, const Camera& camera, std::shared_ptr<const SkyImage> sky, int w, int h,
+                   int spp, uint64_t seed) {
+    light.set_sky(std::move(sky));
+    RenderSettings s;
+    s.width = w, s.height = h, s.spp = spp, s.seed = seed, s.quiet = true;
+    PathIntegrator integrator(accel, light, s);
+    return integrator.render(camera).color;
+}
+
+// Mean luminance (cd m^-2 = 683 Y) of a (2r+1)^2 window around pixel (x, y).
+double window_luminance(const Image& im, int x, int y, int r = 2) {
+    double sum = 0;
+    int n = 0;
+    for (int j = std::max(0, y - r); j <= std::min(im.height - 1, y + r); ++j)
+        for (int i = std::max(0, x - r); i <= std::min(im.width - 1, x + r); ++i) {
+            const float* p = &im.pixels[(size_t(j) * im.width + i) * im.channels];
+            sum += 683.0 * luminance(Color(p[0], p[1], p[2])), ++n;
+        }
+    return sum / std::max(n, 1);
+}
+
+}  // namespace
+
+std::vector<std::pair<double, double>> parse_chart_points(const std::string& text) {
+    std::vector<std::pair<double, double>> out;
+    std::stringstream ss(text);
+    std::string item;
+    std::regex re("^\\s*([0-9.]+)\\s*,\\s*([0-9.]+)\\s*$");
+    while (std::getline(ss, item, ';')) {
+        std::smatch m;
+        if (!std::regex_match(item, m, re)) throw Error("--points '" + text + "': expected X,Y;X,Y;... with X, Y in [0, 1]");
+        double x = std::stod(m[1]), y = std::stod(m[2]);
+        if (x > 1 || y > 1) throw Error("--points '" + text + "': coordinates are fractions of the image, in [0, 1]");
+        out.emplace_back(x, y);
+    }
+    if (out.empty()) throw Error("--points: give at least one point");
+    return out;
+}
+
+void render_clear_cloudy_comparison(const ComparisonSettings& o) {
+    const int w = o.width, h = o.height, cw = o.chart_width, ch = o.chart_height;
+    if (o.spp < 1 || o.chart_spp < 1) throw Error("--spp and --chart-spp must be at least 1");
+    if (o.chart_frames < 2) throw Error("--chart-frames must be at least 2");
+    if (!(o.duration > 0)) throw Error("--duration must be positive");
+    auto points = parse_chart_points(o.points);
+    std::unique_ptr<tbb::global_control> threads;
+    if (o.threads > 0) threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
+
+    SkySourceSpec so = o.sky;
+    if (so.time.empty()) throw Error("--time is required: the clear and cloudy skies share the sun of that moment");
+    SkyTimeline cloudy = make_sky_timeline(so, o.model);
+    LoadedScene scene = load_scene(o.scene, float(w) / h);
+    fs::create_directories(o.out);
+    const UtcTime t0 = start_time(so);
+    const GeoLocation where{so.latitude, so.longitude, 0};
+    const int sky_n = cloudy.step(0)->resolution;
+    auto clear_at = [&](double t) {
+        ClearSkyParams p;
+        p.sun_direction = compute_sun_position(add_seconds(t0, t), where).direction();
+        p.turbidity = 3;
+        auto s = std::make_shared<SkyImage>(make_clear_sky(p, sky_n));
+        s->time_seconds = t;
+        return s;
+    };
+
+    Accel accel(scene.scene);
+    EnvLight light(o.scene.ground_albedo);
+    auto clear0 = clear_at(0.0);
+    auto cloudy0 = std::make_shared<const SkyImage>(cloudy.sky_at(0.0));
+    Image a = render_frame(accel, light, scene.camera, clear0, w, h, o.spp, o.seed);
+    float ev = exposure_for_irradiance(light.sky_irradiance());
+    Color e_clear = light.sky_irradiance();
+    Image b = render_frame(accel, light, scene.camera, cloudy0, w, h, o.spp, o.seed);
+    Color e_cloudy = light.sky_irradiance();
+    write_image((fs::path(o.out) / "clear.exr").string(), a);
+    write_image((fs::path(o.out) / "cloudy.exr").string(), b);
+    Image da = tonemap_to_display(a, ev), db = tonemap_to_display(b, ev);
+    Image side;
+    side.width = 2 * w + 8, side.height = h, side.channels = 3;
+    side.pixels.assign(size_t(side.width) * h * 3, 1.0f);
+    Image diff = side;
+    diff.width = w;
+    diff.pixels.assign(size_t(w) * h * 3, 0.0f);
+    cv::Mat ratio8(h, w, CV_8UC1);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            for (int c = 0; c < 3; ++c) {
+                side.pixels[(size_t(y) * side.width + x) * 3 + c] = da.pixels[(size_t(y) * w + x) * da.channels + c];
+                side.pixels[(size_t(y) * side.width + x + w + 8) * 3 + c] = db.pixels[(size_t(y) * w + x) * db.channels + c];
+            }
+            const float* pa = &a.pixels[(size_t(y) * w + x) * a.channels];
+            const float* pb = &b.pixels[(size_t(y) * w + x) * b.channels];
+            double la = luminance(Color(pa[0], pa[1], pa[2])), lb = luminance(Color(pb[0], pb[1], pb[2]));
+            // log2(cloudy / clear) in [-3, 3] stops -> 0..255 (128: no change)
+            double stops = std::log2((lb + 1e-6) / (la + 1e-6));
+            ratio8.at<uint8_t>(y, x) = uint8_t(std::lround(std::clamp(128.0 + stops / 3.0 * 127.0, 0.0, 255.0)));
+        }
+    cv::Mat coloured;
+    cv::applyColorMap(ratio8, coloured, cv::COLORMAP_TWILIGHT_SHIFTED);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            cv::Vec3b p = coloured.at<cv::Vec3b>(y, x);  // BGR
+            for (int c = 0; c < 3; ++c) diff.pixels[(size_t(y) * w + x) * 3 + c] = p[2 - c] / 255.0f;
+        }
+    write_image((fs::path(o.out) / "side_by_side.png").string(), side);
+    write_image((fs::path(o.out) / "difference.png").string(), diff);
+    std::fprintf(stderr,
+                 "wrote %s/side_by_side.png (clear | cloudy, same exposure %.2f EV) and difference.png (log2 cloudy/clear, "
+                 "-3..+3 stops, colormap TWILIGHT_SHIFTED: mid = no change)\n"
+                 "global horizontal illuminance at t=0: clear %.0f lx, cloudy %.0f lx\n",
+                 o.out.c_str(), ev, 683.0 * luminance(e_clear), 683.0 * luminance(e_cloudy));
+
+    // Illuminance over time at the chosen points, under both skies (the sun follows the clock).
+    std::string csv = (fs::path(o.out) / "illuminance.csv").string();
+    {
+        std::ostringstream f;  // written whole at the end: a stopped run leaves no half table
+        f << "time_s,clear sky horizontal (lx / 100),cloudy sky horizontal (lx / 100)";
+        for (size_t p = 0; p < points.size(); ++p) f << ",cloudy point " << p + 1 << " (cd/m2),clear point " << p + 1 << " (cd/m2)";
+        f << '\n';
+        for (int k = 0; k < o.chart_frames; ++k) {
+            double t = o.duration * k / (o.chart_frames - 1);
+            Image ic = render_frame(accel, light, scene.camera, clear_at(t), cw, ch, o.chart_spp, o.seed);
+            double ec = 683.0 * luminance(light.sky_irradiance());
+            Image iy = render_frame(accel, light, scene.camera, std::make_shared<const SkyImage>(cloudy.sky_at(t)), cw, ch,
+                                    o.chart_spp, o.seed);
+            double ey = 683.0 * luminance(light.sky_irradiance());
+            f << t << ',' << ec / 100 << ',' << ey / 100;
+            for (auto [px, py] : points) {
+                int x = std::min(cw - 1, int(px * cw)), y = std::min(ch - 1, int(py * ch));
+                f << ',' << window_luminance(iy, x, y) << ',' << window_luminance(ic, x, y);
+            }
+            f << '\n';
+            std::fprintf(stderr, "chart frame %d/%d (t = %.1f s)\n", k + 1, o.chart_frames, t);
+        }
+        write_file_atomic(csv, f.str());
+    }
+    make_line_chart(csv, (fs::path(o.out) / "illuminance.png").string(),
+               "Clear vs cloudy sky: illuminance and luminance at chosen points", "time (s)", "lux / 100, cd/m^2", true);
+    std::fprintf(stderr, "wrote %s and illuminance.png\n", csv.c_str());
+}
+
+}  // namespace dynsky

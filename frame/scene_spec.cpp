@@ -1,0 +1,33 @@
+#include "frame/scene_spec.h"
+
+#include <cstdio>
+
+#include "renderer/builtin_scene.h"
+#include "renderer/gltf_loader.h"
+#include "util/error.h"
+
+namespace dynsky {
+
+LoadedScene load_scene(const SceneSpec& o, float aspect_ratio) {
+    if (!(o.ground_albedo >= 0 && o.ground_albedo <= 1)) throw Error("--ground-albedo must be in [0, 1]");
+    LoadedScene out;
+    if (o.scene == "builtin") {
+        out.scene = make_builtin_scene();
+    } else {
+        out.scene = load_gltf(o.scene);
+        for (const std::string& w : out.scene.warnings) std::fprintf(stderr, "dynsky: warning: %s\n", w.c_str());
+    }
+    if (out.scene.instances.empty()) throw Error(o.scene + ": the scene has no triangles to render");
+    if (out.scene.cameras.empty()) {
+        if (o.camera != 0) throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " asked for, but the file has no cameras");
+        out.camera = frame_bounds_camera(out.scene.world_bounds(), aspect_ratio);
+    } else {
+        if (o.camera < 0 || o.camera >= int(out.scene.cameras.size()))
+            throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " is out of range (the file has " +
+                        std::to_string(out.scene.cameras.size()) + " perspective camera(s), numbered from 0)");
+        out.camera = out.scene.cameras[size_t(o.camera)];
+    }
+    return out;
+}
+
+}  // namespace dynsky

@@ -1,0 +1,26 @@
+// The scene of a render (glossary: "scene spec"): a glTF file or the built-in scene, which camera,
+// and the ground model's albedo; loaded with its camera (or one framing the bounds).
+#pragma once
+
+#include <string>
+
+#include "renderer/scene.h"
+
+namespace dynsky {
+
+struct SceneSpec {
+    std::string scene = "scenes/tower/tower.gltf";  // .gltf/.glb or "builtin"
+    int camera = 0;                                  // index of the glTF perspective camera
+    float ground_albedo = 0.3f;                      // the Lambertian ground below the horizon
+};
+
+struct LoadedScene {
+    Scene scene;
+    Camera camera;
+};
+
+// Validates the spec, loads the scene (warnings to stderr) and picks the camera; a file without
+// cameras gets one framing its bounds at aspect_ratio. Throws dynsky::Error naming the file.
+LoadedScene load_scene(const SceneSpec& spec, float aspect_ratio);
+
+}  // namespace dynsky

@@ -1,0 +1,116 @@
+#include "frame/sky_source.h"
+
+#include <cmath>
+#include <cstdio>
+
+#include "motion/flow_extrapolation_model.h"
+#include "motion/network_step_model.h"
+#include "motion/procedural_step_model.h"
+#include "sky/clear_sky.h"
+#include "util/data_path.h"
+#include "util/error.h"
+#include "util/image.h"
+
+namespace dynsky {
+
+UtcTime start_time(const SkySourceSpec& o) {
+    return parse_utc_time(o.time.empty() ? std::string("2026-06-21T16:00:00Z") : o.time);
+}
+
+namespace {
+
+ProceduralSkyParams procedural_params(const SkySourceSpec& o, uint64_t seed, const Vec3d& sun) {
+    ProceduralSkyParams p;
+    p.seed = seed;
+    p.coverage = o.coverage;
+    p.layers = {cumulus_layer()};
+    p.layers[0].wind_from_deg = o.wind_from_deg;
+    p.layers[0].wind_speed_mps = o.wind_speed_mps;
+    p.clear_sky.sun_direction = sun;
+    p.clear_sky.turbidity = 3;
+    validate_procedural_params(p);
+    return p;
+}
+
+}  // namespace
+
+SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
+    if (!(m.dt >= 0)) throw Error("--dt must be positive (or 0: automatic)");
+    if (o.sky_resolution < 16 || o.sky_resolution > 8192) throw Error("--sky-res must be 16..8192");
+    if (!(o.coverage >= 0 && o.coverage <= 1)) throw Error("--coverage must be in [0, 1]");
+    GeoLocation where{o.latitude, o.longitude, 0};
+    std::optional<SunClock> clock;
+    const bool generated = o.sky == "clear" || o.sky.rfind("procedural", 0) == 0;
+    if (generated || !o.time.empty()) {
+        validate_location(where);
+        clock = SunClock{start_time(o), where};
+    }
+    std::string model_name = m.model;
+    if (model_name != "auto" && model_name != "flow" && model_name != "procedural" && model_name.rfind("network:", 0) != 0)
+        throw Error("--model '" + model_name + "': expected auto, procedural, flow or network:FOLDER");
+    std::unique_ptr<MediumStepModel> model;
+    if (model_name == "auto") {
+        // The paper's model: the shipped FlowNet + CloudNet, when the data files are where they belong.
+        std::string folder;
+        try {
+            folder = data_path("networks/models/arm_tsi/model.json");
+            folder = folder.substr(0, folder.size() - std::string("/model.json").size());
+        } catch (const Error&) {
+            std::fprintf(stderr, "dynsky: note: the shipped cloud model is not installed; clouds move by %s\n",
+                         o.sky.rfind("procedural", 0) == 0 ? "the procedural sky's own motion" : "flow extrapolation");
+        }
+        if (!folder.empty()) {
+            model = make_network_step_model(folder);
+            model_name = "network:" + folder;
+        }
+    }
+    if (model_name.rfind("network:", 0) == 0 && !model) model = make_network_step_model(model_name.substr(8));  // fails early
+    SkyImage input;
+    if (o.sky.rfind("procedural", 0) == 0) {
+        uint64_t seed = 0;
+        if (o.sky.size() > 10) {
+            if (o.sky[10] != ':' || o.sky.size() == 11 || o.sky.find_first_not_of("0123456789", 11) != std::string::npos)
+                throw Error("--sky '" + o.sky + "': expected 'procedural' or 'procedural:SEED' (SEED a whole number)");
+            seed = std::stoull(o.sky.substr(11));
+        }
+        Vec3d sun = compute_sun_position(clock->start, where).direction();
+        ProceduralSkyParams p = procedural_params(o, seed, sun);
+        input = render_procedural_sky(p, 0.0, o.sky_resolution);
+        input.source = "procedural (seed " + std::to_string(seed) + ", coverage " + std::to_string(o.coverage) + ")";
+        if (!model && (model_name == "auto" || model_name == "procedural")) {
+            model = std::make_unique<ProceduralStepModel>(p);
+            model_name = "procedural";
+        }
+    } else if (o.sky == "clear") {
+        ClearSkyParams p;
+        p.sun_direction = compute_sun_position(clock->start, where).direction();
+        p.turbidity = 3;
+        input = make_clear_sky(p, o.sky_resolution);
+        input.source = "clear sky (Hosek-Wilkie, turbidity 3)";
+    } else {
+        std::string ext = file_extension(o.sky);
+        if (ext != ".exr")
+            throw Error(o.sky + ": not a sky EXR ('procedural', 'clear' or a canonical fisheye .exr; import photographs first "
+                                "with 'dynsky sky import')");
+        input = load_sky(o.sky);
+        input.time_seconds = 0;
+        if (input.source.empty()) input.source = o.sky;
+    }
+    if (!model) {
+        if (model_name == "auto" || model_name == "flow") {
+            model = std::make_unique<FlowExtrapolationStepModel>(o.wind_from_deg, m.drift_deg_per_s);
+        } else if (model_name == "procedural") {
+            throw Error("--model procedural needs --sky procedural (it is the procedural sky's own motion)");
+        } else {
+            throw Error("--model '" + model_name + "': expected auto, procedural, flow or network:FOLDER");
+        }
+    }
+    double dt = m.dt;
+    if (dt == 0) dt = model->native_dt_seconds() > 0 ? model->native_dt_seconds() : 10.0;
+    else if (model->native_dt_seconds() > 0 && std::abs(dt - model->native_dt_seconds()) > 1e-9)
+        std::fprintf(stderr, "dynsky: warning: --dt %g s, but the network was trained for Delta t = %g s\n", dt,
+                     model->native_dt_seconds());
+    return SkyTimeline(std::move(input), std::move(model), dt, clock);
+}
+
+}  // namespace dynsky

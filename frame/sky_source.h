@@ -1,0 +1,50 @@
+// What moves a sky over time (glossary: "sky source", "step model"): the input sky at t = 0 and
+// the medium-step model xi with its Delta t, as specs, and the factory that turns them into a
+// motion/sky_timeline.h SkyTimeline. `animate`, `compare` and the benchmarks build their moving
+// skies here, so an option means the same thing everywhere.
+#pragma once
+
+#include <string>
+
+#include "motion/sky_timeline.h"
+#include "sky/sun_position.h"
+
+namespace dynsky {
+
+// The input sky S_0. Parameters (defaults):
+//   sky             "procedural"  procedural[:SEED] (cumulus over a clear sky, known motion), clear
+//                                 (Hosek-Wilkie), or a canonical fisheye .exr
+//   sky_resolution  1024          N of skies made here (procedural, clear)
+//   time            ""            ISO 8601 UTC of t = 0; the sun follows the clock from there.
+//                                 Default 2026-06-21T16:00:00Z for skies made here; an EXR keeps its sun
+//   latitude, longitude  48.8566, 2.3522 (Paris)
+//   coverage        0.5           procedural cloud cover
+//   wind_from_deg, wind_speed_mps  270, 12  procedural cumulus wind
+struct SkySourceSpec {
+    std::string sky = "procedural";
+    int sky_resolution = 1024;
+    std::string time;
+    double latitude = 48.8566, longitude = 2.3522;
+    double coverage = 0.5;
+    double wind_from_deg = 270.0, wind_speed_mps = 12.0;
+};
+
+// The step model xi. Parameters (defaults):
+//   model            "auto"  auto | procedural | flow | network:FOLDER. auto: the shipped network
+//                            (networks/models/arm_tsi) when installed, else procedural for
+//                            procedural input and flow for others
+//   dt               0       Delta t in seconds; 0: a network's own, else 10
+//   drift_deg_per_s  0.25    flow model: first-step drift of a single input sky (from wind_from_deg)
+struct StepModelSpec {
+    std::string model = "auto";
+    double dt = 0.0;
+    double drift_deg_per_s = 0.25;
+};
+
+// Validates everything (files, ranges) before any step is computed.
+SkyTimeline make_sky_timeline(const SkySourceSpec& sky, const StepModelSpec& model);
+
+// The UTC time of t = 0 (the default when the spec gives none: 2026-06-21T16:00:00Z).
+UtcTime start_time(const SkySourceSpec& sky);
+
+}  // namespace dynsky

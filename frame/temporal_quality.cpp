@@ -1,0 +1,75 @@
+#include "frame/temporal_quality.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <regex>
+#include <sstream>
+#include <vector>
+
+#include "util/atomic_file.h"
+#include "util/chart.h"
+#include "util/error.h"
+#include "util/image.h"
+#include "util/math.h"
+
+namespace dynsky {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::vector<std::string> frame_files(const std::string& dir) {
+    std::vector<std::string> out;
+    std::regex re("^frame_[0-9]{4}\\.exr$");
+    for (const auto& e : fs::directory_iterator(dir))
+        if (std::regex_match(e.path().filename().string(), re)) out.push_back(e.path().string());
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+}  // namespace
+
+void analyse_temporal_quality(const std::string& folder) {
+    struct { const std::string& folder; } o{folder};
+    if (!fs::is_directory(o.folder)) throw_file_error(o.folder, "not a folder (give the --out folder of 'dynsky animate')");
+    auto files = frame_files(o.folder);
+    if (files.size() < 3) throw_file_error(o.folder, "needs at least 3 frame_NNNN.exr files");
+    std::string csv = (fs::path(o.folder) / "temporal.csv").string();
+    std::ostringstream f;  // written whole once every frame is read: a bad frame leaves no table
+    f << "time_s,relative change (%),boundary\n";
+    Image prev = read_image(files[0]);
+    double sum_b = 0, sum_w = 0;
+    int nb = 0, nw = 0;
+    for (size_t k = 1; k < files.size(); ++k) {
+        Image cur = read_image(files[k]);
+        if (cur.width != prev.width || cur.height != prev.height) throw_file_error(files[k], "size differs from the previous frame");
+        double t0 = prev.metadata.numbers["dynsky:time"], t1 = cur.metadata.numbers["dynsky:time"];
+        double dt = cur.metadata.numbers["dynsky:medium_step_seconds"];
+        double num = 0, den = 0;
+        for (size_t p = 0; p < cur.pixels.size(); p += size_t(cur.channels)) {
+            double la = luminance(Color(prev.pixels[p], prev.pixels[p + 1], prev.pixels[p + 2]));
+            double lb = luminance(Color(cur.pixels[p], cur.pixels[p + 1], cur.pixels[p + 2]));
+            num += std::abs(lb - la), den += 0.5 * (la + lb);
+        }
+        double change = 100.0 * num / std::max(den, 1e-12);
+        // The pair straddles (or ends on) a medium-step boundary i * Delta t.
+        bool boundary = dt > 0 && std::floor(t1 / dt + 1e-9) > std::floor(t0 / dt + 1e-9);
+        (boundary ? sum_b : sum_w) += change;
+        (boundary ? nb : nw) += 1;
+        f << t1 << ',' << change << ',' << (boundary ? 1 : 0) << '\n';
+        prev = std::move(cur);
+    }
+    write_file_atomic(csv, f.str());
+    make_line_chart(csv, (fs::path(o.folder) / "temporal.png").string(),
+               "Frame-to-frame change (shaded: pairs across a medium-step boundary)", "time of the later frame (s)",
+               "mean |dL| / L (%)", false);
+    std::printf("frames: %zu; mean frame-to-frame luminance change: across medium-step boundaries %.3f%% (%d pairs), "
+                "within intervals %.3f%% (%d pairs); ratio %.2f\n",
+                files.size(), nb ? sum_b / nb : 0.0, nb, nw ? sum_w / nw : 0.0, nw,
+                (nb && nw && sum_w > 0) ? (sum_b / nb) / (sum_w / nw) : 0.0);
+    std::printf("wrote %s and temporal.png\n", csv.c_str());
+}
+
+}  // namespace dynsky

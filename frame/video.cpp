@@ -1,0 +1,70 @@
+#include "frame/video.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <vector>
+
+#include "util/frame_names.h"
+#include "util/image.h"
+#include "util/shell.h"
+
+namespace dynsky {
+
+namespace fs = std::filesystem;
+
+bool make_video(const std::string& dir, const std::string& prefix, double fps, const std::string& out, bool quiet) {
+    std::string tmp = (fs::path(dir) / (std::string(".partial.") + fs::path(out).filename().string())).string();
+    std::string pattern = (fs::path(dir) / numbered_pattern(prefix, ".png")).string();
+    char rate[32];
+    std::snprintf(rate, sizeof rate, "%g", fps);
+    std::string cmd = "ffmpeg -y -loglevel error -framerate " + std::string(rate) + " -i " + shell_quote(pattern) +
+                      " -vf 'scale=trunc(iw/2)*2:trunc(ih/2)*2' -c:v libx264 -pix_fmt yuv420p -crf 18 " + shell_quote(tmp) +
+                      " </dev/null";
+    int rc = std::system(cmd.c_str());
+    if (rc != 0) {
+        std::fprintf(stderr, "dynsky: warning: ffmpeg failed (exit %d) making %s; is ffmpeg installed?\n", rc, out.c_str());
+        fs::remove(tmp);
+        return false;
+    }
+    fs::rename(tmp, out);
+    if (!quiet) std::fprintf(stderr, "wrote %s\n", out.c_str());
+    return true;
+}
+
+void make_contact_sheet(const FrameStore& store, int total, const std::string& out) {
+    int count = std::min(total, 12), columns = std::min(count, 4), rows = (count + columns - 1) / columns;
+    std::vector<cv::Mat> tiles;
+    int tw = 320, th = 0;
+    for (int c = 0; c < count; ++c) {
+        int k = count == 1 ? 0 : int(std::lround(double(c) * (total - 1) / (count - 1)));
+        Image img = read_image(store.frame_png(k));
+        cv::Mat m(img.height, img.width, CV_32FC(img.channels), img.pixels.data()), rgb, small;
+        if (img.channels == 4) cv::cvtColor(m, rgb, cv::COLOR_RGBA2RGB);
+        else if (img.channels == 1) cv::cvtColor(m, rgb, cv::COLOR_GRAY2RGB);
+        else rgb = m.clone();
+        th = std::max(1, int(std::lround(double(tw) * img.height / img.width)));
+        cv::resize(rgb, small, cv::Size(tw, th), 0, 0, cv::INTER_AREA);
+        tiles.push_back(small);
+    }
+    Image sheet;
+    sheet.width = columns * tw, sheet.height = rows * th, sheet.channels = 3;
+    sheet.pixels.assign(size_t(sheet.width) * sheet.height * 3, 0.0f);
+    for (int c = 0; c < count; ++c) {
+        const cv::Mat& t = tiles[size_t(c)];
+        int x0 = (c % columns) * tw, y0 = (c / columns) * th;
+        for (int y = 0; y < th; ++y)
+            for (int x = 0; x < tw; ++x) {
+                cv::Vec3f p = t.at<cv::Vec3f>(y, x);
+                float* q = &sheet.pixels[(size_t(y0 + y) * sheet.width + x0 + x) * 3];
+                q[0] = p[0], q[1] = p[1], q[2] = p[2];
+            }
+    }
+    write_image(out, sheet);
+}
+
+}  // namespace dynsky

@@ -1,0 +1,18 @@
+// What an animation folder is summed up by: MP4s of its numbered PNGs (ffmpeg, Debian's) and a
+// contact sheet of evenly spaced frames.
+#pragma once
+
+#include <string>
+
+#include "frame/frame_store.h"
+
+namespace dynsky {
+
+// PREFIX_NNNN.png of the folder at `fps` to `out` (H.264, yuv420p, even size), through a temporary
+// name renamed when complete. Returns false (and warns, removing the partial file) if ffmpeg fails.
+bool make_video(const std::string& folder, const std::string& prefix, double fps, const std::string& out, bool quiet);
+
+// Up to 12 frames, evenly spaced, in a grid of 4 columns, each 320 pixels wide.
+void make_contact_sheet(const FrameStore& store, int total, const std::string& out);
+
+}  // namespace dynsky

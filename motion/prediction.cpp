@@ -1,0 +1,80 @@
+#include "motion/prediction.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include "motion/cloud_model.h"
+#include "motion/metrics.h"
+#include "util/atomic_file.h"
+#include "util/error.h"
+#include "util/exposure.h"
+#include "util/frame_names.h"
+#include "util/progress.h"
+
+namespace dynsky {
+
+namespace fs = std::filesystem;
+
+void write_prediction(const PredictionOptions& o) {
+    if (o.in.empty()) throw Error("--sky: give the input sky (a canonical fisheye .exr)");
+    if (o.out.empty()) throw Error("--out: an output folder is required");
+    if (o.steps < 1 || o.steps > 100000) throw Error("--steps: must be in 1..100000");
+    if (o.every < 1) throw Error("--every: must be >= 1");
+    if (fs::exists(o.out) && !fs::is_directory(o.out)) throw_file_error(o.out, "exists and is not a folder");
+    CloudModel model = CloudModel::load(o.model);
+    SkyImage sky = load_sky(o.in);
+    const int n = model.info().resolution;
+    const cv::Mat disc = sky_disc_mask(n);
+    fs::create_directories(o.out);
+    std::ostringstream csv;
+    csv << "step,time_s,mean_luminance,mean_unit,min_unit,max_unit,cloud_coverage,hf_energy,nonfinite\n";
+    auto stats_row = [&](int k, const SkyImage& s) {
+        double lum = 0;
+        long nonfinite = 0, count = 0;
+        for (int j = 0; j < s.resolution; ++j)
+            for (int i = 0; i < s.resolution; ++i) {
+                if (!s.in_disc(i, j)) continue;
+                Color c = s.pixel(i, j);
+                if (!c.isFinite().all()) {
+                    ++nonfinite;
+                    continue;
+                }
+                lum += luminance(c), ++count;
+            }
+        cv::Mat unit = to_network_form(s, model.info().form, n);
+        cv::Mat finite_unit = unit.clone();
+        cv::patchNaNs(finite_unit, 0.0);
+        double mn, mx;
+        cv::minMaxLoc(finite_unit.reshape(1), &mn, &mx, nullptr, nullptr, cv::repeat(disc, 1, 3).reshape(1, n));
+        cv::Scalar mean = cv::mean(finite_unit, disc);
+        double coverage = double(cv::countNonZero(network_cloud_mask(finite_unit, model.info().form) & disc)) / cv::countNonZero(disc);
+        char line[256];
+        std::snprintf(line, sizeof line, "%d,%.3f,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%ld\n", k, s.time_seconds,
+                      count ? lum / count : 0.0, (mean[0] + mean[1] + mean[2]) / 3, mn, mx, coverage,
+                      high_frequency_energy(finite_unit, disc), nonfinite);
+        csv << line;
+    };
+    if (!o.stats.empty()) stats_row(0, sky);
+    // One exposure for every preview (the input's), so they do not flicker.
+    const float preview_ev = exposure_log_average(sky_to_image(sky));
+    ProgressBar progress(o.steps, "predict", o.quiet);
+    int written = 0;
+    model.rollout(sky, o.steps, [&](int k, const SkyImage& s) {
+        if (k % o.every == 0 || k == o.steps) {
+            std::string base = numbered_path(o.out, "step", k, "");
+            save_sky(base + ".exr", s);
+            if (o.preview) write_image(base + ".png", tonemap_to_display(sky_to_image(s), preview_ev));
+            ++written;
+        }
+        if (!o.stats.empty()) stats_row(k, s);
+        progress.advance();
+    });
+    progress.finish();
+    if (!o.stats.empty()) write_file_atomic(o.stats, csv.str());
+    if (!o.quiet)
+        std::printf("wrote %d predicted skies (Delta t = %g s, %d steps) to %s\n", written, model.info().dt_seconds,
+                    o.steps, o.out.c_str());
+}
+
+}  // namespace dynsky

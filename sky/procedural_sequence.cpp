@@ -1,0 +1,198 @@
+#include "sky/procedural_sequence.h"
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "sky/clear_sky.h"
+#include "sky/fisheye.h"
+#include "sky/procedural_clouds.h"
+#include "sky/sun_position.h"
+#include "util/atomic_file.h"
+#include "util/error.h"
+#include "util/exposure.h"
+#include "util/frame_names.h"
+#include "util/image.h"
+#include "util/progress.h"
+
+namespace dynsky {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// Flow as colour (hue: direction, saturation: speed relative to max_speed), dimmed where there
+// is no cloud: for looking at, not for measuring.
+Image flow_preview(const Image& flow, double max_speed) {
+    cv::Mat hsv(flow.height, flow.width, CV_32FC3);
+    for (int y = 0; y < flow.height; ++y)
+        for (int x = 0; x < flow.width; ++x) {
+            float fx = flow.at(x, y, 0), fy = flow.at(x, y, 1), opacity = flow.at(x, y, 2);
+            float angle = std::atan2(fy, fx) * 180.0f / kPi;
+            if (angle < 0) angle += 360.0f;
+            float speed = max_speed > 0 ? float(std::hypot(fx, fy) / max_speed) : 0.0f;
+            bool sky = fisheye::pixel_center_uv(x, y, flow.width).squaredNorm() <= 1.0f;
+            hsv.at<cv::Vec3f>(y, x) = cv::Vec3f(angle, std::min(speed, 1.0f), sky ? 0.35f + 0.65f * opacity : 0.0f);
+        }
+    cv::Mat rgb;
+    cv::cvtColor(hsv, rgb, cv::COLOR_HSV2RGB);
+    Image out(flow.width, flow.height, 3);
+    std::copy(rgb.ptr<float>(), rgb.ptr<float>() + out.pixels.size(), out.pixels.begin());
+    return out;
+}
+
+CloudLayer make_layer(const std::string& name, const ProceduralSequenceSettings& o) {
+    if (name == "cumulus") {
+        CloudLayer l = cumulus_layer();
+        l.altitude_m = o.cumulus_altitude;
+        l.evolution_time_s = o.evolution;
+        if (!o.wind.empty()) l.wind_speed_mps = o.wind[0], l.wind_from_deg = o.wind[1];
+        return l;
+    }
+    if (name == "cirrus") {
+        CloudLayer l = cirrus_layer();
+        if (!o.cirrus_wind.empty()) l.wind_speed_mps = o.cirrus_wind[0], l.wind_from_deg = o.cirrus_wind[1];
+        return l;
+    }
+    throw Error("--layers: unknown layer '" + name + "' (use cumulus, cirrus or both: cumulus,cirrus)");
+}
+
+}  // namespace
+
+void write_procedural_sequence(const ProceduralSequenceSettings& o, bool use_location) {
+    // Everything is checked before the output folder is touched, so a bad argument leaves nothing.
+    if (o.out.empty()) throw Error("--out: an output folder is required");
+    if (!std::isfinite(o.dt) || o.dt <= 0) throw Error("--dt: must be a positive number of seconds, got " + std::to_string(o.dt));
+    if (!std::isfinite(o.duration) || o.duration < 0)
+        throw Error("--duration: must be >= 0 seconds, got " + std::to_string(o.duration));
+    double steps = std::floor(o.duration / o.dt + 1e-9);
+    if (steps + 1 > 100000) throw Error("--duration / --dt: more than 100000 frames; use a larger --dt");
+    const int frames = int(steps) + 1;
+    if (o.resolution < 8 || o.resolution > 16384)
+        throw Error("--res: must be in [8, 16384], got " + std::to_string(o.resolution));
+    if (!std::isfinite(o.sun_elevation) || o.sun_elevation < -90 || o.sun_elevation > 90)
+        throw Error("--sun-elevation: must be in [-90, 90] degrees");
+    if (!std::isfinite(o.sun_azimuth)) throw Error("--sun-azimuth: must be a finite angle in degrees");
+    if (fs::exists(o.out) && !fs::is_directory(o.out)) throw_file_error(o.out, "exists and is not a folder");
+
+    ProceduralSkyParams params;
+    params.seed = o.seed;
+    params.coverage = o.coverage;
+    params.visibility_m = o.visibility;
+    params.clear_sky.turbidity = o.turbidity;
+    params.layers.clear();
+    for (const std::string& name : o.layers) params.layers.push_back(make_layer(name, o));
+    if (params.layers.empty()) throw Error("--layers: at least one layer is needed");
+    if (!o.mask_image.empty()) {
+        // The mask shapes the first layer named in --layers.
+        params.layers[0].mask = std::make_shared<Image>(load_cloud_mask(o.mask_image));
+        params.layers[0].mask_extent_m = o.mask_extent;
+        params.layers[0].mask_detail = o.mask_detail;
+    }
+
+    UtcTime start;
+    GeoLocation where;
+    auto sun_at = [&](double t) -> Vec3d {
+        if (!use_location)
+            return fisheye::direction_from_angles((90.0 - o.sun_elevation) * kPiD / 180.0, o.sun_azimuth * kPiD / 180.0);
+        UtcTime now = start;
+        now.second += t;  // julian_date is linear in the seconds field
+        return compute_sun_position(now, where).direction();
+    };
+    if (use_location) {
+        start = parse_utc_time(o.time_iso);
+        where.latitude_deg = o.latitude, where.longitude_deg = o.longitude;
+        validate_location(where);
+    }
+    params.clear_sky.sun_direction = sun_at(0.0);
+    ProceduralSky sky(params);  // validates every parameter
+
+    // Fixed exposure for all previews (from the first clear sky), so they do not flicker.
+    float preview_ev = 0.0f;
+    if (o.preview) preview_ev = exposure_median(sky_to_image(make_clear_sky(params.clear_sky, 64)), 0.2f);
+
+    fs::create_directories(o.out);
+    nlohmann::ordered_json manifest;
+    manifest["generator"] = "dynsky sky procedural";
+    manifest["seed"] = o.seed;
+    manifest["coverage"] = o.coverage;
+    manifest["resolution"] = o.resolution;
+    manifest["dt_s"] = o.dt;
+    manifest["duration_s"] = o.duration;
+    manifest["frame_count"] = frames;
+    manifest["turbidity"] = o.turbidity;
+    manifest["visibility_m"] = o.visibility;
+    if (use_location) {
+        manifest["sun"] = {{"latitude_deg", o.latitude}, {"longitude_deg", o.longitude}, {"start_time", o.time_iso}};
+    } else {
+        manifest["sun"] = {{"elevation_deg", o.sun_elevation}, {"azimuth_deg", o.sun_azimuth}};
+    }
+    nlohmann::ordered_json layers = nlohmann::ordered_json::array();
+    for (const CloudLayer& l : params.layers) {
+        nlohmann::ordered_json j;
+        j["type"] = l.type == CloudType::Cumulus ? "cumulus" : "cirrus";
+        j["altitude_m"] = l.altitude_m;
+        j["coverage"] = l.coverage.value_or(params.coverage);
+        j["wind_speed_mps"] = l.wind_speed_mps;
+        j["wind_from_deg"] = l.wind_from_deg;
+        j["evolution_time_s"] = l.evolution_time_s;
+        if (l.mask) j["mask_image"] = o.mask_image;
+        layers.push_back(j);
+    }
+    manifest["layers"] = layers;
+    manifest["flow"] = {
+        {"channels", {"dx_px", "dy_px", "cloud_opacity"}},
+        {"units", "pixels of the canonical fisheye at this resolution"},
+        {"sign", "forward: the cloud seen at pixel (x, y) of frame k is at (x + dx, y + dy) at time t_k + dt; "
+                 "+x to the right, +y down (row 0 at the top, north)"}};
+
+    nlohmann::ordered_json frame_list = nlohmann::ordered_json::array();
+    double max_speed = 0.0;
+    Vec3d current_sun = params.clear_sky.sun_direction;
+    ProgressBar progress(frames, "procedural sky", o.quiet);
+    for (int k = 0; k < frames; ++k) {
+        double t = k * o.dt;
+        if (use_location) {
+            Vec3d s = sun_at(t);
+            if (s != current_sun) sky.set_sun_direction(s), current_sun = s;
+        }
+        Image flow;
+        SkyImage frame = sky.render(t, o.resolution, &flow, o.dt);
+        std::string image_name = numbered_name("frame", k, ".exr"), flow_name = numbered_name("flow", k, ".exr");
+        save_sky((fs::path(o.out) / image_name).string(), frame);
+        write_image((fs::path(o.out) / flow_name).string(), flow);
+        nlohmann::ordered_json entry;
+        entry["index"] = k;
+        entry["time_s"] = t;
+        entry["image"] = image_name;
+        entry["flow"] = flow_name;
+        entry["sun_direction"] = {current_sun.x(), current_sun.y(), current_sun.z()};
+        entry["sun_transmittance"] = sky.sun_transmittance(t);
+        if (o.preview) {
+            std::string png = numbered_name("frame", k, ".png"), flow_png = numbered_name("flow", k, ".png");
+            write_image((fs::path(o.out) / png).string(), tonemap_to_display(sky_to_image(frame), preview_ev));
+            if (k == 0)
+                for (size_t p = 0; p < flow.pixels.size(); p += 3)
+                    max_speed = std::max(max_speed, std::hypot(double(flow.pixels[p]), double(flow.pixels[p + 1])));
+            write_image((fs::path(o.out) / flow_png).string(), flow_preview(flow, max_speed));
+            entry["preview"] = png;
+            entry["flow_preview"] = flow_png;
+        }
+        frame_list.push_back(entry);
+        progress.advance();
+    }
+    progress.finish();
+    manifest["frames"] = frame_list;
+    // Written last: a manifest means the sequence is complete.
+    write_file_atomic((fs::path(o.out) / "manifest.json").string(), manifest.dump(2) + "\n");
+    if (!o.quiet)
+        std::printf("wrote %d frames, their flows and manifest.json to %s\n", frames, o.out.c_str());
+}
+
+}  // namespace dynsky

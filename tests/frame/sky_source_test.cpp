@@ -1,0 +1,59 @@
+// The sky-source and step-model specs' factory (frame/sky_source.h).
+#include "frame/sky_source.h"
+
+#include <gtest/gtest.h>
+
+#include "util/error.h"
+
+namespace dynsky {
+namespace {
+
+SkySourceSpec small_sky(const std::string& sky) {
+    SkySourceSpec s;
+    s.sky = sky;
+    s.sky_resolution = 32;
+    return s;
+}
+
+TEST(SkySource, ProceduralInputWithItsOwnMotion) {
+    StepModelSpec m;
+    m.model = "procedural";
+    SkyTimeline t = make_sky_timeline(small_sky("procedural:7"), m);
+    EXPECT_EQ(t.model().name(), "procedural");
+    EXPECT_DOUBLE_EQ(t.dt(), 10.0);  // no network: the paper's Delta t
+    EXPECT_EQ(t.step(0)->resolution, 32);
+    ASSERT_TRUE(t.sun_direction_at(0).has_value());
+    // The default clock (2026-06-21T16:00Z, Paris) puts the sun above the horizon.
+    EXPECT_GT(t.sun_direction_at(0)->y(), 0.0);
+}
+
+TEST(SkySource, ClearSkyWithFlowExtrapolationAndAGivenDeltaT) {
+    StepModelSpec m;
+    m.model = "flow";
+    m.dt = 5;
+    SkyTimeline t = make_sky_timeline(small_sky("clear"), m);
+    EXPECT_EQ(t.model().name(), "flow-extrapolation");
+    EXPECT_DOUBLE_EQ(t.dt(), 5.0);
+}
+
+TEST(SkySource, BadSpecsFailBeforeAnyStep) {
+    StepModelSpec m;
+    m.model = "telepathy";
+    EXPECT_THROW(make_sky_timeline(small_sky("clear"), m), Error);
+    m.model = "procedural";
+    EXPECT_THROW(make_sky_timeline(small_sky("clear"), m), Error);  // procedural motion needs procedural input
+    m.model = "flow";
+    EXPECT_THROW(make_sky_timeline(small_sky("procedural:x"), m), Error);
+    EXPECT_THROW(make_sky_timeline(small_sky("sky.png"), m), Error);
+    SkySourceSpec s = small_sky("clear");
+    s.coverage = 2;
+    EXPECT_THROW(make_sky_timeline(s, m), Error);
+    s = small_sky("clear");
+    s.sky_resolution = 4;
+    EXPECT_THROW(make_sky_timeline(s, m), Error);
+    m.dt = -1;
+    EXPECT_THROW(make_sky_timeline(small_sky("clear"), m), Error);
+}
+
+}  // namespace
+}  // namespace dynsky

@@ -1,0 +1,17 @@
+// File names of numbered images (glossary): PREFIX_NNNN.EXT with at least four digits, numbered
+// from 0. "frame" for frames of an animation or a procedural sequence, "sky" for an animation's sky
+// frames, "flow" for a procedural sequence's flow fields, "step" for medium steps of a prediction.
+#pragma once
+
+#include <string>
+
+namespace dynsky {
+
+// "frame", 7, ".exr" -> "frame_0007.exr"; with a folder, the path inside it.
+std::string numbered_name(const std::string& prefix, int k, const std::string& ext);
+std::string numbered_path(const std::string& folder, const std::string& prefix, int k, const std::string& ext);
+
+// The printf pattern of those names ("frame_%04d.png"), for ffmpeg.
+std::string numbered_pattern(const std::string& prefix, const std::string& ext);
+
+}  // namespace dynsky
