@@ -58,7 +58,8 @@ TEST(AnimateCli, KilledRunResumesToTheSameFrames) {
                                     << "kill -9 $pid; wait $pid; echo rc=$?\n";
     r = test::run_command("sh " + dir + "/kill.sh");
     const char* naming = " (has the temporary naming in util/image.cpp changed?)";
-    ASSERT_NE(r.output.find("rc=137"), std::string::npos) << "not killed by SIGKILL while held" << naming << ": " << r.output;
+    ASSERT_NE(r.output.find("rc=137"), std::string::npos)
+        << "not killed by SIGKILL while held" << naming << ": " << r.output;
     ASSERT_TRUE(fs::exists(frame(killed, 2)));
     ASSERT_TRUE(fs::exists(killed + "/sky_0002.png"));
     ASSERT_FALSE(fs::exists(frame(killed, 3))) << "the run got past frame 3" << naming;

@@ -75,8 +75,8 @@ TEST(Accel, BoxHitsRespectTheRaySegmentAndUnnormalisedDirections) {
     red.base_color = Color(1, 0, 0);
     scene.materials.push_back(red);
     // A 2 m cube centred 5 m down -z: its near face at z = -4, far face at z = -6.
-    add_mesh_instance(&scene, make_box_mesh(Vec3(-1, -1, -1), Vec3(1, 1, 1), 0), Eigen::Affine3f(Eigen::Translation3f(0, 0, -5)),
-                      "box");
+    add_mesh_instance(&scene, make_box_mesh(Vec3(-1, -1, -1), Vec3(1, 1, 1), 0),
+                      Eigen::Affine3f(Eigen::Translation3f(0, 0, -5)), "box");
     Accel accel(scene);
     const Bounds3 b = accel.bounds();
     expect_vec3(b.lo, Vec3(-1, -1, -6));
@@ -113,8 +113,8 @@ TEST(Accel, BoxHitsRespectTheRaySegmentAndUnnormalisedDirections) {
 
 TEST(Accel, OcclusionQueriesSeeBlockersOnlyInsideTheSegment) {
     Scene scene;
-    add_mesh_instance(&scene, make_box_mesh(Vec3(-1, -1, -1), Vec3(1, 1, 1)), Eigen::Affine3f(Eigen::Translation3f(0, 0, -5)),
-                      "box");
+    add_mesh_instance(&scene, make_box_mesh(Vec3(-1, -1, -1), Vec3(1, 1, 1)),
+                      Eigen::Affine3f(Eigen::Translation3f(0, 0, -5)), "box");
     Accel accel(scene);
     const Vec3 o(0, 0, 0), d(0, 0, -1);
     EXPECT_TRUE(accel.occluded(Ray{o, d}));               // unbounded

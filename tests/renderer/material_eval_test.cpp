@@ -17,8 +17,10 @@ void expect_color(const Color& got, const Color& want, float tol = 1e-6f) {
 
 // A linear (not sRGB) texture of one RGBA value everywhere.
 int add_constant_texture(Scene* scene, const Vec4& rgba) {
-    scene->textures.push_back(std::make_shared<Texture>("constant", 1, 1, std::vector<float>{rgba[0], rgba[1], rgba[2], rgba[3]},
-                                                        false, TextureWrap::Repeat, TextureWrap::Repeat, TextureFilter::Nearest));
+    scene->textures.push_back(std::make_shared<Texture>("constant", 1, 1,
+                                                        std::vector<float>{rgba[0], rgba[1], rgba[2], rgba[3]}, false,
+                                                        TextureWrap::Repeat, TextureWrap::Repeat,
+                                                        TextureFilter::Nearest));
     return int(scene->textures.size()) - 1;
 }
 
@@ -87,9 +89,9 @@ TEST(MaterialEval, AnEmissiveTextureWithoutAnEmissiveFactorEmitsNothing) {
 TEST(MaterialEval, TexturesAreLookedUpThroughTheirUvSetAndTransform) {
     // A 2 x 2 texture: texel (x, y) has R = x, G = y (nearest), so the value shows which texel uv hit.
     Scene scene;
-    scene.textures.push_back(std::make_shared<Texture>(
-        "quadrants", 2, 2, std::vector<float>{0, 0, 1, 1, 1, 0, 1, 1, 0, 1, 1, 1, 1, 1, 1, 1}, false, TextureWrap::Repeat,
-        TextureWrap::Repeat, TextureFilter::Nearest));
+    scene.textures.push_back(
+        std::make_shared<Texture>("quadrants", 2, 2, std::vector<float>{0, 0, 1, 1, 1, 0, 1, 1, 0, 1, 1, 1, 1, 1, 1, 1},
+                                  false, TextureWrap::Repeat, TextureWrap::Repeat, TextureFilter::Nearest));
     Material m;
     m.base_color_texture.texture = 0;
     SurfaceHit hit = flat_hit(&m);  // uv0 (0.25, 0.75): texel (0, 1); uv1 (0.8, 0.1): texel (1, 0)

@@ -186,7 +186,8 @@ TEST(FractalNoise, FootprintFadesTheFineOctaves) {
         // which is exactly a one-octave noise of the same seed.
         FractalNoise::Sample coarse = full.evaluate(p.x, p.y, p.t, 0.25);
         EXPECT_FLOAT_EQ(coarse.value, first.evaluate(p.x, p.y, p.t).value);
-        EXPECT_NEAR(coarse.removed_sigma, s * std::sqrt(std::pow(gain, 2) + std::pow(gain, 4) + std::pow(gain, 6)), 1e-5);
+        EXPECT_NEAR(coarse.removed_sigma, s * std::sqrt(std::pow(gain, 2) + std::pow(gain, 4) + std::pow(gain, 6)),
+                    1e-5);
         // Between: at 0.3 cells the first octave has weight 2 - 4 * 0.3 = 0.8.
         FractalNoise::Sample partial = full.evaluate(p.x, p.y, p.t, 0.3);
         EXPECT_NEAR(partial.value, 0.8f * first.evaluate(p.x, p.y, p.t).value, 1e-6f);

@@ -38,7 +38,7 @@ bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
 TEST(SkyImage, SaveAndLoadKeepPixelsBitForBitAndTheAttributes) {
     std::string dir = test::temp_dir("sky_image");
     SkyImage sky = awkward_sky(37);
-    sky.time_seconds = 86399.123456789;  // needs a double: a float attribute would keep ~8 digits
+    sky.time_seconds = 86399.123456789;            // needs a double: a float attribute would keep ~8 digits
     sky.sun_direction = Vec3(0.48f, 0.6f, 0.64f);  // unit
     sky.source = "procedural:seed 7";
     const std::string path = dir + "/sky.exr";

@@ -34,11 +34,11 @@ TEST(Median, LeavesTheCallersVectorAlone) {
 TEST(Quantile, RankIsTheFloorOfQTimesNMinusOne) {
     std::vector<int> v;
     for (int k = 100; k >= 1; --k) v.push_back(k);  // 1..100, reversed
-    EXPECT_EQ(quantile(v, 0.0), 1);                  // rank 0: the minimum
-    EXPECT_EQ(quantile(v, 1.0), 100);                // rank n - 1: the maximum
-    EXPECT_EQ(quantile(v, 0.5), 50);                 // floor(49.5) = 49
-    EXPECT_EQ(quantile(v, 0.25), 25);                // floor(24.75) = 24
-    EXPECT_EQ(quantile(v, 0.9), 90);                 // floor(89.1) = 89
+    EXPECT_EQ(quantile(v, 0.0), 1);                 // rank 0: the minimum
+    EXPECT_EQ(quantile(v, 1.0), 100);               // rank n - 1: the maximum
+    EXPECT_EQ(quantile(v, 0.5), 50);                // floor(49.5) = 49
+    EXPECT_EQ(quantile(v, 0.25), 25);               // floor(24.75) = 24
+    EXPECT_EQ(quantile(v, 0.9), 90);                // floor(89.1) = 89
     // 11 values 0, 10, ..., 100: q (n - 1) = 10 q is a whole rank for q = 0.1 k.
     std::vector<double> w;
     for (int k = 10; k >= 0; --k) w.push_back(10.0 * k);
