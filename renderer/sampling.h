@@ -38,14 +38,17 @@ class Rng {
     uint64_t state_, inc_;
 };
 
-// (cell + frac) / n in [0, 1), computed in Frac's precision, kept inside the cell: in float the
-// quotient can round up into the next cell when cell is large.
+// (cell + frac) / n in [0, 1), computed in Frac's precision, kept inside the cell (int(v * n) ==
+// cell, as the pdf lookups read it back): in float the quotient can round up into the next cell
+// when cell is large, and when n is not a power of two cell / n can round down into the previous.
 template <typename Frac>
 inline float in_cell(int cell, Frac frac, int n) {
     float v = float((cell + frac) / n);
+    float lo = float(cell) / n;
+    while (int(lo * n) < cell) lo = std::nextafter(lo, 1.0f);
     float hi = std::nextafter(float(cell + 1) / n, 0.0f);
     while (int(hi * n) > cell) hi = std::nextafter(hi, 0.0f);
-    return std::clamp(v, float(cell) / n, hi);
+    return std::clamp(v, lo, hi);
 }
 
 // 64-bit mix (splitmix64 finaliser), for deriving per-pixel seeds.

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 
 #include "tests/test_support.h"
 #include "util/image.h"
@@ -43,18 +44,41 @@ TEST(AnimateCli, KilledRunResumesToTheSameFrames) {
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_TRUE(fs::exists(full + "/contact_sheet.png"));
 
-    // Start, wait for frame 2 to be done, kill -9 while frame 3 is being made.
-    std::string script = animate(killed) + " & pid=$!; for i in $(seq 1 3000); do [ -e " + killed +
-                         "/sky_0002.png ] && break; kill -0 $pid 2>/dev/null || break; sleep 0.005; done; kill -9 $pid; wait $pid; "
-                         "echo killed";
-    r = test::run_command("sh -c '" + script + "'");
-    ASSERT_NE(r.output.find("killed"), std::string::npos) << r.output;
+    // Kill -9 while frame 3 is being written, without depending on timing: frames are written
+    // through a temporary named .tmp-frame_0003-PID.exr (util/image.cpp), so a named pipe put there
+    // beforehand (the shell execs dynsky, keeping its PID) holds the run in open() until it is
+    // killed. Frames 0-2 are then complete and nothing of frame 3 or later exists, however fast
+    // or slow the machine; the wait for frame 2 is bounded (60 s).
+    fs::create_directories(killed);
+    const std::string pipe = killed + "/.tmp-frame_0003-$$.exr";
+    std::ofstream(dir + "/run.sh") << "mkfifo " << pipe << " && exec " << animate(killed) << "\n";
+    std::ofstream(dir + "/kill.sh") << "sh " << dir << "/run.sh & pid=$!\n"
+                                    << "for i in $(seq 1 600); do [ -e " << killed << "/sky_0002.png ] && break; "
+                                    << "kill -0 $pid 2>/dev/null || break; sleep 0.1; done\n"
+                                    << "kill -9 $pid; wait $pid; echo rc=$?\n";
+    r = test::run_command("sh " + dir + "/kill.sh");
+    const char* naming = " (has the temporary naming in util/image.cpp changed?)";
+    ASSERT_NE(r.output.find("rc=137"), std::string::npos)
+        << "not killed by SIGKILL while held" << naming << ": " << r.output;
     ASSERT_TRUE(fs::exists(frame(killed, 2)));
-    ASSERT_FALSE(fs::exists(killed + "/sky_0007.png")) << "the run finished before the kill: the test proves nothing";
+    ASSERT_TRUE(fs::exists(killed + "/sky_0002.png"));
+    ASSERT_FALSE(fs::exists(frame(killed, 3))) << "the run got past frame 3" << naming;
+    ASSERT_FALSE(fs::exists(killed + "/sky_0007.png"));
+    // What a real kill leaves there: a half-written temporary (a regular file, not the pipe).
+    int temporaries = 0;
+    for (const auto& e : fs::directory_iterator(killed)) {
+        if (e.path().filename().string().rfind(".tmp-frame_0003-", 0) != 0) continue;
+        ++temporaries;
+        fs::path p = e.path();
+        fs::remove(p);
+        std::ofstream(p.string()) << "half an EXR";
+    }
+    ASSERT_EQ(temporaries, 1);
 
     r = test::run_command(animate(killed) + " 2>&1; echo rc=$?");
     EXPECT_NE(r.output.find("rc=0"), std::string::npos) << r.output;
     expect_same_frames(full, killed, 8);
+    EXPECT_TRUE(fs::exists(killed + "/contact_sheet.png"));
     fs::remove_all(dir);
 }
 

@@ -200,7 +200,16 @@ TEST(EnvLight, RebuildFollowsTheNewSky) {
     }
     EXPECT_GT(near_b, 1000);  // the sun holds most of the power; the dim sky the rest
     EXPECT_EQ(near_a, 0);
-    EXPECT_GE(light.last_build_seconds(), 0.0);
+}
+
+// The build time (recorded per frame by animate and render) is measured: zero before any sky,
+// positive and finite after a build.
+TEST(EnvLight, BuildTimeIsMeasured) {
+    EnvLight light(0.3f);
+    EXPECT_EQ(light.last_build_seconds(), 0.0);
+    light.set_sky(tiny_sun_sky(64, fisheye::direction_from_angles(0.3, 0.5), 1e5));
+    EXPECT_GT(light.last_build_seconds(), 0.0);
+    EXPECT_TRUE(std::isfinite(light.last_build_seconds()));
 }
 
 // The per-frame pass has a fast path for clean rows and a checked one for rows holding NaN,

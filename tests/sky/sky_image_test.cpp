@@ -1,0 +1,98 @@
+#include "sky/sky_image.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+
+#include "sky/noise.h"
+#include "tests/test_support.h"
+#include "util/error.h"
+
+namespace dynsky {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A sky whose disc pixels hold values a half-float or 8-bit path could not keep: full-precision
+// mantissas over many decades (1e-20 to a 1e6 sun).
+SkyImage awkward_sky(int n) {
+    SkyImage sky(n);
+    uint64_t s = 99;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            if (!sky.in_disc(i, j)) continue;
+            Color c;
+            for (int k = 0; k < 3; ++k) c[k] = float(std::pow(10.0, -20.0 + 26.0 * noise_unit(s = noise_hash(s))));
+            sky.set_pixel(i, j, c);
+        }
+    sky.set_pixel(n / 2, n / 2, Color(1.0000001f, 3.1415927f, 123456.79f));
+    return sky;
+}
+
+bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+TEST(SkyImage, SaveAndLoadKeepPixelsBitForBitAndTheAttributes) {
+    std::string dir = test::temp_dir("sky_image");
+    SkyImage sky = awkward_sky(37);
+    sky.time_seconds = 86399.123456789;            // needs a double: a float attribute would keep ~8 digits
+    sky.sun_direction = Vec3(0.48f, 0.6f, 0.64f);  // unit
+    sky.source = "procedural:seed 7";
+    const std::string path = dir + "/sky.exr";
+    save_sky(path, sky, dir + "/preview.png");
+
+    SkyImage back = load_sky(path);
+    EXPECT_EQ(back.resolution, 37);
+    EXPECT_TRUE(same_bits(back.rgb, sky.rgb)) << "pixels changed on the way through the file";
+    EXPECT_EQ(back.time_seconds, sky.time_seconds);
+    ASSERT_TRUE(back.sun_direction.has_value());
+    EXPECT_NEAR((*back.sun_direction - *sky.sun_direction).norm(), 0.0f, 1e-6f);
+    EXPECT_EQ(back.source, "procedural:seed 7");
+    EXPECT_TRUE(fs::is_regular_file(dir + "/preview.png"));
+    // Written atomically: only the two outputs are left, no temporary.
+    int files = 0;
+    for (const auto& e : fs::directory_iterator(dir)) {
+        ++files;
+        EXPECT_NE(e.path().filename().string().rfind(".tmp", 0), 0u) << e.path();
+    }
+    EXPECT_EQ(files, 2);
+    fs::remove_all(dir);
+}
+
+TEST(SkyImage, WithoutSunOrSourceTheLoadedSkyHasNoSunAndNamesItsFile) {
+    std::string dir = test::temp_dir("sky_image_plain");
+    SkyImage sky = awkward_sky(16);
+    sky.time_seconds = -2.5;
+    const std::string path = dir + "/plain.exr";
+    save_sky(path, sky);
+    SkyImage back = load_sky(path);
+    EXPECT_TRUE(same_bits(back.rgb, sky.rgb));
+    EXPECT_EQ(back.time_seconds, -2.5);
+    EXPECT_FALSE(back.sun_direction.has_value());
+    EXPECT_EQ(back.source, path);
+    EXPECT_FALSE(fs::exists(dir + "/plain.png")) << "no preview was asked for";
+    fs::remove_all(dir);
+}
+
+TEST(SkyImage, SavingAnotherFormatOrLoadingABadSkyFailsNamingTheFile) {
+    std::string dir = test::temp_dir("sky_image_bad");
+    SkyImage sky = awkward_sky(8);
+    try {
+        save_sky(dir + "/sky.png", sky);
+        FAIL() << "saved a sky as PNG";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("sky.png"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(dir + "/sky.png"));
+    // A black sky saves (it is only data) but does not load as a light source.
+    save_sky(dir + "/black.exr", SkyImage(8));
+    EXPECT_THROW(load_sky(dir + "/black.exr"), Error);
+    EXPECT_THROW(load_sky(dir + "/missing.exr"), Error);
+    fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace dynsky
