@@ -5,7 +5,7 @@
 
 - arm_tsi: the 300 ARM TSI photographs of ../shared/skies/arm_tsi_sgp_20170524 (30 s cadence),
   each imported with the "arm-tsi" camera preset at --import-res exactly as `dynsky sky import
-  --preset arm-tsi` does (same library call, same calibration: sky/cloud_model.h,
+  --preset arm-tsi` does (same library call, same calibration: motion/cloud_model.h,
   import_preset_photo; the in-process call also keeps the import's not-sky mask, which the EXR
   written by the CLI does not carry), HDR-recovered, mapped to [0, 1] and area-averaged to --res.
 - proc_*: procedural sequences (`dynsky sky procedural`, 30 s steps) with their exact flow.

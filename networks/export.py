@@ -1,4 +1,4 @@
-"""Writing a trained model as a folder the C++ side loads (sky/cloud_model.h):
+"""Writing a trained model as a folder the C++ side loads (motion/cloud_model.h):
 
   flownet.onnx, cloudnet.onnx   opset 11, fixed 1 x C x N x N input, constant Resize scales (the
                                 form OpenCV 4.6's importer runs exactly, ../shared/NOTES.md)

@@ -16,6 +16,10 @@
 //            is cut out of X's weights and sampled as a uniform cone, mixed by power
 //   X+mis    MIS compensation (Karlik et al. 2019, as pbrt-v4): weights from max(L - mean L, 0),
 //            all-ones if nothing is left. Only valid when BSDF sampling covers the rest (MIS).
+//
+// Parameters (SkySamplerOptions, defaults): method cdf; sun_split false; mis_compensation false
+// (`dynsky render` and the frame stage use "cdf+mis", recommended_sky_sampler() + MIS). Sun split:
+// cone of the solar disc's radius (0.53 deg), or the brightest compact spot when no sun direction.
 #pragma once
 
 #include <cstdint>
