@@ -68,7 +68,8 @@ void BM_AnimationFrameSplit(benchmark::State& state) {
         sky_s += b - a, build_s += c - b, render_s += d - c, ++frames;
     }
     const double amortised = medium_s / (dt * fps);
-    const double sky_ms = (sky_s / frames + amortised) * 1e3, build_ms = build_s / frames * 1e3, render_ms = render_s / frames * 1e3;
+    const double sky_ms = (sky_s / frames + amortised) * 1e3, build_ms = build_s / frames * 1e3,
+                 render_ms = render_s / frames * 1e3;
     state.counters["gamma_ms"] = sky_s / frames * 1e3;
     state.counters["xi_flow_keys_ms_per_interval"] = medium_s * 1e3;
     state.counters["sky_ms"] = sky_ms;  // Gamma + amortised medium work

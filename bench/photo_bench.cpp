@@ -20,8 +20,8 @@ struct Camera {
     const char* photo;  // relative to DYNSKY_SHARED_DIR
 };
 const Camera kCameras[] = {
-    {"arm-tsi", "skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg"},        // 480 x 640
-    {"mobotix", "skies/mobotix_sophia_20200812_morning/images/2020-08-12_12_00.jpg"},        // 1280 x 960
+    {"arm-tsi", "skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg"},    // 480 x 640
+    {"mobotix", "skies/mobotix_sophia_20200812_morning/images/2020-08-12_12_00.jpg"},  // 1280 x 960
 };
 
 double process_cpu_seconds() {

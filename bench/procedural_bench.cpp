@@ -44,7 +44,7 @@ void BM_ProceduralFrameOneThread(benchmark::State& state) {
         benchmark::DoNotOptimize(frame.rgb.data());
     }
     state.counters["ns/pixel"] = benchmark::Counter(double(n) * n, benchmark::Counter::kIsIterationInvariantRate |
-                                                                      benchmark::Counter::kInvert);
+                                                                       benchmark::Counter::kInvert);
 }
 BENCHMARK(BM_ProceduralFrameOneThread)->ArgsProduct({{512, 1024, 2048}, {0, 1}})->Unit(benchmark::kMillisecond);
 

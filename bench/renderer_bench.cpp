@@ -41,7 +41,8 @@ void BM_DistributionRebuild(benchmark::State& state) {
     const int n = int(state.range(0));
     auto sky = bench_sky(n);
     SkySamplerOptions cdf;
-    cdf.method = SkySamplerMethod::Cdf;  // issue 2's piecewise-constant distribution (bench/sampling_bench compares all)
+    cdf.method =
+        SkySamplerMethod::Cdf;  // issue 2's piecewise-constant distribution (bench/sampling_bench compares all)
     EnvLight light(sky, 0.3f, cdf);
     light.set_sky(sky);  // steady state: the first two frames allocate the buffers a frame reuses
     std::vector<float> scratch;
@@ -61,7 +62,13 @@ void BM_DistributionRebuild(benchmark::State& state) {
     state.counters["ratio_to_floor"] = rebuild / floor;
     state.counters["memory_MiB"] = light.memory_bytes() / 1048576.0;
 }
-BENCHMARK(BM_DistributionRebuild)->Arg(512)->Arg(1024)->Arg(2048)->Arg(4096)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_DistributionRebuild)
+    ->Arg(512)
+    ->Arg(1024)
+    ->Arg(2048)
+    ->Arg(4096)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
 
 struct RecordedRay {
     Ray ray;
@@ -104,17 +111,16 @@ void path_tracer_vs_embree(benchmark::State& state, const std::string& relative)
         double cpu1 = process_cpu_seconds();
         auto t = Clock::now();
         std::atomic<size_t> hits{0};
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 4096), [&](const tbb::blocked_range<size_t>& range) {
-            size_t h = 0;
-            for (size_t i = range.begin(); i != range.end(); ++i) {
-                float tt;
-                if (rays[i].shadow)
-                    h += accel.occluded(rays[i].ray);
-                else
-                    h += accel.intersect_raw(rays[i].ray, &tt);
-            }
-            hits += h;
-        });
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 4096),
+                          [&](const tbb::blocked_range<size_t>& range) {
+                              size_t h = 0;
+                              for (size_t i = range.begin(); i != range.end(); ++i) {
+                                  float tt;
+                                  if (rays[i].shadow) h += accel.occluded(rays[i].ray);
+                                  else h += accel.intersect_raw(rays[i].ray, &tt);
+                              }
+                              hits += h;
+                          });
         embree_rays_per_s = rays.size() / seconds_since(t);
         embree_rays_per_cpu_s = rays.size() / (process_cpu_seconds() - cpu1);
         benchmark::DoNotOptimize(hits.load());

@@ -29,7 +29,8 @@ std::shared_ptr<SkyImage> bench_sky(int n) {
     return s;
 }
 
-const char* kNames[] = {"cdf", "alias", "mip", "sun+cdf", "sun+alias", "sun+mip", "sun+alias+mis", "mip+mis", "alias+mis", "cdf+mis"};
+const char* kNames[] = {"cdf",     "alias",         "mip",     "sun+cdf",   "sun+alias",
+                        "sun+mip", "sun+alias+mis", "mip+mis", "alias+mis", "cdf+mis"};
 
 // Args: sampler index, N, threads (0: all).
 void BM_Rebuild(benchmark::State& state) {

@@ -60,7 +60,8 @@ struct NamedScene {
 };
 
 // Pixel sampling is deterministic in (seed, pixel): renders are repeatable.
-RenderResult render(const Accel& accel, const EnvLight& light, const Camera& cam, int w, int h, int spp, uint64_t seed, int depth) {
+RenderResult render(const Accel& accel, const EnvLight& light, const Camera& cam, int w, int h, int spp, uint64_t seed,
+                    int depth) {
     RenderSettings s;
     s.width = w, s.height = h, s.spp = spp, s.seed = seed, s.quiet = true, s.max_depth = depth;
     return PathIntegrator(accel, light, s).render(cam);
@@ -137,30 +138,32 @@ std::shared_ptr<SkyImage> clear_sky(int n) {
 std::vector<NamedSky> make_skies(int n, const SamplingStudyOptions& o, std::string* notes) {
     std::vector<NamedSky> skies;
     if (selected(o.skies, "clear"))
-        skies.push_back({"clear", "Hosek-Wilkie clear sky, turbidity 3, sun at 35 deg elevation (make_clear_sky)", clear_sky(n)});
+        skies.push_back({"clear", "Hosek-Wilkie clear sky, turbidity 3, sun at 35 deg elevation (make_clear_sky)",
+                         clear_sky(n)});
     ProceduralSkyParams cu;
     cu.clear_sky.sun_direction = fisheye::direction_from_angles(50 * kPiD / 180, 120 * kPiD / 180);
     cu.coverage = 0.5;
     cu.seed = 3;
     if (selected(o.skies, "cumulus"))
         skies.push_back({"cumulus", "procedural broken cumulus, coverage 0.5, sun at 40 deg (render_procedural_sky)",
-                     std::make_shared<SkyImage>(render_procedural_sky(cu, 0.0, n))});
+                         std::make_shared<SkyImage>(render_procedural_sky(cu, 0.0, n))});
     ProceduralSkyParams ov = cu;
     ov.coverage = 1.0;
     ov.layers[0].optical_depth = 60;
     if (selected(o.skies, "overcast"))
         skies.push_back({"overcast", "procedural overcast, coverage 1.0, optical depth 60 (render_procedural_sky)",
-                     std::make_shared<SkyImage>(render_procedural_sky(ov, 0.0, n))});
+                         std::make_shared<SkyImage>(render_procedural_sky(ov, 0.0, n))});
     std::string photo = o.shared + "/skies/mobotix_sophia_20200812_morning/images/2020-08-12_10_00.jpg";
     if (selected(o.skies, "photo")) try {
-        PhotoImportParams pp;
-        pp.resolution = n;
-        ImportedPhoto imp = import_photo(photo, pp);
-        skies.push_back({"photo", "Mobotix all-sky photograph 2020-08-12 10:00 (import_photo, 8-bit, display-referred)",
-                         std::make_shared<SkyImage>(std::move(imp.sky))});
-    } catch (const std::exception& e) {
-        *notes += std::string("- photo sky skipped: ") + e.what() + "\n";
-    }
+            PhotoImportParams pp;
+            pp.resolution = n;
+            ImportedPhoto imp = import_photo(photo, pp);
+            skies.push_back({"photo",
+                             "Mobotix all-sky photograph 2020-08-12 10:00 (import_photo, 8-bit, display-referred)",
+                             std::make_shared<SkyImage>(std::move(imp.sky))});
+        } catch (const std::exception& e) {
+            *notes += std::string("- photo sky skipped: ") + e.what() + "\n";
+        }
     return skies;
 }
 
@@ -183,10 +186,12 @@ std::vector<NamedScene> make_scenes(const SamplingStudyOptions& o, float aspect,
         add(name, desc, [&] { return load_gltf(path); });
     };
     gltf("diffuse", "Box/Box.glb", "Khronos Box (diffuse), framed");
-    gltf("glossy", "MetalRoughSpheresNoTextures/MetalRoughSpheresNoTextures.glb", "Khronos MetalRoughSpheresNoTextures (glossy)");
+    gltf("glossy", "MetalRoughSpheresNoTextures/MetalRoughSpheresNoTextures.glb",
+         "Khronos MetalRoughSpheresNoTextures (glossy)");
     add("plaza", "built-in plaza (renderer/builtin_scene.h)", [] { return make_builtin_scene(); });
     // The House animation scene shipped with dynsky (Kenney CC0 buildings, its own camera).
-    add("house", "scenes/house/house.gltf (Kenney buildings, textured; its camera)", [] { return load_gltf(data_path("scenes/house/house.gltf")); });
+    add("house", "scenes/house/house.gltf (Kenney buildings, textured; its camera)",
+        [] { return load_gltf(data_path("scenes/house/house.gltf")); });
     return scenes;
 }
 
@@ -213,7 +218,8 @@ std::string fmt(const char* f, double v) {
 Image reference(const Accel& accel, const NamedScene& sc, const NamedSky& sky, int w, int h, int spp, int depth,
                 const fs::path& cache) {
     fs::path file = cache / (sc.name + "_" + sky.name + "_" + std::to_string(w) + "x" + std::to_string(h) + "_" +
-                             std::to_string(spp) + "spp_d" + std::to_string(depth) + "_n" + std::to_string(sky.sky->resolution) + ".exr");
+                             std::to_string(spp) + "spp_d" + std::to_string(depth) + "_n" +
+                             std::to_string(sky.sky->resolution) + ".exr");
     if (fs::exists(file)) return read_image(file.string());
     EnvLight light(sky.sky, 0.3f, parse_sky_sampler("sun+cdf+mis"));
     Image img = render(accel, light, sc.camera, w, h, spp, 12345, depth).color;
@@ -233,8 +239,8 @@ struct Run {
 // (robust against the load of a shared machine, which a single render's time is not).
 struct Curve {
     std::vector<double> spp;
-    std::vector<std::vector<double>> rmse;  // [spp level][seed]: trimmed RMSE (see compare)
-    std::vector<double> rel_mse, firefly, full_rmse;   // means per spp level (full_rmse: untrimmed)
+    std::vector<std::vector<double>> rmse;            // [spp level][seed]: trimmed RMSE (see compare)
+    std::vector<double> rel_mse, firefly, full_rmse;  // means per spp level (full_rmse: untrimmed)
     double seconds_per_spp = 0, rebuild_seconds = 0;
     double mean_rmse(size_t level) const {
         double s = 0;
@@ -258,8 +264,9 @@ std::string machine_description() {
             cpu = line.substr(line.find(':') + 2);
             break;
         }
-    return cpu + ", " + std::to_string(std::thread::hardware_concurrency()) + " hardware threads (shared with other work: wall "
-                                                                                "times are noisy, ratios measured in the same run)";
+    return cpu + ", " + std::to_string(std::thread::hardware_concurrency()) +
+           " hardware threads (shared with other work: wall "
+           "times are noisy, ratios measured in the same run)";
 }
 
 }  // namespace
@@ -323,12 +330,14 @@ int run_sampling_study(const SamplingStudyOptions& o) {
         for (const NamedScene& sc : scenes) {
             Accel accel(sc.scene);
             for (const NamedSky& sky : skies) {
-                std::fprintf(stderr, "sampling bench: %s / %s (reference %d spp)\n", sc.name.c_str(), sky.name.c_str(), ref_spp);
+                std::fprintf(stderr, "sampling bench: %s / %s (reference %d spp)\n", sc.name.c_str(), sky.name.c_str(),
+                             ref_spp);
                 Image ref = reference(accel, sc, sky, w, h, ref_spp, depth, cache);
                 // A finished case is kept in the cache (its rows, timings included), so a long run
                 // that is stopped resumes at the first unfinished case: no finished work is lost.
                 std::string key = sc.name + "_" + sky.name + "_" + std::to_string(w) + "x" + std::to_string(h) + "_d" +
-                                  std::to_string(depth) + "_n" + std::to_string(sky_n) + "_s" + std::to_string(seeds) + "_spp";
+                                  std::to_string(depth) + "_n" + std::to_string(sky_n) + "_s" + std::to_string(seeds) +
+                                  "_spp";
                 for (int spp : spps) key += "-" + std::to_string(spp);
                 std::string sampler_list;
                 for (const std::string& name : samplers) sampler_list += name + ";";
@@ -348,8 +357,17 @@ int run_sampling_study(const SamplingStudyOptions& o) {
                         while (std::getline(ls, field, ',')) f.push_back(field);
                         if (f.size() != 11) continue;
                         try {
-                            r = {f[0], f[1], f[2], std::stoi(f[3]), std::stoi(f[4]), std::stod(f[5]), std::stod(f[6]), std::stod(f[7]),
-                                 std::stod(f[8]), std::stod(f[9]), std::stod(f[10])};
+                            r = {f[0],
+                                 f[1],
+                                 f[2],
+                                 std::stoi(f[3]),
+                                 std::stoi(f[4]),
+                                 std::stod(f[5]),
+                                 std::stod(f[6]),
+                                 std::stod(f[7]),
+                                 std::stod(f[8]),
+                                 std::stod(f[9]),
+                                 std::stod(f[10])};
                         } catch (const std::exception&) {
                             continue;
                         }
@@ -358,18 +376,19 @@ int run_sampling_study(const SamplingStudyOptions& o) {
                     if (loaded.size() == samplers.size() * spps.size() * size_t(seeds)) {
                         for (const Run& r : loaded) {
                             runs.push_back(r);
-                            acc_csv << r.scene << "," << r.sky << "," << r.sampler << "," << r.spp << "," << r.seed << ","
-                                    << r.render_seconds << "," << r.rebuild_seconds << "," << r.rmse << "," << r.rel_mse << ","
-                                    << r.firefly << "," << r.trimmed_rmse << "\n";
+                            acc_csv << r.scene << "," << r.sky << "," << r.sampler << "," << r.spp << "," << r.seed
+                                    << "," << r.render_seconds << "," << r.rebuild_seconds << "," << r.rmse << ","
+                                    << r.rel_mse << "," << r.firefly << "," << r.trimmed_rmse << "\n";
                         }
                         resumed = true;
-                        std::fprintf(stderr, "sampling bench: %s / %s: finished earlier, read from %s\n", sc.name.c_str(),
-                                     sky.name.c_str(), case_file.c_str());
+                        std::fprintf(stderr, "sampling bench: %s / %s: finished earlier, read from %s\n",
+                                     sc.name.c_str(), sky.name.c_str(), case_file.c_str());
                     }
                 }
                 std::map<std::string, std::unique_ptr<EnvLight>> lights;
                 if (!resumed)
-                    for (const std::string& name : samplers) lights[name] = std::make_unique<EnvLight>(sky.sky, 0.3f, parse_sky_sampler(name));
+                    for (const std::string& name : samplers)
+                        lights[name] = std::make_unique<EnvLight>(sky.sky, 0.3f, parse_sky_sampler(name));
                 // Samplers interleaved inside each (seed, spp): the machine's load falls on all alike.
                 for (int seed = 0; !resumed && seed < seeds; ++seed)
                     for (int spp : spps)
@@ -379,14 +398,16 @@ int run_sampling_study(const SamplingStudyOptions& o) {
                             light.set_sky(sky.sky);  // a frame: rebuild, then render
                             double rebuild = seconds_since(t0);
                             auto t1 = Clock::now();
-                            RenderResult r = render(accel, light, sc.camera, w, h, spp, 7 + 7919 * uint64_t(seed), depth);
+                            RenderResult r = render(accel, light, sc.camera, w, h, spp, 7 + 7919 * uint64_t(seed),
+                                                    depth);
                             double secs = seconds_since(t1);
                             ErrorStats e = compare(r.color, ref);
-                            runs.push_back({sc.name, sky.name, name, spp, seed, secs, rebuild, e.rmse, e.rel_mse, e.firefly_share,
-                                            e.trimmed_rmse});
+                            runs.push_back({sc.name, sky.name, name, spp, seed, secs, rebuild, e.rmse, e.rel_mse,
+                                            e.firefly_share, e.trimmed_rmse});
                             std::ostringstream row;
-                            row << sc.name << "," << sky.name << "," << name << "," << spp << "," << seed << "," << secs << ","
-                                << rebuild << "," << e.rmse << "," << e.rel_mse << "," << e.firefly_share << "," << e.trimmed_rmse << "\n";
+                            row << sc.name << "," << sky.name << "," << name << "," << spp << "," << seed << "," << secs
+                                << "," << rebuild << "," << e.rmse << "," << e.rel_mse << "," << e.firefly_share << ","
+                                << e.trimmed_rmse << "\n";
                             acc_csv << row.str();
                             case_csv << row.str();
                         }
@@ -413,9 +434,9 @@ int run_sampling_study(const SamplingStudyOptions& o) {
                     c.seconds_per_spp = secs / spp_total;
                     c.rebuild_seconds = median(rebuilds);
                     for (size_t k = 0; k < c.spp.size(); ++k)
-                        sum_csv << sc.name << "," << sky.name << "," << name << "," << c.spp[k] << "," << c.seconds_at(c.spp[k]) << ","
-                                << c.mean_rmse(k) << "," << c.std_rmse(k) << "," << c.full_rmse[k] << "," << c.rel_mse[k] << ","
-                                << c.firefly[k] << "\n";
+                        sum_csv << sc.name << "," << sky.name << "," << name << "," << c.spp[k] << ","
+                                << c.seconds_at(c.spp[k]) << "," << c.mean_rmse(k) << "," << c.std_rmse(k) << ","
+                                << c.full_rmse[k] << "," << c.rel_mse[k] << "," << c.firefly[k] << "\n";
                 }
                 if (!curves.count("cdf")) continue;
                 const Curve& cdf = curves["cdf"];
@@ -433,7 +454,8 @@ int run_sampling_study(const SamplingStudyOptions& o) {
                     double lo = 1e300, hi = 0;
                     for (int k = 0; k < seeds; ++k) {
                         std::vector<double> ek(c.spp.size()), ck(cdf.spp.size());
-                        for (size_t l = 0; l < ek.size(); ++l) ek[l] = c.rmse[l][size_t(k)], ck[l] = cdf.rmse[l][size_t(k)];
+                        for (size_t l = 0; l < ek.size(); ++l)
+                            ek[l] = c.rmse[l][size_t(k)], ck[l] = cdf.rmse[l][size_t(k)];
                         double sk = t_cdf / c.seconds_at(spp_to_reach(c.spp, ek, monotone(ck).back()));
                         lo = std::min(lo, sk), hi = std::max(hi, sk);
                     }
@@ -445,9 +467,10 @@ int run_sampling_study(const SamplingStudyOptions& o) {
                         sunny_low[name].push_back(lo), sunny_high[name].push_back(hi);
                     }
                     eq << "| " << sc.name << " | " << sky.name << " | " << name << " | " << fmt("%.4g", e_at) << " | "
-                       << fmt("%.3g", c.rel_mse.back()) << " | " << fmt("%.3g", 1e3 * c.seconds_at(need)) << " | " << fmt("%.2f", speedup)
-                       << " [" << fmt("%.2f", lo) << ", " << fmt("%.2f", hi) << "] | " << fmt("%.2f", gain) << " | "
-                       << fmt("%.3g", 1e3 * c.seconds_per_spp) << " | " << fmt("%.2f", c.firefly.back()) << " |\n";
+                       << fmt("%.3g", c.rel_mse.back()) << " | " << fmt("%.3g", 1e3 * c.seconds_at(need)) << " | "
+                       << fmt("%.2f", speedup) << " [" << fmt("%.2f", lo) << ", " << fmt("%.2f", hi) << "] | "
+                       << fmt("%.2f", gain) << " | " << fmt("%.3g", 1e3 * c.seconds_per_spp) << " | "
+                       << fmt("%.2f", c.firefly.back()) << " |\n";
                 }
             }
         }
@@ -466,13 +489,15 @@ int run_sampling_study(const SamplingStudyOptions& o) {
     std::map<std::string, double> ratio_2048;
     std::ostringstream per_call;  // sample() and pdf() cost at 1024, one thread
     std::vector<std::string> build_names;
-    for (const char* name : {"cdf", "alias", "mip", "sun+cdf", "sun+alias", "sun+mip", "cdf+mis", "alias+mis", "mip+mis"})
+    for (const char* name :
+         {"cdf", "alias", "mip", "sun+cdf", "sun+alias", "sun+mip", "cdf+mis", "alias+mis", "mip+mis"})
         if (selected(o.samplers, name)) build_names.push_back(name);
     for (int n : sizes) {
         auto sky = clear_sky(n);
         for (int threads : {1, 0}) {
             std::unique_ptr<tbb::global_control> gc;
-            if (threads == 1) gc = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, 1);
+            if (threads == 1)
+                gc = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, 1);
             const int reps = n >= 2048 ? 3 : 7;
             for (const std::string& name : build_names) {
                 EnvLight light(sky, 0.3f, parse_sky_sampler(name));
@@ -487,9 +512,11 @@ int run_sampling_study(const SamplingStudyOptions& o) {
                 }
                 double r = median(rs), f = median(fs_);
                 std::string th = threads == 1 ? "1" : "all";
-                rb_csv << name << "," << n << "," << th << "," << r * 1e3 << "," << r / f << "," << light.memory_bytes() / 1048576.0 << "\n";
-                rb << "| " << name << " | " << n << " | " << th << " | " << fmt("%.2f", r * 1e3) << " | " << fmt("%.2f", f * 1e3) << " | "
-                   << fmt("%.2f", r / f) << " | " << fmt("%.1f", light.memory_bytes() / 1048576.0) << " |\n";
+                rb_csv << name << "," << n << "," << th << "," << r * 1e3 << "," << r / f << ","
+                       << light.memory_bytes() / 1048576.0 << "\n";
+                rb << "| " << name << " | " << n << " | " << th << " | " << fmt("%.2f", r * 1e3) << " | "
+                   << fmt("%.2f", f * 1e3) << " | " << fmt("%.2f", r / f) << " | "
+                   << fmt("%.1f", light.memory_bytes() / 1048576.0) << " |\n";
                 if (n == 2048 && threads == 0) ratio_2048[name] = r / f;
                 if (n == 1024 && threads == 1) {
                     // Cost of one sample() and one pdf() call (uniforms and directions prepared first).
@@ -513,7 +540,8 @@ int run_sampling_study(const SamplingStudyOptions& o) {
                     for (int k = 0; dirs.size() && k < calls; ++k) acc += light.pdf(dirs[size_t(k) % dirs.size()]);
                     double pdf_ns = seconds_since(t0) * 1e9 / calls;
                     if (!std::isfinite(acc)) notes += "- non-finite pdf sum: " + name + "\n";
-                    per_call << "| " << name << " | " << fmt("%.0f", sample_ns) << " | " << fmt("%.0f", pdf_ns) << " |\n";
+                    per_call << "| " << name << " | " << fmt("%.0f", sample_ns) << " | " << fmt("%.0f", pdf_ns)
+                             << " |\n";
                 }
             }
             std::vector<float> scratch;
@@ -545,20 +573,23 @@ int run_sampling_study(const SamplingStudyOptions& o) {
             for (int j = 0; j < n; ++j)
                 for (int i = 0; i < n; ++i) {
                     Vec2 c = fisheye::pixel_center_uv(i, j, n);
-                    if (c.squaredNorm() <= 1) s->set_pixel(i, j, Color(0.3f, 0.5f, 1.0f) * (0.3f + fisheye::direction_from_uv(c).y()));
+                    if (c.squaredNorm() <= 1)
+                        s->set_pixel(i, j, Color(0.3f, 0.5f, 1.0f) * (0.3f + fisheye::direction_from_uv(c).y()));
                 }
             return s;
         };
         auto sun_pixel = [&](std::shared_ptr<SkyImage> s, const Vec3& d, float value) {
             Vec2 uv;
             fisheye::uv_from_direction(d, &uv);
-            s->set_pixel(std::clamp(int((uv.x() + 1) / 2 * n), 0, n - 1), std::clamp(int((uv.y() + 1) / 2 * n), 0, n - 1), Color::Constant(value));
+            s->set_pixel(std::clamp(int((uv.x() + 1) / 2 * n), 0, n - 1),
+                         std::clamp(int((uv.y() + 1) / 2 * n), 0, n - 1), Color::Constant(value));
             return s;
         };
         std::vector<NamedSky> cases;
         cases.push_back({"subtexel_sun", "", sun_pixel(base(), sun, 2e3f)});
         cases.push_back({"sun_1e6", "", sun_pixel(base(), sun, 1e6f)});
-        cases.push_back({"horizon_sun", "", sun_pixel(base(), fisheye::direction_from_angles(1.54, 1.0).cast<float>(), 2e3f)});
+        cases.push_back({"horizon_sun", "",
+                         sun_pixel(base(), fisheye::direction_from_angles(1.54, 1.0).cast<float>(), 2e3f)});
         auto single = std::make_shared<SkyImage>(n);
         single->set_pixel(40, 70, Color(50, 40, 30));
         cases.push_back({"single_pixel", "", single});
@@ -582,12 +613,13 @@ int run_sampling_study(const SamplingStudyOptions& o) {
             for (const std::string& name : samplers) {
                 EnvLight light(c.sky, 0.3f, parse_sky_sampler(name));
                 Image img = render(accel, light, sc.camera, w, h, spp, 7, depth).color;
-                bool finite = std::all_of(img.pixels.begin(), img.pixels.end(), [](float v) { return std::isfinite(v); });
+                bool finite = std::all_of(img.pixels.begin(), img.pixels.end(),
+                                          [](float v) { return std::isfinite(v); });
                 ErrorStats e = compare(img, ref);
                 if (!finite) notes += "- NON-FINITE pixels: " + c.name + " / " + name + "\n";
                 fl_csv << c.name << "," << name << "," << e.rmse << "," << e.rel_mse << "," << e.firefly_share << "\n";
-                fl << "| " << c.name << " | " << name << " | " << fmt("%.4g", e.rmse) << " | " << fmt("%.3g", e.rel_mse) << " | "
-                   << fmt("%.2f", e.firefly_share) << " |\n";
+                fl << "| " << c.name << " | " << name << " | " << fmt("%.4g", e.rmse) << " | " << fmt("%.3g", e.rel_mse)
+                   << " | " << fmt("%.2f", e.firefly_share) << " |\n";
             }
         }
     }
@@ -606,7 +638,8 @@ int run_sampling_study(const SamplingStudyOptions& o) {
     for (const auto& [name, v] : speedups)
         if (med(v) > best_speed) best_speed = med(v), best = name;
     std::string def = sky_sampler_name(recommended_sky_sampler()) + "+mis";
-    std::string command = "dynsky bench sampling" + std::string(o.quick ? " --quick" : "") + " --seeds " + std::to_string(seeds);
+    std::string command = "dynsky bench sampling" + std::string(o.quick ? " --quick" : "") + " --seeds " +
+                          std::to_string(seeds);
     auto list_option = [&](const char* flag, const std::vector<std::string>& v) {
         if (v.empty()) return;
         command += std::string(" ") + flag + " ";
@@ -620,17 +653,20 @@ int run_sampling_study(const SamplingStudyOptions& o) {
     md << "# Sky importance sampling benchmark\n\n"
        << "Produced by `" << command << "` in " << fmt("%.0f", seconds_since(start)) << " s.\n\n"
        << "Machine: " << machine_description() << ".\n\n"
-       << "Settings: sky " << sky_n << "x" << sky_n << ", image " << w << "x" << h << ", max depth " << depth << ", " << seeds
-       << " seeds per point, reference " << ref_spp << " spp (sun+cdf+mis, cached in " << cache.string()
-       << "), MIS (power heuristic) throughout" << (run_accuracy || run_failures ? "" : " (accuracy and failures not run)") << ".\n\n";
+       << "Settings: sky " << sky_n << "x" << sky_n << ", image " << w << "x" << h << ", max depth " << depth << ", "
+       << seeds << " seeds per point, reference " << ref_spp << " spp (sun+cdf+mis, cached in " << cache.string()
+       << "), MIS (power heuristic) throughout"
+       << (run_accuracy || run_failures ? "" : " (accuracy and failures not run)") << ".\n\n";
     if (run_accuracy) {
         md << "## Recommendation\n\n"
            << "Best median speed-up to plain cdf's error over the scenes and skies measured: **" << best << "** ("
            << fmt("%.2f", best_speed) << "x; " << fmt("%.2f", med(spp_gains[best]))
-           << "x fewer spp). The renderer's default is **" << def << "** (EnvLight: without +mis, the render command adds it).\n\n"
+           << "x fewer spp). The renderer's default is **" << def
+           << "** (EnvLight: without +mis, the render command adds it).\n\n"
            << "Under the clear (sunny) sky, median over the scenes of the default's speed-up to plain cdf's error: "
-           << fmt("%.2f", med(sunny_speedups[def])) << "x (per-seed range of the scenes' speed-ups: " << fmt("%.2f", med(sunny_low[def]))
-           << "x to " << fmt("%.2f", med(sunny_high[def])) << "x, medians over the scenes; goal: >= 2x).\n\n";
+           << fmt("%.2f", med(sunny_speedups[def]))
+           << "x (per-seed range of the scenes' speed-ups: " << fmt("%.2f", med(sunny_low[def])) << "x to "
+           << fmt("%.2f", med(sunny_high[def])) << "x, medians over the scenes; goal: >= 2x).\n\n";
     }
     if (run_rebuild)
         md << "Rebuild at 2048 of the default (" << def << "), all threads: " << fmt("%.2f", ratio_2048[def])
@@ -648,8 +684,8 @@ int run_sampling_study(const SamplingStudyOptions& o) {
               "| sampler | median speed-up | sunny (clear) median | sunny per-seed range | median spp gain | sunny spp gain |\n"
               "|---|---|---|---|---|---|\n";
         for (const auto& [name, v] : speedups)
-            md << "| " << name << " | " << fmt("%.2f", med(v)) << " | " << fmt("%.2f", med(sunny_speedups[name])) << " | "
-               << fmt("%.2f", med(sunny_low[name])) << " - " << fmt("%.2f", med(sunny_high[name])) << " | "
+            md << "| " << name << " | " << fmt("%.2f", med(v)) << " | " << fmt("%.2f", med(sunny_speedups[name]))
+               << " | " << fmt("%.2f", med(sunny_low[name])) << " - " << fmt("%.2f", med(sunny_high[name])) << " | "
                << fmt("%.2f", med(spp_gains[name])) << " | " << fmt("%.2f", med(sunny_spp_gains[name])) << " |\n";
     }
     if (run_accuracy) {
@@ -669,17 +705,20 @@ int run_sampling_study(const SamplingStudyOptions& o) {
             for (const NamedSky& sky : skies)
                 md << "![" << sc.name << " " << sky.name << "](rmse_" << sc.name << "_" << sky.name << ".png)\n";
     }
-    if (run_rebuild) md << "\n## Per-frame rebuild\n\nMedian of repeated rebuilds (EnvLight::set_sky: weights + sampler tables) of a clear sky, "
-          "beside the streaming floor (one parallel pass reading the RGB image and writing one float per pixel) "
-          "measured interleaved in the same run.\n\n"
-       << rb.str() << "\n![rebuild](rebuild.png)\n\n"
-       << "Cost of one call at N = 1024, one thread (EnvLight::sample with the sky chosen, EnvLight::pdf of sampled directions; "
-          "both include the fisheye mapping and the pdf lookup):\n\n| sampler | sample() ns | pdf() ns |\n|---|---|---|\n"
-       << per_call.str() << "\n";
+    if (run_rebuild)
+        md << "\n## Per-frame rebuild\n\nMedian of repeated rebuilds (EnvLight::set_sky: weights + sampler tables) of a clear sky, "
+              "beside the streaming floor (one parallel pass reading the RGB image and writing one float per pixel) "
+              "measured interleaved in the same run.\n\n"
+           << rb.str() << "\n![rebuild](rebuild.png)\n\n"
+           << "Cost of one call at N = 1024, one thread (EnvLight::sample with the sky chosen, EnvLight::pdf of sampled directions; "
+              "both include the fisheye mapping and the pdf lookup):\n\n| sampler | sample() ns | pdf() ns |\n|---|---|---|\n"
+           << per_call.str() << "\n";
     if (run_failures)
-        md << "## Failure cases\n\n" << failure_scene << " scene, " << w << "x" << h << ", 128x128 skies; reference " << ref_spp / 2 << " spp with sun+cdf+mis. "
-       << "Firefly share: fraction of the squared error held by the brightest 0.1% of pixels.\n\n"
-       << fl.str() << "\n![failures](failures.png)\n\n";
+        md << "## Failure cases\n\n"
+           << failure_scene << " scene, " << w << "x" << h << ", 128x128 skies; reference " << ref_spp / 2
+           << " spp with sun+cdf+mis. "
+           << "Firefly share: fraction of the squared error held by the brightest 0.1% of pixels.\n\n"
+           << fl.str() << "\n![failures](failures.png)\n\n";
     if (!notes.empty()) md << "## Notes\n\n" << notes << "\n";
     write_file_atomic((out / "README.md").string(), md.str());
     std::fprintf(stderr, "wrote %s (%.0f s)\n", (out / "README.md").c_str(), seconds_since(start));

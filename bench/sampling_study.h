@@ -18,9 +18,9 @@ namespace dynsky {
 struct SamplingStudyOptions {
     bool quick = false;
     std::string out = "sampling-report";
-    std::string cache;   // "" : OUT/cache
+    std::string cache;  // "" : OUT/cache
     std::string shared = DYNSKY_SHARED_DIR_DEFAULT;
-    int seeds = 0;       // 0: 2 in quick mode, 4 otherwise
+    int seeds = 0;                                            // 0: 2 in quick mode, 4 otherwise
     std::vector<std::string> skies, scenes, samplers, parts;  // empty: all
 };
 

@@ -26,9 +26,16 @@ void BM_MakeClearSky(benchmark::State& state) {
         SkyImage sky = make_clear_sky(p, n);
         benchmark::DoNotOptimize(sky.rgb.data());
     }
-    state.counters["Mpixel/s"] = benchmark::Counter(double(n) * n * state.iterations() / 1e6, benchmark::Counter::kIsRate);
+    state.counters["Mpixel/s"] = benchmark::Counter(double(n) * n * state.iterations() / 1e6,
+                                                    benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_MakeClearSky)->Arg(512)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+BENCHMARK(BM_MakeClearSky)
+    ->Arg(512)
+    ->Arg(1024)
+    ->Arg(2048)
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
 
 void BM_SkyToLatLong(benchmark::State& state) {
     const int n = int(state.range(0));

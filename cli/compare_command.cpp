@@ -32,11 +32,13 @@ void register_compare_command(CLI::App& app) {
     cmd->add_option("--res", o->resolution, "Size of the side-by-side frames, WIDTHxHEIGHT")->capture_default_str();
     cmd->add_option("--spp", c->spp, "Samples per pixel of the side-by-side frames")->capture_default_str();
     cmd->add_option("--out,-o", c->out, "Output folder")->capture_default_str();
-    cmd->add_option("--points", c->points, "Chart points as fractions of the image: X,Y;X,Y;... (0,0 = top left)")->capture_default_str();
+    cmd->add_option("--points", c->points, "Chart points as fractions of the image: X,Y;X,Y;... (0,0 = top left)")
+        ->capture_default_str();
     cmd->add_option("--duration", c->duration, "Chart: seconds of sky time")->capture_default_str();
     cmd->add_option("--chart-frames", c->chart_frames, "Chart: frames rendered over --duration")->capture_default_str();
     cmd->add_option("--chart-res", o->chart_resolution, "Chart: frame size")->capture_default_str();
-    cmd->add_option("--chart-spp", c->chart_spp, "Chart: samples per pixel (the same seed every frame)")->capture_default_str();
+    cmd->add_option("--chart-spp", c->chart_spp, "Chart: samples per pixel (the same seed every frame)")
+        ->capture_default_str();
     cmd->add_option("--seed", c->seed, "Random seed")->capture_default_str();
     cmd->add_option("--threads", c->threads, "Worker threads (0: all cores)")->capture_default_str();
     cmd->callback([o] {

@@ -5,44 +5,55 @@
 namespace dynsky::cli {
 
 void add_scene_options(CLI::App* cmd, SceneSpec* o) {
-    cmd->add_option("scene", o->scene, "Scene: a .gltf/.glb file (scenes/tower/tower.gltf, scenes/house/house.gltf) or 'builtin'")
+    cmd->add_option("scene", o->scene,
+                    "Scene: a .gltf/.glb file (scenes/tower/tower.gltf, scenes/house/house.gltf) or 'builtin'")
         ->capture_default_str();
-    cmd->add_option("--camera", o->camera, "Index of the glTF perspective camera (the bounds are framed when the file has none)")
+    cmd->add_option("--camera", o->camera,
+                    "Index of the glTF perspective camera (the bounds are framed when the file has none)")
         ->capture_default_str();
-    cmd->add_option("--ground-albedo", o->ground_albedo, "Albedo of the ground model below the horizon")->capture_default_str();
+    cmd->add_option("--ground-albedo", o->ground_albedo, "Albedo of the ground model below the horizon")
+        ->capture_default_str();
 }
 
 void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {
-    cmd->add_option("--sky", o->sky,
-                    "Input sky at t = 0: 'procedural[:SEED]' (cumulus over a clear sky, known motion), 'clear' (Hosek-Wilkie),\n"
-                    "or a canonical fisheye EXR (from 'dynsky sky clear|import|procedural|predict'; photographs: import first)")
+    cmd->add_option(
+           "--sky", o->sky,
+           "Input sky at t = 0: 'procedural[:SEED]' (cumulus over a clear sky, known motion), 'clear' (Hosek-Wilkie),\n"
+           "or a canonical fisheye EXR (from 'dynsky sky clear|import|procedural|predict'; photographs: import first)")
         ->capture_default_str();
-    cmd->add_option("--model", m->model,
-                    "Medium-step model xi: 'procedural' (the procedural sky's own next frame; procedural input only),\n"
-                    "'flow' (extrapolate the Farneback flow of the last two steps; a uniform drift first),\n"
-                    "'network:FOLDER' (the trained FlowNet+CloudNet, motion/cloud_model.h), or 'auto': the shipped network\n"
-                    "(networks/models/arm_tsi, Delta t 30 s) when it is installed, else procedural for procedural input and flow\n"
-                    "for others")
+    cmd->add_option(
+           "--model", m->model,
+           "Medium-step model xi: 'procedural' (the procedural sky's own next frame; procedural input only),\n"
+           "'flow' (extrapolate the Farneback flow of the last two steps; a uniform drift first),\n"
+           "'network:FOLDER' (the trained FlowNet+CloudNet, motion/cloud_model.h), or 'auto': the shipped network\n"
+           "(networks/models/arm_tsi, Delta t 30 s) when it is installed, else procedural for procedural input and flow\n"
+           "for others")
         ->capture_default_str();
-    cmd->add_option("--dt", m->dt,
-                    "Delta t: seconds between medium steps (0: a network model's own Delta t from its model.json, else the paper's 10 s)")
+    cmd->add_option(
+           "--dt", m->dt,
+           "Delta t: seconds between medium steps (0: a network model's own Delta t from its model.json, else the paper's 10 s)")
         ->capture_default_str();
-    cmd->add_option("--sky-res", o->sky_resolution, "Resolution N of skies made here (procedural, clear)")->capture_default_str();
-    cmd->add_option("--time", o->time,
-                    "UTC time of t = 0, ISO 8601 (e.g. 2026-06-21T16:00:00Z): the sun follows the clock from there.\n"
-                    "Default for 'procedural' and 'clear': 2026-06-21T16:00:00Z; for an EXR: the sun stays where the file has it");
+    cmd->add_option("--sky-res", o->sky_resolution, "Resolution N of skies made here (procedural, clear)")
+        ->capture_default_str();
+    cmd->add_option(
+        "--time", o->time,
+        "UTC time of t = 0, ISO 8601 (e.g. 2026-06-21T16:00:00Z): the sun follows the clock from there.\n"
+        "Default for 'procedural' and 'clear': 2026-06-21T16:00:00Z; for an EXR: the sun stays where the file has it");
     cmd->add_option("--lat", o->latitude, "Latitude of the place, degrees north (with --time)")->capture_default_str();
     cmd->add_option("--lon", o->longitude, "Longitude of the place, degrees east (with --time)")->capture_default_str();
     cmd->add_option("--coverage", o->coverage, "Cloud cover of the procedural sky, 0..1")->capture_default_str();
-    cmd->add_option("--wind-from", o->wind_from_deg, "Where the wind blows from, degrees clockwise from north")->capture_default_str();
+    cmd->add_option("--wind-from", o->wind_from_deg, "Where the wind blows from, degrees clockwise from north")
+        ->capture_default_str();
     cmd->add_option("--wind-speed", o->wind_speed_mps, "Procedural sky's wind speed, m/s")->capture_default_str();
-    cmd->add_option("--drift", m->drift_deg_per_s, "Flow model: first-step drift of a single input sky, degrees per second")
+    cmd->add_option("--drift", m->drift_deg_per_s,
+                    "Flow model: first-step drift of a single input sky, degrees per second")
         ->capture_default_str();
 }
 
 void add_quiet_flag(CLI::App* cmd) {
-    cmd->add_flag_callback("-q,--quiet", [] { std::fflush(stdout), std::freopen("/dev/null", "w", stdout); },
-                           "No report on stdout (warnings and errors still go to stderr)");
+    cmd->add_flag_callback(
+        "-q,--quiet", [] { std::fflush(stdout), std::freopen("/dev/null", "w", stdout); },
+        "No report on stdout (warnings and errors still go to stderr)");
 }
 
 }  // namespace dynsky::cli

@@ -60,7 +60,8 @@ int run_render(const RenderOptions& o) {
     const SkySamplerOptions sampler = parse_sky_sampler(o.sampler);
 
     std::unique_ptr<tbb::global_control> threads;
-    if (o.threads > 0) threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
+    if (o.threads > 0)
+        threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
 
     LoadedScene loaded = load_scene(SceneSpec{o.scene, o.camera, o.ground_albedo}, float(width) / height);
     const Scene& scene = loaded.scene;
@@ -76,9 +77,10 @@ int run_render(const RenderOptions& o) {
     Accel accel(scene);
     EnvLight light(sky, o.ground_albedo, sampler);
     if (!o.quiet)
-        std::fprintf(stderr, "scene: %s, %zu triangles, %zu instances; sky: %s (%dx%d), distribution built in %.2f ms\n",
-                     o.scene.c_str(), scene.triangle_count(), scene.instances.size(), sky->source.c_str(), sky->resolution,
-                     sky->resolution, light.last_build_seconds() * 1e3);
+        std::fprintf(stderr,
+                     "scene: %s, %zu triangles, %zu instances; sky: %s (%dx%d), distribution built in %.2f ms\n",
+                     o.scene.c_str(), scene.triangle_count(), scene.instances.size(), sky->source.c_str(),
+                     sky->resolution, sky->resolution, light.last_build_seconds() * 1e3);
 
     RenderSettings settings;
     settings.width = width, settings.height = height, settings.spp = o.spp, settings.seed = o.seed;
@@ -108,8 +110,8 @@ int run_render(const RenderOptions& o) {
         if (!o.quiet) std::fprintf(stderr, "wrote %s\n", o.out.c_str());
     }
     if (!o.quiet)
-        std::fprintf(stderr, "rendered %dx%d at %d spp in %.2f s: %.2f M rays/s\n", width, height, o.spp, result.stats.seconds,
-                     result.stats.total_rays() / result.stats.seconds * 1e-6);
+        std::fprintf(stderr, "rendered %dx%d at %d spp in %.2f s: %.2f M rays/s\n", width, height, o.spp,
+                     result.stats.seconds, result.stats.total_rays() / result.stats.seconds * 1e-6);
     return 0;
 }
 
@@ -118,28 +120,35 @@ int run_render(const RenderOptions& o) {
 void register_render_command(CLI::App& app) {
     auto o = std::make_shared<RenderOptions>();
     CLI::App* cmd = app.add_subcommand("render", "Render a glTF 2.0 scene under a fisheye sky (path traced, CPU)");
-    cmd->add_option("scene", o->scene, "Scene: a .gltf or .glb file, or 'builtin' for the built-in plaza")->capture_default_str();
+    cmd->add_option("scene", o->scene, "Scene: a .gltf or .glb file, or 'builtin' for the built-in plaza")
+        ->capture_default_str();
     cmd->add_option("--sky", o->sky,
                     "Sky image: canonical fisheye EXR (square, equidistant, north up, east left; see 'dynsky sky').\n"
                     "Default: a built-in clear sky (Paris, 2026-06-21 16:00 UTC, turbidity 3)");
-    cmd->add_option("--out,-o", o->out, "Output image: .exr (linear, with metadata; a tone-mapped .png is written beside it) or .png")
+    cmd->add_option("--out,-o", o->out,
+                    "Output image: .exr (linear, with metadata; a tone-mapped .png is written beside it) or .png")
         ->capture_default_str();
     cmd->add_option("--res", o->resolution, "Image size WIDTHxHEIGHT")->capture_default_str();
     cmd->add_option("--spp", o->spp, "Samples per pixel")->capture_default_str();
-    cmd->add_option("--camera", o->camera, "Index of the glTF perspective camera to use (the scene's bounds are framed when it has none)")
+    cmd->add_option("--camera", o->camera,
+                    "Index of the glTF perspective camera to use (the scene's bounds are framed when it has none)")
         ->capture_default_str();
-    cmd->add_option("--seed", o->seed, "Random seed: the same seed gives the same image on any thread count")->capture_default_str();
+    cmd->add_option("--seed", o->seed, "Random seed: the same seed gives the same image on any thread count")
+        ->capture_default_str();
     cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")->capture_default_str();
-    cmd->add_option("--ground-albedo", o->ground_albedo,
-                    "Albedo of the ground model below the horizon: a Lambertian plane lit by the sky, radiance albedo * E_sky / pi")
+    cmd->add_option(
+           "--ground-albedo", o->ground_albedo,
+           "Albedo of the ground model below the horizon: a Lambertian plane lit by the sky, radiance albedo * E_sky / pi")
         ->capture_default_str();
     cmd->add_option("--max-depth", o->max_depth, "Maximum path length (bounces)")->capture_default_str();
-    cmd->add_option("--exposure", o->exposure,
-                    "Exposure of the PNG in stops (default: automatic, log-average luminance to middle grey; EXR pixels are never scaled)");
-    cmd->add_option("--sampler", o->sampler,
-                    "Sky importance sampler: uniform, cosine, cdf, alias, mip, sun+cdf, sun+alias, sun+mip; pixel-based ones "
-                    "with '+mis' for MIS compensation (the renderer combines light and BSDF sampling by MIS). "
-                    "See docs/sampling/README.md")
+    cmd->add_option(
+        "--exposure", o->exposure,
+        "Exposure of the PNG in stops (default: automatic, log-average luminance to middle grey; EXR pixels are never scaled)");
+    cmd->add_option(
+           "--sampler", o->sampler,
+           "Sky importance sampler: uniform, cosine, cdf, alias, mip, sun+cdf, sun+alias, sun+mip; pixel-based ones "
+           "with '+mis' for MIS compensation (the renderer combines light and BSDF sampling by MIS). "
+           "See docs/sampling/README.md")
         ->capture_default_str();
     cmd->add_flag("--quiet,-q", o->quiet, "No progress bar or summary");
     cmd->callback([o] { run_render(*o); });

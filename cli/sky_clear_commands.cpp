@@ -44,7 +44,8 @@ struct LatLongOptions {
 
 void add_sun_options(CLI::App* cmd, SunOptions* o) {
     cmd->add_option("--lat", o->lat, "Latitude in degrees, north positive (-90..90)")->required();
-    cmd->add_option("--lon", o->lon, "Longitude in degrees, EAST positive (-180..180); write --lon=-105.2 or --lon -105.2")
+    cmd->add_option("--lon", o->lon,
+                    "Longitude in degrees, EAST positive (-180..180); write --lon=-105.2 or --lon -105.2")
         ->required();
     cmd->add_option("--time", o->time,
                     "Date and time, ISO 8601 with a zone: 2026-06-21T12:00:00Z (UTC) or 2026-06-21T14:00:00+02:00")
@@ -69,8 +70,10 @@ SunPosition sun_from(const SunOptions& o, UtcTime* t) {
 void print_sun(const SunPosition& s, const UtcTime& t, const SunOptions& o) {
     Vec3d d = s.direction();
     std::printf("time       %s\n", format_utc_time(t).c_str());
-    std::printf("location   latitude %.6f deg, longitude %.6f deg (east positive), %.1f m\n", o.lat, o.lon, o.elevation_m);
-    std::printf("zenith     %.5f deg (%s)\n", s.zenith_deg, o.no_refraction ? "geometric, no refraction" : "with refraction");
+    std::printf("location   latitude %.6f deg, longitude %.6f deg (east positive), %.1f m\n", o.lat, o.lon,
+                o.elevation_m);
+    std::printf("zenith     %.5f deg (%s)\n", s.zenith_deg,
+                o.no_refraction ? "geometric, no refraction" : "with refraction");
     std::printf("elevation  %.5f deg%s\n", s.elevation_deg(), s.elevation_deg() < 0 ? " (below the horizon)" : "");
     std::printf("azimuth    %.5f deg (from north towards east)\n", s.azimuth_deg);
     std::printf("direction  %.6f %.6f %.6f (world frame: +Y up, -Z north, +X east)\n", d.x(), d.y(), d.z());
@@ -97,8 +100,8 @@ void run_clear(const ClearOptions& o) {
     source << sky.source << " time=" << format_utc_time(t) << " lat=" << o.sun.lat << " lon=" << o.sun.lon;
     sky.source = source.str();
     save_sky(o.out, sky);
-    std::printf("wrote %s (%dx%d fisheye, linear Rec.709 radiance in W m^-2 sr^-1; luminance = 683 Y cd/m^2)\n", o.out.c_str(),
-                o.resolution, o.resolution);
+    std::printf("wrote %s (%dx%d fisheye, linear Rec.709 radiance in W m^-2 sr^-1; luminance = 683 Y cd/m^2)\n",
+                o.out.c_str(), o.resolution, o.resolution);
     if (!o.preview.empty()) write_preview(o.preview, sky_to_image(sky));
 }
 
@@ -132,9 +135,10 @@ void run_latlong(const LatLongOptions& o) {
         throw Error("--width " + std::to_string(width) + ": must be even, 4..65536 (the image is W x W/2)");
     Image ll = sky_to_latlong(sky, width, ground);
     write_image(o.out, ll);
-    std::printf("wrote %s (%dx%d equirectangular: top row zenith, centre column east, north at u = 0.25; "
-                "Blender's Environment Texture convention with north = +Y)\n",
-                o.out.c_str(), ll.width, ll.height);
+    std::printf(
+        "wrote %s (%dx%d equirectangular: top row zenith, centre column east, north at u = 0.25; "
+        "Blender's Environment Texture convention with north = +Y)\n",
+        o.out.c_str(), ll.width, ll.height);
     if (!o.preview.empty()) write_preview(o.preview, ll);
 }
 
@@ -150,10 +154,12 @@ void register_sky_clear_commands(CLI::App& sky) {
         "position (Meeus/VSOP87, ~0.001 deg) is printed. A sun below the horizon is outside the model: the sky\n"
         "is made with the sun at the horizon and a warning is printed.");
     add_sun_options(clear, &clear_opts->sun);
-    clear->add_option("--turbidity", clear_opts->turbidity, "Atmospheric turbidity, 1..10 (2: very clear, 3: clear, 6+: hazy; default 3)");
+    clear->add_option("--turbidity", clear_opts->turbidity,
+                      "Atmospheric turbidity, 1..10 (2: very clear, 3: clear, 6+: hazy; default 3)");
     clear->add_option("--albedo", clear_opts->albedo, "Ground albedo seen by the sky model, 0..1 (default 0.3)");
     clear->add_flag("--no-sun", clear_opts->no_sun, "Leave the solar disc out (sky only)");
-    clear->add_option("--sky-res", clear_opts->resolution, "Fisheye size N in pixels (N x N), 16..16384")->capture_default_str();
+    clear->add_option("--sky-res", clear_opts->resolution, "Fisheye size N in pixels (N x N), 16..16384")
+        ->capture_default_str();
     add_hidden_alias(clear, "--res", &clear_opts->resolution);
     clear->add_option("--out,-o", clear_opts->out, "Output sky, .exr")->required();
     clear->add_option("--preview", clear_opts->preview, "Also write a tone-mapped .png preview (auto exposure)");

@@ -76,7 +76,8 @@ void run_import(const ImportOptions& o) {
         have_location = true;
         if (o.mask.empty() && !o.no_preset_mask) {
             if (!plan.mask_found)
-                std::fprintf(stderr, "dynsky: warning: no %s mask found beside %s%s\n", o.preset.c_str(), o.photo.c_str(),
+                std::fprintf(stderr, "dynsky: warning: no %s mask found beside %s%s\n", o.preset.c_str(),
+                             o.photo.c_str(),
                              params.detect_obstructions ? "" : "; detecting dark obstructions instead");
             params.mask_path = plan.params.mask_path;
             params.detect_obstructions = plan.params.detect_obstructions;
@@ -106,7 +107,8 @@ void run_import(const ImportOptions& o) {
     // --utc-offset hours ahead of UTC, which presets know).
     std::string time = o.time;
     if (time.empty()) time = time_from_file_name(o.photo, utc_offset);
-    if (time.find('Z') == std::string::npos && o.preset.empty() && !o.offset_opt->count() && o.time.empty()) time.clear();
+    if (time.find('Z') == std::string::npos && o.preset.empty() && !o.offset_opt->count() && o.time.empty())
+        time.clear();
     bool calibrate = o.hdr == "calibrated" || (o.hdr == "auto" && have_location && !time.empty());
     UtcTime utc;
     GeoLocation where{lat, lon, elevation};
@@ -121,9 +123,12 @@ void run_import(const ImportOptions& o) {
     ImportedPhoto imported = import_photo(o.photo, params);
     const SkyCircle& c = imported.geometry.circle;
     std::printf("sky circle: centre (%.1f, %.1f) px, radius %.1f px (%s); lens %s, north %.1f deg, %s%s\n", c.center_x,
-                c.center_y, c.radius, imported.circle_detected ? "found" : "given", lens_law_name(imported.geometry.lens),
-                imported.geometry.north_deg, imported.geometry.mirrored ? "mirrored" : "not mirrored",
-                imported.geometry.tilt_deg != 0 ? (", tilt " + std::to_string(imported.geometry.tilt_deg) + " deg").c_str() : "");
+                c.center_y, c.radius, imported.circle_detected ? "found" : "given",
+                lens_law_name(imported.geometry.lens), imported.geometry.north_deg,
+                imported.geometry.mirrored ? "mirrored" : "not mirrored",
+                imported.geometry.tilt_deg != 0
+                    ? (", tilt " + std::to_string(imported.geometry.tilt_deg) + " deg").c_str()
+                    : "");
     long long filled = 0, disc = 0;
     for (int j = 0; j < o.resolution; ++j)
         for (int i = 0; i < o.resolution; ++i)
@@ -132,8 +137,10 @@ void run_import(const ImportOptions& o) {
                 filled += imported.not_sky[size_t(j) * o.resolution + i];
             }
     if (imported.display_referred)
-        std::printf("saturation: %s\n", imported.clip_level < 1.0 ? ("clipped at encoded level " + std::to_string(imported.clip_level)).c_str()
-                                                                   : "no clipping plateau found");
+        std::printf("saturation: %s\n",
+                    imported.clip_level < 1.0
+                        ? ("clipped at encoded level " + std::to_string(imported.clip_level)).c_str()
+                        : "no clipping plateau found");
     std::printf("not-sky pixels filled: %.1f%% of the disc%s%s\n", disc ? 100.0 * filled / disc : 0.0,
                 params.mask_path.empty() ? "" : (" (mask " + params.mask_path + ")").c_str(),
                 params.inpaint ? "" : " (left black: --no-inpaint)");
@@ -214,9 +221,10 @@ void run_mask(const MaskOptions& o) {
             cloud += mask.pixels[p] > 0.5f;
         }
     write_image(o.out, mask);
-    std::printf("wrote %s (255 cloud, 100 clear, 0 not sky); rule %s %s %.3f; cloud fraction %.1f%% of %lld sky pixels\n",
-                o.out.c_str(), cloud_rule_name(mp.rule), mp.rule == CloudRule::RedBlueRatio ? "r/b >" : "(b-r)/(b+r) <",
-                mp.threshold, total ? 100.0 * cloud / total : 0.0, total);
+    std::printf(
+        "wrote %s (255 cloud, 100 clear, 0 not sky); rule %s %s %.3f; cloud fraction %.1f%% of %lld sky pixels\n",
+        o.out.c_str(), cloud_rule_name(mp.rule), mp.rule == CloudRule::RedBlueRatio ? "r/b >" : "(b-r)/(b+r) <",
+        mp.threshold, total ? 100.0 * cloud / total : 0.0, total);
 }
 
 }  // namespace
@@ -237,38 +245,49 @@ void register_sky_import_commands(CLI::App& sky) {
                     "Camera preset (" + presets +
                         "): geometry, mask handling, place and file-name clock of the real cameras in ../shared/skies. "
                         "Options given explicitly override it");
-    imp->add_option("--center", io->center, "Sky circle centre X,Y in photo pixels (pixel centres at integers); default: found automatically");
+    imp->add_option("--center", io->center,
+                    "Sky circle centre X,Y in photo pixels (pixel centres at integers); default: found automatically");
     imp->add_option("--radius", io->radius, "Sky circle radius in pixels: distance from the centre to 90 deg off-axis");
     imp->add_flag("--auto-circle", io->auto_circle, "Find the circle automatically even if the preset gives one");
-    io->lens_opt = imp->add_option("--lens", io->lens, "Lens law: equidistant (default), equisolid, orthographic, stereographic");
-    io->north_opt = imp->add_option("--north", io->north,
-                                    "Where north appears in the photo, degrees clockwise from its top (default 0: north up)");
+    io->lens_opt = imp->add_option("--lens", io->lens,
+                                   "Lens law: equidistant (default), equisolid, orthographic, stereographic");
+    io->north_opt = imp->add_option(
+        "--north", io->north, "Where north appears in the photo, degrees clockwise from its top (default 0: north up)");
     imp->add_flag("--mirror", io->mirror,
                   "The photo is mirror-reversed (east clockwise from north), as mirror imagers (TSI) show the sky "
                   "(arm-tsi sets it already)");
-    io->tilt_opt = imp->add_option("--tilt", io->tilt, "Zenith angle of the camera's optical axis, degrees (default 0: level)");
-    io->tilt_az_opt = imp->add_option("--tilt-azimuth", io->tilt_azimuth, "Azimuth the optical axis leans towards, degrees east of north");
-    imp->add_option("--mask", io->mask, "Non-sky mask image (photo-sized; black = not sky unless --mask-layout says otherwise)");
-    imp->add_option("--mask-layout", io->mask_layout,
-                    "photo (default: photo-sized, black = not sky), tsi (a TSI tsi_cloudmask/ frame: black inside its circle, "
-                    "extended radially beyond) or alonso-planar (the Mobotix background_mask.png)");
+    io->tilt_opt = imp->add_option("--tilt", io->tilt,
+                                   "Zenith angle of the camera's optical axis, degrees (default 0: level)");
+    io->tilt_az_opt = imp->add_option("--tilt-azimuth", io->tilt_azimuth,
+                                      "Azimuth the optical axis leans towards, degrees east of north");
+    imp->add_option("--mask", io->mask,
+                    "Non-sky mask image (photo-sized; black = not sky unless --mask-layout says otherwise)");
+    imp->add_option(
+        "--mask-layout", io->mask_layout,
+        "photo (default: photo-sized, black = not sky), tsi (a TSI tsi_cloudmask/ frame: black inside its circle, "
+        "extended radially beyond) or alonso-planar (the Mobotix background_mask.png)");
     imp->add_flag("--no-preset-mask", io->no_preset_mask, "Do not look for the preset's mask beside the photo");
-    imp->add_flag("--detect-obstructions", io->detect, "Also detect dark obstructions (shadow band, arm, masts) and fill them");
+    imp->add_flag("--detect-obstructions", io->detect,
+                  "Also detect dark obstructions (shadow band, arm, masts) and fill them");
     imp->add_flag("--no-inpaint", io->no_inpaint, "Leave non-sky pixels black instead of filling them");
     imp->add_option("--encoding", io->encoding,
                     "Input values: auto (default: 8-bit formats are sRGB, .exr/.hdr/.pfm/.tif linear), srgb, linear");
-    imp->add_option("--time", io->time,
-                    "When the photo was taken, ISO 8601 with a zone (2017-05-24T17:00:00Z); default: from the file name");
-    io->offset_opt = imp->add_option("--utc-offset", io->utc_offset,
-                                     "Hours the file name's clock is ahead of UTC, for names without a zone (default 0; presets know theirs)");
+    imp->add_option(
+        "--time", io->time,
+        "When the photo was taken, ISO 8601 with a zone (2017-05-24T17:00:00Z); default: from the file name");
+    io->offset_opt = imp->add_option(
+        "--utc-offset", io->utc_offset,
+        "Hours the file name's clock is ahead of UTC, for names without a zone (default 0; presets know theirs)");
     io->lat_opt = imp->add_option("--lat", io->lat, "Latitude of the camera, degrees north");
     io->lon_opt = imp->add_option("--lon", io->lon, "Longitude of the camera, degrees EAST (write --lon=-97.485)");
     io->elev_opt = imp->add_option("--elevation", io->elevation, "Height above sea level, metres");
-    imp->add_option("--hdr", io->hdr,
-                    "none: linear relative values; calibrated: absolute radiance (W m^-2 sr^-1) from the clear-sky model and "
-                    "the sun restored; auto (default): calibrated when time and place are known");
+    imp->add_option(
+        "--hdr", io->hdr,
+        "none: linear relative values; calibrated: absolute radiance (W m^-2 sr^-1) from the clear-sky model and "
+        "the sun restored; auto (default): calibrated when time and place are known");
     imp->add_option("--turbidity", io->turbidity, "Clear-sky model turbidity for the calibration (default 3)");
-    imp->add_option("--sky-res", io->resolution, "Output fisheye size N (N x N pixels), 16..16384")->capture_default_str();
+    imp->add_option("--sky-res", io->resolution, "Output fisheye size N (N x N pixels), 16..16384")
+        ->capture_default_str();
     add_hidden_alias(imp, "--res", &io->resolution);
     imp->add_option("--out,-o", io->out, "Output sky, .exr")->required();
     imp->add_option("--preview", io->preview, "Also write a tone-mapped .png preview");
@@ -283,7 +302,8 @@ void register_sky_import_commands(CLI::App& sky) {
     mask->add_option("input", mo->input, "Photograph (JPEG/PNG) or canonical sky (.exr)")->required();
     mask->add_option("--out,-o", mo->out, "Output mask, .png")->required();
     mask->add_option("--threshold", mo->threshold, "Rule threshold (default 0.46, the paper's r/b)");
-    mask->add_option("--rule", mo->rule, "rb: cloud if r/b > threshold (default); nbr: cloud if (b-r)/(b+r) < threshold");
+    mask->add_option("--rule", mo->rule,
+                     "rb: cloud if r/b > threshold (default); nbr: cloud if (b-r)/(b+r) < threshold");
     mask->add_option("--preset", mo->preset, "Camera preset for the sky circle and non-sky mask (" + presets + ")");
     mask->add_option("--center", mo->center, "Sky circle centre X,Y in pixels (photos only; default: preset or found)");
     mask->add_option("--radius", mo->radius, "Sky circle radius in pixels (with --center)");

@@ -19,7 +19,8 @@ void register_sky_model_commands(CLI::App& sky) {
             "Move the clouds of a sky forward with a trained cloud model (docs/networks.md): K recursive\n"
             "medium steps of Delta t (the model's, e.g. 30 s), xi(I) = CloudNet(I, FlowNet(I)). Writes\n"
             "DIR/step_0001.exr ... (canonical fisheye radiance; the sun of the input is kept).");
-        cmd->add_option("--model", o->model, "Model folder (flownet.onnx, cloudnet.onnx, model.json), e.g. networks/models/arm_tsi_128")
+        cmd->add_option("--model", o->model,
+                        "Model folder (flownet.onnx, cloudnet.onnx, model.json), e.g. networks/models/arm_tsi_128")
             ->required();
         cmd->add_option("--sky", o->in, "Input sky (canonical fisheye EXR, any resolution)");
         add_hidden_alias(cmd, "--in", &o->in);
@@ -29,7 +30,8 @@ void register_sky_model_commands(CLI::App& sky) {
         cmd->add_option("--stats", o->stats,
                         "CSV of per-step statistics (mean luminance, mean/min/max of the [0,1] form, cloud\n"
                         "coverage, high-frequency energy, non-finite pixel count), step 0 = the input");
-        cmd->add_flag("--preview", o->preview, "Also write tone-mapped PNGs beside the EXRs (the input's auto exposure)");
+        cmd->add_flag("--preview", o->preview,
+                      "Also write tone-mapped PNGs beside the EXRs (the input's auto exposure)");
         cmd->add_flag("--quiet,-q", o->quiet, "No progress bar or summary");
         cmd->callback([o]() { write_prediction(*o); });
     }
@@ -62,7 +64,8 @@ void register_sky_model_commands(CLI::App& sky) {
             "networks' [0, 1] form at --res, seen-sky and cloud masks, Farneback flow frame k -> k+1 and, for\n"
             "procedural sequences, the exact flow, as .npy files plus meta.json in --out.");
         cmd->add_option("--sequence", o->sequence, "Real sequence to import: arm-tsi or mobotix");
-        cmd->add_option("--procedural", o->procedural, "Folder written by `dynsky sky procedural` (with manifest.json)");
+        cmd->add_option("--procedural", o->procedural,
+                        "Folder written by `dynsky sky procedural` (with manifest.json)");
         cmd->add_option("--shared", o->shared, "The shared data folder (default: ../shared beside the source tree)");
         cmd->add_option("--sky-res", o->resolution, "Resolution N of the training images")->capture_default_str();
         add_hidden_alias(cmd, "--res", &o->resolution);
@@ -72,12 +75,15 @@ void register_sky_model_commands(CLI::App& sky) {
         cmd->add_option("--unit-scale", o->form.unit_map.scale,
                         "HDR -> [0, 1] log map (sky/hdr_recovery.h): radiance scale, W m^-2 sr^-1")
             ->capture_default_str();
-        cmd->add_option("--unit-max", o->form.unit_map.max_radiance,
-                        "HDR -> [0, 1] log map: radiance that maps to 1 (brighter clips; the sun is re-inserted on output)")
+        cmd->add_option(
+               "--unit-max", o->form.unit_map.max_radiance,
+               "HDR -> [0, 1] log map: radiance that maps to 1 (brighter clips; the sun is re-inserted on output)")
             ->capture_default_str();
-        cmd->add_option("--cloud-rule", o->cloud_rule, "Cloud mask rule: rb (red / blue > t) or nbr ((b - r) / (b + r) < t)")
+        cmd->add_option("--cloud-rule", o->cloud_rule,
+                        "Cloud mask rule: rb (red / blue > t) or nbr ((b - r) / (b + r) < t)")
             ->capture_default_str();
-        cmd->add_option("--cloud-threshold", o->form.cloud_rule.threshold, "Cloud mask threshold t")->capture_default_str();
+        cmd->add_option("--cloud-threshold", o->form.cloud_rule.threshold, "Cloud mask threshold t")
+            ->capture_default_str();
         cmd->add_option("--out,-o", o->out, "Output folder")->required();
         cmd->add_flag("--quiet,-q", o->quiet, "No progress bars or summary");
         cmd->callback([o]() { build_training_sequence(*o); });

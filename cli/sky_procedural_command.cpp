@@ -19,13 +19,16 @@ void register_sky_procedural_command(CLI::App& sky) {
         "(the exact motion of the clouds over --dt: channels dx, dy in pixels of the image, +x right,\n"
         "+y down, and the cloud opacity) and DIR/manifest.json. Frames are at t = 0, dt, 2 dt, ...\n"
         "up to --duration. See docs/procedural-sky.md.");
-    cmd->add_option("--seed", o->seed, "Random seed: the same seed and options give identical frames")->capture_default_str();
+    cmd->add_option("--seed", o->seed, "Random seed: the same seed and options give identical frames")
+        ->capture_default_str();
     cmd->add_option("--coverage", o->coverage, "Fraction of each cloud layer holding cloud, 0 (clear) to 1 (overcast)")
         ->capture_default_str();
     cmd->add_option("--duration", o->duration, "Length of the sequence in seconds (frames at 0, dt, ..., <= duration)")
         ->capture_default_str();
-    cmd->add_option("--dt", o->dt, "Time step between frames in seconds; also the span of each flow field")->capture_default_str();
-    cmd->add_option("--sky-res", o->resolution, "Resolution N of the N x N fisheye images (8..16384)")->capture_default_str();
+    cmd->add_option("--dt", o->dt, "Time step between frames in seconds; also the span of each flow field")
+        ->capture_default_str();
+    cmd->add_option("--sky-res", o->resolution, "Resolution N of the N x N fisheye images (8..16384)")
+        ->capture_default_str();
     add_hidden_alias(cmd, "--res", &o->resolution);
     cmd->add_option("--out,-o", o->out, "Output folder (created if missing; files in it are overwritten)")->required();
     cmd->add_option("--layers", o->layers, "Cloud layers, comma-separated: cumulus, cirrus")
@@ -56,8 +59,9 @@ void register_sky_procedural_command(CLI::App& sky) {
                           ->capture_default_str();
     auto* azimuth = cmd->add_option("--sun-azimuth", o->sun_azimuth, "Sun azimuth, degrees clockwise from north")
                         ->capture_default_str();
-    auto* lat = cmd->add_option("--lat", o->latitude, "Latitude in degrees (north +); with --lon and --time the sun\n"
-                                                      "follows its true path over the sequence");
+    auto* lat = cmd->add_option("--lat", o->latitude,
+                                "Latitude in degrees (north +); with --lon and --time the sun\n"
+                                "follows its true path over the sequence");
     auto* lon = cmd->add_option("--lon", o->longitude, "Longitude in degrees (east +)");
     auto* time = cmd->add_option("--time", o->time_iso, "Start time, ISO 8601 with a zone, e.g. 2024-06-21T14:00:00Z");
     lat->excludes(elevation)->excludes(azimuth);
@@ -67,7 +71,8 @@ void register_sky_procedural_command(CLI::App& sky) {
         ->capture_default_str();
     cmd->add_option("--visibility", o->visibility, "Distance in metres over which far clouds fade into the sky (1/e)")
         ->capture_default_str();
-    cmd->add_flag("--preview", o->preview, "Also write tone-mapped PNGs: frame_NNNN.png and flow_NNNN.png (colour-coded)");
+    cmd->add_flag("--preview", o->preview,
+                  "Also write tone-mapped PNGs: frame_NNNN.png and flow_NNNN.png (colour-coded)");
     cmd->add_flag("--quiet,-q", o->quiet, "No progress bar or summary");
     cmd->callback([o, lat, lon, time]() {
         int given = int(lat->count() > 0) + int(lon->count() > 0) + int(time->count() > 0);

@@ -33,7 +33,8 @@ AnimationReport render_animation(const AnimationSettings& o) {
     parse_frame_range(o.frames, total, &first, &last);
 
     std::unique_ptr<tbb::global_control> threads;
-    if (o.threads > 0) threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
+    if (o.threads > 0)
+        threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
 
     SkyTimeline timeline = make_sky_timeline(o.sky, o.model);
     LoadedScene scene = load_scene(o.scene, float(width) / height);
@@ -41,9 +42,11 @@ AnimationReport render_animation(const AnimationSettings& o) {
     const FrameStore store(o.out);
 
     if (!o.quiet)
-        std::fprintf(stderr, "scene: %s (%zu triangles); sky: %s, model %s, Delta t %g s; %d frames at %g fps, rendering %d-%d\n",
-                     o.scene.scene.c_str(), scene.scene.triangle_count(), timeline.step(0)->source.c_str(),
-                     timeline.model().name().c_str(), timeline.dt(), total, o.fps, first, last);
+        std::fprintf(
+            stderr,
+            "scene: %s (%zu triangles); sky: %s, model %s, Delta t %g s; %d frames at %g fps, rendering %d-%d\n",
+            o.scene.scene.c_str(), scene.scene.triangle_count(), timeline.step(0)->source.c_str(),
+            timeline.model().name().c_str(), timeline.dt(), total, o.fps, first, last);
 
     // One exposure for the whole animation (per-frame auto exposure would flicker), from the sky
     // at t = 0 so every frame range agrees on it.
@@ -98,22 +101,25 @@ AnimationReport render_animation(const AnimationSettings& o) {
                 << result.stats.seconds * 1e3 << ',' << timeline.timings().medium_steps << '\n';
         timings.flush();
         if (!o.quiet)
-            std::fprintf(stderr, "frame %d/%d t=%.3f s: sky %.1f ms, distribution %.1f ms, render %.1f ms\n", k, total - 1, t,
-                         sky_s * 1e3, light.last_build_seconds() * 1e3, result.stats.seconds * 1e3);
+            std::fprintf(stderr, "frame %d/%d t=%.3f s: sky %.1f ms, distribution %.1f ms, render %.1f ms\n", k,
+                         total - 1, t, sky_s * 1e3, light.last_build_seconds() * 1e3, result.stats.seconds * 1e3);
     }
     if (!o.quiet) {
         std::fprintf(stderr, "%d frame(s) rendered, %d already complete (kept)\n", rendered, skipped);
         if (rendered > 0)
-            std::fprintf(stderr,
-                         "per frame (mean): sky %.1f ms (Gamma + amortised xi: %d medium step(s) this run), distribution %.1f ms, "
-                         "render %.1f ms; sky work %.2f%% of the frame\n",
-                         sum_sky / rendered * 1e3, timeline.timings().medium_steps, sum_build / rendered * 1e3,
-                         sum_render / rendered * 1e3, 100.0 * (sum_sky + sum_build) / (sum_sky + sum_build + sum_render));
+            std::fprintf(
+                stderr,
+                "per frame (mean): sky %.1f ms (Gamma + amortised xi: %d medium step(s) this run), distribution %.1f ms, "
+                "render %.1f ms; sky work %.2f%% of the frame\n",
+                sum_sky / rendered * 1e3, timeline.timings().medium_steps, sum_build / rendered * 1e3,
+                sum_render / rendered * 1e3, 100.0 * (sum_sky + sum_build) / (sum_sky + sum_build + sum_render));
     }
 
     AnimationReport report{total, first, last, rendered, skipped, store.all_complete(total)};
     if (!report.complete) {
-        if (!o.quiet) std::fprintf(stderr, "not every frame of 0-%d exists yet: videos and contact sheet left for later\n", total - 1);
+        if (!o.quiet)
+            std::fprintf(stderr, "not every frame of 0-%d exists yet: videos and contact sheet left for later\n",
+                         total - 1);
         return report;
     }
     make_contact_sheet(store, total, store.file("contact_sheet.png"));

@@ -25,8 +25,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-Image render_frame(const Accel& accel, EnvLight& light, const Camera& camera, std::shared_ptr<const SkyImage> sky, int w, int h,
-                   int spp, uint64_t seed) {
+Image render_frame(const Accel& accel, EnvLight& light, const Camera& camera, std::shared_ptr<const SkyImage> sky,
+                   int w, int h, int spp, uint64_t seed) {
     light.set_sky(std::move(sky));
     RenderSettings s;
     s.width = w, s.height = h, s.spp = spp, s.seed = seed, s.quiet = true;
@@ -55,7 +55,8 @@ std::vector<std::pair<double, double>> parse_chart_points(const std::string& tex
     std::regex re("^\\s*([0-9.]+)\\s*,\\s*([0-9.]+)\\s*$");
     while (std::getline(ss, item, ';')) {
         std::smatch m;
-        if (!std::regex_match(item, m, re)) throw Error("--points '" + text + "': expected X,Y;X,Y;... with X, Y in [0, 1]");
+        if (!std::regex_match(item, m, re))
+            throw Error("--points '" + text + "': expected X,Y;X,Y;... with X, Y in [0, 1]");
         double x = std::stod(m[1]), y = std::stod(m[2]);
         if (x > 1 || y > 1) throw Error("--points '" + text + "': coordinates are fractions of the image, in [0, 1]");
         out.emplace_back(x, y);
@@ -71,7 +72,8 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
     if (!(o.duration > 0)) throw Error("--duration must be positive");
     auto points = parse_chart_points(o.points);
     std::unique_ptr<tbb::global_control> threads;
-    if (o.threads > 0) threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
+    if (o.threads > 0)
+        threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
 
     SkySourceSpec so = o.sky;
     if (so.time.empty()) throw Error("--time is required: the clear and cloudy skies share the sun of that moment");
@@ -113,7 +115,8 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
         for (int x = 0; x < w; ++x) {
             for (int c = 0; c < 3; ++c) {
                 side.pixels[(size_t(y) * side.width + x) * 3 + c] = da.pixels[(size_t(y) * w + x) * da.channels + c];
-                side.pixels[(size_t(y) * side.width + x + w + 8) * 3 + c] = db.pixels[(size_t(y) * w + x) * db.channels + c];
+                side.pixels[(size_t(y) * side.width + x + w + 8) * 3 + c] =
+                    db.pixels[(size_t(y) * w + x) * db.channels + c];
             }
             const float* pa = &a.pixels[(size_t(y) * w + x) * a.channels];
             const float* pb = &b.pixels[(size_t(y) * w + x) * b.channels];
@@ -131,25 +134,27 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
         }
     write_image((fs::path(o.out) / "side_by_side.png").string(), side);
     write_image((fs::path(o.out) / "difference.png").string(), diff);
-    std::fprintf(stderr,
-                 "wrote %s/side_by_side.png (clear | cloudy, same exposure %.2f EV) and difference.png (log2 cloudy/clear, "
-                 "-3..+3 stops, colormap TWILIGHT_SHIFTED: mid = no change)\n"
-                 "global horizontal illuminance at t=0: clear %.0f lx, cloudy %.0f lx\n",
-                 o.out.c_str(), ev, 683.0 * luminance(e_clear), 683.0 * luminance(e_cloudy));
+    std::fprintf(
+        stderr,
+        "wrote %s/side_by_side.png (clear | cloudy, same exposure %.2f EV) and difference.png (log2 cloudy/clear, "
+        "-3..+3 stops, colormap TWILIGHT_SHIFTED: mid = no change)\n"
+        "global horizontal illuminance at t=0: clear %.0f lx, cloudy %.0f lx\n",
+        o.out.c_str(), ev, 683.0 * luminance(e_clear), 683.0 * luminance(e_cloudy));
 
     // Illuminance over time at the chosen points, under both skies (the sun follows the clock).
     std::string csv = (fs::path(o.out) / "illuminance.csv").string();
     {
         std::ostringstream f;  // written whole at the end: a stopped run leaves no half table
         f << "time_s,clear sky horizontal (lx / 100),cloudy sky horizontal (lx / 100)";
-        for (size_t p = 0; p < points.size(); ++p) f << ",cloudy point " << p + 1 << " (cd/m2),clear point " << p + 1 << " (cd/m2)";
+        for (size_t p = 0; p < points.size(); ++p)
+            f << ",cloudy point " << p + 1 << " (cd/m2),clear point " << p + 1 << " (cd/m2)";
         f << '\n';
         for (int k = 0; k < o.chart_frames; ++k) {
             double t = o.duration * k / (o.chart_frames - 1);
             Image ic = render_frame(accel, light, scene.camera, clear_at(t), cw, ch, o.chart_spp, o.seed);
             double ec = 683.0 * luminance(light.sky_irradiance());
-            Image iy = render_frame(accel, light, scene.camera, std::make_shared<const SkyImage>(cloudy.sky_at(t)), cw, ch,
-                                    o.chart_spp, o.seed);
+            Image iy = render_frame(accel, light, scene.camera, std::make_shared<const SkyImage>(cloudy.sky_at(t)), cw,
+                                    ch, o.chart_spp, o.seed);
             double ey = 683.0 * luminance(light.sky_irradiance());
             f << t << ',' << ec / 100 << ',' << ey / 100;
             for (auto [px, py] : points) {
@@ -162,7 +167,8 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
         write_file_atomic(csv, f.str());
     }
     make_line_chart(csv, (fs::path(o.out) / "illuminance.png").string(),
-               "Clear vs cloudy sky: illuminance and luminance at chosen points", "time (s)", "lux / 100, cd/m^2", true);
+                    "Clear vs cloudy sky: illuminance and luminance at chosen points", "time (s)", "lux / 100, cd/m^2",
+                    true);
     std::fprintf(stderr, "wrote %s and illuminance.png\n", csv.c_str());
 }
 

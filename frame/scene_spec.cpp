@@ -19,7 +19,8 @@ LoadedScene load_scene(const SceneSpec& o, float aspect_ratio) {
     }
     if (out.scene.instances.empty()) throw Error(o.scene + ": the scene has no triangles to render");
     if (out.scene.cameras.empty()) {
-        if (o.camera != 0) throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " asked for, but the file has no cameras");
+        if (o.camera != 0)
+            throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " asked for, but the file has no cameras");
         out.camera = frame_bounds_camera(out.scene.world_bounds(), aspect_ratio);
     } else {
         if (o.camera < 0 || o.camera >= int(out.scene.cameras.size()))

@@ -10,8 +10,8 @@ namespace dynsky {
 
 struct SceneSpec {
     std::string scene = "scenes/tower/tower.gltf";  // .gltf/.glb or "builtin"
-    int camera = 0;                                  // index of the glTF perspective camera
-    float ground_albedo = 0.3f;                      // the Lambertian ground below the horizon
+    int camera = 0;                                 // index of the glTF perspective camera
+    float ground_albedo = 0.3f;                     // the Lambertian ground below the horizon
 };
 
 struct LoadedScene {

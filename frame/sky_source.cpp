@@ -46,7 +46,8 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
         clock = SunClock{start_time(o), where};
     }
     std::string model_name = m.model;
-    if (model_name != "auto" && model_name != "flow" && model_name != "procedural" && model_name.rfind("network:", 0) != 0)
+    if (model_name != "auto" && model_name != "flow" && model_name != "procedural" &&
+        model_name.rfind("network:", 0) != 0)
         throw Error("--model '" + model_name + "': expected auto, procedural, flow or network:FOLDER");
     std::unique_ptr<MediumStepModel> model;
     if (model_name == "auto") {
@@ -64,12 +65,14 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
             model_name = "network:" + folder;
         }
     }
-    if (model_name.rfind("network:", 0) == 0 && !model) model = make_network_step_model(model_name.substr(8));  // fails early
+    if (model_name.rfind("network:", 0) == 0 && !model)
+        model = make_network_step_model(model_name.substr(8));  // fails early
     SkyImage input;
     if (o.sky.rfind("procedural", 0) == 0) {
         uint64_t seed = 0;
         if (o.sky.size() > 10) {
-            if (o.sky[10] != ':' || o.sky.size() == 11 || o.sky.find_first_not_of("0123456789", 11) != std::string::npos)
+            if (o.sky[10] != ':' || o.sky.size() == 11 ||
+                o.sky.find_first_not_of("0123456789", 11) != std::string::npos)
                 throw Error("--sky '" + o.sky + "': expected 'procedural' or 'procedural:SEED' (SEED a whole number)");
             seed = std::stoull(o.sky.substr(11));
         }
@@ -90,8 +93,9 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     } else {
         std::string ext = file_extension(o.sky);
         if (ext != ".exr")
-            throw Error(o.sky + ": not a sky EXR ('procedural', 'clear' or a canonical fisheye .exr; import photographs first "
-                                "with 'dynsky sky import')");
+            throw Error(o.sky +
+                        ": not a sky EXR ('procedural', 'clear' or a canonical fisheye .exr; import photographs first "
+                        "with 'dynsky sky import')");
         input = load_sky(o.sky);
         input.time_seconds = 0;
         if (input.source.empty()) input.source = o.sky;

@@ -32,8 +32,11 @@ std::vector<std::string> frame_files(const std::string& dir) {
 }  // namespace
 
 void analyse_temporal_quality(const std::string& folder) {
-    struct { const std::string& folder; } o{folder};
-    if (!fs::is_directory(o.folder)) throw_file_error(o.folder, "not a folder (give the --out folder of 'dynsky animate')");
+    struct {
+        const std::string& folder;
+    } o{folder};
+    if (!fs::is_directory(o.folder))
+        throw_file_error(o.folder, "not a folder (give the --out folder of 'dynsky animate')");
     auto files = frame_files(o.folder);
     if (files.size() < 3) throw_file_error(o.folder, "needs at least 3 frame_NNNN.exr files");
     std::string csv = (fs::path(o.folder) / "temporal.csv").string();
@@ -44,7 +47,8 @@ void analyse_temporal_quality(const std::string& folder) {
     int nb = 0, nw = 0;
     for (size_t k = 1; k < files.size(); ++k) {
         Image cur = read_image(files[k]);
-        if (cur.width != prev.width || cur.height != prev.height) throw_file_error(files[k], "size differs from the previous frame");
+        if (cur.width != prev.width || cur.height != prev.height)
+            throw_file_error(files[k], "size differs from the previous frame");
         double t0 = prev.metadata.numbers["dynsky:time"], t1 = cur.metadata.numbers["dynsky:time"];
         double dt = cur.metadata.numbers["dynsky:medium_step_seconds"];
         double num = 0, den = 0;
@@ -63,12 +67,13 @@ void analyse_temporal_quality(const std::string& folder) {
     }
     write_file_atomic(csv, f.str());
     make_line_chart(csv, (fs::path(o.folder) / "temporal.png").string(),
-               "Frame-to-frame change (shaded: pairs across a medium-step boundary)", "time of the later frame (s)",
-               "mean |dL| / L (%)", false);
-    std::printf("frames: %zu; mean frame-to-frame luminance change: across medium-step boundaries %.3f%% (%d pairs), "
-                "within intervals %.3f%% (%d pairs); ratio %.2f\n",
-                files.size(), nb ? sum_b / nb : 0.0, nb, nw ? sum_w / nw : 0.0, nw,
-                (nb && nw && sum_w > 0) ? (sum_b / nb) / (sum_w / nw) : 0.0);
+                    "Frame-to-frame change (shaded: pairs across a medium-step boundary)",
+                    "time of the later frame (s)", "mean |dL| / L (%)", false);
+    std::printf(
+        "frames: %zu; mean frame-to-frame luminance change: across medium-step boundaries %.3f%% (%d pairs), "
+        "within intervals %.3f%% (%d pairs); ratio %.2f\n",
+        files.size(), nb ? sum_b / nb : 0.0, nb, nw ? sum_w / nw : 0.0, nw,
+        (nb && nw && sum_w > 0) ? (sum_b / nb) / (sum_w / nw) : 0.0);
     std::printf("wrote %s and temporal.png\n", csv.c_str());
 }
 

@@ -23,11 +23,12 @@ bool make_video(const std::string& dir, const std::string& prefix, double fps, c
     char rate[32];
     std::snprintf(rate, sizeof rate, "%g", fps);
     std::string cmd = "ffmpeg -y -loglevel error -framerate " + std::string(rate) + " -i " + shell_quote(pattern) +
-                      " -vf 'scale=trunc(iw/2)*2:trunc(ih/2)*2' -c:v libx264 -pix_fmt yuv420p -crf 18 " + shell_quote(tmp) +
-                      " </dev/null";
+                      " -vf 'scale=trunc(iw/2)*2:trunc(ih/2)*2' -c:v libx264 -pix_fmt yuv420p -crf 18 " +
+                      shell_quote(tmp) + " </dev/null";
     int rc = std::system(cmd.c_str());
     if (rc != 0) {
-        std::fprintf(stderr, "dynsky: warning: ffmpeg failed (exit %d) making %s; is ffmpeg installed?\n", rc, out.c_str());
+        std::fprintf(stderr, "dynsky: warning: ffmpeg failed (exit %d) making %s; is ffmpeg installed?\n", rc,
+                     out.c_str());
         fs::remove(tmp);
         return false;
     }

@@ -73,7 +73,8 @@ SkyImage advect_great_arc(const SkyImage& sky, const cv::Mat& flow, double fract
             Vec3d src = d;
             for (int it = 0; it < kIterations; ++it) {
                 cv::Vec2f f = sample_flow(flow, px, py);
-                Vec3d from = fisheye::direction_from_pixel(px, py, n), to = fisheye::direction_from_pixel(px + f[0], py + f[1], n);
+                Vec3d from = fisheye::direction_from_pixel(px, py, n),
+                      to = fisheye::direction_from_pixel(px + f[0], py + f[1], n);
                 Vec3d c = from.cross(to);
                 double s = c.norm();
                 if (s < 1e-12) {
@@ -112,8 +113,7 @@ cv::Mat advect_by_flow(const cv::Mat& image, const cv::Mat& flow, double steps) 
     for (int y = 0; y < flow.rows; ++y) {
         const cv::Vec2f* f = flow.ptr<cv::Vec2f>(y);
         cv::Vec2f* m = map.ptr<cv::Vec2f>(y);
-        for (int x = 0; x < flow.cols; ++x)
-            m[x] = cv::Vec2f(float(x - steps * f[x][0]), float(y - steps * f[x][1]));
+        for (int x = 0; x < flow.cols; ++x) m[x] = cv::Vec2f(float(x - steps * f[x][0]), float(y - steps * f[x][1]));
     }
     cv::Mat out;
     cv::remap(image, out, map, cv::noArray(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar::all(0));

@@ -58,10 +58,12 @@ cv::Mat to_blob(const std::vector<cv::Mat>& images) {
 
 cv::Mat from_blob(const cv::Mat& blob, const std::string& what) {
     if (blob.dims != 4 || blob.size[0] != 1)
-        throw Error(what + ": the network returned a " + std::to_string(blob.dims) + "-d tensor, expected 1 x C x N x N");
+        throw Error(what + ": the network returned a " + std::to_string(blob.dims) +
+                    "-d tensor, expected 1 x C x N x N");
     const int c = blob.size[1], n = blob.size[2], w = blob.size[3];
     std::vector<cv::Mat> planes;
-    for (int k = 0; k < c; ++k) planes.push_back(cv::Mat(n, w, CV_32F, const_cast<float*>(blob.ptr<float>(0, k))).clone());
+    for (int k = 0; k < c; ++k)
+        planes.push_back(cv::Mat(n, w, CV_32F, const_cast<float*>(blob.ptr<float>(0, k))).clone());
     cv::Mat out;
     cv::merge(planes, out);
     return out;

@@ -62,17 +62,20 @@ void draw_histogram(const std::string& path, const std::string& title, const std
         }
         cv::polylines(img, pts, false, colours[s % 3], 2, cv::LINE_AA);
         cv::putText(img, series[s].first + " (" + std::to_string(series[s].second.size()) + " px)",
-                    {left + pw - 430, top + 25 + 22 * int(s)}, cv::FONT_HERSHEY_SIMPLEX, 0.55, colours[s % 3], 1, cv::LINE_AA);
+                    {left + pw - 430, top + 25 + 22 * int(s)}, cv::FONT_HERSHEY_SIMPLEX, 0.55, colours[s % 3], 1,
+                    cv::LINE_AA);
     }
     for (int k = 0; k <= 4; ++k) {
         char label[32];
         std::snprintf(label, sizeof label, "%.2g", max_value * k / 4);
         int x = left + k * pw / 4;
         cv::line(img, {x, top + ph}, {x, top + ph + 6}, cv::Scalar(0, 0, 0));
-        cv::putText(img, label, {x - 12, top + ph + 24}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+        cv::putText(img, label, {x - 12, top + ph + 24}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1,
+                    cv::LINE_AA);
     }
     cv::putText(img, title, {left, 32}, cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-    cv::putText(img, xlabel, {left + pw / 2 - 160, h - 18}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    cv::putText(img, xlabel, {left + pw / 2 - 160, h - 18}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1,
+                cv::LINE_AA);
     cv::putText(img, "fraction", {8, top + ph / 2}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
     Image out(w, h, 3);
     for (int y = 0; y < h; ++y)
@@ -105,7 +108,8 @@ void evaluate_cloud_model(const EvaluationOptions& o) {
     const int lo = split[seq.name].at("heldout").at(0).get<int>();
     int hi = split[seq.name].at("heldout").at(1).get<int>();
     if (lo < 1 || hi > int(seq.photos.size()) || hi - lo < 2)
-        throw_file_error(split_path, "held-out range does not fit the sequence's " + std::to_string(seq.photos.size()) + " frames");
+        throw_file_error(split_path,
+                         "held-out range does not fit the sequence's " + std::to_string(seq.photos.size()) + " frames");
     if (std::abs(seq.dt_s - info.dt_seconds) > 1e-6)
         throw Error("the model steps " + std::to_string(info.dt_seconds) + " s but the sequence's cadence is " +
                     std::to_string(seq.dt_s) + " s");
@@ -134,7 +138,8 @@ void evaluate_cloud_model(const EvaluationOptions& o) {
     std::vector<float> real_mag, rollout_mag, flownet_mag;
     ProgressBar progress2(hi - hmax - lo, "evaluate", o.quiet);
     // The flow of the pair ending at t (the baseline's) is the one measured from t at the step before.
-    cv::Mat flow = lo + hmax < hi ? flow_at_resolution(farneback_flow(frame_big(lo - 1).image, frame_big(lo).image), n) : cv::Mat();
+    cv::Mat flow = lo + hmax < hi ? flow_at_resolution(farneback_flow(frame_big(lo - 1).image, frame_big(lo).image), n)
+                                  : cv::Mat();
     for (int t = lo; t + hmax < hi; ++t) {
         cv::Mat next_flow = flow_at_resolution(farneback_flow(frame_big(t).image, frame_big(t + 1).image), n);
         append_magnitudes(next_flow, frame(t).cloud & frame(t).valid & frame(t + 1).valid, &real_mag);
@@ -142,7 +147,8 @@ void evaluate_cloud_model(const EvaluationOptions& o) {
         for (int h = 1; h <= hmax; ++h) {
             NetworkStep s = model.step_network(state);
             if (h == 1) append_magnitudes(model.decode_flow(s.flow), frame(t).cloud & frame(t).valid, &flownet_mag);
-            append_magnitudes(farneback_flow(state, s.next), network_cloud_mask(state, info.form) & frame(t).valid, &rollout_mag);
+            append_magnitudes(farneback_flow(state, s.next), network_cloud_mask(state, info.form) & frame(t).valid,
+                              &rollout_mag);
             state = s.next;
             if (!std::binary_search(horizons.begin(), horizons.end(), h)) continue;
             const cv::Mat& truth = frame(t + h).image;
@@ -175,10 +181,11 @@ void evaluate_cloud_model(const EvaluationOptions& o) {
     md << "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (int h : horizons) {
         std::snprintf(line, sizeof line,
-                      "| %d | %g s | %.2f dB | %.3f | %.2f dB | %.3f | %.2f dB | %.3f | %.5f | %.5f | %.5f | %zu |\n", h,
-                      h * info.dt_seconds, Scores::mean(sm[h].psnr), Scores::mean(sm[h].ssim), Scores::mean(sp[h].psnr),
-                      Scores::mean(sp[h].ssim), Scores::mean(sf[h].psnr), Scores::mean(sf[h].ssim),
-                      Scores::mean(sm[h].mse), Scores::mean(sp[h].mse), Scores::mean(sf[h].mse), sm[h].psnr.size());
+                      "| %d | %g s | %.2f dB | %.3f | %.2f dB | %.3f | %.2f dB | %.3f | %.5f | %.5f | %.5f | %zu |\n",
+                      h, h * info.dt_seconds, Scores::mean(sm[h].psnr), Scores::mean(sm[h].ssim),
+                      Scores::mean(sp[h].psnr), Scores::mean(sp[h].ssim), Scores::mean(sf[h].psnr),
+                      Scores::mean(sf[h].ssim), Scores::mean(sm[h].mse), Scores::mean(sp[h].mse),
+                      Scores::mean(sf[h].mse), sm[h].psnr.size());
         md << line;
     }
     auto median_or_0 = [](const std::vector<float>& v) { return v.empty() ? 0.0f : median(v); };
@@ -190,7 +197,8 @@ void evaluate_cloud_model(const EvaluationOptions& o) {
     float top = std::max({median_or_0(real_mag), median_or_0(rollout_mag), median_or_0(flownet_mag), 0.05f}) * 4.0f;
     draw_histogram(o.histogram, "Cloud motion per step, " + seq.name + " held-out (" + info.name + ")",
                    "flow magnitude on cloud pixels (px per step at " + std::to_string(n) + " px)", top,
-                   {{"real frames (Farneback)", real_mag}, {"model rollout (Farneback)", rollout_mag},
+                   {{"real frames (Farneback)", real_mag},
+                    {"model rollout (Farneback)", rollout_mag},
                     {"FlowNet output", flownet_mag}});
     write_file_atomic(o.report, md.str());
     if (!o.quiet) std::printf("%s\nwrote %s and %s\n", md.str().c_str(), o.report.c_str(), o.histogram.c_str());

@@ -40,8 +40,8 @@ cv::Mat to_grey(const cv::Mat& image) {
 
 cv::Mat farneback(const cv::Mat& from, const cv::Mat& to, const FarnebackParams& p) {
     cv::Mat flow;
-    cv::calcOpticalFlowFarneback(from, to, flow, p.pyr_scale, p.levels, p.winsize, p.iterations, p.poly_n,
-                                 p.poly_sigma, 0);
+    cv::calcOpticalFlowFarneback(from, to, flow, p.pyr_scale, p.levels, p.winsize, p.iterations, p.poly_n, p.poly_sigma,
+                                 0);
     return flow;
 }
 
@@ -85,7 +85,8 @@ cv::Mat estimate_sky_flow(const SkyImage& from, const SkyImage& to, const SkyFlo
         for (int j = 0; j < w; ++j)
             for (int i = 0; i < w; ++i) {
                 cv::Vec3f p = small.at<cv::Vec3f>(j, i);
-                lum.at<float>(j, i) = std::log(std::max(0.2126f * p[0] + 0.7152f * p[1] + 0.0722f * p[2], 0.0f) + 1e-3f);
+                lum.at<float>(j,
+                              i) = std::log(std::max(0.2126f * p[0] + 0.7152f * p[1] + 0.0722f * p[2], 0.0f) + 1e-3f);
             }
         return lum;
     };

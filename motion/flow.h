@@ -36,9 +36,9 @@ cv::Mat farneback(const cv::Mat& from, const cv::Mat& to, const FarnebackParams&
 cv::Mat farneback_flow(const cv::Mat& from, const cv::Mat& to, const FarnebackParams& params = {});
 
 struct SkyFlowParams {
-    int work_resolution = 512;      // Farneback runs at this size; the flow is scaled back to N
-    double min_texture = 0.02;      // confidence: local gradient of log luminance below this is a hole
-    double fill_sigma = 0.06;       // hole filling reach, as a fraction of the work resolution
+    int work_resolution = 512;  // Farneback runs at this size; the flow is scaled back to N
+    double min_texture = 0.02;  // confidence: local gradient of log luminance below this is a hole
+    double fill_sigma = 0.06;   // hole filling reach, as a fraction of the work resolution
     // winsize is for a 512 px working size and scales with it (at least 5).
     FarnebackParams farneback{0.5, 5, 15, 3, 5, 1.2};
 };

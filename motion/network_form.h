@@ -35,9 +35,9 @@ SkyImage from_network_form(const cv::Mat& image, const SkyImage& like, const Net
 
 // A frame as the networks see it, at their resolution N.
 struct NetworkFrame {
-    cv::Mat image;               // N x N CV_32FC3 in [0, 1], 0 outside the disc
-    cv::Mat valid;               // N x N CV_8UC1: 255 where the sky was seen (inside the disc, not hidden)
-    cv::Mat cloud;               // N x N CV_8UC1: 255 where the cloud mask (sky/cloud_mask.h) says cloud
+    cv::Mat image;  // N x N CV_32FC3 in [0, 1], 0 outside the disc
+    cv::Mat valid;  // N x N CV_8UC1: 255 where the sky was seen (inside the disc, not hidden)
+    cv::Mat cloud;  // N x N CV_8UC1: 255 where the cloud mask (sky/cloud_mask.h) says cloud
     double time_seconds = 0.0;
 };
 

@@ -25,7 +25,11 @@ PhotoSequence named_photo_sequence(const std::string& name, const std::string& s
     if (name == "arm-tsi" || name == "arm_tsi") {
         s = {"arm_tsi", "arm-tsi", (fs::path(shared_dir) / "skies" / "arm_tsi_sgp_20170524").string(), 30.0, {}};
     } else if (name == "mobotix") {
-        s = {"mobotix", "mobotix", (fs::path(shared_dir) / "skies" / "mobotix_sophia_20200812_morning").string(), 60.0, {}};
+        s = {"mobotix",
+             "mobotix",
+             (fs::path(shared_dir) / "skies" / "mobotix_sophia_20200812_morning").string(),
+             60.0,
+             {}};
     } else {
         throw Error("--sequence: unknown sequence '" + name + "' (known: arm-tsi, mobotix)");
     }

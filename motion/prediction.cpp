@@ -48,7 +48,8 @@ void write_prediction(const PredictionOptions& o) {
         double mn, mx;
         cv::minMaxLoc(finite_unit.reshape(1), &mn, &mx, nullptr, nullptr, cv::repeat(disc, 1, 3).reshape(1, n));
         cv::Scalar mean = cv::mean(finite_unit, disc);
-        double coverage = double(cv::countNonZero(network_cloud_mask(finite_unit, model.info().form) & disc)) / cv::countNonZero(disc);
+        double coverage = double(cv::countNonZero(network_cloud_mask(finite_unit, model.info().form) & disc)) /
+                          cv::countNonZero(disc);
         char line[256];
         std::snprintf(line, sizeof line, "%d,%.3f,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%ld\n", k, s.time_seconds,
                       count ? lum / count : 0.0, (mean[0] + mean[1] + mean[2]) / 3, mn, mx, coverage,

@@ -71,20 +71,23 @@ void build_training_sequence(const TrainingSetOptions& o) {
         nlohmann::json m = read_json((fs::path(o.procedural) / "manifest.json").string());
         dt = m.at("dt_s").get<double>();
         meta["source"] = "procedural sequence in " + o.procedural;
-        meta["procedural"] = {{"seed", m.value("seed", 0)}, {"coverage", m.value("coverage", 0.0)}, {"layers", m["layers"]}};
+        meta["procedural"] = {{"seed", m.value("seed", 0)},
+                              {"coverage", m.value("coverage", 0.0)},
+                              {"layers", m["layers"]}};
         ProgressBar progress(long(m.at("frames").size()), "procedural frames", o.quiet);
         for (const auto& fr : m.at("frames")) {
             SkyImage sky = load_sky((fs::path(o.procedural) / fr.at("image").get<std::string>()).string());
             if (sky.resolution != big)
-                throw_file_error(o.procedural, "frames are " + std::to_string(sky.resolution) + " px; generate them at --import-res " +
-                                                   std::to_string(big));
+                throw_file_error(o.procedural, "frames are " + std::to_string(sky.resolution) +
+                                                   " px; generate them at --import-res " + std::to_string(big));
             frames_big.push_back(network_frame(sky, {}, big, form));
             frames_big.back().time_seconds = fr.at("time_s").get<double>();
             names.push_back(fr.at("image").get<std::string>());
             Image flow = read_image((fs::path(o.procedural) / fr.at("flow").get<std::string>()).string());
             cv::Mat fxy(flow.height, flow.width, CV_32FC2);
             for (int y = 0; y < flow.height; ++y)
-                for (int x = 0; x < flow.width; ++x) fxy.at<cv::Vec2f>(y, x) = cv::Vec2f(flow.at(x, y, 0), flow.at(x, y, 1));
+                for (int x = 0; x < flow.width; ++x)
+                    fxy.at<cv::Vec2f>(y, x) = cv::Vec2f(flow.at(x, y, 0), flow.at(x, y, 1));
             exact.push_back(flow_at_resolution(fxy, n));
             progress.advance();
         }
@@ -112,22 +115,26 @@ void build_training_sequence(const TrainingSetOptions& o) {
     write_npy(path("valid.npy"), {t, nn, nn}, stack_mask(valid).data());
     write_npy(path("cloud.npy"), {t, nn, nn}, stack_mask(cloud).data());
     write_npy(path("flow_farneback.npy"), {t - 1, nn, nn, 2}, stack(flows).data());
-    if (!exact.empty()) write_npy(path("flow_exact.npy"), {t - 1, nn, nn, 2}, stack(std::vector<cv::Mat>(exact.begin(), exact.end() - 1)).data());
+    if (!exact.empty())
+        write_npy(path("flow_exact.npy"), {t - 1, nn, nn, 2},
+                  stack(std::vector<cv::Mat>(exact.begin(), exact.end() - 1)).data());
     meta["dt_s"] = dt;
     meta["resolution"] = n;
     meta["import_resolution"] = big;
     meta["frame_count"] = t;
     meta["times_s"] = times;
     meta["frames"] = names;
-    meta["flow_farneback"] = "OpenCV calcOpticalFlowFarneback (pyr 0.5, 3 levels, window 15, 3 iterations, poly 5 / 1.2) "
-                             "frame k -> k+1 on the luminance at the import resolution, area-averaged to N, pixels of N";
+    meta["flow_farneback"] =
+        "OpenCV calcOpticalFlowFarneback (pyr 0.5, 3 levels, window 15, 3 iterations, poly 5 / 1.2) "
+        "frame k -> k+1 on the luminance at the import resolution, area-averaged to N, pixels of N";
     meta["unit_scale"] = form.unit_map.scale;
     meta["unit_max"] = form.unit_map.max_radiance;
     meta["cloud_rule"] = cloud_rule_name(form.cloud_rule.rule);
     meta["cloud_threshold"] = form.cloud_rule.threshold;
     meta["images"] = "hdr_to_unit (sky/hdr_recovery.h): log(1 + L / unit_scale) / log(1 + unit_max / unit_scale)";
-    meta["cloud"] = "sky/cloud_mask.h rule on the sky encoded as a camera would (encode_sky_for_mask) at the import "
-                    "resolution, then majority over the pixels under each pixel of N";
+    meta["cloud"] =
+        "sky/cloud_mask.h rule on the sky encoded as a camera would (encode_sky_for_mask) at the import "
+        "resolution, then majority over the pixels under each pixel of N";
     write_file_atomic(path("meta.json"), meta.dump(2) + "\n");
     if (!o.quiet) std::printf("wrote %zu frames at %d px to %s\n", count, n, o.out.c_str());
 }

@@ -13,7 +13,9 @@ static void embree_error(void*, RTCError code, const char* message) {
 
 Accel::Accel(const Scene& scene) : scene_(scene) {
     device_ = rtcNewDevice("threads=0");
-    if (!device_) throw Error("Embree: could not create a device (error " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
+    if (!device_)
+        throw Error("Embree: could not create a device (error " + std::to_string(int(rtcGetDeviceError(nullptr))) +
+                    ")");
     rtcSetDeviceErrorFunction(device_, embree_error, nullptr);
 
     for (const Material& m : scene.materials)
@@ -30,7 +32,8 @@ Accel::Accel(const Scene& scene) : scene_(scene) {
             // Copies (not shared buffers): Embree wants padding past the last vertex.
             auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                                   3 * sizeof(float), mesh.positions.size()));
-            for (size_t k = 0; k < mesh.positions.size(); ++k) std::memcpy(v + 3 * k, mesh.positions[k].data(), 3 * sizeof(float));
+            for (size_t k = 0; k < mesh.positions.size(); ++k)
+                std::memcpy(v + 3 * k, mesh.positions[k].data(), 3 * sizeof(float));
             auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                                                        3 * sizeof(uint32_t), mesh.triangle_count()));
             std::memcpy(idx, mesh.indices.data(), mesh.triangle_count() * 3 * sizeof(uint32_t));
@@ -127,7 +130,8 @@ bool Accel::intersect(const Ray& ray, SurfaceHit* hit) const {
         Vec4 t = b0 * mesh.tangents[i0] + b1 * mesh.tangents[i1] + b2 * mesh.tangents[i2];
         Vec3 tw = instance.transform.linear() * t.head<3>();
         float l = tw.norm();
-        hit->tangent = l > 0 ? Vec4(tw.x() / l, tw.y() / l, tw.z() / l, mesh.tangents[i0].w() < 0 ? -1.0f : 1.0f) : Vec4::Zero();
+        hit->tangent = l > 0 ? Vec4(tw.x() / l, tw.y() / l, tw.z() / l, mesh.tangents[i0].w() < 0 ? -1.0f : 1.0f)
+                             : Vec4::Zero();
     } else {
         hit->tangent = Vec4::Zero();
     }
@@ -135,7 +139,8 @@ bool Accel::intersect(const Ray& ray, SurfaceHit* hit) const {
         const auto& uv = mesh.texcoords[k];
         hit->texcoord[k] = uv.empty() ? Vec2::Zero() : Vec2(b0 * uv[i0] + b1 * uv[i1] + b2 * uv[i2]);
     }
-    hit->color = mesh.colors.empty() ? Vec4::Ones() : Vec4(b0 * mesh.colors[i0] + b1 * mesh.colors[i1] + b2 * mesh.colors[i2]);
+    hit->color = mesh.colors.empty() ? Vec4::Ones()
+                                     : Vec4(b0 * mesh.colors[i0] + b1 * mesh.colors[i1] + b2 * mesh.colors[i2]);
     return true;
 }
 

@@ -21,8 +21,8 @@ struct Ray {
 struct SurfaceHit {
     float t = 0;
     Vec3 position;
-    Vec3 geometric_normal;   // unit, from the triangle's winding (front side per glTF CCW)
-    Vec3 shading_normal;     // unit, interpolated vertex normal
+    Vec3 geometric_normal;            // unit, from the triangle's winding (front side per glTF CCW)
+    Vec3 shading_normal;              // unit, interpolated vertex normal
     Vec4 tangent = Vec4(0, 0, 0, 0);  // xyz unit, w handedness; zero if the mesh has none
     Vec2 texcoord[2] = {Vec2::Zero(), Vec2::Zero()};
     Vec4 color = Vec4::Ones();

@@ -32,7 +32,8 @@ class SpecularAlbedoTable {
         int x0 = std::min(int(x), kSize - 2), y0 = std::min(int(y), kSize - 2);
         float fx = x - x0, fy = y - y0;
         auto e = [&](int i, int j) { return albedo_[j * kSize + i]; };
-        return (1 - fy) * ((1 - fx) * e(x0, y0) + fx * e(x0 + 1, y0)) + fy * ((1 - fx) * e(x0, y0 + 1) + fx * e(x0 + 1, y0 + 1));
+        return (1 - fy) * ((1 - fx) * e(x0, y0) + fx * e(x0 + 1, y0)) +
+               fy * ((1 - fx) * e(x0, y0 + 1) + fx * e(x0 + 1, y0 + 1));
     }
     float average(float roughness) const {
         float y = clamp(roughness, 0.0f, 1.0f) * (kSize - 1);
@@ -79,7 +80,9 @@ class SpecularAlbedoTable {
 
 
 MetalRoughBsdf::MetalRoughBsdf(const Color& base_color, float metallic, float roughness, float specular)
-    : base_(base_color.max(0.0f).min(1.0f)), metallic_(clamp(metallic, 0.0f, 1.0f)), specular_(clamp(specular, 0.0f, 1.0f)) {
+    : base_(base_color.max(0.0f).min(1.0f)),
+      metallic_(clamp(metallic, 0.0f, 1.0f)),
+      specular_(clamp(specular, 0.0f, 1.0f)) {
     roughness_ = clamp(roughness, 0.0f, 1.0f);
     alpha_ = std::max(roughness_ * roughness_, kMinAlpha);
 }
@@ -138,8 +141,8 @@ Color MetalRoughBsdf::eval(const Vec3& wo, const Vec3& wi) const {
     float diffuse_weight = 1.0f;
     if (specular_ > 0) {
         float e_avg = specular_ * table.average(roughness_);
-        diffuse_weight = (1 - specular_ * table.albedo(wo.z(), roughness_)) * (1 - specular_ * table.albedo(wi.z(), roughness_)) /
-                         std::max(1 - e_avg, 1e-4f);
+        diffuse_weight = (1 - specular_ * table.albedo(wo.z(), roughness_)) *
+                         (1 - specular_ * table.albedo(wi.z(), roughness_)) / std::max(1 - e_avg, 1e-4f);
     }
     Color dielectric = diffuse_weight * base_ * kInvPi + Color::Constant(f_dielectric * spec);
     Color metal = (base_ + (1 - base_) * w) * spec;

@@ -10,10 +10,10 @@
 namespace dynsky {
 
 struct BsdfSample {
-    Vec3 wi;            // local frame
-    Color f;            // BSDF value (not multiplied by the cosine)
-    float pdf = 0;      // solid angle
-    bool delta = false; // unused by this model (roughness is clamped), kept for the integrator
+    Vec3 wi;             // local frame
+    Color f;             // BSDF value (not multiplied by the cosine)
+    float pdf = 0;       // solid angle
+    bool delta = false;  // unused by this model (roughness is clamped), kept for the integrator
 };
 
 class MetalRoughBsdf {

@@ -23,12 +23,17 @@ Scene make_builtin_scene() {
     using T = Eigen::Translation3f;
     add_mesh_instance(&scene, make_ground_quad_mesh(60.0f, ground), Eigen::Affine3f::Identity(), "ground");
     add_mesh_instance(&scene, make_sphere_mesh(128, 64, mirror), Eigen::Affine3f(T(0, 1, 0)), "mirror sphere");
-    add_mesh_instance(&scene, make_sphere_mesh(96, 48, gold), Eigen::Affine3f(T(2.4f, 0.7f, 1.0f) * Eigen::Scaling(0.7f)), "gold sphere");
-    add_mesh_instance(&scene, make_sphere_mesh(96, 48, plaster), Eigen::Affine3f(T(-2.3f, 0.8f, 0.8f) * Eigen::Scaling(0.8f)), "plaster sphere");
+    add_mesh_instance(&scene, make_sphere_mesh(96, 48, gold),
+                      Eigen::Affine3f(T(2.4f, 0.7f, 1.0f) * Eigen::Scaling(0.7f)), "gold sphere");
+    add_mesh_instance(&scene, make_sphere_mesh(96, 48, plaster),
+                      Eigen::Affine3f(T(-2.3f, 0.8f, 0.8f) * Eigen::Scaling(0.8f)), "plaster sphere");
     // A tower block behind: brick body with a glass curtain wall facing the camera.
-    add_mesh_instance(&scene, make_box_mesh(Vec3(-1.5f, 0, -7), Vec3(1.5f, 9, -4), brick), Eigen::Affine3f::Identity(), "tower");
-    add_mesh_instance(&scene, make_box_mesh(Vec3(-1.3f, 0.5f, -4.02f), Vec3(1.3f, 8.5f, -3.98f), glass), Eigen::Affine3f::Identity(), "curtain wall");
-    add_mesh_instance(&scene, make_box_mesh(Vec3(3.5f, 0, -5), Vec3(6.5f, 3.5f, -2), plaster), Eigen::Affine3f::Identity(), "house");
+    add_mesh_instance(&scene, make_box_mesh(Vec3(-1.5f, 0, -7), Vec3(1.5f, 9, -4), brick), Eigen::Affine3f::Identity(),
+                      "tower");
+    add_mesh_instance(&scene, make_box_mesh(Vec3(-1.3f, 0.5f, -4.02f), Vec3(1.3f, 8.5f, -3.98f), glass),
+                      Eigen::Affine3f::Identity(), "curtain wall");
+    add_mesh_instance(&scene, make_box_mesh(Vec3(3.5f, 0, -5), Vec3(6.5f, 3.5f, -2), plaster),
+                      Eigen::Affine3f::Identity(), "house");
 
     Camera cam;
     cam.name = "plaza";

@@ -49,7 +49,8 @@ void Distribution2D::sum_blocks(int y) {
             __m128 s = zero;
             for (int x = b * kBlock; x < (b + 1) * kBlock; x += 8) {
                 __m128i j8 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(base + x));
-                __m128 j0 = _mm_cvtepi32_ps(_mm_unpacklo_epi16(j8, zi)), j1 = _mm_cvtepi32_ps(_mm_unpackhi_epi16(j8, zi));
+                __m128 j0 = _mm_cvtepi32_ps(_mm_unpacklo_epi16(j8, zi)),
+                       j1 = _mm_cvtepi32_ps(_mm_unpackhi_epi16(j8, zi));
                 s = _mm_add_ps(s, _mm_max_ps(_mm_sub_ps(_mm_loadu_ps(w + x), _mm_mul_ps(f, j0)), zero));
                 s = _mm_add_ps(s, _mm_max_ps(_mm_sub_ps(_mm_loadu_ps(w + x + 4), _mm_mul_ps(f, j1)), zero));
             }
@@ -138,7 +139,8 @@ float Distribution2D::pdf(const Vec2& xy) const {
 }
 
 size_t Distribution2D::memory_bytes() const {
-    return weights_.capacity() * sizeof(float) + block_sums_.capacity() * sizeof(float) + marginal_.capacity() * sizeof(double);
+    return weights_.capacity() * sizeof(float) + block_sums_.capacity() * sizeof(float) +
+           marginal_.capacity() * sizeof(double);
 }
 
 }  // namespace dynsky

@@ -55,9 +55,9 @@ class Distribution2D {
     void sum_blocks(int y);
     void finish_marginal();
     int width_ = 0, height_ = 0, blocks_ = 0;
-    std::vector<float> weights_;       // H x W cell weights
-    std::vector<float> block_sums_;    // H x blocks_: running sums of each row's block totals
-    std::vector<double> marginal_;     // H + 1 running sums of the row totals (first is 0)
+    std::vector<float> weights_;     // H x W cell weights
+    std::vector<float> block_sums_;  // H x blocks_: running sums of each row's block totals
+    std::vector<double> marginal_;   // H + 1 running sums of the row totals (first is 0)
     const uint16_t* baseline_ = nullptr;
     float offset_ = 0;
     double total_ = 0;

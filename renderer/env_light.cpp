@@ -31,8 +31,8 @@ const Distribution2D& EnvLight::distribution() const {
 }
 
 size_t EnvLight::memory_bytes() const {
-    return weights_.capacity() * sizeof(float) + (jacobian_table_.capacity() + jacobian_pair_table_.capacity()) * sizeof(uint16_t) +
-           sampler_->memory_bytes();
+    return weights_.capacity() * sizeof(float) +
+           (jacobian_table_.capacity() + jacobian_pair_table_.capacity()) * sizeof(uint16_t) + sampler_->memory_bytes();
 }
 
 // Radiance as sampled: NaN, infinite and negative channels count as 0.
@@ -84,14 +84,17 @@ bool weigh_row_fast(const float* rgb, const uint16_t* jt, int n, float* w, RowSu
             __m128 t1 = _mm_shuffle_ps(b, c, _MM_SHUFFLE(2, 1, 3, 2));  // r2 g2 r3 g3
             __m128 r = _mm_shuffle_ps(t0, t1, _MM_SHUFFLE(2, 0, 1, 0));
             __m128 g = _mm_shuffle_ps(_mm_shuffle_ps(a, t0, _MM_SHUFFLE(2, 2, 1, 1)), t1, _MM_SHUFFLE(3, 1, 2, 0));
-            __m128 bl = _mm_shuffle_ps(_mm_shuffle_ps(a, t0, _MM_SHUFFLE(3, 3, 2, 2)), _mm_shuffle_ps(c, c, _MM_SHUFFLE(3, 3, 0, 0)),
-                                       _MM_SHUFFLE(2, 0, 2, 0));
+            __m128 bl = _mm_shuffle_ps(_mm_shuffle_ps(a, t0, _MM_SHUFFLE(3, 3, 2, 2)),
+                                       _mm_shuffle_ps(c, c, _MM_SHUFFLE(3, 3, 0, 0)), _MM_SHUFFLE(2, 0, 2, 0));
             __m128i pairs = _mm_loadu_si128(reinterpret_cast<const __m128i*>(jt + 2 * i));  // jac x 4, cos x jac x 4
-            __m128 jac = _mm_cvtepi32_ps(_mm_unpacklo_epi16(pairs, zero)), cjac = _mm_cvtepi32_ps(_mm_unpackhi_epi16(pairs, zero));
-            __m128 wi = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(kr, r), _mm_mul_ps(kg, g)), _mm_mul_ps(kb, bl)), jac);
+            __m128 jac = _mm_cvtepi32_ps(_mm_unpacklo_epi16(pairs, zero)),
+                   cjac = _mm_cvtepi32_ps(_mm_unpackhi_epi16(pairs, zero));
+            __m128 wi = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(kr, r), _mm_mul_ps(kg, g)), _mm_mul_ps(kb, bl)),
+                                   jac);
             _mm_storeu_ps(w + i, wi);
             vw = _mm_add_ps(vw, wi);
-            vr = _mm_add_ps(vr, _mm_mul_ps(r, cjac)), vg = _mm_add_ps(vg, _mm_mul_ps(g, cjac)), vb = _mm_add_ps(vb, _mm_mul_ps(bl, cjac));
+            vr = _mm_add_ps(vr, _mm_mul_ps(r, cjac)), vg = _mm_add_ps(vg, _mm_mul_ps(g, cjac)),
+            vb = _mm_add_ps(vb, _mm_mul_ps(bl, cjac));
             vsign = _mm_or_ps(vsign, _mm_or_ps(a, _mm_or_ps(b, c)));
         }
         alignas(16) float lanes[4][4];
@@ -120,15 +123,19 @@ bool weigh_row_fast(const float* rgb, const uint16_t* jt, int n, float* w, RowSu
 float EnvLight::jacobian_from_r2(float r2) {
     // sin(x)/x = sum (-1)^k x^(2k) / (2k+1)!, x^2 = (pi^2/4) r^2 <= 2.47: error < 1e-9 with 7 terms.
     float x2 = (kPi * kPi / 4) * r2;
-    float s = 1.0f + x2 * (-1.0f / 6 + x2 * (1.0f / 120 + x2 * (-1.0f / 5040 + x2 * (1.0f / 362880 +
-              x2 * (-1.0f / 39916800 + x2 * (1.0f / 6227020800.0f))))));
+    float s = 1.0f + x2 * (-1.0f / 6 +
+                           x2 * (1.0f / 120 +
+                                 x2 * (-1.0f / 5040 +
+                                       x2 * (1.0f / 362880 + x2 * (-1.0f / 39916800 + x2 * (1.0f / 6227020800.0f))))));
     return (kPi * kPi / 4) * s;
 }
 
 float EnvLight::cos_theta_from_r2(float r2) {
     float x2 = (kPi * kPi / 4) * r2;
-    return 1.0f + x2 * (-1.0f / 2 + x2 * (1.0f / 24 + x2 * (-1.0f / 720 + x2 * (1.0f / 40320 +
-           x2 * (-1.0f / 3628800 + x2 * (1.0f / 479001600.0f))))));
+    return 1.0f +
+           x2 * (-1.0f / 2 +
+                 x2 * (1.0f / 24 +
+                       x2 * (-1.0f / 720 + x2 * (1.0f / 40320 + x2 * (-1.0f / 3628800 + x2 * (1.0f / 479001600.0f))))));
 }
 
 void EnvLight::set_sky(std::shared_ptr<const SkyImage> sky) {

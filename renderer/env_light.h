@@ -25,9 +25,9 @@
 namespace dynsky {
 
 struct EnvLightSample {
-    Vec3 wi;       // world direction towards the light
+    Vec3 wi;  // world direction towards the light
     Color radiance;
-    float pdf = 0; // solid angle
+    float pdf = 0;  // solid angle
 };
 
 class EnvLight {
@@ -50,7 +50,7 @@ class EnvLight {
 
     float ground_albedo() const { return ground_albedo_; }
     Color ground_radiance() const { return ground_radiance_; }
-    Color sky_irradiance() const { return sky_irradiance_; }   // on a horizontal plane, W m^-2 per channel
+    Color sky_irradiance() const { return sky_irradiance_; }  // on a horizontal plane, W m^-2 per channel
     float sky_probability() const { return sky_probability_; }
     const SkyImage& sky() const { return *sky_; }
     // The CDF of the "cdf" sampler (an empty one for other samplers).
@@ -82,7 +82,7 @@ class EnvLight {
     std::shared_ptr<const SkyImage> sky_;
     SkySamplerOptions sampler_options_;
     std::unique_ptr<SkySampler> sampler_;
-    std::vector<float> weights_;               // per pixel luminance x jacobian (fixed-point scale)
+    std::vector<float> weights_;  // per pixel luminance x jacobian (fixed-point scale)
     std::vector<RowSums> row_sums_;
     size_t bad_pixels_ = 0;
     // Per pixel dw/(du dv) in fixed point (0 off the disc), alone (read by the samplers' pass) and

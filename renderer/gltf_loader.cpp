@@ -83,8 +83,8 @@ uint32_t read_u32(const unsigned char* p) {
 // The image callback given to tinygltf: keep the encoded bytes and decode later, in parallel and
 // only for images a material uses. Images in a bufferView are read later from the (validated)
 // view, so tinygltf's unchecked pointer into the buffer is never dereferenced.
-bool keep_encoded_image(tg::Image* image, const int, std::string*, std::string*, int, int,
-                        const unsigned char* bytes, int size, void*) {
+bool keep_encoded_image(tg::Image* image, const int, std::string*, std::string*, int, int, const unsigned char* bytes,
+                        int size, void*) {
     if (image->bufferView >= 0) return true;
     image->image.assign(bytes, bytes + std::max(size, 0));
     image->as_is = true;
@@ -160,10 +160,13 @@ void copy_components(int component_type, const unsigned char* src, size_t stride
                      bool normalized, Out* dst) {
     switch (component_type) {
         case TINYGLTF_COMPONENT_TYPE_BYTE: return copy_typed<Out, int8_t>(src, stride, count, ncomp, normalized, dst);
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return copy_typed<Out, uint8_t>(src, stride, count, ncomp, normalized, dst);
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+            return copy_typed<Out, uint8_t>(src, stride, count, ncomp, normalized, dst);
         case TINYGLTF_COMPONENT_TYPE_SHORT: return copy_typed<Out, int16_t>(src, stride, count, ncomp, normalized, dst);
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return copy_typed<Out, uint16_t>(src, stride, count, ncomp, normalized, dst);
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return copy_typed<Out, uint32_t>(src, stride, count, ncomp, normalized, dst);
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+            return copy_typed<Out, uint16_t>(src, stride, count, ncomp, normalized, dst);
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+            return copy_typed<Out, uint32_t>(src, stride, count, ncomp, normalized, dst);
         case TINYGLTF_COMPONENT_TYPE_FLOAT: return copy_typed<Out, float>(src, stride, count, ncomp, normalized, dst);
     }
 }
@@ -213,7 +216,8 @@ class GltfLoader {
         build_textures();
         traverse_nodes();
         if (!model_.animations.empty())
-            warn(std::to_string(model_.animations.size()) + " animation(s) ignored: the scene is rendered in its rest pose");
+            warn(std::to_string(model_.animations.size()) +
+                 " animation(s) ignored: the scene is rendered in its rest pose");
         scene_.warnings = warnings_;
         return std::move(scene_);
     }
@@ -243,7 +247,8 @@ class GltfLoader {
     }
 
     void check_glb_header(const std::vector<unsigned char>& b) const {
-        if (b.size() < 12) fail("truncated GLB: " + std::to_string(b.size()) + " bytes, shorter than the 12-byte header");
+        if (b.size() < 12)
+            fail("truncated GLB: " + std::to_string(b.size()) + " bytes, shorter than the 12-byte header");
         uint32_t version = read_u32(&b[4]), length = read_u32(&b[8]);
         if (version != 2) fail("GLB container version " + std::to_string(version) + " (only glTF 2.0 is supported)");
         if (length > b.size())
@@ -271,7 +276,8 @@ class GltfLoader {
             size_t first = 0;
             while (first < bytes.size() && std::isspace(bytes[first])) ++first;
             // UTF-8 byte order mark, which some exporters write before the JSON.
-            if (first + 3 <= bytes.size() && bytes[first] == 0xEF && bytes[first + 1] == 0xBB && bytes[first + 2] == 0xBF)
+            if (first + 3 <= bytes.size() && bytes[first] == 0xEF && bytes[first + 1] == 0xBB &&
+                bytes[first + 2] == 0xBF)
                 first += 3;
             if (first >= bytes.size() || bytes[first] != '{') fail(describe_foreign_bytes(bytes));
         } else {
@@ -282,9 +288,11 @@ class GltfLoader {
         gltf.SetImageLoader(&keep_encoded_image, nullptr);
         std::string err, warn_text;
         std::string base_dir = std::filesystem::path(path_).parent_path().string();
-        bool ok = binary ? gltf.LoadBinaryFromMemory(&model_, &err, &warn_text, bytes.data(), unsigned(bytes.size()), base_dir)
-                         : gltf.LoadASCIIFromString(&model_, &err, &warn_text, reinterpret_cast<const char*>(bytes.data()),
-                                                    unsigned(bytes.size()), base_dir);
+        bool ok = binary
+                      ? gltf.LoadBinaryFromMemory(&model_, &err, &warn_text, bytes.data(), unsigned(bytes.size()),
+                                                  base_dir)
+                      : gltf.LoadASCIIFromString(&model_, &err, &warn_text, reinterpret_cast<const char*>(bytes.data()),
+                                                 unsigned(bytes.size()), base_dir);
         if (!ok) {
             std::vector<std::string> lines = split_lines(err);
             std::string text = join(lines, "; ");
@@ -303,7 +311,8 @@ class GltfLoader {
         // Missing external images are only warnings in tinygltf: build_textures() turns them into
         // errors when a material needs them. Keep other tinygltf warnings.
         for (const std::string& l : split_lines(warn_text))
-            if (l.rfind("File not found", 0) != 0 && l.find("Failed to load external 'uri' for image") == std::string::npos)
+            if (l.rfind("File not found", 0) != 0 &&
+                l.find("Failed to load external 'uri' for image") == std::string::npos)
                 warn("tinygltf: " + l);
     }
 
@@ -314,10 +323,10 @@ class GltfLoader {
         for (const std::string& e : model_.extensionsUsed)
             if (!supported_extensions().count(e)) {
                 if (e == "KHR_materials_specular")
-                    warn("extension 'KHR_materials_specular' is only partly supported: specularFactor is used, "
-                         "specularColorFactor and the textures are ignored");
-                else
-                    warn("extension " + in_quotes(e) + " is not supported: ignored");
+                    warn(
+                        "extension 'KHR_materials_specular' is only partly supported: specularFactor is used, "
+                        "specularColorFactor and the textures are ignored");
+                else warn("extension " + in_quotes(e) + " is not supported: ignored");
             }
     }
 
@@ -375,10 +384,9 @@ class GltfLoader {
         }
         size_t csize = component_size(a.componentType);
         if (csize == 0) fail(what + " has invalid componentType " + std::to_string(a.componentType));
-        if (std::is_same_v<Out, uint32_t> &&
-            !(a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
-              a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ||
-              a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT))
+        if (std::is_same_v<Out, uint32_t> && !(a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                                               a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ||
+                                               a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT))
             fail(what + " must have an unsigned integer componentType, not " + std::to_string(a.componentType));
         int ncomp = component_count(a.type);
         if (components_out) *components_out = ncomp;
@@ -386,7 +394,8 @@ class GltfLoader {
         size_t count = a.count;
         // An accessor without a bufferView is all zeros: cap its size so a hostile count cannot
         // exhaust memory (real data is bounded by its bufferView below).
-        if (a.bufferView < 0 && count > (size_t(1) << 28)) fail(what + " has an implausible count " + std::to_string(count));
+        if (a.bufferView < 0 && count > (size_t(1) << 28))
+            fail(what + " has an implausible count " + std::to_string(count));
 
         std::vector<Out> out;
         if (a.bufferView >= 0) {
@@ -415,13 +424,14 @@ class GltfLoader {
                 fail(what + ": sparse indices must be unsigned integers");
             size_t n = size_t(sp.count), isize = component_size(ict);
             std::vector<uint32_t> sparse_indices(n);
-            copy_components<uint32_t>(ict, view_span(sp.indices.bufferView, size_t(sp.indices.byteOffset), n, isize, isize,
-                                                     what + " sparse indices"),
+            copy_components<uint32_t>(ict,
+                                      view_span(sp.indices.bufferView, size_t(sp.indices.byteOffset), n, isize, isize,
+                                                what + " sparse indices"),
                                       isize, n, 1, false, sparse_indices.data());
             std::vector<Out> values(n * size_t(ncomp));
             copy_components<Out>(a.componentType,
-                                 view_span(sp.values.bufferView, size_t(sp.values.byteOffset), n, element_size, element_size,
-                                           what + " sparse values"),
+                                 view_span(sp.values.bufferView, size_t(sp.values.byteOffset), n, element_size,
+                                           element_size, what + " sparse values"),
                                  element_size, n, ncomp, a.normalized, values.data());
             for (size_t k = 0; k < n; ++k) {
                 size_t target = sparse_indices[k];
@@ -464,9 +474,11 @@ class GltfLoader {
             return;
         }
         if (size_t(t.source) >= model_.images.size())
-            fail("texture " + std::to_string(texture) + " refers to image " + std::to_string(t.source) + ", which does not exist");
+            fail("texture " + std::to_string(texture) + " refers to image " + std::to_string(t.source) +
+                 ", which does not exist");
         if (t.sampler >= 0 && size_t(t.sampler) >= model_.samplers.size())
-            fail("texture " + std::to_string(texture) + " refers to sampler " + std::to_string(t.sampler) + ", which does not exist");
+            fail("texture " + std::to_string(texture) + " refers to sampler " + std::to_string(t.sampler) +
+                 ", which does not exist");
         slot->texcoord = texcoord;
         slot->scale = scale;
         if (const tg::Value* tt = extension(extensions, "KHR_texture_transform")) {
@@ -474,10 +486,12 @@ class GltfLoader {
             Vec2 sc = vec2_or(member(*tt, "scale"), Vec2(1, 1));
             float rotation = float(number_or(member(*tt, "rotation"), 0.0));
             slot->uv_transform = texture_transform_matrix(offset, rotation, sc);
-            if (const tg::Value* tc = member(*tt, "texCoord"); tc && tc->IsNumber()) slot->texcoord = tc->GetNumberAsInt();
+            if (const tg::Value* tc = member(*tt, "texCoord"); tc && tc->IsNumber())
+                slot->texcoord = tc->GetNumberAsInt();
         }
         if (slot->texcoord < 0 || slot->texcoord > 1) {
-            warn(what + " uses TEXCOORD_" + std::to_string(slot->texcoord) + ": only TEXCOORD_0 and TEXCOORD_1 are read, using 0");
+            warn(what + " uses TEXCOORD_" + std::to_string(slot->texcoord) +
+                 ": only TEXCOORD_0 and TEXCOORD_1 are read, using 0");
             slot->texcoord = 0;
         }
         TextureRequest key{t.source, t.sampler, srgb};
@@ -497,13 +511,14 @@ class GltfLoader {
             std::string what = "material " + in_quotes(out.name);
             const tg::PbrMetallicRoughness& pbr = m.pbrMetallicRoughness;
             if (pbr.baseColorFactor.size() == 4) {
-                out.base_color = Color(float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]), float(pbr.baseColorFactor[2]));
+                out.base_color = Color(float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]),
+                                       float(pbr.baseColorFactor[2]));
                 out.base_alpha = float(pbr.baseColorFactor[3]);
             }
             out.metallic = clamp(float(pbr.metallicFactor), 0.0f, 1.0f);
             out.roughness = clamp(float(pbr.roughnessFactor), 0.0f, 1.0f);
-            read_slot(pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, pbr.baseColorTexture.extensions, true, 1.0f,
-                      &out.base_color_texture, what + " baseColorTexture");
+            read_slot(pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, pbr.baseColorTexture.extensions, true,
+                      1.0f, &out.base_color_texture, what + " baseColorTexture");
             read_slot(pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord,
                       pbr.metallicRoughnessTexture.extensions, false, 1.0f, &out.metallic_roughness_texture,
                       what + " metallicRoughnessTexture");
@@ -514,7 +529,8 @@ class GltfLoader {
             read_slot(m.emissiveTexture.index, m.emissiveTexture.texCoord, m.emissiveTexture.extensions, true, 1.0f,
                       &out.emissive_texture, what + " emissiveTexture");
             if (m.emissiveFactor.size() == 3)
-                out.emissive = Color(float(m.emissiveFactor[0]), float(m.emissiveFactor[1]), float(m.emissiveFactor[2]));
+                out.emissive = Color(float(m.emissiveFactor[0]), float(m.emissiveFactor[1]),
+                                     float(m.emissiveFactor[2]));
             if (const tg::Value* es = extension(m.extensions, "KHR_materials_emissive_strength"))
                 out.emissive *= float(number_or(member(*es, "emissiveStrength"), 1.0));
             if (const tg::Value* sp = extension(m.extensions, "KHR_materials_specular"))
@@ -576,12 +592,14 @@ class GltfLoader {
             tg::Image img;
             std::string err, warn_text;
             if (encoded[k].second > size_t(std::numeric_limits<int>::max()) ||
-                !tg::LoadImageData(&img, images[k], &err, &warn_text, 0, 0, encoded[k].first, int(encoded[k].second), nullptr)) {
+                !tg::LoadImageData(&img, images[k], &err, &warn_text, 0, 0, encoded[k].first, int(encoded[k].second),
+                                   nullptr)) {
                 decoded[k].error = join(split_lines(err), "; ");
                 return;
             }
             size_t n = size_t(img.width) * size_t(img.height) * 4;
-            if (img.component != 4 || (img.bits != 8 && img.bits != 16) || img.image.size() != n * size_t(img.bits / 8)) {
+            if (img.component != 4 || (img.bits != 8 && img.bits != 16) ||
+                img.image.size() != n * size_t(img.bits / 8)) {
                 decoded[k].error = "unexpected decoded layout";
                 return;
             }
@@ -604,8 +622,8 @@ class GltfLoader {
             if (!decoded[k].error.empty()) {
                 const tg::Image& img = model_.images[size_t(images[k])];
                 std::string name = !img.uri.empty() ? img.uri : img.name;
-                fail("cannot decode image " + std::to_string(images[k]) + (name.empty() ? "" : " " + in_quotes(name)) + ": " +
-                     decoded[k].error);
+                fail("cannot decode image " + std::to_string(images[k]) + (name.empty() ? "" : " " + in_quotes(name)) +
+                     ": " + decoded[k].error);
             }
         for (size_t i = 0; i < model_.images.size(); ++i) {
             const tg::Image& img = model_.images[i];
@@ -617,7 +635,8 @@ class GltfLoader {
         // Per image, the last texture made from it takes its pixels instead of copying them.
         std::vector<std::vector<size_t>> requests_of_image(images.size());
         for (size_t r = 0; r < requests_.size(); ++r)
-            requests_of_image[size_t(std::lower_bound(images.begin(), images.end(), requests_[r].image) - images.begin())]
+            requests_of_image[size_t(std::lower_bound(images.begin(), images.end(), requests_[r].image) -
+                                     images.begin())]
                 .push_back(r);
         scene_.textures.resize(requests_.size());
         tbb::parallel_for(size_t(0), images.size(), [&](size_t k) {
@@ -633,7 +652,9 @@ class GltfLoader {
                     if (s.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST) filter = TextureFilter::Nearest;
                 }
                 const tg::Image& img = model_.images[size_t(req.image)];
-                std::string name = !img.name.empty() ? img.name : !img.uri.empty() ? img.uri : "image " + std::to_string(req.image);
+                std::string name = !img.name.empty()  ? img.name
+                                   : !img.uri.empty() ? img.uri
+                                                      : "image " + std::to_string(req.image);
                 std::vector<float> rgba = u + 1 == users.size() ? std::move(decoded[k].rgba) : decoded[k].rgba;
                 scene_.textures[users[u]] = std::make_shared<Texture>(name, decoded[k].width, decoded[k].height,
                                                                       std::move(rgba), req.srgb, ws, wt, filter);
@@ -648,8 +669,9 @@ class GltfLoader {
         std::vector<uint32_t> tri;
         size_t n = v.size();
         if (mode == TINYGLTF_MODE_TRIANGLES) {
-            if (n % 3) warn(what + ": " + std::to_string(n) + " indices is not a multiple of 3, the last " +
-                            std::to_string(n % 3) + " ignored");
+            if (n % 3)
+                warn(what + ": " + std::to_string(n) + " indices is not a multiple of 3, the last " +
+                     std::to_string(n % 3) + " ignored");
             tri.assign(v.begin(), v.begin() + std::ptrdiff_t(n - n % 3));
         } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
             for (size_t i = 0; i + 2 < n; ++i) {
@@ -679,7 +701,8 @@ class GltfLoader {
             warn(what + ": points and lines are not rendered, skipped");
             return false;
         }
-        if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+        if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+            mode != TINYGLTF_MODE_TRIANGLE_FAN) {
             warn(what + ": unknown primitive mode " + std::to_string(mode) + ", skipped");
             return false;
         }
@@ -718,11 +741,14 @@ class GltfLoader {
         auto read_matching = [&](const char* name, std::initializer_list<int> types) {
             FloatArray f = read_floats(attr(name), what + " " + name, types);
             if (f.count != n)
-                fail(what + ": " + name + " has " + std::to_string(f.count) + " elements but POSITION has " + std::to_string(n));
+                fail(what + ": " + name + " has " + std::to_string(f.count) + " elements but POSITION has " +
+                     std::to_string(n));
             return f;
         };
-        if (attr("TEXCOORD_0") >= 0) mesh->texcoords[0] = to_vectors<2>(read_matching("TEXCOORD_0", {TINYGLTF_TYPE_VEC2}));
-        if (attr("TEXCOORD_1") >= 0) mesh->texcoords[1] = to_vectors<2>(read_matching("TEXCOORD_1", {TINYGLTF_TYPE_VEC2}));
+        if (attr("TEXCOORD_0") >= 0)
+            mesh->texcoords[0] = to_vectors<2>(read_matching("TEXCOORD_0", {TINYGLTF_TYPE_VEC2}));
+        if (attr("TEXCOORD_1") >= 0)
+            mesh->texcoords[1] = to_vectors<2>(read_matching("TEXCOORD_1", {TINYGLTF_TYPE_VEC2}));
         if (attr("COLOR_0") >= 0) {
             FloatArray c = read_matching("COLOR_0", {TINYGLTF_TYPE_VEC3, TINYGLTF_TYPE_VEC4});
             mesh->colors.resize(n);
@@ -754,7 +780,8 @@ class GltfLoader {
                 smooth.positions = mesh->positions, smooth.indices = mesh->indices;
                 generate_smooth_normals(smooth);
                 for (size_t i = 0; i < n; ++i)
-                    if (!(std::abs(mesh->normals[i].squaredNorm() - 1.0f) < 1e-3f)) mesh->normals[i] = smooth.normals[i];
+                    if (!(std::abs(mesh->normals[i].squaredNorm() - 1.0f) < 1e-3f))
+                        mesh->normals[i] = smooth.normals[i];
                 warn(what + ": some normals were zero or not finite and were regenerated");
             }
             if (attr("TANGENT") >= 0) {
@@ -806,7 +833,8 @@ class GltfLoader {
         }
         Eigen::Vector3d t = Eigen::Vector3d::Zero(), s = Eigen::Vector3d::Ones();
         Eigen::Quaterniond r = Eigen::Quaterniond::Identity();
-        if (node.translation.size() == 3) t = Eigen::Vector3d(node.translation[0], node.translation[1], node.translation[2]);
+        if (node.translation.size() == 3)
+            t = Eigen::Vector3d(node.translation[0], node.translation[1], node.translation[2]);
         if (node.scale.size() == 3) s = Eigen::Vector3d(node.scale[0], node.scale[1], node.scale[2]);
         if (node.rotation.size() == 4) {
             // glTF stores (x, y, z, w); Eigen's constructor takes (w, x, y, z).
@@ -860,7 +888,9 @@ class GltfLoader {
             fail("node " + std::to_string(node_index) + " refers to camera " + std::to_string(node.camera) +
                  ", which does not exist");
         const tg::Camera& c = model_.cameras[size_t(node.camera)];
-        std::string name = !c.name.empty() ? c.name : !node.name.empty() ? node.name : "camera " + std::to_string(node.camera);
+        std::string name = !c.name.empty()      ? c.name
+                           : !node.name.empty() ? node.name
+                                                : "camera " + std::to_string(node.camera);
         if (c.type != "perspective") {
             warn("camera " + in_quotes(name) + " is " + (c.type.empty() ? std::string("untyped") : c.type) +
                  ": only perspective cameras are supported, skipped");
@@ -872,7 +902,9 @@ class GltfLoader {
         Eigen::Affine3f w = to_affine(world);
         cam.camera_to_world = Eigen::Translation3f(w.translation()) * w.rotation();
         if (c.perspective.yfov > 0 && c.perspective.yfov < kPiD) cam.yfov = float(c.perspective.yfov);
-        else warn("camera " + in_quotes(name) + ": invalid yfov " + std::to_string(c.perspective.yfov) + ", using the default");
+        else
+            warn("camera " + in_quotes(name) + ": invalid yfov " + std::to_string(c.perspective.yfov) +
+                 ", using the default");
         cam.aspect_ratio = c.perspective.aspectRatio > 0 ? float(c.perspective.aspectRatio) : 0.0f;
         cameras_.push_back({node.camera, node_index, std::move(cam)});
     }
@@ -885,8 +917,8 @@ class GltfLoader {
                 if (c < 0 || size_t(c) >= count)
                     fail("node " + std::to_string(i) + " has child " + std::to_string(c) + ", which does not exist");
                 if (parent[size_t(c)] >= 0)
-                    fail("node " + std::to_string(c) + " has two parents (" + std::to_string(parent[size_t(c)]) + " and " +
-                         std::to_string(i) + "): the node hierarchy must be a forest");
+                    fail("node " + std::to_string(c) + " has two parents (" + std::to_string(parent[size_t(c)]) +
+                         " and " + std::to_string(i) + "): the node hierarchy must be a forest");
                 parent[size_t(c)] = int(i);
             }
 
@@ -896,7 +928,8 @@ class GltfLoader {
             if (s < 0 || size_t(s) >= model_.scenes.size()) s = 0;
             roots = model_.scenes[size_t(s)].nodes;
             if (model_.scenes.size() > 1)
-                warn("the file has " + std::to_string(model_.scenes.size()) + " scenes: rendering scene " + std::to_string(s));
+                warn("the file has " + std::to_string(model_.scenes.size()) + " scenes: rendering scene " +
+                     std::to_string(s));
         } else {
             for (size_t i = 0; i < count; ++i)
                 if (parent[i] < 0) roots.push_back(int(i));
@@ -906,14 +939,16 @@ class GltfLoader {
         std::vector<char> visited(count, 0);
         std::vector<std::pair<int, Eigen::Matrix4d>> stack;
         for (auto it = roots.rbegin(); it != roots.rend(); ++it) {
-            if (*it < 0 || size_t(*it) >= count) fail("the scene refers to node " + std::to_string(*it) + ", which does not exist");
+            if (*it < 0 || size_t(*it) >= count)
+                fail("the scene refers to node " + std::to_string(*it) + ", which does not exist");
             stack.emplace_back(*it, Eigen::Matrix4d::Identity());
         }
         while (!stack.empty()) {
             auto [index, parent_world] = stack.back();
             stack.pop_back();
             if (visited[size_t(index)])
-                fail("node " + std::to_string(index) + " is reached twice (a cycle, or listed in the scene as well as a child)");
+                fail("node " + std::to_string(index) +
+                     " is reached twice (a cycle, or listed in the scene as well as a child)");
             visited[size_t(index)] = 1;
             const tg::Node& node = model_.nodes[size_t(index)];
             Eigen::Matrix4d world = parent_world * local_matrix(node);
@@ -926,7 +961,8 @@ class GltfLoader {
                     if (instances.empty()) {
                         scene_.instances.push_back({group, to_affine(world)});
                     } else {
-                        for (const Eigen::Matrix4d& m : instances) scene_.instances.push_back({group, to_affine(world * m)});
+                        for (const Eigen::Matrix4d& m : instances)
+                            scene_.instances.push_back({group, to_affine(world * m)});
                     }
                 }
             }

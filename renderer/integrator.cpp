@@ -33,8 +33,10 @@ float PathIntegrator::surface_alpha(const SurfaceHit& hit) const {
     const Material& m = *hit.material;
     float alpha = m.base_alpha * hit.color.w();
     if (m.base_color_texture.present())
-        alpha *= accel_.scene().textures[size_t(m.base_color_texture.texture)]->evaluate(
-            texture_uv(m.base_color_texture, hit)).w();
+        alpha *= accel_.scene()
+                     .textures[size_t(m.base_color_texture.texture)]
+                     ->evaluate(texture_uv(m.base_color_texture, hit))
+                     .w();
     return alpha;
 }
 
@@ -99,7 +101,8 @@ Color PathIntegrator::trace(const Ray& camera_ray_in, Rng& rng, RenderStats* sta
             }
             Color le = light_.radiance(w);
             if (use_bsdf_hits) {
-                float weight = settings_.strategy == LightStrategy::Mis ? power_heuristic(prev_bsdf_pdf, light_.pdf(w)) : 1.0f;
+                float weight = settings_.strategy == LightStrategy::Mis ? power_heuristic(prev_bsdf_pdf, light_.pdf(w))
+                                                                        : 1.0f;
                 L += beta * le * weight;
             }
             break;
@@ -127,7 +130,9 @@ Color PathIntegrator::trace(const Ray& camera_ray_in, Rng& rng, RenderStats* sta
                     shadow.direction = ls.wi;
                     float tr = transmittance(shadow, stats);
                     if (tr > 0) {
-                        float weight = settings_.strategy == LightStrategy::Mis ? power_heuristic(ls.pdf, bsdf.pdf(wo, wi)) : 1.0f;
+                        float weight = settings_.strategy == LightStrategy::Mis
+                                           ? power_heuristic(ls.pdf, bsdf.pdf(wo, wi))
+                                           : 1.0f;
                         L += beta * f * (wi.z() * tr * weight / ls.pdf) * ls.radiance;
                     }
                 }
@@ -193,8 +198,10 @@ RenderResult PathIntegrator::render(const Camera& camera) const {
                 Eigen::Array3d mean = sum / settings_.spp;
                 for (int k = 0; k < 3; ++k) result.color.at(x, y, k) = float(mean[k]);
                 if (settings_.compute_variance && settings_.spp > 1) {
-                    Eigen::Array3d var = (sum2 / settings_.spp - mean * mean) * (double(settings_.spp) / (settings_.spp - 1));
-                    for (int k = 0; k < 3; ++k) result.variance.at(x, y, k) = float(std::max(0.0, var[k]) / settings_.spp);
+                    Eigen::Array3d var = (sum2 / settings_.spp - mean * mean) *
+                                         (double(settings_.spp) / (settings_.spp - 1));
+                    for (int k = 0; k < 3; ++k)
+                        result.variance.at(x, y, k) = float(std::max(0.0, var[k]) / settings_.spp);
                 }
             }
         camera_rays += stats.camera_rays, extension_rays += stats.extension_rays, shadow_rays += stats.shadow_rays;

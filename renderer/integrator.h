@@ -20,8 +20,8 @@ enum class LightStrategy { Mis, LightOnly, BsdfOnly };
 struct RenderSettings {
     int width = 640, height = 360;
     int spp = 16;
-    int max_depth = 8;           // path vertices after the camera
-    int rr_start_depth = 3;      // Russian roulette from this depth on
+    int max_depth = 8;       // path vertices after the camera
+    int rr_start_depth = 3;  // Russian roulette from this depth on
     uint64_t seed = 0;
     LightStrategy strategy = LightStrategy::Mis;
     bool compute_variance = false;  // per-pixel variance of the pixel mean (for tests)

@@ -5,7 +5,9 @@ namespace dynsky {
 ShadingPoint evaluate_material(const Scene& scene, const SurfaceHit& hit, const Vec3& wo) {
     const Material& m = *hit.material;
     ShadingPoint sp;
-    auto tex = [&](const TextureSlot& slot) { return scene.textures[size_t(slot.texture)]->evaluate(texture_uv(slot, hit)); };
+    auto tex = [&](const TextureSlot& slot) {
+        return scene.textures[size_t(slot.texture)]->evaluate(texture_uv(slot, hit));
+    };
 
     sp.base_color = m.base_color * hit.color.head<3>().array();
     if (m.base_color_texture.present()) sp.base_color *= tex(m.base_color_texture).head<3>().array();
@@ -15,7 +17,8 @@ ShadingPoint evaluate_material(const Scene& scene, const SurfaceHit& hit, const 
         sp.roughness *= t.y(), sp.metallic *= t.z();
     }
     sp.emission = m.emissive;
-    if (m.emissive_texture.present() && (m.emissive > 0).any()) sp.emission *= tex(m.emissive_texture).head<3>().array();
+    if (m.emissive_texture.present() && (m.emissive > 0).any())
+        sp.emission *= tex(m.emissive_texture).head<3>().array();
     // occlusion_texture is not applied: a path tracer computes occlusion itself, and glTF defines
     // it as a rasteriser's approximation of exactly that.
 

@@ -9,7 +9,7 @@ struct ShadingPoint {
     Color base_color = Color::Ones();
     float metallic = 1, roughness = 1, specular = 1;
     Color emission = Color::Zero();
-    Vec3 geometric_normal;           // flipped to the side of wo
+    Vec3 geometric_normal;            // flipped to the side of wo
     Vec3 normal, tangent, bitangent;  // shading frame (normal-mapped), on the side of wo
 
     Vec3 to_local(const Vec3& w) const { return Vec3(w.dot(tangent), w.dot(bitangent), w.dot(normal)); }

@@ -29,7 +29,7 @@ struct Material {
     std::string name;
     Color base_color = Color::Ones();
     float base_alpha = 1.0f;
-    TextureSlot base_color_texture;          // sRGB RGBA
+    TextureSlot base_color_texture;  // sRGB RGBA
     float metallic = 1.0f, roughness = 1.0f;
     TextureSlot metallic_roughness_texture;  // linear: G roughness, B metallic
     float specular = 1.0f;                   // KHR_materials_specular specularFactor (0: pure Lambert base)
@@ -46,12 +46,12 @@ struct Material {
 // strips and fans are converted, and non-indexed primitives get 0..n-1 indices, by the loader.
 struct TriangleMesh {
     std::vector<Vec3> positions;
-    std::vector<Vec3> normals;              // per vertex, unit; generated when missing
-    std::vector<Vec4> tangents;             // xyz unit, w = handedness +-1; generated when missing
-    std::vector<Vec2> texcoords[2];         // TEXCOORD_0 and TEXCOORD_1 (empty when absent)
-    std::vector<Vec4> colors;               // COLOR_0 (empty when absent), multiplies base colour
-    std::vector<uint32_t> indices;          // 3 per triangle
-    int material = -1;                      // index into Scene::materials, -1 for the glTF default
+    std::vector<Vec3> normals;       // per vertex, unit; generated when missing
+    std::vector<Vec4> tangents;      // xyz unit, w = handedness +-1; generated when missing
+    std::vector<Vec2> texcoords[2];  // TEXCOORD_0 and TEXCOORD_1 (empty when absent)
+    std::vector<Vec4> colors;        // COLOR_0 (empty when absent), multiplies base colour
+    std::vector<uint32_t> indices;   // 3 per triangle
+    int material = -1;               // index into Scene::materials, -1 for the glTF default
     size_t triangle_count() const { return indices.size() / 3; }
 };
 
@@ -69,8 +69,8 @@ struct Instance {
 struct Camera {
     std::string name;
     Eigen::Affine3f camera_to_world = Eigen::Affine3f::Identity();  // camera looks down -Z, +Y up
-    float yfov = 0.8f;            // radians
-    float aspect_ratio = 0.0f;    // 0: take it from the image resolution
+    float yfov = 0.8f;                                              // radians
+    float aspect_ratio = 0.0f;                                      // 0: take it from the image resolution
 };
 
 struct Bounds3 {
@@ -83,16 +83,16 @@ struct Bounds3 {
 };
 
 struct Scene {
-    std::string source;                           // file it came from
+    std::string source;  // file it came from
     std::vector<MeshGroup> meshes;
     std::vector<Instance> instances;
     std::vector<Material> materials;
     std::vector<std::shared_ptr<Texture>> textures;
-    std::vector<Camera> cameras;                  // glTF perspective cameras, in file order
-    std::vector<std::string> warnings;            // e.g. extensions used but not supported
+    std::vector<Camera> cameras;        // glTF perspective cameras, in file order
+    std::vector<std::string> warnings;  // e.g. extensions used but not supported
 
     Bounds3 world_bounds() const;
-    size_t triangle_count() const;                // counting every instance
+    size_t triangle_count() const;  // counting every instance
     // The default glTF material (white, metallic 1, roughness 1) for primitives without one.
     static const Material& default_material();
     const Material& material(int index) const { return index < 0 ? default_material() : materials[size_t(index)]; }

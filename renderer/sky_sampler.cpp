@@ -251,8 +251,9 @@ class MipSampler : public PixelSampler {
             std::vector<float>& l0 = levels_[0];
             tbb::parallel_for(tbb::blocked_range<int>(0, s0, 8), [&](const tbb::blocked_range<int>& r) {
                 for (int y = r.begin(); y != r.end(); ++y)
-                    for (int x = 0; x < s0; ++x) l0[size_t(y) * s0 + x] = leaf(2 * x, 2 * y) + leaf(2 * x + 1, 2 * y) +
-                                                                          leaf(2 * x, 2 * y + 1) + leaf(2 * x + 1, 2 * y + 1);
+                    for (int x = 0; x < s0; ++x)
+                        l0[size_t(y) * s0 + x] = leaf(2 * x, 2 * y) + leaf(2 * x + 1, 2 * y) + leaf(2 * x, 2 * y + 1) +
+                                                 leaf(2 * x + 1, 2 * y + 1);
             });
             for (size_t k = 1; k < levels_.size(); ++k) {
                 const int s = s0 >> k, sp = 2 * s;
@@ -261,8 +262,10 @@ class MipSampler : public PixelSampler {
                 tbb::parallel_for(tbb::blocked_range<int>(0, s, 8), [&](const tbb::blocked_range<int>& r) {
                     for (int y = r.begin(); y != r.end(); ++y)
                         for (int x = 0; x < s; ++x)
-                            out[size_t(y) * s + x] = below[size_t(2 * y) * sp + 2 * x] + below[size_t(2 * y) * sp + 2 * x + 1] +
-                                                     below[size_t(2 * y + 1) * sp + 2 * x] + below[size_t(2 * y + 1) * sp + 2 * x + 1];
+                            out[size_t(y) * s + x] = below[size_t(2 * y) * sp + 2 * x] +
+                                                     below[size_t(2 * y) * sp + 2 * x + 1] +
+                                                     below[size_t(2 * y + 1) * sp + 2 * x] +
+                                                     below[size_t(2 * y + 1) * sp + 2 * x + 1];
                 });
             }
             total_ = levels_.back()[0];
@@ -288,7 +291,8 @@ class MipSampler : public PixelSampler {
         int x = 0, y = 0;
         for (int d = int(levels_.size()) - 2; d >= -1; --d) {
             x *= 2, y *= 2;
-            double left = double(node(d, x, y)) + node(d, x, y + 1), right = double(node(d, x + 1, y)) + node(d, x + 1, y + 1);
+            double left = double(node(d, x, y)) + node(d, x, y + 1),
+                   right = double(node(d, x + 1, y)) + node(d, x + 1, y + 1);
             if (!(left + right > 0)) return false;
             double pl = left / (left + right);
             if (ux < pl) {
@@ -339,7 +343,8 @@ class SunSplitSampler : public SkySampler {
             double a = std::min(double(u.x()) / sun_probability_, 1.0) * one_minus_cos_;
             double cos_t = 1 - a, sin_t = std::sqrt(std::max(0.0, a * (2 - a)));
             double phi = 2 * kPiD * u.y();
-            Vec3 d = (float(sin_t * std::cos(phi)) * t_ + float(sin_t * std::sin(phi)) * b_ + float(cos_t) * sun_).normalized();
+            Vec3 d = (float(sin_t * std::cos(phi)) * t_ + float(sin_t * std::sin(phi)) * b_ + float(cos_t) * sun_)
+                         .normalized();
             if (d.y() < 0) return false;  // the cone's part below the horizon: no sky sample
             *wi = d;
         } else {
@@ -385,10 +390,14 @@ class SunSplitSampler : public SkySampler {
         if (sky.sun_direction && sky.sun_direction->y() > 0) {
             Vec2 uv;
             fisheye::uv_from_direction(sky.sun_direction->normalized(), &uv);
-            ci = std::clamp(int((uv.x() + 1) * 0.5f * n), 0, n - 1), cj = std::clamp(int((uv.y() + 1) * 0.5f * n), 0, n - 1);
+            ci = std::clamp(int((uv.x() + 1) * 0.5f * n), 0, n - 1),
+            cj = std::clamp(int((uv.y() + 1) * 0.5f * n), 0, n - 1);
         } else {
             // Brightest pixel by luminance (weights are luminance x jacobian: divide it out).
-            struct Best { float l = -1; int i = 0, j = 0; };
+            struct Best {
+                float l = -1;
+                int i = 0, j = 0;
+            };
             Best best = tbb::parallel_reduce(
                 tbb::blocked_range<int>(0, n, 16), Best{},
                 [&](const tbb::blocked_range<int>& r, Best b) {
@@ -404,15 +413,17 @@ class SunSplitSampler : public SkySampler {
         }
         // Look in a window around the centre for the peak and the disc's bright pixels.
         const int win = std::max(4, n / 32);
-        const int i0 = std::max(0, ci - win), i1 = std::min(n - 1, ci + win), j0 = std::max(0, cj - win), j1 = std::min(n - 1, cj + win);
+        const int i0 = std::max(0, ci - win), i1 = std::min(n - 1, ci + win), j0 = std::max(0, cj - win),
+                  j1 = std::min(n - 1, cj + win);
         float peak = 0;
         int pi = ci, pj = cj;
         for (int j = j0; j <= j1; ++j)
             for (int i = i0; i <= i1; ++i)
                 if (lum(i, j) > peak) peak = lum(i, j), pi = i, pj = j;
         if (!(peak > kSunContrast * mean)) return 0;  // no sun standing out of the sky
-        Vec3 centre = sky.sun_direction && sky.sun_direction->y() > 0 ? Vec3(sky.sun_direction->normalized())
-                                                                     : fisheye::direction_from_uv(fisheye::pixel_center_uv(pi, pj, n));
+        Vec3 centre = sky.sun_direction && sky.sun_direction->y() > 0
+                          ? Vec3(sky.sun_direction->normalized())
+                          : fisheye::direction_from_uv(fisheye::pixel_center_uv(pi, pj, n));
         const float threshold = std::max(float(0.05 * peak), float(kSunContrast * mean));
         double max_angle = 0;
         for (int j = j0; j <= j1; ++j)
@@ -437,9 +448,11 @@ class SunSplitSampler : public SkySampler {
         double removed = 0;
         for (int j = std::max(0, pj - reach); j <= std::min(n - 1, pj + reach); ++j)
             for (int i = std::max(0, pi - reach); i <= std::min(n - 1, pi + reach); ++i) {
-                float u0 = 2.0f * i / n - 1, u1 = 2.0f * (i + 1) / n - 1, v0 = 2.0f * j / n - 1, v1 = 2.0f * (j + 1) / n - 1;
-                if (inside(u0, v0) && inside(u1, v0) && inside(u0, v1) && inside(u1, v1) && inside(0.5f * (u0 + u1), v0) &&
-                    inside(0.5f * (u0 + u1), v1) && inside(u0, 0.5f * (v0 + v1)) && inside(u1, 0.5f * (v0 + v1))) {
+                float u0 = 2.0f * i / n - 1, u1 = 2.0f * (i + 1) / n - 1, v0 = 2.0f * j / n - 1,
+                      v1 = 2.0f * (j + 1) / n - 1;
+                if (inside(u0, v0) && inside(u1, v0) && inside(u0, v1) && inside(u1, v1) &&
+                    inside(0.5f * (u0 + u1), v0) && inside(0.5f * (u0 + u1), v1) && inside(u0, 0.5f * (v0 + v1)) &&
+                    inside(u1, 0.5f * (v0 + v1))) {
                     removed += w[size_t(j) * n + i];
                     w[size_t(j) * n + i] = 0;
                 }
@@ -465,7 +478,9 @@ const char* method_name(SkySamplerMethod m) {
     return "?";
 }
 
-bool pixel_based(SkySamplerMethod m) { return m == SkySamplerMethod::Cdf || m == SkySamplerMethod::Alias || m == SkySamplerMethod::Mip; }
+bool pixel_based(SkySamplerMethod m) {
+    return m == SkySamplerMethod::Cdf || m == SkySamplerMethod::Alias || m == SkySamplerMethod::Mip;
+}
 
 std::unique_ptr<PixelSampler> make_pixel_sampler(SkySamplerMethod m) {
     switch (m) {

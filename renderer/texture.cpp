@@ -41,10 +41,15 @@ int wrap_index(int i, int n, TextureWrap wrap) {
 
 }  // namespace
 
-Texture::Texture(std::string name, int width, int height, std::vector<float> rgba, bool srgb,
-                 TextureWrap wrap_s, TextureWrap wrap_t, TextureFilter filter)
-    : name_(std::move(name)), width_(width), height_(height), rgba_(std::move(rgba)),
-      wrap_s_(wrap_s), wrap_t_(wrap_t), filter_(filter) {
+Texture::Texture(std::string name, int width, int height, std::vector<float> rgba, bool srgb, TextureWrap wrap_s,
+                 TextureWrap wrap_t, TextureFilter filter)
+    : name_(std::move(name)),
+      width_(width),
+      height_(height),
+      rgba_(std::move(rgba)),
+      wrap_s_(wrap_s),
+      wrap_t_(wrap_t),
+      filter_(filter) {
     if (width_ <= 0 || height_ <= 0 || rgba_.size() != size_t(width_) * size_t(height_) * 4)
         throw Error("texture '" + name_ + "': " + std::to_string(rgba_.size()) + " floats do not make a " +
                     std::to_string(width_) + " x " + std::to_string(height_) + " RGBA image");

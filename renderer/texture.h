@@ -32,8 +32,8 @@ class Texture {
     Vec4 texel(int x, int y) const;
     std::string name_;
     int width_, height_;
-    std::vector<float> rgba_;          // float storage (HDR or 16-bit sources)
-    std::vector<uint8_t> bytes_;       // 8-bit storage: 4x less memory and cache traffic
+    std::vector<float> rgba_;            // float storage (HDR or 16-bit sources)
+    std::vector<uint8_t> bytes_;         // 8-bit storage: 4x less memory and cache traffic
     const float* decode_rgb_ = nullptr;  // byte -> linear value for RGB (sRGB or linear table)
     TextureWrap wrap_s_, wrap_t_;
     TextureFilter filter_;

@@ -53,7 +53,9 @@ Image cloud_mask(const Image& encoded, const CloudMaskParams& params, const std:
         for (int x = 0; x < encoded.width; ++x) {
             size_t p = size_t(y) * encoded.width + x;
             if (sky && !(*sky)[p]) continue;
-            out.at(x, y, 0) = is_cloud(encoded.at(x, y, 0), encoded.at(x, y, 1), encoded.at(x, y, 2), params) ? 1.0f : kClearValue;
+            out.at(x, y, 0) = is_cloud(encoded.at(x, y, 0), encoded.at(x, y, 1), encoded.at(x, y, 2), params)
+                                  ? 1.0f
+                                  : kClearValue;
         }
     return out;
 }
@@ -105,10 +107,8 @@ MaskAgreement compare_with_labels(const Image& encoded, const Image& labels, con
             int truth = label_class(labels.at(x, y, 0));
             if (truth == 0) continue;
             bool cloud = is_cloud(encoded.at(x, y, 0), encoded.at(x, y, 1), encoded.at(x, y, 2), params);
-            if (truth == 2)
-                (cloud ? a.true_cloud : a.missed_cloud)++;
-            else
-                (cloud ? a.false_cloud : a.true_clear)++;
+            if (truth == 2) (cloud ? a.true_cloud : a.missed_cloud)++;
+            else (cloud ? a.false_cloud : a.true_clear)++;
         }
     return a;
 }

@@ -19,8 +19,8 @@
 namespace dynsky {
 
 enum class CloudRule {
-    RedBlueRatio,        // cloud if r / b > threshold (the paper's, threshold 0.46)
-    NormalizedBlueRed,   // cloud if (b - r) / (b + r) < threshold
+    RedBlueRatio,       // cloud if r / b > threshold (the paper's, threshold 0.46)
+    NormalizedBlueRed,  // cloud if (b - r) / (b + r) < threshold
 };
 
 CloudRule parse_cloud_rule(const std::string& name);  // "rb" | "nbr"; throws dynsky::Error

@@ -38,7 +38,8 @@ std::string HdrCalibrationReport::summary() const {
 
 SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& params, HdrCalibrationReport* report_out) {
     if (!photo.display_referred)
-        throw_file_error(photo.photo_path, "HDR recovery is for 8-bit (display-referred) photographs; this one is already linear HDR");
+        throw_file_error(photo.photo_path,
+                         "HDR recovery is for 8-bit (display-referred) photographs; this one is already linear HDR");
     validate_location(params.location);
     const SkyImage& in = photo.sky;
     const int n = in.resolution;

@@ -29,9 +29,9 @@
 namespace dynsky {
 
 struct HdrCalibrationParams {
-    UtcTime time;              // when the photo was taken (UTC)
-    GeoLocation location;      // where
-    double turbidity = 3.0;    // clear-sky model parameters (sky/clear_sky.h)
+    UtcTime time;            // when the photo was taken (UTC)
+    GeoLocation location;    // where
+    double turbidity = 3.0;  // clear-sky model parameters (sky/clear_sky.h)
     double ground_albedo = 0.3;
     // Which pixels are clear sky for the calibration; the paper's 0.46 is too strict for most
     // cameras (docs/sky-import.md), WSISEG's best threshold is the default here.
@@ -40,22 +40,22 @@ struct HdrCalibrationParams {
     double max_zenith_deg = 78;        // skip the haze and obstructions near the horizon
     double min_clear_fraction = 0.01;  // of the disc, to trust the clear-pixel calibration
     bool restore_sun = true;
-    double sun_search_deg = 3;         // a clipped blob this close to the computed sun is the sun
-    bool use_observed_sun = true;      // place the sun where the photo shows it (if seen)
+    double sun_search_deg = 3;     // a clipped blob this close to the computed sun is the sun
+    bool use_observed_sun = true;  // place the sun where the photo shows it (if seen)
 };
 
 struct HdrCalibrationReport {
-    std::string method;              // "clear-sky pixels" or "mean-luminance fallback"
-    double scale = 0;                // radiance (W m^-2 sr^-1) per linear photo unit
-    long long clear_pixels = 0;      // pixels used (before subsampling)
-    double clear_fraction = 0;       // of the disc
-    double ratio_spread = 0;         // median absolute deviation / median of the per-pixel ratios
-    bool sun_visible = false;        // clipped sun found, or sun behind the band with clear sky around
+    std::string method;          // "clear-sky pixels" or "mean-luminance fallback"
+    double scale = 0;            // radiance (W m^-2 sr^-1) per linear photo unit
+    long long clear_pixels = 0;  // pixels used (before subsampling)
+    double clear_fraction = 0;   // of the disc
+    double ratio_spread = 0;     // median absolute deviation / median of the per-pixel ratios
+    bool sun_visible = false;    // clipped sun found, or sun behind the band with clear sky around
     bool sun_restored = false;
-    double sun_offset_deg = -1;      // angle between the clipped sun seen and the computed sun (-1: not seen)
-    double sun_elevation_deg = 0;    // computed
+    double sun_offset_deg = -1;    // angle between the clipped sun seen and the computed sun (-1: not seen)
+    double sun_elevation_deg = 0;  // computed
     Vec3d computed_sun = Vec3d::UnitY(), used_sun = Vec3d::UnitY();
-    std::string summary() const;     // one line for people
+    std::string summary() const;  // one line for people
 };
 
 // Absolute radiance from an imported LDR photo (throws dynsky::Error if the photo was not

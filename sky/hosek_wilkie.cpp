@@ -30,14 +30,17 @@ std::map<std::string, std::vector<double>> read_sections(const std::string& path
         if (line[0] == '#') {
             std::istringstream words(line.substr(1));
             std::string name, count, extra;
-            if (words >> name >> count && !(words >> extra) && count.find_first_not_of("0123456789") == std::string::npos) {
+            if (words >> name >> count && !(words >> extra) &&
+                count.find_first_not_of("0123456789") == std::string::npos) {
                 current = name;
                 declared[name] = std::stoul(count);
                 sections[name].reserve(declared[name]);
             }
             continue;
         }
-        if (current.empty()) throw_file_error(path, "line " + std::to_string(line_number) + ": a number before any '# NAME COUNT' section header");
+        if (current.empty())
+            throw_file_error(path, "line " + std::to_string(line_number) +
+                                       ": a number before any '# NAME COUNT' section header");
         const char* begin = line.c_str();
         char* end = nullptr;
         double value = std::strtod(begin, &end);
@@ -48,18 +51,18 @@ std::map<std::string, std::vector<double>> read_sections(const std::string& path
     }
     for (const auto& [name, count] : declared)
         if (sections[name].size() != count)
-            throw_file_error(path, "section " + name + " has " + std::to_string(sections[name].size()) + " numbers, its header says " +
-                                       std::to_string(count));
+            throw_file_error(path, "section " + name + " has " + std::to_string(sections[name].size()) +
+                                       " numbers, its header says " + std::to_string(count));
     return sections;
 }
 
-std::vector<double> take(std::map<std::string, std::vector<double>>& sections, const std::string& path, const std::string& name,
-                         size_t count) {
+std::vector<double> take(std::map<std::string, std::vector<double>>& sections, const std::string& path,
+                         const std::string& name, size_t count) {
     auto it = sections.find(name);
     if (it == sections.end()) throw_file_error(path, "no section " + name);
     if (it->second.size() != count)
-        throw_file_error(path, "section " + name + " has " + std::to_string(it->second.size()) + " numbers, the model needs " +
-                                   std::to_string(count));
+        throw_file_error(path, "section " + name + " has " + std::to_string(it->second.size()) +
+                                   " numbers, the model needs " + std::to_string(count));
     return it->second;
 }
 
@@ -92,7 +95,8 @@ void read_cie(const std::string& path, HosekWilkieData* data) {
 double bernstein5(const double* p, int stride, double s) {
     double t = 1.0 - s;
     return t * t * t * t * t * p[0] + 5 * t * t * t * t * s * p[stride] + 10 * t * t * t * s * s * p[2 * stride] +
-           10 * t * t * s * s * s * p[3 * stride] + 5 * t * s * s * s * s * p[4 * stride] + s * s * s * s * s * p[5 * stride];
+           10 * t * t * s * s * s * p[3 * stride] + 5 * t * s * s * s * s * p[4 * stride] +
+           s * s * s * s * s * p[5 * stride];
 }
 
 // Integer turbidity index (0-based) and weight of the next one, as the reference does it.
@@ -134,8 +138,10 @@ HosekWilkieData load_hosek_wilkie_data(const std::string& folder, const std::str
     std::string rgb_path = folder + "/rgb.txt";
     auto rgb = read_sections(rgb_path);
     for (int c = 0; c < 3; ++c) {
-        data.sky_params[c] = take(rgb, rgb_path, "datasetRGB" + std::to_string(c + 1), 2 * kTurbidities * kControlPoints * kParams);
-        data.sky_radiance[c] = take(rgb, rgb_path, "datasetRGBRad" + std::to_string(c + 1), 2 * kTurbidities * kControlPoints);
+        data.sky_params[c] = take(rgb, rgb_path, "datasetRGB" + std::to_string(c + 1),
+                                  2 * kTurbidities * kControlPoints * kParams);
+        data.sky_radiance[c] = take(rgb, rgb_path, "datasetRGBRad" + std::to_string(c + 1),
+                                    2 * kTurbidities * kControlPoints);
     }
     std::string solar_path = folder + "/solar_spectral.txt";
     auto solar = read_sections(solar_path);
@@ -150,14 +156,15 @@ HosekWilkieData load_hosek_wilkie_data(const std::string& folder, const std::str
 }
 
 const HosekWilkieData& hosek_wilkie_data() {
-    static const HosekWilkieData data =
-        load_hosek_wilkie_data(data_path("sky/data/hosek-wilkie"), data_path("sky/data/cie/cie1931_2deg_5nm.csv"));
+    static const HosekWilkieData data = load_hosek_wilkie_data(data_path("sky/data/hosek-wilkie"),
+                                                               data_path("sky/data/cie/cie1931_2deg_5nm.csv"));
     return data;
 }
 
 void validate_hosek_wilkie_range(double turbidity, double albedo) {
     if (!(turbidity >= 1.0 && turbidity <= 10.0))
-        throw Error("turbidity " + std::to_string(turbidity) + " is outside the Hosek-Wilkie model's range [1, 10] (2-3: very clear, 10: hazy)");
+        throw Error("turbidity " + std::to_string(turbidity) +
+                    " is outside the Hosek-Wilkie model's range [1, 10] (2-3: very clear, 10: hazy)");
     if (!(albedo >= 0.0 && albedo <= 1.0))
         throw Error("ground albedo " + std::to_string(albedo) + " is outside [0, 1]");
 }
@@ -227,7 +234,8 @@ HosekWilkieSky::HosekWilkieSky(double turbidity, double albedo, double sun_eleva
         }
         return res;
     };
-    for (int b = 0; b < kHosekWilkieBands; ++b) solar_centre_[b] = (1 - t_frac) * piece(b, t_low) + t_frac * piece(b, t_low + 1);
+    for (int b = 0; b < kHosekWilkieBands; ++b)
+        solar_centre_[b] = (1 - t_frac) * piece(b, t_low) + t_frac * piece(b, t_low + 1);
 
     // Spectral -> RGB: rgb(mu) = sum_k M xyz(lambda_k) L(lambda_k, mu) d lambda, with L linear in the
     // bands (as the model interpolates) and held at its 720 nm value beyond the model's range (the
@@ -243,7 +251,8 @@ HosekWilkieSky::HosekWilkieSky(double turbidity, double albedo, double sun_eleva
         double centre = (1 - frac) * solar_centre_[band] + frac * solar_centre_[band + 1];
         Eigen::Array3d weight = (m * data.cie_xyz[k]).array() * data.cie_step_nm * centre;
         for (int j = 0; j < 6; ++j)
-            rgb_limb_[j] += weight * ((1 - frac) * data.limb_darkening[band][j] + frac * data.limb_darkening[band + 1][j]);
+            rgb_limb_[j] += weight *
+                            ((1 - frac) * data.limb_darkening[band][j] + frac * data.limb_darkening[band + 1][j]);
     }
 }
 
@@ -254,8 +263,8 @@ double HosekWilkieSky::sky_radiance(int channel, double theta, double gamma) con
     const double ray_m = cos_gamma * cos_gamma;
     const double mie_m = (1.0 + cos_gamma * cos_gamma) / std::pow(1.0 + p[8] * p[8] - 2.0 * p[8] * cos_gamma, 1.5);
     const double zenith = std::sqrt(cos_theta);
-    return (1.0 + p[0] * std::exp(p[1] / (cos_theta + 0.01))) * (p[2] + p[3] * exp_m + p[5] * ray_m + p[6] * mie_m + p[7] * zenith) *
-           scale_[channel];
+    return (1.0 + p[0] * std::exp(p[1] / (cos_theta + 0.01))) *
+           (p[2] + p[3] * exp_m + p[5] * ray_m + p[6] * mie_m + p[7] * zenith) * scale_[channel];
 }
 
 Color HosekWilkieSky::sky_radiance_rgb(double cos_theta, double gamma, double cos_gamma) const {

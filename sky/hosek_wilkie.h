@@ -29,13 +29,13 @@
 
 namespace dynsky {
 
-constexpr int kHosekWilkieBands = 11;                 // 320, 360, ..., 720 nm
+constexpr int kHosekWilkieBands = 11;                                // 320, 360, ..., 720 nm
 constexpr double kHosekWilkieSolarRadius = 0.51 / 2 * kPiD / 180.0;  // radians
 
 // The tables, as read from sky/data/hosek-wilkie and sky/data/cie.
 struct HosekWilkieData {
-    std::array<std::vector<double>, 3> sky_params;     // datasetRGB1..3: 2 x 10 x 6 x 9
-    std::array<std::vector<double>, 3> sky_radiance;   // datasetRGBRad1..3: 2 x 10 x 6
+    std::array<std::vector<double>, 3> sky_params;             // datasetRGB1..3: 2 x 10 x 6 x 9
+    std::array<std::vector<double>, 3> sky_radiance;           // datasetRGBRad1..3: 2 x 10 x 6
     std::array<std::vector<double>, kHosekWilkieBands> solar;  // solarDatasetNNN: 10 x 45 x 4
     std::array<std::array<double, 6>, kHosekWilkieBands> limb_darkening;
     // CIE 1931 2-degree colour-matching functions, 5 nm steps from cie_start_nm.
@@ -59,7 +59,8 @@ Eigen::Matrix3d xyz_to_rec709();
 // The model configured for one turbidity, albedo and sun elevation (radians, in [0, pi/2]).
 class HosekWilkieSky {
   public:
-    HosekWilkieSky(double turbidity, double albedo, double sun_elevation, const HosekWilkieData& data = hosek_wilkie_data());
+    HosekWilkieSky(double turbidity, double albedo, double sun_elevation,
+                   const HosekWilkieData& data = hosek_wilkie_data());
 
     // Sky radiance of one channel (0 R, 1 G, 2 B) for view zenith angle theta and angle gamma
     // between view and sun, radians: the reference implementation's

@@ -71,7 +71,9 @@ Image sky_to_latlong(const SkyImage& sky, int width, const Color& ground) {
     tbb::parallel_for(tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& rows) {
         for (int r = rows.begin(); r != rows.end(); ++r) {
             const double theta0 = kPiD * r / H, theta1 = kPiD * (r + 1) / H;
-            const double max_sin = (theta0 <= kPiD / 2 && theta1 >= kPiD / 2) ? 1.0 : std::max(std::sin(theta0), std::sin(theta1));
+            const double max_sin = (theta0 <= kPiD / 2 && theta1 >= kPiD / 2)
+                                       ? 1.0
+                                       : std::max(std::sin(theta0), std::sin(theta1));
             const int n_theta = std::clamp(int(std::ceil(2 * (theta1 - theta0) / texel)), 1, 32);
             const int n_phi = std::clamp(int(std::ceil(2 * (2 * kPiD / W) * max_sin / texel)), 1, 32);
             for (int c = 0; c < W; ++c) {

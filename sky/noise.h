@@ -43,13 +43,13 @@ class FractalNoise {
 
   private:
     struct Octave {
-        double frequency;                 // lattice cells per unit
-        double time_rate;                 // lattice cells per unit of t
+        double frequency;  // lattice cells per unit
+        double time_rate;  // lattice cells per unit of t
         double offset_x, offset_y, offset_t;
-        double cos_r, sin_r;              // domain rotation
+        double cos_r, sin_r;  // domain rotation
         float amplitude;
         bool billow;
-        unsigned char seed;               // stb_perlin's permutation offset
+        unsigned char seed;  // stb_perlin's permutation offset
     };
     std::vector<Octave> octaves_;
     float total_sigma_ = 0.0f;

@@ -48,7 +48,8 @@ bool is_display_encoded(const std::string& path, const std::string& encoding) {
 // RGB float image (3 channels, RGB order) from any channel count.
 cv::Mat to_rgb_mat(const Image& image, const std::string& name) {
     if (image.channels != 1 && image.channels < 3)
-        throw_file_error(name, "has " + std::to_string(image.channels) + " channels; a sky photograph needs 1 (grey) or 3+ (RGB)");
+        throw_file_error(name, "has " + std::to_string(image.channels) +
+                                   " channels; a sky photograph needs 1 (grey) or 3+ (RGB)");
     cv::Mat out(image.height, image.width, CV_32FC3);
     for (int y = 0; y < image.height; ++y) {
         cv::Vec3f* row = out.ptr<cv::Vec3f>(y);
@@ -57,10 +58,12 @@ cv::Mat to_rgb_mat(const Image& image, const std::string& name) {
                 float v = image.at(x, y, image.channels == 1 ? 0 : c);
                 if (!std::isfinite(v))
                     throw_file_error(name, "pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") is " +
-                                               (std::isnan(v) ? "NaN" : "infinite") + ": a photograph must hold finite values");
+                                               (std::isnan(v) ? "NaN" : "infinite") +
+                                               ": a photograph must hold finite values");
                 if (v < 0)
-                    throw_file_error(name, "pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") is negative (" +
-                                               std::to_string(v) + "): a photograph cannot hold negative light");
+                    throw_file_error(name, "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                                               ") is negative (" + std::to_string(v) +
+                                               "): a photograph cannot hold negative light");
                 row[x][c] = v;
             }
         }
@@ -244,8 +247,8 @@ SkyCircle find_sky_circle(const Image& photo, const std::string& name, double mi
         double p99 = quantile(std::vector<unsigned char>(grey.begin<unsigned char>(), grey.end<unsigned char>()), 0.99);
         int cw = std::max(1, grey.cols / 12), ch = std::max(1, grey.rows / 12);
         double corner = 0;
-        for (cv::Rect r : {cv::Rect(0, 0, cw, ch), cv::Rect(grey.cols - cw, 0, cw, ch), cv::Rect(0, grey.rows - ch, cw, ch),
-                           cv::Rect(grey.cols - cw, grey.rows - ch, cw, ch)}) {
+        for (cv::Rect r : {cv::Rect(0, 0, cw, ch), cv::Rect(grey.cols - cw, 0, cw, ch),
+                           cv::Rect(0, grey.rows - ch, cw, ch), cv::Rect(grey.cols - cw, grey.rows - ch, cw, ch)}) {
             cv::Mat patch = grey(r).clone();
             std::vector<unsigned char> pv(patch.begin<unsigned char>(), patch.end<unsigned char>());
             std::nth_element(pv.begin(), pv.begin() + pv.size() * 3 / 4, pv.end());
@@ -287,7 +290,9 @@ SkyCircle find_sky_circle(const Image& photo, const std::string& name, double mi
     // Stretch so the 99th percentile is white: dark exposures (the Mobotix) get the same edge
     // contrast as bright ones.
     {
-        const unsigned char p99 = quantile(std::vector<unsigned char>(small.begin<unsigned char>(), small.end<unsigned char>()), 0.99);
+        const unsigned char p99 = quantile(std::vector<unsigned char>(small.begin<unsigned char>(),
+                                                                      small.end<unsigned char>()),
+                                           0.99);
         if (p99 > 0) small.convertTo(small, CV_8U, 255.0 / p99);
     }
     cv::GaussianBlur(small, small, cv::Size(0, 0), 2.0);
@@ -296,11 +301,11 @@ SkyCircle find_sky_circle(const Image& photo, const std::string& name, double mi
     std::vector<cv::Vec3f> circles;
     // Canny high threshold 60 and 20 votes at this scale: the sky's rim is the image's strongest
     // circular edge for every camera we have; a smooth or uniform picture gives no candidate.
-    cv::HoughCircles(small, circles, cv::HOUGH_GRADIENT, 1, std::min(small.cols, small.rows), 60, 20, std::max(1, min_r),
-                     std::max(2, max_r));
+    cv::HoughCircles(small, circles, cv::HOUGH_GRADIENT, 1, std::min(small.cols, small.rows), 60, 20,
+                     std::max(1, min_r), std::max(2, max_r));
     if (circles.empty())
-        throw_file_error(name, "no sky circle found (looked for a circle of radius " + fmt(min_fraction * shorter, 0) + "-" +
-                                   fmt(max_fraction * shorter, 0) +
+        throw_file_error(name, "no sky circle found (looked for a circle of radius " + fmt(min_fraction * shorter, 0) +
+                                   "-" + fmt(max_fraction * shorter, 0) +
                                    " px); give its centre and radius (--center X,Y --radius R)");
     SkyCircle c;
     c.center_x = (circles[0][0] + 0.5) / scale - 0.5;
@@ -348,7 +353,8 @@ std::vector<unsigned char> load_not_sky_mask(const std::string& path, MaskLayout
                 }
             cv::Mat sky(photo_height, photo_width, CV_8U);
             for (int y = 0; y < photo_height; ++y)
-                for (int x = 0; x < photo_width; ++x) sky.at<unsigned char>(y, x) = out[size_t(y) * photo_width + x] ? 0 : 255;
+                for (int x = 0; x < photo_width; ++x)
+                    sky.at<unsigned char>(y, x) = out[size_t(y) * photo_width + x] ? 0 : 255;
             std::vector<cv::Point> points;
             cv::findNonZero(sky, points);
             if (points.empty()) throw_file_error(path, "the TSI mask marks no pixel as sky");
@@ -376,7 +382,8 @@ std::vector<unsigned char> load_not_sky_mask(const std::string& path, MaskLayout
     if (mask.channels < 3) throw_file_error(path, "the Mobotix background mask must be an RGB image (green = not sky)");
     const double cx = 640, cy = 480, r0 = 480, h = 0.1;
     const int d = mask.width;
-    if (mask.height != d) throw_file_error(path, "the Mobotix background mask must be square (it is 512 x 512 as shipped)");
+    if (mask.height != d)
+        throw_file_error(path, "the Mobotix background mask must be square (it is 512 x 512 as shipped)");
     auto green = [&](int i, int j) { return value(j, i, 1) > 0.9f && value(j, i, 0) < 0.1f && value(j, i, 2) < 0.1f; };
     for (int y = 0; y < photo_height; ++y)
         for (int x = 0; x < photo_width; ++x) {
@@ -397,7 +404,8 @@ std::vector<unsigned char> load_not_sky_mask(const std::string& path, MaskLayout
     return out;
 }
 
-std::vector<unsigned char> detect_dark_obstructions(const Image& encoded_photo, const SkyCircle& circle, double darkness) {
+std::vector<unsigned char> detect_dark_obstructions(const Image& encoded_photo, const SkyCircle& circle,
+                                                    double darkness) {
     cv::Mat grey = image_to_grey8(encoded_photo, true);
     cv::Mat disc = cv::Mat::zeros(grey.size(), CV_8U);
     cv::circle(disc, cv::Point2d(circle.center_x, circle.center_y), int(circle.radius * 1.02), 255, cv::FILLED);
@@ -559,10 +567,8 @@ ImportedPhoto import_photo_image(const Image& photo, const std::string& name, co
         }
 
     if (cv::countNonZero(fill) > 0) {
-        if (params.inpaint)
-            inpaint_float(sky, fill);
-        else
-            sky.setTo(cv::Scalar::all(0), fill);
+        if (params.inpaint) inpaint_float(sky, fill);
+        else sky.setTo(cv::Scalar::all(0), fill);
     }
 
     out.sky = SkyImage(n);
@@ -575,7 +581,8 @@ ImportedPhoto import_photo_image(const Image& photo, const std::string& name, co
                 out.clipped[size_t(j) * n + i] = 0;
                 continue;
             }
-            out.sky.set_pixel(i, j, Color(std::max(0.0f, row[i][0]), std::max(0.0f, row[i][1]), std::max(0.0f, row[i][2])));
+            out.sky.set_pixel(i, j,
+                              Color(std::max(0.0f, row[i][0]), std::max(0.0f, row[i][1]), std::max(0.0f, row[i][2])));
         }
     }
     return out;
@@ -658,13 +665,15 @@ std::string time_from_file_name(const std::string& path, double utc_offset_hours
     std::string file = fs::path(path).filename().string();
     std::smatch m;
     if (std::regex_search(file, m, std::regex("(\\d{4})(\\d{2})(\\d{2})(\\d{2})(\\d{2})(\\d{2})Z")))
-        return m[1].str() + "-" + m[2].str() + "-" + m[3].str() + "T" + m[4].str() + ":" + m[5].str() + ":" + m[6].str() + "Z";
+        return m[1].str() + "-" + m[2].str() + "-" + m[3].str() + "T" + m[4].str() + ":" + m[5].str() + ":" +
+               m[6].str() + "Z";
     if (std::regex_search(file, m, std::regex("(\\d{4})-(\\d{2})-(\\d{2})_(\\d{2})_(\\d{2})(?:_(\\d{2}))?"))) {
         int minutes = int(std::lround(std::abs(utc_offset_hours) * 60));
         char zone[16];
         std::snprintf(zone, sizeof zone, "%c%02d:%02d", utc_offset_hours < 0 ? '-' : '+', minutes / 60, minutes % 60);
         std::string sec = m[6].matched ? m[6].str() : "00";
-        return m[1].str() + "-" + m[2].str() + "-" + m[3].str() + "T" + m[4].str() + ":" + m[5].str() + ":" + sec + zone;
+        return m[1].str() + "-" + m[2].str() + "-" + m[3].str() + "T" + m[4].str() + ":" + m[5].str() + ":" + sec +
+               zone;
     }
     return "";
 }

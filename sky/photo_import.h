@@ -36,8 +36,8 @@ enum class LensLaw { Equidistant, Equisolid, Orthographic, Stereographic };
 
 LensLaw parse_lens_law(const std::string& name);  // throws dynsky::Error listing the valid names
 const char* lens_law_name(LensLaw law);
-double lens_radius(LensLaw law, double theta);     // theta in [0, pi/2] (beyond: extrapolated)
-double lens_angle(LensLaw law, double r);          // inverse, r >= 0
+double lens_radius(LensLaw law, double theta);  // theta in [0, pi/2] (beyond: extrapolated)
+double lens_angle(LensLaw law, double r);       // inverse, r >= 0
 
 // The sky circle in a photograph, in pixels: r = 1 of the lens law lies at `radius` from the centre.
 struct SkyCircle {
@@ -52,10 +52,10 @@ struct SkyCircle {
 struct PhotoGeometry {
     SkyCircle circle;
     LensLaw lens = LensLaw::Equidistant;
-    double north_deg = 0;        // where north appears, clockwise from the photo's top (0: north up)
-    bool mirrored = false;       // true: east is clockwise from north in the photo (mirror imagers)
-    double tilt_deg = 0;         // zenith angle of the optical axis (0: level camera)
-    double tilt_azimuth_deg = 0; // azimuth the axis leans towards (only with tilt_deg != 0)
+    double north_deg = 0;         // where north appears, clockwise from the photo's top (0: north up)
+    bool mirrored = false;        // true: east is clockwise from north in the photo (mirror imagers)
+    double tilt_deg = 0;          // zenith angle of the optical axis (0: level camera)
+    double tilt_azimuth_deg = 0;  // azimuth the axis leans towards (only with tilt_deg != 0)
 
     // Photo pixel of a world direction; false if the direction is outside the lens's 180 deg field.
     bool project(const Vec3d& direction, double* x, double* y) const;
@@ -80,21 +80,21 @@ enum class MaskLayout {
 };
 
 struct PhotoImportParams {
-    int resolution = 512;                 // N of the N x N canonical output
-    std::optional<SkyCircle> circle;      // none: found automatically (find_sky_circle)
-    double min_radius_fraction = 0.30;    // automatic search range for the radius, as fractions of
-    double max_radius_fraction = 0.55;    //   the photo's shorter side
+    int resolution = 512;               // N of the N x N canonical output
+    std::optional<SkyCircle> circle;    // none: found automatically (find_sky_circle)
+    double min_radius_fraction = 0.30;  // automatic search range for the radius, as fractions of
+    double max_radius_fraction = 0.55;  //   the photo's shorter side
     LensLaw lens = LensLaw::Equidistant;
     double north_deg = 0;
     bool mirrored = false;
     double tilt_deg = 0, tilt_azimuth_deg = 0;
-    std::string mask_path;                // non-sky mask file ("": none)
+    std::string mask_path;  // non-sky mask file ("": none)
     MaskLayout mask_layout = MaskLayout::PhotoBlackIsNotSky;
-    int mask_dilate_px = 2;               // grow the mask (photo pixels) to cover object edges
-    bool detect_obstructions = false;     // also find dark obstructions (detect_dark_obstructions)
+    int mask_dilate_px = 2;            // grow the mask (photo pixels) to cover object edges
+    bool detect_obstructions = false;  // also find dark obstructions (detect_dark_obstructions)
     // Photo rectangles that are never sky, {x, y, width, height} in pixels (burnt-in captions).
     std::vector<std::array<int, 4>> not_sky_rects;
-    bool inpaint = true;                  // fill non-sky pixels (cv::inpaint, Telea); else leave 0
+    bool inpaint = true;  // fill non-sky pixels (cv::inpaint, Telea); else leave 0
     // Input encoding: "auto" (8-bit formats are sRGB-encoded, .exr/.hdr/.pfm are linear), "srgb", "linear".
     std::string encoding = "auto";
     // Saturation: a pixel is "clipped" if its largest channel is within 2/255 of this encoded level.
@@ -104,13 +104,13 @@ struct PhotoImportParams {
 
 // A photograph after import.
 struct ImportedPhoto {
-    SkyImage sky;                      // linear, relative to the photo (see the file comment)
-    PhotoGeometry geometry;            // the geometry used, with the circle found or given
-    bool circle_detected = false;      // true if the circle was found automatically
-    bool display_referred = true;      // true if the photo was sRGB-decoded (8-bit input)
+    SkyImage sky;                        // linear, relative to the photo (see the file comment)
+    PhotoGeometry geometry;              // the geometry used, with the circle found or given
+    bool circle_detected = false;        // true if the circle was found automatically
+    bool display_referred = true;        // true if the photo was sRGB-decoded (8-bit input)
     std::vector<unsigned char> not_sky;  // N*N: 1 where the sky was hidden and has been filled
     std::vector<unsigned char> clipped;  // N*N: 1 where the photo was saturated (LDR input only)
-    double clip_level = 1.0;           // encoded level treated as saturation (1: none found)
+    double clip_level = 1.0;             // encoded level treated as saturation (1: none found)
     std::string photo_path;
 };
 
@@ -146,11 +146,11 @@ std::vector<unsigned char> load_not_sky_mask(const std::string& path, MaskLayout
 // Unknown names throw dynsky::Error listing the valid ones.
 struct CameraPreset {
     std::string name;
-    PhotoImportParams params;     // geometry and mask handling (resolution left at the default)
+    PhotoImportParams params;  // geometry and mask handling (resolution left at the default)
     double latitude_deg = 0, longitude_deg = 0, elevation_m = 0;
     // Offset of the file names' clock from UTC, hours (local = UTC + offset). TSI names are UTC.
     double filename_utc_offset_hours = 0;
-    double sun_search_deg = 3;    // how far from the computed sun a seen sun may lie (HDR recovery)
+    double sun_search_deg = 3;  // how far from the computed sun a seen sun may lie (HDR recovery)
 };
 CameraPreset camera_preset(const std::string& name);
 std::vector<std::string> camera_preset_names();

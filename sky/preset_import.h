@@ -17,10 +17,10 @@ namespace dynsky {
 
 struct PresetImportPlan {
     CameraPreset preset;
-    PhotoImportParams params;   // preset geometry, resolution, mask or detection
-    GeoLocation location;       // the preset's place
-    std::string time;           // ISO 8601 from the file name ("" if none)
-    bool mask_found = false;    // the preset's mask file lies beside the photo
+    PhotoImportParams params;  // preset geometry, resolution, mask or detection
+    GeoLocation location;      // the preset's place
+    std::string time;          // ISO 8601 from the file name ("" if none)
+    bool mask_found = false;   // the preset's mask file lies beside the photo
 };
 
 PresetImportPlan plan_preset_import(const std::string& preset, const std::string& photo, int resolution);

@@ -56,19 +56,21 @@ float sample_mask(const Image& mask, double x, double y) {
 struct LayerModel {
     CloudLayer spec;
     FractalNoise noise;
-    FractalNoise warp;   // bends cirrus streaks (a domain warp in material coordinates)
-    FractalNoise patch;  // gathers cirrus streaks into patches
+    FractalNoise warp;                           // bends cirrus streaks (a domain warp in material coordinates)
+    FractalNoise patch;                          // gathers cirrus streaks into patches
     static constexpr double kPatchWeight = 1.2;  // patch field's spread relative to the streaks'
     double field_sigma = 0.0;
-    double threshold = 0.0;  // noise value above which there is cloud (+inf: none)
-    double ramp = 0.0;       // width of the density ramp above the threshold, in noise units
+    double threshold = 0.0;               // noise value above which there is cloud (+inf: none)
+    double ramp = 0.0;                    // width of the density ramp above the threshold, in noise units
     double wind_x = 0.0, wind_z = 0.0;    // m/s, world frame
     double along_x = 1.0, along_z = 0.0;  // unit vector the wind blows towards
     double inv_evolution = 0.0;           // noise time units per second
     double mask_half_extent = 0.0;        // metres
 
     LayerModel(const CloudLayer& layer, uint64_t seed, double coverage)
-        : spec(layer), noise(seed, layer.octaves, layer.gain, layer.billow_from), warp(noise_hash(seed), 2, 0.5),
+        : spec(layer),
+          noise(seed, layer.octaves, layer.gain, layer.billow_from),
+          warp(noise_hash(seed), 2, 0.5),
           patch(noise_hash(seed + 1), 3, 0.5) {
         // The wind blows towards the opposite of where it comes from: azimuth from + 180 deg.
         double from = layer.wind_from_deg * kPiD / 180.0;
@@ -126,7 +128,8 @@ struct LayerModel {
         const double patch_size = 5.0 * along;
         FractalNoise::Sample p = patch.evaluate(qx / patch_size, qz / patch_size, time / 5.0, footprint / patch_size);
         s.value += float(kPatchWeight * noise.sigma() / patch.sigma()) * p.value;
-        s.removed_sigma = std::hypot(s.removed_sigma, float(kPatchWeight * noise.sigma() / patch.sigma()) * p.removed_sigma);
+        s.removed_sigma = std::hypot(s.removed_sigma,
+                                     float(kPatchWeight * noise.sigma() / patch.sigma()) * p.removed_sigma);
         return s;
     }
 
@@ -158,8 +161,8 @@ struct LayerModel {
 };
 
 struct LayerHit {
-    double alpha = 0.0;            // visible opacity (aerial perspective included)
-    double direct = 1.0;           // transmittance of the cloud itself, for the sun disc behind it
+    double alpha = 0.0;              // visible opacity (aerial perspective included)
+    double direct = 1.0;             // transmittance of the cloud itself, for the sun disc behind it
     Color radiance = Color::Zero();  // premultiplied by alpha
 };
 
@@ -253,15 +256,15 @@ Image load_cloud_mask(const std::string& path) {
 
 struct ProceduralSky::Impl {
     ProceduralSkyParams params;
-    std::vector<LayerModel> layers;  // sorted by altitude, lowest (nearest the viewer) first
+    std::vector<LayerModel> layers;    // sorted by altitude, lowest (nearest the viewer) first
     std::vector<size_t> sorted_index;  // params.layers[k] is layers[sorted_index[k]]
     // Lighting from the clear sky, for the current sun.
     Vec3d sun = Vec3d(0, 1, 0);
-    Color sun_irradiance = Color::Zero();  // on a surface facing the sun, above the clouds
-    Color sky_ambient = Color::Zero();     // cosine-weighted mean radiance of the clear sky
-    Color ground_radiance = Color::Zero(); // light reflected by the ground onto cloud bases
-    SkyImage clear;                        // cached clear sky (resolution 0: none)
-    SkyImage clear_no_disc;                // the same without the sun disc
+    Color sun_irradiance = Color::Zero();   // on a surface facing the sun, above the clouds
+    Color sky_ambient = Color::Zero();      // cosine-weighted mean radiance of the clear sky
+    Color ground_radiance = Color::Zero();  // light reflected by the ground onto cloud bases
+    SkyImage clear;                         // cached clear sky (resolution 0: none)
+    SkyImage clear_no_disc;                 // the same without the sun disc
 
     explicit Impl(const ProceduralSkyParams& p) : params(p) {
         validate_procedural_params(p);
@@ -300,8 +303,7 @@ struct ProceduralSky::Impl {
         }
         sky_ambient = (e / kPiD).cast<float>();
         double mu = std::max(0.0, sun.y());
-        ground_radiance = float(params.clear_sky.ground_albedo / kPiD) *
-                          (sun_irradiance * float(mu) + e.cast<float>());
+        ground_radiance = float(params.clear_sky.ground_albedo / kPiD) * (sun_irradiance * float(mu) + e.cast<float>());
     }
 
     const SkyImage& clear_sky(int n) {
@@ -497,7 +499,8 @@ double ProceduralSky::layer_density(size_t layer, double x_m, double z_m, double
 }
 
 void ProceduralSky::set_sun_direction(const Vec3d& sun_direction) {
-    require(sun_direction.allFinite() && sun_direction.norm() > 0.0, "the sun direction must be a finite, non-zero vector");
+    require(sun_direction.allFinite() && sun_direction.norm() > 0.0,
+            "the sun direction must be a finite, non-zero vector");
     impl_->params.clear_sky.sun_direction = sun_direction.normalized();
     impl_->update_lighting();
 }

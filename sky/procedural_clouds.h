@@ -31,25 +31,25 @@ struct CloudLayer {
     std::optional<double> coverage;  // fraction of the layer (seen from below) holding any cloud,
                                      // [0, 1]; unset: ProceduralSkyParams::coverage
     double wind_speed_mps = 8.0;
-    double wind_from_deg = 270.0;    // where the wind blows FROM, clockwise from north (weather
-                                     // reports' convention: 270 = westerly, clouds drift east)
-    double feature_size_m = 800.0;   // size of the largest cloud features (across the wind)
-    double stretch = 1.0;            // elongation along the wind (cirrus streaks: > 1)
-    double optical_depth = 20.0;     // vertical optical depth where the density is 1
-    double edge_softness = 1.0;      // width of the density ramp at cloud edges, in noise sigmas
-    double evolution_time_s = 900.0; // time for the largest features to change shape; 0 freezes
-                                     // the shapes (pure advection)
+    double wind_from_deg = 270.0;     // where the wind blows FROM, clockwise from north (weather
+                                      // reports' convention: 270 = westerly, clouds drift east)
+    double feature_size_m = 800.0;    // size of the largest cloud features (across the wind)
+    double stretch = 1.0;             // elongation along the wind (cirrus streaks: > 1)
+    double optical_depth = 20.0;      // vertical optical depth where the density is 1
+    double edge_softness = 1.0;       // width of the density ramp at cloud edges, in noise sigmas
+    double evolution_time_s = 900.0;  // time for the largest features to change shape; 0 freezes
+                                      // the shapes (pure advection)
     int octaves = 7;
-    double gain = 0.5;               // amplitude ratio between successive noise octaves
-    int billow_from = 1;             // octaves from this one on are billowy (rounded lobes); a
-                                     // value >= octaves keeps plain fBm (wispy)
+    double gain = 0.5;    // amplitude ratio between successive noise octaves
+    int billow_from = 1;  // octaves from this one on are billowy (rounded lobes); a
+                          // value >= octaves keeps plain fBm (wispy)
 
     // Artist-drawn clouds: a 1-channel density image in [0, 1] (load_cloud_mask) replacing the
     // noise on this layer. It is seen from below like the sky image (north up, east left), covers
     // a square of mask_extent_m centred above the viewer at t = 0, and drifts with the wind.
     std::shared_ptr<const Image> mask;
-    double mask_extent_m = 0.0;      // 0: 2 * altitude * tan(60 deg), i.e. out to 60 deg zenith angle
-    double mask_detail = 0.35;       // how much noise erodes the mask's soft edges (0: mask as is)
+    double mask_extent_m = 0.0;  // 0: 2 * altitude * tan(60 deg), i.e. out to 60 deg zenith angle
+    double mask_detail = 0.35;   // how much noise erodes the mask's soft edges (0: mask as is)
 };
 
 // Presets: fair-weather cumulus at 1.5 km, cirrus streaks at 8 km.
@@ -58,10 +58,10 @@ CloudLayer cirrus_layer();
 
 struct ProceduralSkyParams {
     uint64_t seed = 0;
-    double coverage = 0.4;               // default coverage of layers that set none
+    double coverage = 0.4;  // default coverage of layers that set none
     std::vector<CloudLayer> layers = {cumulus_layer()};
-    ClearSkyParams clear_sky;            // sun direction, turbidity, ground albedo, sun disc
-    double visibility_m = 40000.0;       // aerial perspective: clouds this far fade to 1/e
+    ClearSkyParams clear_sky;       // sun direction, turbidity, ground albedo, sun disc
+    double visibility_m = 40000.0;  // aerial perspective: clouds this far fade to 1/e
 };
 
 // Throws dynsky::Error naming the bad parameter.

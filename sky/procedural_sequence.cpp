@@ -68,7 +68,8 @@ CloudLayer make_layer(const std::string& name, const ProceduralSequenceSettings&
 void write_procedural_sequence(const ProceduralSequenceSettings& o, bool use_location) {
     // Everything is checked before the output folder is touched, so a bad argument leaves nothing.
     if (o.out.empty()) throw Error("--out: an output folder is required");
-    if (!std::isfinite(o.dt) || o.dt <= 0) throw Error("--dt: must be a positive number of seconds, got " + std::to_string(o.dt));
+    if (!std::isfinite(o.dt) || o.dt <= 0)
+        throw Error("--dt: must be a positive number of seconds, got " + std::to_string(o.dt));
     if (!std::isfinite(o.duration) || o.duration < 0)
         throw Error("--duration: must be >= 0 seconds, got " + std::to_string(o.duration));
     double steps = std::floor(o.duration / o.dt + 1e-9);
@@ -100,7 +101,8 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o, bool use_loc
     GeoLocation where;
     auto sun_at = [&](double t) -> Vec3d {
         if (!use_location)
-            return fisheye::direction_from_angles((90.0 - o.sun_elevation) * kPiD / 180.0, o.sun_azimuth * kPiD / 180.0);
+            return fisheye::direction_from_angles((90.0 - o.sun_elevation) * kPiD / 180.0,
+                                                  o.sun_azimuth * kPiD / 180.0);
         UtcTime now = start;
         now.second += t;  // julian_date is linear in the seconds field
         return compute_sun_position(now, where).direction();
@@ -146,11 +148,11 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o, bool use_loc
         layers.push_back(j);
     }
     manifest["layers"] = layers;
-    manifest["flow"] = {
-        {"channels", {"dx_px", "dy_px", "cloud_opacity"}},
-        {"units", "pixels of the canonical fisheye at this resolution"},
-        {"sign", "forward: the cloud seen at pixel (x, y) of frame k is at (x + dx, y + dy) at time t_k + dt; "
-                 "+x to the right, +y down (row 0 at the top, north)"}};
+    manifest["flow"] = {{"channels", {"dx_px", "dy_px", "cloud_opacity"}},
+                        {"units", "pixels of the canonical fisheye at this resolution"},
+                        {"sign",
+                         "forward: the cloud seen at pixel (x, y) of frame k is at (x + dx, y + dy) at time t_k + dt; "
+                         "+x to the right, +y down (row 0 at the top, north)"}};
 
     nlohmann::ordered_json frame_list = nlohmann::ordered_json::array();
     double max_speed = 0.0;
@@ -191,8 +193,7 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o, bool use_loc
     manifest["frames"] = frame_list;
     // Written last: a manifest means the sequence is complete.
     write_file_atomic((fs::path(o.out) / "manifest.json").string(), manifest.dump(2) + "\n");
-    if (!o.quiet)
-        std::printf("wrote %d frames, their flows and manifest.json to %s\n", frames, o.out.c_str());
+    if (!o.quiet) std::printf("wrote %d frames, their flows and manifest.json to %s\n", frames, o.out.c_str());
 }
 
 }  // namespace dynsky

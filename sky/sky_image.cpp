@@ -21,12 +21,13 @@ void validate_sky(const SkyImage& sky, const std::string& name) {
             Color c = sky.pixel(i, j);
             for (int k = 0; k < 3; ++k) {
                 if (!std::isfinite(c[k]))
-                    throw_file_error(name, "sky pixel (" + std::to_string(i) + ", " + std::to_string(j) +
-                                               ") is " + (std::isnan(c[k]) ? "NaN" : "infinite") +
+                    throw_file_error(name, "sky pixel (" + std::to_string(i) + ", " + std::to_string(j) + ") is " +
+                                               (std::isnan(c[k]) ? "NaN" : "infinite") +
                                                ": a sky must hold finite radiance");
                 if (c[k] < 0)
                     throw_file_error(name, "sky pixel (" + std::to_string(i) + ", " + std::to_string(j) +
-                                               ") is negative (" + std::to_string(c[k]) + "): radiance cannot be negative");
+                                               ") is negative (" + std::to_string(c[k]) +
+                                               "): radiance cannot be negative");
             }
             if (sky.in_disc(i, j)) total += c.sum();
         }
@@ -52,15 +53,19 @@ SkyImage sky_from_image(const Image& image, const std::string& name) {
     if (image.width != image.height)
         throw_file_error(name, "sky image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
                                    ", but a canonical fisheye sky must be square");
-    if (image.channels < 3) throw_file_error(name, "sky image needs 3 colour channels, has " + std::to_string(image.channels));
+    if (image.channels < 3)
+        throw_file_error(name, "sky image needs 3 colour channels, has " + std::to_string(image.channels));
     SkyImage sky(image.width);
     for (size_t p = 0; p < size_t(image.width) * image.height; ++p)
         for (int c = 0; c < 3; ++c) sky.rgb[p * 3 + c] = image.pixels[p * image.channels + c];
     const auto& num = image.metadata.numbers;
     if (auto it = num.find("dynsky:time"); it != num.end()) sky.time_seconds = it->second;
     if (num.count("dynsky:sun_x") && num.count("dynsky:sun_y") && num.count("dynsky:sun_z"))
-        sky.sun_direction = Vec3(float(num.at("dynsky:sun_x")), float(num.at("dynsky:sun_y")), float(num.at("dynsky:sun_z"))).normalized();
-    if (auto it = image.metadata.strings.find("dynsky:source"); it != image.metadata.strings.end()) sky.source = it->second;
+        sky.sun_direction = Vec3(float(num.at("dynsky:sun_x")), float(num.at("dynsky:sun_y")),
+                                 float(num.at("dynsky:sun_z")))
+                                .normalized();
+    if (auto it = image.metadata.strings.find("dynsky:source"); it != image.metadata.strings.end())
+        sky.source = it->second;
     return sky;
 }
 

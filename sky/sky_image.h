@@ -11,11 +11,11 @@
 namespace dynsky {
 
 struct SkyImage {
-    int resolution = 0;          // N: the image is N x N
-    std::vector<float> rgb;      // N * N * 3, row-major, row 0 at the top (north); 0 outside the disc
-    double time_seconds = 0.0;   // the sequence's own clock (CONVENTIONS.md, Time)
+    int resolution = 0;                 // N: the image is N x N
+    std::vector<float> rgb;             // N * N * 3, row-major, row 0 at the top (north); 0 outside the disc
+    double time_seconds = 0.0;          // the sequence's own clock (CONVENTIONS.md, Time)
     std::optional<Vec3> sun_direction;  // world frame, unit, if known
-    std::string source;          // what made it ("hosek-wilkie", "photo:FILE", "procedural", ...)
+    std::string source;                 // what made it ("hosek-wilkie", "photo:FILE", "procedural", ...)
 
     SkyImage() = default;
     explicit SkyImage(int n) : resolution(n), rgb(size_t(n) * n * 3, 0.0f) {}

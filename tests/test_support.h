@@ -22,7 +22,7 @@ CommandResult run_command(const std::string& command_line);
 
 }  // namespace dynsky::test
 
-#define DYNSKY_REQUIRE_SHARED()                                                   \
-    do {                                                                          \
+#define DYNSKY_REQUIRE_SHARED()                                                     \
+    do {                                                                            \
         if (!dynsky::test::shared_available()) GTEST_SKIP() << "../shared missing"; \
     } while (0)

@@ -36,18 +36,20 @@ fig.tight_layout(); fig.savefig(out)
 
 }  // namespace
 
-void make_line_chart(const std::string& csv, const std::string& png, const std::string& title, const std::string& xlabel,
-                     const std::string& ylabel, bool logy) {
+void make_line_chart(const std::string& csv, const std::string& png, const std::string& title,
+                     const std::string& xlabel, const std::string& ylabel, bool logy) {
     std::string script = (fs::path(png).parent_path() / ".chart.py").string();
     std::ofstream(script) << kChartScript;
     std::string tmp = (fs::path(png).parent_path() / ".partial.chart.png").string();
-    std::string cmd = "/usr/bin/python3 " + shell_quote(script) + " " + shell_quote(csv) + " " + shell_quote(tmp) + " " +
-                      shell_quote(title) + " " + shell_quote(xlabel) + " " + shell_quote(ylabel) + (logy ? " 1" : " 0");
+    std::string cmd = "/usr/bin/python3 " + shell_quote(script) + " " + shell_quote(csv) + " " + shell_quote(tmp) +
+                      " " + shell_quote(title) + " " + shell_quote(xlabel) + " " + shell_quote(ylabel) +
+                      (logy ? " 1" : " 0");
     int rc = std::system(cmd.c_str());
     fs::remove(script);
     if (rc != 0) {
         fs::remove(tmp);
-        std::fprintf(stderr, "dynsky: warning: matplotlib chart %s failed (exit %d); the data is in %s\n", png.c_str(), rc, csv.c_str());
+        std::fprintf(stderr, "dynsky: warning: matplotlib chart %s failed (exit %d); the data is in %s\n", png.c_str(),
+                     rc, csv.c_str());
         return;
     }
     fs::rename(tmp, png);

@@ -6,9 +6,7 @@
 namespace dynsky {
 
 // IEC 61966-2-1 sRGB transfer function, per channel value in [0, 1].
-inline float srgb_to_linear(float v) {
-    return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
-}
+inline float srgb_to_linear(float v) { return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f); }
 inline float linear_to_srgb(float v) {
     v = clamp(v, 0.0f, 1.0f);
     return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;

@@ -32,17 +32,16 @@ Image read_image(const std::string& path) {
         throw_file_error(path, "not a readable image" + (why.empty() ? std::string() : " (" + why + ")"));
     }
     const OIIO::ImageSpec& spec = in->spec();
-    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
-        throw_file_error(path, "image has no pixels");
+    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) throw_file_error(path, "image has no pixels");
     Image image(spec.width, spec.height, spec.nchannels);
     if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
         std::string why = in->geterror();
-        throw_file_error(path, "could not decode pixels (truncated or corrupt?)" + (why.empty() ? std::string() : ": " + why));
+        throw_file_error(path, "could not decode pixels (truncated or corrupt?)" +
+                                   (why.empty() ? std::string() : ": " + why));
     }
     for (const auto& p : spec.extra_attribs) {
         std::string name = p.name().string();
-        if (p.type() == OIIO::TypeDesc::STRING)
-            image.metadata.strings[name] = p.get_string();
+        if (p.type() == OIIO::TypeDesc::STRING) image.metadata.strings[name] = p.get_string();
         else if (p.type() == OIIO::TypeDesc::FLOAT || p.type() == OIIO::TypeDesc::DOUBLE ||
                  p.type() == OIIO::TypeDesc::INT)
             image.metadata.numbers[name] = p.get_float();
@@ -64,12 +63,12 @@ void write_image(const std::string& path, const Image& image) {
     if (!is_exr && !is_ldr) throw_file_error(path, "unsupported output extension '" + ext + "' (use .exr or .png)");
 
     fs::path target(path);
-    if (target.has_parent_path() && !fs::exists(target.parent_path()))
-        fs::create_directories(target.parent_path());
+    if (target.has_parent_path() && !fs::exists(target.parent_path())) fs::create_directories(target.parent_path());
     // Temporary name keeps the extension so OIIO picks the right writer.
     fs::path tmp = target.parent_path() / (".tmp-" + target.stem().string() + "-" + std::to_string(::getpid()) + ext);
 
-    OIIO::ImageSpec spec(image.width, image.height, image.channels, is_exr ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
+    OIIO::ImageSpec spec(image.width, image.height, image.channels,
+                         is_exr ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
     if (is_exr) spec.attribute("compression", "zip");
     for (const auto& [name, value] : image.metadata.numbers) spec.attribute(name, OIIO::TypeDesc::DOUBLE, &value);
     for (const auto& [name, value] : image.metadata.strings) spec.attribute(name, value);

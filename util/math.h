@@ -36,7 +36,9 @@ T quantile(std::vector<T> v, double q) {
 inline float luminance(const Color& c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
 
 template <typename T>
-inline T clamp(T x, T lo, T hi) { return std::min(std::max(x, lo), hi); }
+inline T clamp(T x, T lo, T hi) {
+    return std::min(std::max(x, lo), hi);
+}
 
 inline float safe_sqrt(float x) { return std::sqrt(std::max(0.0f, x)); }
 

@@ -34,8 +34,8 @@ NpyArray read_npy(const std::string& path) {
         return header.substr(header.find(':', p) + 1);
     };
     std::string descr = field("descr");
-    bool is_f4 = descr.find("<f4") != std::string::npos, is_u1 = descr.find("|u1") != std::string::npos ||
-                                                                   descr.find("|b1") != std::string::npos;
+    bool is_f4 = descr.find("<f4") != std::string::npos,
+         is_u1 = descr.find("|u1") != std::string::npos || descr.find("|b1") != std::string::npos;
     if (!is_f4 && !is_u1) throw_file_error(path, "only float32 and uint8 .npy files are supported");
     std::string order = field("fortran_order");
     if (order.substr(0, order.find(',')).find("True") != std::string::npos)
@@ -67,7 +67,8 @@ namespace {
 void write_npy_raw(const std::string& path, const std::vector<size_t>& shape, const char* descr, const void* data,
                    size_t bytes_count) {
     std::string dict = std::string("{'descr': '") + descr + "', 'fortran_order': False, 'shape': (";
-    for (size_t i = 0; i < shape.size(); ++i) dict += std::to_string(shape[i]) + (shape.size() == 1 || i + 1 < shape.size() ? "," : "");
+    for (size_t i = 0; i < shape.size(); ++i)
+        dict += std::to_string(shape[i]) + (shape.size() == 1 || i + 1 < shape.size() ? "," : "");
     dict += "), }";
     size_t total = 10 + dict.size() + 1;
     dict += std::string((64 - total % 64) % 64, ' ') + "\n";

@@ -53,10 +53,9 @@ void ProgressBar::draw(long long done, bool final) {
     std::string bar(filled, '#');
     bar += std::string(width - filled, '.');
     if (tty_)
-        std::fprintf(stderr, "\r%s [%s] %5.1f%%  %.1fs elapsed, %.1fs left%s", label_.c_str(), bar.c_str(),
-                     100 * frac, t, eta, final ? "\n" : "   ");
-    else
-        std::fprintf(stderr, "%s [%s] %5.1f%%  %.1fs elapsed\n", label_.c_str(), bar.c_str(), 100 * frac, t);
+        std::fprintf(stderr, "\r%s [%s] %5.1f%%  %.1fs elapsed, %.1fs left%s", label_.c_str(), bar.c_str(), 100 * frac,
+                     t, eta, final ? "\n" : "   ");
+    else std::fprintf(stderr, "%s [%s] %5.1f%%  %.1fs elapsed\n", label_.c_str(), bar.c_str(), 100 * frac, t);
     std::fflush(stderr);
 }
 

@@ -18,7 +18,8 @@ namespace fs = std::filesystem;
 std::string animate(const std::string& out, const std::string& extra = "") {
     return std::string(DYNSKY_EXE) +
            " animate builtin --sky procedural:3 --model procedural --sky-res 96 --res 64x36 --spp 2 --duration 1 --fps 8 --dt 0.5"
-           " --no-video --quiet --threads 2 --out " + out + " " + extra;
+           " --no-video --quiet --threads 2 --out " +
+           out + " " + extra;
 }
 
 std::string frame(const std::string& dir, int k) {
@@ -99,8 +100,10 @@ TEST(AnimateCli, FrameRangesEqualOneRun) {
 // The main job's default moves the clouds with the shipped networks (issue 4), recorded per frame.
 TEST(AnimateCli, DefaultModelIsTheShippedNetwork) {
     std::string dir = test::temp_dir("animate_default_model");
-    auto r = test::run_command(std::string(DYNSKY_EXE) + " animate builtin --sky-res 96 --res 32x18 --spp 1 --duration 30 --fps 0.05 "
-                               "--quiet --out " + dir + " 2>&1");
+    auto r = test::run_command(std::string(DYNSKY_EXE) +
+                               " animate builtin --sky-res 96 --res 32x18 --spp 1 --duration 30 --fps 0.05 "
+                               "--quiet --out " +
+                               dir + " 2>&1");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     for (int k = 0; k < 2; ++k) {
         Image img = read_image(frame(dir, k));
@@ -116,11 +119,13 @@ TEST(AnimateCli, BadInputFailsCleanly) {
     auto r = test::run_command(animate(dir + "/a", "--frames 3-20") + " 2>&1");
     EXPECT_NE(r.exit_code, 0);
     EXPECT_NE(r.output.find("--frames"), std::string::npos) << r.output;
-    r = test::run_command(std::string(DYNSKY_EXE) + " animate builtin --sky " + dir + "/missing.exr --out " + dir + "/b 2>&1");
+    r = test::run_command(std::string(DYNSKY_EXE) + " animate builtin --sky " + dir + "/missing.exr --out " + dir +
+                          "/b 2>&1");
     EXPECT_NE(r.exit_code, 0);
     EXPECT_NE(r.output.find("missing.exr"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(dir + "/b/frame_0000.exr"));
-    r = test::run_command(std::string(DYNSKY_EXE) + " animate builtin --model network:" + dir + "/nomodel --out " + dir + "/c 2>&1");
+    r = test::run_command(std::string(DYNSKY_EXE) + " animate builtin --model network:" + dir + "/nomodel --out " +
+                          dir + "/c 2>&1");
     EXPECT_NE(r.exit_code, 0);
     EXPECT_NE(r.output.find("nomodel"), std::string::npos) << r.output;
     fs::remove_all(dir);

@@ -23,9 +23,10 @@ std::string read_text(const std::string& path) {
 TEST(BenchSamplingCli, FinishedCasesAreKeptAndReused) {
     DYNSKY_REQUIRE_SHARED();
     std::string dir = test::temp_dir("bench_resume");
-    std::string cmd = std::string(DYNSKY_EXE) +
-                      " bench sampling --quick --skies clear --scenes diffuse --samplers cdf,cdf+mis --parts accuracy --out " + dir +
-                      " 2>&1";
+    std::string cmd =
+        std::string(DYNSKY_EXE) +
+        " bench sampling --quick --skies clear --scenes diffuse --samplers cdf,cdf+mis --parts accuracy --out " + dir +
+        " 2>&1";
     auto first = test::run_command(cmd);
     ASSERT_EQ(first.exit_code, 0) << first.output;
     EXPECT_EQ(first.output.find("finished earlier"), std::string::npos) << first.output;
@@ -42,8 +43,10 @@ TEST(BenchSamplingCli, FinishedCasesAreKeptAndReused) {
 
 TEST(BenchSamplingCli, BadSelectionsFail) {
     std::string dir = test::temp_dir("bench_bad");
-    for (const char* bad : {"--skies cloudy", "--scenes sponza", "--samplers nonsense", "--parts everything", "--seeds 0"}) {
-        auto r = test::run_command(std::string(DYNSKY_EXE) + " bench sampling --quick " + bad + " --out " + dir + "/x 2>&1");
+    for (const char* bad :
+         {"--skies cloudy", "--scenes sponza", "--samplers nonsense", "--parts everything", "--seeds 0"}) {
+        auto r = test::run_command(std::string(DYNSKY_EXE) + " bench sampling --quick " + bad + " --out " + dir +
+                                   "/x 2>&1");
         EXPECT_NE(r.exit_code, 0) << bad << ": " << r.output;
         EXPECT_FALSE(fs::exists(dir + "/x")) << bad << ": nothing may be written";
     }

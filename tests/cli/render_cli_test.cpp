@@ -41,7 +41,9 @@ Outcome render(const std::string& args, const std::string& out) {
 
 void expect_clean_failure(const Outcome& o, const std::string& must_mention) {
     EXPECT_NE(o.result.exit_code, 0) << o.result.output;
-    EXPECT_NE(o.result.output.find(must_mention), std::string::npos) << "message should name '" << must_mention << "':\n" << o.result.output;
+    EXPECT_NE(o.result.output.find(must_mention), std::string::npos)
+        << "message should name '" << must_mention << "':\n"
+        << o.result.output;
     EXPECT_NE(o.result.output.find("error"), std::string::npos) << o.result.output;
     EXPECT_FALSE(o.output_exists) << "a failed render left an output file";
 }
@@ -105,8 +107,7 @@ TEST(RenderCli, BadSkyPixelsAreRejected) {
         Image im = read_image(sky);
         if (std::string(c.name) == "black.exr")
             for (auto& v : im.pixels) v = 0;
-        else
-            im.at(8, 8, 1) = c.value;
+        else im.at(8, 8, 1) = c.value;
         write_image(sky, im);
         Outcome o = render(box_glb() + " --sky " + sky, dir + "/out.exr");
         expect_clean_failure(o, c.name);

@@ -21,8 +21,9 @@ test::CommandResult dynsky(const std::string& args) { return test::run_command(s
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 TEST(SkyClearCli, SunPrintsTheNrelSpaCase) {
-    auto r = dynsky("sky sun --lat 39.742476 --lon -105.1786 --elevation 1830.14 --time 2003-10-17T12:30:30-07:00 "
-                    "--pressure 820 --temperature 11");
+    auto r = dynsky(
+        "sky sun --lat 39.742476 --lon -105.1786 --elevation 1830.14 --time 2003-10-17T12:30:30-07:00 "
+        "--pressure 820 --temperature 11");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_TRUE(contains(r.output, "zenith     50.1116")) << r.output;  // SPA: 50.11162
     EXPECT_TRUE(contains(r.output, "azimuth    194.340")) << r.output;  // SPA: 194.34024
@@ -32,8 +33,9 @@ TEST(SkyClearCli, SunPrintsTheNrelSpaCase) {
 TEST(SkyClearCli, ClearWritesASkyAndPreview) {
     std::string dir = test::temp_dir("skyclear");
     std::string out = dir + "/sky.exr", png = dir + "/sky.png";
-    auto r = dynsky("sky clear --lat 48.8566 --lon 2.3522 --time 2026-06-21T12:00:00Z --turbidity 2.5 --albedo 0.2 --res 64 --out " +
-                    out + " --preview " + png);
+    auto r = dynsky(
+        "sky clear --lat 48.8566 --lon 2.3522 --time 2026-06-21T12:00:00Z --turbidity 2.5 --albedo 0.2 --res 64 --out " +
+        out + " --preview " + png);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_TRUE(contains(r.output, "azimuth")) << r.output;
     EXPECT_TRUE(contains(r.output, "W m^-2 sr^-1")) << r.output;
@@ -42,24 +44,28 @@ TEST(SkyClearCli, ClearWritesASkyAndPreview) {
     SkyImage sky = load_sky(out);
     EXPECT_EQ(sky.resolution, 64);
     ASSERT_TRUE(sky.sun_direction.has_value());
-    Vec3d expected = compute_sun_position(parse_utc_time("2026-06-21T12:00:00Z"), GeoLocation{48.8566, 2.3522, 0}).direction();
+    Vec3d expected =
+        compute_sun_position(parse_utc_time("2026-06-21T12:00:00Z"), GeoLocation{48.8566, 2.3522, 0}).direction();
     EXPECT_NEAR((sky.sun_direction->cast<double>() - expected).norm(), 0.0, 1e-5);
     EXPECT_TRUE(contains(sky.source, "hosek-wilkie")) << sky.source;
     EXPECT_TRUE(contains(sky.source, "2026-06-21T12:00:00Z")) << sky.source;
     // --no-sun: same sky without the disc: the brightest pixel is far dimmer.
     std::string out2 = dir + "/nosun.exr";
-    r = dynsky("sky clear --lat 48.8566 --lon 2.3522 --time 2026-06-21T12:00:00Z --turbidity 2.5 --albedo 0.2 --no-sun --res 64 --out " +
-               out2);
+    r = dynsky(
+        "sky clear --lat 48.8566 --lon 2.3522 --time 2026-06-21T12:00:00Z --turbidity 2.5 --albedo 0.2 --no-sun --res 64 --out " +
+        out2);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     SkyImage nosun = load_sky(out2);
-    float a = *std::max_element(sky.rgb.begin(), sky.rgb.end()), b = *std::max_element(nosun.rgb.begin(), nosun.rgb.end());
+    float a = *std::max_element(sky.rgb.begin(), sky.rgb.end()),
+          b = *std::max_element(nosun.rgb.begin(), nosun.rgb.end());
     EXPECT_GT(a, 100 * b);
     fs::remove_all(dir);
 }
 
 TEST(SkyClearCli, NightSunWarnsAndStillWrites) {
     std::string dir = test::temp_dir("skyclear");
-    auto r = dynsky("sky clear --lat 48.8566 --lon 2.3522 --time 2026-06-21T23:00:00Z --res 32 --out " + dir + "/night.exr");
+    auto r = dynsky("sky clear --lat 48.8566 --lon 2.3522 --time 2026-06-21T23:00:00Z --res 32 --out " + dir +
+                    "/night.exr");
     EXPECT_EQ(r.exit_code, 0) << r.output;
     EXPECT_TRUE(contains(r.output, "below the horizon")) << r.output;
     EXPECT_TRUE(fs::exists(dir + "/night.exr"));
@@ -84,7 +90,8 @@ TEST(SkyClearCli, BadInputFailsAndWritesNothing) {
     };
     // The program starts in ~0.5 s of CPU (shared libraries): run the cases side by side.
     std::vector<std::future<test::CommandResult>> runs;
-    for (const Case& c : cases) runs.push_back(std::async(std::launch::async, [args = c.args] { return dynsky(args); }));
+    for (const Case& c : cases)
+        runs.push_back(std::async(std::launch::async, [args = c.args] { return dynsky(args); }));
     for (size_t k = 0; k < cases.size(); ++k) {
         auto r = runs[k].get();
         EXPECT_NE(r.exit_code, 0) << cases[k].args << "\n" << r.output;
@@ -132,8 +139,8 @@ TEST(SkyClearCli, LatLongConvertsASky) {
 TEST(SkyClearCli, HelpDescribesOptionsAndUnits) {
     auto r = dynsky("sky clear --help");
     EXPECT_EQ(r.exit_code, 0);
-    for (const char* s : {"--lat", "--lon", "--time", "--turbidity", "--albedo", "--no-sun", "--sky-res", "--out", "--preview",
-                          "W m^-2 sr^-1", "EAST positive"})
+    for (const char* s : {"--lat", "--lon", "--time", "--turbidity", "--albedo", "--no-sun", "--sky-res", "--out",
+                          "--preview", "W m^-2 sr^-1", "EAST positive"})
         EXPECT_TRUE(contains(r.output, s)) << s << "\n" << r.output;
     r = dynsky("sky latlong --help");
     EXPECT_EQ(r.exit_code, 0);

@@ -18,8 +18,8 @@ std::string exe() { return DYNSKY_EXE; }
 TEST(SkyImportCli, HelpDescribesTheOptions) {
     auto r = test::run_command(exe() + " sky import --help");
     EXPECT_EQ(r.exit_code, 0) << r.output;
-    for (const char* word : {"--preset", "--center", "--radius", "--lens", "--north", "--mirror", "--mask", "--time", "--lat",
-                             "--lon", "--hdr", "--sky-res", "--out", "--preview", "equisolid"})
+    for (const char* word : {"--preset", "--center", "--radius", "--lens", "--north", "--mirror", "--mask", "--time",
+                             "--lat", "--lon", "--hdr", "--sky-res", "--out", "--preview", "equisolid"})
         EXPECT_NE(r.output.find(word), std::string::npos) << word;
 }
 
@@ -27,8 +27,8 @@ TEST(SkyImportCli, ImportsATsiFrameWithItsPreset) {
     DYNSKY_REQUIRE_SHARED();
     std::string dir = test::temp_dir("sky-import-cli");
     std::string photo = test::shared_path("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg");
-    auto r = test::run_command(exe() + " sky import " + photo + " --preset arm-tsi --res 96 --out " + dir + "/tsi.exr --preview " +
-                               dir + "/tsi.png");
+    auto r = test::run_command(exe() + " sky import " + photo + " --preset arm-tsi --res 96 --out " + dir +
+                               "/tsi.exr --preview " + dir + "/tsi.png");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("clear-sky pixels"), std::string::npos) << r.output;
     SkyImage sky = load_sky(dir + "/tsi.exr");
@@ -61,7 +61,8 @@ TEST(SkyImportCli, BadInputFailsNamingTheFileAndWritesNothing) {
     EXPECT_NE(r.output.find(dir + "/fake.png"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(out));
 
-    r = test::run_command(exe() + " sky import " + dir + "/grey.png --center 100,75 --radius 70 --hdr calibrated --res 64 --out " + out);
+    r = test::run_command(exe() + " sky import " + dir +
+                          "/grey.png --center 100,75 --radius 70 --hdr calibrated --res 64 --out " + out);
     EXPECT_EQ(r.exit_code, 1) << r.output;
     EXPECT_NE(r.output.find("--time"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(out));

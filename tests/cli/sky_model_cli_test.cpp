@@ -34,8 +34,8 @@ std::string small_sky(const std::string& dir, int n) {
 TEST(SkyModelCli, PredictWritesStepsAndStats) {
     const std::string dir = test::temp_dir("predict");
     const std::string in = small_sky(dir, 48);
-    auto r = test::run_command(dynsky("sky predict --quiet --model " + shipped_model() + " --in " + in + " --steps 4 --every 2 --out " +
-                                      dir + "/out --stats " + dir + "/stats.csv"));
+    auto r = test::run_command(dynsky("sky predict --quiet --model " + shipped_model() + " --in " + in +
+                                      " --steps 4 --every 2 --out " + dir + "/out --stats " + dir + "/stats.csv"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_FALSE(fs::exists(dir + "/out/step_0001.exr"));
     ASSERT_TRUE(fs::exists(dir + "/out/step_0002.exr"));
@@ -63,11 +63,13 @@ TEST(SkyModelCli, PredictBadInputsFailClearlyAndWriteNothing) {
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.output.find("no_model: model folder not found"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(dir + "/o1"));
-    r = test::run_command(dynsky("sky predict --model " + shipped_model() + " --in " + dir + "/missing.exr --out " + dir + "/o2"));
+    r = test::run_command(dynsky("sky predict --model " + shipped_model() + " --in " + dir + "/missing.exr --out " +
+                                 dir + "/o2"));
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.output.find("missing.exr"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(dir + "/o2"));
-    r = test::run_command(dynsky("sky predict --model " + shipped_model() + " --in " + in + " --steps 0 --out " + dir + "/o3"));
+    r = test::run_command(dynsky("sky predict --model " + shipped_model() + " --in " + in + " --steps 0 --out " + dir +
+                                 "/o3"));
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.output.find("--steps"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(dir + "/o3"));

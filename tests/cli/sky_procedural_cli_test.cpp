@@ -20,8 +20,10 @@ test::CommandResult procedural(const std::string& args) {
 
 TEST(SkyProceduralCli, WritesFramesFlowsAndManifest) {
     std::string dir = test::temp_dir("procedural_cli") + "/seq";
-    auto r = procedural("--seed 3 --coverage 0.4 --duration 20 --dt 10 --res 48 --wind 12,250 "
-                        "--layers cumulus,cirrus --preview --out " + dir);
+    auto r = procedural(
+        "--seed 3 --coverage 0.4 --duration 20 --dt 10 --res 48 --wind 12,250 "
+        "--layers cumulus,cirrus --preview --out " +
+        dir);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     for (int k = 0; k < 3; ++k) {
         char name[32];
@@ -78,7 +80,8 @@ TEST(SkyProceduralCli, BadArgumentsLeaveNoOutput) {
 
 TEST(SkyProceduralCli, SunFromPlaceAndTime) {
     std::string dir = test::temp_dir("procedural_cli_sun") + "/seq";
-    auto r = procedural("--lat 39.74 --lon -105.18 --time 2024-06-21T18:00:00Z --duration 600 --dt 600 --res 32 --out " + dir);
+    auto r = procedural(
+        "--lat 39.74 --lon -105.18 --time 2024-06-21T18:00:00Z --duration 600 --dt 600 --res 32 --out " + dir);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     // Denver near solar noon in June: the sun is high in the south, and moves over 10 minutes.
     SkyImage a = load_sky(dir + "/frame_0000.exr"), b = load_sky(dir + "/frame_0001.exr");
@@ -90,8 +93,8 @@ TEST(SkyProceduralCli, SunFromPlaceAndTime) {
 TEST(SkyProceduralCli, HelpDescribesOptions) {
     auto r = test::run_command(std::string(DYNSKY_EXE) + " sky procedural --help");
     EXPECT_EQ(r.exit_code, 0);
-    for (const char* option : {"--seed", "--coverage", "--duration", "--dt", "--sky-res", "--out", "--wind", "--mask-image",
-                               "--sun-elevation", "--lat", "--preview"})
+    for (const char* option : {"--seed", "--coverage", "--duration", "--dt", "--sky-res", "--out", "--wind",
+                               "--mask-image", "--sun-elevation", "--lat", "--preview"})
         EXPECT_NE(r.output.find(option), std::string::npos) << option;
 }
 

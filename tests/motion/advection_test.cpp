@@ -21,7 +21,8 @@ SkyImage blob_sky(int n, const Vec3d& centre, double sigma_deg) {
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
             if (!sky.in_disc(i, j)) continue;
-            double a = std::acos(std::clamp(fisheye::direction_from_pixel(i, j, n).dot(centre), -1.0, 1.0)) * 180 / kPiD;
+            double a = std::acos(std::clamp(fisheye::direction_from_pixel(i, j, n).dot(centre), -1.0, 1.0)) * 180 /
+                       kPiD;
             float v = float(1.0 + 10.0 * std::exp(-0.5 * a * a / (sigma_deg * sigma_deg)));
             sky.set_pixel(i, j, Color(v, v, v));
         }
@@ -35,7 +36,8 @@ void blob_moments(const SkyImage& sky, Vec3d* centroid, double* integral) {
     for (int j = 0; j < sky.resolution; ++j)
         for (int i = 0; i < sky.resolution; ++i) {
             if (!sky.in_disc(i, j)) continue;
-            double w = std::max(0.0, double(sky.pixel(i, j)[0]) - 1.0) * fisheye::pixel_solid_angle(i, j, sky.resolution);
+            double w = std::max(0.0, double(sky.pixel(i, j)[0]) - 1.0) *
+                       fisheye::pixel_solid_angle(i, j, sky.resolution);
             sum += w * fisheye::direction_from_pixel(i, j, sky.resolution);
             total += w;
         }

@@ -77,7 +77,8 @@ TEST(SkyMetrics, AdvectionByAnIntegerFlowIsAShift) {
     cv::Mat out = advect_by_flow(img, flow, 1.0);
     for (int y = 1; y < 40; ++y)
         for (int x = 2; x < 40; ++x)
-            for (int c = 0; c < 3; ++c) ASSERT_NEAR(out.at<cv::Vec3f>(y, x)[c], img.at<cv::Vec3f>(y - 1, x - 2)[c], 1e-5f);
+            for (int c = 0; c < 3; ++c)
+                ASSERT_NEAR(out.at<cv::Vec3f>(y, x)[c], img.at<cv::Vec3f>(y - 1, x - 2)[c], 1e-5f);
     EXPECT_EQ(out.at<cv::Vec3f>(0, 0)[0], 0.0f);  // read from outside: 0
     // Two steps of (2, 1) = one of (4, 2).
     cv::Mat two = advect_by_flow(img, flow, 2.0);

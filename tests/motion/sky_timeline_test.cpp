@@ -63,10 +63,12 @@ TEST(SkyTimeline, GammaReproducesMediumStepsAndKeys) {
     cv::Mat f1 = estimate_sky_flow(s1, s2);
     EXPECT_EQ(timeline.sky_at(10.0 + 10.0 / 3.0).rgb, advect_great_arc(s1, f1, 1.0 / 3.0).rgb);
     // Half-way: the even blend of the two keys.
-    SkyImage mid = timeline.sky_at(15.0), k1 = advect_great_arc(s1, f1, 1.0 / 3.0), k2 = advect_great_arc(s2, f1, -1.0 / 3.0);
+    SkyImage mid = timeline.sky_at(15.0), k1 = advect_great_arc(s1, f1, 1.0 / 3.0),
+             k2 = advect_great_arc(s2, f1, -1.0 / 3.0);
     for (size_t k = 0; k < mid.rgb.size(); k += 97) EXPECT_NEAR(mid.rgb[k], 0.5f * (k1.rgb[k] + k2.rgb[k]), 1e-5f);
     // Continuity: approaching a key from either side converges to it (no jump inside an interval).
-    SkyImage a = timeline.sky_at(10.0 / 3.0 - 1e-4), b = timeline.sky_at(10.0 / 3.0 + 1e-4), k = timeline.sky_at(10.0 / 3.0);
+    SkyImage a = timeline.sky_at(10.0 / 3.0 - 1e-4), b = timeline.sky_at(10.0 / 3.0 + 1e-4),
+             k = timeline.sky_at(10.0 / 3.0);
     for (size_t q = 0; q < k.rgb.size(); q += 53) {
         EXPECT_NEAR(a.rgb[q], k.rgb[q], 1e-3f);
         EXPECT_NEAR(b.rgb[q], k.rgb[q], 1e-3f);
@@ -92,7 +94,8 @@ TEST(SkyTimeline, SunIsCutOutAndFollowsTheClock) {
     auto energy = [](const SkyImage& s) {
         double e = 0;
         for (int j = 0; j < s.resolution; ++j)
-            for (int i = 0; i < s.resolution; ++i) e += luminance(s.pixel(i, j)) * fisheye::pixel_solid_angle(i, j, s.resolution);
+            for (int i = 0; i < s.resolution; ++i)
+                e += luminance(s.pixel(i, j)) * fisheye::pixel_solid_angle(i, j, s.resolution);
         return e;
     };
     SkyImage cut = clear;
@@ -114,7 +117,8 @@ TEST(SkyTimeline, SunIsCutOutAndFollowsTheClock) {
     for (int j = 0; j < later.resolution; ++j)
         for (int i = 0; i < later.resolution; ++i)
             if (luminance(later.pixel(i, j)) > best) best = luminance(later.pixel(i, j)), bi = i, bj = j;
-    double angle = std::acos(std::clamp(fisheye::direction_from_pixel(bi, bj, 256).dot(expected), -1.0, 1.0)) * 180 / kPiD;
+    double angle = std::acos(std::clamp(fisheye::direction_from_pixel(bi, bj, 256).dot(expected), -1.0, 1.0)) * 180 /
+                   kPiD;
     EXPECT_LT(angle, 1.0);
 }
 

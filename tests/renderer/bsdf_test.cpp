@@ -45,7 +45,8 @@ TEST(MetalRoughBsdf, NeverReflectsMoreThanItReceives) {
             for (float theta : {0.0f, 0.8f, 1.2f, 1.4f}) {
                 MetalRoughBsdf bsdf(Color::Ones(), metallic, roughness);
                 Color a = albedo_quadrature(bsdf, dir_from_theta(theta), 500);
-                EXPECT_LE(a.maxCoeff(), 1.0f + 5e-3f) << "metallic " << metallic << " roughness " << roughness << " theta " << theta;
+                EXPECT_LE(a.maxCoeff(), 1.0f + 5e-3f)
+                    << "metallic " << metallic << " roughness " << roughness << " theta " << theta;
                 EXPECT_GT(a.minCoeff(), 0.3f);
                 // A white dielectric reflects everything: what the specular lobe does not, the base does.
                 if (metallic == 0) {
@@ -88,7 +89,8 @@ TEST(MetalRoughBsdf, SampledEstimateMatchesQuadrature) {
             }
             Eigen::Array3d mean = sum / n, se = ((sum2 / n - mean * mean) / n).sqrt();
             for (int c = 0; c < 3; ++c)
-                EXPECT_NEAR(mean[c], exact[c], 4 * se[c] + 2e-3) << "metallic " << metallic << " roughness " << roughness;
+                EXPECT_NEAR(mean[c], exact[c], 4 * se[c] + 2e-3)
+                    << "metallic " << metallic << " roughness " << roughness;
         }
 }
 

@@ -13,7 +13,8 @@ struct ChiSquareResult {
     int dof = 0;
     double p_value = 1;
     std::string summary() const {
-        return "chi2 = " + std::to_string(statistic) + ", dof = " + std::to_string(dof) + ", p = " + std::to_string(p_value);
+        return "chi2 = " + std::to_string(statistic) + ", dof = " + std::to_string(dof) +
+               ", p = " + std::to_string(p_value);
     }
 };
 

@@ -28,7 +28,9 @@ std::shared_ptr<SkyImage> real_photo_sky(int n) {
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
             cv::Vec3b bgr = small.at<cv::Vec3b>(j, i);
-            sky->set_pixel(i, j, Color(srgb_to_linear(bgr[2] / 255.f), srgb_to_linear(bgr[1] / 255.f), srgb_to_linear(bgr[0] / 255.f)));
+            sky->set_pixel(i, j,
+                           Color(srgb_to_linear(bgr[2] / 255.f), srgb_to_linear(bgr[1] / 255.f),
+                                 srgb_to_linear(bgr[0] / 255.f)));
         }
     clear_outside_disc(sky.get());
     return sky;
@@ -236,7 +238,8 @@ TEST(EnvLight, RowsWithBadPixelsMatchTheCleanedSky) {
             EnvLight a(bad, 0.3f, parse_sky_sampler(sampler)), b(clean, 0.3f, parse_sky_sampler(sampler));
             EXPECT_EQ(a.bad_pixel_count(), 4u) << n << " " << sampler;
             EXPECT_EQ(b.bad_pixel_count(), 0u);
-            for (int c = 0; c < 3; ++c) EXPECT_NEAR(a.sky_irradiance()[c], b.sky_irradiance()[c], 1e-5f * b.sky_irradiance()[c]) << n;
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(a.sky_irradiance()[c], b.sky_irradiance()[c], 1e-5f * b.sky_irradiance()[c]) << n;
             EXPECT_NEAR(a.sky_probability(), b.sky_probability(), 1e-6f);
             Rng rng(3, 7);
             for (int k = 0; k < 200; ++k) {
@@ -267,7 +270,8 @@ TEST(EnvLight, IrradianceMatchesADirectSum) {
                 for (int k = 0; k < 3; ++k) direct[k] += c[k] * std::cos(theta) * jac * (4.0 / (double(n) * n));
             }
         EnvLight light(sky, 0.3f);
-        for (int k = 0; k < 3; ++k) EXPECT_NEAR(light.sky_irradiance()[k], direct[k], 2e-4 * direct[k]) << n << " " << k;
+        for (int k = 0; k < 3; ++k)
+            EXPECT_NEAR(light.sky_irradiance()[k], direct[k], 2e-4 * direct[k]) << n << " " << k;
     }
 }
 

@@ -72,10 +72,13 @@ bool has_warning_containing(const Scene& s, const std::string& text) {
 
 // The scenes the feature tests below inspect, loaded once per test program (decoding their
 // 2048-pixel textures is most of this file's run time). Others are loaded and dropped.
-const std::set<std::string> kInspected = {
-    "SimpleInstancing/SimpleInstancing.glb", "CesiumMilkTruck/CesiumMilkTruck.glb", "Cameras/Cameras.gltf",
-    "OrientationTest/OrientationTest.glb", "EmissiveStrengthTest/EmissiveStrengthTest.glb",
-    "ClearCoatTest/ClearCoatTest.glb", "GlassBrokenWindow/GlassBrokenWindow.glb"};
+const std::set<std::string> kInspected = {"SimpleInstancing/SimpleInstancing.glb",
+                                          "CesiumMilkTruck/CesiumMilkTruck.glb",
+                                          "Cameras/Cameras.gltf",
+                                          "OrientationTest/OrientationTest.glb",
+                                          "EmissiveStrengthTest/EmissiveStrengthTest.glb",
+                                          "ClearCoatTest/ClearCoatTest.glb",
+                                          "GlassBrokenWindow/GlassBrokenWindow.glb"};
 
 const Scene& inspected_scene(const std::string& relative) {
     static std::map<std::string, Scene> cache;
@@ -166,7 +169,8 @@ TEST(GltfLoader, CesiumMilkTruckBuildsTheWheelMeshOnceForTwoNodes) {
     EXPECT_GT((where[0] - where[1]).norm(), 1.0f);  // front and rear axles
     // Two glTF textures name the same image with the default sampler, both as base colour.
     EXPECT_EQ(s.textures.size(), 1u);
-    EXPECT_EQ(material_named(s, "wheels")->base_color_texture.texture, material_named(s, "truck")->base_color_texture.texture);
+    EXPECT_EQ(material_named(s, "wheels")->base_color_texture.texture,
+              material_named(s, "truck")->base_color_texture.texture);
     EXPECT_TRUE(has_warning_containing(s, "animation"));
 }
 
@@ -191,7 +195,8 @@ TEST(GltfLoader, CamerasFileGivesThePerspectiveCameraAndGeneratedFlatNormals) {
     ASSERT_EQ(m.triangle_count(), 2u);
     ASSERT_EQ(m.normals.size(), m.positions.size());
     for (size_t t = 0; t < m.indices.size(); t += 3) {
-        const Vec3 &a = m.positions[m.indices[t]], &b = m.positions[m.indices[t + 1]], &d = m.positions[m.indices[t + 2]];
+        const Vec3 &a = m.positions[m.indices[t]], &b = m.positions[m.indices[t + 1]],
+                   &d = m.positions[m.indices[t + 2]];
         Vec3 face = (b - a).cross(d - a).normalized();
         EXPECT_NEAR(std::abs(face.z()), 1.0f, 1e-6f);  // the square lies in z = 0
         for (int k = 0; k < 3; ++k) EXPECT_NEAR((m.normals[m.indices[t + k]] - face).norm(), 0.0f, 1e-6f);
@@ -215,9 +220,9 @@ TEST(GltfLoader, OrientationTestNodesMatchTheirKnownPlacements) {
         return s.instances[0];
     };
     // Node translations (TRS nodes and matrix nodes alike).
-    const std::pair<const char*, Vec3> placements[] = {
-        {"ArrowMeshX1", Vec3(5, 0, 0)},  {"ArrowMeshX2", Vec3(-5, 0, 0)}, {"ArrowMeshY1", Vec3(0, 5, 0)},
-        {"ArrowMeshY2", Vec3(0, -5, 0)}, {"ArrowMeshZ1", Vec3(0, 0, 5)},  {"ArrowMeshZ2", Vec3(0, 0, -5)}};
+    const std::pair<const char*, Vec3> placements[] = {{"ArrowMeshX1", Vec3(5, 0, 0)}, {"ArrowMeshX2", Vec3(-5, 0, 0)},
+                                                       {"ArrowMeshY1", Vec3(0, 5, 0)}, {"ArrowMeshY2", Vec3(0, -5, 0)},
+                                                       {"ArrowMeshZ1", Vec3(0, 0, 5)}, {"ArrowMeshZ2", Vec3(0, 0, -5)}};
     for (const auto& [mesh, t] : placements)
         EXPECT_NEAR((instance(mesh).transform.translation() - t).norm(), 0.0f, 1e-5f) << mesh;
     // Each arrow, rotated by its node, touches its target (targets have identity nodes). A wrong
@@ -226,7 +231,8 @@ TEST(GltfLoader, OrientationTestNodesMatchTheirKnownPlacements) {
         const Instance& arrow = instance(std::string("ArrowMesh") + axis);
         const Instance& target = instance(std::string("TargetMesh") + axis);
         Bounds3 box;
-        for (const Vec3& p : s.meshes[size_t(target.mesh_group)].primitives[0].positions) box.extend(target.transform * p);
+        for (const Vec3& p : s.meshes[size_t(target.mesh_group)].primitives[0].positions)
+            box.extend(target.transform * p);
         float closest = 1e9f;
         for (const Vec3& p : s.meshes[size_t(arrow.mesh_group)].primitives[0].positions) {
             Vec3 w = arrow.transform * p;
@@ -240,7 +246,8 @@ TEST(GltfLoader, EmissiveStrengthMultipliesTheEmissiveFactor) {
     DYNSKY_REQUIRE_SHARED();
     const Scene& s = inspected_scene("EmissiveStrengthTest/EmissiveStrengthTest.glb");
     const Color factor(0.1f, 0.5f, 0.9f);  // every material's emissiveFactor in the file
-    for (auto [name, strength] : {std::pair<const char*, float>{"Emit1", 1}, {"Emit2", 2}, {"Emit4", 4}, {"Emit8", 8}, {"Emit16", 16}}) {
+    for (auto [name, strength] :
+         {std::pair<const char*, float>{"Emit1", 1}, {"Emit2", 2}, {"Emit4", 4}, {"Emit8", 8}, {"Emit16", 16}}) {
         const Material* m = material_named(s, name);
         ASSERT_NE(m, nullptr) << name;
         EXPECT_NEAR((m->emissive - factor * strength).matrix().norm(), 0.0f, 1e-5f) << name;
@@ -289,16 +296,16 @@ class MiniGltf {
     }
     int accessor(int view, int component_type, size_t count, const std::string& type, const std::string& extra = "") {
         accessors_.push_back("{" + (view >= 0 ? "\"bufferView\":" + std::to_string(view) + "," : std::string()) +
-                             "\"componentType\":" + std::to_string(component_type) + ",\"count\":" + std::to_string(count) +
-                             ",\"type\":\"" + type + "\"" + extra + "}");
+                             "\"componentType\":" + std::to_string(component_type) +
+                             ",\"count\":" + std::to_string(count) + ",\"type\":\"" + type + "\"" + extra + "}");
         return int(accessors_.size()) - 1;
     }
     // Writes NAME.gltf and NAME.bin into dir; `body` holds the remaining top-level members.
     std::string write(const std::string& dir, const std::string& name, const std::string& body) const {
         write_bytes(dir + "/" + name + ".bin", bin_);
         std::string json = "{\"asset\":{\"version\":\"2.0\"}," + body + ",\"buffers\":[{\"uri\":\"" + name +
-                           ".bin\",\"byteLength\":" + std::to_string(bin_.size()) + "}],\"bufferViews\":[" + join(views_) +
-                           "],\"accessors\":[" + join(accessors_) + "]}";
+                           ".bin\",\"byteLength\":" + std::to_string(bin_.size()) + "}],\"bufferViews\":[" +
+                           join(views_) + "],\"accessors\":[" + join(accessors_) + "]}";
         std::string path = dir + "/" + name + ".gltf";
         write_bytes(path, json);
         return path;
@@ -331,10 +338,16 @@ TEST(GltfLoader, StripsAndFansBecomeTriangleListsAndPointsAreSkipped) {
     const std::vector<float> q = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0};
     int pos = g.accessor(g.view(q), kFloat, 4, "VEC3");
     int five = g.accessor(g.view(std::vector<float>{0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, -1, 1, 0}), kFloat, 5, "VEC3");
-    std::string prims = "{\"attributes\":{\"POSITION\":" + std::to_string(pos) + "},\"mode\":5},"  // strip, not indexed
-                        "{\"attributes\":{\"POSITION\":" + std::to_string(five) + "},\"mode\":6},"  // fan
-                        "{\"attributes\":{\"POSITION\":" + std::to_string(pos) + "},\"mode\":0},"   // points
-                        "{\"attributes\":{\"POSITION\":" + std::to_string(pos) + "},\"mode\":1}";   // lines
+    std::string prims = "{\"attributes\":{\"POSITION\":" + std::to_string(pos) +
+                        "},\"mode\":5},"  // strip, not indexed
+                        "{\"attributes\":{\"POSITION\":" +
+                        std::to_string(five) +
+                        "},\"mode\":6},"  // fan
+                        "{\"attributes\":{\"POSITION\":" +
+                        std::to_string(pos) +
+                        "},\"mode\":0},"  // points
+                        "{\"attributes\":{\"POSITION\":" +
+                        std::to_string(pos) + "},\"mode\":1}";  // lines
     Scene s = load_gltf(g.write(dir, "modes", one_node_scene("{\"name\":\"m\",\"primitives\":[" + prims + "]}")));
     ASSERT_EQ(s.meshes.size(), 1u);
     ASSERT_EQ(s.meshes[0].primitives.size(), 2u);
@@ -353,7 +366,8 @@ TEST(GltfLoader, StripsAndFansBecomeTriangleListsAndPointsAreSkipped) {
     for (size_t i = 0; i < strip.size(); ++i) EXPECT_EQ(strip[i], want_strip[i]) << i;
     std::vector<Vec3> fan = corners(s.meshes[0].primitives[1]);
     std::vector<Vec3> five_v = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0), Vec3(0, 1, 0), Vec3(-1, 1, 0)};
-    std::vector<Vec3> want_fan = {five_v[1], five_v[2], five_v[0], five_v[2], five_v[3], five_v[0], five_v[3], five_v[4], five_v[0]};
+    std::vector<Vec3> want_fan = {five_v[1], five_v[2], five_v[0], five_v[2], five_v[3],
+                                  five_v[0], five_v[3], five_v[4], five_v[0]};
     ASSERT_EQ(fan.size(), want_fan.size());
     for (size_t i = 0; i < fan.size(); ++i) EXPECT_EQ(fan[i], want_fan[i]) << i;
     // Both keep a counter-clockwise winding seen from +Z, so every flat normal is +Z.
@@ -369,17 +383,20 @@ TEST(GltfLoader, ReadsEveryComponentTypeNormalizedOrNot) {
     int pos = g.accessor(g.view(std::vector<int16_t>{0, 0, 0, 0, 200, 0, 300, -100, 0}), kShort, 3, "VEC3");
     int nrm = g.accessor(g.view(std::vector<int8_t>{127, 0, 0, 0, -128, 0, 0, 0, 127, 0}), kByte, 3, "VEC3",
                          ",\"normalized\":true");
-    int uv = g.accessor(g.view(std::vector<uint8_t>{0, 255, 51, 0, 255, 102, 0, 0}), kUByte, 3, "VEC2", ",\"normalized\":true");
-    int col = g.accessor(g.view(std::vector<uint16_t>{65535, 0, 32768, 0, 65535, 0, 0, 0, 65535, 0}), kUShort, 3, "VEC3",
-                         ",\"normalized\":true");
+    int uv = g.accessor(g.view(std::vector<uint8_t>{0, 255, 51, 0, 255, 102, 0, 0}), kUByte, 3, "VEC2",
+                        ",\"normalized\":true");
+    int col = g.accessor(g.view(std::vector<uint16_t>{65535, 0, 32768, 0, 65535, 0, 0, 0, 65535, 0}), kUShort, 3,
+                         "VEC3", ",\"normalized\":true");
     int idx32 = g.accessor(g.view(std::vector<uint32_t>{0, 1, 2}), kUInt, 3, "SCALAR");
     int idx8 = g.accessor(g.view(std::vector<uint8_t>{2, 1, 0, 0}), kUByte, 3, "SCALAR");
     std::string attrs = "\"attributes\":{\"POSITION\":" + std::to_string(pos) + ",\"NORMAL\":" + std::to_string(nrm) +
                         ",\"TEXCOORD_0\":" + std::to_string(uv) + ",\"COLOR_0\":" + std::to_string(col) + "}";
     std::string mesh = "{\"primitives\":[{" + attrs + ",\"indices\":" + std::to_string(idx32) + "},{" + attrs +
                        ",\"indices\":" + std::to_string(idx8) + "}]}";
-    Scene s = load_gltf(g.write(dir, "types", one_node_scene(mesh, "\"extensionsUsed\":[\"KHR_mesh_quantization\"],"
-                                                                   "\"extensionsRequired\":[\"KHR_mesh_quantization\"]")));
+    Scene s = load_gltf(g.write(dir, "types",
+                                one_node_scene(mesh,
+                                               "\"extensionsUsed\":[\"KHR_mesh_quantization\"],"
+                                               "\"extensionsRequired\":[\"KHR_mesh_quantization\"]")));
     ASSERT_EQ(s.meshes[0].primitives.size(), 2u);
     const TriangleMesh& m = s.meshes[0].primitives[0];
     EXPECT_EQ(m.positions[1], Vec3(0, 200, 0));
@@ -406,8 +423,8 @@ TEST(GltfLoader, SparseAccessorsReplaceTheListedElements) {
     // A sparse accessor without a bufferView: zeros, then the substitutions.
     int zeros = g.accessor(-1, kFloat, 4, "VEC3", sparse);
     int idx = g.accessor(g.view(std::vector<uint16_t>{0, 1, 2, 0, 2, 3}), kUShort, 6, "SCALAR");
-    std::string mesh = "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) + ",\"NORMAL\":" +
-                       std::to_string(zeros) + "},\"indices\":" + std::to_string(idx) + "}]}";
+    std::string mesh = "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) +
+                       ",\"NORMAL\":" + std::to_string(zeros) + "},\"indices\":" + std::to_string(idx) + "}]}";
     Scene s = load_gltf(g.write(dir, "sparse", one_node_scene(mesh)));
     const TriangleMesh& m = s.meshes[0].primitives[0];
     EXPECT_EQ(m.positions[0], Vec3(0, 0, 0));
@@ -441,9 +458,12 @@ TEST(GltfLoader, TexturesAreSharedPerImageSamplerAndColourSpace) {
         "\"extensions\":{\"KHR_texture_transform\":{\"offset\":[0.25,0.5],\"rotation\":0.3,\"scale\":[2,3],\"texCoord\":1}}";
     std::string body =
         "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
-        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) + ",\"TEXCOORD_0\":" +
-        std::to_string(uv) + ",\"TEXCOORD_1\":" + std::to_string(uv1) + "},\"material\":1}]}],"
-        "\"images\":[{\"uri\":\"" + png + "\"}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":" +
+        std::to_string(pos) + ",\"TEXCOORD_0\":" + std::to_string(uv) + ",\"TEXCOORD_1\":" + std::to_string(uv1) +
+        "},\"material\":1}]}],"
+        "\"images\":[{\"uri\":\"" +
+        png +
+        "\"}],"
         "\"samplers\":[{\"magFilter\":9728,\"wrapS\":33071,\"wrapT\":33648},{}],"
         "\"textures\":[{\"source\":0,\"sampler\":0},{\"source\":0,\"sampler\":0},{\"source\":0,\"sampler\":1}],"
         "\"materials\":["
@@ -452,7 +472,9 @@ TEST(GltfLoader, TexturesAreSharedPerImageSamplerAndColourSpace) {
         "\"occlusionTexture\":{\"index\":0,\"strength\":0.25},\"emissiveTexture\":{\"index\":1},"
         "\"emissiveFactor\":[1,2,3],\"alphaMode\":\"MASK\",\"alphaCutoff\":0.3,\"doubleSided\":true},"
         "{\"name\":\"b\",\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":2},"
-        "\"metallicRoughnessTexture\":{\"index\":1," + transform + "}},\"alphaMode\":\"BLEND\"}],"
+        "\"metallicRoughnessTexture\":{\"index\":1," +
+        transform +
+        "}},\"alphaMode\":\"BLEND\"}],"
         "\"extensionsUsed\":[\"KHR_texture_transform\",\"KHR_materials_clearcoat\"]";
     Scene s = load_gltf(g.write(dir, "textures", body));
     EXPECT_TRUE(has_warning_containing(s, "KHR_materials_clearcoat"));
@@ -493,7 +515,9 @@ TEST(GltfLoader, TexturesAreSharedPerImageSamplerAndColourSpace) {
     // KHR_texture_transform on b's metallicRoughnessTexture, with its texCoord override.
     EXPECT_EQ(b.metallic_roughness_texture.texcoord, 1);
     EXPECT_NEAR((b.metallic_roughness_texture.uv_transform -
-                 texture_transform_matrix(Vec2(0.25f, 0.5f), 0.3f, Vec2(2, 3))).norm(), 0.0f, 1e-6f);
+                 texture_transform_matrix(Vec2(0.25f, 0.5f), 0.3f, Vec2(2, 3)))
+                    .norm(),
+                0.0f, 1e-6f);
     EXPECT_TRUE(a.base_color_texture.uv_transform.isIdentity());
     EXPECT_EQ(s.meshes[0].primitives[0].texcoords[1][2], Vec2(2, 2));
 }
@@ -535,7 +559,8 @@ TEST(GltfLoader, NodeMatricesAndTrsComposeParentFirst) {
         "{\"matrix\":[2,0,0,0, 0,1,0,0, 0,0,1,0, 10,0,0,1],\"children\":[1,2]},"
         "{\"translation\":[0,1,0],\"rotation\":[0,0,0.70710678,0.70710678],\"scale\":[3,3,3],\"mesh\":0},"
         "{\"mesh\":0}],"
-        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) + "}}]}]";
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":" +
+        std::to_string(pos) + "}}]}]";
     Scene s = load_gltf(g.write(dir, "nodes", body));
     ASSERT_EQ(s.meshes.size(), 1u);
     ASSERT_EQ(s.instances.size(), 2u);
@@ -550,8 +575,10 @@ TEST(GltfLoader, UnsupportedExtensionsRequiredFailAndUsedWarn) {
     MiniGltf g;
     int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
     std::string mesh = "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) + "}}]}";
-    std::string path = g.write(dir, "required", one_node_scene(mesh, "\"extensionsUsed\":[\"KHR_draco_mesh_compression\"],"
-                                                                     "\"extensionsRequired\":[\"KHR_draco_mesh_compression\"]"));
+    std::string path = g.write(dir, "required",
+                               one_node_scene(mesh,
+                                              "\"extensionsUsed\":[\"KHR_draco_mesh_compression\"],"
+                                              "\"extensionsRequired\":[\"KHR_draco_mesh_compression\"]"));
     std::string e = load_error(path);
     EXPECT_NE(e.find("required.gltf"), std::string::npos) << e;
     EXPECT_NE(e.find("KHR_draco_mesh_compression"), std::string::npos) << e;
@@ -595,8 +622,9 @@ TEST(GltfLoader, MissingBinAndTextureFilesAreNamed) {
     MiniGltf g;
     int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
     std::string mesh = "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) + "},\"material\":0}]}";
-    std::string tex = "\"images\":[{\"uri\":\"gone.png\"}],\"textures\":[{\"source\":0}],"
-                      "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}]";
+    std::string tex =
+        "\"images\":[{\"uri\":\"gone.png\"}],\"textures\":[{\"source\":0}],"
+        "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}]";
     std::string path = g.write(dir, "notex", one_node_scene(mesh, tex));
     std::string e = load_error(path);
     EXPECT_NE(e.find("notex.gltf"), std::string::npos) << e;
@@ -627,7 +655,8 @@ TEST(GltfLoader, OutOfRangeAccessorsIndicesAndNodesThrow) {
         {"accessor_range", one_node_scene(mesh(too_long, -1)), "out of range"},
         {"index_range", one_node_scene(mesh(pos, bad_index)), "index 4"},
         {"no_accessor", one_node_scene(mesh(99, -1)), "accessor 99"},
-        {"no_material", one_node_scene("{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":3}]}"), "material 3"},
+        {"no_material", one_node_scene("{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":3}]}"),
+         "material 3"},
         {"cycle", "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"children\":[1]},{\"children\":[0]}]", "node"},
         {"no_mesh", "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":5}]", "mesh 5"},
     };

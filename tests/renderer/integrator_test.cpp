@@ -43,7 +43,8 @@ Scene sphere_scene(const Material& m, bool with_ground) {
         Material g;
         g.base_color = Color(0.6f, 0.6f, 0.6f), g.metallic = 0, g.roughness = 0.9f;
         scene.materials.push_back(g);
-        add_mesh_instance(&scene, make_ground_quad_mesh(8, 1), Eigen::Affine3f(Eigen::Translation3f(0, -1, 0)), "ground");
+        add_mesh_instance(&scene, make_ground_quad_mesh(8, 1), Eigen::Affine3f(Eigen::Translation3f(0, -1, 0)),
+                          "ground");
     }
     return scene;
 }
@@ -135,7 +136,8 @@ TEST(PathIntegrator, MisLightOnlyAndBsdfOnlyAgreeWithinStandardErrors) {
         for (int a = 0; a < 3; ++a)
             for (int b = a + 1; b < 3; ++b)
                 EXPECT_LT(std::abs(mean[a] - mean[b]), 4 * std::sqrt(var[a] + var[b]))
-                    << "strategies " << a << " vs " << b << " roughness " << roughness << ": " << mean[a] << " vs " << mean[b];
+                    << "strategies " << a << " vs " << b << " roughness " << roughness << ": " << mean[a] << " vs "
+                    << mean[b];
         // MIS should not be noisier than the worse of the two (sanity of the weights).
         EXPECT_LE(var[0], std::max(var[1], var[2]));
     }

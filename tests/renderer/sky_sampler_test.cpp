@@ -63,16 +63,20 @@ std::shared_ptr<SkyImage> sun_sky(int n, const Vec3& sun, float radius_rad, floa
 
 // The Mobotix all-sky photograph (sRGB-decoded, cropped to its image circle), if ../shared exists.
 std::shared_ptr<SkyImage> photo_sky(int n) {
-    cv::Mat img = cv::imread(test::shared_path("skies/mobotix_sophia_20200812_morning/images/2020-08-12_10_00.jpg"), cv::IMREAD_COLOR);
+    cv::Mat img = cv::imread(test::shared_path("skies/mobotix_sophia_20200812_morning/images/2020-08-12_10_00.jpg"),
+                             cv::IMREAD_COLOR);
     if (img.empty()) return nullptr;
     int side = std::min(img.rows, 940);
     cv::Mat small;
-    cv::resize(img(cv::Rect((img.cols - side) / 2, (img.rows - side) / 2, side, side)), small, cv::Size(n, n), 0, 0, cv::INTER_AREA);
+    cv::resize(img(cv::Rect((img.cols - side) / 2, (img.rows - side) / 2, side, side)), small, cv::Size(n, n), 0, 0,
+               cv::INTER_AREA);
     auto sky = std::make_shared<SkyImage>(n);
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
             cv::Vec3b c = small.at<cv::Vec3b>(j, i);
-            sky->set_pixel(i, j, Color(srgb_to_linear(c[2] / 255.f), srgb_to_linear(c[1] / 255.f), srgb_to_linear(c[0] / 255.f)));
+            sky->set_pixel(i, j,
+                           Color(srgb_to_linear(c[2] / 255.f), srgb_to_linear(c[1] / 255.f),
+                                 srgb_to_linear(c[0] / 255.f)));
         }
     clear_outside_disc(sky.get());
     return sky;
@@ -90,7 +94,8 @@ std::vector<NamedSky> failure_skies() {
     Vec3 sun = fisheye::direction_from_angles(0.7, 2.0).cast<float>();
     skies.push_back({"subtexel_sun", sun_sky(n, sun, 0.0046f, 1e5f, false)});
     skies.push_back({"sun_1e6", sun_sky(n, sun, 0.03f, 1e6f, true)});
-    skies.push_back({"horizon_sun", sun_sky(n, fisheye::direction_from_angles(1.53, 1.0).cast<float>(), 0.03f, 1e4f, true)});
+    skies.push_back({"horizon_sun",
+                     sun_sky(n, fisheye::direction_from_angles(1.53, 1.0).cast<float>(), 0.03f, 1e4f, true)});
     auto single = std::make_shared<SkyImage>(n);
     single->set_pixel(20, 41, Color(3, 2, 1));
     skies.push_back({"single_pixel", single});
@@ -119,7 +124,8 @@ double pixel_mass(const EnvLight& light, int i, int j, int n, int s, bool* jumps
         for (int a = 0; a < s; ++a) {
             Vec2 uv(float(-1 + (i * s + a + 0.5) * cell), float(-1 + (j * s + b + 0.5) * cell));
             double p = 0;
-            if (uv.squaredNorm() <= 1) p = double(light.pdf(fisheye::direction_from_uv(uv))) * EnvLight::jacobian_from_r2(uv.squaredNorm());
+            if (uv.squaredNorm() <= 1)
+                p = double(light.pdf(fisheye::direction_from_uv(uv))) * EnvLight::jacobian_from_r2(uv.squaredNorm());
             sum += p * cell * cell;
             lo = std::min(lo, p), hi = std::max(hi, p);
         }
@@ -146,7 +152,8 @@ void check_chi_square(const EnvLight& light, int block, int samples, const std::
         for (int i = 0; i < n; ++i) {
             bool near_jump = false;
             for (int b = std::max(0, j - 1); b <= std::min(n - 1, j + 1); ++b)
-                for (int a = std::max(0, i - 1); a <= std::min(n - 1, i + 1); ++a) near_jump |= jumps[size_t(b) * n + a] != 0;
+                for (int a = std::max(0, i - 1); a <= std::min(n - 1, i + 1); ++a)
+                    near_jump |= jumps[size_t(b) * n + a] != 0;
             double p = near_jump ? pixel_mass(light, i, j, n, 64, nullptr) : coarse[size_t(j) * n + i];
             expected[size_t((j / block) * bins + i / block)] += samples * p;
             mass += p;
@@ -218,7 +225,8 @@ TEST(SkySampler, PdfsIntegrateToOne) {
             for (int i = 0; i < m; ++i) {
                 Vec2 uv(-1 + (i + 0.5f) * 2.0f / m, -1 + (j + 0.5f) * 2.0f / m);
                 if (uv.squaredNorm() > 1) continue;
-                sum += double(light.pdf(fisheye::direction_from_uv(uv))) * EnvLight::jacobian_from_r2(uv.squaredNorm()) * 4.0 / (double(m) * m);
+                sum += double(light.pdf(fisheye::direction_from_uv(uv))) *
+                       EnvLight::jacobian_from_r2(uv.squaredNorm()) * 4.0 / (double(m) * m);
             }
         // Pixel-based samplers lose the part of rim pixels beyond the horizon (< 1% at 128 px).
         EXPECT_NEAR(sum, 1.0, 0.01) << name;
@@ -272,7 +280,8 @@ TEST(SkySampler, NaNInfAndNegativePixelsAreTreatedAsBlack) {
 }
 
 TEST(SkySampler, MovingBrightnessIsRebuiltNeverStale) {
-    Vec3 a = fisheye::direction_from_angles(0.4, 1.0).cast<float>(), b = fisheye::direction_from_angles(1.1, 4.0).cast<float>();
+    Vec3 a = fisheye::direction_from_angles(0.4, 1.0).cast<float>(),
+         b = fisheye::direction_from_angles(1.1, 4.0).cast<float>();
     auto sky_a = sun_sky(64, a, 0.05f, 1e3f, false), sky_b = sun_sky(64, b, 0.05f, 1e3f, false);
     for (const std::string& name : all_sampler_names()) {
         if (name == "uniform" || name == "cosine") continue;
@@ -292,7 +301,8 @@ TEST(SkySampler, EstimatesOfIrradianceAgreeWithThePixelSum) {
         for (int i = 0; i < 128; ++i) {
             Vec2 c = fisheye::pixel_center_uv(i, j, 128);
             if (c.squaredNorm() > 1) continue;
-            exact += luminance(sky->pixel(i, j)) * fisheye::direction_from_uv(c).y() * fisheye::pixel_solid_angle(i, j, 128);
+            exact += luminance(sky->pixel(i, j)) * fisheye::direction_from_uv(c).y() *
+                     fisheye::pixel_solid_angle(i, j, 128);
         }
     for (const std::string& name : sky_sampler_base_names()) {
         EnvLight light(sky, 0.0f, parse_sky_sampler(name));
@@ -302,7 +312,8 @@ TEST(SkySampler, EstimatesOfIrradianceAgreeWithThePixelSum) {
         for (int k = 0; k < m; ++k) {
             EnvLightSample s;
             double v = 0;
-            if (light.sample(rng.uniform(), rng.uniform2(), &s) && s.wi.y() > 0) v = luminance(s.radiance) * s.wi.y() / s.pdf;
+            if (light.sample(rng.uniform(), rng.uniform2(), &s) && s.wi.y() > 0)
+                v = luminance(s.radiance) * s.wi.y() / s.pdf;
             sum += v, sum2 += v * v;
         }
         double mean = sum / m, se = std::sqrt(std::max(0.0, sum2 / m - mean * mean) / m);
@@ -323,7 +334,8 @@ TEST(SkySampler, AllSamplersConvergeToTheSameImage) {
     Camera cam = frame_bounds_camera(scene.world_bounds(), 4.0f / 3);
     EnvLight ref_light(sky, 0.3f, parse_sky_sampler("cdf"));
     RenderResult ref = PathIntegrator(accel, ref_light, rs).render(cam);
-    for (const std::string name : {"uniform", "cosine", "alias+mis", "mip+mis", "sun+alias+mis", "sun+mip", "sun+cdf+mis"}) {
+    for (const std::string name :
+         {"uniform", "cosine", "alias+mis", "mip+mis", "sun+alias+mis", "sun+mip", "sun+cdf+mis"}) {
         EnvLight light(sky, 0.3f, parse_sky_sampler(name));
         RenderSettings s2 = rs;
         s2.seed = 99;

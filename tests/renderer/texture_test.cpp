@@ -52,7 +52,7 @@ TEST(Texture, RepeatWrapsWithPeriodOneAndBlendsAcrossTheSeam) {
 
 TEST(Texture, ClampToEdgeRepeatsTheBorderTexel) {
     Texture l = ramp(4, 4, TextureWrap::ClampToEdge, TextureWrap::ClampToEdge, TextureFilter::Linear);
-    expect_vec4(l.evaluate(Vec2(0.0f, 0.375f)), Vec4(0, 1, 1, 1));   // no blend with column 3
+    expect_vec4(l.evaluate(Vec2(0.0f, 0.375f)), Vec4(0, 1, 1, 1));  // no blend with column 3
     expect_vec4(l.evaluate(Vec2(-5.0f, 9.0f)), Vec4(0, 3, 3, 1));
     expect_vec4(l.evaluate(Vec2(1.2f, -0.3f)), Vec4(3, 0, 30, 1));
 }

@@ -19,8 +19,8 @@ Vec3d sun_at(double elevation_deg, double azimuth_deg) {
 }
 
 struct Integrals {
-    Eigen::Array3d hemisphere = Eigen::Array3d::Zero();   // sum L * omega
-    Eigen::Array3d horizontal = Eigen::Array3d::Zero();   // sum L * cos(theta) * omega
+    Eigen::Array3d hemisphere = Eigen::Array3d::Zero();  // sum L * omega
+    Eigen::Array3d horizontal = Eigen::Array3d::Zero();  // sum L * cos(theta) * omega
 };
 Integrals integrate(const SkyImage& sky) {
     Integrals out;
@@ -55,7 +55,8 @@ TEST(ClearSky, BrightestPixelIsTheSun) {
                 float best = -1;
                 for (int j = 0; j < n; ++j)
                     for (int i = 0; i < n; ++i)
-                        if (sky.in_disc(i, j) && luminance(sky.pixel(i, j)) > best) best = luminance(sky.pixel(i, j)), bi = i, bj = j;
+                        if (sky.in_disc(i, j) && luminance(sky.pixel(i, j)) > best)
+                            best = luminance(sky.pixel(i, j)), bi = i, bj = j;
                 double u, v;
                 ASSERT_TRUE(fisheye::uv_from_direction(params.sun_direction, &u, &v));
                 double si = (u + 1) / 2 * n - 0.5, sj = (v + 1) / 2 * n - 0.5;  // continuous pixel coordinates
@@ -76,7 +77,8 @@ TEST(ClearSky, SunDiscConservesIrradiance) {
         SkyImage sky_only = make_clear_sky(params, n);
         Eigen::Array3d disc = integrate(with_sun).hemisphere - integrate(sky_only).hemisphere;
         Color expected = ClearSkyModel(params).model().solar_irradiance_rgb();
-        for (int c = 0; c < 3; ++c) EXPECT_NEAR(disc[c], expected[c], 1e-3 * expected[c]) << "N " << n << " channel " << c;
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(disc[c], expected[c], 1e-3 * expected[c]) << "N " << n << " channel " << c;
     }
 }
 
@@ -96,10 +98,11 @@ TEST(ClearSky, PlausibleIlluminance) {
     double direct_normal_lux = kLumensPerWatt * luminance(with_sun.sun_irradiance());
     double sun_luminance = kLumensPerWatt * luminance(with_sun.model().solar_radiance_rgb(0.0));
     double zenith_luminance = kLumensPerWatt * luminance(model.sky_radiance(Vec3d(0, 1, 0)));
-    std::printf("sun at 60 deg, T 2.5: diffuse horizontal %.0f lux, direct normal %.0f lux (~%.0f W/m^2 at 100 lm/W), "
-                "global horizontal %.0f lux, sun centre %.3g cd/m^2, zenith %.0f cd/m^2\n",
-                diffuse_lux, direct_normal_lux, direct_normal_lux / 100, diffuse_lux + direct_normal_lux * std::sin(60 * kDeg),
-                sun_luminance, zenith_luminance);
+    std::printf(
+        "sun at 60 deg, T 2.5: diffuse horizontal %.0f lux, direct normal %.0f lux (~%.0f W/m^2 at 100 lm/W), "
+        "global horizontal %.0f lux, sun centre %.3g cd/m^2, zenith %.0f cd/m^2\n",
+        diffuse_lux, direct_normal_lux, direct_normal_lux / 100, diffuse_lux + direct_normal_lux * std::sin(60 * kDeg),
+        sun_luminance, zenith_luminance);
     EXPECT_GT(diffuse_lux, 8e3);
     EXPECT_LT(diffuse_lux, 30e3);
     EXPECT_GT(direct_normal_lux, 70e3);
@@ -133,7 +136,8 @@ TEST(ClearSky, ImageHoldsTheModelAtPixelCentres) {
             Vec3d w = fisheye::direction_from_uv(double(uv.x()), double(uv.y()));
             double theta = std::acos(w.y()), gamma = std::acos(std::clamp(w.dot(params.sun_direction), -1.0, 1.0));
             for (int c = 0; c < 3; ++c)
-                EXPECT_NEAR(sky.pixel(i, j)[c], std::max(0.0, hw.sky_radiance(c, theta, gamma)), 2e-5 * std::abs(hw.sky_radiance(c, theta, gamma)) + 1e-6);
+                EXPECT_NEAR(sky.pixel(i, j)[c], std::max(0.0, hw.sky_radiance(c, theta, gamma)),
+                            2e-5 * std::abs(hw.sky_radiance(c, theta, gamma)) + 1e-6);
             Color one = clear_sky_radiance(params, w);
             EXPECT_NEAR(one[1], sky.pixel(i, j)[1], 1e-5 * one[1]);
         }

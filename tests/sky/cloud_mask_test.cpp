@@ -16,10 +16,10 @@ namespace dynsky {
 namespace {
 
 TEST(CloudMask, RedBlueRuleOnEncodedValues) {
-    CloudMaskParams paper;  // r / b > 0.46
-    EXPECT_TRUE(is_cloud(0.8f, 0.8f, 0.8f, paper));    // grey cloud, ratio 1
-    EXPECT_FALSE(is_cloud(0.2f, 0.4f, 0.8f, paper));   // blue sky, ratio 0.25
-    EXPECT_TRUE(is_cloud(0.4f, 0.5f, 0.8f, paper));    // ratio 0.5
+    CloudMaskParams paper;                            // r / b > 0.46
+    EXPECT_TRUE(is_cloud(0.8f, 0.8f, 0.8f, paper));   // grey cloud, ratio 1
+    EXPECT_FALSE(is_cloud(0.2f, 0.4f, 0.8f, paper));  // blue sky, ratio 0.25
+    EXPECT_TRUE(is_cloud(0.4f, 0.5f, 0.8f, paper));   // ratio 0.5
     EXPECT_NEAR(cloud_score(0.3f, 0.6f, CloudRule::RedBlueRatio), 0.5, 1e-9);
     EXPECT_NEAR(cloud_score(0.3f, 0.6f, CloudRule::NormalizedBlueRed), 1.0 / 3.0, 1e-9);
     EXPECT_EQ(parse_cloud_rule("nbr"), CloudRule::NormalizedBlueRed);
@@ -50,7 +50,8 @@ TEST(CloudMask, ClearModelSkyIsClearAndGreyIsCloud) {
     long clear = 0, disc = 0;
     for (int j = 0; j < 64; ++j)
         for (int i = 0; i < 64; ++i)
-            if (fisheye::pixel_center_uv(i, j, 64).norm() < 0.8f) ++disc, clear += std::abs(m.at(i, j, 0) - 100 / 255.0f) < 1e-6f;
+            if (fisheye::pixel_center_uv(i, j, 64).norm() < 0.8f)
+                ++disc, clear += std::abs(m.at(i, j, 0) - 100 / 255.0f) < 1e-6f;
     EXPECT_GT(double(clear) / disc, 0.8);
 }
 
@@ -98,11 +99,12 @@ TEST(CloudMask, AgreementWithWsisegHumanLabels) {
         held_out_all.add(a);
     }
     std::printf("WSISEG (100 images, %lld labelled sky pixels)\n", paper_all.total());
-    std::printf("  r/b > 0.46 (paper)            all: accuracy %.4f  cloud IoU %.4f\n", paper_all.accuracy(), paper_all.cloud_iou());
-    std::printf("  r/b > %.3f tuned on even  -> odd:  accuracy %.4f  cloud IoU %.4f\n", tuned[0], held_out[1].accuracy(),
-                held_out[1].cloud_iou());
-    std::printf("  r/b > %.3f tuned on odd   -> even: accuracy %.4f  cloud IoU %.4f\n", tuned[1], held_out[0].accuracy(),
-                held_out[0].cloud_iou());
+    std::printf("  r/b > 0.46 (paper)            all: accuracy %.4f  cloud IoU %.4f\n", paper_all.accuracy(),
+                paper_all.cloud_iou());
+    std::printf("  r/b > %.3f tuned on even  -> odd:  accuracy %.4f  cloud IoU %.4f\n", tuned[0],
+                held_out[1].accuracy(), held_out[1].cloud_iou());
+    std::printf("  r/b > %.3f tuned on odd   -> even: accuracy %.4f  cloud IoU %.4f\n", tuned[1],
+                held_out[0].accuracy(), held_out[0].cloud_iou());
     std::printf("  held-out, both halves:             accuracy %.4f  cloud IoU %.4f\n", held_out_all.accuracy(),
                 held_out_all.cloud_iou());
 

@@ -164,7 +164,8 @@ TEST(HdrRecovery, TsiCalibrationIsStableAlongTheSequence) {
     CameraPreset preset = camera_preset("arm-tsi");
     std::vector<double> scales;
     for (const char* stamp : {"20170524154000Z", "20170524170000Z", "20170524180930Z"}) {
-        std::string path = test::shared_path(std::string("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_") + stamp + ".jpg");
+        std::string path = test::shared_path(std::string("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_") + stamp +
+                                             ".jpg");
         PhotoImportParams p = preset.params;
         p.resolution = 128;
         p.mask_path = find_preset_mask("arm-tsi", path);

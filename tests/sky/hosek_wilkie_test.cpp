@@ -50,12 +50,13 @@ TEST(HosekWilkie, MatchesReferenceSkyVectors) {
             double rel_fast = std::abs(fast[c] - expected) / std::abs(expected);
             worst = std::max(worst, rel);
             worst_float = std::max(worst_float, rel_fast);
-            EXPECT_LT(rel, 1e-4) << "T " << r[0] << " albedo " << r[1] << " elevation " << r[2] << " theta " << r[3] << " gamma "
-                                 << r[4] << " channel " << c;
+            EXPECT_LT(rel, 1e-4) << "T " << r[0] << " albedo " << r[1] << " elevation " << r[2] << " theta " << r[3]
+                                 << " gamma " << r[4] << " channel " << c;
             EXPECT_LT(rel_fast, 1e-4) << "fast path, channel " << c;
         }
     }
-    std::printf("sky vectors: %zu rows, worst relative error %.3g (float image path %.3g)\n", rows.size(), worst, worst_float);
+    std::printf("sky vectors: %zu rows, worst relative error %.3g (float image path %.3g)\n", rows.size(), worst,
+                worst_float);
 }
 
 TEST(HosekWilkie, MatchesReferenceSolarVectors) {
@@ -69,8 +70,8 @@ TEST(HosekWilkie, MatchesReferenceSolarVectors) {
         double value = sky.solar_spectral_radiance(r[3], r[4] * kDeg);
         double rel = std::abs(value - r[5]) / std::abs(r[5]);
         worst = std::max(worst, rel);
-        EXPECT_LT(rel, 1e-4) << "T " << r[0] << " elevation " << r[2] << " wavelength " << r[3] << " gamma " << r[4] << ": " << value
-                             << " vs " << r[5];
+        EXPECT_LT(rel, 1e-4) << "T " << r[0] << " elevation " << r[2] << " wavelength " << r[3] << " gamma " << r[4]
+                             << ": " << value << " vs " << r[5];
     }
     std::printf("solar vectors: %zu rows, worst relative error %.3g\n", rows.size(), worst);
 }
@@ -81,7 +82,8 @@ TEST(HosekWilkie, SolarDiscEdgeAndOutside) {
     EXPECT_EQ(sky.solar_spectral_radiance(550, kHosekWilkieSolarRadius * 1.001), 0.0);
     EXPECT_EQ(sky.solar_radiance_rgb(kHosekWilkieSolarRadius * 1.001).matrix().norm(), 0.0f);
     // Limb darkening: the edge is dimmer than the centre.
-    EXPECT_LT(sky.solar_spectral_radiance(550, kHosekWilkieSolarRadius * 0.99), 0.6 * sky.solar_spectral_radiance(550, 0.0));
+    EXPECT_LT(sky.solar_spectral_radiance(550, kHosekWilkieSolarRadius * 0.99),
+              0.6 * sky.solar_spectral_radiance(550, 0.0));
     EXPECT_THROW(sky.solar_spectral_radiance(800, 0.0), Error);
 }
 
@@ -122,12 +124,14 @@ TEST(HosekWilkie, SolarIrradianceIsTheDiscIntegral) {
     Eigen::Array3d sum = Eigen::Array3d::Zero();
     for (int k = 0; k < n; ++k) {
         double gamma = (k + 0.5) / n * kHosekWilkieSolarRadius;
-        sum += sky.solar_radiance_rgb(gamma).cast<double>() * 2 * kPiD * std::sin(gamma) * (kHosekWilkieSolarRadius / n);
+        sum += sky.solar_radiance_rgb(gamma).cast<double>() * 2 * kPiD * std::sin(gamma) *
+               (kHosekWilkieSolarRadius / n);
     }
     Color e = sky.solar_irradiance_rgb();
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(e[c], sum[c], 2e-4 * sum[c]);
     // Rings add up to the disc.
-    Color rings = sky.solar_irradiance_rgb(0, 0.3) + sky.solar_irradiance_rgb(0.3, 0.8) + sky.solar_irradiance_rgb(0.8, 1.0);
+    Color rings = sky.solar_irradiance_rgb(0, 0.3) + sky.solar_irradiance_rgb(0.3, 0.8) +
+                  sky.solar_irradiance_rgb(0.8, 1.0);
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(rings[c], e[c], 1e-5 * e[c]);
 }
 
@@ -174,7 +178,10 @@ TEST(HosekWilkie, BrokenTablesGiveClearErrors) {
     bool in_section = false, dropped = false;
     while (std::getline(in, line)) {
         if (line.rfind("# datasetRGB2 ", 0) == 0) in_section = true;
-        else if (in_section && !dropped && line[0] != '#') { dropped = true; continue; }
+        else if (in_section && !dropped && line[0] != '#') {
+            dropped = true;
+            continue;
+        }
         out << line << "\n";
     }
     out.close();

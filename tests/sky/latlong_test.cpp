@@ -30,7 +30,8 @@ SkyImage sky_from_function(int n, Color (*f)(const Vec3d&)) {
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
             Vec2 uv = fisheye::pixel_center_uv(i, j, n);
-            if (uv.squaredNorm() <= 1) sky.set_pixel(i, j, f(fisheye::direction_from_uv(double(uv.x()), double(uv.y()))));
+            if (uv.squaredNorm() <= 1)
+                sky.set_pixel(i, j, f(fisheye::direction_from_uv(double(uv.x()), double(uv.y()))));
         }
     return sky;
 }
@@ -56,10 +57,10 @@ Eigen::Array3d latlong_upper_integral(const Image& ll) {
 TEST(LatLong, LayoutMatchesBlender) {
     // Named directions: top row zenith, centre column east, u = 0.25 north, 0.75 south, 0 west.
     EXPECT_NEAR((latlong_direction(0.3, 0.0) - Vec3d(0, 1, 0)).norm(), 0.0, 1e-12);
-    EXPECT_NEAR((latlong_direction(0.5, 0.5) - Vec3d(1, 0, 0)).norm(), 0.0, 1e-12);   // east +X
-    EXPECT_NEAR((latlong_direction(0.25, 0.5) - Vec3d(0, 0, -1)).norm(), 0.0, 1e-12); // north -Z
-    EXPECT_NEAR((latlong_direction(0.75, 0.5) - Vec3d(0, 0, 1)).norm(), 0.0, 1e-12);  // south +Z
-    EXPECT_NEAR((latlong_direction(0.0, 0.5) - Vec3d(-1, 0, 0)).norm(), 0.0, 1e-12);  // west -X
+    EXPECT_NEAR((latlong_direction(0.5, 0.5) - Vec3d(1, 0, 0)).norm(), 0.0, 1e-12);    // east +X
+    EXPECT_NEAR((latlong_direction(0.25, 0.5) - Vec3d(0, 0, -1)).norm(), 0.0, 1e-12);  // north -Z
+    EXPECT_NEAR((latlong_direction(0.75, 0.5) - Vec3d(0, 0, 1)).norm(), 0.0, 1e-12);   // south +Z
+    EXPECT_NEAR((latlong_direction(0.0, 0.5) - Vec3d(-1, 0, 0)).norm(), 0.0, 1e-12);   // west -X
     // Cycles' direction_to_equirectangular: u = 0.5 - atan2(y, x) / 2 pi, v = 1 - acos(z) / pi
     // (v up), in Blender's frame after glTF import: (x, y, z)_blender = (x, -z, y)_gltf.
     std::mt19937 rng(3);
@@ -100,7 +101,8 @@ TEST(LatLong, RoundTripsASyntheticSky) {
             Color f = synthetic(w);
             for (int k = 0; k < 3; ++k) {
                 double rel = std::abs(ll.at(c, r, k) - f[k]) / f[k];
-                (r >= ll.height / 2 - 2 ? worst_rim : worst) = std::max(r >= ll.height / 2 - 2 ? worst_rim : worst, rel);
+                (r >= ll.height / 2 - 2 ? worst_rim : worst) = std::max(r >= ll.height / 2 - 2 ? worst_rim : worst,
+                                                                        rel);
             }
         }
     // Bilinear of a smooth function over pixels pi/256 wide: ~1e-4; the two rows at the horizon
@@ -125,8 +127,8 @@ TEST(LatLong, RoundTripsASyntheticSky) {
         EXPECT_NEAR(fish[c], exact[c], 2e-3 * exact[c]);
         EXPECT_NEAR(lat[c], fish[c], 2e-3 * fish[c]);
     }
-    std::printf("hemisphere integral (G): exact %.5f, fisheye %.5f, lat-long %.5f; worst pixel error %.2g (rim %.2g)\n", exact[1],
-                fish[1], lat[1], worst, worst_rim);
+    std::printf("hemisphere integral (G): exact %.5f, fisheye %.5f, lat-long %.5f; worst pixel error %.2g (rim %.2g)\n",
+                exact[1], fish[1], lat[1], worst, worst_rim);
 }
 
 // A clear sky with its sun (one fisheye pixel of ~1e6): neither missed nor doubled, whether the
@@ -139,7 +141,8 @@ TEST(LatLong, KeepsTheSunsEnergy) {
     for (int width : {256, 512, 1024}) {
         Image ll = sky_to_latlong(sky, width);
         Eigen::Array3d lat = latlong_upper_integral(ll);
-        for (int c = 0; c < 3; ++c) EXPECT_NEAR(lat[c], fish[c], 0.005 * fish[c]) << "width " << width << " channel " << c;
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(lat[c], fish[c], 0.005 * fish[c]) << "width " << width << " channel " << c;
         std::printf("sky with sun, N 256 -> lat-long %d: integral ratio %.5f (G)\n", width, lat[1] / fish[1]);
         // The brightest lat-long pixel is the sun's.
         int bc = 0, br = 0;

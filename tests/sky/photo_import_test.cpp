@@ -23,8 +23,8 @@ constexpr double kDeg = kPiD / 180.0;
 Color pattern(const Vec3d& w) {
     double theta = std::acos(std::clamp(w.y(), -1.0, 1.0));
     double phi = std::atan2(w.x(), -w.z());
-    return Color(float(0.5 + 0.35 * std::sin(phi) * std::sin(theta)),          // east bright
-                 float(0.5 + 0.35 * std::cos(phi) * std::sin(theta)),          // north bright
+    return Color(float(0.5 + 0.35 * std::sin(phi) * std::sin(theta)),  // east bright
+                 float(0.5 + 0.35 * std::cos(phi) * std::sin(theta)),  // north bright
                  float(0.45 + 0.3 * std::cos(2 * theta) + 0.1 * std::sin(3 * phi + 0.4)));
 }
 
@@ -256,7 +256,8 @@ TEST(PhotoImport, StrongDownsamplingAveragesInsteadOfAliasing) {
     double worst = 0;
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i)
-            if (fisheye::pixel_center_uv(i, j, n).norm() < 0.9) worst = std::max(worst, double(std::abs(imp.sky.pixel(i, j)[0] - 0.5f)));
+            if (fisheye::pixel_center_uv(i, j, n).norm() < 0.9)
+                worst = std::max(worst, double(std::abs(imp.sky.pixel(i, j)[0] - 0.5f)));
     EXPECT_LT(worst, 0.08);
 }
 
@@ -289,7 +290,8 @@ TEST(PhotoImport, RealSequencesImportWithTheSkyCircleWhereExpected) {
     // TSI: the circle found on the photo vs the one fitted to the TSI's own sun marker.
     std::string tsi = test::shared_path("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg");
     CameraPreset tp = camera_preset("arm-tsi");
-    SkyCircle found = find_sky_circle(read_image(tsi), tsi, tp.params.min_radius_fraction, tp.params.max_radius_fraction);
+    SkyCircle found = find_sky_circle(read_image(tsi), tsi, tp.params.min_radius_fraction,
+                                      tp.params.max_radius_fraction);
     EXPECT_NEAR(found.center_x, tp.params.circle->center_x, 4.0);
     EXPECT_NEAR(found.center_y, tp.params.circle->center_y, 4.0);
     EXPECT_NEAR(found.radius, tp.params.circle->radius, 8.0);  // the visible edge lies a few px beyond 90 deg
@@ -297,7 +299,8 @@ TEST(PhotoImport, RealSequencesImportWithTheSkyCircleWhereExpected) {
     // Mobotix: found vs the preset (the lens circle on its black surround).
     std::string mob = test::shared_path("skies/mobotix_sophia_20200812_morning/images/2020-08-12_12_00.jpg");
     CameraPreset mp = camera_preset("mobotix");
-    SkyCircle mfound = find_sky_circle(read_image(mob), mob, mp.params.min_radius_fraction, mp.params.max_radius_fraction);
+    SkyCircle mfound = find_sky_circle(read_image(mob), mob, mp.params.min_radius_fraction,
+                                       mp.params.max_radius_fraction);
     EXPECT_NEAR(mfound.center_x, mp.params.circle->center_x, 4.0);
     EXPECT_NEAR(mfound.center_y, mp.params.circle->center_y, 4.0);
     EXPECT_NEAR(mfound.radius, mp.params.circle->radius, 4.0);
@@ -332,7 +335,8 @@ TEST(PhotoImport, TsiPresetPutsTheSunOnTheTsisOwnSunMarker) {
     g.mirrored = tp.params.mirrored;
     int checked = 0;
     for (const char* stamp : {"20170524154000Z", "20170524163000Z", "20170524172000Z"}) {
-        std::string path = test::shared_path(std::string("skies/arm_tsi_sgp_20170524/tsi_cloudmask/tsicldmask_sgpC1_") + stamp + ".png");
+        std::string path = test::shared_path(std::string("skies/arm_tsi_sgp_20170524/tsi_cloudmask/tsicldmask_sgpC1_") +
+                                             stamp + ".png");
         Image m = read_image(path);
         double sx = 0, sy = 0, count = 0;
         for (int y = 0; y < m.height; ++y)

@@ -61,7 +61,8 @@ std::pair<double, double> warp_errors(uint64_t seed) {
         for (int x = 0; x < n; ++x) {
             map_x.at<float>(y, x) = x - flow.at(x, y, 0);
             map_y.at<float>(y, x) = y - flow.at(x, y, 1);
-            max_displacement = std::max(max_displacement, std::hypot(double(flow.at(x, y, 0)), double(flow.at(x, y, 1))));
+            max_displacement = std::max(max_displacement,
+                                        std::hypot(double(flow.at(x, y, 0)), double(flow.at(x, y, 1))));
         }
     EXPECT_GT(max_displacement, 3.0) << "the test needs visible motion";
     cv::Mat la = luminance_mat(a), lb = luminance_mat(b), warped;
@@ -86,7 +87,8 @@ std::pair<double, double> warp_errors(uint64_t seed) {
 TEST(ProceduralClouds, WarpingByGroundTruthFlowPredictsNextFrame) {
     for (uint64_t seed : {11, 12, 13}) {
         auto [err_warped, err_still] = warp_errors(seed);
-        EXPECT_LT(err_warped * 2.0, err_still) << "seed " << seed << ": warped MSE " << err_warped << ", unwarped " << err_still;
+        EXPECT_LT(err_warped * 2.0, err_still)
+            << "seed " << seed << ": warped MSE " << err_warped << ", unwarped " << err_still;
     }
 }
 
@@ -144,7 +146,8 @@ TEST(ProceduralClouds, CoverageIsTheFractionOfTheLayerWithCloud) {
             const double spacing = layer == 0 ? 1000.0 : 3000.0;
             for (int a = 0; a < n; ++a)
                 for (int b = 0; b < n; ++b)
-                    cloudy += sky.layer_density(layer, (a - n / 2) * spacing + 0.37, (b - n / 2) * spacing + 0.61, 30.0) > 0.0;
+                    cloudy += sky.layer_density(layer, (a - n / 2) * spacing + 0.37, (b - n / 2) * spacing + 0.61,
+                                                30.0) > 0.0;
             EXPECT_NEAR(double(cloudy) / (n * n), c, 0.04) << "coverage " << c << ", layer " << layer;
         }
     }

@@ -48,8 +48,8 @@ TEST(SunPosition, ParsesUtcAndOffsets) {
 
 TEST(SunPosition, RejectsBadTimes) {
     for (const char* bad : {"", "2026-06-21", "2026-06-21T12:00:00", "2026-13-01T00:00:00Z", "2026-02-29T00:00:00Z",
-                            "2026-06-21T24:00:00Z", "2026-06-21T12:60:00Z", "21/06/2026 12:00", "2026-06-21T12:00:00Zjunk",
-                            "2026-06-21T12:00:00+25:00", "yesterday"}) {
+                            "2026-06-21T24:00:00Z", "2026-06-21T12:60:00Z", "21/06/2026 12:00",
+                            "2026-06-21T12:00:00Zjunk", "2026-06-21T12:00:00+25:00", "yesterday"}) {
         EXPECT_THROW(parse_utc_time(bad), Error) << bad;
     }
     try {
@@ -81,7 +81,8 @@ TEST(SunPosition, MatchesNrelSpaReferenceCase) {
     double dz = s.zenith_deg - 50.11162, da = angle_diff_deg(s.azimuth_deg, 194.34024);
     RecordProperty("zenith_error_deg", std::to_string(dz));
     RecordProperty("azimuth_error_deg", std::to_string(da));
-    std::printf("SPA case: zenith %.5f (error %+.5f deg), azimuth %.5f (error %+.5f deg)\n", s.zenith_deg, dz, s.azimuth_deg, da);
+    std::printf("SPA case: zenith %.5f (error %+.5f deg), azimuth %.5f (error %+.5f deg)\n", s.zenith_deg, dz,
+                s.azimuth_deg, da);
     EXPECT_NEAR(dz, 0.0, 0.001);
     EXPECT_NEAR(da, 0.0, 0.001);
 }
@@ -140,7 +141,8 @@ double culmination_elevation(const std::string& day, const GeoLocation& where) {
     const double g = (std::sqrt(5.0) - 1) / 2;
     for (int k = 0; k < 60; ++k) {
         double x1 = b - g * (b - a), x2 = a + g * (b - a);
-        if (elevation_at(x1) > elevation_at(x2)) b = x2; else a = x1;
+        if (elevation_at(x1) > elevation_at(x2)) b = x2;
+        else a = x1;
     }
     return elevation_at(0.5 * (a + b));
 }
@@ -203,7 +205,7 @@ TEST(SunPosition, RefractionLiftsTheSun) {
 
 TEST(SunPosition, DirectionFollowsTheWorldFrame) {
     SunPosition s;
-    s.zenith_deg = 90;  // on the horizon
+    s.zenith_deg = 90;   // on the horizon
     s.azimuth_deg = 90;  // east
     EXPECT_NEAR((s.direction() - Vec3d(1, 0, 0)).norm(), 0.0, 1e-12);
     s.azimuth_deg = 180;  // south = +Z
