@@ -94,7 +94,7 @@ int run_render(const RenderOptions& o) {
     image.metadata.numbers["dynsky:render_seconds"] = result.stats.seconds;
     image.metadata.numbers["dynsky:sky_distribution_seconds"] = light.last_build_seconds();
     image.metadata.numbers["dynsky:ground_albedo"] = o.ground_albedo;
-    image.metadata.numbers["dynsky:sky_time"] = sky->time_seconds;
+    image.metadata.numbers["dynsky:time"] = sky->time_seconds;  // frame time (glossary)
     image.metadata.strings["dynsky:sky"] = sky->source;
     image.metadata.strings["dynsky:scene"] = o.scene;
     image.metadata.strings["dynsky:camera"] = camera.name;

@@ -110,10 +110,10 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
         }
     }
     double dt = m.dt;
-    if (dt == 0) dt = model->native_dt_seconds() > 0 ? model->native_dt_seconds() : 10.0;
-    else if (model->native_dt_seconds() > 0 && std::abs(dt - model->native_dt_seconds()) > 1e-9)
+    if (dt == 0) dt = model->native_dt() > 0 ? model->native_dt() : 10.0;
+    else if (model->native_dt() > 0 && std::abs(dt - model->native_dt()) > 1e-9)
         std::fprintf(stderr, "dynsky: warning: --dt %g s, but the network was trained for Delta t = %g s\n", dt,
-                     model->native_dt_seconds());
+                     model->native_dt());
     return SkyTimeline(std::move(input), std::move(model), dt, clock);
 }
 

@@ -114,7 +114,7 @@ CloudModel CloudModel::load(const std::string& folder) {
         nlohmann::json j = nlohmann::json::parse(f);
         info.name = j.value("name", fs::path(folder).filename().string());
         info.resolution = j.at("resolution").get<int>();
-        info.dt_seconds = j.at("dt_s").get<double>();
+        info.dt = j.at("dt_s").get<double>();
         info.flow_scale = j.at("flow_scale").get<double>();
         info.flow_widths = j.value("flow_widths", std::vector<int>{});
         info.cloud_widths = j.value("cloud_widths", std::vector<int>{});
@@ -129,7 +129,7 @@ CloudModel CloudModel::load(const std::string& folder) {
     }
     if (info.resolution < 8 || info.resolution > 4096)
         throw_file_error(json_path, "resolution " + std::to_string(info.resolution) + " is not in 8..4096");
-    if (!(info.dt_seconds > 0)) throw_file_error(json_path, "dt_s must be a positive number of seconds");
+    if (!(info.dt > 0)) throw_file_error(json_path, "dt_s must be a positive number of seconds");
     if (!(info.flow_scale > 0)) throw_file_error(json_path, "flow_scale must be positive");
     try {
         validate_unit_map(info.form.unit_map);
@@ -236,7 +236,7 @@ void CloudModel::rollout(const SkyImage& sky, int steps, const std::function<voi
             state.setTo(cv::Scalar::all(0), ~disc_big);
         }
         SkyImage next = from_network_form(state, sky, info_.form);
-        next.time_seconds = sky.time_seconds + k * info_.dt_seconds;
+        next.time_seconds = sky.time_seconds + k * info_.dt;
         if (has_sun) restore_pixels(&next, sky, sun);
         on_step(k, next);
     }

@@ -27,7 +27,7 @@ namespace dynsky {
 struct CloudModelInfo {
     std::string name;
     int resolution = 0;        // N: the networks' fixed input size
-    double dt_seconds = 0.0;   // Delta t of one medium step
+    double dt = 0.0;           // Delta t of one medium step, seconds
     double flow_scale = 0.04;  // magnitude channel 1 = flow_scale * N pixels per step
     std::vector<int> flow_widths, cloud_widths;
     NetworkFormParams form;

@@ -110,9 +110,9 @@ void evaluate_cloud_model(const EvaluationOptions& o) {
     if (lo < 1 || hi > int(seq.photos.size()) || hi - lo < 2)
         throw_file_error(split_path,
                          "held-out range does not fit the sequence's " + std::to_string(seq.photos.size()) + " frames");
-    if (std::abs(seq.dt_s - info.dt_seconds) > 1e-6)
-        throw Error("the model steps " + std::to_string(info.dt_seconds) + " s but the sequence's cadence is " +
-                    std::to_string(seq.dt_s) + " s");
+    if (std::abs(seq.dt - info.dt) > 1e-6)
+        throw Error("the model steps " + std::to_string(info.dt) + " s but the sequence's cadence is " +
+                    std::to_string(seq.dt) + " s");
     const int hmax = horizons.back();
     if (hi - lo <= hmax) throw Error("--horizons: the held-out part has only " + std::to_string(hi - lo) + " frames");
     if (o.limit < 0) throw Error("--limit: must be >= 0");
@@ -174,7 +174,7 @@ void evaluate_cloud_model(const EvaluationOptions& o) {
                   "are means of per-frame values. Model: %d recursive steps from the real frame. Persistence: the "
                   "frame itself. Farneback: the frame advected h times by the flow of the previous pair "
                   "(computed at %d px).\n\n",
-                  lo, hi - 1, seq.photos.size(), info.dt_seconds, n, n, hmax, big);
+                  lo, hi - 1, seq.photos.size(), info.dt, n, n, hmax, big);
     md << line;
     md << "| horizon | ahead | model PSNR | model SSIM | persistence PSNR | persistence SSIM | Farneback PSNR | "
           "Farneback SSIM | model MSE | persistence MSE | Farneback MSE | frames |\n";
@@ -182,7 +182,7 @@ void evaluate_cloud_model(const EvaluationOptions& o) {
     for (int h : horizons) {
         std::snprintf(line, sizeof line,
                       "| %d | %g s | %.2f dB | %.3f | %.2f dB | %.3f | %.2f dB | %.3f | %.5f | %.5f | %.5f | %zu |\n",
-                      h, h * info.dt_seconds, Scores::mean(sm[h].psnr), Scores::mean(sm[h].ssim),
+                      h, h * info.dt, Scores::mean(sm[h].psnr), Scores::mean(sm[h].ssim),
                       Scores::mean(sp[h].psnr), Scores::mean(sp[h].ssim), Scores::mean(sf[h].psnr),
                       Scores::mean(sf[h].ssim), Scores::mean(sm[h].mse), Scores::mean(sp[h].mse),
                       Scores::mean(sf[h].mse), sm[h].psnr.size());

@@ -15,7 +15,7 @@ class NetworkStepModel : public MediumStepModel {
         return next;
     }
     std::string name() const override { return "network:" + model_.info().folder; }
-    double native_dt_seconds() const override { return model_.info().dt_seconds; }
+    double native_dt() const override { return model_.info().dt; }
 
   private:
     CloudModel model_;

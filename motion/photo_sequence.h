@@ -11,7 +11,7 @@ struct PhotoSequence {
     std::string name;    // the dataset's and split's name ("arm_tsi")
     std::string preset;  // camera preset of the import (sky/preset_import.h)
     std::string folder;
-    double dt_s = 0;                  // cadence: seconds between frames
+    double dt = 0;                    // cadence: seconds between frames
     std::vector<std::string> photos;  // in time order
 };
 

@@ -74,7 +74,7 @@ void write_prediction(const PredictionOptions& o) {
     progress.finish();
     if (!o.stats.empty()) write_file_atomic(o.stats, csv.str());
     if (!o.quiet)
-        std::printf("wrote %d predicted skies (Delta t = %g s, %d steps) to %s\n", written, model.info().dt_seconds,
+        std::printf("wrote %d predicted skies (Delta t = %g s, %d steps) to %s\n", written, model.info().dt,
                     o.steps, o.out.c_str());
 }
 

@@ -45,9 +45,9 @@ SkyImage blend_skies(const SkyImage& a, const SkyImage& b, double w) {
     return out;
 }
 
-SkyTimeline::SkyTimeline(SkyImage input, std::unique_ptr<MediumStepModel> model, double dt_seconds,
+SkyTimeline::SkyTimeline(SkyImage input, std::unique_ptr<MediumStepModel> model, double dt,
                          std::optional<SunClock> clock, SkyFlowParams flow_params)
-    : model_(std::move(model)), dt_(dt_seconds), clock_(clock), flow_params_(flow_params) {
+    : model_(std::move(model)), dt_(dt), clock_(clock), flow_params_(flow_params) {
     if (!(dt_ > 0)) throw Error("sky timeline: Delta t must be positive");
     validate_sky(input, input.source.empty() ? "input sky" : input.source);
     input_sun_ = input.sun_direction ? std::optional<Vec3d>(input.sun_direction->cast<double>()) : std::nullopt;

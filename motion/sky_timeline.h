@@ -47,7 +47,7 @@ struct SkyTimelineTimings {
 
 class SkyTimeline {
   public:
-    SkyTimeline(SkyImage input, std::unique_ptr<MediumStepModel> model, double dt_seconds,
+    SkyTimeline(SkyImage input, std::unique_ptr<MediumStepModel> model, double dt,
                 std::optional<SunClock> clock = std::nullopt, SkyFlowParams flow_params = {});
 
     // Gamma at t (seconds since the input; t >= 0). Computes and caches the steps it needs.

@@ -24,7 +24,7 @@ class MediumStepModel {
     // Where the sun is for the next step (models that make their own sun follow it).
     virtual void set_sun_direction(const Vec3d&) {}
     // The Delta t the model was made for (a trained network's), 0 when any is fine.
-    virtual double native_dt_seconds() const { return 0.0; }
+    virtual double native_dt() const { return 0.0; }
 };
 
 }  // namespace dynsky

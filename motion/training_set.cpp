@@ -56,7 +56,7 @@ void build_training_sequence(const TrainingSetOptions& o) {
     double dt = 0;
     if (!o.sequence.empty()) {
         PhotoSequence seq = named_photo_sequence(o.sequence, o.shared.empty() ? default_shared_dir() : o.shared);
-        dt = seq.dt_s;
+        dt = seq.dt;
         meta["source"] = "photographs in " + seq.folder + ", imported with camera preset " + seq.preset;
         meta["preset"] = seq.preset;
         ProgressBar progress(long(seq.photos.size()), "import " + seq.name, o.quiet);

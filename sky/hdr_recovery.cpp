@@ -237,12 +237,9 @@ Image hdr_to_unit(const SkyImage& sky, const UnitMapParams& params) {
         }
     out.metadata.numbers["dynsky:unit_scale"] = params.scale;
     out.metadata.numbers["dynsky:unit_max"] = params.max_radiance;
-    out.metadata.numbers["dynsky:time"] = sky.time_seconds;
-    if (sky.sun_direction) {
-        out.metadata.numbers["dynsky:sun_x"] = sky.sun_direction->x();
-        out.metadata.numbers["dynsky:sun_y"] = sky.sun_direction->y();
-        out.metadata.numbers["dynsky:sun_z"] = sky.sun_direction->z();
-    }
+    // The sky's own metadata, less its source (a unit map is not that sky).
+    write_sky_metadata(sky, &out.metadata);
+    out.metadata.strings.erase("dynsky:source");
     return out;
 }
 

@@ -95,13 +95,7 @@ Image sky_to_latlong(const SkyImage& sky, int width, const Color& ground) {
             }
         }
     });
-    out.metadata.numbers["dynsky:time"] = sky.time_seconds;
-    if (sky.sun_direction) {
-        out.metadata.numbers["dynsky:sun_x"] = sky.sun_direction->x();
-        out.metadata.numbers["dynsky:sun_y"] = sky.sun_direction->y();
-        out.metadata.numbers["dynsky:sun_z"] = sky.sun_direction->z();
-    }
-    if (!sky.source.empty()) out.metadata.strings["dynsky:source"] = sky.source;
+    write_sky_metadata(sky, &out.metadata);
     out.metadata.strings["dynsky:layout"] =
         "equirectangular W x W/2, top row zenith, centre column azimuth 90 deg (east), azimuth increasing to the right "
         "(Blender environment mapping with north = +Y)";

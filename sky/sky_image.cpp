@@ -35,16 +35,20 @@ void validate_sky(const SkyImage& sky, const std::string& name) {
     if (!(total > 0)) throw_file_error(name, "sky is black everywhere inside the fisheye disc: nothing to light with");
 }
 
+void write_sky_metadata(const SkyImage& sky, ImageMetadata* m) {
+    m->numbers["dynsky:time"] = sky.time_seconds;
+    if (sky.sun_direction) {
+        m->numbers["dynsky:sun_x"] = sky.sun_direction->x();
+        m->numbers["dynsky:sun_y"] = sky.sun_direction->y();
+        m->numbers["dynsky:sun_z"] = sky.sun_direction->z();
+    }
+    if (!sky.source.empty()) m->strings["dynsky:source"] = sky.source;
+}
+
 Image sky_to_image(const SkyImage& sky) {
     Image image(sky.resolution, sky.resolution, 3);
     image.pixels = sky.rgb;
-    image.metadata.numbers["dynsky:time"] = sky.time_seconds;
-    if (sky.sun_direction) {
-        image.metadata.numbers["dynsky:sun_x"] = sky.sun_direction->x();
-        image.metadata.numbers["dynsky:sun_y"] = sky.sun_direction->y();
-        image.metadata.numbers["dynsky:sun_z"] = sky.sun_direction->z();
-    }
-    if (!sky.source.empty()) image.metadata.strings["dynsky:source"] = sky.source;
+    write_sky_metadata(sky, &image.metadata);
     image.metadata.strings["dynsky:layout"] = "equidistant fisheye, upper hemisphere, north up, east left";
     return image;
 }

@@ -43,6 +43,10 @@ SkyImage load_sky(const std::string& path);
 // non-empty, also writes a tone-mapped PNG there.
 void save_sky(const std::string& path, const SkyImage& sky, const std::string& preview_png = "");
 
+// A sky's own metadata in an image header: dynsky:time, dynsky:sun_x/y/z (when known) and
+// dynsky:source (when set). Every sky file writer uses it; load_sky reads it back.
+void write_sky_metadata(const SkyImage& sky, ImageMetadata* m);
+
 // Conversions between SkyImage and the generic Image (3 channels).
 Image sky_to_image(const SkyImage& sky);
 SkyImage sky_from_image(const Image& image, const std::string& name);

@@ -65,7 +65,7 @@ ProceduralSkyParams procedural_params() {
 TEST(CloudModel, LoadsTheShippedModel) {
     const CloudModelInfo& info = model().info();
     EXPECT_GE(info.resolution, 32);
-    EXPECT_DOUBLE_EQ(info.dt_seconds, 30.0);  // trained on the 30 s ARM cadence
+    EXPECT_DOUBLE_EQ(info.dt, 30.0);  // trained on the 30 s ARM cadence
     EXPECT_GT(info.flow_scale, 0.0);
     EXPECT_FALSE(info.flow_widths.empty());
 }
