@@ -21,13 +21,14 @@ void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {
            "Input sky at t = 0: 'procedural[:SEED]' (cumulus over a clear sky, known motion), 'clear' (Hosek-Wilkie),\n"
            "or a canonical fisheye EXR (from 'dynsky sky clear|import|procedural|predict'; photographs: import first)")
         ->capture_default_str();
-    cmd->add_option(
-           "--model", m->model,
-           "Medium-step model xi: 'procedural' (the procedural sky's own next frame; procedural input only),\n"
-           "'flow' (extrapolate the Farneback flow of the last two steps; a uniform drift first),\n"
-           "'network:FOLDER' (the trained FlowNet+CloudNet, motion/cloud_model.h), or 'auto': the shipped network\n"
-           "(networks/models/arm_tsi, Delta t 30 s) when it is installed, else procedural for procedural input and flow\n"
-           "for others")
+    cmd->add_option("--model", m->model,
+                    "Medium-step model xi: 'auto' (the shipped advect-residual network, networks/models/advect_residual:\n"
+                    "clouds advected along the motion, a small network corrects; pure advection when not installed),\n"
+                    "'advect' (pure advection along the motion), 'paper' (the paper's FlowNet + CloudNet,\n"
+                    "networks/models/arm_tsi), 'procedural' (the procedural sky's own next frame; procedural input only),\n"
+                    "'flow' (extrapolate the Farneback flow of the last two steps; a uniform drift first), or\n"
+                    "'network:FOLDER'. The motion: --prev when given, else the wind (--wind-from, --wind-speed,\n"
+                    "--cloud-height)")
         ->capture_default_str();
     cmd->add_option(
            "--dt", m->dt,
@@ -42,9 +43,20 @@ void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {
     cmd->add_option("--lat", o->latitude, "Latitude of the place, degrees north (with --time)")->capture_default_str();
     cmd->add_option("--lon", o->longitude, "Longitude of the place, degrees east (with --time)")->capture_default_str();
     cmd->add_option("--coverage", o->coverage, "Cloud cover of the procedural sky, 0..1")->capture_default_str();
-    cmd->add_option("--wind-from", o->wind_from_deg, "Where the wind blows from, degrees clockwise from north")
+    cmd->add_option("--wind-from", o->wind_from_deg,
+                    "Where the wind at the clouds blows from, degrees clockwise from north (moves the procedural\n"
+                    "sky and, for any input sky, the clouds of the models that take a motion)")
         ->capture_default_str();
-    cmd->add_option("--wind-speed", o->wind_speed_mps, "Procedural sky's wind speed, m/s")->capture_default_str();
+    cmd->add_option("--wind-speed", o->wind_speed_mps, "Wind speed at the clouds, m/s")->capture_default_str();
+    cmd->add_option("--cloud-height", o->cloud_height_m,
+                    "Height of the cloud layer the wind moves, metres (1500: fair-weather cumulus; only speed / height\n"
+                    "matters for the motion seen from the ground)")
+        ->capture_default_str();
+    cmd->add_option("--prev", o->previous,
+                    "A previous frame of the input sky (canonical fisheye EXR): the clouds' motion is measured from it");
+    cmd->add_option("--prev-dt", o->previous_dt,
+                    "Seconds between --prev and the input sky (0: one medium step)")
+        ->capture_default_str();
     cmd->add_option("--drift", m->drift_deg_per_s,
                     "Flow model: first-step drift of a single input sky, degrees per second")
         ->capture_default_str();

@@ -16,12 +16,29 @@ void register_sky_model_commands(CLI::App& sky) {
         auto o = std::make_shared<PredictionOptions>();
         CLI::App* cmd = sky.add_subcommand(
             "predict",
-            "Move the clouds of a sky forward with a trained cloud model (docs/networks.md): K recursive\n"
-            "medium steps of Delta t (the model's, e.g. 30 s), xi(I) = CloudNet(I, FlowNet(I)). Writes\n"
-            "DIR/step_0001.exr ... (canonical fisheye radiance; the sun of the input is kept).");
+            "Move the clouds of a sky forward with a cloud model (docs/networks.md): K recursive medium steps\n"
+            "of Delta t (the model's, e.g. 30 s). The default model advects the clouds along a given motion\n"
+            "(--prev: measured from a previous frame; --wind-from/--wind-speed; else the default wind) and a\n"
+            "small network corrects. Writes DIR/step_0001.exr ... (canonical fisheye radiance; the sun of the\n"
+            "input is kept).");
         cmd->add_option("--model", o->model,
-                        "Model folder (flownet.onnx, cloudnet.onnx, model.json), e.g. networks/models/arm_tsi_128")
-            ->required();
+                        "Model: auto (networks/models/advect_residual), advect (pure advection along the motion),\n"
+                        "paper (the paper's FlowNet + CloudNet, networks/models/arm_tsi), or a model folder")
+            ->capture_default_str();
+        o->model = "auto";
+        auto wind = std::make_shared<Wind>();
+        auto from = cmd->add_option("--wind-from", wind->from_deg,
+                                    "Where the wind blows from, degrees clockwise from north (default 270)");
+        auto speed = cmd->add_option("--wind-speed", wind->speed_mps, "Wind speed at the clouds, m/s (default 12)");
+        auto height = cmd->add_option("--cloud-height", wind->cloud_height_m,
+                                      "Height of the cloud layer the wind moves, metres (default 1500: cumulus)");
+        cmd->add_option("--prev", o->previous,
+                        "A previous frame of the same sky (EXR): the motion is measured from it (previous -> --sky)");
+        cmd->add_option("--prev-dt", o->previous_dt,
+                        "Seconds between --prev and --sky (default: their dynsky:time difference, else one step)");
+        cmd->parse_complete_callback([o, wind, from, speed, height] {
+            if (from->count() || speed->count() || height->count()) o->wind = *wind;
+        });
         cmd->add_option("--sky", o->in, "Input sky (canonical fisheye EXR, any resolution)");
         add_hidden_alias(cmd, "--in", &o->in);
         cmd->add_option("--out,-o", o->out, "Output folder (created if missing)")->required();

@@ -5,6 +5,7 @@
 
 #include "motion/flow_extrapolation_model.h"
 #include "motion/network_step_model.h"
+#include "motion/flow.h"
 #include "motion/procedural_step_model.h"
 #include "sky/clear_sky.h"
 #include "util/data_path.h"
@@ -26,6 +27,7 @@ ProceduralSkyParams procedural_params(const SkySourceSpec& o, uint64_t seed, con
     p.layers = {cumulus_layer()};
     p.layers[0].wind_from_deg = o.wind_from_deg;
     p.layers[0].wind_speed_mps = o.wind_speed_mps;
+    p.layers[0].altitude_m = o.cloud_height_m;
     p.clear_sky.sun_direction = sun;
     p.clear_sky.turbidity = 3;
     validate_procedural_params(p);
@@ -45,28 +47,30 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
         validate_location(where);
         clock = SunClock{start_time(o), where};
     }
+    // What moves the clouds for models that take a motion: the previous frame, else the wind.
+    CloudMotion motion;
+    if (!o.previous.empty()) {
+        motion.previous = std::make_shared<const SkyImage>(load_sky(o.previous));
+        motion.previous_dt = o.previous_dt;
+        if (!(o.previous_dt >= 0)) throw Error("--prev-dt must be positive");
+    } else {
+        motion.wind = Wind{o.wind_from_deg, o.wind_speed_mps, o.cloud_height_m};
+        wind_flow(8, *motion.wind, 1.0);  // validates
+    }
     std::string model_name = m.model;
-    if (model_name != "auto" && model_name != "flow" && model_name != "procedural" &&
-        model_name.rfind("network:", 0) != 0)
-        throw Error("--model '" + model_name + "': expected auto, procedural, flow or network:FOLDER");
+    if (model_name != "auto" && model_name != "flow" && model_name != "procedural" && model_name != "advect" &&
+        model_name != "paper" && model_name.rfind("network:", 0) != 0)
+        throw Error("--model '" + model_name + "': expected auto, advect, paper, procedural, flow or network:FOLDER");
     std::unique_ptr<MediumStepModel> model;
-    if (model_name == "auto") {
-        // The paper's model: the shipped FlowNet + CloudNet, when the data files are where they belong.
-        std::string folder;
-        try {
-            folder = data_path("networks/models/arm_tsi/model.json");
-            folder = folder.substr(0, folder.size() - std::string("/model.json").size());
-        } catch (const Error&) {
-            std::fprintf(stderr, "dynsky: note: the shipped cloud model is not installed; clouds move by %s\n",
-                         o.sky.rfind("procedural", 0) == 0 ? "the procedural sky's own motion" : "flow extrapolation");
-        }
-        if (!folder.empty()) {
-            model = make_network_step_model(folder);
-            model_name = "network:" + folder;
-        }
+    if (model_name == "auto" || model_name == "paper" || model_name == "advect") {
+        const std::string folder = resolve_cloud_model(model_name);
+        if (model_name == "auto" && folder == "advect")
+            std::fprintf(stderr, "dynsky: note: the shipped cloud model is not installed; clouds move by pure advection\n");
+        model = make_network_step_model(folder, motion);
+        model_name = folder == "advect" ? "advect" : "network:" + folder;
     }
     if (model_name.rfind("network:", 0) == 0 && !model)
-        model = make_network_step_model(model_name.substr(8));  // fails early
+        model = make_network_step_model(model_name.substr(8), motion);  // fails early
     SkyImage input;
     if (o.sky.rfind("procedural", 0) == 0) {
         uint64_t seed = 0;

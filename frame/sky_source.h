@@ -19,20 +19,27 @@ namespace dynsky {
 //                                 Default 2026-06-21T16:00:00Z for skies made here; an EXR keeps its sun
 //   latitude, longitude  48.8566, 2.3522 (Paris)
 //   coverage        0.5           procedural cloud cover
-//   wind_from_deg, wind_speed_mps  270, 12  procedural cumulus wind
+//   wind_from_deg, wind_speed_mps, cloud_height_m  270, 12, 1500  the wind at the clouds: it moves
+//                                 the procedural sky's cumulus and, for any input, the clouds of the
+//                                 models that take a motion (advect-residual, advect)
+//   previous, previous_dt  "", 0  a frame of the same sky previous_dt seconds before the input (0:
+//                                 one medium step): the motion is measured from it instead
 struct SkySourceSpec {
     std::string sky = "procedural";
     int sky_resolution = 1024;
     std::string time;
     double latitude = 48.8566, longitude = 2.3522;
     double coverage = 0.5;
-    double wind_from_deg = 270.0, wind_speed_mps = 12.0;
+    double wind_from_deg = 270.0, wind_speed_mps = 12.0, cloud_height_m = 1500.0;
+    std::string previous;
+    double previous_dt = 0.0;
 };
 
 // The step model xi. Parameters (defaults):
-//   model            "auto"  auto | procedural | flow | network:FOLDER. auto: the shipped network
-//                            (networks/models/arm_tsi) when installed, else procedural for
-//                            procedural input and flow for others
+//   model            "auto"  auto | advect | paper | procedural | flow | network:FOLDER. auto: the
+//                            shipped advect-residual network (networks/models/advect_residual)
+//                            when installed, else advect (pure advection along the motion); paper:
+//                            the paper's FlowNet + CloudNet (networks/models/arm_tsi)
 //   dt               0       Delta t in seconds; 0: a network's own, else 10
 //   drift_deg_per_s  0.25    flow model: first-step drift of a single input sky (from wind_from_deg)
 struct StepModelSpec {

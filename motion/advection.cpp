@@ -31,8 +31,8 @@ cv::Vec2f sample_flow(const cv::Mat& flow, double x, double y) {
            fy * ((1 - fx) * flow.at<cv::Vec2f>(y0 + 1, x0) + fx * flow.at<cv::Vec2f>(y0 + 1, x0 + 1));
 }
 
-// The sky with every pixel outside the disc holding the rim's value along its radius, so that
-// bilinear lookups at the horizon never mix in the black corners.
+}  // namespace
+
 cv::Mat extend_past_rim(const cv::Mat& src) {
     const int n = src.cols;
     const double r_in = 1.0 - 1.5 / n;
@@ -49,7 +49,6 @@ cv::Mat extend_past_rim(const cv::Mat& src) {
     return out;
 }
 
-}  // namespace
 
 SkyImage advect_great_arc(const SkyImage& sky, const cv::Mat& flow, double fraction) {
     const int n = sky.resolution;
@@ -123,6 +122,21 @@ cv::Mat advect_by_flow(const cv::Mat& image, const cv::Mat& flow, double steps) 
 cv::Mat extrapolate_farneback(const cv::Mat& previous, const cv::Mat& current, int steps,
                               const FarnebackParams& params) {
     return advect_by_flow(current, farneback_flow(previous, current, params), steps);
+}
+
+cv::Mat warp_in_disc(const cv::Mat& image, const cv::Mat& flow) {
+    if (flow.type() != CV_32FC2 || flow.size() != image.size() || image.rows != image.cols)
+        throw Error("warp_in_disc: the flow must be CV_32FC2 of the (square) image's size");
+    cv::Mat map(flow.size(), CV_32FC2);
+    for (int y = 0; y < flow.rows; ++y) {
+        const cv::Vec2f* f = flow.ptr<cv::Vec2f>(y);
+        cv::Vec2f* m = map.ptr<cv::Vec2f>(y);
+        for (int x = 0; x < flow.cols; ++x) m[x] = cv::Vec2f(float(x) - f[x][0], float(y) - f[x][1]);
+    }
+    cv::Mat out;
+    cv::remap(extend_past_rim(image), out, map, cv::noArray(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    out.setTo(cv::Scalar::all(0), ~sky_disc_mask(image.rows));
+    return out;
 }
 
 }  // namespace dynsky

@@ -20,6 +20,16 @@ namespace dynsky {
 // Time and sun are copied from the input.
 SkyImage advect_great_arc(const SkyImage& sky, const cv::Mat& flow, double fraction);
 
+// The image with every pixel outside the disc holding the rim's value along its radius (pixel
+// centres with r > 1 - 1.5 / N take the value at r = 1 - 1.5 / N, bilinear, border replicate), so
+// that bilinear lookups at the horizon never mix in the black corners. Any channel count.
+cv::Mat extend_past_rim(const cv::Mat& image);
+
+// The networks' warp (motion/advect_residual.h): W(x) = E(I)(x - F(x)), E = extend_past_rim,
+// bilinear with border replicate, then 0 outside the disc. Exact for a flow by destination
+// (motion/flow.h wind_flow); the usual first-order stand-in for a flow by source.
+cv::Mat warp_in_disc(const cv::Mat& image, const cv::Mat& flow);
+
 // Advects an image along a flow field for `steps` steps at constant velocity:
 // out(x) = image(x - steps * flow(x)) (bilinear; outside the image reads 0). The backward lookup
 // through the flow at the destination is the usual first-order stand-in for forward splatting.

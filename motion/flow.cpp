@@ -151,4 +151,80 @@ cv::Mat flow_at_resolution(const cv::Mat& flow, int n) {
     return small * (double(n) / flow.rows);
 }
 
+namespace {
+
+// Flow of a layer displacement w (image axes, units of the layer's height) by destination.
+cv::Mat layer_flow(int n, double wx, double wy) {
+    cv::Mat flow(n, n, CV_32FC2);
+    const double theta_max = 88.0 * kPiD / 180.0;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const double u = 2.0 * (i + 0.5) / n - 1.0, v = 2.0 * (j + 0.5) / n - 1.0;
+            const double r = std::max(std::sqrt(u * u + v * v), 1e-6);
+            const double theta = r * kPiD / 2;
+            if (theta > theta_max) {
+                flow.at<cv::Vec2f>(j, i) = cv::Vec2f(0, 0);
+                continue;
+            }
+            // The point on the layer seen at x (image axes, units of height), and where its cloud was.
+            const double rho = std::tan(theta), px = rho * u / r, py = rho * v / r;
+            const double sx = px - wx, sy = py - wy, rs = std::max(std::hypot(sx, sy), 1e-9);
+            const double r_src = std::atan(rs) / (kPiD / 2);
+            const double us = r_src * sx / rs, vs = r_src * sy / rs;
+            flow.at<cv::Vec2f>(j, i) = cv::Vec2f(float((u - us) * n / 2), float((v - vs) * n / 2));
+        }
+    return flow;
+}
+
+// The layer displacement over dt in image axes (east is left, north up), units of the height.
+void layer_displacement(const Wind& w, double dt, double* wx, double* wy) {
+    const double to = (w.from_deg + 180.0) * kPiD / 180.0, d = w.speed_mps * dt / w.cloud_height_m;
+    const double east = d * std::sin(to), north = d * std::cos(to);
+    *wx = -east, *wy = -north;
+}
+
+}  // namespace
+
+cv::Mat wind_flow(int n, const Wind& wind, double dt) {
+    if (!(wind.cloud_height_m > 0) || !std::isfinite(wind.speed_mps) || !std::isfinite(wind.from_deg))
+        throw Error("wind: the cloud height must be positive and the speed and direction finite");
+    double wx, wy;
+    layer_displacement(wind, dt, &wx, &wy);
+    return layer_flow(n, wx, wy);
+}
+
+Wind fit_wind(const cv::Mat& flow, const cv::Mat& weight, double dt, double cloud_height_m) {
+    const int n = flow.rows;
+    cv::Mat wgt;
+    weight.convertTo(wgt, CV_32F, weight.depth() == CV_8U ? 1.0 / 255.0 : 1.0);
+    // Small-displacement Jacobian of layer_flow; two Gauss-Newton rounds for larger winds.
+    double wx = 0, wy = 0;
+    const double eps = 1e-3;
+    for (int round = 0; round < 3; ++round) {
+        cv::Mat f0 = layer_flow(n, wx, wy), fx = layer_flow(n, wx + eps, wy), fy = layer_flow(n, wx, wy + eps);
+        double a11 = 0, a12 = 0, a22 = 0, b1 = 0, b2 = 0;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                const float w = wgt.at<float>(j, i);
+                if (!(w > 0)) continue;
+                const cv::Vec2f jx = (fx.at<cv::Vec2f>(j, i) - f0.at<cv::Vec2f>(j, i)) / eps;
+                const cv::Vec2f jy = (fy.at<cv::Vec2f>(j, i) - f0.at<cv::Vec2f>(j, i)) / eps;
+                const cv::Vec2f r = flow.at<cv::Vec2f>(j, i) - f0.at<cv::Vec2f>(j, i);
+                a11 += w * jx.dot(jx), a12 += w * jx.dot(jy), a22 += w * jy.dot(jy);
+                b1 += w * jx.dot(r), b2 += w * jy.dot(r);
+            }
+        const double det = a11 * a22 - a12 * a12;
+        if (!(std::abs(det) > 1e-12)) break;
+        wx += (a22 * b1 - a12 * b2) / det, wy += (a11 * b2 - a12 * b1) / det;
+    }
+    // Back from image axes to a wind: east = -wx, north = -wy (units of height over dt).
+    const double east = -wx, north = -wy, d = std::hypot(east, north);
+    Wind w;
+    w.cloud_height_m = cloud_height_m;
+    w.speed_mps = d * cloud_height_m / dt;
+    double to = std::atan2(east, north) * 180.0 / kPiD;
+    w.from_deg = std::fmod(to + 180.0 + 720.0, 360.0);
+    return w;
+}
+
 }  // namespace dynsky

@@ -57,6 +57,28 @@ cv::Mat fill_flow_holes(const cv::Mat& flow, const cv::Mat& confidence, double s
 // flow(p) = pixel(R d_p) - p. For tests and for a uniform wind drift across the sky.
 cv::Mat rotation_flow(int resolution, const Vec3d& axis, double angle);
 
+// A uniform wind on one cloud layer (glossary: "wind"): the clouds are a flat layer at
+// cloud_height_m above the camera, moving horizontally at speed_mps towards from_deg + 180 degrees
+// (from_deg: where the wind blows FROM, clockwise from north, as weather reports give it). Only
+// the ratio speed / height matters for the image: 10 m/s at 1500 m moves an overhead cloud
+// 0.38 degrees per second. Defaults: from the west at 12 m/s, a cumulus base at 1500 m (the
+// procedural sky's cumulus layer).
+struct Wind {
+    double from_deg = 270.0;
+    double speed_mps = 12.0;
+    double cloud_height_m = 1500.0;
+};
+
+// The flow of that layer over dt seconds at resolution n, by destination: F(x) = x - s(x), where
+// s(x) is the pixel whose cloud moves to x (so a backward warp I(x - F(x)) is exact). Beyond 88
+// degrees from the zenith the layer is taken at 88 degrees (the motion there is ~0 anyway).
+cv::Mat wind_flow(int n, const Wind& wind, double dt);
+
+// The uniform wind that best explains a measured flow (least squares over the pixels where
+// weight > 0, CV_32FC1 or CV_8UC1; the flow's resolution), with the given cloud height. For
+// fitting a "true wind" to real motion.
+Wind fit_wind(const cv::Mat& flow, const cv::Mat& weight, double dt, double cloud_height_m = 1500.0);
+
 // A flow field measured at another resolution, area-averaged (or resized) to N and rescaled to
 // N's pixels.
 cv::Mat flow_at_resolution(const cv::Mat& flow, int n);

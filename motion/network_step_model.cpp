@@ -1,6 +1,8 @@
 #include "motion/network_step_model.h"
 
 #include "motion/cloud_model.h"
+#include "util/data_path.h"
+#include "util/error.h"
 
 namespace dynsky {
 
@@ -23,8 +25,34 @@ class NetworkStepModel : public MediumStepModel {
 
 }  // namespace
 
-std::unique_ptr<MediumStepModel> make_network_step_model(const std::string& folder) {
+std::unique_ptr<MediumStepModel> make_network_step_model(const std::string& folder, const CloudMotion& motion) {
+    if (folder == "advect")
+        return std::make_unique<AdvectResidualStepModel>(AdvectResidualNetwork::pure_advection(), motion);
+    if (cloud_model_kind(folder) == "advect-residual")
+        return std::make_unique<AdvectResidualStepModel>(AdvectResidualNetwork::load(folder), motion);
     return std::make_unique<NetworkStepModel>(folder);
 }
+
+std::string resolve_cloud_model(const std::string& name) {
+    auto installed = [](const std::string& rel) -> std::string {
+        try {
+            std::string p = data_path(rel + "/model.json");
+            return p.substr(0, p.size() - std::string("/model.json").size());
+        } catch (const Error&) {
+            return "";
+        }
+    };
+    if (name.empty() || name == "auto") {
+        std::string f = installed("networks/models/advect_residual");
+        return f.empty() ? "advect" : f;
+    }
+    if (name == "paper") {
+        std::string f = installed("networks/models/arm_tsi");
+        if (f.empty()) throw Error("--model paper: networks/models/arm_tsi is not installed");
+        return f;
+    }
+    return name;
+}
+
 
 }  // namespace dynsky

@@ -1,17 +1,26 @@
-// Step model "network:FOLDER": the trained networks of a model folder (motion/cloud_model.h,
-// CloudModel::step) as a medium-step model.
+// Step model "network:FOLDER": the trained networks of a model folder as a medium-step model, by
+// the folder's kind (model.json): advect-residual (motion/advect_residual.h: moved along a given
+// motion, corrected by a network) or the paper's FlowNet + CloudNet (motion/cloud_model.h, v1
+// folders; its motion comes from the sky alone, so `motion` is not used).
 //
 // Parameters (defaults):
-//   folder   (required)  flownet.onnx, cloudnet.onnx, model.json; Delta t is the model's dt_s
+//   folder   (required)  model.json and its ONNX files; Delta t is the model's dt_s
+//   motion   the default wind (motion/advect_residual.h CloudMotion)
 #pragma once
 
 #include <memory>
 #include <string>
 
+#include "motion/advect_residual.h"
 #include "motion/step_model.h"
 
 namespace dynsky {
 
-std::unique_ptr<MediumStepModel> make_network_step_model(const std::string& folder);
+std::unique_ptr<MediumStepModel> make_network_step_model(const std::string& folder, const CloudMotion& motion = {});
+
+// The folder (or "advect") a model name stands for: "" and "auto" -> networks/models/advect_residual
+// when installed (else "advect": pure advection); "paper" -> networks/models/arm_tsi; "advect";
+// else the name itself (a folder).
+std::string resolve_cloud_model(const std::string& name);
 
 }  // namespace dynsky

@@ -1,10 +1,16 @@
 #include "motion/prediction.h"
 
 #include <cstdio>
+#include <functional>
+#include <memory>
+#include <optional>
 #include <filesystem>
 #include <sstream>
 
+#include "motion/advect_residual.h"
 #include "motion/cloud_model.h"
+#include "motion/network_step_model.h"
+#include "util/data_path.h"
 #include "motion/metrics.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
@@ -22,9 +28,34 @@ void write_prediction(const PredictionOptions& o) {
     if (o.steps < 1 || o.steps > 100000) throw Error("--steps: must be in 1..100000");
     if (o.every < 1) throw Error("--every: must be >= 1");
     if (fs::exists(o.out) && !fs::is_directory(o.out)) throw_file_error(o.out, "exists and is not a folder");
-    CloudModel model = CloudModel::load(o.model);
+    const std::string folder = resolve_cloud_model(o.model);
+    const bool advect_kind = folder == "advect" || cloud_model_kind(folder) == "advect-residual";
+    std::optional<CloudModel> paper;
+    std::optional<AdvectResidualNetwork> advect;
+    if (advect_kind) advect = folder == "advect" ? AdvectResidualNetwork::pure_advection() : AdvectResidualNetwork::load(folder);
+    else paper = CloudModel::load(folder);
+    if (!advect_kind && (!o.previous.empty() || o.wind))
+        throw Error("--prev and --wind-*: the paper's model (" + folder + ") takes its motion from the sky alone");
     SkyImage sky = load_sky(o.in);
-    const int n = model.info().resolution;
+    CloudMotion motion;
+    motion.wind = o.wind;
+    motion.previous_dt = o.previous_dt;
+    if (!o.previous.empty()) {
+        if (o.wind) throw Error("--prev and --wind-*: give one source of motion, not both");
+        motion.previous = std::make_shared<const SkyImage>(load_sky(o.previous));
+        if (motion.previous_dt == 0 && sky.time_seconds > motion.previous->time_seconds)
+            motion.previous_dt = sky.time_seconds - motion.previous->time_seconds;
+        if (motion.previous_dt < 0) throw Error("--prev-dt: must be positive");
+    }
+    const NetworkFormParams form = advect ? advect->info().form : paper->info().form;
+    const int n = advect ? advect->info().resolution : paper->info().resolution;
+    const double dt = advect ? advect->info().dt : paper->info().dt;
+    cv::Mat flow;
+    if (advect) flow = advect->motion_flow(sky, motion, dt, sky.resolution);
+    auto rollout = [&](const std::function<void(int, const SkyImage&)>& on_step) {
+        if (advect) advect->rollout(sky, flow, o.steps, on_step);
+        else paper->rollout(sky, o.steps, on_step);
+    };
     const cv::Mat disc = sky_disc_mask(n);
     fs::create_directories(o.out);
     std::ostringstream csv;
@@ -42,13 +73,13 @@ void write_prediction(const PredictionOptions& o) {
                 }
                 lum += luminance(c), ++count;
             }
-        cv::Mat unit = to_network_form(s, model.info().form, n);
+        cv::Mat unit = to_network_form(s, form, n);
         cv::Mat finite_unit = unit.clone();
         cv::patchNaNs(finite_unit, 0.0);
         double mn, mx;
         cv::minMaxLoc(finite_unit.reshape(1), &mn, &mx, nullptr, nullptr, cv::repeat(disc, 1, 3).reshape(1, n));
         cv::Scalar mean = cv::mean(finite_unit, disc);
-        double coverage = double(cv::countNonZero(network_cloud_mask(finite_unit, model.info().form) & disc)) /
+        double coverage = double(cv::countNonZero(network_cloud_mask(finite_unit, form) & disc)) /
                           cv::countNonZero(disc);
         char line[256];
         std::snprintf(line, sizeof line, "%d,%.3f,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%ld\n", k, s.time_seconds,
@@ -61,7 +92,7 @@ void write_prediction(const PredictionOptions& o) {
     const float preview_ev = exposure_log_average(sky_to_image(sky));
     ProgressBar progress(o.steps, "predict", o.quiet);
     int written = 0;
-    model.rollout(sky, o.steps, [&](int k, const SkyImage& s) {
+    rollout([&](int k, const SkyImage& s) {
         if (k % o.every == 0 || k == o.steps) {
             std::string base = numbered_path(o.out, "step", k, "");
             save_sky(base + ".exr", s);
@@ -74,7 +105,7 @@ void write_prediction(const PredictionOptions& o) {
     progress.finish();
     if (!o.stats.empty()) write_file_atomic(o.stats, csv.str());
     if (!o.quiet)
-        std::printf("wrote %d predicted skies (Delta t = %g s, %d steps) to %s\n", written, model.info().dt,
+        std::printf("wrote %d predicted skies (Delta t = %g s, %d steps) to %s\n", written, dt,
                     o.steps, o.out.c_str());
 }
 

@@ -4,14 +4,26 @@
 // / max, cloud cover, high-frequency energy, non-finite pixels; step 0 = the input).
 #pragma once
 
+#include <optional>
 #include <string>
+
+#include "motion/flow.h"
 
 namespace dynsky {
 
+// Parameters (defaults): model "" (the shipped advect-residual model; "advect": pure advection;
+// "paper": the FlowNet + CloudNet of networks/models/arm_tsi; or a model folder), in (the sky),
+// out (a folder), steps 1, every 1 (write every M-th step and the last), stats "" (no CSV),
+// preview false. Motion (advect-residual and advect only): previous (a frame before `in`,
+// previous_dt seconds before it; 0: one model step) or a wind; with neither, the default wind
+// (motion/flow.h Wind{}).
 struct PredictionOptions {
     std::string model, in, out, stats;
     int steps = 1, every = 1;
     bool preview = false, quiet = false;
+    std::string previous;
+    double previous_dt = 0;
+    std::optional<Wind> wind;
 };
 
 void write_prediction(const PredictionOptions& o);

@@ -98,7 +98,7 @@ TEST(AnimateCli, FrameRangesEqualOneRun) {
 }
 
 // The main job's default moves the clouds with the shipped networks (issue 4), recorded per frame.
-TEST(AnimateCli, DefaultModelIsTheShippedNetwork) {
+TEST(AnimateCli, DefaultModelIsTheShippedAdvectResidualNetwork) {
     std::string dir = test::temp_dir("animate_default_model");
     auto r = test::run_command(std::string(DYNSKY_EXE) +
                                " animate builtin --sky-res 96 --res 32x18 --spp 1 --duration 30 --fps 0.05 "
@@ -109,7 +109,7 @@ TEST(AnimateCli, DefaultModelIsTheShippedNetwork) {
         Image img = read_image(frame(dir, k));
         const std::string& model = img.metadata.strings["dynsky:sky_model"];
         EXPECT_EQ(model.rfind("network:", 0), 0u) << model;
-        EXPECT_NE(model.find("networks/models/arm_tsi"), std::string::npos) << model;
+        EXPECT_NE(model.find("networks/models/advect_residual"), std::string::npos) << model;
     }
     fs::remove_all(dir);
 }

@@ -1,0 +1,112 @@
+// The advection-residual cloud model (glossary: "advect-residual"; networks/advect.py trains it,
+// docs/networks-advect-residual.md measures it). Motion comes from a GIVEN flow, never from
+// memory: one medium step advects the sky along the flow F and a small network only corrects
+// (cloud growth and decay, what the flow cannot move, clear sky held still):
+//
+//   W      = E(I)(x - F(x))        the warp (motion/advection.h warp_in_disc)
+//   next   = clamp(net([W, I, F / (flow_scale N)]), 0, 1), 0 outside the disc
+//
+// at the networks' resolution N on the network form (motion/network_form.h). A rollout keeps F
+// fixed (constant velocity) and feeds each prediction back. A sky of any resolution is stepped at
+// its own resolution: its state is warped there along the flow resampled to it, and the network's
+// correction (next - W at N) is added, upsampled; so the sky keeps its fine detail.
+//
+// Where F comes from (CloudMotion): the previous frame (Farneback on the network form, previous ->
+// current, scaled to one step), a wind (motion/flow.h wind_flow), or, with neither, the default
+// wind (Wind{}: from the west at 12 m/s, clouds at 1500 m).
+//
+// Model folder: model.json (format dynsky-cloud-model, version 2, kind advect-residual) and
+// model.onnx (1 x 8 x N x N -> 1 x 3 x N x N). Kind "advect" without a folder is the same step
+// with no network (next = W): the pure-advection baseline.
+//
+// Parameters (defaults): folder (required for the network), motion (the default wind).
+#pragma once
+
+#include <opencv2/core.hpp>
+#include <opencv2/dnn.hpp>
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "motion/flow.h"
+#include "motion/network_form.h"
+#include "motion/step_model.h"
+#include "sky/sky_image.h"
+
+namespace dynsky {
+
+// What moves the clouds: a previous frame (taken previous_dt seconds before the sky being moved;
+// 0: one step before), else a wind, else the default wind.
+struct CloudMotion {
+    std::optional<Wind> wind;
+    std::shared_ptr<const SkyImage> previous;
+    double previous_dt = 0;
+};
+
+struct AdvectResidualInfo {
+    std::string name, folder, kind = "advect-residual";
+    int resolution = 64;          // N
+    int import_resolution = 256;  // where the training flows were measured
+    double dt = 30.0;             // the cadence trained on most (the flow input sets the speed)
+    double flow_scale = 0.08;     // flow channels = F / (flow_scale N)
+    NetworkFormParams form;
+};
+
+class AdvectResidualNetwork {
+  public:
+    // Reads FOLDER/model.json and FOLDER/model.onnx and runs the network once on zeros. Throws
+    // dynsky::Error naming the file and the problem (missing, wrong format, version or kind, not
+    // ONNX, wrong shapes).
+    static AdvectResidualNetwork load(const std::string& folder);
+    // No network: next = W (kind "advect"), with the form and N given.
+    static AdvectResidualNetwork pure_advection(int resolution = 64, double dt = 30.0);
+
+    const AdvectResidualInfo& info() const { return info_; }
+    bool has_network() const { return !net_.empty(); }
+
+    // The raw network on its input [W, I, F / (flow_scale N)] (N x N CV_32FC(8)): N x N CV_32FC3.
+    cv::Mat run(const cv::Mat& input);
+    // The network's input for image I (N x N CV_32FC3) and flow F (N x N CV_32FC2).
+    cv::Mat network_input(const cv::Mat& image, const cv::Mat& flow) const;
+    // One step at N: warp, network, clamp, 0 outside the disc.
+    cv::Mat step_network(const cv::Mat& image, const cv::Mat& flow);
+
+    // K recursive steps of an HDR sky of any resolution along a fixed flow given at the sky's
+    // resolution (pixels per step); on_step(k, sky_k) for k = 1..K. The sun (pixels the network
+    // form clips) is filled before the first step and the input's put back into every output.
+    void rollout(const SkyImage& sky, const cv::Mat& flow, int steps,
+                 const std::function<void(int, const SkyImage&)>& on_step);
+
+    // The flow per step of length dt at resolution n for a sky and its motion (see CloudMotion).
+    cv::Mat motion_flow(const SkyImage& sky, const CloudMotion& motion, double dt, int n) const;
+
+  private:
+    AdvectResidualInfo info_;
+    cv::dnn::Net net_;
+};
+
+// Farneback flow previous -> current on the network form at min(256, N_sky) px, as the training
+// flows were measured, returned at resolution n in pixels at n (per the gap between the frames).
+cv::Mat network_form_flow(const SkyImage& previous, const SkyImage& current, const NetworkFormParams& form, int n);
+
+// The step model: "network:FOLDER" for a folder of kind advect-residual, or "advect".
+class AdvectResidualStepModel : public MediumStepModel {
+  public:
+    AdvectResidualStepModel(AdvectResidualNetwork network, CloudMotion motion);
+    SkyImage step(const std::vector<std::shared_ptr<const SkyImage>>& history, double dt) override;
+    std::string name() const override;
+
+  private:
+    AdvectResidualNetwork network_;
+    CloudMotion motion_;
+    cv::Mat flow_;  // at the sky's resolution, per step; fixed from the first step on
+    double flow_dt_ = 0;
+};
+
+// The kind of a model folder's model.json ("advect-residual", or "flownet-cloudnet" for the
+// paper's v1 folders without a kind). Throws naming the file when it is missing or unreadable.
+std::string cloud_model_kind(const std::string& folder);
+
+}  // namespace dynsky

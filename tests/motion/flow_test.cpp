@@ -1,0 +1,83 @@
+// Winds as flow fields (motion/flow.h): a uniform wind on a cloud layer against the procedural
+// sky's exact cloud motion, its directions, and fitting a wind back to a measured flow.
+#include "motion/flow.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "sky/procedural_clouds.h"
+#include "util/error.h"
+#include "util/math.h"
+
+namespace dynsky {
+namespace {
+
+// Median over cloud pixels of |wind_flow - exact| / |exact|, and the median |exact|.
+void compare_with_procedural(double from_deg, double speed, double dt, double* rel_error, double* median_px) {
+    const int n = 128;
+    ProceduralSkyParams p;
+    p.seed = 5;
+    p.coverage = 0.6;
+    p.layers = {cumulus_layer()};
+    p.layers[0].wind_from_deg = from_deg, p.layers[0].wind_speed_mps = speed, p.layers[0].evolution_time_s = 0;
+    Image exact;
+    render_procedural_sky(p, 0.0, n, &exact, dt);
+    cv::Mat flow = wind_flow(n, Wind{from_deg, speed, p.layers[0].altitude_m}, dt);
+    std::vector<double> rel, mag;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            if (exact.at(i, j, 2) < 0.5) continue;  // cloud pixels only
+            const double ex = exact.at(i, j, 0), ey = exact.at(i, j, 1);
+            const cv::Vec2f f = flow.at<cv::Vec2f>(j, i);
+            const double m = std::hypot(ex, ey);
+            if (m < 0.05) continue;
+            rel.push_back(std::hypot(f[0] - ex, f[1] - ey) / m), mag.push_back(m);
+        }
+    ASSERT_GT(rel.size(), 500u);
+    *rel_error = median(rel), *median_px = median(mag);
+}
+
+TEST(WindFlow, MatchesTheProceduralSkysExactMotionInEveryDirection) {
+    for (double from : {0.0, 45.0, 90.0, 135.0, 180.0, 225.0, 270.0, 315.0}) {
+        double rel = 0, px = 0;
+        compare_with_procedural(from, 10.0, 5.0, &rel, &px);
+        EXPECT_GT(px, 0.5) << from;  // the test moves clouds by more than half a pixel
+        // By destination (wind_flow) vs by source (the procedural flow): they differ to second order
+        // in the displacement (1.3 px here; at 8 px per step, 8 %).
+        EXPECT_LT(rel, 0.03) << "wind from " << from << " deg: median relative error " << rel;
+    }
+}
+
+TEST(WindFlow, AWesterlyMovesOverheadCloudsEastwardThatIsLeftInTheImage) {
+    const int n = 65;  // odd: one pixel centre at the zenith
+    cv::Mat f = wind_flow(n, Wind{270.0, 15.0, 1500.0}, 10.0);
+    const cv::Vec2f z = f.at<cv::Vec2f>(32, 32);
+    // 150 m at 1500 m overhead: atan(0.1) = 5.71 deg = 5.71 / 90 of the radius (32.5 px).
+    EXPECT_NEAR(z[0], -std::atan(0.1) / (kPiD / 2) * n / 2, 0.02);
+    EXPECT_NEAR(z[1], 0.0, 1e-3);
+    cv::Mat north = wind_flow(n, Wind{180.0, 15.0, 1500.0}, 10.0);  // from the south: towards the north, up
+    EXPECT_LT(north.at<cv::Vec2f>(32, 32)[1], -1.0f);
+    // Near the horizon a layer moves far less in angle than overhead.
+    EXPECT_LT(std::abs(f.at<cv::Vec2f>(32, 2)[0]), 0.2 * std::abs(z[0]));
+}
+
+TEST(WindFlow, FittingAWindRecoversIt) {
+    const int n = 96;
+    for (double from : {10.0, 200.0, 300.0}) {
+        Wind truth{from, 9.0, 1500.0};
+        cv::Mat flow = wind_flow(n, truth, 30.0);
+        cv::Mat weight(n, n, CV_32FC1, cv::Scalar(1.0f));
+        Wind w = fit_wind(flow, weight, 30.0, 1500.0);
+        EXPECT_NEAR(w.speed_mps, 9.0, 0.05) << from;
+        EXPECT_NEAR(std::remainder(w.from_deg - from, 360.0), 0.0, 0.5) << from;
+    }
+}
+
+TEST(WindFlow, RejectsBadLayers) {
+    EXPECT_THROW(wind_flow(32, Wind{270, 10, 0}, 10), Error);
+    EXPECT_THROW(wind_flow(32, Wind{270, std::nan(""), 1500}, 10), Error);
+}
+
+}  // namespace
+}  // namespace dynsky
