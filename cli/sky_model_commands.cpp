@@ -56,21 +56,32 @@ void register_sky_model_commands(CLI::App& sky) {
         auto o = std::make_shared<EvaluationOptions>();
         CLI::App* cmd = sky.add_subcommand(
             "evaluate",
-            "Score a cloud model on the held-out (last, in time) part of a real sequence against the\n"
-            "persistence and Farneback-extrapolation baselines, in the same run: MSE, PSNR and SSIM per\n"
-            "horizon, as a markdown table, plus a histogram of cloud motion (real vs rollout) as PNG.");
-        cmd->add_option("--model", o->model, "Model folder (with split.json naming the held-out frames)")->required();
-        cmd->add_option("--sequence", o->sequence, "Real sequence: arm-tsi (30 s) or mobotix (60 s)")->required();
-        cmd->add_option("--horizons", o->horizons, "Steps ahead to score, comma-separated")->capture_default_str();
-        cmd->add_option("--shared", o->shared, "The shared data folder (default: ../shared beside the source tree)");
-        cmd->add_option("--report", o->report, "Markdown file to write")->capture_default_str();
-        cmd->add_option("--histogram", o->histogram, "PNG of the flow-magnitude histogram")->capture_default_str();
-        cmd->add_option("--import-res", o->import_resolution,
-                        "Resolution the photographs are imported at before area-averaging to the model's\n"
-                        "(default: the model's training value)");
-        cmd->add_option("--limit", o->limit, "Score only the first K held-out start frames (0: all; for quick checks)")
+            "Score a cloud model on real photographs against persistence and iterated Farneback extrapolation, in\n"
+            "the same run (docs/networks.md): a named sequence or any folder of one camera's photographs, at\n"
+            "several resolutions and horizons; the model given the previous frame, and from one frame with the\n"
+            "true (fitted) wind; pure advection and the paper's model beside them. Writes a markdown report with\n"
+            "PSNR tables, the paper's one-step table (MSE, PSNR, SSIM), verdicts, a CSV and charts.");
+        cmd->add_option("--model", o->model, "Model: auto, advect or a model folder (as for 'sky predict')")
             ->capture_default_str();
-        cmd->add_flag("--quiet,-q", o->quiet, "No progress bars; the table is still written");
+        cmd->add_option("--sequence", o->sequence, "A named sequence in the shared data: arm-tsi, arm-clear, arm-dusk, mobotix");
+        cmd->add_option("--photos", o->photos,
+                        "Any folder of photographs of one camera (or its images/ sub-folder), times in the file names");
+        cmd->add_option("--preset", o->preset, "Camera preset of --photos: arm-tsi or mobotix");
+        cmd->add_option("--frames", o->frames,
+                        "Start frames A-B to score (default: the model's held-out part of a sequence it was trained on,\n"
+                        "else every frame)");
+        cmd->add_option("--horizons", o->horizons, "Steps ahead to score, comma-separated")->capture_default_str();
+        cmd->add_option("--res", o->resolutions, "Resolutions N to score at, comma-separated (each divides --import-res)")
+            ->capture_default_str();
+        cmd->add_option("--shared", o->shared, "The shared data folder (default: ../shared beside the source tree)");
+        cmd->add_option("--report,-o", o->report, "Markdown file to write (a .csv and charts beside it)")
+            ->capture_default_str();
+        cmd->add_option("--import-res", o->import_resolution, "Resolution the photographs are imported at")
+            ->capture_default_str();
+        cmd->add_option("--limit", o->limit, "Score only the first K start frames (0: all; for quick checks)")
+            ->capture_default_str();
+        cmd->add_flag("!--no-paper", o->paper, "Do not score the paper's model beside it");
+        cmd->add_flag("--quiet,-q", o->quiet, "No progress bars; the report is still written");
         cmd->callback([o]() { evaluate_cloud_model(*o); });
     }
     {

@@ -122,27 +122,25 @@ cv::Mat resize_flow(const cv::Mat& flow, int n) {
 
 }  // namespace
 
-void AdvectResidualNetwork::rollout(const SkyImage& sky, const cv::Mat& flow, int steps,
-                                    const std::function<void(int, const SkyImage&)>& on_step) {
-    validate_sky(sky, sky.source.empty() ? std::string("input sky") : sky.source);
-    const int n = info_.resolution, big = sky.resolution;
+void AdvectResidualNetwork::rollout_network_form(const cv::Mat& start, const cv::Mat& flow, int steps,
+                                                 const std::function<void(int, const cv::Mat&)>& on_step) {
+    const int n = info_.resolution, big = start.rows;
     if (flow.rows != big || flow.cols != big || flow.type() != CV_32FC2)
-        throw Error("advect-residual: the flow must be CV_32FC2 at the sky's resolution " + std::to_string(big));
-    cv::Mat state = to_network_form(sky, info_.form);
-    const cv::Mat sun = fill_saturated_pixels(&state);
-    const bool has_sun = cv::countNonZero(sun) > 0;
+        throw Error("advect-residual: the flow must be CV_32FC2 at the state's resolution " + std::to_string(big));
+    if (big < n) throw Error("advect-residual: the state is smaller than the network's " + std::to_string(n) + " px");
     const cv::Mat disc_big = sky_disc_mask(big), disc_n = sky_disc_mask(n);
     const cv::Mat flow_n = resize_flow(flow, n);
+    cv::Mat state = start.clone();
     for (int k = 1; k <= steps; ++k) {
         if (big == n) {
             state = step_network(state, flow_n);
         } else {
-            // The state moves at its own resolution; the network's correction is added at N.
-            cv::Mat small;
-            cv::resize(state, small, cv::Size(n, n), 0, 0, cv::INTER_AREA);
-            small.setTo(cv::Scalar::all(0), ~disc_n);
+            // The state moves at its own resolution; the network's correction is added from N.
             cv::Mat moved = warp_in_disc(state, flow);
             if (has_network()) {
+                cv::Mat small;
+                cv::resize(state, small, cv::Size(n, n), 0, 0, cv::INTER_AREA);
+                small.setTo(cv::Scalar::all(0), ~disc_n);
                 cv::Mat correction = step_network(small, flow_n) - warp_in_disc(small, flow_n), up;
                 cv::resize(correction, up, cv::Size(big, big), 0, 0, cv::INTER_LINEAR);
                 moved += up;
@@ -150,11 +148,22 @@ void AdvectResidualNetwork::rollout(const SkyImage& sky, const cv::Mat& flow, in
             cv::min(cv::max(moved, 0.0), 1.0, state);
             state.setTo(cv::Scalar::all(0), ~disc_big);
         }
-        SkyImage next = from_network_form(state, sky, info_.form);
+        on_step(k, state);
+    }
+}
+
+void AdvectResidualNetwork::rollout(const SkyImage& sky, const cv::Mat& flow, int steps,
+                                    const std::function<void(int, const SkyImage&)>& on_step) {
+    validate_sky(sky, sky.source.empty() ? std::string("input sky") : sky.source);
+    cv::Mat state = to_network_form(sky, info_.form);
+    const cv::Mat sun = fill_saturated_pixels(&state);
+    const bool has_sun = cv::countNonZero(sun) > 0;
+    rollout_network_form(state, flow, steps, [&](int k, const cv::Mat& s) {
+        SkyImage next = from_network_form(s, sky, info_.form);
         next.time_seconds = sky.time_seconds + k * info_.dt;
         if (has_sun) restore_pixels(&next, sky, sun);
         on_step(k, next);
-    }
+    });
 }
 
 cv::Mat network_form_flow(const SkyImage& previous, const SkyImage& current, const NetworkFormParams& form, int n) {
@@ -165,7 +174,7 @@ cv::Mat network_form_flow(const SkyImage& previous, const SkyImage& current, con
     cv::Mat a = to_network_form(previous, form, w), b = to_network_form(current, form, w);
     fill_saturated_pixels(&a);
     fill_saturated_pixels(&b);
-    return resize_flow(farneback_flow(a, b), n);
+    return resize_flow(smooth_motion(farneback_flow(a, b)), n);
 }
 
 cv::Mat AdvectResidualNetwork::motion_flow(const SkyImage& sky, const CloudMotion& motion, double dt, int n) const {

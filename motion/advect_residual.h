@@ -79,6 +79,11 @@ class AdvectResidualNetwork {
     void rollout(const SkyImage& sky, const cv::Mat& flow, int steps,
                  const std::function<void(int, const SkyImage&)>& on_step);
 
+    // The same on the network form: state (R x R CV_32FC3, any R >= N, no saturated pixels) and
+    // flow (R x R CV_32FC2, per step); on_step(k, state_k) for k = 1..K.
+    void rollout_network_form(const cv::Mat& state, const cv::Mat& flow, int steps,
+                              const std::function<void(int, const cv::Mat&)>& on_step);
+
     // The flow per step of length dt at resolution n for a sky and its motion (see CloudMotion).
     cv::Mat motion_flow(const SkyImage& sky, const CloudMotion& motion, double dt, int n) const;
 
@@ -87,8 +92,9 @@ class AdvectResidualNetwork {
     cv::dnn::Net net_;
 };
 
-// Farneback flow previous -> current on the network form at min(256, N_sky) px, as the training
-// flows were measured, returned at resolution n in pixels at n (per the gap between the frames).
+// The motion measured from a previous frame: Farneback flow previous -> current on the network form
+// at min(256, N_sky) px (as the training flows were measured), smoothed (motion/flow.h
+// smooth_motion), returned at resolution n in pixels at n (per the gap between the frames).
 cv::Mat network_form_flow(const SkyImage& previous, const SkyImage& current, const NetworkFormParams& form, int n);
 
 // The step model: "network:FOLDER" for a folder of kind advect-residual, or "advect".

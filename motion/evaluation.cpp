@@ -5,21 +5,25 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
-#include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
+#include "motion/advect_residual.h"
 #include "motion/advection.h"
 #include "motion/cloud_model.h"
 #include "motion/flow.h"
 #include "motion/metrics.h"
+#include "motion/network_step_model.h"
 #include "motion/photo_sequence.h"
+#include "motion/sun_patch.h"
 #include "util/atomic_file.h"
+#include "util/chart.h"
 #include "util/error.h"
-#include "util/image.h"
 #include "util/json_file.h"
-#include "util/math.h"
 #include "util/parse.h"
 #include "util/progress.h"
 
@@ -29,179 +33,247 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Scores {
-    std::vector<double> mse, psnr, ssim;
-    void add(const ImageComparison& c) { mse.push_back(c.mse), psnr.push_back(c.psnr), ssim.push_back(c.ssim); }
-    static double mean(const std::vector<double>& v) {
-        double s = 0;
-        for (double x : v) s += x;
-        return v.empty() ? std::nan("") : s / v.size();
+struct Accumulator {
+    double mse = 0, psnr = 0, ssim = 0;
+    int count = 0;
+    void add(const ImageComparison& c) { mse += c.mse, psnr += c.psnr, ssim += c.ssim, ++count; }
+    MethodScore mean() const {
+        MethodScore s;
+        s.frames = count;
+        if (count) s.mse = mse / count, s.psnr = psnr / count, s.ssim = ssim / count;
+        return s;
     }
 };
 
-// A two- or three-series histogram drawn with OpenCV (no plotting library needed at run time).
-void draw_histogram(const std::string& path, const std::string& title, const std::string& xlabel, double max_value,
-                    const std::vector<std::pair<std::string, std::vector<float>>>& series) {
-    const int bins = 40, w = 900, h = 520, left = 80, right = 20, top = 50, bottom = 70;
-    const cv::Scalar colours[] = {cv::Scalar(200, 120, 40), cv::Scalar(40, 110, 230), cv::Scalar(60, 170, 60)};
-    std::vector<std::vector<double>> hist(series.size(), std::vector<double>(bins, 0.0));
-    double peak = 1e-9;
-    for (size_t s = 0; s < series.size(); ++s) {
-        for (float v : series[s].second) hist[s][std::clamp(int(v / max_value * bins), 0, bins - 1)] += 1;
-        for (double& b : hist[s]) b /= std::max<size_t>(1, series[s].second.size()), peak = std::max(peak, b);
-    }
-    cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
-    const int pw = w - left - right, ph = h - top - bottom;
-    cv::rectangle(img, cv::Rect(left, top, pw, ph), cv::Scalar(0, 0, 0), 1);
-    for (size_t s = 0; s < series.size(); ++s) {
-        std::vector<cv::Point> pts;
-        for (int b = 0; b < bins; ++b) {
-            int x0 = left + b * pw / bins, x1 = left + (b + 1) * pw / bins;
-            int y = top + ph - int(hist[s][b] / peak * (ph - 10));
-            pts.push_back({x0, y}), pts.push_back({x1, y});
-        }
-        cv::polylines(img, pts, false, colours[s % 3], 2, cv::LINE_AA);
-        cv::putText(img, series[s].first + " (" + std::to_string(series[s].second.size()) + " px)",
-                    {left + pw - 430, top + 25 + 22 * int(s)}, cv::FONT_HERSHEY_SIMPLEX, 0.55, colours[s % 3], 1,
-                    cv::LINE_AA);
-    }
-    for (int k = 0; k <= 4; ++k) {
-        char label[32];
-        std::snprintf(label, sizeof label, "%.2g", max_value * k / 4);
-        int x = left + k * pw / 4;
-        cv::line(img, {x, top + ph}, {x, top + ph + 6}, cv::Scalar(0, 0, 0));
-        cv::putText(img, label, {x - 12, top + ph + 24}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1,
-                    cv::LINE_AA);
-    }
-    cv::putText(img, title, {left, 32}, cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-    cv::putText(img, xlabel, {left + pw / 2 - 160, h - 18}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1,
-                cv::LINE_AA);
-    cv::putText(img, "fraction", {8, top + ph / 2}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-    Image out(w, h, 3);
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x)
-            for (int c = 0; c < 3; ++c) out.at(x, y, c) = img.at<cv::Vec3b>(y, x)[2 - c] / 255.0f;  // BGR drawing
-    if (!fs::path(path).parent_path().empty()) fs::create_directories(fs::path(path).parent_path());
-    write_image(path, out);
+cv::Mat saturated_mask(const cv::Mat& unit) {
+    std::vector<cv::Mat> ch;
+    cv::split(unit, ch);
+    return (ch[0] >= 0.999f) | (ch[1] >= 0.999f) | (ch[2] >= 0.999f);
 }
 
-void append_magnitudes(const cv::Mat& flow, const cv::Mat& mask, std::vector<float>* out) {
-    for (int y = 0; y < flow.rows; ++y)
-        for (int x = 0; x < flow.cols; ++x)
-            if (mask.at<uint8_t>(y, x)) {
-                cv::Vec2f f = flow.at<cv::Vec2f>(y, x);
-                out->push_back(std::hypot(f[0], f[1]));
-            }
+// The wind fitted to a measured flow, where there is cloud to track (else everywhere seen).
+Wind oracle_wind(const cv::Mat& flow, const cv::Mat& valid, const cv::Mat& cloud, double dt) {
+    cv::Mat w = valid & cloud;
+    if (cv::countNonZero(w) < 0.01 * cv::countNonZero(valid)) w = valid;
+    return fit_wind(flow, w, dt);
+}
+
+std::string fmt(const char* f, double v) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, f, v);
+    return buf;
 }
 
 }  // namespace
 
-void evaluate_cloud_model(const EvaluationOptions& o) {
+EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
     const std::vector<int> horizons = parse_int_list(o.horizons, "--horizons");
-    PhotoSequence seq = named_photo_sequence(o.sequence, o.shared.empty() ? default_shared_dir() : o.shared);
-    CloudModel model = CloudModel::load(o.model);
-    const CloudModelInfo& info = model.info();
-    const std::string split_path = (fs::path(o.model) / "split.json").string();
-    nlohmann::json split = read_json(split_path);
-    if (!split.contains(seq.name))
-        throw_file_error(split_path, "has no split for sequence '" + seq.name + "': the model was not trained on it");
-    const int lo = split[seq.name].at("heldout").at(0).get<int>();
-    int hi = split[seq.name].at("heldout").at(1).get<int>();
-    if (lo < 1 || hi > int(seq.photos.size()) || hi - lo < 2)
-        throw_file_error(split_path,
-                         "held-out range does not fit the sequence's " + std::to_string(seq.photos.size()) + " frames");
-    if (std::abs(seq.dt - info.dt) > 1e-6)
-        throw Error("the model steps " + std::to_string(info.dt) + " s but the sequence's cadence is " +
-                    std::to_string(seq.dt) + " s");
+    const std::vector<int> resolutions = parse_int_list(o.resolutions, "--res");
     const int hmax = horizons.back();
-    if (hi - lo <= hmax) throw Error("--horizons: the held-out part has only " + std::to_string(hi - lo) + " frames");
     if (o.limit < 0) throw Error("--limit: must be >= 0");
-    if (o.limit > 0) hi = std::min(hi, lo + o.limit + hmax);  // only the frames the first --limit starts need
+    if (o.import_resolution < 16 || o.import_resolution > 2048) throw Error("--import-res: must be 16..2048");
+    for (int r : resolutions)
+        if (r > o.import_resolution || o.import_resolution % r != 0)
+            throw Error("--res " + std::to_string(r) + ": must divide --import-res " + std::to_string(o.import_resolution));
+    if (o.sequence.empty() == o.photos.empty())
+        throw Error("give exactly one of --sequence (arm-tsi, arm-clear, arm-dusk, mobotix) and --photos DIR --preset P");
+    if (!o.photos.empty() && o.preset.empty()) throw Error("--photos needs --preset (arm-tsi or mobotix)");
+    PhotoSequence seq = o.sequence.empty() ? photo_sequence_from_folder(o.photos, o.preset)
+                                           : named_photo_sequence(o.sequence, o.shared.empty() ? default_shared_dir() : o.shared);
 
-    nlohmann::json mj = read_json((fs::path(o.model) / "model.json").string());
-    const int n = info.resolution;
-    const int big = o.import_resolution > 0 ? o.import_resolution : mj.value("import_resolution", 2 * n);
+    // The models.
+    const std::string folder = resolve_cloud_model(o.model);
+    AdvectResidualNetwork model = folder == "advect" ? AdvectResidualNetwork::pure_advection() : AdvectResidualNetwork::load(folder);
+    AdvectResidualNetwork advect = AdvectResidualNetwork::pure_advection(model.info().resolution, model.info().dt);
+    std::optional<CloudModel> paper;
+    if (o.paper) {
+        try {
+            paper = CloudModel::load(resolve_cloud_model("paper"));
+        } catch (const Error&) {
+            if (!o.quiet) std::fprintf(stderr, "dynsky: note: the paper's model is not installed; not scored\n");
+        }
+    }
+    const NetworkFormParams& form = model.info().form;
 
-    // The held-out frames and the one before them (the Farneback baseline's previous frame).
-    std::vector<NetworkFrame> frames, frames_big;
-    ProgressBar progress(hi - lo + 1, "import held-out frames", o.quiet);
-    for (int k = lo - 1; k < hi; ++k) {
-        frames_big.push_back(network_frame_from_photo(seq.photos[k], seq.preset, big, big, info.form));
-        frames.push_back(resample_frame(frames_big.back(), n));
+    // Which start frames: the held-out part of a sequence the model was trained on, else all.
+    const int count = int(seq.photos.size());
+    int first = 1, last = count - 1 - hmax;
+    std::string part = "every frame (the model was not trained on this sequence)";
+    if (!o.frames.empty()) {
+        int a = 0, b = 0;
+        std::stringstream ss(o.frames);
+        char dash = 0;
+        if (!(ss >> a) || (ss >> dash && (dash != '-' || !(ss >> b)))) throw Error("--frames '" + o.frames + "': expected A-B");
+        if (!dash) b = a;
+        first = std::max(1, a), last = std::min(last, b);
+        part = "start frames " + o.frames + " (--frames)";
+    } else if (folder != "advect") {
+        const std::string split_path = (fs::path(folder) / "split.json").string();
+        if (fs::exists(split_path)) {
+            nlohmann::json split = read_json(split_path);
+            if (split.contains(seq.name) && split[seq.name].contains("heldout")) {
+                first = std::max(1, split[seq.name]["heldout"].at(0).get<int>());
+                last = std::min(last, split[seq.name]["heldout"].at(1).get<int>() - 1 - hmax);
+                part = "the held-out frames of the model's split.json (last in time, never trained on or used to choose)";
+            }
+        }
+    }
+    if (o.limit > 0) last = std::min(last, first + o.limit - 1);
+    if (last < first)
+        throw Error(seq.folder + ": too few frames to score horizon " + std::to_string(hmax) + " (" +
+                    std::to_string(count) + " frames)");
+
+    // Import the frames needed (first - 1 .. last + hmax) once, at the import resolution.
+    const int big = o.import_resolution;
+    std::vector<NetworkFrame> frames;
+    ProgressBar progress(last + hmax - first + 2, "import " + seq.name, o.quiet);
+    for (int k = first - 1; k <= last + hmax; ++k) {
+        frames.push_back(network_frame_from_photo(seq.photos[size_t(k)], seq.preset, big, big, form));
         progress.advance();
     }
     progress.finish();
-    auto frame = [&](int k) -> const NetworkFrame& { return frames[k - (lo - 1)]; };
-    auto frame_big = [&](int k) -> const NetworkFrame& { return frames_big[k - (lo - 1)]; };
+    auto frame = [&](int k) -> const NetworkFrame& { return frames[size_t(k - (first - 1))]; };
 
-    std::map<int, Scores> sm, sp, sf;
-    std::vector<float> real_mag, rollout_mag, flownet_mag;
-    ProgressBar progress2(hi - hmax - lo, "evaluate", o.quiet);
-    // The flow of the pair ending at t (the baseline's) is the one measured from t at the step before.
-    cv::Mat flow = lo + hmax < hi ? flow_at_resolution(farneback_flow(frame_big(lo - 1).image, frame_big(lo).image), n)
-                                  : cv::Mat();
-    for (int t = lo; t + hmax < hi; ++t) {
-        cv::Mat next_flow = flow_at_resolution(farneback_flow(frame_big(t).image, frame_big(t + 1).image), n);
-        append_magnitudes(next_flow, frame(t).cloud & frame(t).valid & frame(t + 1).valid, &real_mag);
-        cv::Mat state = frame(t).image;
-        for (int h = 1; h <= hmax; ++h) {
-            NetworkStep s = model.step_network(state);
-            if (h == 1) append_magnitudes(model.decode_flow(s.flow), frame(t).cloud & frame(t).valid, &flownet_mag);
-            append_magnitudes(farneback_flow(state, s.next), network_cloud_mask(state, info.form) & frame(t).valid,
-                              &rollout_mag);
-            state = s.next;
-            if (!std::binary_search(horizons.begin(), horizons.end(), h)) continue;
-            const cv::Mat& truth = frame(t + h).image;
-            const cv::Mat mask = frame(t + h).valid & frame(t).valid;
-            sm[h].add(compare_images(state, truth, mask));
-            sp[h].add(compare_images(frame(t).image, truth, mask));
-            sf[h].add(compare_images(advect_by_flow(frame(t).image, flow, h), truth, mask));
+    EvaluationResult result;
+    result.sequence = seq.name;
+    result.first = first, result.last = last, result.dt = seq.dt;
+    result.methods = {"persistence", "farneback", "advect+prev", "model+prev", "model+wind"};
+    if (paper) result.methods.push_back("paper");
+    if (std::getenv("DYNSKY_EVAL_EXPERIMENTS"))
+        for (const char* m : {"advect+prevwind", "advect+smooth", "advect+mix"}) result.methods.push_back(m);
+    std::map<int, std::map<int, std::map<std::string, Accumulator>>> acc;
+    // Farneback flows of consecutive pairs at the import resolution, computed once.
+    std::map<int, cv::Mat> pair_flow;
+    auto flow_from = [&](int k) -> const cv::Mat& {  // k -> k + 1
+        auto it = pair_flow.find(k);
+        if (it == pair_flow.end()) it = pair_flow.emplace(k, farneback_flow(frame(k).image, frame(k + 1).image)).first;
+        return it->second;
+    };
+    ProgressBar progress2(long(last - first + 1) * long(resolutions.size()), "evaluate", o.quiet);
+    for (int r : resolutions) {
+        for (int t = first; t <= last; ++t) {
+            std::vector<NetworkFrame> f;
+            for (int k = t - 1; k <= t + hmax; ++k) f.push_back(resample_frame(frame(k), r));
+            auto at = [&](int k) -> const NetworkFrame& { return f[size_t(k - (t - 1))]; };
+            const cv::Mat prev_flow = flow_at_resolution(flow_from(t - 1), r);
+            const cv::Mat prev_motion = flow_at_resolution(smooth_motion(flow_from(t - 1)), r);  // the models' estimate
+            const cv::Mat next_flow = flow_at_resolution(flow_from(t), r);
+            cv::Mat start = at(t).image.clone();
+            fill_saturated_pixels(&start);
+            const cv::Mat wind = wind_flow(r, oracle_wind(next_flow, at(t).valid, at(t).cloud, seq.dt), seq.dt);
+            std::map<std::string, std::vector<cv::Mat>> pred;
+            auto collect = [&](const std::string& name) {
+                return [&pred, name](int, const cv::Mat& s) { pred[name].push_back(s.clone()); };
+            };
+            advect.rollout_network_form(start, prev_motion, hmax, collect("advect+prev"));
+            if (std::getenv("DYNSKY_EVAL_EXPERIMENTS")) {
+                const cv::Mat prev_wind = wind_flow(r, oracle_wind(prev_flow, at(t - 1).valid, at(t - 1).cloud, seq.dt), seq.dt);
+                advect.rollout_network_form(start, prev_wind, hmax, collect("advect+prevwind"));
+                cv::Mat smooth;
+                cv::GaussianBlur(prev_flow, smooth, cv::Size(0, 0), r / 32.0);
+                advect.rollout_network_form(start, smooth, hmax, collect("advect+smooth"));
+                cv::Mat mix = 0.5 * smooth + 0.5 * prev_wind;
+                advect.rollout_network_form(start, mix, hmax, collect("advect+mix"));
+            }
+            model.rollout_network_form(start, prev_motion, hmax, collect("model+prev"));
+            model.rollout_network_form(start, wind, hmax, collect("model+wind"));
+            if (paper && r == paper->info().resolution) {
+                cv::Mat s = start;
+                for (int h = 1; h <= hmax; ++h) pred["paper"].push_back(s = paper->step_network(s).next);
+            }
+            const cv::Mat sat_t = saturated_mask(at(t).image);
+            for (int h : horizons) {
+                const cv::Mat& truth = at(t + h).image;
+                const cv::Mat mask = at(t + h).valid & at(t).valid & ~sat_t & ~saturated_mask(truth);
+                if (cv::countNonZero(mask) == 0) continue;
+                acc[r][h]["persistence"].add(compare_images(at(t).image, truth, mask));
+                acc[r][h]["farneback"].add(compare_images(warp_in_disc(at(t).image, prev_flow * double(h)), truth, mask));
+                for (const auto& [name, list] : pred) acc[r][h][name].add(compare_images(list[size_t(h - 1)], truth, mask));
+            }
+            progress2.advance();
         }
-        flow = next_flow;
-        progress2.advance();
     }
     progress2.finish();
+    for (auto& [r, by_h] : acc)
+        for (auto& [h, by_m] : by_h)
+            for (auto& [m, a] : by_m) result.scores[r][h][m] = a.mean();
 
-    std::ostringstream md;
-    char line[512];
-    md << "# Cloud model evaluation: " << info.name << " on " << seq.name << " (held-out frames)\n\n";
-    md << "Written by `dynsky sky evaluate --model " << o.model << " --sequence " << o.sequence << " --horizons "
-       << o.horizons << "`.\n\n";
-    std::snprintf(line, sizeof line,
-                  "Held-out frames %d..%d of %zu (the last part in time, from the model's split.json); "
-                  "Delta t = %g s; images compared at the model's %d x %d in the networks' [0, 1] form, "
-                  "inside the sky disc minus pixels the camera could not see (arm, shadow band); PSNR and SSIM "
-                  "are means of per-frame values. Model: %d recursive steps from the real frame. Persistence: the "
-                  "frame itself. Farneback: the frame advected h times by the flow of the previous pair "
-                  "(computed at %d px).\n\n",
-                  lo, hi - 1, seq.photos.size(), info.dt, n, n, hmax, big);
-    md << line;
-    md << "| horizon | ahead | model PSNR | model SSIM | persistence PSNR | persistence SSIM | Farneback PSNR | "
-          "Farneback SSIM | model MSE | persistence MSE | Farneback MSE | frames |\n";
-    md << "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-    for (int h : horizons) {
-        std::snprintf(line, sizeof line,
-                      "| %d | %g s | %.2f dB | %.3f | %.2f dB | %.3f | %.2f dB | %.3f | %.5f | %.5f | %.5f | %zu |\n",
-                      h, h * info.dt, Scores::mean(sm[h].psnr), Scores::mean(sm[h].ssim),
-                      Scores::mean(sp[h].psnr), Scores::mean(sp[h].ssim), Scores::mean(sf[h].psnr),
-                      Scores::mean(sf[h].ssim), Scores::mean(sm[h].mse), Scores::mean(sp[h].mse),
-                      Scores::mean(sf[h].mse), sm[h].psnr.size());
-        md << line;
+    // The report.
+    std::ostringstream md, csv;
+    csv << "resolution,horizon,ahead_s,method,psnr_db,ssim,mse,frames\n";
+    md << "# Cloud model evaluation: " << (folder == "advect" ? "advect" : model.info().name) << " on " << seq.name << "\n\n";
+    md << "Photographs: `" << seq.folder << "` (" << count << " frames every " << seq.dt << " s, preset " << seq.preset
+       << "); scored: " << part << ", start frames " << first << ".." << last << ". Imported at " << big
+       << " px and area-averaged to each resolution; network form; pixels seen in both frames and not saturated. "
+          "PSNR/SSIM: means of per-frame values. farneback = the previous pair's flow applied h times (one warp by h F, "
+          "with the rim extended so it never pulls in black); "
+          "model+wind = from one frame with the wind fitted to the following pair's measured motion.\n\n";
+    for (int r : resolutions) {
+        md << "## " << r << " px\n\n| horizon | ahead |";
+        for (const std::string& m : result.methods)
+            if (!result.scores[r].empty() && result.scores[r].begin()->second.count(m)) md << " " << m << " PSNR |";
+        md << " frames |\n|---:|---:|";
+        for (const std::string& m : result.methods)
+            if (!result.scores[r].empty() && result.scores[r].begin()->second.count(m)) md << "---:|";
+        md << "---:|\n";
+        std::ostringstream chart_csv;
+        chart_csv << "horizon (steps)";
+        for (const std::string& m : result.methods)
+            if (!result.scores[r].empty() && result.scores[r].begin()->second.count(m)) chart_csv << "," << m;
+        chart_csv << "\n";
+        for (int h : horizons) {
+            auto& by_m = result.scores[r][h];
+            md << "| " << h << " | " << h * seq.dt << " s |";
+            chart_csv << h;
+            int frames_scored = 0;
+            for (const std::string& m : result.methods) {
+                if (!by_m.count(m)) continue;
+                const MethodScore& s = by_m[m];
+                md << " " << fmt("%.2f", s.psnr) << " dB |";
+                chart_csv << "," << fmt("%.4f", s.psnr);
+                csv << r << ',' << h << ',' << h * seq.dt << ',' << m << ',' << fmt("%.4f", s.psnr) << ','
+                    << fmt("%.5f", s.ssim) << ',' << fmt("%.7f", s.mse) << ',' << s.frames << '\n';
+                frames_scored = s.frames;
+            }
+            md << " " << frames_scored << " |\n";
+            chart_csv << "\n";
+        }
+        // Verdicts: the model against each baseline, at every horizon.
+        auto beats = [&](const std::string& a, const std::string& b) {
+            std::string out;
+            bool all = true;
+            for (int h : horizons) {
+                auto& by_m = result.scores[r][h];
+                if (!by_m.count(a) || !by_m.count(b)) return std::string("n/a");
+                const double d = by_m[a].psnr - by_m[b].psnr;
+                all = all && d > 0;
+                out += (out.empty() ? "" : ", ") + fmt("%+.2f dB", d);
+            }
+            return std::string(all ? "yes" : "NO") + " (" + out + ")";
+        };
+        md << "\nmodel+prev beats farneback at every horizon: " << beats("model+prev", "farneback")
+           << "; model+wind beats persistence at every horizon: " << beats("model+wind", "persistence") << ".\n\n";
+        const std::string base = fs::path(o.report).replace_extension("").string() + "_" + std::to_string(r);
+        write_file_atomic(base + ".csv", chart_csv.str());
+        make_line_chart(base + ".csv", base + ".png", seq.name + ", " + std::to_string(r) + " px: PSNR against horizon",
+                        "steps ahead", "PSNR (dB)", false);
+        md << "![PSNR against horizon at " << r << " px](" << fs::path(base + ".png").filename().string() << ")\n\n";
     }
-    auto median_or_0 = [](const std::vector<float>& v) { return v.empty() ? 0.0f : median(v); };
-    std::snprintf(line, sizeof line,
-                  "\nFlow magnitude on cloud pixels, pixels per step at %d px (median): real frames (Farneback) %.3f, "
-                  "model rollout frames (Farneback) %.3f, FlowNet output %.3f. Histogram: `%s`.\n",
-                  n, median_or_0(real_mag), median_or_0(rollout_mag), median_or_0(flownet_mag), o.histogram.c_str());
-    md << line;
-    float top = std::max({median_or_0(real_mag), median_or_0(rollout_mag), median_or_0(flownet_mag), 0.05f}) * 4.0f;
-    draw_histogram(o.histogram, "Cloud motion per step, " + seq.name + " held-out (" + info.name + ")",
-                   "flow magnitude on cloud pixels (px per step at " + std::to_string(n) + " px)", top,
-                   {{"real frames (Farneback)", real_mag},
-                    {"model rollout (Farneback)", rollout_mag},
-                    {"FlowNet output", flownet_mag}});
-    write_file_atomic(o.report, md.str());
-    if (!o.quiet) std::printf("%s\nwrote %s and %s\n", md.str().c_str(), o.report.c_str(), o.histogram.c_str());
+    // The paper's table: MSE, PSNR and SSIM one step ahead.
+    md << "## One step ahead (the paper's table)\n\n| resolution | method | MSE | PSNR | SSIM |\n|---:|---|---:|---:|---:|\n";
+    for (int r : resolutions)
+        for (const std::string& m : result.methods)
+            if (result.scores[r].count(1) && result.scores[r][1].count(m)) {
+                const MethodScore& s = result.scores[r][1][m];
+                md << "| " << r << " | " << m << " | " << fmt("%.5f", s.mse) << " | " << fmt("%.2f dB", s.psnr) << " | "
+                   << fmt("%.3f", s.ssim) << " |\n";
+            }
+    result.markdown = md.str();
+    if (!fs::path(o.report).parent_path().empty()) fs::create_directories(fs::path(o.report).parent_path());
+    write_file_atomic(fs::path(o.report).replace_extension(".csv").string(), csv.str());
+    write_file_atomic(o.report, result.markdown);
+    if (!o.quiet) std::printf("%s\nwrote %s\n", result.markdown.c_str(), o.report.c_str());
+    return result;
 }
 
 }  // namespace dynsky

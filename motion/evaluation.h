@@ -1,20 +1,64 @@
-// The evaluation protocol of cloud models: a model's recursive rollout against persistence and
-// Farneback extrapolation (motion/metrics.h) on the held-out (last, in time) frames of a photo
-// sequence (motion/photo_sequence.h), all from the same frames in one run: MSE, PSNR and SSIM per
-// horizon as a markdown table, and a histogram of cloud motion (real vs rollout vs FlowNet).
+// The evaluation protocol of cloud models (`dynsky sky evaluate`): on real photo sequences, every
+// method predicts from the same frames in one run and is scored against the real frames h steps
+// later, at several resolutions, in the network form (motion/network_form.h):
+//
+//   persistence     the frame itself
+//   farneback       the frame advected by h times the Farneback flow of the previous pair (the
+//                   stronger, iterated form of two-frame extrapolation), in one warp with the rim
+//                   extended (motion/advection.h warp_in_disc), so it never pulls in black
+//   advect+prev     pure advection along the models' motion estimate of the previous pair (that flow
+//                   smoothed: motion/flow.h smooth_motion), stepped h times (no network)
+//   model+prev      the advect-residual model given the previous frame (that motion, fixed)
+//   model+wind      the same model from one frame and the true wind: the uniform wind fitted to the
+//                   measured motion of the following pair (an oracle for "the wind is known")
+//   paper           the paper's FlowNet + CloudNet from one frame (at its own 64 px only)
+//
+// Frames are imported with the camera preset (sky/preset_import.h) at the import resolution and
+// area-averaged to each resolution; scored pixels: seen in both frames (not the arm, band or masts)
+// and not saturated in either (the sun, which every model puts back from the input). PSNR and SSIM
+// are means of per-frame values (motion/metrics.h). Which frames: the model's held-out part
+// (split.json) for a sequence it was trained on, else every frame, or --frames.
 #pragma once
 
+#include <map>
 #include <string>
+#include <vector>
 
 namespace dynsky {
 
+// Parameters (defaults): model "auto" (motion/network_step_model.h resolve_cloud_model); a named
+// sequence (motion/photo_sequence.h) or a folder of photos with its preset; shared "" (the default
+// shared folder); horizons "1,2,6"; resolutions "64,256"; frames "" (see above; "A-B": start frames
+// A..B of the sequence); report "evaluation.md" (with .csv and _RES.png charts beside it);
+// import_resolution 256; limit 0 (all start frames; K: only the first K); paper true (also the
+// paper's model when installed); quiet false.
 struct EvaluationOptions {
-    std::string model, sequence, shared, horizons = "1,2,3,6", report = "docs/networks-evaluation.md",
-                                         histogram = "docs/networks-flow-histogram.png";
-    int import_resolution = 0, limit = 0;
+    std::string model = "auto";
+    std::string sequence, photos, preset, shared;
+    std::string horizons = "1,2,6", resolutions = "64,256", frames;
+    std::string report = "evaluation.md";
+    int import_resolution = 256, limit = 0;
+    bool paper = true;
     bool quiet = false;
 };
 
-void evaluate_cloud_model(const EvaluationOptions& o);
+struct MethodScore {
+    double mse = 0, psnr = 0, ssim = 0;
+    int frames = 0;
+};
+
+struct EvaluationResult {
+    std::string sequence;
+    int first = 0, last = 0;  // start frames scored
+    double dt = 0;
+    std::vector<std::string> methods;
+    // resolution -> horizon -> method -> score
+    std::map<int, std::map<int, std::map<std::string, MethodScore>>> scores;
+    std::string markdown;
+};
+
+// Scores and writes the report (markdown, CSV, charts). Throws dynsky::Error before writing
+// anything for bad options, a folder without a regular sequence, or too few frames.
+EvaluationResult evaluate_cloud_model(const EvaluationOptions& o);
 
 }  // namespace dynsky

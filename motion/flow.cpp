@@ -144,6 +144,12 @@ cv::Mat rotation_flow(int n, const Vec3d& axis, double angle) {
     return flow;
 }
 
+cv::Mat smooth_motion(const cv::Mat& flow) {
+    cv::Mat out;
+    cv::GaussianBlur(flow, out, cv::Size(0, 0), flow.rows / 32.0, flow.rows / 32.0, cv::BORDER_REPLICATE);
+    return out;
+}
+
 cv::Mat flow_at_resolution(const cv::Mat& flow, int n) {
     if (flow.rows == n) return flow;
     cv::Mat small;

@@ -79,6 +79,13 @@ cv::Mat wind_flow(int n, const Wind& wind, double dt);
 // fitting a "true wind" to real motion.
 Wind fit_wind(const cv::Mat& flow, const cv::Mat& weight, double dt, double cloud_height_m = 1500.0);
 
+// The motion estimate of a previous frame as the cloud models use it: the flow Gaussian-smoothed
+// with sigma = N / 32 (2 px at 64). Farneback's field is noisy where there is little to track (clear
+// sky, flat overcast); smoothing keeps the clouds' common motion and drops the noise, which
+// otherwise shuffles a static background (measured: +0.37 dB one step ahead on held-out ARM frames,
+// never worse on the four real sequences; docs/networks.md).
+cv::Mat smooth_motion(const cv::Mat& flow);
+
 // A flow field measured at another resolution, area-averaged (or resized) to N and rescaled to
 // N's pixels.
 cv::Mat flow_at_resolution(const cv::Mat& flow, int n);

@@ -4,7 +4,10 @@
 #include <filesystem>
 #include <fstream>
 
+#include "sky/photo_import.h"
+#include "sky/sun_position.h"
 #include "util/data_path.h"
+#include "util/math.h"
 #include "util/error.h"
 
 namespace dynsky {
@@ -21,18 +24,24 @@ std::string default_shared_dir() {
 }
 
 PhotoSequence named_photo_sequence(const std::string& name, const std::string& shared_dir) {
+    // name (as in data sets and split.json), CLI spelling, preset, folder in shared/skies, cadence.
+    struct Known {
+        const char *name, *spelling, *preset, *folder;
+        double dt;
+    };
+    static const Known known[] = {
+        {"arm_tsi", "arm-tsi", "arm-tsi", "arm_tsi_sgp_20170524", 30.0},
+        {"arm_clear", "arm-clear", "arm-tsi", "arm_tsi_sgp_20170524_clear_morning", 30.0},
+        {"arm_dusk", "arm-dusk", "arm-tsi", "arm_tsi_sgp_20170524_overcast_dusk", 30.0},
+        {"mobotix", "mobotix", "mobotix", "mobotix_sophia_20200812_morning", 60.0},
+    };
     PhotoSequence s;
-    if (name == "arm-tsi" || name == "arm_tsi") {
-        s = {"arm_tsi", "arm-tsi", (fs::path(shared_dir) / "skies" / "arm_tsi_sgp_20170524").string(), 30.0, {}};
-    } else if (name == "mobotix") {
-        s = {"mobotix",
-             "mobotix",
-             (fs::path(shared_dir) / "skies" / "mobotix_sophia_20200812_morning").string(),
-             60.0,
-             {}};
-    } else {
-        throw Error("--sequence: unknown sequence '" + name + "' (known: arm-tsi, mobotix)");
-    }
+    for (const Known& k : known)
+        if (name == k.name || name == k.spelling)
+            s = {k.name, k.preset, (fs::path(shared_dir) / "skies" / k.folder).string(), k.dt, {}};
+    if (s.name.empty())
+        throw Error("--sequence: unknown sequence '" + name +
+                    "' (known: arm-tsi, arm-clear, arm-dusk, mobotix; or give any folder with --photos and --preset)");
     const std::string csv = (fs::path(s.folder) / "frames.csv").string();
     if (fs::exists(csv)) {
         std::ifstream f(csv);
@@ -48,6 +57,48 @@ PhotoSequence named_photo_sequence(const std::string& name, const std::string& s
         throw_file_error(s.folder, "sequence folder not found (give the shared data folder with --shared)");
     }
     if (s.photos.size() < 2) throw_file_error(s.folder, "fewer than two frames");
+    return s;
+}
+
+PhotoSequence photo_sequence_from_folder(const std::string& folder, const std::string& preset) {
+    if (!fs::is_directory(folder)) throw_file_error(folder, "not a folder of photographs");
+    const CameraPreset cam = camera_preset(preset);  // throws listing the presets
+    fs::path dir = fs::is_directory(fs::path(folder) / "images") ? fs::path(folder) / "images" : fs::path(folder);
+    std::vector<std::pair<double, std::string>> timed;
+    for (const auto& e : fs::directory_iterator(dir)) {
+        if (!e.is_regular_file()) continue;
+        std::string ext = e.path().extension().string();
+        for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+        if (ext != ".jpg" && ext != ".jpeg" && ext != ".png") continue;
+        const std::string time = time_from_file_name(e.path().string(), cam.filename_utc_offset_hours);
+        if (time.empty())
+            throw_file_error(e.path().string(), "the file name carries no time (expected ..._YYYYMMDDhhmmssZ.jpg or "
+                                                "YYYY-MM-DD_hh_mm.jpg)");
+        timed.emplace_back(julian_date(parse_utc_time(time)) * 86400.0, e.path().string());
+    }
+    if (timed.empty()) throw_file_error(dir.string(), "no photographs (.jpg, .jpeg, .png) in this folder");
+    if (timed.size() < 3) throw_file_error(dir.string(), "fewer than three photographs: nothing to predict and score");
+    std::sort(timed.begin(), timed.end());
+    std::vector<double> gaps;
+    for (size_t k = 1; k < timed.size(); ++k) gaps.push_back(timed[k].first - timed[k - 1].first);
+    const double cadence = median(gaps);
+    for (size_t k = 1; k < timed.size(); ++k) {
+        const double gap = timed[k].first - timed[k - 1].first;
+        if (gap < 0.5)
+            throw_file_error(timed[k].second, "has the same time as " + fs::path(timed[k - 1].second).filename().string());
+        if (std::abs(gap - cadence) > std::max(1.0, 0.02 * cadence))
+            throw_file_error(timed[k].second, "comes " + std::to_string(long(std::lround(gap))) + " s after " +
+                                                  fs::path(timed[k - 1].second).filename().string() +
+                                                  ", but the cadence is " + std::to_string(long(std::lround(cadence))) +
+                                                  " s (mixed cadence or missing frames: give a folder of one regular sequence)");
+    }
+    PhotoSequence s;
+    s.name = fs::path(folder).filename().string();
+    if (s.name.empty()) s.name = fs::path(folder).parent_path().filename().string();
+    s.preset = preset;
+    s.folder = folder;
+    s.dt = std::round(cadence);
+    for (auto& [t, p] : timed) s.photos.push_back(p);
     return s;
 }
 

@@ -19,6 +19,13 @@ struct PhotoSequence {
 // unknown name or a missing folder.
 PhotoSequence named_photo_sequence(const std::string& name, const std::string& shared_dir);
 
+// Any folder of photographs of one camera preset (JPEG/PNG in the folder or its images/ sub-folder),
+// ordered by the times their file names carry (sky/photo_import.h time_from_file_name, on the
+// preset's clock). The cadence is the median gap. Throws dynsky::Error naming the folder when it
+// holds no photographs, a name carries no time, two photographs share a time, or the gaps are not
+// all the cadence (mixed cadence or missing frames: the first offending pair is named).
+PhotoSequence photo_sequence_from_folder(const std::string& folder, const std::string& preset);
+
 // The shared data folder beside the source tree (the tests' ../shared).
 std::string default_shared_dir();
 

@@ -1,7 +1,10 @@
 // End-to-end tests of `dynsky sky predict | evaluate | training-data`.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <map>
+#include <vector>
 #include <fstream>
 #include <sstream>
 
@@ -76,33 +79,101 @@ TEST(SkyModelCli, PredictBadInputsFailClearlyAndWriteNothing) {
     fs::remove_all(dir);
 }
 
-TEST(SkyModelCli, EvaluateWritesTheTableWithBothBaselines) {
-    DYNSKY_REQUIRE_SHARED();
-    const std::string dir = test::temp_dir("evaluate");
-    auto r = test::run_command(dynsky("sky evaluate --quiet --model " + shipped_model() +
-                                      " --sequence arm-tsi --horizons 1,2 --limit 3 --shared " + test::shared_path("") +
-                                      " --report " + dir + "/eval.md --histogram " + dir + "/hist.png"));
-    ASSERT_EQ(r.exit_code, 0) << r.output;
-    std::ifstream f(dir + "/eval.md");
+// A folder of `count` consecutive ARM photographs (links), skipping the frames in `skip`.
+std::string photo_folder(const std::string& dir, int count, std::vector<int> skip = {}) {
+    const std::string src = test::shared_path("skies/arm_tsi_sgp_20170524/images");
+    std::vector<fs::path> all;
+    for (const auto& e : fs::directory_iterator(src)) all.push_back(e.path());
+    std::sort(all.begin(), all.end());
+    fs::create_directories(dir);
+    for (int k = 0; k < count; ++k)
+        if (std::find(skip.begin(), skip.end(), k) == skip.end()) fs::create_symlink(all[size_t(100 + k)], fs::path(dir) / all[size_t(100 + k)].filename());
+    return dir;
+}
+
+std::string read_text(const std::string& path) {
+    std::ifstream f(path);
     std::stringstream ss;
     ss << f.rdbuf();
-    const std::string md = ss.str();
+    return ss.str();
+}
+
+TEST(SkyModelCli, EvaluateScoresAnyFolderOfPhotosWithEveryMethod) {
+    DYNSKY_REQUIRE_SHARED();
+    const std::string dir = test::temp_dir("evaluate");
+    const std::string photos = photo_folder(dir + "/photos", 6);
+    auto r = test::run_command(dynsky("sky evaluate --quiet --model advect --no-paper --photos " + photos +
+                                      " --preset arm-tsi --horizons 1,2 --res 64 --report " + dir + "/eval.md"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const std::string md = read_text(dir + "/eval.md");
     EXPECT_NE(md.find("| 1 | 30 s |"), std::string::npos) << md;
     EXPECT_NE(md.find("| 2 | 60 s |"), std::string::npos) << md;
-    EXPECT_NE(md.find("Farneback PSNR"), std::string::npos) << md;
-    EXPECT_NE(md.find("persistence PSNR"), std::string::npos) << md;
+    for (const char* m : {"persistence PSNR", "farneback PSNR", "advect+prev PSNR", "model+prev PSNR", "model+wind PSNR",
+                          "One step ahead (the paper's table)", "| 64 | farneback |"})
+        EXPECT_NE(md.find(m), std::string::npos) << m << "\n" << md;
     EXPECT_EQ(md.find("nan"), std::string::npos) << md;
-    EXPECT_TRUE(fs::exists(dir + "/hist.png"));
+    // Six frames, horizons up to 2: start frames 1..3 (each needs the previous frame and two after).
+    EXPECT_NE(md.find("start frames 1..3"), std::string::npos) << md;
+    // The clouds of the ARM day move: any motion estimate beats persistence one step ahead.
+    std::map<std::string, double> psnr1;
+    std::stringstream csv(read_text(dir + "/eval.csv"));
+    std::string line;
+    std::getline(csv, line);
+    while (std::getline(csv, line)) {
+        std::vector<std::string> f;
+        std::stringstream ls(line);
+        for (std::string x; std::getline(ls, x, ',');) f.push_back(x);
+        ASSERT_EQ(f.size(), 8u) << line;
+        if (f[1] == "1") psnr1[f[3]] = std::stod(f[4]);
+    }
+    EXPECT_GT(psnr1["farneback"], psnr1["persistence"] + 1.0);
+    EXPECT_GT(psnr1["model+wind"], psnr1["persistence"] + 1.0);
+    fs::remove_all(dir);
+}
+
+TEST(SkyModelCli, EvaluateRejectsFoldersWithoutOneRegularSequence) {
+    DYNSKY_REQUIRE_SHARED();
+    const std::string dir = test::temp_dir("evaluate_bad");
+    fs::create_directories(dir + "/empty");
+    struct Case {
+        std::string folder, message;
+    } cases[] = {
+        {dir + "/empty", "no photographs"},
+        {photo_folder(dir + "/gap", 8, {4}), "missing frames"},
+        {photo_folder(dir + "/two", 2), "fewer than three photographs"},
+    };
+    for (const Case& c : cases) {
+        auto r = test::run_command(dynsky("sky evaluate --quiet --model advect --photos " + c.folder +
+                                          " --preset arm-tsi --report " + dir + "/eval.md 2>&1"));
+        EXPECT_EQ(r.exit_code, 1) << c.folder;
+        EXPECT_NE(r.output.find(c.message), std::string::npos) << c.folder << ": " << r.output;
+        EXPECT_FALSE(fs::exists(dir + "/eval.md")) << c.folder;
+    }
+    // A file whose name carries no time.
+    fs::create_directories(dir + "/untimed");
+    fs::copy_file(test::shared_path("skies/wsiseg/images/ASC100-1006_001.png"), dir + "/untimed/sky.png");
+    auto r = test::run_command(dynsky("sky evaluate --model advect --photos " + dir + "/untimed --preset arm-tsi 2>&1"));
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.output.find("carries no time"), std::string::npos) << r.output;
     fs::remove_all(dir);
 }
 
 TEST(SkyModelCli, EvaluateRejectsBadArguments) {
-    auto r = test::run_command(dynsky("sky evaluate --model " + shipped_model() + " --sequence nowhere"));
+    auto r = test::run_command(dynsky("sky evaluate --model advect --sequence nowhere"));
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.output.find("unknown sequence 'nowhere'"), std::string::npos) << r.output;
-    r = test::run_command(dynsky("sky evaluate --model " + shipped_model() + " --sequence arm-tsi --horizons 1,x"));
+    r = test::run_command(dynsky("sky evaluate --model advect --sequence arm-tsi --horizons 1,x"));
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.output.find("--horizons: 'x'"), std::string::npos) << r.output;
+    r = test::run_command(dynsky("sky evaluate --model advect"));
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.output.find("exactly one of --sequence"), std::string::npos) << r.output;
+    r = test::run_command(dynsky("sky evaluate --model advect --photos /tmp"));
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.output.find("--preset"), std::string::npos) << r.output;
+    r = test::run_command(dynsky("sky evaluate --model advect --sequence arm-tsi --res 100"));
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.output.find("--res 100"), std::string::npos) << r.output;
 }
 
 TEST(SkyModelCli, TrainingDataImportsExactlyAsSkyImport) {
