@@ -7,8 +7,12 @@
 #include <benchmark/benchmark.h>
 #include <opencv2/core.hpp>
 
-#include <cstdlib>
+#include <tbb/global_control.h>
 
+#include <cstdlib>
+#include <memory>
+
+#include "motion/advect_residual.h"
 #include "motion/cloud_model.h"
 #include "sky/fisheye.h"
 #include "sky/procedural_clouds.h"
@@ -72,6 +76,53 @@ void BM_SkyStep512(benchmark::State& state) {
     for (auto _ : state) benchmark::DoNotOptimize(model().step(sky).rgb.data());
 }
 BENCHMARK(BM_SkyStep512)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The default model (advect-residual, networks/models/advect_residual): one medium step of a whole
+// sky as the timeline runs it (the HDR maps, warp at the sky's resolution with the background
+// compensation, the network at 64 px and its correction, the sun put back), with the motion already
+// measured (it is fixed after the first step). Goal: 1024 px in at most 250 ms on 2 cores.
+AdvectResidualNetwork& advect_model() {
+    static AdvectResidualNetwork m = [] {
+        const char* env = std::getenv("DYNSKY_ADVECT_MODEL");
+        return AdvectResidualNetwork::load(env && *env ? std::string(env) : data_path("networks/models/advect_residual"));
+    }();
+    return m;
+}
+
+void BM_AdvectResidualSkyStep(benchmark::State& state) {
+    const int n = int(state.range(0));
+    cv::setNumThreads(int(state.range(1)));
+    tbb::global_control threads(tbb::global_control::max_allowed_parallelism, size_t(state.range(1)));
+    SkyImage sky = test_sky(n);
+    CloudMotion motion;
+    motion.wind = Wind{250, 10, 1500};
+    AdvectResidualStepModel model(advect_model(), motion);
+    std::vector<std::shared_ptr<const SkyImage>> history{std::make_shared<const SkyImage>(sky)};
+    model.step(history, 30.0);  // measures the motion once
+    for (auto _ : state) benchmark::DoNotOptimize(model.step(history, 30.0).rgb.data());
+    state.counters["resolution"] = n;
+    state.counters["threads"] = double(state.range(1));
+}
+BENCHMARK(BM_AdvectResidualSkyStep)
+    ->Args({256, 2})
+    ->Args({512, 2})
+    ->Args({1024, 1})
+    ->Args({1024, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// The motion from a previous frame (Farneback at 256 on the network form, smoothed), once per run.
+void BM_MotionFromPreviousFrame1024(benchmark::State& state) {
+    cv::setNumThreads(2);
+    ProceduralSkyParams p;
+    p.seed = 3;
+    p.coverage = 0.5;
+    p.clear_sky.sun_direction = fisheye::direction_from_angles(0.7, 2.5);
+    ProceduralSky sky(p);
+    SkyImage a = sky.render(0.0, 1024), b = sky.render(30.0, 1024);
+    for (auto _ : state) benchmark::DoNotOptimize(network_form_flow(a, b, advect_model().info().form, 1024).data);
+}
+BENCHMARK(BM_MotionFromPreviousFrame1024)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace dynsky

@@ -54,6 +54,7 @@ AdvectResidualNetwork AdvectResidualNetwork::load(const std::string& folder) {
         info.import_resolution = j.value("import_resolution", 4 * info.resolution);
         info.dt = j.at("dt_s").get<double>();
         info.flow_scale = j.value("flow_scale", 0.08);
+        info.compensated = j.value("base", std::string("warp")) == "compensated";
         info.form.unit_map.scale = j.value("unit_scale", info.form.unit_map.scale);
         info.form.unit_map.max_radiance = j.value("unit_max", info.form.unit_map.max_radiance);
         info.form.cloud_rule.rule = parse_cloud_rule(j.value("cloud_rule", std::string("rb")));
@@ -82,7 +83,8 @@ AdvectResidualNetwork AdvectResidualNetwork::load(const std::string& folder) {
     return m;
 }
 
-cv::Mat AdvectResidualNetwork::network_input(const cv::Mat& image, const cv::Mat& flow) const {
+cv::Mat AdvectResidualNetwork::network_input(const cv::Mat& image, const cv::Mat& flow,
+                                             const cv::Mat& compensation) const {
     const int n = info_.resolution;
     if (image.rows != n || image.cols != n || image.type() != CV_32FC3)
         throw Error("advect-residual: the image must be " + std::to_string(n) + " x " + std::to_string(n) +
@@ -90,7 +92,9 @@ cv::Mat AdvectResidualNetwork::network_input(const cv::Mat& image, const cv::Mat
     if (flow.rows != n || flow.cols != n || flow.type() != CV_32FC2)
         throw Error("advect-residual: the flow must be " + std::to_string(n) + " x " + std::to_string(n) + " x 2 float");
     cv::Mat scaled = flow * (1.0 / (info_.flow_scale * n)), input;
-    cv::merge(std::vector<cv::Mat>{warp_in_disc(image, flow), image, scaled}, input);
+    cv::Mat warped = warp_in_disc(image, flow);
+    if (info_.compensated && !compensation.empty()) warped += compensation;
+    cv::merge(std::vector<cv::Mat>{warped, image, scaled}, input);
     return input;
 }
 
@@ -99,19 +103,33 @@ cv::Mat AdvectResidualNetwork::run(const cv::Mat& input) {
     return from_blob(run_net(net_, to_blob({input}), "advect-residual network"), "advect-residual network");
 }
 
-cv::Mat AdvectResidualNetwork::step_network(const cv::Mat& image, const cv::Mat& flow) {
+cv::Mat AdvectResidualNetwork::step_network(const cv::Mat& image, const cv::Mat& flow, const cv::Mat& compensation) {
     cv::Mat next;
     if (net_.empty()) {
         next = warp_in_disc(image, flow);
+        if (!compensation.empty()) next += compensation;
     } else {
-        next = run(network_input(image, flow));
-        cv::min(cv::max(next, 0.0), 1.0, next);
+        next = run(network_input(image, flow, compensation));
+        // A model trained on the plain warp gets the compensation added to its output.
+        if (!info_.compensated && !compensation.empty()) next += compensation;
     }
+    cv::min(cv::max(next, 0.0), 1.0, next);
     next.setTo(cv::Scalar::all(0), ~sky_disc_mask(image.rows));
     return next;
 }
 
 namespace {
+
+// The clear background at n, computed at most at 256 px and upsampled (it is smooth).
+cv::Mat background_at(const Vec3& sun, int n, const NetworkFormParams& form) {
+    const int w = std::min(n, 256);
+    cv::Mat b = clear_background(sun.cast<double>(), w, form);
+    if (w == n) return b;
+    cv::Mat up;
+    cv::resize(extend_past_rim(b), up, cv::Size(n, n), 0, 0, cv::INTER_LINEAR);
+    up.setTo(cv::Scalar::all(0), ~sky_disc_mask(n));
+    return up;
+}
 
 cv::Mat resize_flow(const cv::Mat& flow, int n) {
     if (flow.rows == n) return flow;
@@ -123,25 +141,40 @@ cv::Mat resize_flow(const cv::Mat& flow, int n) {
 }  // namespace
 
 void AdvectResidualNetwork::rollout_network_form(const cv::Mat& start, const cv::Mat& flow, int steps,
-                                                 const std::function<void(int, const cv::Mat&)>& on_step) {
+                                                 const std::function<void(int, const cv::Mat&)>& on_step,
+                                                 const cv::Mat& background) {
     const int n = info_.resolution, big = start.rows;
     if (flow.rows != big || flow.cols != big || flow.type() != CV_32FC2)
         throw Error("advect-residual: the flow must be CV_32FC2 at the state's resolution " + std::to_string(big));
     if (big < n) throw Error("advect-residual: the state is smaller than the network's " + std::to_string(n) + " px");
     const cv::Mat disc_big = sky_disc_mask(big), disc_n = sky_disc_mask(n);
     const cv::Mat flow_n = resize_flow(flow, n);
+    // B - warp(B) is the same every step (the flow is fixed): computed once, at both sizes.
+    cv::Mat compensation, compensation_n;
+    if (!background.empty()) {
+        compensation = background - warp_in_disc(background, flow);
+        cv::Mat background_n = background;
+        if (big != n) {
+            cv::resize(background, background_n, cv::Size(n, n), 0, 0, cv::INTER_AREA);
+            background_n.setTo(cv::Scalar::all(0), ~disc_n);
+        }
+        compensation_n = background_n - warp_in_disc(background_n, flow_n);
+    }
     cv::Mat state = start.clone();
     for (int k = 1; k <= steps; ++k) {
         if (big == n) {
-            state = step_network(state, flow_n);
+            state = step_network(state, flow_n, compensation_n);
         } else {
             // The state moves at its own resolution; the network's correction is added from N.
             cv::Mat moved = warp_in_disc(state, flow);
+            if (!compensation.empty()) moved += compensation;
             if (has_network()) {
                 cv::Mat small;
                 cv::resize(state, small, cv::Size(n, n), 0, 0, cv::INTER_AREA);
                 small.setTo(cv::Scalar::all(0), ~disc_n);
-                cv::Mat correction = step_network(small, flow_n) - warp_in_disc(small, flow_n), up;
+                cv::Mat base = warp_in_disc(small, flow_n);
+                if (!compensation_n.empty()) base += compensation_n;
+                cv::Mat correction = step_network(small, flow_n, compensation_n) - base, up;
                 cv::resize(correction, up, cv::Size(big, big), 0, 0, cv::INTER_LINEAR);
                 moved += up;
             }
@@ -153,17 +186,18 @@ void AdvectResidualNetwork::rollout_network_form(const cv::Mat& start, const cv:
 }
 
 void AdvectResidualNetwork::rollout(const SkyImage& sky, const cv::Mat& flow, int steps,
-                                    const std::function<void(int, const SkyImage&)>& on_step) {
+                                    const std::function<void(int, const SkyImage&)>& on_step, cv::Mat background) {
     validate_sky(sky, sky.source.empty() ? std::string("input sky") : sky.source);
     cv::Mat state = to_network_form(sky, info_.form);
     const cv::Mat sun = fill_saturated_pixels(&state);
     const bool has_sun = cv::countNonZero(sun) > 0;
+    if (background.empty() && sky.sun_direction) background = this->background(*sky.sun_direction, sky.resolution);
     rollout_network_form(state, flow, steps, [&](int k, const cv::Mat& s) {
         SkyImage next = from_network_form(s, sky, info_.form);
         next.time_seconds = sky.time_seconds + k * info_.dt;
         if (has_sun) restore_pixels(&next, sky, sun);
         on_step(k, next);
-    });
+    }, background);
 }
 
 cv::Mat network_form_flow(const SkyImage& previous, const SkyImage& current, const NetworkFormParams& form, int n) {
@@ -185,6 +219,8 @@ cv::Mat AdvectResidualNetwork::motion_flow(const SkyImage& sky, const CloudMotio
     return wind_flow(n, motion.wind ? *motion.wind : Wind{}, dt);
 }
 
+cv::Mat AdvectResidualNetwork::background(const Vec3& sun, int n) const { return background_at(sun, n, info_.form); }
+
 AdvectResidualStepModel::AdvectResidualStepModel(AdvectResidualNetwork network, CloudMotion motion)
     : network_(std::move(network)), motion_(std::move(motion)) {}
 
@@ -199,8 +235,13 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
         flow_ = network_.motion_flow(*history.front(), motion_, dt, last.resolution);
         flow_dt_ = dt;
     }
+    if (last.sun_direction &&
+        (background_.rows != last.resolution || (*last.sun_direction - background_sun_).norm() > 0.0035)) {
+        background_ = network_.background(*last.sun_direction, last.resolution);
+        background_sun_ = *last.sun_direction;
+    }
     SkyImage next;
-    network_.rollout(last, flow_, 1, [&](int, const SkyImage& s) { next = s; });
+    network_.rollout(last, flow_, 1, [&](int, const SkyImage& s) { next = s; }, last.sun_direction ? background_ : cv::Mat());
     next.time_seconds = last.time_seconds + dt;
     return next;
 }

@@ -3,7 +3,10 @@
 // memory: one medium step advects the sky along the flow F and a small network only corrects
 // (cloud growth and decay, what the flow cannot move, clear sky held still):
 //
-//   W      = E(I)(x - F(x))        the warp (motion/advection.h warp_in_disc)
+//   W      = E(I)(x - F(x)) + B - E(B)(x - F(x))   the warp (motion/advection.h warp_in_disc) of the
+//                                                   clouds only: B is the clear background
+//                                                   (motion/network_form.h clear_background) of the
+//                                                   sky's sun, which stays where it is
 //   next   = clamp(net([W, I, F / (flow_scale N)]), 0, 1), 0 outside the disc
 //
 // at the networks' resolution N on the network form (motion/network_form.h). A rollout keeps F
@@ -51,6 +54,7 @@ struct AdvectResidualInfo {
     int import_resolution = 256;  // where the training flows were measured
     double dt = 30.0;             // the cadence trained on most (the flow input sets the speed)
     double flow_scale = 0.08;     // flow channels = F / (flow_scale N)
+    bool compensated = false;     // W input is warp(I) + B - warp(B) ("base": "compensated")
     NetworkFormParams form;
 };
 
@@ -68,21 +72,32 @@ class AdvectResidualNetwork {
 
     // The raw network on its input [W, I, F / (flow_scale N)] (N x N CV_32FC(8)): N x N CV_32FC3.
     cv::Mat run(const cv::Mat& input);
-    // The network's input for image I (N x N CV_32FC3) and flow F (N x N CV_32FC2).
-    cv::Mat network_input(const cv::Mat& image, const cv::Mat& flow) const;
-    // One step at N: warp, network, clamp, 0 outside the disc.
-    cv::Mat step_network(const cv::Mat& image, const cv::Mat& flow);
+    // The network's input for image I (N x N CV_32FC3) and flow F (N x N CV_32FC2): [W, I, F /
+    // (flow_scale N)], with W = warp(I) + compensation when the model was trained on the
+    // background-compensated warp (model.json "base": "compensated"; compensation = B - warp(B),
+    // empty when the sun, hence B, is unknown).
+    cv::Mat network_input(const cv::Mat& image, const cv::Mat& flow, const cv::Mat& compensation = cv::Mat()) const;
+    // One step at N: warp (+ compensation), network, clamp, 0 outside the disc.
+    cv::Mat step_network(const cv::Mat& image, const cv::Mat& flow, const cv::Mat& compensation = cv::Mat());
 
     // K recursive steps of an HDR sky of any resolution along a fixed flow given at the sky's
     // resolution (pixels per step); on_step(k, sky_k) for k = 1..K. The sun (pixels the network
     // form clips) is filled before the first step and the input's put back into every output.
+    // background: the clear background at the sky's resolution; empty: made from the sky's sun.
     void rollout(const SkyImage& sky, const cv::Mat& flow, int steps,
-                 const std::function<void(int, const SkyImage&)>& on_step);
+                 const std::function<void(int, const SkyImage&)>& on_step, cv::Mat background = cv::Mat());
+
+    // The clear background of a sun at n (computed at most at 256 px and upsampled: it is smooth).
+    cv::Mat background(const Vec3& sun, int n) const;
 
     // The same on the network form: state (R x R CV_32FC3, any R >= N, no saturated pixels) and
     // flow (R x R CV_32FC2, per step); on_step(k, state_k) for k = 1..K.
+    // With a background (the clear sky under the clouds, motion/network_form.h clear_background, at
+    // the state's resolution), only the clouds move: each step adds B - warp(B), so the background's
+    // own gradients (horizon, aureole) stay where they are.
     void rollout_network_form(const cv::Mat& state, const cv::Mat& flow, int steps,
-                              const std::function<void(int, const cv::Mat&)>& on_step);
+                              const std::function<void(int, const cv::Mat&)>& on_step,
+                              const cv::Mat& background = cv::Mat());
 
     // The flow per step of length dt at resolution n for a sky and its motion (see CloudMotion).
     cv::Mat motion_flow(const SkyImage& sky, const CloudMotion& motion, double dt, int n) const;
@@ -109,6 +124,8 @@ class AdvectResidualStepModel : public MediumStepModel {
     CloudMotion motion_;
     cv::Mat flow_;  // at the sky's resolution, per step; fixed from the first step on
     double flow_dt_ = 0;
+    cv::Mat background_;  // of background_sun_ (recomputed when the sun has moved by 0.2 degrees)
+    Vec3 background_sun_ = Vec3::Zero();
 };
 
 // The kind of a model folder's model.json ("advect-residual", or "flownet-cloudnet" for the

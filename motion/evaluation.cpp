@@ -140,7 +140,7 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
     result.methods = {"persistence", "farneback", "advect+prev", "model+prev", "model+wind"};
     if (paper) result.methods.push_back("paper");
     if (std::getenv("DYNSKY_EVAL_EXPERIMENTS"))
-        for (const char* m : {"advect+prevwind", "advect+smooth", "advect+mix"}) result.methods.push_back(m);
+        for (const char* m : {"advect+raw", "model+nobg"}) result.methods.push_back(m);
     std::map<int, std::map<int, std::map<std::string, Accumulator>>> acc;
     // Farneback flows of consecutive pairs at the import resolution, computed once.
     std::map<int, cv::Mat> pair_flow;
@@ -165,18 +165,16 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
             auto collect = [&](const std::string& name) {
                 return [&pred, name](int, const cv::Mat& s) { pred[name].push_back(s.clone()); };
             };
-            advect.rollout_network_form(start, prev_motion, hmax, collect("advect+prev"));
+            // The clear background of the frame's sun: only the clouds move (motion/advect_residual.h).
+            cv::Mat bg;
+            if (at(t).sun_direction) bg = clear_background(at(t).sun_direction->cast<double>(), r, form);
+            advect.rollout_network_form(start, prev_motion, hmax, collect("advect+prev"), bg);
+            model.rollout_network_form(start, prev_motion, hmax, collect("model+prev"), bg);
+            model.rollout_network_form(start, wind, hmax, collect("model+wind"), bg);
             if (std::getenv("DYNSKY_EVAL_EXPERIMENTS")) {
-                const cv::Mat prev_wind = wind_flow(r, oracle_wind(prev_flow, at(t - 1).valid, at(t - 1).cloud, seq.dt), seq.dt);
-                advect.rollout_network_form(start, prev_wind, hmax, collect("advect+prevwind"));
-                cv::Mat smooth;
-                cv::GaussianBlur(prev_flow, smooth, cv::Size(0, 0), r / 32.0);
-                advect.rollout_network_form(start, smooth, hmax, collect("advect+smooth"));
-                cv::Mat mix = 0.5 * smooth + 0.5 * prev_wind;
-                advect.rollout_network_form(start, mix, hmax, collect("advect+mix"));
+                advect.rollout_network_form(start, prev_flow, hmax, collect("advect+raw"));
+                model.rollout_network_form(start, prev_motion, hmax, collect("model+nobg"));
             }
-            model.rollout_network_form(start, prev_motion, hmax, collect("model+prev"));
-            model.rollout_network_form(start, wind, hmax, collect("model+wind"));
             if (paper && r == paper->info().resolution) {
                 cv::Mat s = start;
                 for (int h = 1; h <= hmax; ++h) pred["paper"].push_back(s = paper->step_network(s).next);

@@ -2,6 +2,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "sky/clear_sky.h"
 #include "sky/fisheye.h"
 #include "sky/preset_import.h"
 #include "util/error.h"
@@ -61,6 +62,7 @@ NetworkFrame resample_frame(const NetworkFrame& frame, int resolution) {
     if (frame.image.rows == n) return frame;
     NetworkFrame f;
     f.time_seconds = frame.time_seconds;
+    f.sun_direction = frame.sun_direction;
     const cv::Mat disc = sky_disc_mask(n);
     cv::resize(frame.image, f.image, cv::Size(n, n), 0, 0, cv::INTER_AREA);
     f.image.setTo(cv::Scalar::all(0), ~disc);
@@ -81,6 +83,7 @@ NetworkFrame network_frame(const SkyImage& sky, const std::vector<unsigned char>
         throw Error("network_frame: the not-sky mask does not match the sky's resolution");
     NetworkFrame f;
     f.time_seconds = sky.time_seconds;
+    f.sun_direction = sky.sun_direction;
     f.image = to_network_form(sky, form);
     f.valid = sky_disc_mask(big);
     if (!not_sky.empty())
@@ -96,6 +99,14 @@ NetworkFrame network_frame_from_photo(const std::string& path, const std::string
     std::vector<unsigned char> not_sky;
     SkyImage sky = import_preset_photo(path, preset, import_resolution, &not_sky);
     return network_frame(sky, not_sky, resolution, form);
+}
+
+cv::Mat clear_background(const Vec3d& sun_direction, int n, const NetworkFormParams& form) {
+    ClearSkyParams p;
+    p.sun_direction = sun_direction.y() > 0.01 ? sun_direction : Vec3d(sun_direction.x(), 0.01, sun_direction.z());
+    p.turbidity = 3;
+    p.sun_disc = false;
+    return to_network_form(make_clear_sky(p, n), form, n);
 }
 
 }  // namespace dynsky

@@ -6,6 +6,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -39,7 +40,12 @@ struct NetworkFrame {
     cv::Mat valid;  // N x N CV_8UC1: 255 where the sky was seen (inside the disc, not hidden)
     cv::Mat cloud;  // N x N CV_8UC1: 255 where the cloud mask (sky/cloud_mask.h) says cloud
     double time_seconds = 0.0;
+    std::optional<Vec3> sun_direction;  // the sky's, when known
 };
+
+// The clear sky of a sun direction (Hosek-Wilkie, turbidity 3, no solar disc) in the network form
+// at n: the background the clouds of a sky move over (glossary: "clear background").
+cv::Mat clear_background(const Vec3d& sun_direction, int n, const NetworkFormParams& form);
 
 // From a sky of any resolution. `not_sky` (sky.resolution^2 values, 1 = hidden by the camera's arm,
 // band or masts and filled in by the import) may be empty (everything seen). A pixel at N is valid

@@ -86,14 +86,20 @@ cv::Mat fill_saturated_pixels(cv::Mat* unit) {
     cv::Mat sun = saturated_pixels(state);
     if (cv::countNonZero(sun) > 0) {
         cv::dilate(sun, sun, cv::Mat());
+        // Inpainting reaches 3 px: only the clipped pixels' bounding box (and a margin) is touched.
+        cv::Rect box = cv::boundingRect(sun);
+        box = cv::Rect(box.x - 8, box.y - 8, box.width + 16, box.height + 16) & cv::Rect(0, 0, state.cols, state.rows);
+        cv::Mat roi = state(box), roi_mask = sun(box);
         std::vector<cv::Mat> ch;
-        cv::split(state, ch);
+        cv::split(roi, ch);
         for (cv::Mat& c : ch) {
             cv::Mat filled;
-            cv::inpaint(c, sun, filled, 3.0, cv::INPAINT_TELEA);
+            cv::inpaint(c, roi_mask, filled, 3.0, cv::INPAINT_TELEA);
             c = filled;
         }
-        cv::merge(ch, state);
+        cv::Mat merged;
+        cv::merge(ch, merged);
+        merged.copyTo(roi);
         state.setTo(cv::Scalar::all(0), ~disc_big);
     }
     return sun;

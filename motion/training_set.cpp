@@ -97,9 +97,16 @@ void build_training_sequence(const TrainingSetOptions& o) {
     if (count < 2) throw Error("the sequence has fewer than two frames");
     std::vector<cv::Mat> images, valid, cloud, flows;
     std::vector<double> times;
+    std::vector<cv::Mat> backgrounds;
+    std::vector<float> suns;
     for (const NetworkFrame& fb : frames_big) {
         NetworkFrame f = resample_frame(fb, n);
         images.push_back(f.image), valid.push_back(f.valid), cloud.push_back(f.cloud), times.push_back(f.time_seconds);
+        // The clear background under the clouds (the advect-residual model moves only what differs).
+        backgrounds.push_back(f.sun_direction ? clear_background(f.sun_direction->cast<double>(), n, form)
+                                              : cv::Mat(n, n, CV_32FC3, cv::Scalar::all(0)));
+        const Vec3 sun = f.sun_direction ? *f.sun_direction : Vec3(0, 0, 0);
+        suns.insert(suns.end(), {sun.x(), sun.y(), sun.z()});
     }
     ProgressBar progress(long(count - 1), "farneback", o.quiet);
     for (size_t k = 0; k + 1 < count; ++k) {
@@ -114,6 +121,8 @@ void build_training_sequence(const TrainingSetOptions& o) {
     write_npy(path("images.npy"), {t, nn, nn, 3}, stack(images).data());
     write_npy(path("valid.npy"), {t, nn, nn}, stack_mask(valid).data());
     write_npy(path("cloud.npy"), {t, nn, nn}, stack_mask(cloud).data());
+    write_npy(path("background.npy"), {t, nn, nn, 3}, stack(backgrounds).data());
+    write_npy(path("sun.npy"), {t, 3}, suns.data());
     write_npy(path("flow_farneback.npy"), {t - 1, nn, nn, 2}, stack(flows).data());
     if (!exact.empty())
         write_npy(path("flow_exact.npy"), {t - 1, nn, nn, 2},

@@ -1,6 +1,7 @@
 // One sequence of a cloud-model training set (networks/dataset.py drives it through `dynsky sky
 // training-data`): frames in the networks' form at N (motion/network_form.h), seen-sky and cloud
-// masks, Farneback flow frame k -> k+1 (at the import resolution, area-averaged to N) and, for
+// masks, the clear background of each frame's sun (motion/network_form.h clear_background; zero and
+// sun (0, 0, 0) when the sun is unknown), Farneback flow frame k -> k+1 (at the import resolution, area-averaged to N) and, for
 // procedural sequences, the exact flow, as .npy files (util/npy.h) plus meta.json
 // (networks/data.py documents the arrays).
 #pragma once
@@ -20,7 +21,7 @@ struct TrainingSetOptions {
     bool quiet = false;
 };
 
-// Writes OUT/images.npy, valid.npy, cloud.npy, flow_farneback.npy, [flow_exact.npy,] meta.json.
+// Writes OUT/images.npy, valid.npy, cloud.npy, background.npy, sun.npy, flow_farneback.npy, [flow_exact.npy,] meta.json.
 // Throws dynsky::Error before writing anything when the options or inputs are bad.
 void build_training_sequence(const TrainingSetOptions& o);
 

@@ -1,0 +1,196 @@
+// The advect-residual cloud model (motion/advect_residual.h) with the shipped weights
+// (networks/models/advect_residual): OpenCV dnn and the C++ warp agree with PyTorch on the
+// reference pair, clouds follow a requested wind in every direction, clear skies stay clear, and
+// rollouts from each kind of start stay finite, in range, within the luminance band and keep their
+// detail.
+#include "motion/advect_residual.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "motion/metrics.h"
+#include "sky/clear_sky.h"
+#include "sky/fisheye.h"
+#include "sky/preset_import.h"
+#include "sky/procedural_clouds.h"
+#include "tests/test_support.h"
+#include "util/data_path.h"
+#include "util/error.h"
+#include "util/math.h"
+#include "util/npy.h"
+
+namespace dynsky {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string shipped() { return data_path("networks/models/advect_residual"); }
+
+cv::Mat nchw_to_mat(const NpyArray& a) {
+    const int c = int(a.shape[1]), n = int(a.shape[2]);
+    std::vector<cv::Mat> planes;
+    for (int k = 0; k < c; ++k)
+        planes.push_back(cv::Mat(n, n, CV_32F, const_cast<float*>(a.data.data() + size_t(k) * n * n)).clone());
+    cv::Mat m;
+    cv::merge(planes, m);
+    return m;
+}
+
+TEST(AdvectResidual, OpenCvAndTheWarpAgreeWithPyTorch) {
+    AdvectResidualNetwork net = AdvectResidualNetwork::load(shipped());
+    const std::string f = shipped() + "/";
+    cv::Mat image = nchw_to_mat(read_npy(f + "reference_image.npy")), flow = nchw_to_mat(read_npy(f + "reference_flow.npy"));
+    cv::Mat input = nchw_to_mat(read_npy(f + "reference_input.npy")), output = nchw_to_mat(read_npy(f + "reference_output.npy"));
+    ASSERT_EQ(image.rows, net.info().resolution);
+    EXPECT_LT(cv::norm(net.network_input(image, flow), input, cv::NORM_INF), 1e-4);  // the warp, outside ONNX
+    EXPECT_LT(cv::norm(net.run(input), output, cv::NORM_INF), 1e-4);                // the network
+}
+
+// A procedural cumulus sky with frozen shapes and the given wind, at n px, and its exact flow.
+SkyImage procedural(uint64_t seed, double from_deg, double speed, int n, double dt, Image* flow) {
+    ProceduralSkyParams p;
+    p.seed = seed;
+    p.coverage = 0.5;
+    p.layers = {cumulus_layer()};
+    p.layers[0].wind_from_deg = from_deg, p.layers[0].wind_speed_mps = speed, p.layers[0].evolution_time_s = 0;
+    p.clear_sky.sun_direction = fisheye::direction_from_angles(0.9, 1.0);
+    return render_procedural_sky(p, 0.0, n, flow, dt);
+}
+
+double angle_deg(const cv::Vec2f& a, const cv::Vec2f& b) {
+    return std::abs(std::remainder(std::atan2(a[1], a[0]) - std::atan2(b[1], b[0]), 2 * kPiD)) * 180 / kPiD;
+}
+
+TEST(AdvectResidual, CloudsFollowTheRequestedWindInEveryDirection) {
+    AdvectResidualNetwork net = AdvectResidualNetwork::load(shipped());
+    const int n = 128;
+    const double dt = net.info().dt, speed = 12.0;
+    for (int d = 0; d < 8; ++d) {
+        const double from = 22.5 + 45.0 * d;  // not the training set's exact directions
+        Image exact;
+        SkyImage sky = procedural(900 + d, from, speed, n, dt, &exact);  // seeds never trained on
+        CloudMotion motion;
+        motion.wind = Wind{from, speed, 1500.0};
+        SkyImage next;
+        net.rollout(sky, net.motion_flow(sky, motion, dt, n), 1, [&](int, const SkyImage& s) { next = s; });
+        // The motion produced, measured on the images themselves, against the requested (exact) one.
+        cv::Mat produced = farneback_flow(to_network_form(sky, net.info().form), to_network_form(next, net.info().form));
+        std::vector<double> angles, ratios;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                const cv::Vec2f want(exact.at(i, j, 0), exact.at(i, j, 1));
+                if (exact.at(i, j, 2) < 0.5 || std::hypot(want[0], want[1]) < 0.5) continue;  // clouds that move
+                const cv::Vec2f got = produced.at<cv::Vec2f>(j, i);
+                angles.push_back(angle_deg(got, want));
+                ratios.push_back(std::hypot(got[0], got[1]) / std::hypot(want[0], want[1]));
+            }
+        ASSERT_GT(angles.size(), 300u) << from;
+        EXPECT_LT(median(angles), 15.0) << "wind from " << from << " deg";
+        EXPECT_NEAR(median(ratios), 1.0, 0.2) << "wind from " << from << " deg";
+    }
+}
+
+struct RolloutStats {
+    bool finite = true;
+    float min = 1, max = 0;
+    double mean0 = 0, mean_min = 1e30, mean_max = 0, hf0 = 0, hf_min = 1e30, cover0 = 0, cover_max = 0;
+};
+
+RolloutStats roll(AdvectResidualNetwork& net, const SkyImage& sky, const CloudMotion& motion, int steps) {
+    const int n = net.info().resolution;
+    const cv::Mat disc = sky_disc_mask(n);
+    RolloutStats r;
+    auto measure = [&](const SkyImage& s, bool first) {
+        cv::Mat u = to_network_form(s, net.info().form, n);
+        double lo, hi;
+        cv::minMaxLoc(u.reshape(1), &lo, &hi);
+        r.finite = r.finite && cv::checkRange(u);
+        r.min = std::min(r.min, float(lo)), r.max = std::max(r.max, float(hi));
+        double lum = 0;
+        int count = 0;
+        for (int j = 0; j < s.resolution; ++j)
+            for (int i = 0; i < s.resolution; ++i)
+                if (s.in_disc(i, j)) lum += luminance(s.pixel(i, j)), ++count;
+        lum /= count;
+        const double hf = high_frequency_energy(u, disc);
+        const double cover = double(cv::countNonZero(network_cloud_mask(u, net.info().form) & disc)) / cv::countNonZero(disc);
+        if (first) r.mean0 = lum, r.hf0 = hf, r.cover0 = cover;
+        r.mean_min = std::min(r.mean_min, lum), r.mean_max = std::max(r.mean_max, lum);
+        r.hf_min = std::min(r.hf_min, hf), r.cover_max = std::max(r.cover_max, cover);
+    };
+    measure(sky, true);
+    net.rollout(sky, net.motion_flow(sky, motion, net.info().dt, sky.resolution), steps,
+                [&](int, const SkyImage& s) { measure(s, false); });
+    return r;
+}
+
+TEST(AdvectResidual, ClearSkiesStayClearUnderAnyWind) {
+    AdvectResidualNetwork net = AdvectResidualNetwork::load(shipped());
+    const double elevations[] = {5, 15, 30, 50, 75};
+    for (int k = 0; k < 5; ++k) {
+        ClearSkyParams p;
+        p.sun_direction = fisheye::direction_from_angles((90 - elevations[k]) * kPiD / 180, 0.7 + 1.2 * k);
+        p.turbidity = 3;
+        SkyImage sky = make_clear_sky(p, 128);
+        CloudMotion motion;
+        motion.wind = Wind{45.0 + 70.0 * k, 15.0, 1500.0};
+        RolloutStats r = roll(net, sky, motion, 120);
+        EXPECT_TRUE(r.finite);
+        EXPECT_LE(r.cover_max, r.cover0 + 0.03) << "sun elevation " << elevations[k];
+        EXPECT_NEAR(r.mean_max / r.mean0, 1.0, 0.2) << "sun elevation " << elevations[k];
+        EXPECT_NEAR(r.mean_min / r.mean0, 1.0, 0.2) << "sun elevation " << elevations[k];
+    }
+}
+
+TEST(AdvectResidual, FiftyStepRolloutsFromEveryKindOfStartStayInBand) {
+    AdvectResidualNetwork net = AdvectResidualNetwork::load(shipped());
+    std::vector<std::pair<std::string, SkyImage>> starts;
+    Image unused;
+    starts.emplace_back("procedural", procedural(77, 250, 10, 128, 30, &unused));
+    ClearSkyParams p;
+    p.sun_direction = fisheye::direction_from_angles(0.7, 3.0);
+    starts.emplace_back("clear", make_clear_sky(p, 128));
+    if (test::shared_available())
+        starts.emplace_back("photograph", import_preset_photo(test::shared_path("skies/arm_tsi_sgp_20170524/images/"
+                                                                                 "tsi_sgpC1_20170524175000Z.jpg"),
+                                                              "arm-tsi", 128));
+    for (auto& [name, sky] : starts) {
+        CloudMotion motion;
+        motion.wind = Wind{300, 9, 1500};
+        RolloutStats r = roll(net, sky, motion, 50);
+        EXPECT_TRUE(r.finite) << name;
+        EXPECT_GE(r.min, 0.0f) << name;
+        EXPECT_LE(r.max, 1.0f) << name;
+        EXPECT_GT(r.mean_min, 0.8 * r.mean0) << name;
+        EXPECT_LT(r.mean_max, 1.2 * r.mean0) << name;
+        if (name != "clear") EXPECT_GT(r.hf_min, 0.5 * r.hf0) << name;  // keeps at least half its fine detail
+    }
+}
+
+TEST(AdvectResidual, BadModelFoldersFailClearly) {
+    const std::string dir = test::temp_dir("advect_bad");
+    EXPECT_THROW(AdvectResidualNetwork::load(dir + "/missing"), Error);
+    fs::create_directories(dir + "/m");
+    std::ofstream(dir + "/m/model.json") << R"({"format": "dynsky-cloud-model", "version": 3, "kind": "advect-residual"})";
+    try {
+        AdvectResidualNetwork::load(dir + "/m");
+        ADD_FAILURE() << "version 3 accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("version 3"), std::string::npos) << e.what();
+    }
+    std::ofstream(dir + "/m/model.json") << R"({"format": "dynsky-cloud-model", "version": 2, "kind": "advect-residual",
+        "resolution": 64, "dt_s": 30})";
+    try {
+        AdvectResidualNetwork::load(dir + "/m");
+        ADD_FAILURE() << "missing model.onnx accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("model.onnx"), std::string::npos) << e.what();
+    }
+    fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace dynsky
