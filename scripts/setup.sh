@@ -10,9 +10,11 @@ packages=(
   libopencv-dev libeigen3-dev libtbb-dev
   libgtest-dev libbenchmark-dev libcli11-dev
   ffmpeg python3-matplotlib python3-numpy
+  python3-torch python3-onnx
 )
-# Training the cloud networks (not needed to build, run or test): scripts/setup.sh --training
-if [[ "${1:-}" == "--training" ]]; then packages+=(python3-torch python3-onnx); fi
+# python3-torch and python3-onnx: the cloud networks' training code and its tests (NetworksTraining)
+# run under /usr/bin/python3; the program itself runs the networks through OpenCV and needs neither.
+# (--training is still accepted: everything is installed either way.)
 
 missing=()
 for p in "${packages[@]}"; do
