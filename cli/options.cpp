@@ -19,7 +19,8 @@ void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {
     cmd->add_option(
            "--sky", o->sky,
            "Input sky at t = 0: 'procedural[:SEED]' (cumulus over a clear sky, known motion), 'clear' (Hosek-Wilkie),\n"
-           "or a canonical fisheye EXR (from 'dynsky sky clear|import|procedural|predict'; photographs: import first)")
+           "a canonical fisheye EXR (from 'dynsky sky clear|import|procedural|predict'; photographs: import first), or a\n"
+           "folder of them (a captured sequence: the last is the input, the one before it gives the motion)")
         ->capture_default_str();
     cmd->add_option("--model", m->model,
                     "Medium-step model xi: 'auto' (the shipped advect-residual network, networks/models/advect_residual:\n"

@@ -1,6 +1,8 @@
 #include "frame/sky_source.h"
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <cstdio>
 
 #include "motion/flow_extrapolation_model.h"
@@ -13,6 +15,8 @@
 #include "util/image.h"
 
 namespace dynsky {
+
+namespace fs = std::filesystem;
 
 UtcTime start_time(const SkySourceSpec& o) {
     return parse_utc_time(o.time.empty() ? std::string("2026-06-21T16:00:00Z") : o.time);
@@ -49,8 +53,20 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     }
     // What moves the clouds for models that take a motion: the previous frame, else the wind.
     CloudMotion motion;
-    if (!o.previous.empty()) {
-        motion.previous = std::make_shared<const SkyImage>(load_sky(o.previous));
+    // A captured sequence (a folder of sky EXRs): the last is the input, the one before it the
+    // previous frame.
+    std::string sky_file = o.sky, previous_file = o.previous;
+    if (fs::is_directory(o.sky)) {
+        std::vector<std::string> exrs;
+        for (const auto& e : fs::directory_iterator(o.sky))
+            if (e.is_regular_file() && file_extension(e.path().string()) == ".exr") exrs.push_back(e.path().string());
+        std::sort(exrs.begin(), exrs.end());
+        if (exrs.empty()) throw_file_error(o.sky, "a folder without sky EXRs (give a captured sequence of canonical fisheyes)");
+        sky_file = exrs.back();
+        if (exrs.size() >= 2 && previous_file.empty()) previous_file = exrs[exrs.size() - 2];
+    }
+    if (!previous_file.empty()) {
+        motion.previous = std::make_shared<const SkyImage>(load_sky(previous_file));
         motion.previous_dt = o.previous_dt;
         if (!(o.previous_dt >= 0)) throw Error("--prev-dt must be positive");
     } else {
@@ -95,14 +111,16 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
         input = make_clear_sky(p, o.sky_resolution);
         input.source = "clear sky (Hosek-Wilkie, turbidity 3)";
     } else {
-        std::string ext = file_extension(o.sky);
+        std::string ext = file_extension(sky_file);
         if (ext != ".exr")
             throw Error(o.sky +
                         ": not a sky EXR ('procedural', 'clear' or a canonical fisheye .exr; import photographs first "
                         "with 'dynsky sky import')");
-        input = load_sky(o.sky);
+        input = load_sky(sky_file);
+        if (motion.previous && motion.previous_dt == 0 && input.time_seconds > motion.previous->time_seconds)
+            motion.previous_dt = input.time_seconds - motion.previous->time_seconds;  // their own clocks
         input.time_seconds = 0;
-        if (input.source.empty()) input.source = o.sky;
+        if (input.source.empty()) input.source = sky_file;
     }
     if (!model) {
         if (model_name == "auto" || model_name == "flow") {
@@ -115,7 +133,7 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     }
     double dt = m.dt;
     if (dt == 0) dt = model->native_dt() > 0 ? model->native_dt() : 10.0;
-    else if (model->native_dt() > 0 && std::abs(dt - model->native_dt()) > 1e-9)
+    else if (model->dt_is_fixed() && std::abs(dt - model->native_dt()) > 1e-9)
         std::fprintf(stderr, "dynsky: warning: --dt %g s, but the network was trained for Delta t = %g s\n", dt,
                      model->native_dt());
     return SkyTimeline(std::move(input), std::move(model), dt, clock);

@@ -3,6 +3,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
@@ -140,52 +141,101 @@ cv::Mat resize_flow(const cv::Mat& flow, int n) {
 
 }  // namespace
 
-void AdvectResidualNetwork::rollout_network_form(const cv::Mat& start, const cv::Mat& flow, int steps,
-                                                 const std::function<void(int, const cv::Mat&)>& on_step,
-                                                 const cv::Mat& background) {
-    const int n = info_.resolution, big = start.rows;
-    if (flow.rows != big || flow.cols != big || flow.type() != CV_32FC2)
+cv::Mat CloudFlow::at(int k) const {
+    if (wind.empty() || relax_steps <= 0) return measured;
+    const double a = std::exp(-(k - 1) / relax_steps);
+    return wind + (measured - wind) * a;
+}
+
+CloudFlow CloudFlow::from_measured(const cv::Mat& measured, double dt) {
+    const int n = measured.rows;
+    CloudFlow f;
+    f.measured = measured;
+    // The wind that explains it, fitted inside 80 % of the radius (the rim is foreshortened).
+    cv::Mat inner = cv::Mat::zeros(n, n, CV_8UC1);
+    cv::circle(inner, cv::Point(n / 2, n / 2), int(0.4 * n), cv::Scalar(255), cv::FILLED);
+    f.wind = wind_flow(n, fit_wind(measured, inner, dt), dt);
+    f.relax_steps = 6.0;
+    return f;
+}
+
+CloudFlow CloudFlow::resized(int n) const {
+    CloudFlow f = *this;
+    f.measured = resize_flow(measured, n);
+    if (!wind.empty()) f.wind = resize_flow(wind, n);
+    return f;
+}
+
+CloudRollout::CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start, const CloudFlow& flow,
+                           const cv::Mat& background)
+    : network_(network), flow_(flow), start_(start.clone()), state_(start.clone()) {
+    const int n = network->info().resolution, big = start.rows;
+    if (flow.measured.rows != big || flow.measured.cols != big || flow.measured.type() != CV_32FC2)
         throw Error("advect-residual: the flow must be CV_32FC2 at the state's resolution " + std::to_string(big));
     if (big < n) throw Error("advect-residual: the state is smaller than the network's " + std::to_string(n) + " px");
-    const cv::Mat disc_big = sky_disc_mask(big), disc_n = sky_disc_mask(n);
-    const cv::Mat flow_n = resize_flow(flow, n);
-    // B - warp(B) is the same every step (the flow is fixed): computed once, at both sizes.
-    cv::Mat compensation, compensation_n;
-    if (!background.empty()) {
-        compensation = background - warp_in_disc(background, flow);
-        cv::Mat background_n = background;
-        if (big != n) {
-            cv::resize(background, background_n, cv::Size(n, n), 0, 0, cv::INTER_AREA);
-            background_n.setTo(cv::Scalar::all(0), ~disc_n);
-        }
-        compensation_n = background_n - warp_in_disc(background_n, flow_n);
-    }
-    cv::Mat state = start.clone();
-    for (int k = 1; k <= steps; ++k) {
-        if (big == n) {
-            state = step_network(state, flow_n, compensation_n);
-        } else {
-            // The state moves at its own resolution; the network's correction is added from N.
-            cv::Mat moved = warp_in_disc(state, flow);
-            if (!compensation.empty()) moved += compensation;
-            if (has_network()) {
-                cv::Mat small;
-                cv::resize(state, small, cv::Size(n, n), 0, 0, cv::INTER_AREA);
-                small.setTo(cv::Scalar::all(0), ~disc_n);
-                cv::Mat base = warp_in_disc(small, flow_n);
-                if (!compensation_n.empty()) base += compensation_n;
-                cv::Mat correction = step_network(small, flow_n, compensation_n) - base, up;
-                cv::resize(correction, up, cv::Size(big, big), 0, 0, cv::INTER_LINEAR);
-                moved += up;
-            }
-            cv::min(cv::max(moved, 0.0), 1.0, state);
-            state.setTo(cv::Scalar::all(0), ~disc_big);
-        }
-        on_step(k, state);
+    flow_small_ = flow.resized(n);
+    disc_big_ = sky_disc_mask(big), disc_n_ = sky_disc_mask(n);
+    start_ext_ = extend_past_rim_exact(start_);
+    positions_ = cv::Mat(big, big, CV_32FC2);
+    for (int y = 0; y < big; ++y)
+        for (int x = 0; x < big; ++x) positions_.at<cv::Vec2f>(y, x) = cv::Vec2f(float(x), float(y));
+    corrections_ = cv::Mat(big, big, CV_32FC3, cv::Scalar::all(0));
+    set_background(background);
+}
+
+void CloudRollout::set_background(const cv::Mat& background) {
+    background_ = flow_.hold_background ? background : cv::Mat();
+    background_ext_ = background_.empty() ? cv::Mat() : extend_past_rim_exact(background_);
+    background_n_ = background_;
+    const int n = network_->info().resolution;
+    if (!background_.empty() && background_.rows != n) {
+        cv::resize(background_, background_n_, cv::Size(n, n), 0, 0, cv::INTER_AREA);
+        background_n_.setTo(cv::Scalar::all(0), ~disc_n_);
     }
 }
 
-void AdvectResidualNetwork::rollout(const SkyImage& sky, const cv::Mat& flow, int steps,
+const cv::Mat& CloudRollout::advance() {
+    const int n = network_->info().resolution, big = start_.rows, k = ++steps_;
+    // The flow of this step (fixed, or relaxing towards the wind).
+    const cv::Mat f_big = flow_.at(k), f_n = flow_small_.at(k);
+    cv::Mat compensation_n;
+    if (!background_.empty()) compensation_n = background_n_ - warp_in_disc(background_n_, f_n);
+    const cv::Mat sources = warp_sources(f_big, true);
+    positions_ = sample_exact(positions_, sources);
+    corrections_ = sample_exact(extend_past_rim_exact(corrections_), sources);
+    // The clouds where their paths lead (the background stays where it is: + B - B(path)).
+    cv::Mat moved = sample_exact(start_ext_, positions_);
+    if (!background_.empty()) moved += background_ - sample_exact(background_ext_, positions_);
+    const cv::Mat lagrangian = moved.clone();
+    moved += corrections_;
+    if (network_->has_network()) {
+        // The network sees the last step's image at N, as it was trained; its correction (its
+        // output minus the warp it was given) is added at the state's resolution.
+        cv::Mat small = state_;
+        if (big != n) {
+            cv::resize(state_, small, cv::Size(n, n), 0, 0, cv::INTER_AREA);
+            small.setTo(cv::Scalar::all(0), ~disc_n_);
+        }
+        cv::Mat base = warp_in_disc(small, f_n);
+        if (!compensation_n.empty()) base += compensation_n;
+        cv::Mat correction = network_->step_network(small, f_n, compensation_n) - base, up = correction;
+        if (big != n) cv::resize(correction, up, cv::Size(big, big), 0, 0, cv::INTER_LINEAR);
+        moved += up;
+    }
+    cv::min(cv::max(moved, 0.0), 1.0, state_);
+    state_.setTo(cv::Scalar::all(0), ~disc_big_);
+    corrections_ = state_ - lagrangian;  // what clamping kept of them
+    return state_;
+}
+
+void AdvectResidualNetwork::rollout_network_form(const cv::Mat& start, const CloudFlow& flow, int steps,
+                                                 const std::function<void(int, const cv::Mat&)>& on_step,
+                                                 const cv::Mat& background) {
+    CloudRollout rollout(this, start, flow, background);
+    for (int k = 1; k <= steps; ++k) on_step(k, rollout.advance());
+}
+
+void AdvectResidualNetwork::rollout(const SkyImage& sky, const CloudFlow& flow, int steps,
                                     const std::function<void(int, const SkyImage&)>& on_step, cv::Mat background) {
     validate_sky(sky, sky.source.empty() ? std::string("input sky") : sky.source);
     cv::Mat state = to_network_form(sky, info_.form);
@@ -211,12 +261,12 @@ cv::Mat network_form_flow(const SkyImage& previous, const SkyImage& current, con
     return resize_flow(smooth_motion(farneback_flow(a, b)), n);
 }
 
-cv::Mat AdvectResidualNetwork::motion_flow(const SkyImage& sky, const CloudMotion& motion, double dt, int n) const {
+CloudFlow AdvectResidualNetwork::motion_flow(const SkyImage& sky, const CloudMotion& motion, double dt, int n) const {
     if (motion.previous) {
         double gap = motion.previous_dt > 0 ? motion.previous_dt : dt;
-        return network_form_flow(*motion.previous, sky, info_.form, n) * (dt / gap);
+        return CloudFlow::from_measured(network_form_flow(*motion.previous, sky, info_.form, n) * (dt / gap), dt);
     }
-    return wind_flow(n, motion.wind ? *motion.wind : Wind{}, dt);
+    return CloudFlow::from_wind(wind_flow(n, motion.wind ? *motion.wind : Wind{}, dt));
 }
 
 cv::Mat AdvectResidualNetwork::background(const Vec3& sun, int n) const { return background_at(sun, n, info_.form); }
@@ -229,20 +279,28 @@ std::string AdvectResidualStepModel::name() const {
 }
 
 SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const SkyImage>>& history, double dt) {
-    const SkyImage& last = *history.back();
-    if (flow_.empty() || flow_dt_ != dt || flow_.rows != last.resolution) {
-        // Fixed from the first step on (constant velocity), measured against the input S_0.
-        flow_ = network_.motion_flow(*history.front(), motion_, dt, last.resolution);
+    const SkyImage& input = *history.front();
+    const int k = int(history.size());  // this makes step k (S_k)
+    if (!rollout_ || flow_dt_ != dt || rollout_->steps() != k - 1 || rollout_input_ != history.front().get()) {
+        // One rollout from the input S_0 (its motion measured once), kept across the timeline's
+        // calls so the clouds keep their detail (motion/advect_residual.h CloudRollout).
+        flow_ = network_.motion_flow(input, motion_, dt, input.resolution);
         flow_dt_ = dt;
+        cv::Mat start = to_network_form(input, network_.info().form);
+        sun_mask_ = fill_saturated_pixels(&start);
+        rollout_ = std::make_unique<CloudRollout>(&network_, start, flow_, cv::Mat());
+        rollout_input_ = history.front().get();
+        for (int j = 1; j < k; ++j) rollout_->advance();  // catch up (not the timeline's order)
     }
-    if (last.sun_direction &&
-        (background_.rows != last.resolution || (*last.sun_direction - background_sun_).norm() > 0.0035)) {
-        background_ = network_.background(*last.sun_direction, last.resolution);
-        background_sun_ = *last.sun_direction;
+    const std::optional<Vec3> sun = sun_ ? sun_ : input.sun_direction;
+    if (sun && (background_.rows != input.resolution || (*sun - background_sun_).norm() > 0.0035)) {
+        background_ = network_.background(*sun, input.resolution);
+        background_sun_ = *sun;
+        rollout_->set_background(background_);
     }
-    SkyImage next;
-    network_.rollout(last, flow_, 1, [&](int, const SkyImage& s) { next = s; }, last.sun_direction ? background_ : cv::Mat());
-    next.time_seconds = last.time_seconds + dt;
+    SkyImage next = from_network_form(rollout_->advance(), input, network_.info().form);
+    if (cv::countNonZero(sun_mask_) > 0) restore_pixels(&next, input, sun_mask_);
+    next.time_seconds = history.back()->time_seconds + dt;
     return next;
 }
 

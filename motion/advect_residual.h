@@ -48,6 +48,29 @@ struct CloudMotion {
     double previous_dt = 0;
 };
 
+// The flow of one rollout, per step, at one resolution. A measured flow (from a previous frame) is
+// trusted for the first steps and relaxes to the uniform wind that best explains it
+// (motion/flow.h fit_wind): measured - wind decays as exp(-(k - 1) / relax_steps). A fixed
+// non-uniform flow, iterated for hours, shears every cloud into streaks; a uniform wind moves the
+// layer as a whole. From a wind: that wind's flow throughout.
+//
+// Under a wind the clear background is held still (motion/network_form.h clear_background: only
+// the clouds move); a measured flow already leaves clear sky nearly still, and holding an assumed
+// background there costs accuracy where the real one differs (overcast, a sun at the horizon:
+// -0.3 to -2.4 dB one step ahead on the real sequences), so it is not held.
+struct CloudFlow {
+    cv::Mat measured;             // CV_32FC2, pixels per step
+    cv::Mat wind;                 // empty: `measured` throughout
+    double relax_steps = 6.0;     // default: 6 steps (3 minutes at 30 s)
+    bool hold_background = false; // true for a wind
+    cv::Mat at(int k) const;   // the flow of step k = 1, 2, ...
+    CloudFlow resized(int n) const;
+    static CloudFlow from_wind(const cv::Mat& flow) { return CloudFlow{flow, cv::Mat(), 0.0, true}; }
+    static CloudFlow constant(const cv::Mat& flow) { return CloudFlow{flow, cv::Mat(), 0.0, false}; }
+    // A measured flow (per step of dt), relaxing to its fitted wind (inside 80 % of the radius).
+    static CloudFlow from_measured(const cv::Mat& measured, double dt);
+};
+
 struct AdvectResidualInfo {
     std::string name, folder, kind = "advect-residual";
     int resolution = 64;          // N
@@ -84,7 +107,7 @@ class AdvectResidualNetwork {
     // resolution (pixels per step); on_step(k, sky_k) for k = 1..K. The sun (pixels the network
     // form clips) is filled before the first step and the input's put back into every output.
     // background: the clear background at the sky's resolution; empty: made from the sky's sun.
-    void rollout(const SkyImage& sky, const cv::Mat& flow, int steps,
+    void rollout(const SkyImage& sky, const CloudFlow& flow, int steps,
                  const std::function<void(int, const SkyImage&)>& on_step, cv::Mat background = cv::Mat());
 
     // The clear background of a sun at n (computed at most at 256 px and upsampled: it is smooth).
@@ -95,16 +118,40 @@ class AdvectResidualNetwork {
     // With a background (the clear sky under the clouds, motion/network_form.h clear_background, at
     // the state's resolution), only the clouds move: each step adds B - warp(B), so the background's
     // own gradients (horizon, aureole) stay where they are.
-    void rollout_network_form(const cv::Mat& state, const cv::Mat& flow, int steps,
+    void rollout_network_form(const cv::Mat& state, const CloudFlow& flow, int steps,
                               const std::function<void(int, const cv::Mat&)>& on_step,
                               const cv::Mat& background = cv::Mat());
 
     // The flow per step of length dt at resolution n for a sky and its motion (see CloudMotion).
-    cv::Mat motion_flow(const SkyImage& sky, const CloudMotion& motion, double dt, int n) const;
+    CloudFlow motion_flow(const SkyImage& sky, const CloudMotion& motion, double dt, int n) const;
 
   private:
     AdvectResidualInfo info_;
     cv::dnn::Net net_;
+};
+
+// One rollout in progress on the network form, semi-Lagrangian: the clouds are always read from the
+// start image along their accumulated paths (the composed source positions of every step's warp,
+// recycled at the rim), not re-warped from the last step's image, so hours of steps do not blur
+// them away; the network's corrections (its output minus the warp it was given) ride along as a
+// field of their own. The network itself sees the last step's image at N, as it was trained.
+class CloudRollout {
+  public:
+    CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start, const CloudFlow& flow,
+                 const cv::Mat& background = cv::Mat());
+    const cv::Mat& advance();  // the next step's state
+    int steps() const { return steps_; }
+    const cv::Mat& state() const { return state_; }
+    // The clear background (at the state's resolution) for the following steps; used only when the
+    // flow holds the background.
+    void set_background(const cv::Mat& background);
+
+  private:
+    AdvectResidualNetwork* network_;
+    CloudFlow flow_, flow_small_;
+    cv::Mat start_, start_ext_, state_, positions_, corrections_;
+    cv::Mat background_, background_ext_, background_n_, disc_big_, disc_n_;
+    int steps_ = 0;
 };
 
 // The motion measured from a previous frame: Farneback flow previous -> current on the network form
@@ -118,14 +165,22 @@ class AdvectResidualStepModel : public MediumStepModel {
     AdvectResidualStepModel(AdvectResidualNetwork network, CloudMotion motion);
     SkyImage step(const std::vector<std::shared_ptr<const SkyImage>>& history, double dt) override;
     std::string name() const override;
+    double native_dt() const override { return network_.info().dt; }
+    bool dt_is_fixed() const override { return false; }
+    // The timeline's sun for the next step: the clear background is that sun's.
+    void set_sun_direction(const Vec3d& d) override { sun_ = d.cast<float>(); }
 
   private:
     AdvectResidualNetwork network_;
     CloudMotion motion_;
-    cv::Mat flow_;  // at the sky's resolution, per step; fixed from the first step on
+    CloudFlow flow_;  // at the sky's resolution, per step; measured at the first step
     double flow_dt_ = 0;
+    std::unique_ptr<CloudRollout> rollout_;
+    const SkyImage* rollout_input_ = nullptr;
+    cv::Mat sun_mask_;
     cv::Mat background_;  // of background_sun_ (recomputed when the sun has moved by 0.2 degrees)
     Vec3 background_sun_ = Vec3::Zero();
+    std::optional<Vec3> sun_;  // from the timeline, else the sky's own
 };
 
 // The kind of a model folder's model.json ("advect-residual", or "flownet-cloudnet" for the

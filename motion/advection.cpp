@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <map>
 #include <mutex>
 #include <opencv2/imgproc.hpp>
@@ -178,18 +179,43 @@ cv::Mat make_rim_map(int n) {
 
 }  // namespace
 
+cv::Mat warp_sources(const cv::Mat& flow, bool recycle) {
+    if (flow.type() != CV_32FC2 || flow.rows != flow.cols) throw Error("warp_sources: the flow must be square CV_32FC2");
+    const int n = flow.rows;
+    const double c = (n - 1) / 2.0, r_in = (1.0 - 1.5 / n) * n / 2.0;
+    cv::Scalar mean = cv::mean(flow, sky_disc_mask(n));
+    double wx = mean[0], wy = mean[1];
+    const double wn = std::hypot(wx, wy);
+    const bool wrap = recycle && wn > 1e-3;
+    if (wrap) wx /= wn, wy /= wn;
+    cv::Mat map(flow.size(), CV_32FC2);
+    for (int y = 0; y < n; ++y) {
+        const cv::Vec2f* f = flow.ptr<cv::Vec2f>(y);
+        cv::Vec2f* m = map.ptr<cv::Vec2f>(y);
+        for (int x = 0; x < n; ++x) {
+            double sx = x - f[x][0] - c, sy = y - f[x][1] - c, r2 = sx * sx + sy * sy;
+            if (r2 > r_in * r_in) {
+                const double d = sx * wx + sy * wy;
+                if (wrap && d < 0) sx -= 2 * d * wx, sy -= 2 * d * wy;  // the upwind side reads downwind
+            }
+            m[x] = cv::Vec2f(float(sx + c), float(sy + c));
+        }
+    }
+    return map;
+}
+
+cv::Mat extend_past_rim_exact(const cv::Mat& image) { return sample_exact(image, rim_map(image.rows)); }
+
+cv::Mat sample_exact(const cv::Mat& image, const cv::Mat& positions) {
+    cv::Mat src = image.depth() == CV_32F ? image : cv::Mat();
+    if (src.empty()) image.convertTo(src, CV_32F);
+    return remap_exact(src, positions);
+}
+
 cv::Mat warp_in_disc(const cv::Mat& image, const cv::Mat& flow) {
     if (flow.type() != CV_32FC2 || flow.size() != image.size() || image.rows != image.cols)
         throw Error("warp_in_disc: the flow must be CV_32FC2 of the (square) image's size");
-    cv::Mat map(flow.size(), CV_32FC2);
-    for (int y = 0; y < flow.rows; ++y) {
-        const cv::Vec2f* f = flow.ptr<cv::Vec2f>(y);
-        cv::Vec2f* m = map.ptr<cv::Vec2f>(y);
-        for (int x = 0; x < flow.cols; ++x) m[x] = cv::Vec2f(float(x) - f[x][0], float(y) - f[x][1]);
-    }
-    cv::Mat src = image.depth() == CV_32F ? image : cv::Mat();
-    if (src.empty()) image.convertTo(src, CV_32F);
-    cv::Mat out = remap_exact(remap_exact(src, rim_map(image.rows)), map);
+    cv::Mat out = sample_exact(extend_past_rim_exact(image), warp_sources(flow));
     out.setTo(cv::Scalar::all(0), ~sky_disc_mask(image.rows));
     return out;
 }

@@ -30,6 +30,20 @@ cv::Mat extend_past_rim(const cv::Mat& image);
 // (motion/flow.h wind_flow); the usual first-order stand-in for a flow by source.
 cv::Mat warp_in_disc(const cv::Mat& image, const cv::Mat& flow);
 
+// Where the warp of a flow reads, per output pixel (CV_32FC2 pixel coordinates, x - F(x)), with
+// the networks' rim rule (sources beyond the rim read the rim-extended image, extend_past_rim). With
+// recycle, such a source is first carried to the far side of the disc (reflected across the line through the zenith
+// perpendicular to the flow's mean direction): what leaves downwind comes back upwind, so long
+// rollouts keep their clouds instead of filling up with the rim's values.
+cv::Mat warp_sources(const cv::Mat& flow, bool recycle = false);
+
+// extend_past_rim in full float precision (what the networks' warp samples).
+cv::Mat extend_past_rim_exact(const cv::Mat& image);
+
+// Bilinear lookup of a float image (any channel count) at positions (CV_32FC2), border replicate,
+// in full float precision (cv::remap rounds positions to 1/32 pixel).
+cv::Mat sample_exact(const cv::Mat& image, const cv::Mat& positions);
+
 // Advects an image along a flow field for `steps` steps at constant velocity:
 // out(x) = image(x - steps * flow(x)) (bilinear; outside the image reads 0). The backward lookup
 // through the flow at the destination is the usual first-order stand-in for forward splatting.

@@ -139,8 +139,6 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
     result.first = first, result.last = last, result.dt = seq.dt;
     result.methods = {"persistence", "farneback", "advect+prev", "model+prev", "model+wind"};
     if (paper) result.methods.push_back("paper");
-    if (std::getenv("DYNSKY_EVAL_EXPERIMENTS"))
-        for (const char* m : {"advect+raw", "model+nobg"}) result.methods.push_back(m);
     std::map<int, std::map<int, std::map<std::string, Accumulator>>> acc;
     // Farneback flows of consecutive pairs at the import resolution, computed once.
     std::map<int, cv::Mat> pair_flow;
@@ -168,13 +166,10 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
             // The clear background of the frame's sun: only the clouds move (motion/advect_residual.h).
             cv::Mat bg;
             if (at(t).sun_direction) bg = clear_background(at(t).sun_direction->cast<double>(), r, form);
-            advect.rollout_network_form(start, prev_motion, hmax, collect("advect+prev"), bg);
-            model.rollout_network_form(start, prev_motion, hmax, collect("model+prev"), bg);
-            model.rollout_network_form(start, wind, hmax, collect("model+wind"), bg);
-            if (std::getenv("DYNSKY_EVAL_EXPERIMENTS")) {
-                advect.rollout_network_form(start, prev_flow, hmax, collect("advect+raw"));
-                model.rollout_network_form(start, prev_motion, hmax, collect("model+nobg"));
-            }
+            const CloudFlow motion = CloudFlow::from_measured(prev_motion, seq.dt);
+            advect.rollout_network_form(start, motion, hmax, collect("advect+prev"), bg);
+            model.rollout_network_form(start, motion, hmax, collect("model+prev"), bg);
+            model.rollout_network_form(start, CloudFlow::from_wind(wind), hmax, collect("model+wind"), bg);
             if (paper && r == paper->info().resolution) {
                 cv::Mat s = start;
                 for (int h = 1; h <= hmax; ++h) pred["paper"].push_back(s = paper->step_network(s).next);

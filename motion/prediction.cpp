@@ -50,7 +50,7 @@ void write_prediction(const PredictionOptions& o) {
     const NetworkFormParams form = advect ? advect->info().form : paper->info().form;
     const int n = advect ? advect->info().resolution : paper->info().resolution;
     const double dt = advect ? advect->info().dt : paper->info().dt;
-    cv::Mat flow;
+    CloudFlow flow;
     if (advect) flow = advect->motion_flow(sky, motion, dt, sky.resolution);
     auto rollout = [&](const std::function<void(int, const SkyImage&)>& on_step) {
         if (advect) advect->rollout(sky, flow, o.steps, on_step);

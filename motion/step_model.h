@@ -25,6 +25,9 @@ class MediumStepModel {
     virtual void set_sun_direction(const Vec3d&) {}
     // The Delta t the model was made for (a trained network's), 0 when any is fine.
     virtual double native_dt() const { return 0.0; }
+    // True when only native_dt() is right (the paper's networks learnt one step's motion); models
+    // that take their motion as an input work at any Delta t.
+    virtual bool dt_is_fixed() const { return native_dt() > 0; }
 };
 
 }  // namespace dynsky
