@@ -285,8 +285,12 @@ def gaussian_blur(img, sigma=2.0):
 
 
 def hf_energy(img, mask, sigma=2.0):
-    """Mean squared difference to a sigma-2 px Gaussian blur over mask pixels (per image)."""
-    d = ((img - gaussian_blur(img, sigma)) ** 2).mean(1, keepdim=True)
+    """Mean squared difference to a sigma-2 px Gaussian blur over mask pixels (per image). The blur
+    is normalised inside the sky disc (G * (I d) / G * d), so the black outside the disc does not
+    count as detail at the rim."""
+    d = _disc_t(img.shape[-1], img.device)
+    blur = gaussian_blur(img * d, sigma) / gaussian_blur(d, sigma).clamp(min=1e-6)
+    d = ((img - blur) ** 2).mean(1, keepdim=True)
     return ((d * mask).sum((1, 2, 3)) / mask.sum((1, 2, 3)).clamp(min=1)).tolist()
 
 

@@ -85,14 +85,15 @@ def evaluate(model, sources, split, part="heldout", horizons=(1, 2, 6), max_star
     return out
 
 
-def selection_score(ev, horizons=(1, 2, 6)):
+def selection_score(ev, horizons=(1, 2, 6), clip=3.0):
     """Model-selection number (validation parts): mean over sources and horizons of
-    (model_prev - farneback) and (model_true - persistence), dB."""
+    (model_prev - farneback) and (model_true - persistence), each clipped to +-clip dB so that no
+    single part (e.g. a static clear procedural sky where persistence is exact, 100 dB) dominates."""
     d = []
     for name, r in ev.items():
         for h in horizons:
             if h in r.get("model_prev", {}):
-                d.append(r["model_prev"][h] - r["farneback"][h])
+                d.append(np.clip(r["model_prev"][h] - r["farneback"][h], -clip, clip))
             if h in r.get("model_true", {}):
-                d.append(r["model_true"][h] - r["persistence"][h])
+                d.append(np.clip(r["model_true"][h] - r["persistence"][h], -clip, clip))
     return float(np.mean(d)) if d else float("nan")

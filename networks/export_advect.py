@@ -112,6 +112,71 @@ def model_info(model, args, n, ops, extra=None):
     return info
 
 
+def write_card(args, info, used, names, excluded):
+    import advect_data as AD
+    lines = [f"# Model card: {info['name']} (kind advect-residual)", "",
+             "A medium-step cloud model whose motion comes from a GIVEN flow, never from memory: the sky is "
+             "warped by the flow (outside the network) and a small UNet corrects the warped image by a bounded "
+             "change. Report, figures and how it was chosen: docs/networks-advect-residual.md.", "",
+             "## Interface (exact; the C++ side implements this)", "", "```", INTERFACE, "```", "",
+             "## What it is", "",
+             f"- N = {info['resolution']}; UNet widths {info['widths']} (networks/unet.py blocks, (u, v) position "
+             "planes added as constants after the first and last convolutions), input 8 channels, output "
+             + ("3 channels: next = W + " if not info["kernel"] else
+                f"{info['kernel'] ** 2} kernel logits + 3: next = softmax-weighted {info['kernel']} x {info['kernel']} "
+                "neighbours of W + ") + f"{info['change_bound']:g} tanh(change).",
+             f"- {info['parameters']:,} parameters, {info['macs_per_step'] / 1e6:.1f} M multiply-adds per step; "
+             f"ONNX opset 11, fixed 1 x 8 x {info['resolution']} x {info['resolution']} input, operators "
+             f"{', '.join(info['onnx_ops'])}.",
+             "- reference_image.npy (I) and reference_flow.npy (F) give reference_input.npy through the warp above; "
+             "reference_output.npy is PyTorch's output for reference_input.npy (before clamping).", "",
+             "## Data and split", "",
+             "| source | frames | dt | what | fit (train) | validation | held out |", "|---|---:|---:|---|---|---|---|"]
+    what = {"arm_tsi": "ARM TSI 2017-05-24 15:40-18:09 UTC, broken cumulus",
+            "arm_clear": "ARM TSI 2017-05-24 12:00-15:39 UTC, clear morning",
+            "arm_dusk": "ARM TSI 2017-05-24 00:00-01:30 UTC, overcast clearing at dusk",
+            "mobotix": "Mobotix, Sophia Antipolis 2020-08-12 06:00-13:59, mostly overcast (other camera)"}
+    for name, sp in used.items():
+        meta = json.load(open(os.path.join(args.data, name, "meta.json")))
+        desc = what.get(name)
+        if desc is None:
+            pr = meta.get("procedural", {})
+            layers = ", ".join(f"{l['type']} {l['wind_speed_mps']:g} m/s from {l['wind_from_deg']:g} deg at "
+                               f"{l['altitude_m'] / 1e3:g} km" for l in pr.get("layers", []))
+            desc = f"procedural, coverage {pr.get('coverage')}: {layers}"
+        lines.append(f"| {name} | {meta['frame_count']} | {meta['dt_s']:g} s | {desc} | {sp['fit'][0]}-{sp['fit'][1] - 1} "
+                     f"({sp['train'][0]}-{sp['train'][1] - 1}) | {sp['val'][0]}-{sp['val'][1] - 1} | "
+                     f"{sp['heldout'][0]}-{sp['heldout'][1] - 1} |")
+    lines += ["", f"Trained on the part `{info.get('trained_part')}` (fit = first 70 %, train = first 80 %) of: "
+              f"{', '.join(info['trained_on'])}" + (f"; left out: {', '.join(sorted(e for e in excluded if e))}" if any(excluded) else "")
+              + ". The last 20 % of every source (held out) was not used for training or model selection "
+              "(selection used the validation part, 70-80 %).", "",
+              "Samples (networks/advect_data.py): frame k, flow F = prev Farneback (k-1 -> k) / true motion "
+              "(procedural: exact flow; real: the prev Farneback flow fitted as one uniform wind) / a random uniform "
+              "wind on clear skies / 0 (p = 0.15); targets k+1..k+K with the same F; rotation about the zenith "
+              "(flow vectors rotated), mirroring, exposure and white-balance gains in HDR. Loss: per sample "
+              "log(MSE + 0.05 (1 - cos) + 1e-6) over pixels seen at k and k+t and not saturated.", ""]
+    if args.command:
+        lines += ["## Training command", "", "```", args.command, "```", ""]
+    if args.card_tables and os.path.exists(args.card_tables):
+        lines += ["# Results (held-out, PyTorch, [0, 1] form at N, seen sky pixels)", "",
+                  "model, prev F: given the previous frame (F = Farneback prev -> current, fixed); model, true F: from one "
+                  "frame with the true motion (procedural: exact flow; real: the previous pair's Farneback flow fitted as "
+                  "one uniform wind); Farneback: the previous pair's flow applied h times, "
+                  "out(x) = I(x - h F(x)), 0 outside (sky/sky_metrics.cpp advect_by_flow). PSNR: mean of per-frame "
+                  "10 log10(1 / MSE).", ""]
+        lines += [l.replace("## ", "### ") for l in open(args.card_tables).read().splitlines()]
+    lines += ["", "## Limits", "",
+              "- The network corrects a warp; it cannot know motion the flow does not carry (F = 0 gives a "
+              "persistence-like sky).",
+              "- Clouds entering the view upwind come from the rim extension (the rim's values carried inward), "
+              "corrected by the net; over long rollouts these streaks, not real new clouds, fill the upwind sky.",
+              "- Trained on four real sequences of two cameras on two days; the sun and its aureole are not predicted "
+              "(saturated pixels are removed before stepping; none occur at 64 px in this data set).", ""]
+    with open(os.path.join(args.out, "MODEL_CARD.md"), "w") as f:
+        f.write("\n".join(lines))
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--checkpoint", required=True)
@@ -119,6 +184,8 @@ def main(argv=None):
     p.add_argument("--out", required=True)
     p.add_argument("--reference-source", default="arm_tsi")
     p.add_argument("--extra", default="", help="JSON file of extra model.json fields (metrics, timings)")
+    p.add_argument("--card-tables", default="", help="markdown (networks/report_advect.py --tables) for the card")
+    p.add_argument("--command", default="", help="the training command, for the card")
     args = p.parse_args(argv)
     import advect_data as AD
     import train_advect as T
@@ -145,6 +212,7 @@ def main(argv=None):
         json.dump(info, f, indent=2)
     with open(os.path.join(args.out, "split.json"), "w") as f:
         json.dump(used, f, indent=2)
+    write_card(args, info, used, names, ex)
     size = os.path.getsize(os.path.join(args.out, "model.onnx"))
     print(f"wrote {args.out}: model.onnx {size / 1e6:.2f} MB, ops {ops}")
     return info

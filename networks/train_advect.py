@@ -47,18 +47,53 @@ def image_loss(pred, tgt, mask, cos_weight=0.5):
     return mse + cos_weight * 0.1 * masked_mean(1 - cos, mask), mse
 
 
-def rollout_loss(model, x, v, f, cos_weight=0.5):
-    """x (B, K+1, 3, N, N), v (B, K+1, 1, N, N), f (B, 2, N, N)."""
-    K = x.shape[1] - 1
+def grad_mag(img):
+    """|gradient| per pixel (forward differences, mean over channels), (B, 1, N-1, N-1)."""
+    dx = img[:, :, :-1, 1:] - img[:, :, :-1, :-1]
+    dy = img[:, :, 1:, :-1] - img[:, :, :-1, :-1]
+    return torch.sqrt(dx * dx + dy * dy + 1e-8).mean(1, keepdim=True)
+
+
+def image_loss_log(pred, tgt, mask, cos_weight=0.5, eps=1e-6, gdl_weight=0.0):
+    """Per-sample loss l_b = MSE_b + 0.05 (1 - cos)_b on the sample's mask pixels, averaged as
+    log(l_b + eps): the mean per-frame PSNR is what is scored, and a clear sky (MSE ~1e-5) counts
+    as much as a cloudy one (MSE ~3e-3) instead of vanishing next to it."""
+    m = mask.sum((1, 2, 3)).clamp(min=1.0)
+    mse_b = (((pred - tgt) ** 2).mean(1, keepdim=True) * mask).sum((1, 2, 3)) / m
+    cos = torch.nn.functional.cosine_similarity(pred, tgt, dim=1, eps=1e-4)[:, None]
+    cos_b = ((1 - cos) * mask).sum((1, 2, 3)) / m
+    l_b = mse_b + cos_weight * 0.1 * cos_b
+    if gdl_weight:
+        # gradient-magnitude difference (Mathieu et al. 2016's GDL, squared): penalises blur, which
+        # MSE alone rewards under uncertainty and which compounds over a rollout
+        m2 = mask[:, :, :-1, :-1] * mask[:, :, 1:, :-1] * mask[:, :, :-1, 1:]
+        g = ((grad_mag(pred) - grad_mag(tgt)) ** 2 * m2).sum((1, 2, 3)) / m2.sum((1, 2, 3)).clamp(min=1.0)
+        l_b = l_b + gdl_weight * g
+    return torch.log(l_b + eps).mean(), masked_mean(((pred - tgt) ** 2).mean(1, keepdim=True), mask)
+
+
+def rollout_loss(model, x, v, f, cos_weight=0.5, log_loss=False, pushforward=0, gdl_weight=0.0):
+    """x (B, K+1+P, 3, N, N), v (B, K+1+P, 1, N, N), f (B, 2, N, N). With pushforward P > 0 the
+    model first steps P times without gradient (its own rollout, same F), then K scored steps
+    against frames k+P+1 .. k+P+K: it learns to correct its own accumulated errors (the
+    pushforward trick, Brandstetter et al. 2022)."""
+    K = x.shape[1] - 1 - pushforward
     img = A.fill_saturated(x[:, 0])
     sat0 = A.saturated(x[:, 0])
+    if pushforward:
+        with torch.no_grad():
+            for _ in range(pushforward):
+                img = A.step(model, img, f)
     total, mse1 = 0.0, None
-    for t in range(1, K + 1):
+    for t in range(pushforward + 1, pushforward + K + 1):
         img = A.step(model, img, f)
         mask = v[:, 0] * v[:, t] * (1 - sat0) * (1 - A.saturated(x[:, t]))
-        loss, mse = image_loss(img, x[:, t], mask, cos_weight)
+        if log_loss:
+            loss, mse = image_loss_log(img, x[:, t], mask, cos_weight, gdl_weight=gdl_weight)
+        else:
+            loss, mse = image_loss(img, x[:, t], mask, cos_weight)
         total = total + loss
-        if t == 1:
+        if mse1 is None:
             mse1 = mse
     return total / K, mse1
 
@@ -84,7 +119,8 @@ def train(args):
         for s in sources:
             resize_sequence_advect(s, args.res)
         n = args.res
-    sampler = AD.Sampler(sources, split, args.part, args.unroll, p_zero=args.p_zero, seed=args.seed)
+    sampler = AD.Sampler(sources, split, args.part, args.unroll + args.pushforward, p_zero=args.p_zero, seed=args.seed)
+    pf_rng = np.random.default_rng(args.seed + 1000)
     model = build_model(args)
     opt = torch.optim.Adam(model.parameters(), lr=args.lr)
     total_steps = args.steps_per_epoch * args.epochs
@@ -99,6 +135,8 @@ def train(args):
         opt.load_state_dict(ck["opt"])
         sched.load_state_dict(ck["sched"])
         sampler.set_state(ck["sampler"])
+        if "pf_rng" in ck:
+            pf_rng.bit_generator.state = ck["pf_rng"]
         torch.set_rng_state(ck["rng"])
         start_epoch, log, best = ck["epoch"], ck["log"], ck.get("best")
         print(f"resumed at epoch {start_epoch}", flush=True)
@@ -109,7 +147,9 @@ def train(args):
         losses, mses = [], []
         for b in range(args.steps_per_epoch):
             x, v, f, _ = sampler.batch(args.batch)
-            loss, mse1 = rollout_loss(model, x, v, f, args.cos_weight)
+            pf = int(pf_rng.integers(0, args.pushforward + 1)) if args.pushforward else 0
+            x, v = x[:, :pf + args.unroll + 1], v[:, :pf + args.unroll + 1]
+            loss, mse1 = rollout_loss(model, x, v, f, args.cos_weight, args.loss == "log", pf, args.gdl_weight)
             opt.zero_grad()
             loss.backward()
             torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)
@@ -133,7 +173,7 @@ def train(args):
         short = {k: v for k, v in entry.items() if k != "val"}
         print(json.dumps(short), flush=True)
         torch.save({"model": model.state_dict(), "opt": opt.state_dict(), "sched": sched.state_dict(),
-                    "sampler": sampler.state(), "rng": torch.get_rng_state(), "epoch": epoch + 1, "log": log,
+                    "sampler": sampler.state(), "pf_rng": pf_rng.bit_generator.state, "rng": torch.get_rng_state(), "epoch": epoch + 1, "log": log,
                     "best": best, "args": vars(args)}, ckpt)
         with open(os.path.join(args.out, "training_log.json"), "w") as fh:
             json.dump(log, fh, indent=1)
@@ -185,7 +225,12 @@ def main(argv=None):
     p.add_argument("--unroll", type=int, default=3)
     p.add_argument("--lr", type=float, default=1e-3)
     p.add_argument("--p-zero", type=float, default=0.15)
+    p.add_argument("--pushforward", type=int, default=0,
+                   help="per batch, first step the model 0..P times without gradient (uniform), then --unroll scored steps")
+    p.add_argument("--gdl-weight", type=float, default=0.0, help="weight of the gradient-magnitude difference term")
     p.add_argument("--cos-weight", type=float, default=0.5)
+    p.add_argument("--loss", default="log", choices=["log", "mse"],
+                   help="log: mean over samples of log(MSE + 0.05 (1 - cos) + 1e-6); mse: batch MSE + 0.05 (1 - cos)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--threads", type=int, default=1)
     p.add_argument("--eval-every", type=int, default=2)
