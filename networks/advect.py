@@ -320,21 +320,32 @@ class KernelBlend(nn.Module):
 
 
 class AdvectResidual(nn.Module):
-    """X (B, 8, N, N) = [W, I, F / (0.08 N)] -> next (B, 3, N, N) before clamping."""
+    """X (B, 8, N, N) = [W, I, F / (0.08 N)] -> next (B, 3, N, N) before clamping.
 
-    def __init__(self, widths=(16, 32, 64, 64), kernel=0, bound=0.1, centre_logit=4.0):
+    kernel = 0:  next = W + bound tanh(c)
+    kernel = k:  next = sum_j softmax_j W(x + o_j) (k x k neighbours) + bound tanh(c)
+    gate:        next = (1 - a) W + a I + bound tanh(c), a = sigmoid(g) per pixel: the net can hold
+                 a pixel still (a = 1: persistence, e.g. clear sky under a wind) or let it move
+                 (a = 0: advection); (1 - a) is computed as sigmoid(-g) (ONNX: Mul, Sigmoid, Add).
+    """
+
+    def __init__(self, widths=(16, 32, 64, 64), kernel=0, bound=0.1, centre_logit=4.0, gate=False, gate_logit=-4.0):
         super().__init__()
         self.widths = tuple(widths)
         self.kernel = int(kernel)
         self.bound = float(bound)
+        self.gate = bool(gate)
         kk = self.kernel * self.kernel
-        self.unet = U.UNet(8, kk + 3, self.widths)
-        with torch.no_grad():  # start as pure advection: change 0, kernel ~ centre tap
+        ng = 1 if self.gate else 0
+        self.unet = U.UNet(8, kk + ng + 3, self.widths)
+        with torch.no_grad():  # start as (nearly) pure advection: change 0, kernel ~ centre tap, gate ~ 0
             self.unet.head.weight.zero_()
             self.unet.head.bias.zero_()
             self.unet.pos_out.weight.zero_()
             if kk:
                 self.unet.head.bias[kk // 2] = centre_logit
+            if ng:
+                self.unet.head.bias[kk] = gate_logit
         if kk:
             self.blend = KernelBlend(self.kernel)
 
@@ -343,7 +354,12 @@ class AdvectResidual(nn.Module):
         w = x[:, 0:3]
         kk = self.kernel * self.kernel
         base = self.blend(w, y[:, 0:kk]) if kk else w
-        return base + self.bound * torch.tanh(y[:, kk:kk + 3])
+        c0 = kk
+        if self.gate:
+            g = y[:, kk:kk + 1]
+            base = torch.sigmoid(g * -1.0) * base + torch.sigmoid(g) * x[:, 3:6]  # Mul, not Neg (OpenCV 4.6)
+            c0 = kk + 1
+        return base + self.bound * torch.tanh(y[:, c0:c0 + 3])
 
 
 def step(model, img, flow):

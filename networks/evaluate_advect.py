@@ -222,7 +222,8 @@ def save_rollout_png(roll, frames, path):
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--data", required=True)
-    p.add_argument("--model", action="append", required=True, help="NAME=checkpoint.pt")
+    p.add_argument("--model", action="append", required=True,
+                   help="NAME=checkpoint.pt, or NAME=checkpoint.pt@S to shrink the change's bound by S")
     p.add_argument("--out", required=True)
     p.add_argument("--part", default="heldout")
     p.add_argument("--sources", default="")
@@ -240,7 +241,12 @@ def main(argv=None):
     results, cpu = {}, {}
     for spec in args.model:
         name, path = spec.split("=", 1)
+        scale = 1.0
+        if "@" in path:  # NAME=ckpt.pt@0.5: the per-step change's bound shrunk by 0.5
+            path, scale = path.split("@")
+            scale = float(scale)
         model, targs = T.load_model(path)
+        model.bound *= scale
         sources = base_sources
         if targs.get("res") and targs["res"] != base_sources[0].n:
             sources, _ = AD.load_sources(args.data, names)

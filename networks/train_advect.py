@@ -103,7 +103,7 @@ def parse_widths(text):
 
 
 def build_model(args):
-    return A.AdvectResidual(parse_widths(args.widths), args.kernel, args.bound)
+    return A.AdvectResidual(parse_widths(args.widths), args.kernel, args.bound, gate=args.gate)
 
 
 def train(args):
@@ -204,7 +204,7 @@ def resize_sequence_advect(s, n):
 def load_model(path):
     ck = torch.load(path)
     a = ck["args"]
-    m = A.AdvectResidual(parse_widths(a["widths"]), a["kernel"], a["bound"])
+    m = A.AdvectResidual(parse_widths(a["widths"]), a["kernel"], a["bound"], gate=a.get("gate", False))
     m.load_state_dict(ck["model"])
     return m.eval(), a
 
@@ -219,6 +219,7 @@ def main(argv=None):
     p.add_argument("--widths", default="16,32,64,64")
     p.add_argument("--kernel", type=int, default=0, help="0: W + bound tanh; 3 or 5: k x k kernel blend of W + bound tanh")
     p.add_argument("--bound", type=float, default=0.1, help="bound of the per-step change")
+    p.add_argument("--gate", action="store_true", help="next = (1 - a) W + a I + bound tanh(c), a = sigmoid(learnt)")
     p.add_argument("--epochs", type=int, default=12)
     p.add_argument("--steps-per-epoch", type=int, default=100)
     p.add_argument("--batch", type=int, default=16)
