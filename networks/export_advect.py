@@ -53,6 +53,15 @@ Saturated pixels (>= 0.999 in any channel: the sun) are removed (filled from the
 before stepping, as for the v1 model."""
 
 
+USER_WIND = """\
+How the training built a flow from a uniform wind (networks/advect.py wind_flow; the procedural exact flow
+agrees to ~0.01-0.1 px): the layer displacement per step w = (wind speed x dt / layer height) in image axes
+(+x right = west, +y down = south in the canonical north-up, east-left fisheye). For each pixel centre (u, v),
+r = hypot(u, v), theta = r x 90 deg (clamped to 88 deg), ground point P = tan(theta) (u, v) / r (units of the
+layer height); source S = P - w; r_s = atan(|S|) / 90 deg; F = ((u, v) - r_s S / |S|) x N / 2 pixels
+(0 beyond 88 deg)."""
+
+
 def export_onnx(model, n, path):
     model = copy.deepcopy(model).eval()
     for m in model.modules():
@@ -95,6 +104,12 @@ def model_info(model, args, n, ops, extra=None):
         "widths": list(model.widths),
         "kernel": model.kernel,
         "change_bound": model.bound,
+        "gate": bool(getattr(model, "gate", False)),
+        "network_output_rule": ("next = sigmoid(-g) W + sigmoid(g) I + change_bound tanh(c); the UNet's 4 output channels "
+                                "are g, c_r, c_g, c_b" if getattr(model, "gate", False) else
+                                "next = W + change_bound tanh(c)" if not model.kernel else
+                                "next = softmax-weighted k x k neighbours of W + change_bound tanh(c)"),
+        "user_wind_flow": USER_WIND,
         "input": {"name": "warped_image_flow", "shape": [1, 8, n, n],
                   "channels": ["W r", "W g", "W b", "I r", "I g", "I b", "F x / (flow_scale N)", "F y / (flow_scale N)"]},
         "output": {"name": "next", "shape": [1, 3, n, n], "note": "before clamping; clamp to [0, 1], 0 outside the disc"},
@@ -122,9 +137,12 @@ def write_card(args, info, used, names, excluded):
              "## What it is", "",
              f"- N = {info['resolution']}; UNet widths {info['widths']} (networks/unet.py blocks, (u, v) position "
              "planes added as constants after the first and last convolutions), input 8 channels, output "
-             + ("3 channels: next = W + " if not info["kernel"] else
+             + ("4 channels (g, c): next = sigmoid(-g) W + sigmoid(g) I + " if info.get("gate") else
+                "3 channels: next = W + " if not info["kernel"] else
                 f"{info['kernel'] ** 2} kernel logits + 3: next = softmax-weighted {info['kernel']} x {info['kernel']} "
-                "neighbours of W + ") + f"{info['change_bound']:g} tanh(change).",
+                "neighbours of W + ") + f"{info['change_bound']:g} tanh(c)"
+             + (" (the gate variant: per pixel the net blends the warped image W and the unwarped I, so it can hold "
+                "clear sky still under a wind, and adds a bounded change)." if info.get("gate") else "."),
              f"- {info['parameters']:,} parameters, {info['macs_per_step'] / 1e6:.1f} M multiply-adds per step; "
              f"ONNX opset 11, fixed 1 x 8 x {info['resolution']} x {info['resolution']} input, operators "
              f"{', '.join(info['onnx_ops'])}.",
@@ -166,6 +184,8 @@ def write_card(args, info, used, names, excluded):
                   "out(x) = I(x - h F(x)), 0 outside (sky/sky_metrics.cpp advect_by_flow). PSNR: mean of per-frame "
                   "10 log10(1 / MSE).", ""]
         lines += [l.replace("## ", "### ") for l in open(args.card_tables).read().splitlines()]
+    if getattr(args, "card_extra", "") and os.path.exists(args.card_extra):
+        lines += [""] + open(args.card_extra).read().splitlines()
     lines += ["", "## Limits", "",
               "- The network corrects a warp; it cannot know motion the flow does not carry (F = 0 gives a "
               "persistence-like sky).",
@@ -186,6 +206,7 @@ def main(argv=None):
     p.add_argument("--extra", default="", help="JSON file of extra model.json fields (metrics, timings)")
     p.add_argument("--card-tables", default="", help="markdown (networks/report_advect.py --tables) for the card")
     p.add_argument("--command", default="", help="the training command, for the card")
+    p.add_argument("--card-extra", default="", help="more markdown for the card (unseen camera, stability verdicts)")
     args = p.parse_args(argv)
     import advect_data as AD
     import train_advect as T
