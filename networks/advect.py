@@ -115,9 +115,27 @@ def advect_by_flow(img, flow, steps):
     return sample(img, coords, "zeros")
 
 
-def network_input(img, flow):
+def compensation(background, flow):
+    """B - warp(B): what the clear background (the sky under the clouds, C++ motion/network_form.h
+    clear_background) loses when warped. Added to the warp, only the clouds move: W = warp(I) + B -
+    warp(B). background (B, 3, N, N) or None."""
+    if background is None:
+        return None
+    return (background - warp(background, flow)) * _disc_t(background.shape[-1], background.device)
+
+
+def smooth_motion(flow):
+    """The C++ motion/flow.h smooth_motion: the previous-frame flow Gaussian-smoothed, sigma N / 32,
+    replicate borders."""
+    return gaussian_blur(flow, flow.shape[-1] / 32.0)
+
+
+def network_input(img, flow, comp=None):
     n = img.shape[-1]
-    return torch.cat([warp(img, flow), img, flow / (FLOW_SCALE * n)], 1)
+    w = warp(img, flow)
+    if comp is not None:
+        w = w + comp
+    return torch.cat([w, img, flow / (FLOW_SCALE * n)], 1)
 
 
 # ---------------------------------------------------------------- uniform wind
@@ -362,10 +380,11 @@ class AdvectResidual(nn.Module):
         return base + self.bound * torch.tanh(y[:, c0:c0 + 3])
 
 
-def step(model, img, flow):
-    """One full step as the C++ side runs it: warp, network, clamp, zero outside the disc."""
+def step(model, img, flow, comp=None):
+    """One full step as the C++ side runs it: warp (+ background compensation), network, clamp, zero
+    outside the disc."""
     n = img.shape[-1]
-    return model(network_input(img, flow)).clamp(0, 1) * _disc_t(n, img.device)
+    return model(network_input(img, flow, comp)).clamp(0, 1) * _disc_t(n, img.device)
 
 
 def macs(model, n):

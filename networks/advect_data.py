@@ -35,6 +35,8 @@ class Source:
         self.valid = np.load(os.path.join(folder, "valid.npy"))
         self.cloud = np.load(os.path.join(folder, "cloud.npy"))
         self.flow = np.load(os.path.join(folder, "flow_farneback.npy"))
+        bg = os.path.join(folder, "background.npy")
+        self.background = np.load(bg) if os.path.exists(bg) else None
         ex = os.path.join(folder, "flow_exact.npy")
         self.flow_exact = np.load(ex) if os.path.exists(ex) else None
         self.procedural = self.flow_exact is not None
@@ -78,7 +80,7 @@ def true_flow(src, ks):
 
 class Sampler:
     def __init__(self, sources, split, part, unroll, weights=None, p_zero=0.15, p_wind_clear=0.3,
-                 augment=True, seed=1):
+                 augment=True, seed=1, compensated=False, smooth=False):
         self.sources = sources
         self.unroll = unroll
         self.ranges = []
@@ -93,6 +95,8 @@ class Sampler:
         self.p_zero = p_zero
         self.p_wind_clear = p_wind_clear
         self.augment = augment
+        self.compensated = compensated
+        self.smooth = smooth
         self.rng = np.random.default_rng(seed)
 
     def state(self):
@@ -104,7 +108,7 @@ class Sampler:
     def batch(self, b):
         rng = self.rng
         K = self.unroll
-        imgs, valids, flows, kinds = [], [], [], []
+        imgs, valids, flows, kinds, bgs = [], [], [], [], []
         for _ in range(b):
             si = rng.choice(len(self.sources), p=self.p)
             s = self.sources[si]
@@ -112,6 +116,7 @@ class Sampler:
             k = int(rng.integers(lo, hi))
             imgs.append(s.images[k:k + K + 1])
             valids.append(s.valid[k:k + K + 1])
+            bgs.append(s.background[k] if s.background is not None else np.zeros_like(s.images[k]))
             u = rng.random()
             if u < self.p_zero:
                 kind = "zero"
@@ -124,6 +129,8 @@ class Sampler:
             elif rng.random() < 0.5:
                 kind = "prev"
                 f = t_img(s.flow[k - 1:k])
+                if self.smooth:
+                    f = A.smooth_motion(f)
             else:
                 kind = "true"
                 f = true_flow(s, [k])
@@ -133,12 +140,14 @@ class Sampler:
         x = torch.from_numpy(np.stack(imgs)).float().permute(0, 1, 4, 2, 3)  # B, K+1, 3, N, N
         v = torch.from_numpy(np.stack(valids).astype(np.float32))[:, :, None]  # B, K+1, 1, N, N
         f = torch.cat(flows, 0)
+        bg = t_img(np.stack(bgs)) if self.compensated else None
         if self.augment:
-            x, v, f = augment(x, v, f, rng)
-        return x, v, f, kinds
+            x, v, f, bg = augment(x, v, f, rng, bg=bg)
+        comp = A.compensation(bg, f) if self.compensated else None
+        return x, v, f, kinds, comp
 
 
-def augment(x, v, f, rng, p_rot=0.75, p_mirror=0.5, exposure_sigma=0.25, wb_sigma=0.05):
+def augment(x, v, f, rng, p_rot=0.75, p_mirror=0.5, exposure_sigma=0.25, wb_sigma=0.05, bg=None):
     B, T, C, n, _ = x.shape
     disc = A._disc_t(n, x.device)
     rot = rng.random(B) < p_rot
@@ -148,6 +157,8 @@ def augment(x, v, f, rng, p_rot=0.75, p_mirror=0.5, exposure_sigma=0.25, wb_sigm
         x = (A.rotate(x.reshape(B * T, C, n, n), angT) * disc).reshape(B, T, C, n, n)
         v = (A.rotate(v.reshape(B * T, 1, n, n), angT, extend=False) > 0.99).float().reshape(B, T, 1, n, n)
         f = A.rotate_flow(f, ang) * disc
+        if bg is not None:
+            bg = A.rotate(bg, ang) * disc
         # unrotated samples: angle 0 resamples exactly (identity grid), nothing changes
     mir = rng.random(B) < p_mirror
     if mir.any():
@@ -155,7 +166,11 @@ def augment(x, v, f, rng, p_rot=0.75, p_mirror=0.5, exposure_sigma=0.25, wb_sigm
         x[idx] = torch.flip(x[idx], [-1])
         v[idx] = torch.flip(v[idx], [-1])
         f[idx] = A.mirror_flow(f[idx])
+        if bg is not None:
+            bg[idx] = torch.flip(bg[idx], [-1])
     gains = np.exp(rng.normal(0, exposure_sigma, (B, 1)) + rng.normal(0, wb_sigma, (B, 3)))
     g = torch.from_numpy(gains.astype(np.float32))
     x = A.exposure_jitter(x.reshape(B * T, C, n, n), g.repeat_interleave(T, 0)).reshape(B, T, C, n, n) * disc
-    return x, v, f
+    if bg is not None:
+        bg = A.exposure_jitter(bg, g) * disc
+    return x, v, f, bg

@@ -17,6 +17,8 @@ import torch
 import advect as A
 import advect_data as AD
 
+strong_baseline = True  # Farneback with the rim extended, as `dynsky sky evaluate` scores it
+
 METHODS = ("model_prev", "model_true", "model_zero", "advect_prev", "persistence", "farneback")
 
 
@@ -26,7 +28,7 @@ def pure_advection(x):
 
 @torch.no_grad()
 def evaluate_source(model, src, split, part="heldout", horizons=(1, 2, 6), max_starts=None, methods=METHODS,
-                    batch=32):
+                    batch=32, compensated=False, smooth=False):
     model.eval() if model is not None and hasattr(model, "eval") else None
     lo, hi = split[src.name][part]
     horizons = tuple(h for h in horizons if hi - (lo + 1) - h >= 1) or horizons[:1]
@@ -45,7 +47,10 @@ def evaluate_source(model, src, split, part="heldout", horizons=(1, 2, 6), max_s
         v0 = torch.from_numpy(src.valid[ks].astype(np.float32))[:, None]
         sat0 = A.saturated(x0)
         f_prev = AD.t_img(src.flow[[k - 1 for k in ks]])
-        flows = {"model_prev": f_prev, "advect_prev": f_prev, "model_zero": torch.zeros_like(f_prev)}
+        # The models' motion estimate (smoothed, as the C++ side); the baseline keeps the raw flow.
+        f_model = A.smooth_motion(f_prev) if smooth else f_prev
+        bg = AD.t_img(src.background[ks]) if compensated and src.background is not None else None
+        flows = {"model_prev": f_model, "advect_prev": f_model, "model_zero": torch.zeros_like(f_prev)}
         if "model_true" in methods:
             flows["model_true"] = AD.true_flow(src, ks)
         preds = {}
@@ -54,8 +59,9 @@ def evaluate_source(model, src, split, part="heldout", horizons=(1, 2, 6), max_s
                 net = pure_advection if m == "advect_prev" else model
                 x = A.fill_saturated(x0)
                 out = {}
+                comp = A.compensation(bg, flows[m])
                 for h in range(1, H + 1):
-                    x = A.step(net, x, flows[m])
+                    x = A.step(net, x, flows[m], comp)
                     if h in horizons:
                         out[h] = x
                 preds[m] = out
@@ -67,7 +73,8 @@ def evaluate_source(model, src, split, part="heldout", horizons=(1, 2, 6), max_s
                 if m == "persistence":
                     p = x0
                 elif m == "farneback":
-                    p = A.advect_by_flow(x0, f_prev, h)
+                    # the strong form: rim extended (C++ sky evaluate), one warp by h F
+                    p = A.warp(x0, f_prev * h) if strong_baseline else A.advect_by_flow(x0, f_prev, h)
                 else:
                     p = preds[m][h]
                 mse = ((p - tgt) ** 2).mean(1, keepdim=True)
@@ -76,10 +83,12 @@ def evaluate_source(model, src, split, part="heldout", horizons=(1, 2, 6), max_s
     return {m: {h: float(np.mean(v)) for h, v in r.items()} for m, r in res.items()}, len(starts)
 
 
-def evaluate(model, sources, split, part="heldout", horizons=(1, 2, 6), max_starts=None, methods=METHODS):
+def evaluate(model, sources, split, part="heldout", horizons=(1, 2, 6), max_starts=None, methods=METHODS,
+             compensated=False, smooth=False):
     out = {}
     for s in sources:
-        r, count = evaluate_source(model, s, split, part, horizons, max_starts, methods)
+        r, count = evaluate_source(model, s, split, part, horizons, max_starts, methods, compensated=compensated,
+                                   smooth=smooth)
         r["starts"] = count
         out[s.name] = r
     return out

@@ -72,7 +72,7 @@ def image_loss_log(pred, tgt, mask, cos_weight=0.5, eps=1e-6, gdl_weight=0.0):
     return torch.log(l_b + eps).mean(), masked_mean(((pred - tgt) ** 2).mean(1, keepdim=True), mask)
 
 
-def rollout_loss(model, x, v, f, cos_weight=0.5, log_loss=False, pushforward=0, gdl_weight=0.0):
+def rollout_loss(model, x, v, f, cos_weight=0.5, log_loss=False, pushforward=0, gdl_weight=0.0, comp=None):
     """x (B, K+1+P, 3, N, N), v (B, K+1+P, 1, N, N), f (B, 2, N, N). With pushforward P > 0 the
     model first steps P times without gradient (its own rollout, same F), then K scored steps
     against frames k+P+1 .. k+P+K: it learns to correct its own accumulated errors (the
@@ -83,10 +83,10 @@ def rollout_loss(model, x, v, f, cos_weight=0.5, log_loss=False, pushforward=0, 
     if pushforward:
         with torch.no_grad():
             for _ in range(pushforward):
-                img = A.step(model, img, f)
+                img = A.step(model, img, f, comp)
     total, mse1 = 0.0, None
     for t in range(pushforward + 1, pushforward + K + 1):
-        img = A.step(model, img, f)
+        img = A.step(model, img, f, comp)
         mask = v[:, 0] * v[:, t] * (1 - sat0) * (1 - A.saturated(x[:, t]))
         if log_loss:
             loss, mse = image_loss_log(img, x[:, t], mask, cos_weight, gdl_weight=gdl_weight)
@@ -119,7 +119,8 @@ def train(args):
         for s in sources:
             resize_sequence_advect(s, args.res)
         n = args.res
-    sampler = AD.Sampler(sources, split, args.part, args.unroll + args.pushforward, p_zero=args.p_zero, seed=args.seed)
+    sampler = AD.Sampler(sources, split, args.part, args.unroll + args.pushforward, p_zero=args.p_zero, seed=args.seed,
+                         compensated=args.compensated, smooth=args.smooth)
     pf_rng = np.random.default_rng(args.seed + 1000)
     model = build_model(args)
     opt = torch.optim.Adam(model.parameters(), lr=args.lr)
@@ -146,10 +147,10 @@ def train(args):
         model.train()
         losses, mses = [], []
         for b in range(args.steps_per_epoch):
-            x, v, f, _ = sampler.batch(args.batch)
+            x, v, f, _, comp = sampler.batch(args.batch)
             pf = int(pf_rng.integers(0, args.pushforward + 1)) if args.pushforward else 0
             x, v = x[:, :pf + args.unroll + 1], v[:, :pf + args.unroll + 1]
-            loss, mse1 = rollout_loss(model, x, v, f, args.cos_weight, args.loss == "log", pf, args.gdl_weight)
+            loss, mse1 = rollout_loss(model, x, v, f, args.cos_weight, args.loss == "log", pf, args.gdl_weight, comp)
             opt.zero_grad()
             loss.backward()
             torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)
@@ -161,7 +162,8 @@ def train(args):
                  "train_psnr1": float(10 * np.log10(1 / np.mean(mses))), "seconds": time.time() - t0}
         if val_part and args.eval_every and ((epoch + 1) % args.eval_every == 0 or epoch + 1 == args.epochs):
             ev = AE.evaluate(model, sources, split, val_part, (1, 2, 6), max_starts=args.val_starts,
-                             methods=("model_prev", "model_true", "persistence", "farneback"))
+                             methods=("model_prev", "model_true", "persistence", "farneback"),
+                             compensated=args.compensated, smooth=args.smooth)
             entry["val_score"] = AE.selection_score(ev)
             entry["val"] = {k: {m: {str(h): round(p, 3) for h, p in r[m].items()} for m in
                                 ("model_prev", "model_true", "persistence", "farneback")} for k, r in ev.items()}
@@ -219,6 +221,9 @@ def main(argv=None):
     p.add_argument("--widths", default="16,32,64,64")
     p.add_argument("--kernel", type=int, default=0, help="0: W + bound tanh; 3 or 5: k x k kernel blend of W + bound tanh")
     p.add_argument("--bound", type=float, default=0.1, help="bound of the per-step change")
+    p.add_argument("--compensated", action="store_true",
+                   help="W = warp(I) + B - warp(B) with the frames' clear background B (background.npy): only the clouds move")
+    p.add_argument("--smooth", action="store_true", help="previous-frame flows smoothed (sigma N/32) as the C++ side does")
     p.add_argument("--gate", action="store_true", help="next = (1 - a) W + a I + bound tanh(c), a = sigmoid(learnt)")
     p.add_argument("--epochs", type=int, default=12)
     p.add_argument("--steps-per-epoch", type=int, default=100)
