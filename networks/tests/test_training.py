@@ -143,5 +143,145 @@ class TrainingTest(unittest.TestCase):
         self.assertEqual(ref_in.shape, (32, 32, 3))
 
 
+@unittest.skipUnless(HAVE_TORCH, "SKIPPED: torch (or numpy) is not installed for /usr/bin/python3")
+class AdvectResidualTest(unittest.TestCase):
+    """The advect-residual model (networks/advect.py): warp rule, symmetries, training, export."""
+
+    def setUp(self):
+        torch.set_num_threads(1)
+        torch.manual_seed(0)
+        self.tmp = tempfile.mkdtemp()
+
+    def tearDown(self):
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+    @staticmethod
+    def bilinear(img, x, y):
+        """Hand bilinear sample of img (C, N, N) at pixel (x, y), border replicate."""
+        n = img.shape[-1]
+        x = min(max(x, 0.0), n - 1.0)
+        y = min(max(y, 0.0), n - 1.0)
+        x0, y0 = int(np.floor(x)), int(np.floor(y))
+        x1, y1 = min(x0 + 1, n - 1), min(y0 + 1, n - 1)
+        fx, fy = x - x0, y - y0
+        return ((1 - fx) * (1 - fy) * img[:, y0, x0] + fx * (1 - fy) * img[:, y0, x1]
+                + (1 - fx) * fy * img[:, y1, x0] + fx * fy * img[:, y1, x1])
+
+    def test_warp_matches_hand_computation(self):
+        import advect as A
+        n = 8
+        rng = np.random.default_rng(3)
+        img = rng.random((3, n, n)).astype(np.float32) * A.disc_mask(n)[None]
+        # Rim extension of the corner pixel (0, 0): u = v = -0.875, r = 1.2374 > r_in = 0.8125.
+        u = 2 * 0.5 / n - 1
+        s = (1 - 1.5 / n) / np.hypot(u, u)
+        x = (u * s + 1) * n / 2 - 0.5
+        e = A.rim_extend(torch.from_numpy(img)[None])[0].numpy()
+        np.testing.assert_allclose(e[:, 0, 0], self.bilinear(img, x, x), atol=1e-5)
+        np.testing.assert_allclose(e[:, 3, 4], img[:, 3, 4], atol=1e-6)  # inside r_in: unchanged
+        # Warp with a flow of (0.5, -0.25) px at pixel (i=4, j=3): W = E(I)(4 - 0.5, 3 + 0.25).
+        flow = np.zeros((2, n, n), np.float32)
+        flow[:, 3, 4] = (0.5, -0.25)
+        flow[:, 0, 0] = (2.0, 2.0)  # outside the disc: W is 0 there whatever F says
+        w = A.warp(torch.from_numpy(img)[None], torch.from_numpy(flow)[None])[0].numpy()
+        np.testing.assert_allclose(w[:, 3, 4], self.bilinear(e, 3.5, 3.25), atol=1e-5)
+        np.testing.assert_allclose(w[:, 0, 0], 0.0)
+        # The Farneback baseline (sky_metrics.cpp advect_by_flow): 0 beyond the image, 2 steps.
+        flow[:, 3, 0] = (1.0, 0.0)
+        adv = A.advect_by_flow(torch.from_numpy(img)[None], torch.from_numpy(flow)[None], 2)[0].numpy()
+        np.testing.assert_allclose(adv[:, 3, 4], self.bilinear(img, 3.0, 3.5), atol=1e-5)
+        np.testing.assert_allclose(adv[:, 3, 0], 0.0, atol=1e-7)  # samples x = -2: black
+        # The network input: [W, I, F / (0.08 N)].
+        x8 = A.network_input(torch.from_numpy(img)[None], torch.from_numpy(flow)[None])[0].numpy()
+        self.assertEqual(x8.shape, (8, n, n))
+        np.testing.assert_allclose(x8[6:, 3, 4], np.array([0.5, -0.25]) / (0.08 * n), atol=1e-6)
+
+    def smooth_disc_image(self, n):
+        import advect as A
+        c = A.pixel_centres(n)
+        u, v = np.meshgrid(c, c)
+        img = np.stack([0.5 + 0.3 * np.sin(3 * u + 1) * np.cos(2 * v), 0.4 + 0.2 * np.cos(2 * u - v),
+                        0.6 + 0.1 * u * v]).astype(np.float32)
+        return torch.from_numpy(img * A.disc_mask(n)[None])[None]
+
+    def test_rotating_image_and_flow_commutes_with_warping(self):
+        import advect as A
+        n = 32
+        img = self.smooth_disc_image(n)
+        flow = A.wind_flow(n, [[0.12, -0.05]])
+        disc = A._disc_t(n, "cpu")
+        inner = torch.from_numpy((np.hypot(*np.meshgrid(A.pixel_centres(n), A.pixel_centres(n))) < 0.8)
+                                 .astype(np.float32))
+        for deg, tol in ((90.0, 1e-5), (180.0, 1e-5), (33.0, 0.01)):
+            ang = torch.tensor([np.radians(deg)], dtype=torch.float32)
+            a = A.rotate(A.warp(img, flow), ang) * disc
+            b = A.warp(A.rotate(img, ang) * disc, A.rotate_flow(flow, ang) * disc)
+            err = float(((a - b).abs() * inner).max())
+            self.assertLess(err, tol, f"rotation by {deg} deg: max difference {err}")
+        # Rotation by 90 deg is a pixel permutation: the flow vectors turn with it.
+        f90 = A.rotate_flow(flow, torch.tensor([np.pi / 2]))
+        np.testing.assert_allclose(f90[0, 0].numpy(), -torch.rot90(flow[0, 1], -1, (0, 1)).numpy(), atol=1e-5)
+        # Mirroring (flip x, negate flow x) commutes exactly.
+        a = A.mirror(A.warp(img, flow))
+        b = A.warp(A.mirror(img), A.mirror_flow(flow))
+        self.assertLess(float((a - b).abs().max()), 1e-5)
+
+    def test_uniform_wind_fit_recovers_the_wind(self):
+        import advect as A
+        n = 32
+        w = torch.tensor([[0.08, -0.15]])
+        f = A.wind_flow(n, w)
+        fit_w, fit = A.fit_uniform_wind(f, A._disc_t(n, "cpu"), n)
+        np.testing.assert_allclose(fit_w.numpy(), w.numpy(), atol=2e-3)
+        # At the zenith the flow is the layer displacement's angle: atan(|w|) / 90 deg x N / 2.
+        z = float(torch.hypot(f[0, 0, 15:17, 15:17], f[0, 1, 15:17, 15:17]).mean())
+        self.assertAlmostEqual(z, np.arctan(float(w.norm())) / (np.pi / 2) * n / 2, delta=0.05)
+
+    def test_tiny_model_loss_falls(self):
+        import advect as A
+        import train_advect as T
+        n = 32
+        images, disc, flow = drifting_sequence(8, n)
+        images = images + 0.04 * np.arange(8)[:, None, None, None] * disc[None, :, :, None]  # clouds brighten
+        x = torch.from_numpy(images.astype(np.float32)).permute(0, 3, 1, 2)
+        xs = torch.stack([x[0:4], x[1:5], x[2:6]])  # 3 windows of K + 1 = 4 frames
+        v = torch.from_numpy(disc.astype(np.float32))[None, None, None].expand(3, 4, 1, n, n)
+        f = torch.from_numpy(flow[:3]).permute(0, 3, 1, 2)
+        model = A.AdvectResidual((4, 8), kernel=0)
+        opt = torch.optim.Adam(model.parameters(), lr=3e-3)
+        losses = []
+        for _ in range(30):
+            loss, _ = T.rollout_loss(model, xs, v, f)
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            losses.append(float(loss))
+        self.assertTrue(all(np.isfinite(losses)))
+        self.assertLess(np.mean(losses[-3:]), 0.5 * np.mean(losses[:3]), f"{losses[0]:.5f} -> {losses[-1]:.5f}")
+
+    def test_untrained_model_is_pure_advection_and_exports(self):
+        import advect as A
+        import export_advect as X
+        n = 32
+        img = self.smooth_disc_image(n)
+        flow = A.wind_flow(n, [[0.1, 0.05]])
+        for kernel in (0, 3):
+            model = A.AdvectResidual((4, 8, 8), kernel=kernel).eval()
+            x = A.network_input(img, flow)
+            y = model(x)
+            if kernel == 0:
+                self.assertLess(float((y - x[:, 0:3]).abs().max()), 1e-6)
+            else:  # starts near (not at) the centre tap: a slight 3 x 3 blur of W
+                self.assertLess(float((y - x[:, 0:3]).abs().mean()), 0.01)
+            path = os.path.join(self.tmp, f"k{kernel}.onnx")
+            ops = X.export_onnx(model, n, path)
+            self.assertIn("Resize", ops)
+            self.assertNotIn("GridSample", ops)
+            import onnx
+            m = onnx.load(path)
+            dims = [d.dim_value for d in m.graph.input[0].type.tensor_type.shape.dim]
+            self.assertEqual(dims, [1, 8, n, n])
+
+
 if __name__ == "__main__":
     unittest.main()
