@@ -1,5 +1,7 @@
 #include "motion/advect_residual.h"
 
+#include <tbb/parallel_for.h>
+
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
@@ -166,6 +168,11 @@ CloudFlow CloudFlow::resized(int n) const {
     return f;
 }
 
+namespace {
+constexpr double kCorrectionSteps = 6.0;
+const double kCorrectionFade = std::exp(-1.0 / kCorrectionSteps);
+}  // namespace
+
 CloudRollout::CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start, const CloudFlow& flow,
                            const cv::Mat& background)
     : network_(network), flow_(flow), start_(start.clone()), state_(start.clone()) {
@@ -180,11 +187,30 @@ CloudRollout::CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start,
     for (int y = 0; y < big; ++y)
         for (int x = 0; x < big; ++x) positions_.at<cv::Vec2f>(y, x) = cv::Vec2f(float(x), float(y));
     corrections_ = cv::Mat(big, big, CV_32FC3, cv::Scalar::all(0));
+    if (!flow.hold_background) {
+        // Held by the clear share of the start sky (the cloud rule on the networks' image).
+        cv::Mat small;
+        cv::resize(start_, small, cv::Size(n, n), 0, 0, cv::INTER_AREA);
+        const double cover = double(cv::countNonZero(network_cloud_mask(small, network->info().form) & disc_n_)) /
+                             std::max(1, cv::countNonZero(disc_n_));
+        background_weight_ = std::clamp(1.0 - cover, 0.0, 1.0);
+    }
     set_background(background);
 }
 
-void CloudRollout::set_background(const cv::Mat& background) {
-    background_ = flow_.hold_background ? background : cv::Mat();
+void CloudRollout::set_background(const cv::Mat& given) {
+    cv::Mat background;
+    if (!given.empty()) {
+        // Where the model's clear sky clips (the sun's aureole) the start was filled in too: there
+        // the background is the start itself, so nothing of the sun moves with the clouds.
+        background = given.clone();
+        std::vector<cv::Mat> ch;
+        cv::split(background, ch);
+        cv::Mat clipped = (ch[0] >= 0.999f) | (ch[1] >= 0.999f) | (ch[2] >= 0.999f);
+        cv::dilate(clipped, clipped, cv::Mat(), cv::Point(-1, -1), 2);
+        start_.copyTo(background, clipped);
+    }
+    background_ = background.empty() ? cv::Mat() : background * background_weight_;
     background_ext_ = background_.empty() ? cv::Mat() : extend_past_rim_exact(background_);
     background_n_ = background_;
     const int n = network_->info().resolution;
@@ -200,12 +226,30 @@ const cv::Mat& CloudRollout::advance() {
     const cv::Mat f_big = flow_.at(k), f_n = flow_small_.at(k);
     cv::Mat compensation_n;
     if (!background_.empty()) compensation_n = background_n_ - warp_in_disc(background_n_, f_n);
-    const cv::Mat sources = warp_sources(f_big, true);
+    const cv::Mat sources = warp_sources(f_big);
     positions_ = sample_exact(positions_, sources);
-    corrections_ = sample_exact(extend_past_rim_exact(corrections_), sources);
+    // The corrections ride along and fade (e-folding kCorrectionSteps): what the network adds is a
+    // short-lived change of the clouds; kept for hours, a tiny bias per step would add up to weather
+    // nobody asked for (a clear sky whitening under a wind).
+    corrections_ = sample_exact(extend_past_rim_exact(corrections_), sources) * kCorrectionFade;
     // The clouds where their paths lead (the background stays where it is: + B - B(path)).
     cv::Mat moved = sample_exact(start_ext_, positions_);
     if (!background_.empty()) moved += background_ - sample_exact(background_ext_, positions_);
+    // Sky whose path comes from beyond the horizon was never seen: it shows what the start showed
+    // there (blended in over the last 3 % of the radius), not the rim's values dragged inwards, so
+    // hours of wind neither streak the sky nor clear or fill it.
+    const double c = (big - 1) / 2.0, rim = (1.0 - 1.5 / big) * big / 2.0, band = 0.03 * big / 2.0;
+    tbb::parallel_for(0, big, [&](int y) {
+        const cv::Vec2f* p = positions_.ptr<cv::Vec2f>(y);
+        cv::Vec3f* m = moved.ptr<cv::Vec3f>(y);
+        const cv::Vec3f* s0 = start_.ptr<cv::Vec3f>(y);
+        for (int x = 0; x < big; ++x) {
+            const double r = std::hypot(p[x][0] - c, p[x][1] - c);
+            if (r <= rim - band) continue;
+            const float a = float(std::min(1.0, (r - (rim - band)) / band));
+            m[x] = (1 - a) * m[x] + a * s0[x];
+        }
+    });
     const cv::Mat lagrangian = moved.clone();
     moved += corrections_;
     if (network_->has_network()) {

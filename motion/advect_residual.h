@@ -54,15 +54,18 @@ struct CloudMotion {
 // non-uniform flow, iterated for hours, shears every cloud into streaks; a uniform wind moves the
 // layer as a whole. From a wind: that wind's flow throughout.
 //
-// Under a wind the clear background is held still (motion/network_form.h clear_background: only
-// the clouds move); a measured flow already leaves clear sky nearly still, and holding an assumed
-// background there costs accuracy where the real one differs (overcast, a sun at the horizon:
-// -0.3 to -2.4 dB one step ahead on the real sequences), so it is not held.
+//
+// The clear background (motion/network_form.h clear_background) is held still where it is seen:
+// only the clouds move. Under a wind it is held fully. With a measured flow it is held in
+// proportion to the clear share of the start sky (1 - cloud cover): Farneback's noise on clear sky
+// would otherwise shuffle its gradients (+0.7 dB one step ahead on the clear ARM morning), while an
+// overcast sky hides the background, and holding an assumed one there costs accuracy (-0.3 to
+// -2.4 dB on the overcast Mobotix and ARM dusk sequences).
 struct CloudFlow {
     cv::Mat measured;             // CV_32FC2, pixels per step
     cv::Mat wind;                 // empty: `measured` throughout
     double relax_steps = 6.0;     // default: 6 steps (3 minutes at 30 s)
-    bool hold_background = false; // true for a wind
+    bool hold_background = false; // fully (a wind); else by the clear share of the start sky
     cv::Mat at(int k) const;   // the flow of step k = 1, 2, ...
     CloudFlow resized(int n) const;
     static CloudFlow from_wind(const cv::Mat& flow) { return CloudFlow{flow, cv::Mat(), 0.0, true}; }
@@ -131,8 +134,8 @@ class AdvectResidualNetwork {
 };
 
 // One rollout in progress on the network form, semi-Lagrangian: the clouds are always read from the
-// start image along their accumulated paths (the composed source positions of every step's warp,
-// recycled at the rim), not re-warped from the last step's image, so hours of steps do not blur
+// start image along their accumulated paths (the composed source positions of every step's warp),
+// not re-warped from the last step's image, so hours of steps do not blur
 // them away; the network's corrections (its output minus the warp it was given) ride along as a
 // field of their own. The network itself sees the last step's image at N, as it was trained.
 class CloudRollout {
@@ -151,6 +154,7 @@ class CloudRollout {
     CloudFlow flow_, flow_small_;
     cv::Mat start_, start_ext_, state_, positions_, corrections_;
     cv::Mat background_, background_ext_, background_n_, disc_big_, disc_n_;
+    double background_weight_ = 1.0;
     int steps_ = 0;
 };
 

@@ -7,7 +7,7 @@
 //        far brighter than their surroundings, as an excess over the inpainted sky, re-inserted at
 //        the sun's direction of every frame (so it can follow the clock).
 //   fill_saturated_pixels / restore_pixels  the networks': every pixel the [0, 1] map clips (sun,
-//        brightest aureole) inpainted before the first step, the input's radiance restored after.
+//        brightest aureole) filled before the first step, the input's radiance restored after.
 #pragma once
 
 #include <opencv2/core.hpp>
@@ -34,7 +34,8 @@ SunPatch remove_sun(SkyImage* sky);
 void insert_sun(SkyImage* sky, const SunPatch& patch, const Vec3d& direction, double weight = 1.0);
 
 // In an image in the [0, 1] form (CV_32FC3): the pixels where any channel is >= 0.999, dilated by
-// one pixel, inpainted (Telea) channel by channel; 0 outside the disc. Returns that mask (CV_8UC1,
+// one pixel, filled from their unclipped surroundings (normalised convolution); the image clamped to
+// [0, 1], 0 outside the disc. Returns that mask (CV_8UC1,
 // all zero when nothing clipped, and then the image is unchanged).
 cv::Mat fill_saturated_pixels(cv::Mat* unit);
 
