@@ -43,15 +43,15 @@ AdvectResidualNetwork AdvectResidualNetwork::pure_advection(int resolution, doub
 AdvectResidualNetwork AdvectResidualNetwork::load(const std::string& folder) {
     const std::string kind = cloud_model_kind(folder);
     const std::string json_path = (fs::path(folder) / "model.json").string();
-    if (kind != "advect-residual")
-        throw_file_error(json_path, "kind '" + kind + "' is not an advect-residual model");
+    if (kind != "advect-residual") throw_file_error(json_path, "kind '" + kind + "' is not an advect-residual model");
     AdvectResidualNetwork m;
     AdvectResidualInfo& info = m.info_;
     info.folder = folder;
     try {
         nlohmann::json j = read_json(json_path);
         const int version = j.value("version", 0);
-        if (version != 2) throw_file_error(json_path, "version " + std::to_string(version) + " (this dynsky reads version 2)");
+        if (version != 2)
+            throw_file_error(json_path, "version " + std::to_string(version) + " (this dynsky reads version 2)");
         info.name = j.value("name", fs::path(folder).filename().string());
         info.resolution = j.at("resolution").get<int>();
         info.import_resolution = j.value("import_resolution", 4 * info.resolution);
@@ -81,8 +81,8 @@ AdvectResidualNetwork AdvectResidualNetwork::load(const std::string& folder) {
     QuietOpenCv quiet;
     cv::Mat out = from_blob(run_net(m.net_, to_blob({cv::Mat(n, n, CV_32FC(8), cv::Scalar::all(0))}), onnx), onnx);
     if (out.rows != n || out.cols != n || out.channels() != 3)
-        throw_file_error(onnx, "returns " + shape_text(out) + ", expected " + std::to_string(n) + " x " + std::to_string(n) +
-                                   " x 3 (model.json's resolution)");
+        throw_file_error(onnx, "returns " + shape_text(out) + ", expected " + std::to_string(n) + " x " +
+                                   std::to_string(n) + " x 3 (model.json's resolution)");
     return m;
 }
 
@@ -93,7 +93,8 @@ cv::Mat AdvectResidualNetwork::network_input(const cv::Mat& image, const cv::Mat
         throw Error("advect-residual: the image must be " + std::to_string(n) + " x " + std::to_string(n) +
                     " x 3 float, got " + shape_text(image));
     if (flow.rows != n || flow.cols != n || flow.type() != CV_32FC2)
-        throw Error("advect-residual: the flow must be " + std::to_string(n) + " x " + std::to_string(n) + " x 2 float");
+        throw Error("advect-residual: the flow must be " + std::to_string(n) + " x " + std::to_string(n) +
+                    " x 2 float");
     cv::Mat scaled = flow * (1.0 / (info_.flow_scale * n)), input;
     cv::Mat warped = warp_in_disc(image, flow);
     if (info_.compensated && !compensation.empty()) warped += compensation;
@@ -158,6 +159,7 @@ CloudFlow CloudFlow::from_measured(const cv::Mat& measured, double dt) {
     cv::circle(inner, cv::Point(n / 2, n / 2), int(0.4 * n), cv::Scalar(255), cv::FILLED);
     f.wind = wind_flow(n, fit_wind(measured, inner, dt), dt);
     f.relax_steps = 6.0;
+    f.recycle = true;
     return f;
 }
 
@@ -195,6 +197,15 @@ CloudRollout::CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start,
                              std::max(1, cv::countNonZero(disc_n_));
         background_weight_ = std::clamp(1.0 - cover, 0.0, 1.0);
     }
+    if (flow.recycle) {
+        const bool relaxing = !flow.wind.empty() && flow.relax_steps > 0;
+        const cv::Mat& wind = relaxing ? flow.wind : flow.measured;
+        paths_ = std::make_unique<CloudLayerPaths>(big, layer_step_of_flow(wind));
+        // Only its large-scale part: the clouds' common motion that the wind does not explain.
+        // Summed over its relaxation (about 6.5 steps) Farneback's small-scale noise would warp
+        // the start's clouds into smears.
+        if (relaxing) cv::GaussianBlur(flow.measured - flow.wind, departure_, cv::Size(), big / 16.0);
+    }
     set_background(background);
 }
 
@@ -212,6 +223,7 @@ void CloudRollout::set_background(const cv::Mat& given) {
     }
     background_ = background.empty() ? cv::Mat() : background * background_weight_;
     background_ext_ = background_.empty() ? cv::Mat() : extend_past_rim_exact(background_);
+    clouds_ext_ = background_ext_.empty() ? start_ext_ : start_ext_ - background_ext_;
     background_n_ = background_;
     const int n = network_->info().resolution;
     if (!background_.empty() && background_.rows != n) {
@@ -227,29 +239,56 @@ const cv::Mat& CloudRollout::advance() {
     cv::Mat compensation_n;
     if (!background_.empty()) compensation_n = background_n_ - warp_in_disc(background_n_, f_n);
     const cv::Mat sources = warp_sources(f_big);
-    positions_ = sample_exact(positions_, sources);
     // The corrections ride along and fade (e-folding kCorrectionSteps): what the network adds is a
     // short-lived change of the clouds; kept for hours, a tiny bias per step would add up to weather
     // nobody asked for (a clear sky whitening under a wind).
     corrections_ = sample_exact(extend_past_rim_exact(corrections_), sources) * kCorrectionFade;
-    // The clouds where their paths lead (the background stays where it is: + B - B(path)).
-    cv::Mat moved = sample_exact(start_ext_, positions_);
-    if (!background_.empty()) moved += background_ - sample_exact(background_ext_, positions_);
-    // Sky whose path comes from beyond the horizon was never seen: it shows what the start showed
-    // there (blended in over the last 3 % of the radius), not the rim's values dragged inwards, so
-    // hours of wind neither streak the sky nor clear or fill it.
-    const double c = (big - 1) / 2.0, rim = (1.0 - 1.5 / big) * big / 2.0, band = 0.03 * big / 2.0;
-    tbb::parallel_for(0, big, [&](int y) {
-        const cv::Vec2f* p = positions_.ptr<cv::Vec2f>(y);
-        cv::Vec3f* m = moved.ptr<cv::Vec3f>(y);
-        const cv::Vec3f* s0 = start_.ptr<cv::Vec3f>(y);
-        for (int x = 0; x < big; ++x) {
-            const double r = std::hypot(p[x][0] - c, p[x][1] - c);
-            if (r <= rim - band) continue;
-            const float a = float(std::min(1.0, (r - (rim - band)) / band));
-            m[x] = (1 - a) * m[x] + a * s0[x];
+    cv::Mat moved;
+    if (paths_) {
+        // The clouds where the layer's paths lead (the background stays where it is).
+        // The measured flow's departure from its wind moves the clouds too while it relaxes: a
+        // displacement of the start image's clouds, read where each path starts (it rides with
+        // the clouds).
+        cv::Mat offset;
+        if (!departure_.empty()) {
+            departure_sum_ += std::exp(-(k - 1) / flow_.relax_steps);
+            offset = departure_ * departure_sum_;
         }
-    });
+        CloudLayerPaths::Reads reads = paths_->at(k);
+        moved = cv::Mat(big, big, CV_32FC3, cv::Scalar::all(0));
+        for (int i = 0; i < 3; ++i) {
+            if (cv::countNonZero(reads.weights[i]) == 0) continue;
+            if (!offset.empty()) reads.positions[i] -= sample_exact(offset, reads.positions[i]);
+            const cv::Mat read = sample_exact(clouds_ext_, reads.positions[i]);
+            tbb::parallel_for(0, big, [&](int y) {
+                const float* w = reads.weights[i].ptr<float>(y);
+                const cv::Vec3f* r = read.ptr<cv::Vec3f>(y);
+                cv::Vec3f* m = moved.ptr<cv::Vec3f>(y);
+                for (int x = 0; x < big; ++x) m[x] += w[x] * r[x];
+            });
+        }
+        if (!background_.empty()) moved += background_;
+    } else {
+        positions_ = sample_exact(positions_, sources);
+        // The clouds where their paths lead (the background stays where it is: + B - B(path)).
+        moved = sample_exact(start_ext_, positions_);
+        if (!background_.empty()) moved += background_ - sample_exact(background_ext_, positions_);
+        // Sky whose path comes from beyond the horizon was never seen: it shows what the start showed
+        // there (blended in over the last 3 % of the radius), not the rim's values dragged inwards, so
+        // hours of wind neither streak the sky nor clear or fill it.
+        const double c = (big - 1) / 2.0, rim = (1.0 - 1.5 / big) * big / 2.0, band = 0.03 * big / 2.0;
+        tbb::parallel_for(0, big, [&](int y) {
+            const cv::Vec2f* p = positions_.ptr<cv::Vec2f>(y);
+            cv::Vec3f* m = moved.ptr<cv::Vec3f>(y);
+            const cv::Vec3f* s0 = start_.ptr<cv::Vec3f>(y);
+            for (int x = 0; x < big; ++x) {
+                const double r = std::hypot(p[x][0] - c, p[x][1] - c);
+                if (r <= rim - band) continue;
+                const float a = float(std::min(1.0, (r - (rim - band)) / band));
+                m[x] = (1 - a) * m[x] + a * s0[x];
+            }
+        });
+    }
     const cv::Mat lagrangian = moved.clone();
     moved += corrections_;
     if (network_->has_network()) {
@@ -286,12 +325,15 @@ void AdvectResidualNetwork::rollout(const SkyImage& sky, const CloudFlow& flow, 
     const cv::Mat sun = fill_saturated_pixels(&state);
     const bool has_sun = cv::countNonZero(sun) > 0;
     if (background.empty() && sky.sun_direction) background = this->background(*sky.sun_direction, sky.resolution);
-    rollout_network_form(state, flow, steps, [&](int k, const cv::Mat& s) {
-        SkyImage next = from_network_form(s, sky, info_.form);
-        next.time_seconds = sky.time_seconds + k * info_.dt;
-        if (has_sun) restore_pixels(&next, sky, sun);
-        on_step(k, next);
-    }, background);
+    rollout_network_form(
+        state, flow, steps,
+        [&](int k, const cv::Mat& s) {
+            SkyImage next = from_network_form(s, sky, info_.form);
+            next.time_seconds = sky.time_seconds + k * info_.dt;
+            if (has_sun) restore_pixels(&next, sky, sun);
+            on_step(k, next);
+        },
+        background);
 }
 
 cv::Mat network_form_flow(const SkyImage& previous, const SkyImage& current, const NetworkFormParams& form, int n) {

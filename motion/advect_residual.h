@@ -33,6 +33,7 @@
 #include <optional>
 #include <string>
 
+#include "motion/cloud_layer_paths.h"
 #include "motion/flow.h"
 #include "motion/network_form.h"
 #include "motion/step_model.h"
@@ -62,14 +63,18 @@ struct CloudMotion {
 // overcast sky hides the background, and holding an assumed one there costs accuracy (-0.3 to
 // -2.4 dB on the overcast Mobotix and ARM dusk sequences).
 struct CloudFlow {
-    cv::Mat measured;             // CV_32FC2, pixels per step
-    cv::Mat wind;                 // empty: `measured` throughout
-    double relax_steps = 6.0;     // default: 6 steps (3 minutes at 30 s)
-    bool hold_background = false; // fully (a wind); else by the clear share of the start sky
-    cv::Mat at(int k) const;   // the flow of step k = 1, 2, ...
+    cv::Mat measured;              // CV_32FC2, pixels per step
+    cv::Mat wind;                  // empty: `measured` throughout
+    double relax_steps = 6.0;      // default: 6 steps (3 minutes at 30 s)
+    bool hold_background = false;  // fully (a wind); else by the clear share of the start sky
+    // The clouds ride one layer under the (fitted) wind, recycled when they leave the view
+    // (motion/cloud_layer_paths.h), so rollouts of any length keep moving; false: the flow's own
+    // paths, with sky from beyond the horizon shown as the start showed it.
+    bool recycle = false;
+    cv::Mat at(int k) const;  // the flow of step k = 1, 2, ...
     CloudFlow resized(int n) const;
-    static CloudFlow from_wind(const cv::Mat& flow) { return CloudFlow{flow, cv::Mat(), 0.0, true}; }
-    static CloudFlow constant(const cv::Mat& flow) { return CloudFlow{flow, cv::Mat(), 0.0, false}; }
+    static CloudFlow from_wind(const cv::Mat& flow) { return CloudFlow{flow, cv::Mat(), 0.0, true, true}; }
+    static CloudFlow constant(const cv::Mat& flow) { return CloudFlow{flow, cv::Mat(), 0.0, false, false}; }
     // A measured flow (per step of dt), relaxing to its fitted wind (inside 80 % of the radius).
     static CloudFlow from_measured(const cv::Mat& measured, double dt);
 };
@@ -134,10 +139,13 @@ class AdvectResidualNetwork {
 };
 
 // One rollout in progress on the network form, semi-Lagrangian: the clouds are always read from the
-// start image along their accumulated paths (the composed source positions of every step's warp),
-// not re-warped from the last step's image, so hours of steps do not blur
-// them away; the network's corrections (its output minus the warp it was given) ride along as a
-// field of their own. The network itself sees the last step's image at N, as it was trained.
+// start image along their accumulated paths, not re-warped from the last step's image, so hours of
+// steps do not blur them away. With a wind (CloudFlow::recycle) the paths are the layer's
+// (motion/cloud_layer_paths.h: the wind's displacement, plus the measured flow's departure from it
+// while it relaxes, recycled when the clouds leave the view); else the composed source positions
+// of every step's warp. The network's corrections (its output minus the warp it was given) ride
+// along as a field of their own. The network itself sees the last step's image at N, as it was
+// trained.
 class CloudRollout {
   public:
     CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start, const CloudFlow& flow,
@@ -154,6 +162,10 @@ class CloudRollout {
     CloudFlow flow_, flow_small_;
     cv::Mat start_, start_ext_, state_, positions_, corrections_;
     cv::Mat background_, background_ext_, background_n_, disc_big_, disc_n_;
+    std::unique_ptr<CloudLayerPaths> paths_;  // with a wind
+    cv::Mat departure_;                       // measured - wind flow (pixels per step), relaxing
+    double departure_sum_ = 0;                // sum of its relaxation weights so far
+    cv::Mat clouds_ext_;                      // start_ext_ - background_ext_: what the paths carry
     double background_weight_ = 1.0;
     int steps_ = 0;
 };

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 
 #include "motion/advection.h"
 #include "motion/metrics.h"
@@ -44,8 +45,10 @@ cv::Mat nchw_to_mat(const NpyArray& a) {
 TEST(AdvectResidual, OpenCvAndTheWarpAgreeWithPyTorch) {
     AdvectResidualNetwork net = AdvectResidualNetwork::load(shipped());
     const std::string f = shipped() + "/";
-    cv::Mat image = nchw_to_mat(read_npy(f + "reference_image.npy")), flow = nchw_to_mat(read_npy(f + "reference_flow.npy"));
-    cv::Mat input = nchw_to_mat(read_npy(f + "reference_input.npy")), output = nchw_to_mat(read_npy(f + "reference_output.npy"));
+    cv::Mat image = nchw_to_mat(read_npy(f + "reference_image.npy")),
+            flow = nchw_to_mat(read_npy(f + "reference_flow.npy"));
+    cv::Mat input = nchw_to_mat(read_npy(f + "reference_input.npy")),
+            output = nchw_to_mat(read_npy(f + "reference_output.npy"));
     ASSERT_EQ(image.rows, net.info().resolution);
     cv::Mat compensation;  // B - warp(B) for a model trained on the compensated warp
     if (fs::exists(f + "reference_background.npy")) {
@@ -54,7 +57,7 @@ TEST(AdvectResidual, OpenCvAndTheWarpAgreeWithPyTorch) {
         compensation.setTo(cv::Scalar::all(0), ~sky_disc_mask(background.rows));
     }
     EXPECT_LT(cv::norm(net.network_input(image, flow, compensation), input, cv::NORM_INF), 1e-4);  // the warp
-    EXPECT_LT(cv::norm(net.run(input), output, cv::NORM_INF), 1e-4);                // the network
+    EXPECT_LT(cv::norm(net.run(input), output, cv::NORM_INF), 1e-4);                               // the network
 }
 
 // A procedural cumulus sky with frozen shapes and the given wind, at n px, and its exact flow.
@@ -85,7 +88,8 @@ TEST(AdvectResidual, CloudsFollowTheRequestedWindInEveryDirection) {
         SkyImage next;
         net.rollout(sky, net.motion_flow(sky, motion, dt, n), 1, [&](int, const SkyImage& s) { next = s; });
         // The motion produced, measured on the images themselves, against the requested (exact) one.
-        cv::Mat produced = farneback_flow(to_network_form(sky, net.info().form), to_network_form(next, net.info().form));
+        cv::Mat produced = farneback_flow(to_network_form(sky, net.info().form),
+                                          to_network_form(next, net.info().form));
         std::vector<double> angles, ratios;
         for (int j = 0; j < n; ++j)
             for (int i = 0; i < n; ++i) {
@@ -121,7 +125,8 @@ struct RolloutStats {
     double mean0 = 0, mean_min = 1e30, mean_max = 0, hf0 = 0, hf_min = 1e30, cover0 = 0, cover_max = 0;
 };
 
-RolloutStats roll(AdvectResidualNetwork& net, const SkyImage& sky, const CloudMotion& motion, int steps) {
+RolloutStats roll(AdvectResidualNetwork& net, const SkyImage& sky, const CloudMotion& motion, int steps,
+                  const std::function<void(int, const SkyImage&)>& also = nullptr) {
     const int n = net.info().resolution;
     const cv::Mat disc = sky_disc_mask(n);
     RolloutStats r;
@@ -138,7 +143,8 @@ RolloutStats roll(AdvectResidualNetwork& net, const SkyImage& sky, const CloudMo
                 if (s.in_disc(i, j)) lum += luminance(s.pixel(i, j)), ++count;
         lum /= count;
         const double hf = high_frequency_energy(u, disc);
-        const double cover = double(cv::countNonZero(network_cloud_mask(u, net.info().form) & disc)) / cv::countNonZero(disc);
+        const double cover = double(cv::countNonZero(network_cloud_mask(u, net.info().form) & disc)) /
+                             cv::countNonZero(disc);
         const auto [rg, bg] = rim_colour(s);
         if (first) r.mean0 = lum, r.hf0 = hf, r.cover0 = cover, r.rim_rg0 = rg, r.rim_bg0 = bg;
         r.rim_change = std::max({r.rim_change, std::abs(rg / r.rim_rg0 - 1), std::abs(bg / r.rim_bg0 - 1)});
@@ -146,8 +152,10 @@ RolloutStats roll(AdvectResidualNetwork& net, const SkyImage& sky, const CloudMo
         r.hf_min = std::min(r.hf_min, hf), r.cover_max = std::max(r.cover_max, cover);
     };
     measure(sky, true);
-    net.rollout(sky, net.motion_flow(sky, motion, net.info().dt, sky.resolution), steps,
-                [&](int, const SkyImage& s) { measure(s, false); });
+    net.rollout(sky, net.motion_flow(sky, motion, net.info().dt, sky.resolution), steps, [&](int k, const SkyImage& s) {
+        measure(s, false);
+        if (also) also(k, s);
+    });
     return r;
 }
 
@@ -170,7 +178,8 @@ TEST(AdvectResidual, ClearSkiesStayClearUnderAnyWind) {
     }
 }
 
-TEST(AdvectResidual, FiftyStepRolloutsFromEveryKindOfStartStayInBand) {
+// Three hours of 30 s steps (issue 10's 360-step rollouts), at 128 px.
+TEST(AdvectResidual, ThreeHourRolloutsFromEveryKindOfStartStayInBandAndKeepMoving) {
     AdvectResidualNetwork net = AdvectResidualNetwork::load(shipped());
     std::vector<std::pair<std::string, SkyImage>> starts;
     Image unused;
@@ -180,22 +189,39 @@ TEST(AdvectResidual, FiftyStepRolloutsFromEveryKindOfStartStayInBand) {
     starts.emplace_back("clear", make_clear_sky(p, 128));
     if (test::shared_available())
         starts.emplace_back("photograph", import_preset_photo(test::shared_path("skies/arm_tsi_sgp_20170524/images/"
-                                                                                 "tsi_sgpC1_20170524175000Z.jpg"),
+                                                                                "tsi_sgpC1_20170524175000Z.jpg"),
                                                               "arm-tsi", 128));
+    const Wind wind{300, 9, 1500};
     for (auto& [name, sky] : starts) {
         CloudMotion motion;
-        motion.wind = Wind{300, 9, 1500};
-        RolloutStats r = roll(net, sky, motion, 50);
+        motion.wind = wind;
+        SkyImage before_last, last;
+        RolloutStats r = roll(net, sky, motion, 360, [&](int k, const SkyImage& s) {
+            if (k == 359) before_last = s;
+            if (k == 360) last = s;
+        });
         EXPECT_TRUE(r.finite) << name;
         EXPECT_GE(r.min, 0.0f) << name;
         EXPECT_LE(r.max, 1.0f) << name;
-        // Issue 10 asks for 20 %; a real photograph under a wind reaches 0.76 of its start after
-        // ~50 steps (its bright clouds leave, the magnified horizon comes in; docs/networks.md,
-        // Stability): 30 % is what is held here, and the figure is reported, not hidden.
-        const double band = name == "photograph" ? 0.3 : 0.2;
-        EXPECT_GT(r.mean_min, (1 - band) * r.mean0) << name;
-        EXPECT_LT(r.mean_max, (1 + band) * r.mean0) << name;
-        if (name != "clear") EXPECT_GT(r.hf_min, 0.5 * r.hf0) << name;  // keeps at least half its fine detail
+        EXPECT_GT(r.mean_min, 0.8 * r.mean0) << name;
+        EXPECT_LT(r.mean_max, 1.2 * r.mean0) << name;
+        if (name == "clear") continue;
+        EXPECT_GT(r.hf_min, 0.5 * r.hf0) << name;  // keeps at least half its fine detail
+        // After three hours the clouds still move with the wind (recycled, not frozen or smeared).
+        const cv::Mat produced = farneback_flow(to_network_form(before_last, net.info().form),
+                                                to_network_form(last, net.info().form));
+        const cv::Mat want = wind_flow(128, wind, net.info().dt);
+        std::vector<double> angles, ratios;
+        for (int j = 0; j < 128; ++j)
+            for (int i = 0; i < 128; ++i) {
+                const Vec2 uv = fisheye::pixel_center_uv(i, j, 128);
+                if (uv.norm() > 0.6f) continue;
+                const cv::Vec2f got = produced.at<cv::Vec2f>(j, i), w = want.at<cv::Vec2f>(j, i);
+                angles.push_back(angle_deg(got, w));
+                ratios.push_back(std::hypot(got[0], got[1]) / std::hypot(w[0], w[1]));
+            }
+        EXPECT_LT(median(angles), 20.0) << name;
+        EXPECT_NEAR(median(ratios), 1.0, 0.3) << name;
     }
 }
 
@@ -203,7 +229,8 @@ TEST(AdvectResidual, BadModelFoldersFailClearly) {
     const std::string dir = test::temp_dir("advect_bad");
     EXPECT_THROW(AdvectResidualNetwork::load(dir + "/missing"), Error);
     fs::create_directories(dir + "/m");
-    std::ofstream(dir + "/m/model.json") << R"({"format": "dynsky-cloud-model", "version": 3, "kind": "advect-residual"})";
+    std::ofstream(dir + "/m/model.json")
+        << R"({"format": "dynsky-cloud-model", "version": 3, "kind": "advect-residual"})";
     try {
         AdvectResidualNetwork::load(dir + "/m");
         ADD_FAILURE() << "version 3 accepted";
