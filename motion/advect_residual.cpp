@@ -13,6 +13,7 @@
 #include "motion/onnx_net.h"
 #include "motion/sun_patch.h"
 #include "sky/fisheye.h"
+#include "util/allocation.h"
 #include "util/error.h"
 #include "util/json_file.h"
 
@@ -178,6 +179,7 @@ const double kCorrectionFade = std::exp(-1.0 / kCorrectionSteps);
 CloudRollout::CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start, const CloudFlow& flow,
                            const cv::Mat& background)
     : network_(network), flow_(flow), start_(start.clone()), state_(start.clone()) {
+    keep_large_allocations();  // each step's full-sky temporaries would page-fault in again
     const int n = network->info().resolution, big = start.rows;
     if (flow.measured.rows != big || flow.measured.cols != big || flow.measured.type() != CV_32FC2)
         throw Error("advect-residual: the flow must be CV_32FC2 at the state's resolution " + std::to_string(big));
