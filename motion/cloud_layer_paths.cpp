@@ -62,30 +62,37 @@ CloudLayerPaths::CloudLayerPaths(int n, const cv::Vec2d& step, const CloudLayerP
     across_ = cv::Vec2d(-along_[1], along_[0]);
     tile_radius_ = std::tan(params.tile_zenith_deg * kHalfPi / 90.0);
     trigger_radius_.create(n, n, CV_64FC1);
+    beyond_.assign(size_t(n) * n, 0);
     const double root_stretch = std::sqrt(params.max_stretch);
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x) {
             const double u = 2.0 * (x + 0.5) / n - 1.0, v = 2.0 * (y + 0.5) / n - 1.0;
             const double trigger = std::min(std::acos(std::cos(zenith_of(u, v)) / root_stretch), kMaxZenith);
             trigger_radius_.at<double>(y, x) = std::max(tile_radius_, std::tan(trigger));
+            beyond_[size_t(y) * n + x] = std::hypot(u, v) * kHalfPi > kMaxZenith;
         }
 }
 
 CloudLayerPaths::Reads CloudLayerPaths::at(double k) const {
     Reads reads;
-    for (int i = 0; i < 3; ++i) {
+    for (int i = 0; i < 4; ++i) {
         reads.positions[i].create(n_, n_, CV_32FC2);
         reads.weights[i] = cv::Mat::zeros(n_, n_, CV_32FC1);
     }
     const double R = tile_radius_, beta = params_.cycle_band;
+    const double centre = (n_ - 1) / 2.0, rim = (1.0 - 1.5 / n_) * n_ / 2.0, band = 0.03 * n_ / 2.0;
     tbb::parallel_for(0, n_, [&](int y) {
-        cv::Vec2f* pos[3];
-        float* wgt[3];
-        for (int i = 0; i < 3; ++i)
+        cv::Vec2f* pos[4];
+        float* wgt[4];
+        for (int i = 0; i < 4; ++i)
             pos[i] = reads.positions[i].ptr<cv::Vec2f>(y), wgt[i] = reads.weights[i].ptr<float>(y);
         const double* trigger = trigger_radius_.ptr<double>(y);
         for (int x = 0; x < n_; ++x) {
-            for (int i = 0; i < 3; ++i) pos[i][x] = cv::Vec2f(float(x), float(y));
+            for (int i = 0; i < 4; ++i) pos[i][x] = cv::Vec2f(float(x), float(y));
+            if (beyond_[y * n_ + x]) {  // past 88 degrees the layer does not move (as wind_flow)
+                wgt[3][x] = 1.0f;
+                continue;
+            }
             const cv::Vec2d source = layer_point(x, y, n_) - k * step_;
             const double s = source.dot(along_), c = source.dot(across_);
             // The real start image, while the cloud's start position is in the tile or not too
@@ -94,7 +101,12 @@ CloudLayerPaths::Reads CloudLayerPaths::at(double k) const {
             const double into_tile = moving_ ? std::clamp((s_t - s) / (params_.entry_band * rho_t), 0.0, 1.0) : 0.0;
             const cv::Vec2d real = pixel_of_layer_point(source, n_);
             pos[0][x] = cv::Vec2f(float(real[0]), float(real[1]));
-            wgt[0][x] = float(1.0 - into_tile);
+            // A read from the last few percent of the radius is of sky barely resolved: the pixel
+            // shows what the start showed there instead (the horizon hardly moves).
+            const double r_src = std::hypot(real[0] - centre, real[1] - centre);
+            const double own = std::clamp((r_src - (rim - band)) / band, 0.0, 1.0);
+            wgt[0][x] = float((1.0 - into_tile) * (1.0 - own));
+            wgt[3][x] = float((1.0 - into_tile) * own);
             if (into_tile <= 0.0) continue;
             // The recycled tile: pass j >= 1 reads the strip -R <= s < R of the same streamline
             // (one period 2 R for all of them, so passes do not shear), mirrored across the wind

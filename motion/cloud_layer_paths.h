@@ -3,8 +3,8 @@
 // layer"). Used by motion/advect_residual.h CloudRollout when the motion has a wind.
 //
 // Parameters (defaults):
-//   tile_zenith_deg  = 65   the recycled tile: the part of the layer seen within this zenith angle
-//   max_stretch      = 3    a pixel keeps reading the real start image while the start's pixels it
+//   tile_zenith_deg  = 55   the recycled tile: the part of the layer seen within this zenith angle
+//   max_stretch      = 4    a pixel keeps reading the real start image while the start's pixels it
 //                           reads are at most this many times more foreshortened than its own
 //                           (sec^2 of the zenith angle); beyond, it fades into the recycled tile
 //   entry_band       = 0.25 the fade into the tile, as a fraction of that trigger's ground radius
@@ -26,12 +26,14 @@
 #include <opencv2/core.hpp>
 
 #include <array>
+#include <cstdint>
+#include <vector>
 
 namespace dynsky {
 
 struct CloudLayerPathsParams {
     double tile_zenith_deg = 55.0;
-    double max_stretch = 2.0;
+    double max_stretch = 4.0;
     double entry_band = 0.25;
     double cycle_band = 0.2;
 };
@@ -51,10 +53,12 @@ class CloudLayerPaths {
     // n: the image's resolution; step: the layer displacement per step (units of its height).
     CloudLayerPaths(int n, const cv::Vec2d& step, const CloudLayerPathsParams& params = {});
 
-    // Up to three reads per pixel for step k (k may be fractional): positions (CV_32FC2 pixel
-    // coordinates in the start image) and weights (CV_32FC1) that sum to 1.
+    // Up to four reads per pixel for step k (k may be fractional): positions (CV_32FC2 pixel
+    // coordinates in the start image) and weights (CV_32FC1) that sum to 1: the real start image
+    // along the layer's path (0), two passes of the recycled tile (1, 2), and the pixel itself (3:
+    // where the path reads the outermost 3 % of the radius, or the pixel is past 88 degrees).
     struct Reads {
-        std::array<cv::Mat, 3> positions, weights;
+        std::array<cv::Mat, 4> positions, weights;
     };
     Reads at(double k) const;
 
@@ -67,7 +71,8 @@ class CloudLayerPaths {
     CloudLayerPathsParams params_;
     double tile_radius_ = 0;
     bool moving_ = false;
-    cv::Mat trigger_radius_;  // CV_64FC1: the ground radius at which each pixel starts to recycle
+    cv::Mat trigger_radius_;       // CV_64FC1: the ground radius at which each pixel starts to recycle
+    std::vector<uint8_t> beyond_;  // pixels past 88 degrees from the zenith
 };
 
 }  // namespace dynsky

@@ -70,7 +70,7 @@ TEST(CloudLayerPaths, LongRolloutsRecycleWithAPeriodOfTwoMirroredPasses) {
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x) {
             float sum = 0;
-            for (int i = 0; i < 3; ++i) {
+            for (int i = 0; i < 4; ++i) {
                 sum += a.weights[i].at<float>(y, x);
                 EXPECT_GE(a.weights[i].at<float>(y, x), 0.0f);
                 max_diff = std::max(max_diff, double(cv::norm(a.positions[i].at<cv::Vec2f>(y, x) -
