@@ -56,6 +56,8 @@ void register_animate_command(CLI::App& app) {
     cmd->add_option("--filter-glossy", a->filter_glossy,
                     "Roughen reflections after the first bounce (0: off; as for 'dynsky render')")
         ->capture_default_str();
+    cmd->add_option("--sampler-pattern", a->sampler_pattern, "Sample values: random or sobol (as for 'dynsky render')")
+        ->capture_default_str();
     cmd->add_flag("--no-video", a->no_video, "Do not run ffmpeg (no MP4s)");
     cmd->add_flag("--quiet,-q", a->quiet, "No per-frame report");
     cmd->callback([o] {

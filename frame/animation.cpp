@@ -29,6 +29,7 @@ AnimationReport render_animation(const AnimationSettings& o) {
     if (!(o.fps > 0 && o.fps <= 1000)) throw Error("--fps must be in (0, 1000]");
     if (o.spp < 1) throw Error("--spp must be at least 1");
     const AovSelection aovs = parse_aovs(o.aovs);
+    const SamplePattern pattern = parse_sample_pattern(o.sampler_pattern);
     if (!(o.clamp_indirect >= 0)) throw Error("--clamp-indirect must be 0 (off) or positive");
     if (!(o.filter_glossy >= 0)) throw Error("--filter-glossy must be 0 (off) or positive");
     const int total = std::max(1, int(std::lround(o.duration * o.fps)));
@@ -86,6 +87,7 @@ AnimationReport render_animation(const AnimationSettings& o) {
         settings.quiet = true;
         settings.aovs = aovs;
         settings.clamp_indirect = o.clamp_indirect, settings.filter_glossy = o.filter_glossy;
+        settings.pattern = pattern;
         PathIntegrator integrator(accel, light, settings);
         RenderResult result = integrator.render(scene.camera);
 

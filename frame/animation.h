@@ -44,6 +44,7 @@ struct AnimationSettings {
     int max_depth = 8;
     std::string aovs;                             // extra EXR passes (renderer/integrator.h parse_aovs)
     float clamp_indirect = 0, filter_glossy = 0;  // firefly remedies, off (0) by default
+    std::string sampler_pattern = "random";       // "random" or "sobol" (renderer/zsobol_sampler.h)
     float exposure = std::numeric_limits<float>::quiet_NaN();
     bool no_video = false;
     bool quiet = false;

@@ -169,7 +169,19 @@ float PathIntegrator::transmittance(const Ray& shadow_ray, RenderStats* stats) c
     return tr;
 }
 
-Color PathIntegrator::trace(const Ray& camera_ray_in, Rng& rng, RenderStats* stats, FirstHit* first_hit) const {
+SamplePattern parse_sample_pattern(const std::string& name) {
+    if (name == "random") return SamplePattern::Random;
+    if (name == "sobol") return SamplePattern::ZSobol;
+    throw Error("--sampler-pattern '" + name + "': choose random or sobol");
+}
+
+Color PathIntegrator::trace(const Ray& ray, Rng& rng, RenderStats* stats, FirstHit* first_hit) const {
+    return trace_path(ray, rng, stats, first_hit);
+}
+
+template <class Sampler>
+Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderStats* stats,
+                                 FirstHit* first_hit) const {
     Color L = Color::Zero(), beta = Color::Ones();
     Ray ray = camera_ray_in;
     float prev_bsdf_pdf = 0;  // 0 at the camera: directly visible sky gets full weight
@@ -288,12 +300,16 @@ Color PathIntegrator::trace(const Ray& camera_ray_in, Rng& rng, RenderStats* sta
 void PathIntegrator::sample_pixel(const Camera& camera, float tan_half, float aspect, int x, int y, int count,
                                   PixelState* st, RenderStats* stats) const {
     const bool features = settings_.aovs.any();
+    const bool sobol = settings_.pattern == SamplePattern::ZSobol;
+    ZSobolSampler zsobol(settings_.width, settings_.height, settings_.spp, settings_.seed);
     for (int s = 0; s < count; ++s) {
-        Vec2 jitter = st->rng.uniform2();
+        if (sobol) zsobol.start(x, y, st->n);
+        Vec2 jitter = sobol ? zsobol.uniform2() : st->rng.uniform2();
         Ray ray = camera_ray(camera, tan_half, aspect, x + jitter.x(), y + jitter.y());
         ++stats->camera_rays;
         FirstHit first;
-        Color c = trace(ray, st->rng, stats, features ? &first : nullptr);
+        FirstHit* fh = features ? &first : nullptr;
+        Color c = sobol ? trace_path(ray, zsobol, stats, fh) : trace_path(ray, st->rng, stats, fh);
         if (!c.allFinite()) c = Color::Zero();  // never let one bad path poison a pixel
         Eigen::Array3d cd = c.cast<double>();
         st->sum += cd;

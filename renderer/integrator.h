@@ -19,6 +19,7 @@
 
 #include "renderer/accel.h"
 #include "renderer/env_light.h"
+#include "renderer/zsobol_sampler.h"
 #include "util/error.h"
 #include "util/image.h"
 
@@ -70,7 +71,13 @@ struct RenderSettings {
     // Fireflies, both off (0) by default so references stay unbiased:
     float clamp_indirect = 0;  // light that scattered at two or more surfaces: sum of RGB at most this, per sample
     float filter_glossy = 0;   // Cycles' Filter Glossy: after the first bounce, roughen by the path's smallest pdf
+    // Where the sample values come from: independent PCG32 streams per pixel (Random, the reference
+    // pattern) or Owen-scrambled Sobol in Z order (renderer/zsobol_sampler.h).
+    SamplePattern pattern = SamplePattern::Random;
 };
+
+// "random" or "sobol". Throws dynsky::Error.
+SamplePattern parse_sample_pattern(const std::string& name);
 
 // The relative error of a pixel's mean from its n luminance samples (sum and sum of squares):
 // sqrt(variance of the mean) / mean; 0 when every sample is 0, infinite for n < 2.
@@ -118,6 +125,9 @@ class PathIntegrator {
 
   private:
     struct PixelState;
+    // The path tracer over any source of samples with uniform() and uniform2() (Rng, ZSobolSampler).
+    template <class Sampler>
+    Color trace_path(const Ray& ray, Sampler& sampler, RenderStats* stats, FirstHit* first_hit) const;
     // tan_half: tan(yfov / 2) of the camera (ymag for orthographic ones), computed once per render.
     Ray camera_ray(const Camera& camera, float tan_half, float aspect, float px, float py) const;
     // Takes samples [state.n, state.n + count) of pixel (x, y).

@@ -192,6 +192,10 @@ TEST(RenderCli, AovsRegionAndCameraOptions) {
     expect_clean_failure(render("builtin --fov 200", dir + "/d.exr"), "--fov");
     expect_clean_failure(render("builtin --aovs depth", dir + "/e.png"), "--aovs");
     expect_clean_failure(render("builtin --noise-threshold -1", dir + "/f.exr"), "--noise-threshold");
+    expect_clean_failure(render("builtin --sampler-pattern halton", dir + "/h.exr"), "halton");
+    Outcome sobol = render("builtin --sampler-pattern sobol --clamp-indirect 10 --filter-glossy 1", dir + "/s.exr");
+    ASSERT_EQ(sobol.result.exit_code, 0) << sobol.result.output;
+    EXPECT_EQ(read_image(dir + "/s.exr").metadata.strings["dynsky:sampler_pattern"], "sobol");
     auto r = test::run_command(exe() + " render builtin --look-at 1,2,3 -q --out " + dir + "/g.exr");
     EXPECT_NE(r.exit_code, 0);
     EXPECT_FALSE(fs::exists(dir + "/g.exr"));

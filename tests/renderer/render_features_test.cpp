@@ -6,8 +6,12 @@
 #include <cmath>
 #include <map>
 
+#include <tbb/global_control.h>
+
 #include "renderer/integrator.h"
 #include "renderer/shapes.h"
+#include "renderer/zsobol_sampler.h"
+#include "tests/renderer/chi_square.h"
 #include "sky/fisheye.h"
 #include "sky/latlong.h"
 #include "tests/test_support.h"
@@ -307,6 +311,92 @@ TEST(Fireflies, ClampAndFilterGlossyCutTheUntrimmedErrorOnAGlossyScene) {
     for (int k : {1, 2}) {
         EXPECT_LT(cases[k].bias, 0.0) << cases[k].name;
         EXPECT_GT(cases[k].bias, -0.1) << cases[k].name;
+    }
+}
+
+TEST(ZSobol, SobolDimensionsAreTheKnownSequences) {
+    // Dimension 0 is van der Corput; dimension 1 has direction numbers 1, 3, 5, 15, 17 (Joe-Kuo).
+    EXPECT_EQ(ZSobolSampler::sobol(1, 0), 0x80000000u);
+    EXPECT_EQ(ZSobolSampler::sobol(2, 0), 0x40000000u);
+    EXPECT_EQ(ZSobolSampler::sobol(3, 0), 0xC0000000u);
+    EXPECT_EQ(ZSobolSampler::sobol(2, 1), 0xC0000000u);
+    EXPECT_EQ(ZSobolSampler::sobol(4, 1), 0xA0000000u);
+    EXPECT_EQ(ZSobolSampler::sobol(8, 1), 0xF0000000u);
+    EXPECT_EQ(ZSobolSampler::sobol(16, 1), 0x88000000u);
+    // An Owen scramble permutes: the 2^k first points stay one per stratum of 2^-k.
+    for (uint32_t seed : {1u, 77u, 0xDEADBEEFu}) {
+        std::vector<int> strata(64, 0);
+        for (uint64_t i = 0; i < 64; ++i) ++strata[ZSobolSampler::scramble(ZSobolSampler::sobol(i, 1), seed) >> 26];
+        for (int c : strata) EXPECT_EQ(c, 1);
+    }
+}
+
+// Every dimension the integrator draws, 1D and 2D, over all pixels and samples of an image: the
+// histograms pass Pearson's chi-square test against the uniform distribution.
+TEST(ZSobol, ChiSquareOfTheSampleDimensions) {
+    const int w = 24, h = 16, spp = 16;
+    ZSobolSampler sampler(w, h, spp, 7);
+    const int dims = 12, bins = 8;
+    std::vector<std::vector<double>> one(dims, std::vector<double>(64, 0)),
+        two(dims, std::vector<double>(bins * bins, 0));
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int i = 0; i < spp; ++i) {
+                sampler.start(x, y, i);
+                for (int d = 0; d < dims; ++d) {
+                    Vec2 u = sampler.uniform2();  // the pixel jitter, then NEE and BSDF pairs
+                    float v = sampler.uniform();
+                    ASSERT_TRUE(u.x() >= 0 && u.x() < 1 && u.y() >= 0 && u.y() < 1 && v >= 0 && v < 1);
+                    ++one[d][int(v * 64)];
+                    ++two[d][int(u.y() * bins) * bins + int(u.x() * bins)];
+                }
+            }
+    const double n = double(w) * h * spp;
+    for (int d = 0; d < dims; ++d) {
+        auto r1 = test::chi_square_test(one[d], std::vector<double>(64, n / 64));
+        auto r2 = test::chi_square_test(two[d], std::vector<double>(bins * bins, n / (bins * bins)));
+        EXPECT_GT(r1.p_value, 0.01) << "1D dimension " << d << ": " << r1.summary();
+        EXPECT_GT(r2.p_value, 0.01) << "2D dimension " << d << ": " << r2.summary();
+    }
+    // Not just uniform but stratified: one pixel's 16 jitters fall one per 4 x 4 stratum.
+    std::vector<int> strata(16, 0);
+    for (int i = 0; i < 16; ++i) {
+        sampler.start(5, 3, i);
+        Vec2 u = sampler.uniform2();
+        ++strata[int(u.y() * 4) * 4 + int(u.x() * 4)];
+    }
+    for (int c : strata) EXPECT_EQ(c, 1);
+}
+
+TEST(ZSobol, SameImageOnAnyThreadCountAndLowerErrorPerSample) {
+    Scene scene = sphere_on_floor(false);
+    Accel accel(scene);
+    EnvLight light(sunny_sky(64, 50, 5), 0.3f);
+    Camera cam = camera_at(Vec3(0.5f, 1.0f, 4.5f), Vec3(0, -0.3f, 0), 0.8f);
+    RenderSettings s;
+    s.width = 24, s.height = 16, s.quiet = true, s.pattern = SamplePattern::ZSobol, s.spp = 8;
+    Image one, many;
+    {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+        one = PathIntegrator(accel, light, s).render(cam).color;
+    }
+    {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 4);
+        many = PathIntegrator(accel, light, s).render(cam).color;
+    }
+    EXPECT_EQ(one.pixels, many.pixels);
+    RenderSettings r = s;
+    r.pattern = SamplePattern::Random, r.spp = 4096, r.seed = 99;
+    const Image reference = PathIntegrator(accel, light, r).render(cam).color;
+    for (int spp : {4, 16, 64}) {
+        double e[2];
+        for (int k = 0; k < 2; ++k) {
+            RenderSettings t = s;
+            t.spp = spp, t.pattern = k ? SamplePattern::ZSobol : SamplePattern::Random;
+            e[k] = relative_mse(PathIntegrator(accel, light, t).render(cam).color, reference);
+        }
+        std::printf("%3d spp: relative MSE random %.5f, sobol %.5f (%.2fx)\n", spp, e[0], e[1], e[0] / e[1]);
+        EXPECT_LT(e[1], 0.85 * e[0]) << spp << " spp";
     }
 }
 
