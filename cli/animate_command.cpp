@@ -48,6 +48,16 @@ void register_animate_command(CLI::App& app) {
     cmd->add_option(
         "--exposure", a->exposure,
         "PNG exposure in stops for every frame (default: from the sky's irradiance at t = 0, the same for all frames)");
+    cmd->add_option("--aovs", a->aovs,
+                    "Extra passes in each frame's EXR: albedo, normal, depth, alpha (as for 'dynsky render')");
+    cmd->add_option("--clamp-indirect", a->clamp_indirect,
+                    "Firefly clamp of indirect light, sum of RGB per sample (0: off; as for 'dynsky render')")
+        ->capture_default_str();
+    cmd->add_option("--filter-glossy", a->filter_glossy,
+                    "Roughen reflections after the first bounce (0: off; as for 'dynsky render')")
+        ->capture_default_str();
+    cmd->add_option("--sampler-pattern", a->sampler_pattern, "Sample values: random or sobol (as for 'dynsky render')")
+        ->capture_default_str();
     cmd->add_flag("--no-video", a->no_video, "Do not run ffmpeg (no MP4s)");
     cmd->add_flag("--quiet,-q", a->quiet, "No per-frame report");
     cmd->callback([o] {

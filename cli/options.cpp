@@ -8,9 +8,15 @@ void add_scene_options(CLI::App* cmd, SceneSpec* o) {
     cmd->add_option("scene", o->scene,
                     "Scene: a .gltf/.glb file (scenes/tower/tower.gltf, scenes/house/house.gltf) or 'builtin'")
         ->capture_default_str();
-    cmd->add_option("--camera", o->camera,
-                    "Index of the glTF perspective camera (the bounds are framed when the file has none)")
+    cmd->add_option(
+           "--camera", o->camera,
+           "Index of the glTF camera, perspective or orthographic (the bounds are framed when the file has none)")
         ->capture_default_str();
+    cmd->add_option("--look-at", o->look_at,
+                    "Camera override: eye_x,eye_y,eye_z,target_x,target_y,target_z (world metres, +Y up)")
+        ->delimiter(',')
+        ->expected(6);
+    cmd->add_option("--fov", o->fov_deg, "Vertical field of view in degrees (overrides the camera's)");
     cmd->add_option("--ground-albedo", o->ground_albedo, "Albedo of the ground model below the horizon")
         ->capture_default_str();
 }

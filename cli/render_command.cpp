@@ -14,6 +14,7 @@
 #include "renderer/gltf_loader.h"
 #include "renderer/integrator.h"
 #include "sky/clear_sky.h"
+#include "sky/latlong.h"
 #include "sky/sun_position.h"
 #include "util/error.h"
 #include "util/exposure.h"
@@ -36,6 +37,12 @@ struct RenderOptions {
     float exposure = std::numeric_limits<float>::quiet_NaN();  // NaN: automatic
     bool quiet = false;
     std::string sampler = sky_sampler_name(recommended_sky_sampler()) + "+mis";
+    std::string aovs, region;
+    std::vector<double> look_at;
+    double fov = 0;
+    float noise_threshold = 0, clamp_indirect = 0, filter_glossy = 0;
+    double time_limit = 0;
+    std::string sampler_pattern = "random";
 };
 
 // The default sky when --sky is not given: a clear afternoon over Paris at the summer solstice.
@@ -58,33 +65,46 @@ int run_render(const RenderOptions& o) {
     if (ext != ".exr" && ext != ".png") throw Error(o.out + ": output must end in .exr or .png");
     if (o.spp < 1) throw Error("--spp must be at least 1");
     const SkySamplerOptions sampler = parse_sky_sampler(o.sampler);
+    RenderSettings settings;
+    settings.aovs = parse_aovs(o.aovs);
+    settings.pattern = parse_sample_pattern(o.sampler_pattern);
+    if (settings.aovs.any() && ext != ".exr")
+        throw Error(o.out + ": --aovs needs an .exr output (a PNG holds colour only)");
+    if (!o.region.empty()) settings.region = parse_region(o.region, width, height);
+    if (!(o.noise_threshold >= 0)) throw Error("--noise-threshold must be 0 (off) or positive");
+    if (!(o.time_limit >= 0)) throw Error("--time-limit must be 0 (none) or positive seconds");
+    if (!(o.clamp_indirect >= 0)) throw Error("--clamp-indirect must be 0 (off) or positive");
+    if (!(o.filter_glossy >= 0)) throw Error("--filter-glossy must be 0 (off) or positive");
 
     std::unique_ptr<tbb::global_control> threads;
     if (o.threads > 0)
         threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
 
-    LoadedScene loaded = load_scene(SceneSpec{o.scene, o.camera, o.ground_albedo}, float(width) / height);
+    LoadedScene loaded = load_scene(SceneSpec{o.scene, o.camera, o.ground_albedo, o.look_at, o.fov},
+                                    float(width) / height);
     const Scene& scene = loaded.scene;
     const Camera& camera = loaded.camera;
 
-    std::shared_ptr<SkyImage> sky;
+    std::shared_ptr<SkyImage> sky, ground;  // ground: a lat-long environment's lower half
     if (o.sky.empty()) {
         sky = default_sky();
     } else {
-        sky = std::make_shared<SkyImage>(load_sky(o.sky));
+        sky = std::make_shared<SkyImage>(load_sky_or_latlong(o.sky, &ground));
     }
 
     Accel accel(scene);
     EnvLight light(sky, o.ground_albedo, sampler);
+    if (ground) light.set_ground_image(ground);
     if (!o.quiet)
         std::fprintf(stderr,
                      "scene: %s, %zu triangles, %zu instances; sky: %s (%dx%d), distribution built in %.2f ms\n",
                      o.scene.c_str(), scene.triangle_count(), scene.instances.size(), sky->source.c_str(),
                      sky->resolution, sky->resolution, light.last_build_seconds() * 1e3);
 
-    RenderSettings settings;
     settings.width = width, settings.height = height, settings.spp = o.spp, settings.seed = o.seed;
     settings.max_depth = o.max_depth, settings.quiet = o.quiet;
+    settings.noise_threshold = o.noise_threshold, settings.time_limit_seconds = o.time_limit;
+    settings.clamp_indirect = o.clamp_indirect, settings.filter_glossy = o.filter_glossy;
     PathIntegrator integrator(accel, light, settings);
     RenderResult result = integrator.render(camera);
 
@@ -98,10 +118,17 @@ int run_render(const RenderOptions& o) {
     image.metadata.strings["dynsky:sky"] = sky->source;
     image.metadata.strings["dynsky:scene"] = o.scene;
     image.metadata.strings["dynsky:camera"] = camera.name;
+    if (!settings.region.empty())
+        image.metadata.strings["dynsky:region"] = o.region;  // x0,y0,x1,y1 of the full --res image
+    if (o.clamp_indirect > 0) image.metadata.numbers["dynsky:clamp_indirect"] = o.clamp_indirect;
+    if (o.filter_glossy > 0) image.metadata.numbers["dynsky:filter_glossy"] = o.filter_glossy;
+    if (o.noise_threshold > 0) image.metadata.numbers["dynsky:noise_threshold"] = o.noise_threshold;
+    image.metadata.numbers["dynsky:rounds"] = result.rounds;
+    image.metadata.strings["dynsky:sampler_pattern"] = o.sampler_pattern;
     float ev = std::isnan(o.exposure) ? exposure_log_average(image) : o.exposure;
     image.metadata.numbers["dynsky:png_exposure_ev"] = ev;
     if (ext == ".exr") {
-        write_image(o.out, image);
+        write_image(o.out, settings.aovs.any() ? render_layers(result) : image);
         std::string png = std::filesystem::path(o.out).replace_extension(".png").string();
         write_image(png, tonemap_to_display(image, ev));
         if (!o.quiet) std::fprintf(stderr, "wrote %s and %s\n", o.out.c_str(), png.c_str());
@@ -112,6 +139,9 @@ int run_render(const RenderOptions& o) {
     if (!o.quiet)
         std::fprintf(stderr, "rendered %dx%d at %d spp in %.2f s: %.2f M rays/s\n", width, height, o.spp,
                      result.stats.seconds, result.stats.total_rays() / result.stats.seconds * 1e-6);
+    if (!o.quiet && result.rounds > 1)
+        std::fprintf(stderr, "adaptive sampling / time limit: %d round(s), %.1f samples per pixel on average\n",
+                     result.rounds, double(result.stats.camera_rays) / (double(image.width) * image.height));
     return 0;
 }
 
@@ -122,16 +152,20 @@ void register_render_command(CLI::App& app) {
     CLI::App* cmd = app.add_subcommand("render", "Render a glTF 2.0 scene under a fisheye sky (path traced, CPU)");
     cmd->add_option("scene", o->scene, "Scene: a .gltf or .glb file, or 'builtin' for the built-in plaza")
         ->capture_default_str();
-    cmd->add_option("--sky", o->sky,
-                    "Sky image: canonical fisheye EXR (square, equidistant, north up, east left; see 'dynsky sky').\n"
-                    "Default: a built-in clear sky (Paris, 2026-06-21 16:00 UTC, turbidity 3)");
+    cmd->add_option(
+        "--sky", o->sky,
+        "Sky image: canonical fisheye EXR (square, equidistant, north up, east left; see 'dynsky sky'), or a\n"
+        "lat-long (equirect, 2:1) HDRI in Blender's mapping: its upper half becomes the fisheye sky, its\n"
+        "lower half the ground (instead of the ground model).\n"
+        "Default: a built-in clear sky (Paris, 2026-06-21 16:00 UTC, turbidity 3)");
     cmd->add_option("--out,-o", o->out,
                     "Output image: .exr (linear, with metadata; a tone-mapped .png is written beside it) or .png")
         ->capture_default_str();
     cmd->add_option("--res", o->resolution, "Image size WIDTHxHEIGHT")->capture_default_str();
     cmd->add_option("--spp", o->spp, "Samples per pixel")->capture_default_str();
-    cmd->add_option("--camera", o->camera,
-                    "Index of the glTF perspective camera to use (the scene's bounds are framed when it has none)")
+    cmd->add_option(
+           "--camera", o->camera,
+           "Index of the glTF camera (perspective or orthographic) to use (the scene's bounds are framed when it has none)")
         ->capture_default_str();
     cmd->add_option("--seed", o->seed, "Random seed: the same seed gives the same image on any thread count")
         ->capture_default_str();
@@ -149,6 +183,43 @@ void register_render_command(CLI::App& app) {
            "Sky importance sampler: uniform, cosine, cdf, alias, mip, sun+cdf, sun+alias, sun+mip; pixel-based ones "
            "with '+mis' for MIS compensation (the renderer combines light and BSDF sampling by MIS). "
            "See docs/sampling/README.md")
+        ->capture_default_str();
+    cmd->add_option("--aovs", o->aovs,
+                    "Extra passes in the EXR, comma-separated: albedo ('Denoising Albedo'), normal ('Normal', world),\n"
+                    "depth ('Depth', camera Z, 1e10 on the sky), alpha (the 'A' channel), samples ('Sample Count')");
+    cmd->add_option(
+        "--region", o->region,
+        "Render only pixels [x0, x1) x [y0, y1) of the --res image, 'x0,y0,x1,y1' (the output is cropped to\n"
+        "them; they equal the same pixels of a full render with the same seed)");
+    cmd->add_option(
+           "--look-at", o->look_at,
+           "Camera override: eye_x,eye_y,eye_z,target_x,target_y,target_z (world metres, +Y up): a perspective\n"
+           "camera at the eye looking at the target")
+        ->delimiter(',')
+        ->expected(6);
+    cmd->add_option("--fov", o->fov, "Vertical field of view in degrees (overrides the camera's)");
+    cmd->add_option(
+           "--noise-threshold", o->noise_threshold,
+           "Adaptive sampling (0: off): a pixel stops taking samples, in rounds of 16, once the relative error\n"
+           "of its mean (luminance) is under this; --spp is then the most a pixel takes")
+        ->capture_default_str();
+    cmd->add_option("--time-limit", o->time_limit,
+                    "Seconds of rendering after which no new round of 16 samples starts (0: none); --spp still caps")
+        ->capture_default_str();
+    cmd->add_option(
+           "--clamp-indirect", o->clamp_indirect,
+           "Firefly clamp (Cycles' Clamp Indirect): light that scattered at two or more surfaces is limited to\n"
+           "this sum of RGB per sample (0: off; biased, darkens bright indirect light)")
+        ->capture_default_str();
+    cmd->add_option(
+           "--filter-glossy", o->filter_glossy,
+           "Cycles' Filter Glossy: after the first bounce, sharp reflections are roughened by the path's\n"
+           "smallest pdf (0: off; 1 is a typical value; biased, blurs caustics and reflections of reflections)")
+        ->capture_default_str();
+    cmd->add_option("--sampler-pattern", o->sampler_pattern,
+                    "Sample values: 'random' (independent PCG32 streams per pixel, the reference) or 'sobol'\n"
+                    "(Owen-scrambled Sobol in Z order, pbrt-v4's ZSobol: lower error per sample); both give the same\n"
+                    "image on any thread count")
         ->capture_default_str();
     cmd->add_flag("--quiet,-q", o->quiet, "No progress bar or summary");
     cmd->callback([o] { run_render(*o); });

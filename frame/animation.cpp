@@ -28,6 +28,10 @@ AnimationReport render_animation(const AnimationSettings& o) {
     if (!(o.duration > 0)) throw Error("--duration must be positive");
     if (!(o.fps > 0 && o.fps <= 1000)) throw Error("--fps must be in (0, 1000]");
     if (o.spp < 1) throw Error("--spp must be at least 1");
+    const AovSelection aovs = parse_aovs(o.aovs);
+    const SamplePattern pattern = parse_sample_pattern(o.sampler_pattern);
+    if (!(o.clamp_indirect >= 0)) throw Error("--clamp-indirect must be 0 (off) or positive");
+    if (!(o.filter_glossy >= 0)) throw Error("--filter-glossy must be 0 (off) or positive");
     const int total = std::max(1, int(std::lround(o.duration * o.fps)));
     int first, last;
     parse_frame_range(o.frames, total, &first, &last);
@@ -81,6 +85,9 @@ AnimationReport render_animation(const AnimationSettings& o) {
         settings.width = width, settings.height = height, settings.spp = o.spp, settings.max_depth = o.max_depth;
         settings.seed = o.seed_per_frame ? o.seed + uint64_t(k) * 0x9E3779B97F4A7C15ull : o.seed;
         settings.quiet = true;
+        settings.aovs = aovs;
+        settings.clamp_indirect = o.clamp_indirect, settings.filter_glossy = o.filter_glossy;
+        settings.pattern = pattern;
         PathIntegrator integrator(accel, light, settings);
         RenderResult result = integrator.render(scene.camera);
 
@@ -92,7 +99,7 @@ AnimationReport render_animation(const AnimationSettings& o) {
         meta.sky = sky->source, meta.sky_model = timeline.model().name(), meta.scene = o.scene.scene;
         meta.camera = scene.camera.name;
         meta.write_to(&image.metadata);
-        write_image(store.frame_exr(k), image);
+        write_image(store.frame_exr(k), aovs.any() ? render_layers(result) : image);
         write_image(store.frame_png(k), tonemap_to_display(image, ev));
         write_image(store.sky_png(k), tonemap_to_display(sky_to_image(*sky), sky_ev));
 

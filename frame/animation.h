@@ -24,6 +24,8 @@ namespace dynsky {
 //   frames ""                "A-B" or "A": render only those (numbered from 0); "" all
 //   seed 0, seed_per_frame false   the same seed every frame (correlated noise, no flicker)
 //   threads 0                worker threads (0: all cores)
+//   aovs ""                  passes in each frame's EXR ("albedo,normal,depth,alpha")
+//   clamp_indirect 0, filter_glossy 0   firefly remedies (renderer/integrator.h), off
 //   exposure NaN             PNG exposure in stops; NaN: from the sky's irradiance at t = 0
 //   no_video false, quiet false
 struct AnimationSettings {
@@ -40,6 +42,9 @@ struct AnimationSettings {
     bool seed_per_frame = false;
     int threads = 0;
     int max_depth = 8;
+    std::string aovs;                             // extra EXR passes (renderer/integrator.h parse_aovs)
+    float clamp_indirect = 0, filter_glossy = 0;  // firefly remedies, off (0) by default
+    std::string sampler_pattern = "random";       // "random" or "sobol" (renderer/zsobol_sampler.h)
     float exposure = std::numeric_limits<float>::quiet_NaN();
     bool no_video = false;
     bool quiet = false;

@@ -25,8 +25,23 @@ LoadedScene load_scene(const SceneSpec& o, float aspect_ratio) {
     } else {
         if (o.camera < 0 || o.camera >= int(out.scene.cameras.size()))
             throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " is out of range (the file has " +
-                        std::to_string(out.scene.cameras.size()) + " perspective camera(s), numbered from 0)");
+                        std::to_string(out.scene.cameras.size()) + " camera(s), numbered from 0)");
         out.camera = out.scene.cameras[size_t(o.camera)];
+    }
+    if (!o.look_at.empty() && o.look_at.size() != 6)
+        throw Error("--look-at takes 6 numbers, eye_x,eye_y,eye_z,target_x,target_y,target_z (got " +
+                    std::to_string(o.look_at.size()) + ")");
+    if (o.fov_deg != 0 && !(o.fov_deg > 0 && o.fov_deg < 180))
+        throw Error("--fov " + std::to_string(o.fov_deg) + " must be in (0, 180) degrees");
+    if (!o.look_at.empty()) {
+        const auto& v = o.look_at;
+        float yfov = out.camera.orthographic ? Camera().yfov : out.camera.yfov;
+        out.camera = look_at_camera(Vec3(float(v[0]), float(v[1]), float(v[2])),
+                                    Vec3(float(v[3]), float(v[4]), float(v[5])), yfov);
+    }
+    if (o.fov_deg != 0) {
+        if (out.camera.orthographic) throw Error(o.scene + ": --fov given, but the camera is orthographic");
+        out.camera.yfov = float(o.fov_deg * kPiD / 180);
     }
     return out;
 }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "renderer/scene.h"
 
@@ -12,6 +13,11 @@ struct SceneSpec {
     std::string scene = "scenes/tower/tower.gltf";  // .gltf/.glb or "builtin"
     int camera = 0;                                 // index of the glTF perspective camera
     float ground_albedo = 0.3f;                     // the Lambertian ground below the horizon
+    // Camera overrides: look_at = {eye x, y, z, target x, y, z} (world frame, metres; empty: none)
+    // replaces the camera by a perspective one there, +Y up; fov_deg (0: none) sets the vertical
+    // field of view of the camera in use (the chosen, framing or look-at one; perspective only).
+    std::vector<double> look_at;
+    double fov_deg = 0;
 };
 
 struct LoadedScene {

@@ -12,6 +12,7 @@
 
 #include "renderer/sampling.h"
 #include "sky/fisheye.h"
+#include "sky/latlong.h"
 #include "util/error.h"
 
 namespace dynsky {
@@ -190,7 +191,7 @@ void EnvLight::set_sky(std::shared_ptr<const SkyImage> sky) {
         e += Eigen::Array3d(row.er, row.eg, row.eb) * double(kFromFixed);
     }
     sky_irradiance_ = (e * double(du * du)).cast<float>();
-    ground_radiance_ = ground_albedo_ * sky_irradiance_ * kInvPi;
+    ground_radiance_ = ground_image_ ? ground_image_mean_ : Color(ground_albedo_ * sky_irradiance_ * kInvPi);
 
     // Power (luminance x solid angle) decides how often each part is sampled.
     // Weights carry the fixed-point scale of the table; integral over [0,1]^2 -> over [-1,1]^2.
@@ -219,6 +220,32 @@ void EnvLight::set_sky(std::shared_ptr<const SkyImage> sky) {
     build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+void EnvLight::set_ground_image(std::shared_ptr<const SkyImage> ground) {
+    if (ground && ground->resolution <= 0) throw Error("environment light: empty ground image");
+    ground_image_ = std::move(ground);
+    if (ground_image_) {
+        const int n = ground_image_->resolution;
+        Eigen::Array3d sum = Eigen::Array3d::Zero();
+        double area = 0;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                if (!ground_image_->in_disc(i, j)) continue;
+                double a = fisheye::pixel_solid_angle(i, j, n);
+                Color c = ground_image_->pixel(i, j);
+                for (int k = 0; k < 3; ++k) sum[k] += a * sane(c[k]);
+                area += a;
+            }
+        ground_image_mean_ = area > 0 ? Color((sum / area).cast<float>()) : Color::Zero();
+    }
+    if (sky_) set_sky(sky_);  // the sky / ground split of light samples follows the ground's power
+}
+
+Color EnvLight::ground(const Vec3& w) const {
+    if (!ground_image_) return ground_radiance_;
+    Color c = sample_sky(*ground_image_, Vec3d(w.x(), -w.y(), w.z()));
+    return Color(sane(c[0]), sane(c[1]), sane(c[2]));
+}
+
 int EnvLight::lookup_pixel(const Vec2& uv) const {
     const int n = sky_->resolution;
     Vec2 p = uv;
@@ -234,7 +261,7 @@ int EnvLight::lookup_pixel(const Vec2& uv) const {
 }
 
 Color EnvLight::radiance(const Vec3& w) const {
-    if (w.y() < 0) return ground_radiance_;
+    if (w.y() < 0) return ground(w);
     Vec2 uv;
     fisheye::uv_from_direction(w, &uv);
     const float* p = &sky_->rgb[size_t(lookup_pixel(uv)) * 3];
@@ -242,7 +269,7 @@ Color EnvLight::radiance(const Vec3& w) const {
 }
 
 Color EnvLight::radiance_filtered(const Vec3& w) const {
-    if (w.y() < 0) return ground_radiance_;
+    if (w.y() < 0) return ground(w);
     Vec2 uv;
     fisheye::uv_from_direction(w, &uv);
     const int n = sky_->resolution;
@@ -267,7 +294,7 @@ bool EnvLight::sample(float u_choice, const Vec2& u, EnvLightSample* out) const 
     }
     Vec3 h = sample_uniform_hemisphere(u);  // about +Z; map +Z to -Y (down)
     out->wi = Vec3(h.x(), -h.z(), h.y());
-    out->radiance = ground_radiance_;
+    out->radiance = ground(out->wi);
     out->pdf = (1 - sky_probability_) / (2 * kPi);
     return out->pdf > 0;
 }

@@ -39,6 +39,11 @@ class EnvLight {
     // The per-frame path: point at a new sky and rebuild the distribution (storage is reused
     // when the resolution is unchanged). The scene is untouched.
     void set_sky(std::shared_ptr<const SkyImage> sky);
+    // Radiance below the horizon from an image instead of the ground model (a lat-long HDRI's lower
+    // half, sky/latlong.h latlong_to_fisheye with lower = true); nullptr: back to the model. Kept
+    // across set_sky. The ground stays sampled uniformly (in proportion to its mean power), which
+    // is unbiased whatever it holds.
+    void set_ground_image(std::shared_ptr<const SkyImage> ground);
     double last_build_seconds() const { return build_seconds_; }
 
     Color radiance(const Vec3& w) const;
@@ -49,7 +54,9 @@ class EnvLight {
     bool sample(float u_choice, const Vec2& u, EnvLightSample* out) const;
 
     float ground_albedo() const { return ground_albedo_; }
+    // The ground model's radiance, or the ground image's mean (solid-angle weighted).
     Color ground_radiance() const { return ground_radiance_; }
+    bool has_ground_image() const { return ground_image_ != nullptr; }
     Color sky_irradiance() const { return sky_irradiance_; }  // on a horizontal plane, W m^-2 per channel
     float sky_probability() const { return sky_probability_; }
     const SkyImage& sky() const { return *sky_; }
@@ -78,6 +85,7 @@ class EnvLight {
     // Pixel holding the radiance of uv (with r <= 1): itself, or for rim pixels whose centre lies
     // outside the disc, the nearest pixel inward.
     int lookup_pixel(const Vec2& uv) const;
+    Color ground(const Vec3& w) const;
 
     std::shared_ptr<const SkyImage> sky_;
     SkySamplerOptions sampler_options_;
@@ -92,6 +100,8 @@ class EnvLight {
     double jacobian_table_sum_ = 0;
     int table_resolution_ = 0;
     float ground_albedo_;
+    std::shared_ptr<const SkyImage> ground_image_;
+    Color ground_image_mean_ = Color::Zero();
     Color ground_radiance_ = Color::Zero();
     Color sky_irradiance_ = Color::Zero();
     float sky_probability_ = 1.0f;

@@ -891,9 +891,9 @@ class GltfLoader {
         std::string name = !c.name.empty()      ? c.name
                            : !node.name.empty() ? node.name
                                                 : "camera " + std::to_string(node.camera);
-        if (c.type != "perspective") {
+        if (c.type != "perspective" && c.type != "orthographic") {
             warn("camera " + in_quotes(name) + " is " + (c.type.empty() ? std::string("untyped") : c.type) +
-                 ": only perspective cameras are supported, skipped");
+                 ": only perspective and orthographic cameras are supported, skipped");
             return;
         }
         Camera cam;
@@ -901,11 +901,22 @@ class GltfLoader {
         // The rotation part only: a camera frame must stay orthonormal even under scaled parents.
         Eigen::Affine3f w = to_affine(world);
         cam.camera_to_world = Eigen::Translation3f(w.translation()) * w.rotation();
-        if (c.perspective.yfov > 0 && c.perspective.yfov < kPiD) cam.yfov = float(c.perspective.yfov);
-        else
-            warn("camera " + in_quotes(name) + ": invalid yfov " + std::to_string(c.perspective.yfov) +
-                 ", using the default");
-        cam.aspect_ratio = c.perspective.aspectRatio > 0 ? float(c.perspective.aspectRatio) : 0.0f;
+        if (c.type == "orthographic") {
+            cam.orthographic = true;
+            if (!(c.orthographic.ymag > 0 && std::isfinite(c.orthographic.ymag))) {
+                warn("camera " + in_quotes(name) + ": invalid orthographic ymag " +
+                     std::to_string(c.orthographic.ymag) + ", skipped");
+                return;
+            }
+            cam.ymag = float(c.orthographic.ymag);
+            if (c.orthographic.xmag > 0) cam.aspect_ratio = float(c.orthographic.xmag / c.orthographic.ymag);
+        } else {
+            if (c.perspective.yfov > 0 && c.perspective.yfov < kPiD) cam.yfov = float(c.perspective.yfov);
+            else
+                warn("camera " + in_quotes(name) + ": invalid yfov " + std::to_string(c.perspective.yfov) +
+                     ", using the default");
+            cam.aspect_ratio = c.perspective.aspectRatio > 0 ? float(c.perspective.aspectRatio) : 0.0f;
+        }
         cameras_.push_back({node.camera, node_index, std::move(cam)});
     }
 

@@ -5,7 +5,7 @@
 // normalised or not, sparse accessors), NORMAL (flat normals generated when missing, as the
 // spec requires), TANGENT (generated from the normal texture's UV set when missing),
 // TEXCOORD_0/1, COLOR_0; metallic-roughness materials with their textures, samplers and factors;
-// perspective cameras on nodes. Each glTF mesh becomes one MeshGroup, instanced by every node
+// perspective and orthographic cameras on nodes. Each glTF mesh becomes one MeshGroup, instanced by every node
 // that uses it (and by every EXT_mesh_gpu_instancing instance).
 // Supported extensions: KHR_texture_transform, KHR_materials_emissive_strength,
 // EXT_mesh_gpu_instancing, KHR_mesh_quantization.

@@ -3,10 +3,13 @@
 #include <tbb/parallel_for.h>
 
 #include <chrono>
+#include <limits>
+#include <sstream>
 
 #include "renderer/bsdf.h"
 #include "renderer/material_eval.h"
 #include "renderer/sampling.h"
+#include "util/error.h"
 #include "util/progress.h"
 
 namespace dynsky {
@@ -17,6 +20,91 @@ Vec3 offset_ray_origin(const Vec3& p, const Vec3& n, const Vec3& w) {
     return n.dot(w) < 0 ? Vec3(p - offset) : Vec3(p + offset);
 }
 
+AovSelection parse_aovs(const std::string& list) {
+    AovSelection a;
+    std::stringstream in(list);
+    std::string item;
+    while (std::getline(in, item, ',')) {
+        if (item == "albedo") a.albedo = true;
+        else if (item == "normal") a.normal = true;
+        else if (item == "depth") a.depth = true;
+        else if (item == "alpha") a.alpha = true;
+        else if (item == "samples") a.sample_count = true;
+        else if (!item.empty())
+            throw Error("--aovs: unknown pass '" + item + "' (choose from albedo, normal, depth, alpha, samples)");
+    }
+    return a;
+}
+
+PixelRegion parse_region(const std::string& text, int width, int height) {
+    std::vector<int> v;
+    std::stringstream in(text);
+    std::string item;
+    while (std::getline(in, item, ',')) {
+        size_t used = 0;
+        int value = 0;
+        try {
+            value = std::stoi(item, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used == 0 || used != item.size())
+            throw Error("--region: '" + item + "' is not an integer (want x0,y0,x1,y1)");
+        v.push_back(value);
+    }
+    if (v.size() != 4) throw Error("--region '" + text + "': want four integers x0,y0,x1,y1");
+    PixelRegion r{v[0], v[1], v[2], v[3]};
+    if (r.x0 < 0 || r.y0 < 0 || r.x1 > width || r.y1 > height || r.empty())
+        throw Error("--region " + text + ": must satisfy 0 <= x0 < x1 <= " + std::to_string(width) +
+                    " and 0 <= y0 < y1 <= " + std::to_string(height) + " (pixels [x0, x1) x [y0, y1))");
+    return r;
+}
+
+double pixel_relative_error(int n, double sum, double sum_squares) {
+    if (n < 2) return std::numeric_limits<double>::infinity();
+    double mean = sum / n;
+    if (mean <= 0) return sum_squares > 0 ? std::numeric_limits<double>::infinity() : 0.0;
+    double variance = std::max(0.0, (sum_squares / n - mean * mean) * (double(n) / (n - 1)));
+    return std::sqrt(variance / n) / mean;
+}
+
+Image render_layers(const RenderResult& r) {
+    const Image& c = r.color;
+    std::vector<std::pair<const Image*, std::vector<std::string>>> parts = {{&c, {"R", "G", "B"}}};
+    if (!r.alpha.empty()) parts.push_back({&r.alpha, {"A"}});
+    if (!r.albedo.empty())
+        parts.push_back({&r.albedo, {"Denoising Albedo.R", "Denoising Albedo.G", "Denoising Albedo.B"}});
+    if (!r.normal.empty()) parts.push_back({&r.normal, {"Normal.X", "Normal.Y", "Normal.Z"}});
+    if (!r.depth.empty()) parts.push_back({&r.depth, {"Depth.Z"}});
+    if (!r.sample_count.empty()) parts.push_back({&r.sample_count, {"Sample Count.X"}});
+    int channels = 0;
+    for (const auto& p : parts) channels += p.first->channels;
+    Image out(c.width, c.height, channels);
+    out.metadata = c.metadata;
+    int at = 0;
+    for (const auto& [image, names] : parts) {
+        for (int y = 0; y < c.height; ++y)
+            for (int x = 0; x < c.width; ++x)
+                for (int k = 0; k < image->channels; ++k) out.at(x, y, at + k) = image->at(x, y, k);
+        out.channel_names.insert(out.channel_names.end(), names.begin(), names.end());
+        at += image->channels;
+    }
+    return out;
+}
+
+// Everything a pixel accumulates over its samples (kept between rounds of adaptive sampling).
+struct PathIntegrator::PixelState {
+    Rng rng;
+    int n = 0;
+    bool done = false;
+    Eigen::Array3d sum = Eigen::Array3d::Zero(), sum2 = Eigen::Array3d::Zero();
+    double lum_sum = 0, lum_sum2 = 0;
+    Eigen::Array3d albedo = Eigen::Array3d::Zero(), normal = Eigen::Array3d::Zero();
+    double alpha = 0;
+    float depth = 1e10f;  // Cycles' depth of the sky
+    explicit PixelState(const Rng& r) : rng(r) {}
+};
+
 PathIntegrator::PathIntegrator(const Accel& accel, const EnvLight& light, const RenderSettings& settings)
     : accel_(accel), light_(light), settings_(settings) {}
 
@@ -24,6 +112,11 @@ Ray PathIntegrator::camera_ray(const Camera& camera, float tan_half, float aspec
     float x = (2 * px / settings_.width - 1) * tan_half * aspect;
     float y = (1 - 2 * py / settings_.height) * tan_half;
     Ray ray;
+    if (camera.orthographic) {
+        ray.origin = camera.camera_to_world * Vec3(x, y, 0);
+        ray.direction = (camera.camera_to_world.linear() * Vec3(0, 0, -1)).normalized();
+        return ray;
+    }
     ray.origin = camera.camera_to_world.translation();
     ray.direction = (camera.camera_to_world.linear() * Vec3(x, y, -1)).normalized();
     return ray;
@@ -76,12 +169,36 @@ float PathIntegrator::transmittance(const Ray& shadow_ray, RenderStats* stats) c
     return tr;
 }
 
-Color PathIntegrator::trace(const Ray& camera_ray_in, Rng& rng, RenderStats* stats) const {
+SamplePattern parse_sample_pattern(const std::string& name) {
+    if (name == "random") return SamplePattern::Random;
+    if (name == "sobol") return SamplePattern::ZSobol;
+    throw Error("--sampler-pattern '" + name + "': choose random or sobol");
+}
+
+Color PathIntegrator::trace(const Ray& ray, Rng& rng, RenderStats* stats, FirstHit* first_hit) const {
+    return trace_path(ray, rng, stats, first_hit);
+}
+
+template <class Sampler>
+Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderStats* stats,
+                                 FirstHit* first_hit) const {
     Color L = Color::Zero(), beta = Color::Ones();
     Ray ray = camera_ray_in;
     float prev_bsdf_pdf = 0;  // 0 at the camera: directly visible sky gets full weight
     const bool use_light = settings_.strategy != LightStrategy::BsdfOnly;
     const bool use_bsdf_hits = settings_.strategy != LightStrategy::LightOnly;
+    // Smallest BSDF pdf along the path so far (Filter Glossy); none before the first bounce.
+    float min_pdf = std::numeric_limits<float>::infinity();
+    // Adds light that scattered at `scatterings` surfaces on its way; indirect light (two or more)
+    // is clamped, as Cycles' Clamp Indirect does, to a sum of RGB of at most clamp_indirect.
+    const float clamp = settings_.clamp_indirect;
+    auto add = [&](Color c, int scatterings) {
+        if (clamp > 0 && scatterings >= 2) {
+            float sum = c.abs().sum();
+            if (sum > clamp) c *= clamp / sum;
+        }
+        L += c;
+    };
 
     for (int depth = 0;; ++depth) {
         SurfaceHit hit;
@@ -103,16 +220,29 @@ Color PathIntegrator::trace(const Ray& camera_ray_in, Rng& rng, RenderStats* sta
             if (use_bsdf_hits) {
                 float weight = settings_.strategy == LightStrategy::Mis ? power_heuristic(prev_bsdf_pdf, light_.pdf(w))
                                                                         : 1.0f;
-                L += beta * le * weight;
+                add(beta * le * weight, depth);
             }
             break;
         }
 
         ShadingPoint sp = evaluate_material(accel_.scene(), hit, -ray.direction.normalized());
-        L += beta * sp.emission;  // emitters are reached by BSDF sampling only
+        if (depth == 0 && first_hit) {
+            first_hit->surface = true;
+            first_hit->albedo = sp.base_color;
+            first_hit->normal = sp.normal;
+            first_hit->position = hit.position;
+        }
+        add(beta * sp.emission, depth);  // emitters are reached by BSDF sampling only
         if (depth >= settings_.max_depth) break;
 
-        MetalRoughBsdf bsdf(sp.base_color, sp.metallic, sp.roughness, sp.specular);
+        // Filter Glossy (Cycles): after a bounce of pdf p, roughen to GGX alpha >= sqrt(1 - p / R) / 2,
+        // so a sharp reflection seen through a rough one does not carry the sun as a firefly.
+        float roughness = sp.roughness;
+        if (settings_.filter_glossy > 0) {
+            float blur_pdf = min_pdf / settings_.filter_glossy;
+            if (blur_pdf < 1) roughness = std::max(roughness, std::sqrt(0.5f * std::sqrt(1 - blur_pdf)));
+        }
+        MetalRoughBsdf bsdf(sp.base_color, sp.metallic, roughness, sp.specular);
         Vec3 wo = sp.to_local(-ray.direction.normalized());
         if (wo.z() <= 0) break;
 
@@ -133,7 +263,7 @@ Color PathIntegrator::trace(const Ray& camera_ray_in, Rng& rng, RenderStats* sta
                         float weight = settings_.strategy == LightStrategy::Mis
                                            ? power_heuristic(ls.pdf, bsdf.pdf(wo, wi))
                                            : 1.0f;
-                        L += beta * f * (wi.z() * tr * weight / ls.pdf) * ls.radiance;
+                        add(beta * f * (wi.z() * tr * weight / ls.pdf) * ls.radiance, depth + 1);
                     }
                 }
             }
@@ -150,6 +280,7 @@ Color PathIntegrator::trace(const Ray& camera_ray_in, Rng& rng, RenderStats* sta
         if (sp.geometric_normal.dot(wi_world) <= 0) break;  // below the true surface: no light leaks
         beta *= bs.f * (bs.wi.z() / bs.pdf);
         prev_bsdf_pdf = bs.pdf;
+        min_pdf = std::min(min_pdf, bs.pdf);
 
         if (depth + 1 >= settings_.rr_start_depth) {
             float q = std::max(0.05f, 1 - beta.maxCoeff());
@@ -166,47 +297,138 @@ Color PathIntegrator::trace(const Ray& camera_ray_in, Rng& rng, RenderStats* sta
     return L;
 }
 
+void PathIntegrator::sample_pixel(const Camera& camera, float tan_half, float aspect, int x, int y, int count,
+                                  PixelState* st, RenderStats* stats) const {
+    const bool features = settings_.aovs.any();
+    const bool sobol = settings_.pattern == SamplePattern::ZSobol;
+    ZSobolSampler zsobol(settings_.width, settings_.height, settings_.spp, settings_.seed);
+    for (int s = 0; s < count; ++s) {
+        if (sobol) zsobol.start(x, y, st->n);
+        Vec2 jitter = sobol ? zsobol.uniform2() : st->rng.uniform2();
+        Ray ray = camera_ray(camera, tan_half, aspect, x + jitter.x(), y + jitter.y());
+        ++stats->camera_rays;
+        FirstHit first;
+        FirstHit* fh = features ? &first : nullptr;
+        Color c = sobol ? trace_path(ray, zsobol, stats, fh) : trace_path(ray, st->rng, stats, fh);
+        if (!c.allFinite()) c = Color::Zero();  // never let one bad path poison a pixel
+        Eigen::Array3d cd = c.cast<double>();
+        st->sum += cd;
+        st->sum2 += cd * cd;
+        double lum = 0.2126 * cd[0] + 0.7152 * cd[1] + 0.0722 * cd[2];
+        st->lum_sum += lum, st->lum_sum2 += lum * lum;
+        if (features && first.surface) {
+            st->albedo += first.albedo.cast<double>();
+            st->normal += first.normal.cast<double>().array();
+            st->alpha += 1;
+            if (st->n == 0) {
+                Vec3 forward = (camera.camera_to_world.linear() * Vec3(0, 0, -1)).normalized();
+                st->depth = (first.position - camera.camera_to_world.translation()).dot(forward);
+            }
+        }
+        ++st->n;
+    }
+}
+
+void PathIntegrator::store_pixel(const Camera&, const PixelState& st, int x, int y, RenderResult* result) const {
+    const int n = st.n;
+    Eigen::Array3d mean = st.sum / n;
+    for (int k = 0; k < 3; ++k) result->color.at(x, y, k) = float(mean[k]);
+    if (settings_.compute_variance && n > 1) {
+        Eigen::Array3d var = (st.sum2 / n - mean * mean) * (double(n) / (n - 1));
+        for (int k = 0; k < 3; ++k) result->variance.at(x, y, k) = float(std::max(0.0, var[k]) / n);
+    }
+    const AovSelection& a = settings_.aovs;
+    for (int k = 0; k < 3; ++k) {
+        if (a.albedo) result->albedo.at(x, y, k) = float(st.albedo[k] / n);
+        if (a.normal) result->normal.at(x, y, k) = float(st.normal[k] / n);
+    }
+    if (a.depth) result->depth.at(x, y, 0) = st.depth;
+    if (a.alpha) result->alpha.at(x, y, 0) = float(st.alpha / n);
+    if (a.sample_count) result->sample_count.at(x, y, 0) = float(n);
+    if (!result->relative_error.empty())
+        result->relative_error.at(x, y, 0) = float(pixel_relative_error(n, st.lum_sum, st.lum_sum2));
+}
+
 RenderResult PathIntegrator::render(const Camera& camera) const {
     const int w = settings_.width, h = settings_.height, ts = settings_.tile_size;
+    if (settings_.spp < 1) throw Error("render: spp must be at least 1");
+    const PixelRegion region = settings_.region.empty() ? PixelRegion{0, 0, w, h} : settings_.region;
+    if (region.x0 < 0 || region.y0 < 0 || region.x1 > w || region.y1 > h)
+        throw Error("render: region outside the " + std::to_string(w) + "x" + std::to_string(h) + " image");
+    const int rw = region.x1 - region.x0, rh = region.y1 - region.y0;
     RenderResult result;
-    result.color = Image(w, h, 3);
-    if (settings_.compute_variance) result.variance = Image(w, h, 3);
-    const float tan_half = std::tan(camera.yfov / 2);
+    result.color = Image(rw, rh, 3);
+    if (settings_.compute_variance) result.variance = Image(rw, rh, 3);
+    const AovSelection& aovs = settings_.aovs;
+    if (aovs.albedo) result.albedo = Image(rw, rh, 3);
+    if (aovs.normal) result.normal = Image(rw, rh, 3);
+    if (aovs.depth) result.depth = Image(rw, rh, 1);
+    if (aovs.alpha) result.alpha = Image(rw, rh, 1);
+    if (aovs.sample_count) result.sample_count = Image(rw, rh, 1);
+    const bool adaptive = settings_.noise_threshold > 0;
+    if (adaptive || settings_.compute_variance) result.relative_error = Image(rw, rh, 1);
+    // tan(yfov / 2) for perspective cameras, the half height for orthographic ones.
+    const float tan_half = camera.orthographic ? camera.ymag : std::tan(camera.yfov / 2);
     const float aspect = float(w) / h;  // the image decides; glTF aspectRatio only matters to rasterisers
-    const int tiles_x = (w + ts - 1) / ts, tiles_y = (h + ts - 1) / ts;
-    ProgressBar progress(tiles_x * tiles_y, "render", settings_.quiet);
+    const int tiles_x = (rw + ts - 1) / ts, tiles_y = (rh + ts - 1) / ts, tiles = tiles_x * tiles_y;
+    // Rounds of samples when a pixel may stop early (adaptive) or the clock may stop the render.
+    const bool by_rounds = adaptive || settings_.time_limit_seconds > 0;
+    const int round_spp = by_rounds ? std::max(1, std::min(settings_.round_spp, settings_.spp)) : settings_.spp;
+    const int max_rounds = (settings_.spp + round_spp - 1) / round_spp;
+    ProgressBar progress(tiles * max_rounds, "render", settings_.quiet);
     std::atomic<uint64_t> camera_rays{0}, extension_rays{0}, shadow_rays{0};
     auto start = std::chrono::steady_clock::now();
+    auto pixel_rng = [&](int x, int y) {
+        return Rng(mix_bits(settings_.seed * 0x9E3779B97F4A7C15ULL + 1), uint64_t(y) * w + x);
+    };
+    // Calls f(x, y, tile stats) for every pixel of every tile, tiles in parallel.
+    auto for_each_tile = [&](auto&& f) {
+        tbb::parallel_for(0, tiles, [&](int tile) {
+            RenderStats stats;
+            int x0 = region.x0 + (tile % tiles_x) * ts, y0 = region.y0 + (tile / tiles_x) * ts;
+            for (int y = y0; y < std::min(y0 + ts, region.y1); ++y)
+                for (int x = x0; x < std::min(x0 + ts, region.x1); ++x) f(x, y, &stats);
+            camera_rays += stats.camera_rays, extension_rays += stats.extension_rays;
+            shadow_rays += stats.shadow_rays;
+            progress.advance();
+        });
+    };
 
-    tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) {
-        RenderStats stats;
-        int x0 = (tile % tiles_x) * ts, y0 = (tile / tiles_x) * ts;
-        for (int y = y0; y < std::min(y0 + ts, h); ++y)
-            for (int x = x0; x < std::min(x0 + ts, w); ++x) {
-                Rng rng(mix_bits(settings_.seed * 0x9E3779B97F4A7C15ULL + 1), uint64_t(y) * w + x);
-                Eigen::Array3d sum = Eigen::Array3d::Zero(), sum2 = Eigen::Array3d::Zero();
-                for (int s = 0; s < settings_.spp; ++s) {
-                    Vec2 jitter = rng.uniform2();
-                    Ray ray = camera_ray(camera, tan_half, aspect, x + jitter.x(), y + jitter.y());
-                    ++stats.camera_rays;
-                    Color c = trace(ray, rng, &stats);
-                    if (!c.allFinite()) c = Color::Zero();  // never let one bad path poison a pixel
-                    Eigen::Array3d cd = c.cast<double>();
-                    sum += cd;
-                    sum2 += cd * cd;
-                }
-                Eigen::Array3d mean = sum / settings_.spp;
-                for (int k = 0; k < 3; ++k) result.color.at(x, y, k) = float(mean[k]);
-                if (settings_.compute_variance && settings_.spp > 1) {
-                    Eigen::Array3d var = (sum2 / settings_.spp - mean * mean) *
-                                         (double(settings_.spp) / (settings_.spp - 1));
-                    for (int k = 0; k < 3; ++k)
-                        result.variance.at(x, y, k) = float(std::max(0.0, var[k]) / settings_.spp);
-                }
-            }
-        camera_rays += stats.camera_rays, extension_rays += stats.extension_rays, shadow_rays += stats.shadow_rays;
-        progress.advance();
-    });
+    if (!by_rounds) {
+        for_each_tile([&](int x, int y, RenderStats* stats) {
+            PixelState st(pixel_rng(x, y));
+            sample_pixel(camera, tan_half, aspect, x, y, settings_.spp, &st, stats);
+            store_pixel(camera, st, x - region.x0, y - region.y0, &result);
+        });
+        result.rounds = 1;
+    } else {
+        std::vector<PixelState> states;
+        states.reserve(size_t(rw) * rh);
+        for (int y = region.y0; y < region.y1; ++y)
+            for (int x = region.x0; x < region.x1; ++x) states.emplace_back(pixel_rng(x, y));
+        int taken = 0;
+        while (taken < settings_.spp) {
+            const int count = std::min(round_spp, settings_.spp - taken);
+            std::atomic<long long> active{0};
+            for_each_tile([&](int x, int y, RenderStats* stats) {
+                PixelState& st = states[size_t(y - region.y0) * rw + (x - region.x0)];
+                if (st.done) return;
+                sample_pixel(camera, tan_half, aspect, x, y, count, &st, stats);
+                if (adaptive && pixel_relative_error(st.n, st.lum_sum, st.lum_sum2) < settings_.noise_threshold)
+                    st.done = true;
+                else ++active;
+            });
+            taken += count, ++result.rounds;
+            if (active == 0) break;
+            if (settings_.time_limit_seconds > 0 &&
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >=
+                    settings_.time_limit_seconds)
+                break;
+        }
+        tbb::parallel_for(0, rh, [&](int y) {
+            for (int x = 0; x < rw; ++x) store_pixel(camera, states[size_t(y) * rw + x], x, y, &result);
+        });
+    }
     progress.finish();
     result.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     result.stats.camera_rays = camera_rays, result.stats.extension_rays = extension_rays;

@@ -3,23 +3,57 @@
 // roulette, a maximum depth, and stochastic transparency for alpha MASK/BLEND. Image tiles run
 // in parallel on oneTBB; every pixel has its own random stream derived from (seed, pixel), so the
 // same seed gives the same image on any number of threads.
+//
+// Beside the colour a render gives the passes users composite and denoise with ("AOVs", named as
+// Cycles names its passes), a render region, adaptive sampling by rounds (a pixel stops once the
+// relative error of its mean falls under a threshold; its samples are a prefix of the same
+// pixel's samples in a non-adaptive render, so both agree bitwise on what they share), a time
+// limit, and two firefly remedies that are off by default (clamp of indirect light, Cycles'
+// "Clamp Indirect"; roughness regularisation after the first bounce, Cycles' "Filter Glossy").
 #pragma once
 
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <string>
 
 #include "renderer/accel.h"
 #include "renderer/env_light.h"
+#include "renderer/zsobol_sampler.h"
+#include "util/error.h"
 #include "util/image.h"
 
 namespace dynsky {
 
 enum class LightStrategy { Mis, LightOnly, BsdfOnly };
 
+// Extra passes of a render (glossary: AOV). In the EXR (render_layers) they are named as Cycles
+// names its passes: "Denoising Albedo", "Normal", "Depth", the alpha as the image's "A", and
+// "Sample Count".
+struct AovSelection {
+    bool albedo = false;        // base colour at the first surface seen (0 on the sky), averaged
+    bool normal = false;        // world shading normal there, facing the camera (0 on the sky), averaged
+    bool depth = false;         // camera-space Z depth of the first sample's surface (1e10 on the sky)
+    bool alpha = false;         // share of samples that see a surface (1) rather than the sky (0)
+    bool sample_count = false;  // samples taken in the pixel (adaptive sampling, time limit)
+    bool any() const { return albedo || normal || depth || alpha || sample_count; }
+};
+
+// "albedo,normal,depth,alpha,samples" (any subset, any order; "" none). Throws dynsky::Error.
+AovSelection parse_aovs(const std::string& list);
+
+// A rectangle of pixels [x0, x1) x [y0, y1) of the full image; empty (x1 <= x0): the whole image.
+struct PixelRegion {
+    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+    bool empty() const { return x1 <= x0 || y1 <= y0; }
+};
+
+// "x0,y0,x1,y1" checked against a width x height image. Throws dynsky::Error.
+PixelRegion parse_region(const std::string& text, int width, int height);
+
 struct RenderSettings {
     int width = 640, height = 360;
-    int spp = 16;
+    int spp = 16;            // samples per pixel (the most, with adaptive sampling or a time limit)
     int max_depth = 8;       // path vertices after the camera
     int rr_start_depth = 3;  // Russian roulette from this depth on
     uint64_t seed = 0;
@@ -27,7 +61,27 @@ struct RenderSettings {
     bool compute_variance = false;  // per-pixel variance of the pixel mean (for tests)
     bool quiet = false;             // no progress bar
     int tile_size = 16;
+    PixelRegion region;  // render only these pixels; the result is cropped to them
+    AovSelection aovs;
+    // Adaptive sampling (0: off): after each round of round_spp samples a pixel whose relative
+    // error estimate (pixel_relative_error) is under the threshold takes no more samples.
+    float noise_threshold = 0;
+    int round_spp = 16;
+    double time_limit_seconds = 0;  // no new round starts after this much time (0: none); the first always runs
+    // Fireflies, both off (0) by default so references stay unbiased:
+    float clamp_indirect = 0;  // light that scattered at two or more surfaces: sum of RGB at most this, per sample
+    float filter_glossy = 0;   // Cycles' Filter Glossy: after the first bounce, roughen by the path's smallest pdf
+    // Where the sample values come from: independent PCG32 streams per pixel (Random, the reference
+    // pattern) or Owen-scrambled Sobol in Z order (renderer/zsobol_sampler.h).
+    SamplePattern pattern = SamplePattern::Random;
 };
+
+// "random" or "sobol". Throws dynsky::Error.
+SamplePattern parse_sample_pattern(const std::string& name);
+
+// The relative error of a pixel's mean from its n luminance samples (sum and sum of squares):
+// sqrt(variance of the mean) / mean; 0 when every sample is 0, infinite for n < 2.
+double pixel_relative_error(int n, double sum, double sum_squares);
 
 struct RenderStats {
     double seconds = 0;
@@ -36,9 +90,24 @@ struct RenderStats {
 };
 
 struct RenderResult {
-    Image color;     // linear radiance, 3 channels
+    Image color;     // linear radiance, 3 channels (the region's size when one is given)
     Image variance;  // variance of each pixel's mean (3 channels) if requested
+    // The passes asked for (empty otherwise): albedo and normal 3 channels, the rest 1.
+    Image albedo, normal, depth, alpha, sample_count;
+    Image relative_error;  // with adaptive sampling or compute_variance: each pixel's pixel_relative_error (1 channel)
     RenderStats stats;
+    int rounds = 0;  // sampling rounds run
+};
+
+// One multi-channel image of the colour and its passes, channels named for the EXR: R, G, B
+// (A with alpha), then "Denoising Albedo.R/G/B", "Normal.X/Y/Z", "Depth.Z", "Sample Count.X".
+Image render_layers(const RenderResult& result);
+
+// What the path's first surface gave, for the passes.
+struct FirstHit {
+    bool surface = false;  // false: the camera ray reached the sky
+    Color albedo = Color::Zero();
+    Vec3 normal = Vec3::Zero(), position = Vec3::Zero();
 };
 
 // Optional observer of every ray traced (benchmarks replay them through plain Embree).
@@ -49,14 +118,22 @@ class PathIntegrator {
     PathIntegrator(const Accel& accel, const EnvLight& light, const RenderSettings& settings);
 
     RenderResult render(const Camera& camera) const;
-    // Radiance along one camera ray (for tests).
-    Color trace(const Ray& ray, class Rng& rng, RenderStats* stats) const;
+    // Radiance along one camera ray (for tests); first_hit, when given, receives the passes' data.
+    Color trace(const Ray& ray, class Rng& rng, RenderStats* stats, FirstHit* first_hit = nullptr) const;
 
     void set_ray_observer(RayObserver observer) { observer_ = std::move(observer); }
 
   private:
-    // tan_half: tan(yfov / 2) of the camera, computed once per render.
+    struct PixelState;
+    // The path tracer over any source of samples with uniform() and uniform2() (Rng, ZSobolSampler).
+    template <class Sampler>
+    Color trace_path(const Ray& ray, Sampler& sampler, RenderStats* stats, FirstHit* first_hit) const;
+    // tan_half: tan(yfov / 2) of the camera (ymag for orthographic ones), computed once per render.
     Ray camera_ray(const Camera& camera, float tan_half, float aspect, float px, float py) const;
+    // Takes samples [state.n, state.n + count) of pixel (x, y).
+    void sample_pixel(const Camera& camera, float tan_half, float aspect, int x, int y, int count, PixelState* state,
+                      RenderStats* stats) const;
+    void store_pixel(const Camera& camera, const PixelState& state, int x, int y, RenderResult* result) const;
     // Visibility along a shadow ray through alpha-tested and blended surfaces (transmittance).
     float transmittance(const Ray& ray, RenderStats* stats) const;
     // Whether a hit is skipped by alpha (MASK below cutoff, or BLEND chosen as transparent).

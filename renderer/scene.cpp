@@ -1,5 +1,7 @@
 #include "renderer/scene.h"
 
+#include "util/error.h"
+
 namespace dynsky {
 
 Bounds3 Scene::world_bounds() const {
@@ -41,6 +43,24 @@ Camera frame_bounds_camera(const Bounds3& bounds, float aspect_ratio) {
     Vec3 eye = center + distance * dir;
     Vec3 forward = (center - eye).normalized();
     Vec3 right = forward.cross(Vec3::UnitY()).normalized();
+    Vec3 up = right.cross(forward);
+    Eigen::Matrix3f rot;
+    rot.col(0) = right, rot.col(1) = up, rot.col(2) = -forward;
+    cam.camera_to_world = Eigen::Translation3f(eye) * rot;
+    return cam;
+}
+
+Camera look_at_camera(const Vec3& eye, const Vec3& target, float yfov) {
+    if (!eye.allFinite() || !target.allFinite()) throw Error("--look-at: eye and target must be finite");
+    if (!((target - eye).norm() > 1e-6f * std::max(1.0f, eye.norm())))
+        throw Error("--look-at: eye and target are the same point");
+    if (!(yfov > 0 && yfov < kPi)) throw Error("--look-at: field of view must be in (0, 180) degrees");
+    Camera cam;
+    cam.name = "look-at camera";
+    cam.yfov = yfov;
+    Vec3 forward = (target - eye).normalized();
+    Vec3 up_hint = std::abs(forward.y()) > 0.999f ? Vec3::UnitZ() : Vec3::UnitY();
+    Vec3 right = forward.cross(up_hint).normalized();
     Vec3 up = right.cross(forward);
     Eigen::Matrix3f rot;
     rot.col(0) = right, rot.col(1) = up, rot.col(2) = -forward;

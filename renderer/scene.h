@@ -69,9 +69,17 @@ struct Instance {
 struct Camera {
     std::string name;
     Eigen::Affine3f camera_to_world = Eigen::Affine3f::Identity();  // camera looks down -Z, +Y up
-    float yfov = 0.8f;                                              // radians
+    float yfov = 0.8f;                                              // radians (perspective)
     float aspect_ratio = 0.0f;                                      // 0: take it from the image resolution
+    // glTF orthographic camera: parallel rays along -Z over a view half ymag metres tall (the
+    // image's aspect decides the width, as it does for perspective cameras; glTF's xmag is ignored).
+    bool orthographic = false;
+    float ymag = 1.0f;
 };
+
+// A perspective camera at eye looking at target, +Y up (a straight up or down view takes +Z as up).
+// Throws dynsky::Error when eye and target coincide or yfov is not in (0, pi).
+Camera look_at_camera(const Vec3& eye, const Vec3& target, float yfov);
 
 struct Bounds3 {
     Vec3 lo = Vec3::Constant(std::numeric_limits<float>::infinity());
@@ -88,7 +96,7 @@ struct Scene {
     std::vector<Instance> instances;
     std::vector<Material> materials;
     std::vector<std::shared_ptr<Texture>> textures;
-    std::vector<Camera> cameras;        // glTF perspective cameras, in file order
+    std::vector<Camera> cameras;        // glTF cameras (perspective and orthographic), in file order
     std::vector<std::string> warnings;  // e.g. extensions used but not supported
 
     Bounds3 world_bounds() const;

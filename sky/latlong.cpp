@@ -102,4 +102,76 @@ Image sky_to_latlong(const SkyImage& sky, int width, const Color& ground) {
     return out;
 }
 
+SkyImage latlong_to_fisheye(const Image& latlong, int resolution, bool lower) {
+    if (!is_latlong_shape(latlong.width, latlong.height) || latlong.channels < 3)
+        throw Error("lat-long image is " + std::to_string(latlong.width) + "x" + std::to_string(latlong.height) + "x" +
+                    std::to_string(latlong.channels) + ": want W x W/2 with 3 or more channels");
+    if (resolution < 2 || resolution > 16384)
+        throw Error("fisheye resolution " + std::to_string(resolution) + " must be in 2..16384");
+    const int n = resolution, H = latlong.height;
+    SkyImage sky(n);
+    // A fisheye pixel spans pi/n radially; lat-long pixels pi/H: enough sub-samples a side to land
+    // at least twice in every lat-long pixel the fisheye pixel covers.
+    const int ss = std::clamp(int(std::ceil(2.0 * H / n)), 2, 16);
+    tbb::parallel_for(0, n, [&](int j) {
+        for (int i = 0; i < n; ++i) {
+            if (fisheye::pixel_center_uv(i, j, n).squaredNorm() > 1.0f)
+                continue;  // centre below the horizon: no sky (lookups step inward)
+            Eigen::Array3d sum = Eigen::Array3d::Zero();
+            double weight = 0;
+            for (int b = 0; b < ss; ++b)
+                for (int a = 0; a < ss; ++a) {
+                    double u = (i + (a + 0.5) / ss) / n * 2 - 1, v = (j + (b + 0.5) / ss) / n * 2 - 1;
+                    double r = std::sqrt(u * u + v * v);
+                    if (r > 1) continue;
+                    Vec3d w = fisheye::direction_from_uv(u, v);
+                    if (lower) w.y() = -w.y();
+                    double wgt = fisheye::sinc(r * kPiD / 2);  // solid angle per uv area (up to a constant)
+                    sum += wgt * sample_latlong(latlong, w).cast<double>();
+                    weight += wgt;
+                }
+            if (weight > 0) sky.set_pixel(i, j, Eigen::Array3d(sum / weight).cast<float>());
+        }
+    });
+    return sky;
+}
+
+LatlongEnvironment load_latlong_environment(const std::string& path, int resolution) {
+    return latlong_environment(read_image(path), path, resolution);
+}
+
+SkyImage load_sky_or_latlong(const std::string& path, std::shared_ptr<SkyImage>* ground) {
+    *ground = nullptr;
+    Image image = read_image(path);
+    if (!is_latlong_shape(image.width, image.height)) return load_sky(path);
+    LatlongEnvironment env = latlong_environment(image, path);
+    *ground = std::make_shared<SkyImage>(std::move(env.ground));
+    return std::move(env.sky);
+}
+
+LatlongEnvironment latlong_environment(const Image& image, const std::string& path, int resolution) {
+    if (!is_latlong_shape(image.width, image.height))
+        throw Error(path + ": a lat-long (equirect) environment must be twice as wide as it is high, not " +
+                    std::to_string(image.width) + "x" + std::to_string(image.height));
+    if (image.channels < 3)
+        throw Error(path + ": lat-long environment has " + std::to_string(image.channels) + " channel(s), want RGB");
+    for (int y = 0; y < image.height; ++y)
+        for (int x = 0; x < image.width; ++x)
+            for (int c = 0; c < 3; ++c) {
+                float v = image.at(x, y, c);
+                if (!(v >= 0 && std::isfinite(v)))
+                    throw Error(path + ": pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                                ") is negative, infinite or NaN; not a radiance image");
+            }
+    const int n = resolution > 0 ? resolution : std::max(16, image.height + (image.height & 1));
+    LatlongEnvironment env;
+    env.sky = latlong_to_fisheye(image, n, false);
+    env.ground = latlong_to_fisheye(image, n, true);
+    env.sky.source = env.ground.source = "latlong:" + path;
+    auto it = image.metadata.numbers.find("dynsky:time");
+    if (it != image.metadata.numbers.end()) env.sky.time_seconds = env.ground.time_seconds = it->second;
+    validate_sky(env.sky, path + " (its upper half)");
+    return env;
+}
+
 }  // namespace dynsky

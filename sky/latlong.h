@@ -13,6 +13,9 @@
 // below the horizon.
 #pragma once
 
+#include <memory>
+#include <string>
+
 #include "sky/sky_image.h"
 #include "util/image.h"
 #include "util/math.h"
@@ -38,5 +41,29 @@ Color sample_latlong(const Image& latlong, const Vec3d& w);
 // one fisheye pixel wide is neither missed nor doubled and the upper hemisphere's integral is kept.
 // Metadata: the sky's time, sun direction and source, plus the layout.
 Image sky_to_latlong(const SkyImage& sky, int width, const Color& ground = Color::Zero());
+
+// The inverse, for downloaded HDRIs (Blender's mapping above): a W x (W / 2) lat-long image to a
+// canonical fisheye of resolution N. Each fisheye pixel averages (weighted by solid angle)
+// enough bilinear lat-long lookups to see every lat-long pixel it covers. lower = false: the sky
+// (upper half); lower = true: the ground (lower half) as a fisheye seen from above, the pixel of
+// direction (x, y, z) holding the radiance arriving from (x, -y, z).
+SkyImage latlong_to_fisheye(const Image& latlong, int resolution, bool lower = false);
+
+// An equirect (2:1) image is a lat-long environment, anything else not.
+inline bool is_latlong_shape(int width, int height) { return height > 0 && width == 2 * height; }
+
+// A lat-long environment file (EXR or any format OpenImageIO reads), checked (2:1, finite,
+// non-negative) and converted: sky (upper half) and ground (lower half) as fisheyes of
+// resolution N (0: the lat-long's height, which keeps its angular resolution at the horizon).
+// Throws dynsky::Error naming the file.
+struct LatlongEnvironment {
+    SkyImage sky, ground;
+};
+LatlongEnvironment load_latlong_environment(const std::string& path, int resolution = 0);
+LatlongEnvironment latlong_environment(const Image& image, const std::string& name, int resolution = 0);
+
+// A sky file as --sky takes it: a canonical fisheye (load_sky; *ground = nullptr), or a lat-long
+// environment, whose sky is returned and whose ground goes to *ground.
+SkyImage load_sky_or_latlong(const std::string& path, std::shared_ptr<SkyImage>* ground);
 
 }  // namespace dynsky

@@ -23,6 +23,12 @@ std::string file_extension(const std::string& path) {
     return ext;
 }
 
+int Image::channel_index(const std::string& name) const {
+    for (size_t i = 0; i < channel_names.size(); ++i)
+        if (channel_names[i] == name) return int(i);
+    return -1;
+}
+
 Image read_image(const std::string& path) {
     if (!fs::exists(path)) throw_file_error(path, "no such file");
     if (fs::is_directory(path)) throw_file_error(path, "is a directory, not an image");
@@ -39,6 +45,7 @@ Image read_image(const std::string& path) {
         throw_file_error(path, "could not decode pixels (truncated or corrupt?)" +
                                    (why.empty() ? std::string() : ": " + why));
     }
+    for (const std::string& name : spec.channelnames) image.channel_names.push_back(name);
     for (const auto& p : spec.extra_attribs) {
         std::string name = p.name().string();
         if (p.type() == OIIO::TypeDesc::STRING) image.metadata.strings[name] = p.get_string();
@@ -70,6 +77,12 @@ void write_image(const std::string& path, const Image& image) {
     OIIO::ImageSpec spec(image.width, image.height, image.channels,
                          is_exr ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
     if (is_exr) spec.attribute("compression", "zip");
+    // Names that do not match the channels (an image reshaped after reading) fall back to the defaults.
+    if (is_exr && int(image.channel_names.size()) == image.channels) {
+        spec.channelnames = image.channel_names;
+        spec.alpha_channel = image.channel_index("A");
+        spec.z_channel = image.channel_index("Depth.Z");
+    }
     for (const auto& [name, value] : image.metadata.numbers) spec.attribute(name, OIIO::TypeDesc::DOUBLE, &value);
     for (const auto& [name, value] : image.metadata.strings) spec.attribute(name, value);
 

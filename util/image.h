@@ -18,12 +18,17 @@ struct Image {
     int width = 0, height = 0, channels = 0;
     std::vector<float> pixels;  // row-major, row 0 at the top, channels interleaved
     ImageMetadata metadata;
+    // Names of the channels in an EXR ("R", "G", "B", "A", "Normal.X", ...; OpenEXR's layer.channel
+    // convention); empty: the writer's defaults (R, G, B, A for up to four channels).
+    std::vector<std::string> channel_names;
 
     Image() = default;
     Image(int w, int h, int c) : width(w), height(h), channels(c), pixels(size_t(w) * h * c, 0.0f) {}
     float& at(int x, int y, int c) { return pixels[(size_t(y) * width + x) * channels + c]; }
     float at(int x, int y, int c) const { return pixels[(size_t(y) * width + x) * channels + c]; }
     bool empty() const { return pixels.empty(); }
+    // Index of the channel named `name`, or -1.
+    int channel_index(const std::string& name) const;
 };
 
 // Reads any format OpenImageIO knows, as float. 8-bit files come back as their encoded values

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 
 namespace dynsky {
@@ -43,19 +44,25 @@ void ProgressBar::finish() {
     draw(done_.load(), true);
 }
 
-void ProgressBar::draw(long long done, bool final) {
-    last_drawn_ = done;
-    double frac = std::min(1.0, double(done) / double(total_));
-    double t = elapsed_seconds();
-    double eta = frac > 0 ? t * (1 - frac) / frac : 0;
+std::string format_progress(const std::string& label, double fraction, double elapsed) {
+    double frac = std::clamp(fraction, 0.0, 1.0);
     const int width = 30;
     int filled = int(frac * width);
-    std::string bar(filled, '#');
-    bar += std::string(width - filled, '.');
-    if (tty_)
-        std::fprintf(stderr, "\r%s [%s] %5.1f%%  %.1fs elapsed, %.1fs left%s", label_.c_str(), bar.c_str(), 100 * frac,
-                     t, eta, final ? "\n" : "   ");
-    else std::fprintf(stderr, "%s [%s] %5.1f%%  %.1fs elapsed\n", label_.c_str(), bar.c_str(), 100 * frac, t);
+    std::string bar(size_t(filled), '#');
+    bar += std::string(size_t(width - filled), '.');
+    char left[32] = "?";
+    if (frac > 0) std::snprintf(left, sizeof left, "%.1fs", elapsed * (1 - frac) / frac);
+    char line[256];
+    std::snprintf(line, sizeof line, "%s [%s] %5.1f%%  %.1fs elapsed, %s left", label.c_str(), bar.c_str(), 100 * frac,
+                  elapsed, left);
+    return line;
+}
+
+void ProgressBar::draw(long long done, bool final) {
+    last_drawn_ = done;
+    std::string line = format_progress(label_, double(done) / double(total_), elapsed_seconds());
+    if (tty_) std::fprintf(stderr, "\r%s%s", line.c_str(), final ? "\n" : "   ");
+    else std::fprintf(stderr, "%s\n", line.c_str());
     std::fflush(stderr);
 }
 

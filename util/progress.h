@@ -1,4 +1,5 @@
-// A thread-safe terminal progress bar for long work (renders, sky sequences, rollouts).
+// A thread-safe progress report for long work (renders, sky sequences, rollouts): a bar redrawn in
+// place on a terminal, a line every 10 % in logs (stderr not a terminal), both with the time left.
 #pragma once
 
 #include <atomic>
@@ -7,6 +8,10 @@
 #include <string>
 
 namespace dynsky {
+
+// One progress line: label, bar, percentage, time elapsed and left (estimated from the rate so
+// far; "?" before any progress).
+std::string format_progress(const std::string& label, double fraction, double elapsed_seconds);
 
 class ProgressBar {
   public:

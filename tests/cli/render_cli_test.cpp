@@ -118,7 +118,7 @@ TEST(RenderCli, BadSkyPixelsAreRejected) {
 TEST(RenderCli, NonSquareSkyIsRejected) {
     DYNSKY_REQUIRE_SHARED();
     std::string dir = test::temp_dir("render");
-    std::string sky = write_sky(dir, "wide.exr", 32, 16, 1.0f);
+    std::string sky = write_sky(dir, "wide.exr", 32, 20, 1.0f);  // neither square nor a 2:1 lat-long
     Outcome o = render(box_glb() + " --sky " + sky, dir + "/out.exr");
     expect_clean_failure(o, "wide.exr");
     EXPECT_NE(o.result.output.find("square"), std::string::npos) << o.result.output;
@@ -153,6 +153,52 @@ TEST(RenderCli, WritesExrWithMetadataAndPng) {
     EXPECT_GT(im.metadata.numbers["dynsky:render_seconds"], 0);
     EXPECT_FALSE(im.metadata.strings["dynsky:sky"].empty());
     EXPECT_TRUE(fs::exists(dir + "/plaza.png"));
+}
+
+// A 2:1 image is a lat-long environment: its upper half lights the scene, its lower half is the ground.
+TEST(RenderCli, LatlongSkyIsConvertedAndItsGroundUsed) {
+    std::string dir = test::temp_dir("render");
+    Image latlong(64, 32, 3);
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 64; ++x)
+            for (int c = 0; c < 3; ++c) latlong.at(x, y, c) = y < 16 ? 2.0f : 0.5f;
+    write_image(dir + "/hdri.exr", latlong);
+    // A camera in the air 5 km from the plaza (60 m across), looking straight up, then straight down.
+    Outcome up = render("builtin --sky " + dir + "/hdri.exr --look-at 5000,500,0,5000,600,0 --fov 20", dir + "/up.exr");
+    ASSERT_EQ(up.result.exit_code, 0) << up.result.output;
+    Outcome down = render("builtin --sky " + dir + "/hdri.exr --look-at 5000,500,0,5000,400,0 --fov 20",
+                          dir + "/down.exr");
+    ASSERT_EQ(down.result.exit_code, 0) << down.result.output;
+    Image a = read_image(dir + "/up.exr"), b = read_image(dir + "/down.exr");
+    EXPECT_NEAR(a.at(16, 12, 1), 2.0f, 1e-3f);  // the sky half
+    EXPECT_NEAR(b.at(16, 12, 1), 0.5f, 1e-3f);  // the ground half, not the ground model
+    EXPECT_NE(a.metadata.strings["dynsky:sky"].find("latlong"), std::string::npos);
+}
+
+TEST(RenderCli, AovsRegionAndCameraOptions) {
+    std::string dir = test::temp_dir("render");
+    Outcome o = render("builtin --aovs albedo,normal,depth,alpha,samples --region 4,2,20,14", dir + "/aov.exr");
+    ASSERT_EQ(o.result.exit_code, 0) << o.result.output;
+    Image im = read_image(dir + "/aov.exr");
+    EXPECT_EQ(im.width, 16);
+    EXPECT_EQ(im.height, 12);
+    for (const char* name : {"R", "G", "B", "A", "Denoising Albedo.R", "Normal.Z", "Depth.Z", "Sample Count.X"})
+        EXPECT_GE(im.channel_index(name), 0) << name;
+    EXPECT_EQ(im.metadata.strings["dynsky:region"], "4,2,20,14");
+    // Bad values: clear errors, no output.
+    expect_clean_failure(render("builtin --aovs albedo,shadow", dir + "/a.exr"), "shadow");
+    expect_clean_failure(render("builtin --region 0,0,33,10", dir + "/b.exr"), "--region");
+    expect_clean_failure(render("builtin --look-at 1,2,3,1,2,3", dir + "/c.exr"), "same point");
+    expect_clean_failure(render("builtin --fov 200", dir + "/d.exr"), "--fov");
+    expect_clean_failure(render("builtin --aovs depth", dir + "/e.png"), "--aovs");
+    expect_clean_failure(render("builtin --noise-threshold -1", dir + "/f.exr"), "--noise-threshold");
+    expect_clean_failure(render("builtin --sampler-pattern halton", dir + "/h.exr"), "halton");
+    Outcome sobol = render("builtin --sampler-pattern sobol --clamp-indirect 10 --filter-glossy 1", dir + "/s.exr");
+    ASSERT_EQ(sobol.result.exit_code, 0) << sobol.result.output;
+    EXPECT_EQ(read_image(dir + "/s.exr").metadata.strings["dynsky:sampler_pattern"], "sobol");
+    auto r = test::run_command(exe() + " render builtin --look-at 1,2,3 -q --out " + dir + "/g.exr");
+    EXPECT_NE(r.exit_code, 0);
+    EXPECT_FALSE(fs::exists(dir + "/g.exr"));
 }
 
 // Every scene in ../shared/scenes renders to a finite, non-black image.

@@ -174,19 +174,26 @@ TEST(GltfLoader, CesiumMilkTruckBuildsTheWheelMeshOnceForTwoNodes) {
     EXPECT_TRUE(has_warning_containing(s, "animation"));
 }
 
-TEST(GltfLoader, CamerasFileGivesThePerspectiveCameraAndGeneratedFlatNormals) {
+TEST(GltfLoader, CamerasFileGivesItsPerspectiveAndOrthographicCamerasAndGeneratedFlatNormals) {
     DYNSKY_REQUIRE_SHARED();
     std::vector<std::string> warnings;
     Scene s = load_gltf(scene_path("Cameras/Cameras.gltf"), &warnings);  // fresh: checks the warnings argument
-    ASSERT_EQ(s.cameras.size(), 1u);
+    ASSERT_EQ(s.cameras.size(), 2u);
     const Camera& c = s.cameras[0];
+    EXPECT_FALSE(c.orthographic);
     EXPECT_NEAR(c.yfov, 0.7f, 1e-6f);
     EXPECT_NEAR(c.aspect_ratio, 1.0f, 1e-6f);
     EXPECT_NEAR((c.camera_to_world.translation() - Vec3(0.5f, 0.5f, 3.0f)).norm(), 0.0f, 1e-6f);
     EXPECT_NEAR((c.camera_to_world.linear() - Eigen::Matrix3f::Identity()).norm(), 0.0f, 1e-6f);
-    bool ortho_warning = false;
-    for (const std::string& w : warnings) ortho_warning |= w.find("orthographic") != std::string::npos;
-    EXPECT_TRUE(ortho_warning);
+    // The second camera: orthographic, xmag = ymag = 1, at the same place.
+    const Camera& o = s.cameras[1];
+    EXPECT_TRUE(o.orthographic);
+    EXPECT_NEAR(o.ymag, 1.0f, 1e-6f);
+    EXPECT_NEAR(o.aspect_ratio, 1.0f, 1e-6f);
+    EXPECT_NEAR((o.camera_to_world.translation() - Vec3(0.5f, 0.5f, 3.0f)).norm(), 0.0f, 1e-6f);
+    bool camera_warning = false;
+    for (const std::string& w : warnings) camera_warning |= w.find("camera") != std::string::npos;
+    EXPECT_FALSE(camera_warning);
     EXPECT_EQ(warnings, s.warnings);
 
     // No NORMAL in the file: flat normals, one per triangle, following its counter-clockwise winding.

@@ -156,6 +156,53 @@ TEST(LatLong, KeepsTheSunsEnergy) {
     }
 }
 
+// The inverse conversion (downloaded HDRIs): a lat-long of a known function back to a fisheye
+// matches the function pixel by pixel, keeps the integral of a sky with a sun, and puts the lower
+// half, seen from above, in the ground fisheye.
+TEST(LatLong, ConvertsBackToTheFisheyeAndTheGround) {
+    const int n = 128;
+    Image ll(512, 256, 3);
+    for (int r = 0; r < ll.height; ++r)
+        for (int c = 0; c < ll.width; ++c) {
+            Vec3d w = latlong_direction((c + 0.5) / ll.width, (r + 0.5) / ll.height);
+            // Below the horizon: a function of the mirrored direction, so the ground fisheye must
+            // show it as the sky fisheye shows `synthetic`, scaled by 0.25.
+            Color col = w.y() >= 0 ? synthetic(w) : Color(0.25f * synthetic(Vec3d(w.x(), -w.y(), w.z())));
+            for (int k = 0; k < 3; ++k) ll.at(c, r, k) = col[k];
+        }
+    SkyImage sky = latlong_to_fisheye(ll, n), ground = latlong_to_fisheye(ll, n, true);
+    SkyImage truth = sky_from_function(n, synthetic);
+    double worst = 0, worst_ground = 0;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            Vec2 uv = fisheye::pixel_center_uv(i, j, n);
+            if (uv.squaredNorm() > 0.95 * 0.95) continue;  // the horizon rows mix both halves
+            for (int k = 0; k < 3; ++k) {
+                worst = std::max(worst, double(std::abs(sky.pixel(i, j)[k] - truth.pixel(i, j)[k])));
+                worst_ground = std::max(worst_ground,
+                                        double(std::abs(ground.pixel(i, j)[k] - 0.25f * truth.pixel(i, j)[k])));
+            }
+        }
+    EXPECT_LT(worst, 0.01);  // values 0.5 .. 3
+    EXPECT_LT(worst_ground, 0.0025);
+    Eigen::Array3d integral = fisheye_integral(sky), expected = synthetic_integral();
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(integral[k], expected[k], 0.005 * expected[k]);
+
+    // A clear sky with its sun: fisheye -> lat-long -> fisheye keeps the sky's integral.
+    ClearSkyParams params;
+    params.sun_direction = fisheye::direction_from_angles(50 * kDeg, 120 * kDeg);
+    SkyImage clear = make_clear_sky(params, 256);
+    SkyImage back = latlong_to_fisheye(sky_to_latlong(clear, 1024), 256);
+    Eigen::Array3d a = fisheye_integral(clear), b = fisheye_integral(back);
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(b[k], a[k], 0.01 * a[k]);
+    std::printf("clear sky N 256 -> lat-long 1024 -> N 256: integral ratio %.5f (G)\n", b[1] / a[1]);
+
+    EXPECT_THROW(latlong_to_fisheye(Image(30, 20, 3), 64), Error);
+    Image bad(8, 4, 3);
+    bad.at(1, 1, 0) = -1;
+    EXPECT_THROW(latlong_environment(bad, "bad.exr"), Error);
+}
+
 TEST(LatLong, CarriesMetadataAndRejectsBadWidths) {
     SkyImage sky = sky_from_function(32, synthetic);
     sky.time_seconds = 12.5;

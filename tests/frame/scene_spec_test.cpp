@@ -1,0 +1,116 @@
+// Camera overrides of the scene spec (--look-at, --fov) and orthographic glTF cameras, rendered.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "frame/scene_spec.h"
+#include "renderer/integrator.h"
+#include "sky/fisheye.h"
+#include "tests/test_support.h"
+#include "util/error.h"
+
+namespace dynsky {
+namespace {
+
+std::shared_ptr<SkyImage> gradient_sky(int n) {
+    auto sky = std::make_shared<SkyImage>(n);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            Vec2 uv = fisheye::pixel_center_uv(i, j, n);
+            if (uv.squaredNorm() > 1) continue;
+            Vec3d w = fisheye::direction_from_uv(uv.x(), uv.y());
+            sky->set_pixel(i, j,
+                           Color(0.3f, 0.45f, 0.9f) * float(0.4 + 0.6 * w.y()) + Color::Constant(float(w.x() > 0.5)));
+        }
+    return sky;
+}
+
+// A glTF file with the Lambert wall and two cameras: perspective at eye (0, 2, 4) pitched down to
+// look at the origin (a rotation about X written as a quaternion), and orthographic on +Z.
+std::string write_camera_gltf(const std::string& dir, float yfov, float ymag) {
+    const float positions[] = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
+    const uint16_t indices[] = {0, 1, 2, 0, 2, 3};
+    std::ofstream bin(dir + "/wall.bin", std::ios::binary);
+    bin.write(reinterpret_cast<const char*>(positions), sizeof positions);
+    bin.write(reinterpret_cast<const char*>(indices), sizeof indices);
+    bin.close();
+    double pitch = -std::atan2(2.0, 4.0);  // look down from (0, 2, 4) to the origin
+    char json[4096];
+    std::snprintf(json, sizeof json, R"({
+ "asset": {"version": "2.0"},
+ "scene": 0, "scenes": [{"nodes": [0, 1, 2]}],
+ "nodes": [{"mesh": 0},
+           {"camera": 0, "translation": [0, 2, 4], "rotation": [%.9f, 0, 0, %.9f]},
+           {"camera": 1, "translation": [0, 0, 4]}],
+ "cameras": [{"type": "perspective", "perspective": {"yfov": %.9f, "znear": 0.01}},
+             {"type": "orthographic", "orthographic": {"xmag": %.9f, "ymag": %.9f, "znear": 0.01, "zfar": 100}}],
+ "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
+ "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0}}],
+ "buffers": [{"uri": "wall.bin", "byteLength": 60}],
+ "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48}, {"buffer": 0, "byteOffset": 48, "byteLength": 12}],
+ "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-1, -1, 0], "max": [1, 1, 0]},
+               {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"}]
+})",
+                  std::sin(pitch / 2), std::cos(pitch / 2), yfov, ymag, ymag);
+    std::ofstream(dir + "/cameras.gltf") << json;
+    return dir + "/cameras.gltf";
+}
+
+TEST(RenderCamera, LookAtOverrideEqualsTheEquivalentGltfCamera) {
+    std::string dir = test::temp_dir("camera");
+    const float yfov = 0.6f;
+    std::string path = write_camera_gltf(dir, yfov, 1.5f);
+    SceneSpec file_camera{path, 0, 0.3f, {}, 0};
+    SceneSpec look_at{path, 0, 0.3f, {0, 2, 4, 0, 0, 0}, yfov * 180 / kPiD};
+    LoadedScene a = load_scene(file_camera, 1.0f), b = load_scene(look_at, 1.0f);
+    EXPECT_LT((a.camera.camera_to_world.matrix() - b.camera.camera_to_world.matrix()).cwiseAbs().maxCoeff(), 1e-6f);
+    EXPECT_NEAR(a.camera.yfov, b.camera.yfov, 1e-6f);
+    Accel accel(a.scene);
+    EnvLight light(gradient_sky(64), 0.3f);
+    RenderSettings s;
+    s.width = 24, s.height = 24, s.spp = 8, s.quiet = true;
+    s.aovs.depth = true;
+    RenderResult ra = PathIntegrator(accel, light, s).render(a.camera);
+    RenderResult rb = PathIntegrator(accel, light, s).render(b.camera);
+    // Cameras equal to float rounding: the same paths except where a ray grazes an edge.
+    int differ = 0;
+    for (size_t i = 0; i < ra.color.pixels.size(); ++i)
+        differ += std::abs(ra.color.pixels[i] - rb.color.pixels[i]) > 1e-4f * (1 + std::abs(ra.color.pixels[i]));
+    EXPECT_LE(differ, 3) << "of " << ra.color.pixels.size();
+    // The view is pitched down: the centre pixel sees the origin at the distance to the eye.
+    EXPECT_NEAR(ra.depth.at(12, 12, 0), std::sqrt(20.0f), 0.2f);
+    // --fov alone changes the field of view of the file's camera; bad overrides are errors.
+    SceneSpec fov_only{path, 0, 0.3f, {}, 30};
+    EXPECT_NEAR(load_scene(fov_only, 1.0f).camera.yfov, 30 * kPi / 180, 1e-6f);
+    EXPECT_THROW(load_scene(SceneSpec{path, 0, 0.3f, {0, 2, 4}, 0}, 1.0f), Error);
+    EXPECT_THROW(load_scene(SceneSpec{path, 0, 0.3f, {1, 1, 1, 1, 1, 1}, 0}, 1.0f), Error);
+    EXPECT_THROW(load_scene(SceneSpec{path, 0, 0.3f, {}, 180}, 1.0f), Error);
+    EXPECT_THROW(load_scene(SceneSpec{path, 1, 0.3f, {}, 40}, 1.0f), Error);  // --fov on an orthographic camera
+}
+
+TEST(RenderCamera, OrthographicCameraSeesTheWallAtOneDepthAndItsTrueSize) {
+    std::string dir = test::temp_dir("camera");
+    const float ymag = 1.6f;  // the wall (half side 1) spans 1 / 1.6 of the half height
+    LoadedScene sc = load_scene(SceneSpec{write_camera_gltf(dir, 0.6f, ymag), 1, 0.3f, {}, 0}, 1.0f);
+    ASSERT_TRUE(sc.camera.orthographic);
+    Accel accel(sc.scene);
+    EnvLight light(gradient_sky(64), 0.3f);
+    RenderSettings s;
+    s.width = 32, s.height = 32, s.spp = 16, s.quiet = true;
+    s.aovs.depth = s.aovs.alpha = true;
+    RenderResult r = PathIntegrator(accel, light, s).render(sc.camera);
+    double covered = 0;
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 32; ++x) {
+            covered += r.alpha.at(x, y, 0);
+            if (r.alpha.at(x, y, 0) == 1.0f) {
+                EXPECT_NEAR(r.depth.at(x, y, 0), 4.0f, 1e-5f);  // parallel rays
+            }
+        }
+    // Exact coverage (1 / 1.6)^2 of the image, up to the antialiased edge pixels' sampling noise.
+    EXPECT_NEAR(covered / (32 * 32), 1 / (ymag * ymag), 0.01);
+}
+
+}  // namespace
+}  // namespace dynsky
