@@ -7,7 +7,9 @@
 #include <filesystem>
 #include <memory>
 
+#include "cli/options.h"
 #include "frame/scene_spec.h"
+#include "frame/sky_source.h"
 #include "util/parse.h"
 #include "cli/commands.h"
 #include "renderer/builtin_scene.h"
@@ -36,6 +38,7 @@ struct RenderOptions {
     float exposure = std::numeric_limits<float>::quiet_NaN();  // NaN: automatic
     bool quiet = false;
     std::string sampler = sky_sampler_name(recommended_sky_sampler()) + "+mis";
+    SkySourceSpec generated;  // --sky clear|procedural[:SEED] with --sky-res, --time, --lat, --lon
 };
 
 // The default sky when --sky is not given: a clear afternoon over Paris at the summer solstice.
@@ -68,8 +71,15 @@ int run_render(const RenderOptions& o) {
     const Camera& camera = loaded.camera;
 
     std::shared_ptr<SkyImage> sky;
-    if (o.sky.empty()) {
+    if (o.sky.empty() && o.generated.time.empty()) {
         sky = default_sky();
+    } else if (o.sky.empty() || is_generated_sky(o.sky)) {
+        SkySourceSpec spec = o.generated;  // made as animate and compare make it (frame/sky_source.h)
+        spec.sky = o.sky.empty() ? "clear" : o.sky;
+        sky = std::make_shared<SkyImage>(make_generated_sky(spec));
+    } else if (!o.generated.time.empty()) {
+        throw Error("--time places the sun of a sky made here (--sky clear or procedural); " + o.sky +
+                    " keeps the sun it has");
     } else {
         sky = std::make_shared<SkyImage>(load_sky(o.sky));
     }
@@ -123,8 +133,10 @@ void register_render_command(CLI::App& app) {
     cmd->add_option("scene", o->scene, "Scene: a .gltf or .glb file, or 'builtin' for the built-in plaza")
         ->capture_default_str();
     cmd->add_option("--sky", o->sky,
-                    "Sky image: canonical fisheye EXR (square, equidistant, north up, east left; see 'dynsky sky').\n"
-                    "Default: a built-in clear sky (Paris, 2026-06-21 16:00 UTC, turbidity 3)");
+                    "Sky: a canonical fisheye EXR (square, equidistant, north up, east left; see 'dynsky sky'), or one made\n"
+                    "here as 'animate' makes it: 'clear' (Hosek-Wilkie) or 'procedural[:SEED]' at --time, --lat, --lon.\n"
+                    "Default: a built-in clear sky (Paris, 2026-06-21 16:00 UTC, turbidity 3; with --time: 'clear')");
+    add_generated_sky_options(cmd, &o->generated);
     cmd->add_option("--out,-o", o->out,
                     "Output image: .exr (linear, with metadata; a tone-mapped .png is written beside it) or .png")
         ->capture_default_str();
