@@ -63,6 +63,7 @@ SkyTimeline::SkyTimeline(SkyImage input, std::unique_ptr<MediumStepModel> model,
     input_time_ = input.time_seconds;
     // The sun is cut out where the image has it; it is put back where the clock says.
     suns_.push_back(remove_sun(&input));
+    if (input_sun_) input_transmittance_ = std::max(estimate_sun_transmittance(input, *input_sun_), 0.05);
     if (clock_) {
         validate_location(clock_->where);
         input.sun_direction = compute_sun_position(clock_->start, clock_->where).direction().cast<float>();
@@ -170,10 +171,15 @@ void SkyTimeline::sky_at(double t, SkyImage* out) {
     auto t0 = std::chrono::steady_clock::now();
     out->time_seconds = input_time_ + t;
     auto sun = sun_direction_at(t);
+    last_sun_weight_ = 1.0;
     if (sun) {
         out->sun_direction = sun->cast<float>();
-        insert_sun(out, suns_[size_t(i)], *sun, 1.0 - s);
-        if (s > 0) insert_sun(out, suns_[size_t(i) + 1], *sun, s);
+        // A model that moves the input's clouds over the sun dims it (models with their own sun
+        // already did). At the input itself the weight is 1: S_0 comes back exactly.
+        if (!model_->makes_own_sun() && !(i == 0 && s == 0) && !suns_[0].empty())
+            last_sun_weight_ = std::clamp(estimate_sun_transmittance(*out, *sun) / input_transmittance_, 0.0, 1.0);
+        insert_sun(out, suns_[size_t(i)], *sun, (1.0 - s) * last_sun_weight_);
+        if (s > 0) insert_sun(out, suns_[size_t(i) + 1], *sun, s * last_sun_weight_);
     }
     timings_.gamma_seconds += seconds_since(t0);
 }

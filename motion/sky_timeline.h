@@ -24,7 +24,9 @@
 //
 // The sun is taken out of the input before any step (motion/sun_patch.h) and put back into every
 // frame at the sun's direction for that time: fixed, or following the clock when the timeline knows
-// where and when the input was taken (SunClock). Models that make their own sun
+// where and when the input was taken (SunClock). It is put back dimmed by the clouds the model moved
+// over it: the frame's sun transmittance, estimated from the sky around the sun, relative to the
+// input's (motion/sun_patch.h relative_sun_transmittance). Models that make their own sun
 // (ProceduralStepModel) keep it.
 #pragma once
 
@@ -85,6 +87,8 @@ class SkyTimeline {
 
     double dt() const { return dt_; }
     const SkyTimelineTimings& timings() const { return timings_; }
+    // The weight the sun was put back with in the last sky_at (1: as in the input; 0: covered).
+    double last_sun_weight() const { return last_sun_weight_; }
     const MediumStepModel& model() const { return *model_; }
     // The sun direction at t (the input's, or the clock's); nullopt when unknown.
     std::optional<Vec3d> sun_direction_at(double t) const;
@@ -107,6 +111,8 @@ class SkyTimeline {
     std::map<int, Interval> intervals_;
     std::vector<SunPatch> suns_;  // per step: the sun cut out of it (all the input's for models without a sun)
     std::optional<Vec3d> input_sun_;
+    double input_transmittance_ = 1.0;  // around the input's sun, after the cut
+    double last_sun_weight_ = 1.0;
     double input_time_ = 0;
     SkyTimelineTimings timings_;
 };
