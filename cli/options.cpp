@@ -41,14 +41,13 @@ void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {
            "--dt", m->dt,
            "Delta t: seconds between medium steps (0: a network model's own Delta t from its model.json, else the paper's 10 s)")
         ->capture_default_str();
-    cmd->add_option("--sky-res", o->sky_resolution, "Resolution N of skies made here (procedural, clear)")
+    cmd->add_option("--gamma", m->gamma,
+                    "The in-between of two medium steps: 'constant' (both steps advected along the motion to the\n"
+                    "frame's moment and cross-faded by time: an even pace) or 'paper' (the paper's keys at 1/3 and 2/3:\n"
+                    "all change in the middle third of each interval)")
+        ->check(CLI::IsMember({"constant", "paper"}))
         ->capture_default_str();
-    cmd->add_option(
-        "--time", o->time,
-        "UTC time of t = 0, ISO 8601 (e.g. 2026-06-21T16:00:00Z): the sun follows the clock from there.\n"
-        "Default for 'procedural' and 'clear': 2026-06-21T16:00:00Z; for an EXR: the sun stays where the file has it");
-    cmd->add_option("--lat", o->latitude, "Latitude of the place, degrees north (with --time)")->capture_default_str();
-    cmd->add_option("--lon", o->longitude, "Longitude of the place, degrees east (with --time)")->capture_default_str();
+    add_generated_sky_options(cmd, o);
     cmd->add_option("--coverage", o->coverage, "Cloud cover of the procedural sky, 0..1")->capture_default_str();
     cmd->add_option("--wind-from", o->wind_from_deg,
                     "Where the wind at the clouds blows from, degrees clockwise from north (moves the procedural\n"
@@ -67,6 +66,18 @@ void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {
     cmd->add_option("--drift", m->drift_deg_per_s,
                     "Flow model: first-step drift of a single input sky, degrees per second")
         ->capture_default_str();
+}
+
+void add_generated_sky_options(CLI::App* cmd, SkySourceSpec* o) {
+    cmd->add_option("--sky-res", o->sky_resolution, "Resolution N of skies made here (procedural, clear)")
+        ->capture_default_str();
+    cmd->add_option(
+        "--time", o->time,
+        "UTC time of t = 0, ISO 8601 (e.g. 2026-06-21T16:00:00Z): the sun follows the clock from there.\n"
+        "Default for 'procedural' and 'clear': 2026-06-21T16:00:00Z (at --lat, --lon: Paris); for an EXR: the sun\n"
+        "stays where the file has it");
+    cmd->add_option("--lat", o->latitude, "Latitude of the place, degrees north (with --time)")->capture_default_str();
+    cmd->add_option("--lon", o->longitude, "Longitude of the place, degrees east (with --time)")->capture_default_str();
 }
 
 void add_quiet_flag(CLI::App* cmd) {

@@ -22,5 +22,8 @@ CLI::Option* add_hidden_alias(CLI::App* cmd, const std::string& old_name, T* var
 // reach stderr).
 void add_quiet_flag(CLI::App* cmd);
 void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m);
+// The options of a sky made here ('clear', 'procedural'): --sky-res, --time, --lat, --lon (part of
+// add_sky_source_options; `render` takes them alone).
+void add_generated_sky_options(CLI::App* cmd, SkySourceSpec* o);
 
 }  // namespace dynsky::cli

@@ -7,7 +7,9 @@
 #include <filesystem>
 #include <memory>
 
+#include "cli/options.h"
 #include "frame/scene_spec.h"
+#include "frame/sky_source.h"
 #include "util/parse.h"
 #include "cli/commands.h"
 #include "renderer/builtin_scene.h"
@@ -43,6 +45,7 @@ struct RenderOptions {
     float noise_threshold = 0, clamp_indirect = 0, filter_glossy = 0;
     double time_limit = 0;
     std::string sampler_pattern = "random";
+    SkySourceSpec generated;  // --sky clear|procedural[:SEED] with --sky-res, --time, --lat, --lon
 };
 
 // The default sky when --sky is not given: a clear afternoon over Paris at the summer solstice.
@@ -86,8 +89,15 @@ int run_render(const RenderOptions& o) {
     const Camera& camera = loaded.camera;
 
     std::shared_ptr<SkyImage> sky, ground;  // ground: a lat-long environment's lower half
-    if (o.sky.empty()) {
+    if (o.sky.empty() && o.generated.time.empty()) {
         sky = default_sky();
+    } else if (o.sky.empty() || is_generated_sky(o.sky)) {
+        SkySourceSpec spec = o.generated;  // made as animate and compare make it (frame/sky_source.h)
+        spec.sky = o.sky.empty() ? "clear" : o.sky;
+        sky = std::make_shared<SkyImage>(make_generated_sky(spec));
+    } else if (!o.generated.time.empty()) {
+        throw Error("--time places the sun of a sky made here (--sky clear or procedural); " + o.sky +
+                    " keeps the sun it has");
     } else {
         sky = std::make_shared<SkyImage>(load_sky_or_latlong(o.sky, &ground));
     }
@@ -154,10 +164,12 @@ void register_render_command(CLI::App& app) {
         ->capture_default_str();
     cmd->add_option(
         "--sky", o->sky,
-        "Sky image: canonical fisheye EXR (square, equidistant, north up, east left; see 'dynsky sky'), or a\n"
-        "lat-long (equirect, 2:1) HDRI in Blender's mapping: its upper half becomes the fisheye sky, its\n"
-        "lower half the ground (instead of the ground model).\n"
-        "Default: a built-in clear sky (Paris, 2026-06-21 16:00 UTC, turbidity 3)");
+        "Sky: a canonical fisheye EXR (square, equidistant, north up, east left; see 'dynsky sky'); a lat-long\n"
+        "(equirect, 2:1) HDRI in Blender's mapping: its upper half becomes the fisheye sky, its lower half the\n"
+        "ground (instead of the ground model); or one made here as 'animate' makes it: 'clear' (Hosek-Wilkie)\n"
+        "or 'procedural[:SEED]' at --time, --lat, --lon.\n"
+        "Default: a built-in clear sky (Paris, 2026-06-21 16:00 UTC, turbidity 3; with --time: 'clear')");
+    add_generated_sky_options(cmd, &o->generated);
     cmd->add_option("--out,-o", o->out,
                     "Output image: .exr (linear, with metadata; a tone-mapped .png is written beside it) or .png")
         ->capture_default_str();

@@ -159,6 +159,8 @@ void run_import(const ImportOptions& o) {
             HdrCalibrationReport report;
             sky = recover_hdr(imported, hp, &report);
             std::printf("time %s; %s\n", format_utc_time(utc).c_str(), report.summary().c_str());
+            if (std::string w = report.sun_offset_warning(); !w.empty())
+                std::fprintf(stderr, "dynsky: warning: %s: %s\n", o.photo.c_str(), w.c_str());
             unit = "W m^-2 sr^-1 (calibrated against the clear-sky model)";
         }
     } else {

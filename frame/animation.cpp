@@ -48,9 +48,10 @@ AnimationReport render_animation(const AnimationSettings& o) {
     if (!o.quiet)
         std::fprintf(
             stderr,
-            "scene: %s (%zu triangles); sky: %s, model %s, Delta t %g s; %d frames at %g fps, rendering %d-%d\n",
-            o.scene.scene.c_str(), scene.scene.triangle_count(), timeline.step(0)->source.c_str(),
-            timeline.model().name().c_str(), timeline.dt(), total, o.fps, first, last);
+            "scene: %s (%zu triangles); sky: %s, model %s, Delta t %g s, Gamma %s; %d frames at %g fps, rendering "
+            "%d-%d\n",
+            scene.path.c_str(), scene.scene.triangle_count(), timeline.step(0)->source.c_str(),
+            timeline.model().name().c_str(), timeline.dt(), gamma_name(timeline.gamma()), total, o.fps, first, last);
 
     // One exposure for the whole animation (per-frame auto exposure would flicker), from the sky
     // at t = 0 so every frame range agrees on it.
@@ -97,7 +98,7 @@ AnimationReport render_animation(const AnimationSettings& o) {
         meta.sky_seconds = sky_s, meta.distribution_seconds = light.last_build_seconds();
         meta.render_seconds = result.stats.seconds, meta.medium_step_seconds = timeline.dt(), meta.png_exposure_ev = ev;
         meta.sky = sky->source, meta.sky_model = timeline.model().name(), meta.scene = o.scene.scene;
-        meta.camera = scene.camera.name;
+        meta.camera = scene.camera.name, meta.gamma = gamma_name(timeline.gamma());
         meta.write_to(&image.metadata);
         write_image(store.frame_exr(k), aovs.any() ? render_layers(result) : image);
         write_image(store.frame_png(k), tonemap_to_display(image, ev));
@@ -129,7 +130,7 @@ AnimationReport render_animation(const AnimationSettings& o) {
                          total - 1);
         return report;
     }
-    make_contact_sheet(store, total, store.file("contact_sheet.png"));
+    make_contact_sheet(store, total, o.fps, store.file("contact_sheet.png"));
     if (!o.quiet) std::fprintf(stderr, "wrote %s\n", store.file("contact_sheet.png").c_str());
     if (!o.no_video) {
         make_video(o.out, "frame", o.fps, store.file("animation.mp4"), o.quiet);

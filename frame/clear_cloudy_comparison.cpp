@@ -46,6 +46,37 @@ double window_luminance(const Image& im, int x, int y, int r = 2) {
     return sum / std::max(n, 1);
 }
 
+// The difference image (BGR, 8 bit) with its colour bar below it: the colormap from -3 to +3 stops
+// with labelled ticks.
+cv::Mat with_colour_bar(const cv::Mat& coloured) {
+    const int w = coloured.cols, bar_h = 14, margin = std::min(std::max(8, w / 20), w / 4), panel_h = 52;
+    cv::Mat ramp(1, w - 2 * margin, CV_8UC1);
+    for (int x = 0; x < ramp.cols; ++x)
+        ramp.at<uint8_t>(0, x) = uint8_t(std::lround(255.0 * x / std::max(1, ramp.cols - 1)));
+    cv::Mat ramp_rgb;
+    cv::applyColorMap(ramp, ramp_rgb, cv::COLORMAP_TWILIGHT_SHIFTED);
+    cv::Mat panel(panel_h, w, CV_8UC3, cv::Scalar(255, 255, 255));
+    for (int y = 4; y < 4 + bar_h; ++y) ramp_rgb.row(0).copyTo(panel(cv::Rect(margin, y, ramp.cols, 1)));
+    const double scale = 0.4;
+    for (int stops = -3; stops <= 3; ++stops) {
+        int x = margin + int(std::lround((stops + 3) / 6.0 * (ramp.cols - 1)));
+        cv::line(panel, cv::Point(x, 4 + bar_h), cv::Point(x, 4 + bar_h + 3), cv::Scalar(0, 0, 0));
+        std::string label = (stops > 0 ? "+" : "") + std::to_string(stops);
+        int baseline = 0;
+        cv::Size size = cv::getTextSize(label, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline);
+        cv::putText(panel, label, cv::Point(x - size.width / 2, 4 + bar_h + 5 + size.height), cv::FONT_HERSHEY_SIMPLEX,
+                    scale, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    }
+    const std::string title = "log2(cloudy / clear), stops";
+    int baseline = 0;
+    cv::Size size = cv::getTextSize(title, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline);
+    cv::putText(panel, title, cv::Point((w - size.width) / 2, panel_h - 4), cv::FONT_HERSHEY_SIMPLEX, scale,
+                cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    cv::Mat out;
+    cv::vconcat(coloured, panel, out);
+    return out;
+}
+
 }  // namespace
 
 std::vector<std::pair<double, double>> parse_chart_points(const std::string& text) {
@@ -75,17 +106,20 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
     if (o.threads > 0)
         threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
 
-    SkySourceSpec so = o.sky;
-    if (so.time.empty()) throw Error("--time is required: the clear and cloudy skies share the sun of that moment");
+    const SkySourceSpec& so = o.sky;
     SkyTimeline cloudy = make_sky_timeline(so, o.model);
+    // The clear sky takes the cloudy one's sun at every moment: the clock's (skies made here, or
+    // --time), else where the sky EXR has it.
+    if (!cloudy.sun_direction_at(0.0))
+        throw Error(so.sky +
+                    ": the sky has no sun direction (dynsky:sun_* attributes): give --time (and --lat, --lon) "
+                    "so the clear sky knows where the sun is");
     LoadedScene scene = load_scene(o.scene, float(w) / h);
     fs::create_directories(o.out);
-    const UtcTime t0 = start_time(so);
-    const GeoLocation where{so.latitude, so.longitude, 0};
     const int sky_n = cloudy.step(0)->resolution;
     auto clear_at = [&](double t) {
         ClearSkyParams p;
-        p.sun_direction = compute_sun_position(add_seconds(t0, t), where).direction();
+        p.sun_direction = *cloudy.sun_direction_at(t);
         p.turbidity = 3;
         auto s = std::make_shared<SkyImage>(make_clear_sky(p, sky_n));
         s->time_seconds = t;
@@ -127,17 +161,20 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
         }
     cv::Mat coloured;
     cv::applyColorMap(ratio8, coloured, cv::COLORMAP_TWILIGHT_SHIFTED);
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-            cv::Vec3b p = coloured.at<cv::Vec3b>(y, x);  // BGR
-            for (int c = 0; c < 3; ++c) diff.pixels[(size_t(y) * w + x) * 3 + c] = p[2 - c] / 255.0f;
+    cv::Mat with_bar = with_colour_bar(coloured);
+    diff.width = with_bar.cols, diff.height = with_bar.rows;
+    diff.pixels.assign(size_t(diff.width) * diff.height * 3, 0.0f);
+    for (int y = 0; y < diff.height; ++y)
+        for (int x = 0; x < diff.width; ++x) {
+            cv::Vec3b p = with_bar.at<cv::Vec3b>(y, x);  // BGR
+            for (int c = 0; c < 3; ++c) diff.pixels[(size_t(y) * diff.width + x) * 3 + c] = p[2 - c] / 255.0f;
         }
     write_image((fs::path(o.out) / "side_by_side.png").string(), side);
     write_image((fs::path(o.out) / "difference.png").string(), diff);
     std::fprintf(
         stderr,
         "wrote %s/side_by_side.png (clear | cloudy, same exposure %.2f EV) and difference.png (log2 cloudy/clear, "
-        "-3..+3 stops, colormap TWILIGHT_SHIFTED: mid = no change)\n"
+        "-3..+3 stops, colormap TWILIGHT_SHIFTED: mid = no change, colour bar below)\n"
         "global horizontal illuminance at t=0: clear %.0f lx, cloudy %.0f lx\n",
         o.out.c_str(), ev, 683.0 * luminance(e_clear), 683.0 * luminance(e_cloudy));
 

@@ -15,7 +15,9 @@ namespace dynsky {
 
 // Parameters (defaults): frames 640 x 360 at 32 spp; out "compare"; chart points (fractions of
 // the image) "0.5,0.3;0.25,0.75;0.75,0.75"; chart over 60 s in 13 frames of 160 x 90 at 8 spp;
-// seed 0; threads 0 (all). sky.time is required (the two skies share that moment's sun).
+// seed 0; threads 0 (all). The clear sky has the cloudy sky's sun at every moment: the clock's for
+// skies made here (sky.time, default 2026-06-21T16:00:00Z at the spec's place) or when sky.time is
+// given, else the sun of the sky EXR (fixed); an EXR without a sun direction needs sky.time.
 struct ComparisonSettings {
     SceneSpec scene;
     SkySourceSpec sky;

@@ -15,6 +15,7 @@ void FrameMetadata::write_to(ImageMetadata* m) const {
     m->numbers["dynsky:png_exposure_ev"] = png_exposure_ev;
     m->strings["dynsky:sky"] = sky;
     m->strings["dynsky:sky_model"] = sky_model;
+    m->strings["dynsky:gamma"] = gamma;
     m->strings["dynsky:scene"] = scene;
     m->strings["dynsky:camera"] = camera;
 }

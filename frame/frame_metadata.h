@@ -21,6 +21,7 @@ struct FrameMetadata {
     double medium_step_seconds = 0;  // Delta t
     double png_exposure_ev = 0;
     std::string sky, sky_model, scene, camera;
+    std::string gamma;  // the in-between: constant | paper (dynsky:gamma)
 
     void write_to(ImageMetadata* m) const;
 };

@@ -4,6 +4,7 @@
 
 #include "renderer/builtin_scene.h"
 #include "renderer/gltf_loader.h"
+#include "util/data_path.h"
 #include "util/error.h"
 
 namespace dynsky {
@@ -13,8 +14,10 @@ LoadedScene load_scene(const SceneSpec& o, float aspect_ratio) {
     LoadedScene out;
     if (o.scene == "builtin") {
         out.scene = make_builtin_scene();
+        out.path = o.scene;
     } else {
-        out.scene = load_gltf(o.scene);
+        out.path = resolve_user_path(o.scene);  // shipped scenes work from any folder
+        out.scene = load_gltf(out.path);
         for (const std::string& w : out.scene.warnings) std::fprintf(stderr, "dynsky: warning: %s\n", w.c_str());
     }
     if (out.scene.instances.empty()) throw Error(o.scene + ": the scene has no triangles to render");

@@ -23,9 +23,11 @@ struct SceneSpec {
 struct LoadedScene {
     Scene scene;
     Camera camera;
+    std::string path;  // the file loaded: the spec's, or the shipped scene of that relative name (util/data_path.h)
 };
 
-// Validates the spec, loads the scene (warnings to stderr) and picks the camera; a file without
+// Validates the spec, loads the scene (a relative path not found from the working folder is
+// looked up among the shipped data, util/data_path.h resolve_user_path) (warnings to stderr) and picks the camera; a file without
 // cameras gets one framing its bounds at aspect_ratio. Throws dynsky::Error naming the file.
 LoadedScene load_scene(const SceneSpec& spec, float aspect_ratio);
 

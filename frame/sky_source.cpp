@@ -38,16 +38,48 @@ ProceduralSkyParams procedural_params(const SkySourceSpec& o, uint64_t seed, con
     return p;
 }
 
+uint64_t procedural_seed(const std::string& sky) {
+    if (sky.size() <= 10) return 0;
+    if (sky[10] != ':' || sky.size() == 11 || sky.find_first_not_of("0123456789", 11) != std::string::npos)
+        throw Error("--sky '" + sky + "': expected 'procedural' or 'procedural:SEED' (SEED a whole number)");
+    return std::stoull(sky.substr(11));
+}
+
 }  // namespace
+
+bool is_generated_sky(const std::string& sky) { return sky == "clear" || sky.rfind("procedural", 0) == 0; }
+
+SkyImage make_generated_sky(const SkySourceSpec& o) {
+    if (!is_generated_sky(o.sky))
+        throw Error("--sky '" + o.sky + "': not a sky made here (expected 'clear' or 'procedural[:SEED]')");
+    if (o.sky_resolution < 16 || o.sky_resolution > 8192) throw Error("--sky-res must be 16..8192");
+    if (!(o.coverage >= 0 && o.coverage <= 1)) throw Error("--coverage must be in [0, 1]");
+    const GeoLocation where{o.latitude, o.longitude, 0};
+    validate_location(where);
+    const Vec3d sun = compute_sun_position(start_time(o), where).direction();
+    SkyImage input;
+    if (o.sky == "clear") {
+        ClearSkyParams p;
+        p.sun_direction = sun;
+        p.turbidity = 3;
+        input = make_clear_sky(p, o.sky_resolution);
+        input.source = "clear sky (Hosek-Wilkie, turbidity 3)";
+    } else {
+        const uint64_t seed = procedural_seed(o.sky);
+        input = render_procedural_sky(procedural_params(o, seed, sun), 0.0, o.sky_resolution);
+        input.source = "procedural (seed " + std::to_string(seed) + ", coverage " + std::to_string(o.coverage) + ")";
+    }
+    return input;
+}
 
 SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     if (!(m.dt >= 0)) throw Error("--dt must be positive (or 0: automatic)");
+    const GammaKind gamma = parse_gamma(m.gamma);
     if (o.sky_resolution < 16 || o.sky_resolution > 8192) throw Error("--sky-res must be 16..8192");
     if (!(o.coverage >= 0 && o.coverage <= 1)) throw Error("--coverage must be in [0, 1]");
     GeoLocation where{o.latitude, o.longitude, 0};
     std::optional<SunClock> clock;
-    const bool generated = o.sky == "clear" || o.sky.rfind("procedural", 0) == 0;
-    if (generated || !o.time.empty()) {
+    if (is_generated_sky(o.sky) || !o.time.empty()) {
         validate_location(where);
         clock = SunClock{start_time(o), where};
     }
@@ -61,7 +93,8 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
         for (const auto& e : fs::directory_iterator(o.sky))
             if (e.is_regular_file() && file_extension(e.path().string()) == ".exr") exrs.push_back(e.path().string());
         std::sort(exrs.begin(), exrs.end());
-        if (exrs.empty()) throw_file_error(o.sky, "a folder without sky EXRs (give a captured sequence of canonical fisheyes)");
+        if (exrs.empty())
+            throw_file_error(o.sky, "a folder without sky EXRs (give a captured sequence of canonical fisheyes)");
         sky_file = exrs.back();
         if (exrs.size() >= 2 && previous_file.empty()) previous_file = exrs[exrs.size() - 2];
     }
@@ -81,35 +114,23 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     if (model_name == "auto" || model_name == "paper" || model_name == "advect") {
         const std::string folder = resolve_cloud_model(model_name);
         if (model_name == "auto" && folder == "advect")
-            std::fprintf(stderr, "dynsky: note: the shipped cloud model is not installed; clouds move by pure advection\n");
+            std::fprintf(stderr,
+                         "dynsky: note: the shipped cloud model is not installed; clouds move by pure advection\n");
         model = make_network_step_model(folder, motion);
         model_name = folder == "advect" ? "advect" : "network:" + folder;
     }
     if (model_name.rfind("network:", 0) == 0 && !model)
-        model = make_network_step_model(model_name.substr(8), motion);  // fails early
+        model = make_network_step_model(resolve_user_path(model_name.substr(8)), motion);  // fails early
     SkyImage input;
     if (o.sky.rfind("procedural", 0) == 0) {
-        uint64_t seed = 0;
-        if (o.sky.size() > 10) {
-            if (o.sky[10] != ':' || o.sky.size() == 11 ||
-                o.sky.find_first_not_of("0123456789", 11) != std::string::npos)
-                throw Error("--sky '" + o.sky + "': expected 'procedural' or 'procedural:SEED' (SEED a whole number)");
-            seed = std::stoull(o.sky.substr(11));
-        }
-        Vec3d sun = compute_sun_position(clock->start, where).direction();
-        ProceduralSkyParams p = procedural_params(o, seed, sun);
-        input = render_procedural_sky(p, 0.0, o.sky_resolution);
-        input.source = "procedural (seed " + std::to_string(seed) + ", coverage " + std::to_string(o.coverage) + ")";
+        input = make_generated_sky(o);
         if (!model && (model_name == "auto" || model_name == "procedural")) {
-            model = std::make_unique<ProceduralStepModel>(p);
+            model = std::make_unique<ProceduralStepModel>(
+                procedural_params(o, procedural_seed(o.sky), compute_sun_position(clock->start, where).direction()));
             model_name = "procedural";
         }
     } else if (o.sky == "clear") {
-        ClearSkyParams p;
-        p.sun_direction = compute_sun_position(clock->start, where).direction();
-        p.turbidity = 3;
-        input = make_clear_sky(p, o.sky_resolution);
-        input.source = "clear sky (Hosek-Wilkie, turbidity 3)";
+        input = make_generated_sky(o);
     } else {
         std::string ext = file_extension(sky_file);
         if (ext != ".exr")
@@ -136,7 +157,9 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     else if (model->dt_is_fixed() && std::abs(dt - model->native_dt()) > 1e-9)
         std::fprintf(stderr, "dynsky: warning: --dt %g s, but the network was trained for Delta t = %g s\n", dt,
                      model->native_dt());
-    return SkyTimeline(std::move(input), std::move(model), dt, clock);
+    SkyTimeline timeline(std::move(input), std::move(model), dt, clock);
+    timeline.set_gamma(gamma);
+    return timeline;
 }
 
 }  // namespace dynsky

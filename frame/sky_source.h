@@ -42,11 +42,22 @@ struct SkySourceSpec {
 //                            the paper's FlowNet + CloudNet (networks/models/arm_tsi)
 //   dt               0       Delta t in seconds; 0: a network's own, else 10
 //   drift_deg_per_s  0.25    flow model: first-step drift of a single input sky (from wind_from_deg)
+//   gamma            "constant"  the in-between of two steps (motion/sky_timeline.h GammaKind):
+//                            constant (even pace) or paper (the paper's keys at 1/3 and 2/3)
 struct StepModelSpec {
     std::string model = "auto";
     double dt = 0.0;
     double drift_deg_per_s = 0.25;
+    std::string gamma = "constant";
 };
+
+// True for the skies made here: 'clear' and 'procedural[:SEED]'.
+bool is_generated_sky(const std::string& sky);
+
+// The sky made here at t = 0 ('clear' or 'procedural[:SEED]'; the sun of start_time at the spec's
+// place): what `render --sky clear` shows and the timeline's input. Throws dynsky::Error naming
+// the option at fault.
+SkyImage make_generated_sky(const SkySourceSpec& sky);
 
 // Validates everything (files, ranges) before any step is computed.
 SkyTimeline make_sky_timeline(const SkySourceSpec& sky, const StepModelSpec& model);

@@ -37,8 +37,16 @@ bool make_video(const std::string& dir, const std::string& prefix, double fps, c
     return true;
 }
 
-void make_contact_sheet(const FrameStore& store, int total, const std::string& out) {
-    int count = std::min(total, 12), columns = std::min(count, 4), rows = (count + columns - 1) / columns;
+void contact_sheet_grid(int total, int* count, int* columns) {
+    int n = std::clamp(total, 1, 12);
+    int c = n <= 5 ? n : (n >= 8 ? 4 : 3);
+    *count = n / c * c, *columns = c;
+}
+
+void make_contact_sheet(const FrameStore& store, int total, double fps, const std::string& out) {
+    int count, columns;
+    contact_sheet_grid(total, &count, &columns);
+    const int rows = count / columns;
     std::vector<cv::Mat> tiles;
     int tw = 320, th = 0;
     for (int c = 0; c < count; ++c) {
@@ -50,6 +58,16 @@ void make_contact_sheet(const FrameStore& store, int total, const std::string& o
         else rgb = m.clone();
         th = std::max(1, int(std::lround(double(tw) * img.height / img.width)));
         cv::resize(rgb, small, cv::Size(tw, th), 0, 0, cv::INTER_AREA);
+        // The frame's time, white on a dark box in the top-left corner.
+        char label[64];
+        std::snprintf(label, sizeof label, "t = %.4g s", k / fps);
+        int baseline = 0;
+        const double scale = 0.5;
+        cv::Size size = cv::getTextSize(label, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline);
+        cv::rectangle(small, cv::Rect(0, 0, std::min(tw, size.width + 8), std::min(th, size.height + baseline + 8)),
+                      cv::Scalar(0.0, 0.0, 0.0), cv::FILLED);
+        cv::putText(small, label, cv::Point(4, 4 + size.height), cv::FONT_HERSHEY_SIMPLEX, scale,
+                    cv::Scalar(1.0, 1.0, 1.0), 1, cv::LINE_AA);
         tiles.push_back(small);
     }
     Image sheet;

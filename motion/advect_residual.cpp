@@ -332,15 +332,13 @@ void AdvectResidualNetwork::rollout(const SkyImage& sky, const CloudFlow& flow, 
     const cv::Mat sun = fill_saturated_pixels(&state);
     const bool has_sun = cv::countNonZero(sun) > 0;
     if (background.empty() && sky.sun_direction) background = this->background(*sky.sun_direction, sky.resolution);
-    rollout_network_form(
-        state, flow, steps,
-        [&](int k, const cv::Mat& s) {
-            SkyImage next = from_network_form(s, sky, info_.form);
-            next.time_seconds = sky.time_seconds + k * info_.dt;
-            if (has_sun) restore_pixels(&next, sky, sun);
-            on_step(k, next);
-        },
-        background);
+    rollout_network_form(state, flow, steps, [&](int k, const cv::Mat& s) {
+        SkyImage next = from_network_form(s, sky, info_.form);
+        next.time_seconds = sky.time_seconds + k * info_.dt;
+        // What was cut out comes back dimmed by the cloud the rollout moved over the sun.
+        if (has_sun) restore_pixels(&next, sky, sun, relative_sun_transmittance(next, sky));
+        on_step(k, next);
+    }, background);
 }
 
 cv::Mat network_form_flow(const SkyImage& previous, const SkyImage& current, const NetworkFormParams& form, int n) {
@@ -392,7 +390,11 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
         rollout_->set_background(background_);
     }
     SkyImage next = from_network_form(rollout_->advance(), input, network_.info().form);
-    if (cv::countNonZero(sun_mask_) > 0) restore_pixels(&next, input, sun_mask_);
+    if (cv::countNonZero(sun_mask_) > 0) {
+        std::optional<Vec3d> at;
+        if (sun) at = sun->cast<double>();
+        restore_pixels(&next, input, sun_mask_, relative_sun_transmittance(next, input, at));
+    }
     next.time_seconds = history.back()->time_seconds + dt;
     return next;
 }

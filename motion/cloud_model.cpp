@@ -140,8 +140,8 @@ void CloudModel::rollout(const SkyImage& sky, int steps, const std::function<voi
     const cv::Mat disc_big = sky_disc_mask(big);
     // The sun (and any pixel the map clips) is not the networks' business: it is filled from its
     // surroundings before the first step, so it is neither moved nor smeared like a cloud, and the
-    // input's radiance is put back into every output. The model does not predict the sun being
-    // covered by cloud; a rollout keeps the input's sun as it is.
+    // input's radiance is put back into every output, dimmed by the cloud moved over the sun
+    // (motion/sun_patch.h relative_sun_transmittance).
     const cv::Mat sun = fill_saturated_pixels(&state);
     const bool has_sun = cv::countNonZero(sun) > 0;
     for (int k = 1; k <= steps; ++k) {
@@ -170,7 +170,7 @@ void CloudModel::rollout(const SkyImage& sky, int steps, const std::function<voi
         }
         SkyImage next = from_network_form(state, sky, info_.form);
         next.time_seconds = sky.time_seconds + k * info_.dt;
-        if (has_sun) restore_pixels(&next, sky, sun);
+        if (has_sun) restore_pixels(&next, sky, sun, relative_sun_transmittance(next, sky));
         on_step(k, next);
     }
 }

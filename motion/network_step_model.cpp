@@ -51,7 +51,7 @@ std::string resolve_cloud_model(const std::string& name) {
         if (f.empty()) throw Error("--model paper: networks/models/arm_tsi is not installed");
         return f;
     }
-    return name;
+    return resolve_user_path(name);  // a folder: from the working folder, else the shipped one of that name
 }
 
 

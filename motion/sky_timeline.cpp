@@ -22,6 +22,15 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 }  // namespace
 
+GammaKind parse_gamma(const std::string& name) {
+    if (name == "constant") return GammaKind::constant;
+    if (name == "paper") return GammaKind::paper;
+    throw Error("--gamma '" + name +
+                "': expected 'constant' (even pace, the default) or 'paper' (the paper's keys at 1/3 and 2/3)");
+}
+
+const char* gamma_name(GammaKind kind) { return kind == GammaKind::paper ? "paper" : "constant"; }
+
 void blend_skies(const SkyImage& a, const SkyImage& b, double w, SkyImage* out) {
     if (a.resolution != b.resolution) throw Error("blend_skies: resolutions differ");
     out->resolution = a.resolution, out->time_seconds = a.time_seconds, out->sun_direction = a.sun_direction;
@@ -54,6 +63,7 @@ SkyTimeline::SkyTimeline(SkyImage input, std::unique_ptr<MediumStepModel> model,
     input_time_ = input.time_seconds;
     // The sun is cut out where the image has it; it is put back where the clock says.
     suns_.push_back(remove_sun(&input));
+    if (input_sun_) input_transmittance_ = std::max(estimate_sun_transmittance(input, *input_sun_), 0.05);
     if (clock_) {
         validate_location(clock_->where);
         input.sun_direction = compute_sun_position(clock_->start, clock_->where).direction().cast<float>();
@@ -98,16 +108,28 @@ SkyTimeline::Interval& SkyTimeline::interval(int i) {
     auto t0 = std::chrono::steady_clock::now();
     Interval iv;
     iv.flow = estimate_sky_flow(*a, *b, flow_params_);
-    iv.third = advect_great_arc(*a, iv.flow, 1.0 / 3.0);
-    iv.two_thirds = advect_great_arc(*b, iv.flow, -1.0 / 3.0);
     timings_.medium_seconds += seconds_since(t0);
     // Frames run forwards: intervals two behind are not needed again.
     intervals_.erase(intervals_.begin(), intervals_.lower_bound(i - 1));
     return intervals_.emplace(i, std::move(iv)).first->second;
 }
 
-const SkyImage& SkyTimeline::key_third(int i) { return interval(i).third; }
-const SkyImage& SkyTimeline::key_two_thirds(int i) { return interval(i).two_thirds; }
+SkyTimeline::Interval& SkyTimeline::interval_with_keys(int i) {
+    Interval& iv = interval(i);
+    if (iv.has_keys) return iv;
+    auto a = step(i), b = step(i + 1);
+    auto t0 = std::chrono::steady_clock::now();
+    iv.third = advect_great_arc(*a, iv.flow, 1.0 / 3.0);
+    iv.two_thirds = advect_great_arc(*b, iv.flow, -1.0 / 3.0);
+    iv.has_keys = true;
+    timings_.medium_seconds += seconds_since(t0);
+    return iv;
+}
+
+void SkyTimeline::set_gamma(GammaKind kind) { gamma_ = kind; }
+
+const SkyImage& SkyTimeline::key_third(int i) { return interval_with_keys(i).third; }
+const SkyImage& SkyTimeline::key_two_thirds(int i) { return interval_with_keys(i).two_thirds; }
 const cv::Mat& SkyTimeline::flow(int i) { return interval(i).flow; }
 
 SkyImage SkyTimeline::sky_at(double t) {
@@ -122,7 +144,7 @@ void SkyTimeline::sky_at(double t, SkyImage* out) {
     int i = int(std::floor(x + 1e-9));
     double s = std::max(0.0, x - i);
     auto snap = [](double v, double key) { return std::abs(v - key) < 1e-9 ? key : v; };
-    s = snap(snap(s, 1.0 / 3.0), 2.0 / 3.0);
+    if (gamma_ == GammaKind::paper) s = snap(snap(s, 1.0 / 3.0), 2.0 / 3.0);
     if (s < 1e-9) s = 0;
 
     if (s == 0) {
@@ -130,8 +152,15 @@ void SkyTimeline::sky_at(double t, SkyImage* out) {
         auto t0 = std::chrono::steady_clock::now();
         blend_skies(*a, *a, 0.0, out);
         timings_.gamma_seconds = seconds_since(t0);
-    } else {
+    } else if (gamma_ == GammaKind::constant) {
         Interval& iv = interval(i);
+        auto a = step(i), b = step(i + 1);
+        auto t0 = std::chrono::steady_clock::now();
+        // Both steps carried to this moment along the flow, then cross-faded by time.
+        blend_skies(advect_great_arc(*a, iv.flow, s), advect_great_arc(*b, iv.flow, -(1.0 - s)), s, out);
+        timings_.gamma_seconds = seconds_since(t0);
+    } else {
+        Interval& iv = interval_with_keys(i);
         auto a = step(i), b = step(i + 1);
         auto t0 = std::chrono::steady_clock::now();
         if (s < 1.0 / 3.0) blend_skies(*a, iv.third, 3.0 * s, out);
@@ -142,10 +171,15 @@ void SkyTimeline::sky_at(double t, SkyImage* out) {
     auto t0 = std::chrono::steady_clock::now();
     out->time_seconds = input_time_ + t;
     auto sun = sun_direction_at(t);
+    last_sun_weight_ = 1.0;
     if (sun) {
         out->sun_direction = sun->cast<float>();
-        insert_sun(out, suns_[size_t(i)], *sun, 1.0 - s);
-        if (s > 0) insert_sun(out, suns_[size_t(i) + 1], *sun, s);
+        // A model that moves the input's clouds over the sun dims it (models with their own sun
+        // already did). At the input itself the weight is 1: S_0 comes back exactly.
+        if (!model_->makes_own_sun() && !(i == 0 && s == 0) && !suns_[0].empty())
+            last_sun_weight_ = std::clamp(estimate_sun_transmittance(*out, *sun) / input_transmittance_, 0.0, 1.0);
+        insert_sun(out, suns_[size_t(i)], *sun, (1.0 - s) * last_sun_weight_);
+        if (s > 0) insert_sun(out, suns_[size_t(i) + 1], *sun, s * last_sun_weight_);
     }
     timings_.gamma_seconds += seconds_since(t0);
 }

@@ -2,19 +2,32 @@
 //
 // Medium steps: S_0 = the input, S_{i+1} = xi(S_0..S_i), one every Delta t, computed in order
 // and cached (deterministic: the same steps whichever frames are asked for first). Between two
-// steps, Gamma (the short timescale) builds two key images from the flow F_i re-estimated on the
-// steps themselves (motion/advection.h, Farneback):
+// steps, Gamma (the short timescale) uses the flow F_i re-estimated on the steps themselves
+// (motion/advection.h, Farneback), at s = (t - i Delta t) / Delta t, in one of two forms:
+//
+// GammaKind::constant (the default): both steps advected along great arcs to the frame's moment and
+// cross-faded by time,
+//   Upsilon(Lambda(S_i, F_i, +s), Lambda(S_{i+1}, F_i, -(1 - s)), s),
+// so clouds move and brightness changes at a constant pace across the whole interval (two
+// advections per frame).
+//
+// GammaKind::paper (the paper's): two key images,
 //   s = 0    S_i
 //   s = 1/3  Lambda(S_i, F_i, +1/3)       the earlier step advected forward a third of the way
 //   s = 2/3  Lambda(S_{i+1}, F_i, -1/3)   the later step advected backward a third of the way
 //   s = 1    S_{i+1}
-// and blends linearly (Upsilon) between consecutive keys, s = (t - i Delta t) / Delta t. Gamma is
-// exactly S_i at t = i Delta t and exactly S_{i+1} at (i+1) Delta t; frames at any rate cost one
-// blend each, the model runs once per Delta t.
+// blended linearly between consecutive keys: one blend per frame, but every change of appearance
+// between the steps happens in the middle third (docs/animation.md, docs/gamma-pace.png).
 //
-// The sun is taken out of the input before any step (motion/sun_patch.h) and put back into every frame at the sun's direction for that time: fixed, or
-// following the clock when the timeline knows where and when the input was taken (SunClock).
-// Models that make their own sun (ProceduralStepModel) keep it.
+// Both are exactly S_i at t = i Delta t and exactly S_{i+1} at (i+1) Delta t; the model runs once
+// per Delta t whatever the frame rate.
+//
+// The sun is taken out of the input before any step (motion/sun_patch.h) and put back into every
+// frame at the sun's direction for that time: fixed, or following the clock when the timeline knows
+// where and when the input was taken (SunClock). It is put back dimmed by the clouds the model moved
+// over it: the frame's sun transmittance, estimated from the sky around the sun, relative to the
+// input's (motion/sun_patch.h relative_sun_transmittance). Models that make their own sun
+// (ProceduralStepModel) keep it.
 #pragma once
 
 #include <map>
@@ -39,6 +52,12 @@ struct SunClock {
     GeoLocation where;
 };
 
+// Which in-between Gamma makes (above).
+enum class GammaKind { constant, paper };
+// "constant" | "paper"; anything else throws dynsky::Error naming --gamma.
+GammaKind parse_gamma(const std::string& name);
+const char* gamma_name(GammaKind kind);
+
 struct SkyTimelineTimings {
     double medium_seconds = 0;  // xi, flow estimation and the two key images, summed over this run
     int medium_steps = 0;       // steps computed by this run
@@ -50,6 +69,10 @@ class SkyTimeline {
     SkyTimeline(SkyImage input, std::unique_ptr<MediumStepModel> model, double dt,
                 std::optional<SunClock> clock = std::nullopt, SkyFlowParams flow_params = {});
 
+    // Which in-between (default constant); changing it drops the cached in-betweens, not the steps.
+    void set_gamma(GammaKind kind);
+    GammaKind gamma() const { return gamma_; }
+
     // Gamma at t (seconds since the input; t >= 0). Computes and caches the steps it needs.
     SkyImage sky_at(double t);
     // The same into *out, reusing its pixel storage: per-frame use without allocating (and
@@ -57,13 +80,15 @@ class SkyTimeline {
     void sky_at(double t, SkyImage* out);
     // The medium step S_i (i >= 0).
     std::shared_ptr<const SkyImage> step(int i);
-    // The key images of interval i: at s = 1/3 and 2/3.
+    // The paper's key images of interval i: at s = 1/3 and 2/3.
     const SkyImage& key_third(int i);
     const SkyImage& key_two_thirds(int i);
     const cv::Mat& flow(int i);  // F_i: from S_i to S_{i+1}
 
     double dt() const { return dt_; }
     const SkyTimelineTimings& timings() const { return timings_; }
+    // The weight the sun was put back with in the last sky_at (1: as in the input; 0: covered).
+    double last_sun_weight() const { return last_sun_weight_; }
     const MediumStepModel& model() const { return *model_; }
     // The sun direction at t (the input's, or the clock's); nullopt when unknown.
     std::optional<Vec3d> sun_direction_at(double t) const;
@@ -71,18 +96,23 @@ class SkyTimeline {
   private:
     struct Interval {
         cv::Mat flow;
-        SkyImage third, two_thirds;
+        SkyImage third, two_thirds;  // the paper's keys: made when first needed
+        bool has_keys = false;
     };
     Interval& interval(int i);
+    Interval& interval_with_keys(int i);
 
     std::unique_ptr<MediumStepModel> model_;
     double dt_;
+    GammaKind gamma_ = GammaKind::constant;
     std::optional<SunClock> clock_;
     SkyFlowParams flow_params_;
     std::vector<std::shared_ptr<const SkyImage>> steps_;
     std::map<int, Interval> intervals_;
     std::vector<SunPatch> suns_;  // per step: the sun cut out of it (all the input's for models without a sun)
     std::optional<Vec3d> input_sun_;
+    double input_transmittance_ = 1.0;  // around the input's sun, after the cut
+    double last_sun_weight_ = 1.0;
     double input_time_ = 0;
     SkyTimelineTimings timings_;
 };

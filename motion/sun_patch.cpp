@@ -5,6 +5,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/photo.hpp>
 
+#include "sky/clear_sky.h"
 #include "sky/fisheye.h"
 
 namespace dynsky {
@@ -111,10 +112,60 @@ cv::Mat fill_saturated_pixels(cv::Mat* unit) {
     return sun;
 }
 
-void restore_pixels(SkyImage* sky, const SkyImage& from, const cv::Mat& mask) {
+void restore_pixels(SkyImage* sky, const SkyImage& from, const cv::Mat& mask, double transmittance) {
+    const float t = float(std::clamp(transmittance, 0.0, 1.0));
     for (int y = 0; y < sky->resolution; ++y)
         for (int x = 0; x < sky->resolution; ++x)
-            if (mask.at<uint8_t>(y, x)) sky->set_pixel(x, y, from.pixel(x, y));
+            if (mask.at<uint8_t>(y, x)) sky->set_pixel(x, y, t * from.pixel(x, y) + (1.0f - t) * sky->pixel(x, y));
+}
+
+double estimate_sun_transmittance(const SkyImage& sky, const Vec3d& sun_in, const SunTransmittanceParams& p) {
+    const Vec3d sun = sun_in.normalized();
+    if (!(sun.y() > 0.0)) return 1.0;
+    const int n = sky.resolution;
+    ClearSkyParams cp;
+    cp.sun_direction = sun;
+    cp.turbidity = p.turbidity;
+    cp.sun_disc = false;
+    const ClearSkyModel model(cp, false);
+    const double cos_in = std::cos(p.inner_deg * kPiD / 180), cos_out = std::cos(p.outer_deg * kPiD / 180);
+    // The ring's bounding box in pixels (the mapping is equidistant: 90 degrees = n / 2 pixels).
+    double sx, sy;
+    fisheye::pixel_from_direction(sun, n, &sx, &sy);
+    const int reach = int(std::ceil(p.outer_deg / 90.0 * n / 2)) + 2;
+    // About 4000 samples whatever the resolution.
+    const int stride = std::max(1, int(reach * 2 / 64));
+    double clear = 0, total = 0;
+    for (int j = std::max(0, int(sy) - reach); j <= std::min(n - 1, int(sy) + reach); j += stride)
+        for (int i = std::max(0, int(sx) - reach); i <= std::min(n - 1, int(sx) + reach); i += stride) {
+            if (!sky.in_disc(i, j)) continue;
+            const Vec3d w = fisheye::direction_from_pixel(i, j, n);
+            const double c = w.dot(sun);
+            if (c > cos_in || c < cos_out || w.y() < 0.05) continue;
+            const Color v = sky.pixel(i, j), m = model.sky_radiance(w);
+            const double lv = luminance(v), lm = luminance(m);
+            if (!(lm > 0) || !(m[2] > 0)) continue;
+            const double angle = std::max(std::acos(std::clamp(c, -1.0, 1.0)), kPiD / 180);
+            const double weight = 1.0 / (angle * angle);  // the cloud at the sun counts most
+            const double rb = (v[0] + 1e-9) / (v[2] + 1e-9), rb_clear = m[0] / m[2];
+            const double brightness = lv / lm;
+            const bool cloud = rb > p.cloud_ratio * rb_clear || brightness > p.brightness_ratio ||
+                               brightness < 1.0 / p.brightness_ratio;
+            total += weight;
+            if (!cloud) clear += weight;
+        }
+    if (!(total > 0)) return 1.0;
+    // The clear share through a smoothstep: three quarters clear around the sun lets it all
+    // through, a quarter none (a sun is behind a cloud or not; the share only says how likely).
+    const double x = std::clamp((clear / total - p.covered_share) / (p.clear_share - p.covered_share), 0.0, 1.0);
+    return x * x * (3 - 2 * x);
+}
+
+double relative_sun_transmittance(const SkyImage& moved, const SkyImage& start, std::optional<Vec3d> sun) {
+    if (!sun && start.sun_direction) sun = start.sun_direction->cast<double>();
+    if (!sun) return 1.0;
+    const double before = std::max(estimate_sun_transmittance(start, *sun), 0.05);
+    return std::clamp(estimate_sun_transmittance(moved, *sun) / before, 0.0, 1.0);
 }
 
 }  // namespace dynsky

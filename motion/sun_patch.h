@@ -12,6 +12,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <optional>
 #include <vector>
 
 #include "sky/sky_image.h"
@@ -39,7 +40,36 @@ void insert_sun(SkyImage* sky, const SunPatch& patch, const Vec3d& direction, do
 // all zero when nothing clipped, and then the image is unchanged).
 cv::Mat fill_saturated_pixels(cv::Mat* unit);
 
-// Copies `from`'s pixels where mask (CV_8UC1, the skies' size) is set.
-void restore_pixels(SkyImage* sky, const SkyImage& from, const cv::Mat& mask);
+// Copies `from`'s pixels where mask (CV_8UC1, the skies' size) is set. With a transmittance T below
+// 1: T x from + (1 - T) x the sky's own pixel there (a cloud over the sun dims what is put back).
+void restore_pixels(SkyImage* sky, const SkyImage& from, const cv::Mat& mask, double transmittance = 1.0);
+
+// How much of the direct sun a sky lets through (glossary: "sun transmittance"), estimated from
+// the sky around the sun, since the sun itself has been cut out (or hidden by a shadow band): the
+// pixels within outer_deg of the sun's direction are compared with the clear sky (Hosek-Wilkie) of
+// that sun, pixel by pixel; a pixel is cloud when its colour is whiter than the clear sky's
+// (red/blue ratio over the model's beyond cloud_ratio) or its luminance departs from the model's by
+// more than brightness_ratio either way. The clear share of those pixels, each weighted by
+// 1 / max(angle to the sun, 1 degree)^2 (the cloud at the sun counts most), goes through a
+// smoothstep from covered_share (0) to clear_share (1).
+// Thresholds calibrated on the ARM TSI day against the imager's own cloud masks
+// (docs/animation.md, "The sun and passing clouds").
+struct SunTransmittanceParams {
+    double inner_deg = 0.0, outer_deg = 12.0;  // the disc (or ring) around the sun
+    double cloud_ratio = 1.25;                 // (r/b) / (r/b)_clear beyond this: cloud
+    double brightness_ratio = 2.5;             // luminance / clear luminance beyond this or below its inverse: cloud
+    double covered_share = 0.25, clear_share = 0.75;  // the smoothstep's ends
+    double turbidity = 3.0;                           // of the clear sky compared with
+};
+
+// 1 for clear surroundings, 0 for surroundings mostly cloud; 1 when the sun is below the horizon or the ring has
+// no pixels (nothing to say).
+double estimate_sun_transmittance(const SkyImage& sky, const Vec3d& sun, const SunTransmittanceParams& params = {});
+
+// The sun put back into a moved sky, relative to the sky it was cut from: T(moved) / T(start),
+// in [0, 1] (never brighter than it was; a start with T below 0.05 counts as 0.05). The sky's own
+// sun direction when `sun` is not given; 1 when neither knows one.
+double relative_sun_transmittance(const SkyImage& moved, const SkyImage& start,
+                                  std::optional<Vec3d> sun = std::nullopt);
 
 }  // namespace dynsky

@@ -36,6 +36,22 @@ std::string HdrCalibrationReport::summary() const {
     return s.str();
 }
 
+std::string HdrCalibrationReport::sun_offset_warning() const {
+    if (!(sun_offset_deg > kSunOffsetWarningDeg)) return "";
+    const bool at_seen = angle_between(used_sun, computed_sun) > 1e-6;
+    std::ostringstream s;
+    s.precision(3);
+    s << "the clipped sun was found " << sun_offset_deg << " deg from the sun computed for the photo's time and place"
+      << " (more than " << kSunOffsetWarningDeg << " deg: a wrong time, place or camera orientation, or glare taken"
+      << " for the sun); ";
+    if (sun_restored)
+        s << "the sun disc was restored " << (at_seen ? "where the photo shows it" : "at the computed position");
+    else s << "the sun disc was not restored";
+    s << ", and the sky's sun direction is " << (at_seen ? "the one seen" : "the computed one")
+      << "; check --time, --lat/--lon and the preset's orientation";
+    return s.str();
+}
+
 SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& params, HdrCalibrationReport* report_out) {
     if (!photo.display_referred)
         throw_file_error(photo.photo_path,

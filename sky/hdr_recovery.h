@@ -56,6 +56,10 @@ struct HdrCalibrationReport {
     double sun_elevation_deg = 0;  // computed
     Vec3d computed_sun = Vec3d::UnitY(), used_sun = Vec3d::UnitY();
     std::string summary() const;  // one line for people
+    // Non-empty when the clipped sun lies farther than kSunOffsetWarningDeg from the computed one
+    // (a wrong time, place or orientation, or glare taken for the sun): says so and what was done.
+    std::string sun_offset_warning() const;
+    static constexpr double kSunOffsetWarningDeg = 3.0;
 };
 
 // Absolute radiance from an imported LDR photo (throws dynsky::Error if the photo was not

@@ -22,7 +22,7 @@ path, out, title, xlabel, ylabel, logy = sys.argv[1:7]
 rows = list(csv.reader(open(path)))
 head, data = rows[0], [[float(v) for v in r] for r in rows[1:]]
 x = [r[0] for r in data]
-fig, ax = plt.subplots(figsize=(9, 4.5), dpi=110)
+fig, ax = plt.subplots(figsize=(11, 4.5), dpi=110)
 for c in range(1, len(head)):
     if head[c] == 'boundary':
         for r in data:
@@ -30,7 +30,9 @@ for c in range(1, len(head)):
         continue
     ax.plot(x, [r[c] for r in data], marker='o', ms=3, label=head[c])
 if logy == '1': ax.set_yscale('log')
-ax.set_title(title); ax.set_xlabel(xlabel); ax.set_ylabel(ylabel); ax.grid(alpha=0.3); ax.legend(fontsize=8)
+ax.set_title(title); ax.set_xlabel(xlabel); ax.set_ylabel(ylabel); ax.grid(alpha=0.3)
+# The legend beside the plot, never over the lines.
+ax.legend(fontsize=8, loc='upper left', bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
 fig.tight_layout(); fig.savefig(out)
 )PY";
 
