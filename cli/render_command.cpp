@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "frame/scene_spec.h"
+#include "util/atomic_file.h"
 #include "util/parse.h"
 #include "cli/commands.h"
 #include "renderer/builtin_scene.h"
@@ -58,6 +59,9 @@ int run_render(const RenderOptions& o) {
     if (ext != ".exr" && ext != ".png") throw Error(o.out + ": output must end in .exr or .png");
     if (o.spp < 1) throw Error("--spp must be at least 1");
     const SkySamplerOptions sampler = parse_sky_sampler(o.sampler);
+    const std::string png_beside = ext == ".exr" ? std::filesystem::path(o.out).replace_extension(".png").string()
+                                                 : std::string();
+    check_outputs_are_not_inputs({o.out, png_beside}, {o.scene, o.sky});
 
     std::unique_ptr<tbb::global_control> threads;
     if (o.threads > 0)
@@ -102,9 +106,8 @@ int run_render(const RenderOptions& o) {
     image.metadata.numbers["dynsky:png_exposure_ev"] = ev;
     if (ext == ".exr") {
         write_image(o.out, image);
-        std::string png = std::filesystem::path(o.out).replace_extension(".png").string();
-        write_image(png, tonemap_to_display(image, ev));
-        if (!o.quiet) std::fprintf(stderr, "wrote %s and %s\n", o.out.c_str(), png.c_str());
+        write_image(png_beside, tonemap_to_display(image, ev));
+        if (!o.quiet) std::fprintf(stderr, "wrote %s and %s\n", o.out.c_str(), png_beside.c_str());
     } else {
         write_image(o.out, tonemap_to_display(image, ev));
         if (!o.quiet) std::fprintf(stderr, "wrote %s\n", o.out.c_str());
