@@ -24,7 +24,8 @@ void register_animate_command(CLI::App& app) {
     CLI::App* cmd = app.add_subcommand(
         "animate",
         "Render a scene under a moving sky: numbered linear EXR + PNG frames, sky frames, MP4s and a contact sheet.\n"
-        "Resumable: frames already complete in --out are kept and skipped; kill it at any moment and run it again.");
+        "Resumable: frames already complete in --out and made with the same settings are kept; damaged frames and\n"
+        "frames of other settings are rendered again (it says which and why). Kill it at any moment and run it again.");
     // A repeated option takes its last value, so wrappers (scripts/demo.sh) can be overridden.
     cmd->option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
     add_scene_options(cmd, &a->scene);
@@ -58,6 +59,7 @@ void register_animate_command(CLI::App& app) {
         ->capture_default_str();
     cmd->add_option("--sampler-pattern", a->sampler_pattern, "Sample values: random or sobol (as for 'dynsky render')")
         ->capture_default_str();
+    cmd->add_flag("--force", a->force, "Render every frame again, even those complete with the same settings");
     cmd->add_flag("--no-video", a->no_video, "Do not run ffmpeg (no MP4s)");
     cmd->add_flag("--quiet,-q", a->quiet, "No per-frame report");
     cmd->callback([o] {

@@ -1,19 +1,52 @@
 // dynsky: moving HDR skies and the scenes they light. One program, subcommands.
+#include <signal.h>
+#include <unistd.h>
+
 #include <cstdio>
+#include <cstring>
 #include <exception>
 #include <functional>
 
 #include "cli/commands.h"
+#include "cli/exit_codes.h"
 #include "cli/options.h"
+#include "util/atomic_file.h"
 #include "util/error.h"
 
+namespace {
+
+// SIGINT/SIGTERM/SIGHUP: remove the output being written (nothing half-written stays; an animation's
+// frames written so far are kept and resume) and exit with kInterrupted.
+extern "C" void on_interrupt(int) {
+    dynsky::remove_active_temporary();
+    const char message[] = "dynsky: interrupted\n";
+    ssize_t ignored = ::write(2, message, sizeof message - 1);
+    (void)ignored;
+    ::_exit(dynsky::cli::kInterrupted);
+}
+
+void install_signal_handlers() {
+    // A file size limit (ulimit -f) then fails the write with EFBIG, reported naming the file,
+    // instead of killing the process with a half-written temporary.
+    ::signal(SIGXFSZ, SIG_IGN);
+    struct sigaction sa;
+    std::memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_interrupt;
+    sigemptyset(&sa.sa_mask);
+    for (int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &sa, nullptr);
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
+    install_signal_handlers();
     CLI::App app{
         "dynsky: time-varying HDR skies (clear, photographed, procedural, with moving clouds) and a\n"
         "CPU path tracer that renders glTF 2.0 scenes under them.\n"
         "Sky images are equidistant fisheye EXRs of the upper hemisphere, north up, east left."};
     app.require_subcommand(1);
     app.set_help_all_flag("--help-all", "Show help for every subcommand");
+    app.footer(dynsky::cli::exit_codes_help());
 
     dynsky::cli::register_render_command(app);
     CLI::App* sky = app.add_subcommand("sky", "Make, import, convert and inspect sky images");
@@ -36,13 +69,13 @@ int main(int argc, char** argv) {
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
-        return app.exit(e);
+        return dynsky::cli::report_parse_error(app, e, argc, argv);
     } catch (const dynsky::Error& e) {
         std::fprintf(stderr, "dynsky: error: %s\n", e.what());
-        return 1;
+        return dynsky::cli::exit_code_of(e);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "dynsky: error: %s\n", e.what());
-        return 1;
+        return dynsky::cli::kRuntimeError;
     }
-    return 0;
+    return dynsky::cli::kSuccess;
 }

@@ -10,6 +10,7 @@
 #include "cli/options.h"
 #include "frame/scene_spec.h"
 #include "frame/sky_source.h"
+#include "util/atomic_file.h"
 #include "util/parse.h"
 #include "cli/commands.h"
 #include "renderer/builtin_scene.h"
@@ -78,6 +79,9 @@ int run_render(const RenderOptions& o) {
     if (!(o.time_limit >= 0)) throw Error("--time-limit must be 0 (none) or positive seconds");
     if (!(o.clamp_indirect >= 0)) throw Error("--clamp-indirect must be 0 (off) or positive");
     if (!(o.filter_glossy >= 0)) throw Error("--filter-glossy must be 0 (off) or positive");
+    const std::string png_beside = ext == ".exr" ? std::filesystem::path(o.out).replace_extension(".png").string()
+                                                 : std::string();
+    check_outputs_are_not_inputs({o.out, png_beside}, {o.scene, o.sky});
 
     std::unique_ptr<tbb::global_control> threads;
     if (o.threads > 0)
@@ -139,9 +143,8 @@ int run_render(const RenderOptions& o) {
     image.metadata.numbers["dynsky:png_exposure_ev"] = ev;
     if (ext == ".exr") {
         write_image(o.out, settings.aovs.any() ? render_layers(result) : image);
-        std::string png = std::filesystem::path(o.out).replace_extension(".png").string();
-        write_image(png, tonemap_to_display(image, ev));
-        if (!o.quiet) std::fprintf(stderr, "wrote %s and %s\n", o.out.c_str(), png.c_str());
+        write_image(png_beside, tonemap_to_display(image, ev));
+        if (!o.quiet) std::fprintf(stderr, "wrote %s and %s\n", o.out.c_str(), png_beside.c_str());
     } else {
         write_image(o.out, tonemap_to_display(image, ev));
         if (!o.quiet) std::fprintf(stderr, "wrote %s\n", o.out.c_str());

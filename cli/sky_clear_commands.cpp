@@ -14,6 +14,7 @@
 #include "sky/latlong.h"
 #include "sky/sky_image.h"
 #include "sky/sun_position.h"
+#include "util/atomic_file.h"
 #include "util/error.h"
 #include "util/image.h"
 
@@ -128,6 +129,7 @@ Color parse_ground(const std::string& text) {
 void run_latlong(const LatLongOptions& o) {
     check_extension("--out", o.out, ".exr");
     if (!o.preview.empty()) check_extension("--preview", o.preview, ".png");
+    check_outputs_are_not_inputs({o.out, o.preview}, {o.sky});
     Color ground = parse_ground(o.ground);
     SkyImage sky = load_sky(o.sky);
     int width = o.width > 0 ? o.width : 2 * sky.resolution;

@@ -14,6 +14,7 @@
 #include "sky/preset_import.h"
 #include "sky/sky_image.h"
 #include "sky/sun_position.h"
+#include "util/atomic_file.h"
 #include "util/color.h"
 #include "util/error.h"
 #include "util/image.h"
@@ -55,6 +56,7 @@ void run_import(const ImportOptions& o) {
     // Check everything cheap first, so a bad run writes nothing.
     check_extension("--out", o.out, ".exr");
     if (!o.preview.empty()) check_extension("--preview", o.preview, ".png");
+    check_outputs_are_not_inputs({o.out, o.preview}, {o.photo, o.mask});
     if (o.resolution < 16 || o.resolution > 16384)
         throw Error("--res " + std::to_string(o.resolution) + ": the fisheye must be 16..16384 pixels wide");
     if (o.hdr != "auto" && o.hdr != "none" && o.hdr != "calibrated")
@@ -177,6 +179,7 @@ void run_import(const ImportOptions& o) {
 
 void run_mask(const MaskOptions& o) {
     check_extension("--out", o.out, ".png");
+    check_outputs_are_not_inputs({o.out}, {o.input, o.mask});
     CloudMaskParams mp{parse_cloud_rule(o.rule), o.threshold};
     if (!std::isfinite(o.threshold)) throw Error("--threshold must be a finite number");
     Image encoded, mask;

@@ -8,6 +8,7 @@
 #include "motion/evaluation.h"
 #include "motion/prediction.h"
 #include "motion/training_set.h"
+#include "util/atomic_file.h"
 
 namespace dynsky::cli {
 
@@ -50,7 +51,11 @@ void register_sky_model_commands(CLI::App& sky) {
         cmd->add_flag("--preview", o->preview,
                       "Also write tone-mapped PNGs beside the EXRs (the input's auto exposure)");
         cmd->add_flag("--quiet,-q", o->quiet, "No progress bar or summary");
-        cmd->callback([o]() { write_prediction(*o); });
+        cmd->callback([o]() {
+            check_outputs_are_not_inputs({o->out, o->stats}, {o->in, o->previous});
+            remove_stale_temporaries(o->out);  // of a killed run into the same folder
+            write_prediction(*o);
+        });
     }
     {
         auto o = std::make_shared<EvaluationOptions>();

@@ -5,6 +5,7 @@
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "sky/procedural_sequence.h"
+#include "util/atomic_file.h"
 #include "util/error.h"
 
 namespace dynsky::cli {
@@ -77,6 +78,8 @@ void register_sky_procedural_command(CLI::App& sky) {
     cmd->callback([o, lat, lon, time]() {
         int given = int(lat->count() > 0) + int(lon->count() > 0) + int(time->count() > 0);
         if (given != 0 && given != 3) throw Error("--lat, --lon and --time go together: give all three or none");
+        check_outputs_are_not_inputs({o->out}, {o->mask_image});
+        remove_stale_temporaries(o->out);  // of a killed run into the same folder
         write_procedural_sequence(*o, given == 3);
     });
 }

@@ -7,7 +7,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <map>
 #include <memory>
+#include <sstream>
+#include <vector>
 
 #include "frame/frame_metadata.h"
 #include "frame/frame_store.h"
@@ -15,12 +19,82 @@
 #include "renderer/accel.h"
 #include "renderer/env_light.h"
 #include "renderer/integrator.h"
+#include "util/atomic_file.h"
 #include "util/error.h"
 #include "util/exposure.h"
 
 namespace dynsky {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+std::string number(double v) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return buf;
+}
+
+// "0-3, 5, 7-9"
+std::string frame_list(const std::vector<int>& frames) {
+    std::string s;
+    for (size_t i = 0; i < frames.size();) {
+        size_t j = i;
+        while (j + 1 < frames.size() && frames[j + 1] == frames[j] + 1) ++j;
+        s += (s.empty() ? "" : ", ") + std::to_string(frames[i]) +
+             (j > i ? "-" + std::to_string(frames[j]) : std::string());
+        i = j + 1;
+    }
+    return s;
+}
+
+// timings.csv gains a line per frame; rewritten whole each time (atomic, checked).
+void append_timing(const std::string& path, const std::string& line, bool start_over) {
+    std::string text;
+    if (!start_over) {
+        std::ifstream f(path, std::ios::binary);
+        text.assign(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+    }
+    if (text.empty() || text.back() != '\n')
+        text = "frame,time_s,sky_ms,distribution_ms,render_ms,medium_steps_so_far\n";
+    write_file_atomic(path, text + line);
+}
+
+}  // namespace
+
+FrameSettings animation_frame_settings(const AnimationSettings& o, const std::string& model_name, double dt,
+                                       float png_exposure_ev) {
+    FrameSettings s;
+    s["scene"] = describe_input(o.scene.scene);
+    s["camera"] = std::to_string(o.scene.camera);
+    s["ground_albedo"] = number(o.scene.ground_albedo);
+    s["sky"] = describe_input(o.sky.sky);
+    s["sky_res"] = std::to_string(o.sky.sky_resolution);
+    s["time"] = o.sky.time;
+    s["lat"] = number(o.sky.latitude), s["lon"] = number(o.sky.longitude);
+    s["coverage"] = number(o.sky.coverage);
+    s["wind_from"] = number(o.sky.wind_from_deg), s["wind_speed"] = number(o.sky.wind_speed_mps);
+    s["cloud_height"] = number(o.sky.cloud_height_m);
+    s["prev"] = o.sky.previous.empty() ? "" : describe_input(o.sky.previous);
+    s["prev_dt"] = number(o.sky.previous_dt);
+    s["model"] = model_name;
+    s["dt"] = number(dt);
+    s["drift"] = number(o.model.drift_deg_per_s);
+    s["fps"] = number(o.fps);
+    s["spp"] = std::to_string(o.spp);
+    s["res"] = std::to_string(o.width) + "x" + std::to_string(o.height);
+    s["max_depth"] = std::to_string(o.max_depth);
+    s["seed"] = std::to_string(o.seed);
+    s["seed_per_frame"] = o.seed_per_frame ? "1" : "0";
+    s["exposure"] = number(png_exposure_ev);
+    std::string look_at;
+    for (double v : o.scene.look_at) look_at += (look_at.empty() ? "" : ",") + number(v);
+    s["look_at"] = look_at, s["fov"] = number(o.scene.fov_deg);
+    s["gamma"] = o.model.gamma;
+    s["aovs"] = o.aovs, s["sampler_pattern"] = o.sampler_pattern;
+    s["clamp_indirect"] = number(o.clamp_indirect), s["filter_glossy"] = number(o.filter_glossy);
+    return s;
+}
 
 AnimationReport render_animation(const AnimationSettings& o) {
     const int width = o.width, height = o.height;
@@ -35,6 +109,8 @@ AnimationReport render_animation(const AnimationSettings& o) {
     const int total = std::max(1, int(std::lround(o.duration * o.fps)));
     int first, last;
     parse_frame_range(o.frames, total, &first, &last);
+    // The frame folder must not be (or hold) an input: its frames would replace or join them.
+    check_outputs_are_not_inputs({o.out}, {o.sky.sky, o.sky.previous, o.scene.scene});
 
     std::unique_ptr<tbb::global_control> threads;
     if (o.threads > 0)
@@ -42,8 +118,14 @@ AnimationReport render_animation(const AnimationSettings& o) {
 
     SkyTimeline timeline = make_sky_timeline(o.sky, o.model);
     LoadedScene scene = load_scene(o.scene, float(width) / height);
-    fs::create_directories(o.out);
+    std::error_code ec;
+    fs::create_directories(o.out, ec);
+    if (ec) throw_file_error(o.out, "cannot create the output folder: " + ec.message());
     const FrameStore store(o.out);
+    const std::vector<std::string> stale = remove_stale_temporaries(o.out);
+    if (!stale.empty())
+        std::fprintf(stderr, "dynsky: removed %zu temporary file(s) left in %s by a killed run (%s%s)\n", stale.size(),
+                     o.out.c_str(), stale[0].c_str(), stale.size() > 1 ? ", ..." : "");
 
     if (!o.quiet)
         std::fprintf(
@@ -60,15 +142,36 @@ AnimationReport render_animation(const AnimationSettings& o) {
     light.set_sky(sky0);
     const float ev = std::isnan(o.exposure) ? exposure_for_irradiance(light.sky_irradiance()) : o.exposure;
     const float sky_ev = exposure_log_average(sky_to_image(*sky0));
+    const std::string settings = canonical_settings(animation_frame_settings(o, timeline.model().name(), timeline.dt(),
+                                                                             ev));
+
+    // Which frames of the range are kept: complete and made with these settings. The others are
+    // rendered, and what was wrong with those that had files is said (grouped by reason).
+    std::vector<char> keep(size_t(total), 0);
+    std::map<std::string, std::vector<int>> replace_reasons;
+    for (int k = first; k <= last; ++k) {
+        if (o.force) continue;
+        FrameCheck c = store.check(k, width, height, settings);
+        keep[size_t(k)] = c.state == FrameCheck::Complete;
+        if (c.state == FrameCheck::Damaged) replace_reasons["damaged: " + c.reason].push_back(k);
+        if (c.state == FrameCheck::OtherSettings) replace_reasons["made with other settings: " + c.reason].push_back(k);
+    }
+    int replaced = 0;
+    for (const auto& [reason, frames] : replace_reasons) {
+        std::fprintf(stderr, "dynsky: rendering again frame(s) %s of %s (%s)\n", frame_list(frames).c_str(),
+                     o.out.c_str(), reason.c_str());
+        replaced += int(frames.size());
+    }
+    if (o.force && !o.quiet) std::fprintf(stderr, "--force: rendering every frame of %d-%d\n", first, last);
 
     Accel accel(scene.scene);
-    std::ofstream timings(store.file("timings.csv"), std::ios::app);
-    if (timings.tellp() == 0) timings << "frame,time_s,sky_ms,distribution_ms,render_ms,medium_steps_so_far\n";
+    const std::string timings = store.file("timings.csv");
+    bool timings_start_over = o.force;
     double sum_sky = 0, sum_build = 0, sum_render = 0;
     int rendered = 0, skipped = 0;
     std::shared_ptr<SkyImage> sky_buffers[2];
     for (int k = first; k <= last; ++k) {
-        if (store.is_complete(k)) {
+        if (keep[size_t(k)]) {
             ++skipped;
             continue;
         }
@@ -82,32 +185,36 @@ AnimationReport render_animation(const AnimationSettings& o) {
         std::shared_ptr<const SkyImage> sky = buffer;
         light.set_sky(sky);
 
-        RenderSettings settings;
-        settings.width = width, settings.height = height, settings.spp = o.spp, settings.max_depth = o.max_depth;
-        settings.seed = o.seed_per_frame ? o.seed + uint64_t(k) * 0x9E3779B97F4A7C15ull : o.seed;
-        settings.quiet = true;
-        settings.aovs = aovs;
-        settings.clamp_indirect = o.clamp_indirect, settings.filter_glossy = o.filter_glossy;
-        settings.pattern = pattern;
-        PathIntegrator integrator(accel, light, settings);
+        RenderSettings render;
+        render.width = width, render.height = height, render.spp = o.spp, render.max_depth = o.max_depth;
+        render.seed = o.seed_per_frame ? o.seed + uint64_t(k) * 0x9E3779B97F4A7C15ull : o.seed;
+        render.quiet = true;
+        render.aovs = aovs;
+        render.clamp_indirect = o.clamp_indirect, render.filter_glossy = o.filter_glossy;
+        render.pattern = pattern;
+        PathIntegrator integrator(accel, light, render);
         RenderResult result = integrator.render(scene.camera);
 
         Image& image = result.color;
         FrameMetadata meta;
-        meta.frame = k, meta.time_seconds = t, meta.fps = o.fps, meta.spp = o.spp, meta.seed = settings.seed;
+        meta.frame = k, meta.time_seconds = t, meta.fps = o.fps, meta.spp = o.spp, meta.seed = render.seed;
         meta.sky_seconds = sky_s, meta.distribution_seconds = light.last_build_seconds();
         meta.render_seconds = result.stats.seconds, meta.medium_step_seconds = timeline.dt(), meta.png_exposure_ev = ev;
         meta.sky = sky->source, meta.sky_model = timeline.model().name(), meta.scene = o.scene.scene;
         meta.camera = scene.camera.name, meta.gamma = gamma_name(timeline.gamma());
+        meta.settings = settings;
         meta.write_to(&image.metadata);
         write_image(store.frame_exr(k), aovs.any() ? render_layers(result) : image);
         write_image(store.frame_png(k), tonemap_to_display(image, ev));
         write_image(store.sky_png(k), tonemap_to_display(sky_to_image(*sky), sky_ev));
+        keep[size_t(k)] = 1;
 
         sum_sky += sky_s, sum_build += light.last_build_seconds(), sum_render += result.stats.seconds, ++rendered;
-        timings << k << ',' << t << ',' << sky_s * 1e3 << ',' << light.last_build_seconds() * 1e3 << ','
-                << result.stats.seconds * 1e3 << ',' << timeline.timings().medium_steps << '\n';
-        timings.flush();
+        std::ostringstream line;
+        line << k << ',' << t << ',' << sky_s * 1e3 << ',' << light.last_build_seconds() * 1e3 << ','
+             << result.stats.seconds * 1e3 << ',' << timeline.timings().medium_steps << '\n';
+        append_timing(timings, line.str(), timings_start_over);
+        timings_start_over = false;
         if (!o.quiet)
             std::fprintf(stderr, "frame %d/%d t=%.3f s: sky %.1f ms, distribution %.1f ms, render %.1f ms\n", k,
                          total - 1, t, sky_s * 1e3, light.last_build_seconds() * 1e3, result.stats.seconds * 1e3);
@@ -123,19 +230,27 @@ AnimationReport render_animation(const AnimationSettings& o) {
                 sum_render / rendered * 1e3, 100.0 * (sum_sky + sum_build) / (sum_sky + sum_build + sum_render));
     }
 
-    AnimationReport report{total, first, last, rendered, skipped, store.all_complete(total)};
+    // Frames outside the range count only when complete with these settings too.
+    std::vector<int> not_complete;
+    for (int k = 0; k < total; ++k)
+        if (!keep[size_t(k)] &&
+            (k >= first && k <= last ? true : store.check(k, width, height, settings).state != FrameCheck::Complete))
+            not_complete.push_back(k);
+    AnimationReport report{total, first, last, rendered, skipped, replaced, not_complete.empty(), settings};
     if (!report.complete) {
         if (!o.quiet)
-            std::fprintf(stderr, "not every frame of 0-%d exists yet: videos and contact sheet left for later\n",
-                         total - 1);
+            std::fprintf(stderr,
+                         "frame(s) %s of 0-%d not complete with these settings yet: videos and contact sheet left "
+                         "for later\n",
+                         frame_list(not_complete).c_str(), total - 1);
         return report;
     }
-    make_contact_sheet(store, total, o.fps, store.file("contact_sheet.png"));
-    if (!o.quiet) std::fprintf(stderr, "wrote %s\n", store.file("contact_sheet.png").c_str());
     if (!o.no_video) {
         make_video(o.out, "frame", o.fps, store.file("animation.mp4"), o.quiet);
         make_video(o.out, "sky", o.fps, store.file("sky.mp4"), o.quiet);
     }
+    make_contact_sheet(store, total, o.fps, store.file("contact_sheet.png"));
+    if (!o.quiet) std::fprintf(stderr, "wrote %s\n", store.file("contact_sheet.png").c_str());
     return report;
 }
 

@@ -4,14 +4,18 @@
 // medium steps are always computed from step 0 in order, and the path tracer's image depends only
 // on its seed. So a frame range rendered alone, or a run resumed after being killed, gives the same
 // pixels as one uninterrupted run. Frames go into a frame/frame_store.h folder; frames already
-// complete there are kept. When every frame exists: the contact sheet and, unless no_video, the
-// MP4s (frame/video.h).
+// complete there and made with the same settings (frame/frame_metadata.h FrameSettings) are kept,
+// the others rendered again, saying which and why (force: every frame of the range is rendered).
+// Temporaries left in the folder by a killed run are removed first. When every frame is complete:
+// the contact sheet and, unless no_video, the MP4s (frame/video.h). Any failed write throws
+// dynsky::Error naming the file (util/atomic_file.h).
 #pragma once
 
 #include <cstdint>
 #include <limits>
 #include <string>
 
+#include "frame/frame_metadata.h"
 #include "frame/scene_spec.h"
 #include "frame/sky_source.h"
 
@@ -27,6 +31,7 @@ namespace dynsky {
 //   aovs ""                  passes in each frame's EXR ("albedo,normal,depth,alpha")
 //   clamp_indirect 0, filter_glossy 0   firefly remedies (renderer/integrator.h), off
 //   exposure NaN             PNG exposure in stops; NaN: from the sky's irradiance at t = 0
+//   force false              render every frame of the range even if complete
 //   no_video false, quiet false
 struct AnimationSettings {
     SceneSpec scene;
@@ -46,6 +51,7 @@ struct AnimationSettings {
     float clamp_indirect = 0, filter_glossy = 0;  // firefly remedies, off (0) by default
     std::string sampler_pattern = "random";       // "random" or "sobol" (renderer/zsobol_sampler.h)
     float exposure = std::numeric_limits<float>::quiet_NaN();
+    bool force = false;
     bool no_video = false;
     bool quiet = false;
 };
@@ -53,8 +59,14 @@ struct AnimationSettings {
 struct AnimationReport {
     int total = 0, first = 0, last = 0;  // frames of the animation; the range asked for
     int rendered = 0, skipped = 0;       // by this run; kept because complete
-    bool complete = false;               // every frame of the animation exists
+    int replaced = 0;                    // of those rendered: had files that were damaged or of other settings
+    bool complete = false;               // every frame of the animation is complete with these settings
+    std::string settings;                // canonical_settings of this run (frame/frame_metadata.h)
 };
+
+// The settings frames of this animation are made with (the exposure as resolved, the model by name).
+FrameSettings animation_frame_settings(const AnimationSettings& settings, const std::string& model_name, double dt,
+                                       float png_exposure_ev);
 
 AnimationReport render_animation(const AnimationSettings& settings);
 

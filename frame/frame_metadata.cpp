@@ -1,6 +1,97 @@
 #include "frame/frame_metadata.h"
 
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
 namespace dynsky {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr uint64_t kFnvOffset = 0xcbf29ce484222325ull, kFnvPrime = 0x100000001b3ull;
+
+uint64_t fnv1a(const char* data, size_t n, uint64_t h = kFnvOffset) {
+    for (size_t i = 0; i < n; ++i) h = (h ^ uint64_t(static_cast<unsigned char>(data[i]))) * kFnvPrime;
+    return h;
+}
+
+std::string hex64(uint64_t h) {
+    char buf[17];
+    std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+    return buf;
+}
+
+std::string describe_file(const fs::path& p) {
+    std::ifstream f(p, std::ios::binary);
+    std::vector<char> buf(1 << 16);
+    uint64_t h = kFnvOffset, size = 0;
+    while (f) {
+        f.read(buf.data(), std::streamsize(buf.size()));
+        size_t n = size_t(f.gcount());
+        h = fnv1a(buf.data(), n, h), size += n;
+    }
+    return p.filename().string() + " (" + std::to_string(size) + " bytes, fnv1a " + hex64(h) + ")";
+}
+
+}  // namespace
+
+std::string canonical_settings(const FrameSettings& settings) {
+    std::string s;
+    for (const auto& [key, value] : settings) s += key + "=" + value + "\n";
+    return s;
+}
+
+FrameSettings parse_settings(const std::string& canonical) {
+    FrameSettings s;
+    std::istringstream in(canonical);
+    std::string line;
+    while (std::getline(in, line)) {
+        size_t eq = line.find('=');
+        if (eq != std::string::npos) s[line.substr(0, eq)] = line.substr(eq + 1);
+    }
+    return s;
+}
+
+std::string settings_hash(const std::string& canonical) { return hex64(fnv1a(canonical.data(), canonical.size())); }
+
+std::string describe_settings_change(const FrameSettings& before, const FrameSettings& now, int limit) {
+    std::vector<std::string> keys;
+    for (const auto& [k, v] : now) keys.push_back(k);
+    for (const auto& [k, v] : before)
+        if (!now.count(k)) keys.push_back(k);
+    std::string out;
+    int named = 0, more = 0;
+    for (const std::string& k : keys) {
+        auto a = before.find(k), b = now.find(k);
+        std::string va = a == before.end() ? "(none)" : a->second, vb = b == now.end() ? "(none)" : b->second;
+        if (va == vb) continue;
+        if (named == limit) {
+            ++more;
+            continue;
+        }
+        out += (named++ ? ", " : "") + k + " " + va + " -> " + vb;
+    }
+    if (more) out += " and " + std::to_string(more) + " more";
+    return out;
+}
+
+std::string describe_input(const std::string& input) {
+    std::error_code ec;
+    if (fs::is_regular_file(input, ec)) return describe_file(input);
+    if (!fs::is_directory(input, ec)) return input;
+    std::vector<fs::path> files;
+    for (const auto& e : fs::directory_iterator(input, ec))
+        if (e.is_regular_file(ec) && e.path().filename().string().rfind(".tmp-", 0) != 0) files.push_back(e.path());
+    std::sort(files.begin(), files.end());
+    std::string s = "folder [";
+    for (size_t i = 0; i < files.size(); ++i) s += (i ? "; " : "") + describe_file(files[i]);
+    return s + "]";
+}
 
 void FrameMetadata::write_to(ImageMetadata* m) const {
     m->numbers["dynsky:frame"] = frame;
@@ -18,6 +109,8 @@ void FrameMetadata::write_to(ImageMetadata* m) const {
     m->strings["dynsky:gamma"] = gamma;
     m->strings["dynsky:scene"] = scene;
     m->strings["dynsky:camera"] = camera;
+    m->strings["dynsky:settings"] = settings;
+    m->strings["dynsky:settings_hash"] = settings_hash(settings);
 }
 
 }  // namespace dynsky

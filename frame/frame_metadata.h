@@ -3,11 +3,32 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <string>
 
 #include "util/image.h"
 
 namespace dynsky {
+
+// The settings a frame's pixels depend on (glossary: "frame settings"), by name: scene, sky (input
+// files by name, size and content hash), step model, fps, spp, size, seed, exposure, ... Stored in
+// each frame (dynsky:settings, with its hash dynsky:settings_hash); resume keeps a frame only when
+// they equal this run's. Settings that do not change frame k (duration, --frames, threads, --out)
+// are not in it.
+using FrameSettings = std::map<std::string, std::string>;
+
+// "key=value" lines in key order: the canonical form that is stored and hashed.
+std::string canonical_settings(const FrameSettings& settings);
+FrameSettings parse_settings(const std::string& canonical);
+// FNV-1a 64 of the canonical form, 16 hex digits.
+std::string settings_hash(const std::string& canonical);
+// The settings that differ, "spp 2 -> 4, res 64x36 -> 32x18" (at most `limit` named).
+std::string describe_settings_change(const FrameSettings& before, const FrameSettings& now, int limit = 4);
+
+// An input as it enters the settings: a file as "NAME (BYTES bytes, fnv1a HASH)" so a changed or
+// replaced file counts and a moved one does not; a folder as the list of its files so; anything
+// else (builtin, procedural:3, clear) as written.
+std::string describe_input(const std::string& input);
 
 struct FrameMetadata {
     int frame = 0;            // k, from 0
@@ -22,6 +43,7 @@ struct FrameMetadata {
     double png_exposure_ev = 0;
     std::string sky, sky_model, scene, camera;
     std::string gamma;  // the in-between: constant | paper (dynsky:gamma)
+    std::string settings;  // canonical_settings of the run (dynsky:settings, dynsky:settings_hash)
 
     void write_to(ImageMetadata* m) const;
 };

@@ -3,7 +3,9 @@
 #include <filesystem>
 #include <regex>
 
+#include "frame/frame_metadata.h"
 #include "util/error.h"
+#include "util/image.h"
 #include "util/frame_names.h"
 
 namespace dynsky {
@@ -15,14 +17,38 @@ std::string FrameStore::frame_png(int k) const { return numbered_path(folder_, "
 std::string FrameStore::sky_png(int k) const { return numbered_path(folder_, "sky", k, ".png"); }
 std::string FrameStore::file(const std::string& name) const { return (fs::path(folder_) / name).string(); }
 
-bool FrameStore::is_complete(int k) const {
-    return fs::exists(frame_exr(k)) && fs::exists(frame_png(k)) && fs::exists(sky_png(k));
-}
-
-bool FrameStore::all_complete(int total) const {
-    for (int k = 0; k < total; ++k)
-        if (!is_complete(k)) return false;
-    return true;
+FrameCheck FrameStore::check(int k, int width, int height, const std::string& settings) const {
+    const std::string exr = frame_exr(k), png = frame_png(k), sky = sky_png(k);
+    std::error_code ec;
+    if (!fs::exists(exr, ec) && !fs::exists(png, ec) && !fs::exists(sky, ec)) return {FrameCheck::Missing, ""};
+    auto name = [](const std::string& p) { return fs::path(p).filename().string(); };
+    for (const std::string& p : {exr, png, sky})
+        if (!fs::exists(p, ec)) return {FrameCheck::Damaged, name(p) + " is missing"};
+    Image frame;
+    try {
+        frame = read_image(exr);
+        Image display = read_image(png);
+        if (frame.width != width || frame.height != height || display.width != width || display.height != height)
+            return {FrameCheck::OtherSettings, "res " + std::to_string(frame.width) + "x" +
+                                                   std::to_string(frame.height) + " -> " + std::to_string(width) + "x" +
+                                                   std::to_string(height)};
+        read_image(sky);
+    } catch (const Error& e) {
+        std::string why = e.what();
+        size_t colon = why.find(": ");  // "PATH: problem" -> the file's name and the problem
+        return {FrameCheck::Damaged, colon == std::string::npos ? why : name(why.substr(0, colon)) + why.substr(colon)};
+    }
+    auto recorded = frame.metadata.strings.find("dynsky:settings");
+    if (recorded == frame.metadata.strings.end())
+        return {FrameCheck::OtherSettings, "made by an older dynsky (no settings recorded)"};
+    auto hash = frame.metadata.strings.find("dynsky:settings_hash");
+    if (hash == frame.metadata.strings.end() || hash->second != settings_hash(recorded->second))
+        return {FrameCheck::Damaged, name(exr) + ": its recorded settings do not match their hash"};
+    if (recorded->second != settings) {
+        std::string change = describe_settings_change(parse_settings(recorded->second), parse_settings(settings));
+        return {FrameCheck::OtherSettings, change.empty() ? "other settings" : change};
+    }
+    return {FrameCheck::Complete, ""};
 }
 
 void parse_frame_range(const std::string& text, int total, int* first, int* last) {

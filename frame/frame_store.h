@@ -3,13 +3,20 @@
 //
 // Frame k consists of frame_NNNN.exr (linear radiance with its metadata, frame/frame_metadata.h),
 // frame_NNNN.png (display) and sky_NNNN.png (the sky it was lit by). Every file is written
-// atomically (util/image.h), so a file under its final name is complete; a frame counts as done
-// when all three exist.
+// atomically (util/atomic_file.h), so a file under its final name was complete when written. A
+// frame counts as done only when all three read back whole at the run's frame size and its EXR
+// records the run's settings (frame/frame_metadata.h FrameSettings): a damaged file or a frame made
+// with other settings is rendered again, and the reason is said.
 #pragma once
 
 #include <string>
 
 namespace dynsky {
+
+struct FrameCheck {
+    enum State { Missing, Damaged, OtherSettings, Complete } state = Missing;
+    std::string reason;  // for Damaged and OtherSettings: which file and what is wrong / which settings differ
+};
 
 class FrameStore {
   public:
@@ -21,8 +28,9 @@ class FrameStore {
     std::string sky_png(int k) const;
     std::string file(const std::string& name) const;  // another file of the folder
 
-    bool is_complete(int k) const;
-    bool all_complete(int total) const;  // frames 0 .. total - 1
+    // Whether frame k is there, whole (all three files decode; the frame is width x height) and made
+    // with `settings` (canonical_settings of this run).
+    FrameCheck check(int k, int width, int height, const std::string& settings) const;
 
   private:
     std::string folder_;

@@ -1,14 +1,18 @@
 #include "frame/video.h"
 
 #include <opencv2/imgproc.hpp>
+#include <sys/wait.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <vector>
 
+#include "util/atomic_file.h"
+#include "util/error.h"
 #include "util/frame_names.h"
 #include "util/image.h"
 #include "util/shell.h"
@@ -17,24 +21,63 @@ namespace dynsky {
 
 namespace fs = std::filesystem;
 
-bool make_video(const std::string& dir, const std::string& prefix, double fps, const std::string& out, bool quiet) {
-    std::string tmp = (fs::path(dir) / (std::string(".partial.") + fs::path(out).filename().string())).string();
+namespace {
+
+// ffmpeg may exit 0 when the disk fills while it writes the MP4's index (the trailer), leaving a
+// file that does not play. An MP4 is complete when its top-level boxes tile the file exactly and
+// include the header (ftyp), the data (mdat) and the index (moov). Returns "" or what is wrong.
+std::string mp4_problem(const std::string& path) {
+    std::ifstream f(path, std::ios::binary);
+    std::error_code ec;
+    const uint64_t size = fs::file_size(path, ec);
+    if (!f || ec) return "cannot read it back";
+    bool ftyp = false, moov = false, mdat = false;
+    for (uint64_t at = 0; at < size;) {
+        unsigned char h[16];
+        f.seekg(std::streamoff(at));
+        if (size - at < 8 || !f.read(reinterpret_cast<char*>(h), 8)) return "cut short inside a box header";
+        uint64_t box = (uint64_t(h[0]) << 24) | (uint64_t(h[1]) << 16) | (uint64_t(h[2]) << 8) | h[3];
+        const std::string type(reinterpret_cast<char*>(h + 4), 4);
+        if (box == 1) {
+            if (size - at < 16 || !f.read(reinterpret_cast<char*>(h + 8), 8)) return "cut short inside a box header";
+            box = 0;
+            for (int i = 8; i < 16; ++i) box = (box << 8) | h[i];
+        } else if (box == 0) {
+            box = size - at;  // to the end of the file
+        }
+        if (box < 8 || box > size - at) return "cut short inside its '" + type + "' box";
+        ftyp |= type == "ftyp", moov |= type == "moov", mdat |= type == "mdat";
+        at += box;
+    }
+    if (!ftyp || !mdat) return "no MP4 header or no video data";
+    if (!moov) return "no index (moov box): the trailer was not written";
+    return "";
+}
+
+}  // namespace
+
+void make_video(const std::string& dir, const std::string& prefix, double fps, const std::string& out, bool quiet) {
+    TemporaryFile tmp(out);
     std::string pattern = (fs::path(dir) / numbered_pattern(prefix, ".png")).string();
     char rate[32];
     std::snprintf(rate, sizeof rate, "%g", fps);
     std::string cmd = "ffmpeg -y -loglevel error -framerate " + std::string(rate) + " -i " + shell_quote(pattern) +
                       " -vf 'scale=trunc(iw/2)*2:trunc(ih/2)*2' -c:v libx264 -pix_fmt yuv420p -crf 18 " +
-                      shell_quote(tmp) + " </dev/null";
-    int rc = std::system(cmd.c_str());
-    if (rc != 0) {
-        std::fprintf(stderr, "dynsky: warning: ffmpeg failed (exit %d) making %s; is ffmpeg installed?\n", rc,
-                     out.c_str());
-        fs::remove(tmp);
-        return false;
+                      shell_quote(tmp.path()) + " </dev/null";
+    int status = std::system(cmd.c_str());
+    if (status != 0) {
+        int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+        throw_file_error(out, "could not write the video: ffmpeg " +
+                                  (code == 127 ? std::string("is not installed (--no-video skips the videos)")
+                                   : code >= 0 ? "failed (exit " + std::to_string(code) + ")"
+                                               : std::string("was killed")));
     }
-    fs::rename(tmp, out);
+    std::error_code ec;
+    if (fs::file_size(tmp.path(), ec) > 0 && !ec)  // a missing or empty file: commit() says so
+        if (std::string problem = mp4_problem(tmp.path()); !problem.empty())
+            throw_file_error(out, "could not write the video: ffmpeg exited 0 but its file is incomplete: " + problem);
+    tmp.commit("ffmpeg");
     if (!quiet) std::fprintf(stderr, "wrote %s\n", out.c_str());
-    return true;
 }
 
 void contact_sheet_grid(int total, int* count, int* columns) {

@@ -76,7 +76,7 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
         if (r > o.import_resolution || o.import_resolution % r != 0)
             throw Error("--res " + std::to_string(r) + ": must divide --import-res " + std::to_string(o.import_resolution));
     if (o.sequence.empty() == o.photos.empty())
-        throw Error("give exactly one of --sequence (arm-tsi, arm-clear, arm-dusk, mobotix) and --photos DIR --preset P");
+        throw Error("--sequence, --photos: give exactly one of --sequence (arm-tsi, arm-clear, arm-dusk, mobotix) and --photos DIR --preset P");
     if (!o.photos.empty() && o.preset.empty()) throw Error("--photos needs --preset (arm-tsi or mobotix)");
     PhotoSequence seq = o.sequence.empty() ? photo_sequence_from_folder(o.photos, o.preset)
                                            : named_photo_sequence(o.sequence, o.shared.empty() ? default_shared_dir() : o.shared);

@@ -1,33 +1,164 @@
 #include "util/atomic_file.h"
 
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <atomic>
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
-#include <fstream>
+#include <regex>
 
 #include "util/error.h"
 
 namespace dynsky {
 
-void write_file_atomic(const std::string& path, const std::string& bytes) {
-    namespace fs = std::filesystem;
-    fs::path target(path);
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string errno_text(int err) { return std::strerror(err); }
+
+// fsync of a path opened read-only: flushes what another program (or OIIO) wrote. Returns errno or 0.
+int sync_path(const fs::path& p, int flags) {
+    int fd = ::open(p.c_str(), flags | O_CLOEXEC);
+    if (fd < 0) return errno;
+    int err = ::fsync(fd) == 0 ? 0 : errno;
+    ::close(fd);
+    // Folders of some file systems refuse fsync; the rename is still atomic there.
+    return err == EINVAL || err == EBADF ? 0 : err;
+}
+
+void make_parent(const fs::path& target) {
+    if (target.parent_path().empty()) return;
     std::error_code ec;
-    if (!target.parent_path().empty()) fs::create_directories(target.parent_path(), ec);
-    fs::path tmp = target.parent_path() / (".tmp-" + target.filename().string() + "-" + std::to_string(::getpid()));
-    {
-        std::ofstream f(tmp, std::ios::binary);
-        f.write(bytes.data(), std::streamsize(bytes.size()));
-        f.flush();
-        if (!f) {
-            fs::remove(tmp, ec);
-            throw_file_error(path, "could not write the file");
-        }
-    }
+    fs::create_directories(target.parent_path(), ec);
+    if (ec) throw_file_error(target.string(), "cannot create its folder: " + ec.message());
+}
+
+// Renames a complete, synced temporary into place (and syncs the folder so the name survives a crash).
+void rename_into_place(const fs::path& tmp, const fs::path& target) {
+    std::error_code ec;
     fs::rename(tmp, target, ec);
     if (ec) {
         fs::remove(tmp, ec);
-        throw_file_error(path, "could not write the file");
+        throw_file_error(target.string(), "could not write the file: " + ec.message());
+    }
+    sync_path(target.parent_path().empty() ? fs::path(".") : target.parent_path(), O_RDONLY | O_DIRECTORY);
+}
+
+// The temporary being written now, for remove_active_temporary (one at a time: outputs are
+// written one after another; a second writer at the same moment is simply not registered).
+char g_active[4096];
+std::atomic<bool> g_active_set{false}, g_active_busy{false};
+
+bool register_active(const std::string& path) {
+    bool expected = false;
+    if (path.size() >= sizeof g_active || !g_active_busy.compare_exchange_strong(expected, true)) return false;
+    std::memcpy(g_active, path.c_str(), path.size() + 1);
+    g_active_set = true;
+    return true;
+}
+
+void unregister_active() {
+    g_active_set = false;
+    g_active_busy = false;
+}
+
+}  // namespace
+
+void remove_active_temporary() noexcept {
+    if (g_active_set) ::unlink(g_active);
+}
+
+TemporaryFile::TemporaryFile(std::string target) : target_(std::move(target)), path_(temporary_path(target_)) {
+    make_parent(fs::path(target_));
+    registered_ = register_active(path_);
+}
+
+TemporaryFile::~TemporaryFile() {
+    std::error_code ec;
+    if (!committed_) fs::remove(path_, ec);
+    if (registered_) unregister_active();
+}
+
+void TemporaryFile::commit(const std::string& what, bool may_be_empty) {
+    const fs::path tmp(path_);
+    std::error_code ec;
+    auto fail = [&](const std::string& why) {
+        fs::remove(tmp, ec);
+        throw_file_error(target_, "could not write the file: " + what + ": " + why);
+    };
+    if (!fs::is_regular_file(tmp, ec)) fail("it wrote no file");
+    if ((fs::file_size(tmp, ec) == 0 && !may_be_empty) || ec) fail("it wrote an empty file");
+    if (int err = sync_path(tmp, O_RDONLY)) fail(errno_text(err));
+    committed_ = true;
+    rename_into_place(tmp, fs::path(target_));
+}
+
+std::string temporary_path(const std::string& path) {
+    fs::path target(path);
+    return (target.parent_path() /
+            (".tmp-" + target.stem().string() + "-" + std::to_string(::getpid()) + target.extension().string()))
+        .string();
+}
+
+void write_file_atomic(const std::string& path, const std::string& bytes) {
+    TemporaryFile tmp(path);
+    int fd = ::open(tmp.path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    if (fd < 0) throw_file_error(path, "could not write the file: " + errno_text(errno));
+    int err = 0;
+    for (size_t done = 0; done < bytes.size() && !err;) {
+        ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+        if (n > 0) done += size_t(n);
+        else if (n < 0 && errno != EINTR) err = errno;
+        else if (n == 0) err = EIO;
+    }
+    if (!err && ::fsync(fd) != 0 && errno != EINVAL) err = errno;
+    if (::close(fd) != 0 && !err) err = errno;
+    if (err)
+        throw_file_error(path,
+                         "could not write the file (" + std::to_string(bytes.size()) + " bytes): " + errno_text(err));
+    tmp.commit("the write", bytes.empty());
+}
+
+std::vector<std::string> remove_stale_temporaries(const std::string& folder) {
+    std::vector<std::string> removed;
+    std::error_code ec;
+    if (!fs::is_directory(folder, ec)) return removed;
+    static const std::regex naming(R"(^\.tmp-.*-([0-9]+)(\.[A-Za-z0-9]+)?$)");
+    for (const auto& entry : fs::directory_iterator(folder, ec)) {
+        const std::string name = entry.path().filename().string();
+        std::smatch m;
+        if (!std::regex_match(name, m, naming)) continue;
+        long pid = std::strtol(m[1].str().c_str(), nullptr, 10);
+        // Alive (ours, or another run writing here now): kill(pid, 0) succeeds or is refused.
+        if (pid > 0 && pid == long(::getpid())) continue;
+        if (pid > 0 && pid <= 4194304 && (::kill(pid_t(pid), 0) == 0 || errno == EPERM)) continue;
+        if (fs::remove(entry.path(), ec)) removed.push_back(name);
+    }
+    return removed;
+}
+
+void check_outputs_are_not_inputs(const std::vector<std::string>& outputs, const std::vector<std::string>& inputs) {
+    for (const std::string& in : inputs) {
+        std::error_code ec;
+        if (in.empty() || !fs::exists(in, ec)) continue;
+        const fs::path input = fs::weakly_canonical(in, ec);
+        const bool folder = fs::is_directory(input, ec);
+        for (const std::string& out : outputs) {
+            if (out.empty()) continue;
+            const fs::path output = fs::weakly_canonical(out, ec);
+            bool same = output == input || (fs::exists(output, ec) && fs::equivalent(output, input, ec));
+            if (same) throw_file_error(out, "is also an input (" + in + "); refusing to overwrite it");
+            if (folder) {
+                auto rel = output.lexically_relative(input);
+                if (!rel.empty() && *rel.begin() != "..")
+                    throw_file_error(out, "is inside the input folder " + in + "; refusing to write there");
+            }
+        }
     }
 }
 

@@ -1,13 +1,53 @@
-// Files other than images (reports, manifests, CSV, .npy arrays) written like images: to a
-// temporary name in the same folder, then renamed, so a reader never sees half a file and a
-// failed write leaves none. The bytes are written as given (binary mode).
+// Every output file (images, reports, manifests, CSV, .npy arrays, videos) is written the same way:
+// to a temporary name in the same folder, checked (every write and the close succeeded, the data
+// reached the disk: fsync, the file is not empty), then renamed. So a reader never sees half a
+// file, a failed write (full disk, file size limit) leaves none, and the error names the file.
+//
+// Temporaries are named .tmp-STEM-PID.EXT (the extension kept so tools that go by it, OIIO and
+// ffmpeg, still work); a run killed with SIGKILL leaves one behind, which remove_stale_temporaries
+// removes at the start of the next run in that folder.
 #pragma once
 
 #include <string>
+#include <vector>
 
 namespace dynsky {
 
-// Creates the parent folder if needed; throws dynsky::Error naming path if the write fails.
+// Creates the parent folder if needed; throws dynsky::Error naming path if the write fails (the
+// temporary removed, nothing under path changed).
 void write_file_atomic(const std::string& path, const std::string& bytes);
+
+// The temporary name of this process for path (same folder): .tmp-STEM-PID.EXT.
+std::string temporary_path(const std::string& path);
+
+// The temporary of one output that another program writes (ffmpeg, python): removed when this goes
+// out of scope uncommitted (an exception on the way), and by an interrupt (SIGINT, SIGTERM) while it
+// exists (remove_active_temporary).
+class TemporaryFile {
+  public:
+    explicit TemporaryFile(std::string target);
+    ~TemporaryFile();
+    TemporaryFile(const TemporaryFile&) = delete;
+    TemporaryFile& operator=(const TemporaryFile&) = delete;
+    const std::string& path() const { return path_; }
+    // Checks it exists and is not empty (unless may_be_empty), syncs it to the disk, renames it to the
+    // target. On failure removes it and throws naming the target, with `what` saying what wrote it.
+    void commit(const std::string& what, bool may_be_empty = false);
+
+  private:
+    std::string target_, path_;
+    bool committed_ = false, registered_ = false;
+};
+
+// For the interrupt handler (cli/main.cpp): unlinks the temporary being written now, if any.
+// Async-signal-safe.
+void remove_active_temporary() noexcept;
+
+// Removes the temporaries (our naming only) in folder whose process is gone; returns their names.
+std::vector<std::string> remove_stale_temporaries(const std::string& folder);
+
+// Throws before any work if an output would replace one of the inputs (the same file or folder,
+// by canonical path; an output inside an input folder counts too). Empty names are ignored.
+void check_outputs_are_not_inputs(const std::vector<std::string>& outputs, const std::vector<std::string>& inputs);
 
 }  // namespace dynsky

@@ -1,10 +1,14 @@
 #include "util/chart.h"
 
+#include <sys/wait.h>
+
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
+#include "util/atomic_file.h"
+#include "util/error.h"
 #include "util/shell.h"
 
 namespace dynsky {
@@ -40,21 +44,18 @@ fig.tight_layout(); fig.savefig(out)
 
 void make_line_chart(const std::string& csv, const std::string& png, const std::string& title,
                      const std::string& xlabel, const std::string& ylabel, bool logy) {
-    std::string script = (fs::path(png).parent_path() / ".chart.py").string();
-    std::ofstream(script) << kChartScript;
-    std::string tmp = (fs::path(png).parent_path() / ".partial.chart.png").string();
-    std::string cmd = "/usr/bin/python3 " + shell_quote(script) + " " + shell_quote(csv) + " " + shell_quote(tmp) +
-                      " " + shell_quote(title) + " " + shell_quote(xlabel) + " " + shell_quote(ylabel) +
-                      (logy ? " 1" : " 0");
-    int rc = std::system(cmd.c_str());
-    fs::remove(script);
-    if (rc != 0) {
-        fs::remove(tmp);
-        std::fprintf(stderr, "dynsky: warning: matplotlib chart %s failed (exit %d); the data is in %s\n", png.c_str(),
-                     rc, csv.c_str());
-        return;
+    // The script goes on the command line (python3 -c): no script file to leave behind.
+    TemporaryFile tmp(png);
+    std::string cmd = "/usr/bin/python3 -c " + shell_quote(kChartScript) + " " + shell_quote(csv) + " " +
+                      shell_quote(tmp.path()) + " " + shell_quote(title) + " " + shell_quote(xlabel) + " " +
+                      shell_quote(ylabel) + (logy ? " 1" : " 0");
+    int status = std::system(cmd.c_str());
+    if (status != 0) {
+        int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+        throw_file_error(png, "could not write the chart: python3 with matplotlib failed (exit " +
+                                  std::to_string(code) + "); the data is in " + csv);
     }
-    fs::rename(tmp, png);
+    tmp.commit("matplotlib");
 }
 
 }  // namespace dynsky

@@ -1,5 +1,6 @@
 #include "util/image.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
@@ -10,6 +11,7 @@
 #include <fstream>
 #include <unistd.h>
 
+#include "util/atomic_file.h"
 #include "util/color.h"
 #include "util/error.h"
 
@@ -69,11 +71,6 @@ void write_image(const std::string& path, const Image& image) {
     bool is_ldr = ext == ".png" || ext == ".jpg" || ext == ".jpeg";
     if (!is_exr && !is_ldr) throw_file_error(path, "unsupported output extension '" + ext + "' (use .exr or .png)");
 
-    fs::path target(path);
-    if (target.has_parent_path() && !fs::exists(target.parent_path())) fs::create_directories(target.parent_path());
-    // Temporary name keeps the extension so OIIO picks the right writer.
-    fs::path tmp = target.parent_path() / (".tmp-" + target.stem().string() + "-" + std::to_string(::getpid()) + ext);
-
     OIIO::ImageSpec spec(image.width, image.height, image.channels,
                          is_exr ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
     if (is_exr) spec.attribute("compression", "zip");
@@ -86,9 +83,17 @@ void write_image(const std::string& path, const Image& image) {
     for (const auto& [name, value] : image.metadata.numbers) spec.attribute(name, OIIO::TypeDesc::DOUBLE, &value);
     for (const auto& [name, value] : image.metadata.strings) spec.attribute(name, value);
 
-    auto out = OIIO::ImageOutput::create(tmp.string());
+    // Encoded in memory, then written by the one checked atomic writer (util/atomic_file.h): the
+    // image libraries do not all report a short write (libpng through OIIO does not), so they never
+    // touch the disk themselves.
+    std::vector<unsigned char> encoded;
+    OIIO::Filesystem::IOVecOutput memory(encoded);
+    OIIO::Filesystem::IOProxy* proxy = &memory;
+    auto out = OIIO::ImageOutput::create(path, proxy);
     if (!out) throw_file_error(path, "no writer for this format: " + OIIO::geterror());
-    bool ok = out->open(tmp.string(), spec);
+    if (!out->supports("ioproxy") || !out->set_ioproxy(proxy))
+        throw_file_error(path, std::string("the ") + out->format_name() + " writer cannot encode to memory");
+    bool ok = out->open(path, spec);
     if (ok) {
         if (is_exr) {
             ok = out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data());
@@ -99,14 +104,11 @@ void write_image(const std::string& path, const Image& image) {
             ok = out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
         }
     }
-    std::string why = out->geterror();
     ok = out->close() && ok;
-    if (!ok) {
-        std::error_code ec;
-        fs::remove(tmp, ec);
-        throw_file_error(path, "could not write image: " + why);
-    }
-    fs::rename(tmp, target);
+    std::string why = out->geterror();
+    if (!ok || encoded.empty())
+        throw_file_error(path, "could not encode the image" + (why.empty() ? std::string() : ": " + why));
+    write_file_atomic(path, std::string(reinterpret_cast<const char*>(encoded.data()), encoded.size()));
 }
 
 Image tonemap_to_display(const Image& linear, float exposure_ev) {

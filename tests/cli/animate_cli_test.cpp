@@ -1,10 +1,15 @@
-// End-to-end tests of `dynsky animate`: a run killed with SIGKILL mid-frame resumes to the same
-// frames as an uninterrupted run (EXR pixels byte for byte), frame ranges rendered separately
-// equal one run, and bad input fails cleanly.
+// End-to-end tests of `dynsky animate`: a run killed with SIGKILL mid-frame, mid-write or at random
+// moments resumes to the same frames as an uninterrupted run (EXR and PNG pixels bit for bit; the
+// files' bytes differ only in the timings their headers record) with no temporary left; resume
+// re-renders damaged frames and frames of other settings and says so; --force starts over; frame
+// ranges rendered separately equal one run; bad input fails cleanly.
 #include <gtest/gtest.h>
+
+#include <sys/stat.h>
 
 #include <filesystem>
 #include <fstream>
+#include <random>
 
 #include "tests/test_support.h"
 #include "util/image.h"
@@ -28,6 +33,12 @@ std::string frame(const std::string& dir, int k) {
     return dir + buf;
 }
 
+std::string numbered(const std::string& dir, const char* prefix, int k, const char* ext) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "/%s_%04d%s", prefix, k, ext);
+    return dir + buf;
+}
+
 void expect_same_frames(const std::string& a, const std::string& b, int count) {
     for (int k = 0; k < count; ++k) {
         ASSERT_TRUE(fs::exists(frame(a, k))) << frame(a, k);
@@ -35,7 +46,26 @@ void expect_same_frames(const std::string& a, const std::string& b, int count) {
         Image ia = read_image(frame(a, k)), ib = read_image(frame(b, k));
         EXPECT_EQ(ia.width, ib.width);
         EXPECT_TRUE(ia.pixels == ib.pixels) << "frame " << k << " differs";
+        EXPECT_EQ(ia.metadata.strings["dynsky:settings"], ib.metadata.strings["dynsky:settings"]);
+        for (const char* prefix : {"frame", "sky"}) {
+            Image pa = read_image(numbered(a, prefix, k, ".png")), pb = read_image(numbered(b, prefix, k, ".png"));
+            EXPECT_TRUE(pa.pixels == pb.pixels) << prefix << " PNG " << k << " differs";
+        }
     }
+}
+
+// Files of dir named like a temporary (util/atomic_file.h).
+std::vector<std::string> temporaries_in(const std::string& dir) {
+    std::vector<std::string> found;
+    for (const auto& e : fs::directory_iterator(dir))
+        if (e.path().filename().string().rfind(".tmp-", 0) == 0) found.push_back(e.path().filename().string());
+    return found;
+}
+
+ino_t inode(const std::string& path) {
+    struct stat st {};
+    ::stat(path.c_str(), &st);
+    return st.st_ino;
 }
 
 TEST(AnimateCli, KilledRunResumesToTheSameFrames) {
@@ -78,8 +108,112 @@ TEST(AnimateCli, KilledRunResumesToTheSameFrames) {
 
     r = test::run_command(animate(killed) + " 2>&1; echo rc=$?");
     EXPECT_NE(r.output.find("rc=0"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("temporary file(s) left in " + killed + " by a killed run"), std::string::npos) << r.output;
+    EXPECT_TRUE(temporaries_in(killed).empty()) << temporaries_in(killed)[0];
     expect_same_frames(full, killed, 8);
     EXPECT_TRUE(fs::exists(killed + "/contact_sheet.png"));
+    fs::remove_all(dir);
+}
+
+// Killed mid-write: frame 2's EXR temporary is a named pipe this test reads 1000 bytes of and then
+// stops reading, so the run is held inside write() with part of the frame written when SIGKILL comes.
+TEST(AnimateCli, KilledMidWriteResumesToTheSameFrames) {
+    std::string dir = test::temp_dir("animate_kill_write");
+    std::string full = dir + "/full", killed = dir + "/killed";
+    // Frames of 256 x 144: an EXR well over a pipe's 64 kB buffer, so the write blocks.
+    const std::string settings = "--res 256x144 --frames 0-3";
+    ASSERT_EQ(test::run_command(animate(full, settings)).exit_code, 0);
+    fs::create_directories(killed);
+    std::ofstream(dir + "/run.sh") << "mkfifo " << killed << "/.tmp-frame_0002-$$.exr && exec "
+                                   << animate(killed, settings) << "\n";
+    std::ofstream(dir + "/kill.sh") << "sh " << dir << "/run.sh & pid=$!\n"
+                                    << "for i in $(seq 1 600); do [ -p " << killed
+                                    << "/.tmp-frame_0002-$pid.exr ] && break; sleep 0.05; done\n"
+                                    << "exec 3< " << killed << "/.tmp-frame_0002-$pid.exr\n"
+                                    << "head -c 1000 <&3 | wc -c\n"
+                                    << "kill -9 $pid; wait $pid; echo rc=$?\n";
+    auto r = test::run_command("sh " + dir + "/kill.sh");
+    ASSERT_NE(r.output.find("1000"), std::string::npos) << "not held mid-write: " << r.output;
+    ASSERT_NE(r.output.find("rc=137"), std::string::npos) << r.output;
+    ASSERT_EQ(temporaries_in(killed).size(), 1u);  // the pipe, as a killed write leaves its temporary
+    ASSERT_FALSE(fs::exists(frame(killed, 2)));
+    r = test::run_command(animate(killed, settings));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_TRUE(temporaries_in(killed).empty());
+    expect_same_frames(full, killed, 4);
+    fs::remove_all(dir);
+}
+
+// SIGKILL at seeded random moments (from start-up to the last frame; some land mid-write), five times
+// in a row, then one run to the end: the same frames as one uninterrupted run, no temporary left.
+TEST(AnimateCli, KilledAtRandomMomentsResumesToTheSameFrames) {
+    std::string dir = test::temp_dir("animate_kill_random");
+    std::string full = dir + "/full", killed = dir + "/killed";
+    ASSERT_EQ(test::run_command(animate(full)).exit_code, 0);
+    std::mt19937 rng(20261202);
+    std::uniform_int_distribution<int> delay_ms(20, 600);
+    std::ofstream script(dir + "/kills.sh");
+    for (int i = 0; i < 5; ++i)
+        script << "sh -c 'exec " << animate(killed) << "' & pid=$!; sleep " << delay_ms(rng) / 1000.0
+               << "; kill -9 $pid 2>/dev/null; wait $pid\n";
+    script.close();
+    test::run_command("sh " + dir + "/kills.sh");
+    auto r = test::run_command(animate(killed));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_TRUE(temporaries_in(killed).empty());
+    expect_same_frames(full, killed, 8);
+    EXPECT_TRUE(fs::exists(killed + "/contact_sheet.png"));
+    fs::remove_all(dir);
+}
+
+// Resume keeps only frames that are whole and made with the same settings, and says why it renders
+// the others again; --force renders every frame again.
+TEST(AnimateCli, ResumeRerendersDamagedFramesAndFramesOfOtherSettings) {
+    std::string dir = test::temp_dir("animate_resume_check");
+    std::string a = dir + "/a";
+    ASSERT_EQ(test::run_command(animate(a)).exit_code, 0);
+    const Image frame5 = read_image(frame(a, 5));
+
+    // Other --spp: every frame again, and the reason named.
+    auto r = test::run_command(animate(a, "--spp 3"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("rendering again frame(s) 0-7 of " + a + " (made with other settings: spp 2 -> 3)"),
+              std::string::npos)
+        << r.output;
+    for (int k = 0; k < 8; ++k) EXPECT_EQ(read_image(frame(a, k)).metadata.numbers["dynsky:spp"], 3) << k;
+    // Back to --spp 2: the same pixels as the first run (nothing of the --spp 3 frames kept).
+    r = test::run_command(animate(a));
+    EXPECT_NE(r.output.find("spp 3 -> 2"), std::string::npos) << r.output;
+    EXPECT_TRUE(read_image(frame(a, 5)).pixels == frame5.pixels);
+
+    // A truncated EXR, an empty PNG and a missing sky PNG: those three frames again, each named.
+    {
+        std::ifstream f(frame(a, 2), std::ios::binary);
+        std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+        std::ofstream(frame(a, 2), std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+    }
+    std::ofstream(numbered(a, "frame", 5, ".png"), std::ios::trunc).flush();
+    fs::remove(numbered(a, "sky", 6, ".png"));
+    const ino_t kept = inode(frame(a, 0));
+    r = test::run_command(animate(a));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("rendering again frame(s) 2 of " + a + " (damaged: frame_0002.exr"), std::string::npos)
+        << r.output;
+    EXPECT_NE(r.output.find("rendering again frame(s) 5 of " + a + " (damaged: frame_0005.png"), std::string::npos)
+        << r.output;
+    EXPECT_NE(r.output.find("rendering again frame(s) 6 of " + a + " (damaged: sky_0006.png is missing)"),
+              std::string::npos)
+        << r.output;
+    EXPECT_EQ(inode(frame(a, 0)), kept) << "a complete frame was rendered again";
+    EXPECT_TRUE(read_image(frame(a, 5)).pixels == frame5.pixels);
+    EXPECT_GT(fs::file_size(numbered(a, "frame", 5, ".png")), 0u);
+    EXPECT_TRUE(fs::exists(numbered(a, "sky", 6, ".png")));
+
+    // --force: every frame written anew.
+    r = test::run_command(animate(a, "--force"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(inode(frame(a, 0)), kept);
+    EXPECT_TRUE(read_image(frame(a, 5)).pixels == frame5.pixels);
     fs::remove_all(dir);
 }
 

@@ -73,7 +73,7 @@ TEST(SkyModelCli, PredictBadInputsFailClearlyAndWriteNothing) {
     EXPECT_FALSE(fs::exists(dir + "/o2"));
     r = test::run_command(dynsky("sky predict --model " + shipped_model() + " --in " + in + " --steps 0 --out " + dir +
                                  "/o3"));
-    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_EQ(r.exit_code, 2);  // a bad option value: usage error
     EXPECT_NE(r.output.find("--steps"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(dir + "/o3"));
     fs::remove_all(dir);
@@ -160,19 +160,19 @@ TEST(SkyModelCli, EvaluateRejectsFoldersWithoutOneRegularSequence) {
 
 TEST(SkyModelCli, EvaluateRejectsBadArguments) {
     auto r = test::run_command(dynsky("sky evaluate --model advect --sequence nowhere"));
-    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_EQ(r.exit_code, 2);  // a bad option value: usage error
     EXPECT_NE(r.output.find("unknown sequence 'nowhere'"), std::string::npos) << r.output;
     r = test::run_command(dynsky("sky evaluate --model advect --sequence arm-tsi --horizons 1,x"));
-    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_EQ(r.exit_code, 2);  // a bad option value: usage error
     EXPECT_NE(r.output.find("--horizons: 'x'"), std::string::npos) << r.output;
     r = test::run_command(dynsky("sky evaluate --model advect"));
-    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_EQ(r.exit_code, 2);  // a bad option value: usage error
     EXPECT_NE(r.output.find("exactly one of --sequence"), std::string::npos) << r.output;
     r = test::run_command(dynsky("sky evaluate --model advect --photos /tmp"));
-    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_EQ(r.exit_code, 2);  // a bad option value: usage error
     EXPECT_NE(r.output.find("--preset"), std::string::npos) << r.output;
     r = test::run_command(dynsky("sky evaluate --model advect --sequence arm-tsi --res 100"));
-    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_EQ(r.exit_code, 2);  // a bad option value: usage error
     EXPECT_NE(r.output.find("--res 100"), std::string::npos) << r.output;
 }
 
@@ -197,7 +197,7 @@ TEST(SkyModelCli, TrainingDataImportsExactlyAsSkyImport) {
 TEST(SkyModelCli, TrainingDataNeedsOneSource) {
     const std::string dir = test::temp_dir("training_data_bad");
     auto r = test::run_command(dynsky("sky training-data --out " + dir + "/o"));
-    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_EQ(r.exit_code, 2);  // a usage error
     EXPECT_NE(r.output.find("exactly one of --sequence"), std::string::npos) << r.output;
     r = test::run_command(dynsky("sky training-data --procedural " + dir + "/none --out " + dir + "/o"));
     EXPECT_EQ(r.exit_code, 1);

@@ -1,12 +1,15 @@
 // The frame stage in-process (frame/animation.h, frame/frame_store.h): frame ranges rendered apart
 // equal one run, a resumed run keeps complete frames and renders only the missing ones, and the
-// frame store's names and completeness rule.
+// frame store's names and completeness rule (whole files, the run's size and settings).
 #include "frame/animation.h"
 
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
+#include "frame/frame_metadata.h"
 #include "frame/frame_store.h"
 #include "tests/test_support.h"
 #include "util/error.h"
@@ -32,10 +35,14 @@ AnimationSettings small_animation(const std::string& out) {
     return a;
 }
 
-void expect_same_frames(const FrameStore& a, const FrameStore& b, int count) {
+bool complete(const FrameStore& store, int k, const std::string& settings) {
+    return store.check(k, 32, 18, settings).state == FrameCheck::Complete;
+}
+
+void expect_same_frames(const FrameStore& a, const FrameStore& b, int count, const std::string& settings) {
     for (int k = 0; k < count; ++k) {
-        ASSERT_TRUE(a.is_complete(k)) << a.frame_exr(k);
-        ASSERT_TRUE(b.is_complete(k)) << b.frame_exr(k);
+        ASSERT_TRUE(complete(a, k, settings)) << a.frame_exr(k);
+        ASSERT_TRUE(complete(b, k, settings)) << b.frame_exr(k);
         Image ia = read_image(a.frame_exr(k)), ib = read_image(b.frame_exr(k));
         EXPECT_TRUE(ia.pixels == ib.pixels) << "frame " << k << " differs";
         EXPECT_EQ(ia.metadata.numbers["dynsky:frame"], k);
@@ -61,24 +68,26 @@ TEST(Animation, FrameRangesRenderedApartEqualOneRun) {
     part.frames = "0-1";
     AnimationReport early = render_animation(part);
     EXPECT_TRUE(early.complete);
-    expect_same_frames(FrameStore(dir + "/whole"), FrameStore(dir + "/parts"), 4);
+    EXPECT_EQ(early.settings, whole.settings);
+    expect_same_frames(FrameStore(dir + "/whole"), FrameStore(dir + "/parts"), 4, whole.settings);
     fs::remove_all(dir);
 }
 
 TEST(Animation, ResumeKeepsCompleteFramesAndRendersTheRest) {
     const std::string dir = test::temp_dir("frame_resume");
     const FrameStore whole(dir + "/whole"), resumed(dir + "/resumed");
-    render_animation(small_animation(whole.folder()));
+    const std::string settings = render_animation(small_animation(whole.folder())).settings;
     AnimationSettings a = small_animation(resumed.folder());
     render_animation(a);
     // Frame 1 loses a file (as if killed between its writes): it is no longer complete.
     fs::remove(resumed.sky_png(1));
-    EXPECT_FALSE(resumed.is_complete(1));
+    EXPECT_EQ(resumed.check(1, 32, 18, settings).state, FrameCheck::Damaged);
     AnimationReport r = render_animation(a);
     EXPECT_EQ(r.rendered, 1);
     EXPECT_EQ(r.skipped, 3);
+    EXPECT_EQ(r.replaced, 1);
     EXPECT_TRUE(r.complete);
-    expect_same_frames(whole, resumed, 4);
+    expect_same_frames(whole, resumed, 4, settings);
     fs::remove_all(dir);
 }
 
@@ -88,16 +97,50 @@ TEST(FrameStore, NamesAndCompleteness) {
     EXPECT_EQ(fs::path(store.frame_exr(7)).filename(), "frame_0007.exr");
     EXPECT_EQ(fs::path(store.frame_png(12345)).filename(), "frame_12345.png");
     EXPECT_EQ(fs::path(store.sky_png(0)).filename(), "sky_0000.png");
-    EXPECT_FALSE(store.is_complete(0));
-    Image tiny(1, 1, 3);
-    write_image(store.frame_exr(0), tiny);
-    write_image(store.frame_png(0), tiny);
-    EXPECT_FALSE(store.is_complete(0));  // the sky PNG is still missing
-    write_image(store.sky_png(0), tiny);
-    EXPECT_TRUE(store.is_complete(0));
-    EXPECT_TRUE(store.all_complete(1));
-    EXPECT_FALSE(store.all_complete(2));
+    const std::string settings = canonical_settings({{"spp", "2"}, {"res", "2x1"}});
+    EXPECT_EQ(store.check(0, 2, 1, settings).state, FrameCheck::Missing);
+    Image frame(2, 1, 3);
+    FrameMetadata meta;
+    meta.settings = settings;
+    meta.write_to(&frame.metadata);
+    write_image(store.frame_exr(0), frame);
+    write_image(store.frame_png(0), frame);
+    FrameCheck c = store.check(0, 2, 1, settings);
+    EXPECT_EQ(c.state, FrameCheck::Damaged);  // the sky PNG is still missing
+    EXPECT_NE(c.reason.find("sky_0000.png"), std::string::npos) << c.reason;
+    write_image(store.sky_png(0), frame);
+    EXPECT_EQ(store.check(0, 2, 1, settings).state, FrameCheck::Complete);
+    // Another size, other settings: not this run's frame, and the check says what differs.
+    EXPECT_EQ(store.check(0, 4, 2, settings).state, FrameCheck::OtherSettings);
+    c = store.check(0, 2, 1, canonical_settings({{"spp", "8"}, {"res", "2x1"}}));
+    EXPECT_EQ(c.state, FrameCheck::OtherSettings);
+    EXPECT_EQ(c.reason, "spp 2 -> 8");
+    // A file cut short or emptied under its final name (not our writer's doing, but a disk's) is damaged.
+    std::string bytes;
+    {
+        std::ifstream f(store.frame_exr(0), std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+    }
+    std::ofstream(store.frame_exr(0), std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+    c = store.check(0, 2, 1, settings);
+    EXPECT_EQ(c.state, FrameCheck::Damaged);
+    EXPECT_NE(c.reason.find("frame_0000.exr"), std::string::npos) << c.reason;
+    std::ofstream(store.frame_exr(0), std::ios::binary | std::ios::trunc).flush();
+    EXPECT_EQ(store.check(0, 2, 1, settings).state, FrameCheck::Damaged);
     fs::remove_all(dir);
+}
+
+TEST(FrameStore, SettingsAreCanonicalAndHashed) {
+    FrameSettings a{{"spp", "2"}, {"model", "procedural"}}, b{{"model", "procedural"}, {"spp", "2"}};
+    EXPECT_EQ(canonical_settings(a), "model=procedural\nspp=2\n");
+    EXPECT_EQ(canonical_settings(a), canonical_settings(b));
+    EXPECT_EQ(parse_settings(canonical_settings(a)), a);
+    // FNV-1a 64 of "" and "a" (the published test vectors).
+    EXPECT_EQ(settings_hash(""), "cbf29ce484222325");
+    EXPECT_EQ(settings_hash("a"), "af63dc4c8601ec8c");
+    EXPECT_NE(settings_hash(canonical_settings(a)), settings_hash(canonical_settings({{"spp", "4"}})));
+    EXPECT_EQ(describe_settings_change(a, {{"spp", "4"}, {"model", "procedural"}, {"res", "8x8"}}),
+              "res (none) -> 8x8, spp 2 -> 4");
 }
 
 TEST(FrameStore, FrameRanges) {

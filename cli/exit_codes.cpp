@@ -1,0 +1,87 @@
+#include "cli/exit_codes.h"
+
+#include <cstdio>
+#include <vector>
+
+#include "util/suggest.h"
+
+namespace dynsky::cli {
+
+std::string exit_codes_help() {
+    return "Exit codes: 0 done; 1 runtime error (an input missing, unreadable or bad, an output not written);\n"
+           "2 usage error (unknown command or option, bad option value); 3 interrupted (the file being written\n"
+           "removed). See docs/exit-codes.md.";
+}
+
+int exit_code_of(const Error& e) { return std::string(e.what()).rfind("--", 0) == 0 ? kUsageError : kRuntimeError; }
+
+namespace {
+
+std::vector<std::string> command_names(const CLI::App* app) {
+    std::vector<std::string> names;
+    for (const CLI::App* sub : app->get_subcommands([](const CLI::App*) { return true; }))
+        if (!sub->get_name().empty()) names.push_back(sub->get_name());
+    return names;
+}
+
+std::vector<std::string> option_names(const CLI::App* app) {
+    std::vector<std::string> names;
+    for (const CLI::Option* opt : app->get_options())
+        for (const std::string& n : opt->get_lnames()) names.push_back("--" + n);
+    return names;
+}
+
+std::string join(const std::vector<std::string>& names) {
+    std::string s;
+    for (const std::string& n : names) s += (s.empty() ? "" : ", ") + n;
+    return s;
+}
+
+// "dynsky sky" for the command a word belongs to.
+std::string command_path(const CLI::App* app) {
+    std::string s;
+    for (; app; app = app->get_parent()) s = app->get_name().empty() ? s : app->get_name() + (s.empty() ? "" : " " + s);
+    return "dynsky" + (s.empty() ? "" : " " + s);
+}
+
+// Walks the words as the parser did: into subcommands by name; the first word that is no command
+// where a command is expected, or an option the command lacks, gets a suggestion.
+std::string suggestion(CLI::App& app, int argc, char** argv) {
+    CLI::App* cmd = &app;
+    for (int i = 1; i < argc; ++i) {
+        std::string word = argv[i];
+        if (word == "--") break;
+        if (word.size() > 2 && word.rfind("--", 0) == 0) {
+            std::string name = word.substr(0, word.find('='));
+            if (cmd->get_option_no_throw(name) != nullptr || name == "--help" || name == "--help-all") continue;
+            std::string best = closest_name(name, option_names(cmd));
+            return command_path(cmd) + " has no option " + name + (best.empty() ? "" : "; did you mean " + best + "?");
+        }
+        if (word[0] == '-') continue;
+        std::vector<std::string> commands = command_names(cmd);
+        if (commands.empty()) continue;  // a value or a positional argument of a leaf command
+        bool found = false;
+        for (CLI::App* sub : cmd->get_subcommands([](const CLI::App*) { return true; }))
+            if (sub->check_name(word)) cmd = sub, found = true;
+        if (found) continue;
+        std::string best = closest_name(word, commands);
+        return "'" + word + "' is not a command of " + command_path(cmd) +
+               (best.empty() ? "" : "; did you mean '" + best + "'?") + " Commands: " + join(commands);
+    }
+    if (!command_names(cmd).empty() && cmd->get_subcommands().empty())
+        return command_path(cmd) + " needs a command: " + join(command_names(cmd));
+    return "";
+}
+
+}  // namespace
+
+int report_parse_error(CLI::App& app, const CLI::ParseError& e, int argc, char** argv) {
+    if (e.get_exit_code() == int(CLI::ExitCodes::Success)) return app.exit(e);  // --help, --help-all
+    std::string hint = suggestion(app, argc, argv);
+    std::fprintf(stderr, "dynsky: usage error: %s\n", e.what());
+    if (!hint.empty()) std::fprintf(stderr, "dynsky: %s\n", hint.c_str());
+    std::fprintf(stderr, "Run with --help for more information.\n");
+    return kUsageError;
+}
+
+}  // namespace dynsky::cli

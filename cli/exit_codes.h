@@ -1,0 +1,28 @@
+// What `dynsky` exits with (docs/exit-codes.md), and the usage errors' "did you mean".
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+
+#include "util/error.h"
+
+namespace dynsky::cli {
+
+constexpr int kSuccess = 0;       // done (also --help)
+constexpr int kRuntimeError = 1;  // an input is missing, unreadable or bad; an output could not be written
+constexpr int kUsageError = 2;    // the command line is wrong: unknown command or option, bad option value
+constexpr int kInterrupted = 3;   // SIGINT, SIGTERM or SIGHUP: stopped, the output being written removed
+
+// The --help epilog.
+std::string exit_codes_help();
+
+// kUsageError for errors about an option (their message starts with the option's name, "--spp ...";
+// util/error.h), kRuntimeError for the rest.
+int exit_code_of(const Error& e);
+
+// Prints a CLI11 parse error with a "did you mean" for a misspelt command or option, and returns
+// kUsageError (kSuccess for --help).
+int report_parse_error(CLI::App& app, const CLI::ParseError& e, int argc, char** argv);
+
+}  // namespace dynsky::cli

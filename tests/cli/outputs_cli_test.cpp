@@ -1,0 +1,228 @@
+// End-to-end: outputs are never half-written and exit codes say what went wrong (docs/exit-codes.md).
+// A full disk is a file size limit (ulimit -f: writes fail with EFBIG, dynsky ignores SIGXFSZ) on
+// every output format: each command exits 1 naming the file, with no file cut short under its
+// final name and no temporary left. An interrupt removes the file being written (exit 3); an
+// output that is an input is refused; misspelt commands and options get a "did you mean" (exit 2).
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+
+#include "tests/test_support.h"
+#include "util/error.h"
+#include "util/image.h"
+
+namespace dynsky {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kExe = DYNSKY_EXE;
+
+// The command under a file size limit of 8 blocks (4 kB in dash's 512-byte blocks, 8 kB in bash's).
+test::CommandResult run_with_full_disk(const std::string& args) {
+    return test::run_command("ulimit -f 8; exec " + kExe + " " + args);
+}
+
+// Every file left in dir is whole (images decode, JSON parses, text ends in a newline) and no
+// temporary (.tmp-*) is left.
+void expect_nothing_half_written(const std::string& dir) {
+    for (const auto& e : fs::recursive_directory_iterator(dir)) {
+        if (!e.is_regular_file()) continue;
+        const std::string name = e.path().filename().string(), path = e.path().string();
+        EXPECT_NE(name.rfind(".tmp-", 0), 0u) << "temporary left: " << path;
+        EXPECT_GT(fs::file_size(path), 0u) << path;
+        const std::string ext = file_extension(path);
+        if (ext == ".exr" || ext == ".png") {
+            EXPECT_NO_THROW(read_image(path)) << path;
+        } else if (ext == ".json") {
+            std::ifstream f(path);
+            EXPECT_TRUE(nlohmann::json::accept(f)) << path;
+        } else if (ext == ".csv" || ext == ".md") {
+            std::ifstream f(path, std::ios::binary);
+            std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+            EXPECT_TRUE(!text.empty() && text.back() == '\n') << path;
+        }
+    }
+}
+
+// A failure under the limit: exit 1, the message names `file`, which does not exist.
+void expect_clean_failure(const test::CommandResult& r, const std::string& file, const std::string& dir) {
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find(file), std::string::npos) << "message does not name " << file << ": " << r.output;
+    EXPECT_EQ(r.output.find("wrote " + file), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(file)) << file;
+    expect_nothing_half_written(dir);
+}
+
+const std::string kAnimate =
+    " animate builtin --sky procedural:3 --model procedural --sky-res 96 --res 64x36 --spp 2 --duration 0.375 "
+    "--fps 8 --dt 0.5 --threads 2 --quiet --out ";
+
+TEST(OutputsCli, FullDiskFailsCleanlyForEveryFormat) {
+    const std::string dir = test::temp_dir("outputs_full_disk");
+    // render: EXR (and the PNG beside it), PNG.
+    auto r = run_with_full_disk("render builtin --res 96x54 --spp 2 --out " + dir + "/r.exr");
+    expect_clean_failure(r, dir + "/r.exr", dir);
+    r = run_with_full_disk("render builtin --res 96x54 --spp 2 --out " + dir + "/r.png");
+    expect_clean_failure(r, dir + "/r.png", dir);
+    // The same without the limit: the outputs are well over the limit, so the limit is what failed.
+    ASSERT_EQ(test::run_command(kExe + " render builtin --res 96x54 --spp 2 -q --out " + dir + "/ok.png").exit_code, 0);
+    EXPECT_GT(fs::file_size(dir + "/ok.png"), 8192u);
+
+    // sky commands: an EXR, its preview PNG, a lat-long EXR from an input sky.
+    r = run_with_full_disk("sky clear --lat 48.85 --lon 2.35 --time 2026-06-21T16:00:00Z --sky-res 64 --out " + dir +
+                           "/clear.exr");
+    expect_clean_failure(r, dir + "/clear.exr", dir);
+    ASSERT_EQ(test::run_command(kExe +
+                                " sky clear --lat 48.85 --lon 2.35 --time 2026-06-21T16:00:00Z --sky-res 64 "
+                                "-q --out " +
+                                dir + "/clear.exr")
+                  .exit_code,
+              0);
+    r = run_with_full_disk("sky latlong " + dir + "/clear.exr --out " + dir + "/ll.exr");
+    expect_clean_failure(r, dir + "/ll.exr", dir);
+    // A folder of outputs: procedural frames, flows, manifest.json.
+    r = run_with_full_disk("sky procedural --duration 10 --dt 10 --sky-res 64 --preview --out " + dir + "/proc");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find(dir + "/proc/"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/proc/manifest.json"));
+    expect_nothing_half_written(dir);
+    // A CSV (sky predict --stats): 200 rows are over 8 kB; the step EXR of a uniform sky compresses to
+    // well under 4 kB.
+    Image uniform(64, 64, 3);
+    uniform.pixels.assign(uniform.pixels.size(), 1.0f);
+    write_image(dir + "/uniform.exr", uniform);
+    ASSERT_LT(fs::file_size(dir + "/uniform.exr"), 4096u);
+    r = run_with_full_disk("sky predict --sky " + dir + "/uniform.exr --model advect --steps 200 --every 1000 --stats " +
+                           dir + "/stats.csv -q --out " + dir + "/pred");
+    expect_clean_failure(r, dir + "/stats.csv", dir);
+
+    // animate: frames, then (all frames there) the contact sheet, then the chart of `temporal`.
+    const std::string anim = dir + "/anim";
+    r = run_with_full_disk(kAnimate + anim + " --no-video");
+    expect_clean_failure(r, anim + "/frame_0000.exr", dir);
+    ASSERT_EQ(test::run_command(kExe + kAnimate + anim + " --no-video").exit_code, 0);
+    fs::remove(anim + "/contact_sheet.png");
+    r = run_with_full_disk(kAnimate + anim + " --no-video");
+    expect_clean_failure(r, anim + "/contact_sheet.png", dir);
+    r = run_with_full_disk("temporal " + anim);
+    expect_clean_failure(r, anim + "/temporal.png", dir);
+    fs::remove_all(dir);
+}
+
+// ffmpeg's part: its exit status and its file are checked (a fake ffmpeg first on the PATH, then
+// the real one under the size limit; the videos are made before the contact sheet).
+TEST(OutputsCli, FailedVideoFailsCleanly) {
+    const std::string dir = test::temp_dir("outputs_video");
+    const std::string anim = dir + "/anim", bin = dir + "/bin";
+    const std::string animate = kAnimate + anim + " --res 320x180 --spp 1";
+    ASSERT_EQ(test::run_command(kExe + animate + " --no-video").exit_code, 0);
+    fs::create_directories(bin);
+    // Writes half a file to its last argument and fails, as ffmpeg does on a full disk.
+    std::ofstream(bin + "/ffmpeg") << "#!/bin/sh\nfor a; do out=$a; done\nprintf 'half' > \"$out\"\nexit 1\n";
+    fs::permissions(bin + "/ffmpeg", fs::perms::owner_all);
+    auto r = test::run_command("PATH=" + bin + ":$PATH " + kExe + animate);
+    expect_clean_failure(r, anim + "/animation.mp4", dir);
+    EXPECT_NE(r.output.find("ffmpeg failed (exit 1)"), std::string::npos) << r.output;
+    // Exits 0 but writes nothing: still an error.
+    std::ofstream(bin + "/ffmpeg") << "#!/bin/sh\nexit 0\n";
+    r = test::run_command("PATH=" + bin + ":$PATH " + kExe + animate);
+    expect_clean_failure(r, anim + "/animation.mp4", dir);
+    EXPECT_NE(r.output.find("wrote no file"), std::string::npos) << r.output;
+    // ffmpeg exits 0 here though its trailer's write fails: the file is checked.
+    r = run_with_full_disk(animate);
+    expect_clean_failure(r, anim + "/animation.mp4", dir);
+    EXPECT_NE(r.output.find("incomplete"), std::string::npos) << r.output;
+    ASSERT_EQ(test::run_command(kExe + animate).exit_code, 0);
+    EXPECT_GT(fs::file_size(anim + "/animation.mp4"), 8192u);  // so the limit is what failed
+    fs::remove_all(dir);
+}
+
+TEST(OutputsCli, OutputThatIsAnInputIsRefusedBeforeAnyWork) {
+    const std::string dir = test::temp_dir("outputs_same");
+    ASSERT_EQ(test::run_command(kExe +
+                                " sky clear --lat 48.85 --lon 2.35 --time 2026-06-21T16:00:00Z --sky-res 32 "
+                                "-q --out " +
+                                dir + "/a.exr")
+                  .exit_code,
+              0);
+    const auto before = fs::file_size(dir + "/a.exr");
+    const auto mtime = fs::last_write_time(dir + "/a.exr");
+    for (const std::string& args :
+         {"render builtin --res 16x8 --spp 1 --sky " + dir + "/a.exr --out " + dir + "/a.exr",
+          "render builtin --res 16x8 --spp 1 --sky " + dir + "/a.exr --out " + dir + "/../" +
+              fs::path(dir).filename().string() + "/a.exr",
+          "sky latlong " + dir + "/a.exr --out " + dir + "/a.exr",
+          "sky import " + dir + "/a.exr --lat 0 --lon 0 --time 2026-06-21T16:00:00Z --radius 10 --center 16,16 --out " +
+              dir + "/a.exr"}) {
+        auto r = test::run_command(kExe + " " + args);
+        EXPECT_EQ(r.exit_code, 1) << args << ": " << r.output;
+        EXPECT_NE(r.output.find("is also an input"), std::string::npos) << args << ": " << r.output;
+        EXPECT_EQ(fs::file_size(dir + "/a.exr"), before);
+        EXPECT_EQ(fs::last_write_time(dir + "/a.exr"), mtime);
+    }
+    // An animation into the folder of its input sequence.
+    fs::create_directories(dir + "/seq");
+    fs::copy_file(dir + "/a.exr", dir + "/seq/sky_0000.exr");
+    auto r = test::run_command(kExe + " animate builtin --sky " + dir + "/seq --res 16x8 --out " + dir + "/seq");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/seq/frame_0000.exr"));
+    fs::remove_all(dir);
+}
+
+TEST(OutputsCli, ExitCodesAndDidYouMean) {
+    struct Case {
+        std::string args;
+        int code;
+        std::string says;
+    };
+    const std::string dir = test::temp_dir("outputs_exit");
+    for (const Case& c : std::vector<Case>{
+             {"--help", 0, "Exit codes: 0 done; 1 runtime error"},
+             {"", 2, "needs a command: render, sky"},
+             {"rendr", 2, "did you mean 'render'?"},
+             {"animte --out x", 2, "did you mean 'animate'?"},
+             {"sky clera --out x.exr", 2, "did you mean 'clear'?"},
+             {"xyzzy", 2, "'xyzzy' is not a command of dynsky"},
+             {"render --sppp 4", 2, "did you mean --spp?"},
+             {"sky clear --sky-rez 64 --out x.exr", 2, "did you mean --sky-res?"},
+             {"render --spp abc", 2, "--spp"},                   // CLI11's 104
+             {"sky clear --lat 1", 2, "is required"},            // CLI11's 106
+             {"render builtin extra words", 2, "not expected"},  // CLI11's 109
+             {"render builtin --spp 0", 2, "--spp must be at least 1"},
+             {"render builtin --sky " + dir + "/missing.exr", 1, dir + "/missing.exr"},
+         }) {
+        auto r = test::run_command(kExe + " " + c.args);
+        EXPECT_EQ(r.exit_code, c.code) << "dynsky " << c.args << ": " << r.output;
+        EXPECT_NE(r.output.find(c.says), std::string::npos) << "dynsky " << c.args << ": " << r.output;
+    }
+    fs::remove_all(dir);
+}
+
+// SIGTERM while an output is being written (held mid-write: its temporary is a named pipe that this
+// test reads 1000 bytes from and then stops reading): exit 3, the temporary removed, no output.
+TEST(OutputsCli, InterruptedWriteLeavesNothing) {
+    const std::string dir = test::temp_dir("outputs_interrupt");
+    std::ofstream(dir + "/run.sh") << "mkfifo " << dir << "/.tmp-r-$$.exr && exec " << kExe
+                                   << " render builtin --res 256x256 --spp 1 -q --out " << dir << "/r.exr\n";
+    std::ofstream(dir + "/interrupt.sh") << "sh " << dir << "/run.sh & pid=$!\n"
+                                         << "for i in $(seq 1 600); do [ -p " << dir
+                                         << "/.tmp-r-$pid.exr ] && break; sleep 0.05; done\n"
+                                         << "exec 3< " << dir << "/.tmp-r-$pid.exr\n"
+                                         << "head -c 1000 <&3 | wc -c\n"
+                                         << "kill -TERM $pid; wait $pid; echo rc=$?\n";
+    auto r = test::run_command("sh " + dir + "/interrupt.sh");
+    EXPECT_NE(r.output.find("1000"), std::string::npos) << "not held mid-write: " << r.output;
+    EXPECT_NE(r.output.find("rc=3"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("interrupted"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/r.exr"));
+    for (const auto& e : fs::directory_iterator(dir))
+        EXPECT_NE(e.path().filename().string().rfind(".tmp-", 0), 0u) << e.path();
+    fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace dynsky

@@ -1,0 +1,164 @@
+// Output files (util/atomic_file.h, util/image.h): a failed write (here a file size limit, as a full
+// disk) throws naming the file and leaves neither a file under the final name nor a temporary;
+// temporaries of killed runs are recognised and removed, those of live processes kept; an output
+// that is an input is refused; "did you mean" (util/suggest.h).
+#include "util/atomic_file.h"
+
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "tests/test_support.h"
+#include "util/error.h"
+#include "util/image.h"
+#include "util/suggest.h"
+
+namespace dynsky {
+namespace {
+
+namespace fs = std::filesystem;
+
+int count_entries(const std::string& dir) {
+    int n = 0;
+    for (const auto& e : fs::directory_iterator(dir)) n += e.path().filename() != "" ? 1 : 0;
+    return n;
+}
+
+// Runs `write` in a child process whose files may not exceed limit_bytes (RLIMIT_FSIZE, SIGXFSZ
+// ignored: the write fails with EFBIG as on a full disk). Returns the child's exit status: 0 if the
+// write threw a dynsky::Error naming `path`, 1 if it did not throw (it wrote), 2 if the message
+// lacked the path.
+int write_under_size_limit(rlim_t limit_bytes, const std::string& path, void (*write)(const std::string&)) {
+    pid_t pid = ::fork();
+    if (pid == 0) {
+        ::signal(SIGXFSZ, SIG_IGN);
+        rlimit r{limit_bytes, limit_bytes};
+        ::setrlimit(RLIMIT_FSIZE, &r);
+        try {
+            write(path);
+        } catch (const Error& e) {
+            ::_exit(std::string(e.what()).find(path) != std::string::npos ? 0 : 2);
+        }
+        ::_exit(1);
+    }
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 100 + WTERMSIG(status);
+}
+
+void write_big_file(const std::string& path) { write_file_atomic(path, std::string(100000, 'x')); }
+// Noise, so that compression keeps the files well over the limits.
+Image noise(int size) {
+    Image image(size, size, 3);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    for (float& v : image.pixels) v = u(rng);
+    return image;
+}
+void write_big_exr(const std::string& path) { write_image(path, noise(128)); }
+void write_big_png(const std::string& path) { write_image(path, noise(128)); }
+
+TEST(AtomicFile, FailedWritesLeaveNothingAndNameTheFile) {
+    const std::string dir = test::temp_dir("atomic_fsize");
+    for (auto [name, write] : {std::pair{"report.csv", &write_big_file}, std::pair{"frame.exr", &write_big_exr},
+                               std::pair{"frame.png", &write_big_png}}) {
+        const std::string path = dir + "/" + name;
+        EXPECT_EQ(write_under_size_limit(8192, path, write), 0) << name;
+        EXPECT_FALSE(fs::exists(path)) << name;
+        EXPECT_EQ(count_entries(dir), 0) << name << ": a temporary was left";
+        // Without the limit the same write succeeds. (Every write runs in a child: a process that
+        // started the image libraries' threads must not fork.)
+        EXPECT_EQ(write_under_size_limit(RLIM_INFINITY, path, write), 1) << name;
+        EXPECT_GT(fs::file_size(path), 8192u) << name;
+        // A failed rewrite leaves the previous file as it was.
+        auto before = fs::file_size(path);
+        EXPECT_EQ(write_under_size_limit(4096, path, write), 0) << name;
+        EXPECT_EQ(fs::file_size(path), before) << name;
+        EXPECT_EQ(count_entries(dir), 1) << name;
+        fs::remove(path);
+    }
+    fs::remove_all(dir);
+}
+
+TEST(AtomicFile, WritesExactBytesAndEmptyFiles) {
+    const std::string dir = test::temp_dir("atomic_bytes");
+    std::string bytes("a\0b\nc", 5);
+    write_file_atomic(dir + "/sub/x.bin", bytes);
+    std::ifstream f(dir + "/sub/x.bin", std::ios::binary);
+    std::string back((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(back, bytes);
+    write_file_atomic(dir + "/empty.csv", "");
+    EXPECT_EQ(fs::file_size(dir + "/empty.csv"), 0u);
+    EXPECT_THROW(write_file_atomic(dir + "/empty.csv/inside", "x"), Error);  // a file is no folder
+    fs::remove_all(dir);
+}
+
+TEST(AtomicFile, StaleTemporariesOfDeadProcessesAreRemoved) {
+    const std::string dir = test::temp_dir("atomic_stale");
+    pid_t dead = ::fork();
+    if (dead == 0) ::_exit(0);
+    ::waitpid(dead, nullptr, 0);
+    const std::string d = std::to_string(dead), live = std::to_string(::getppid()), self = std::to_string(::getpid());
+    for (const std::string& name : {".tmp-frame_0003-" + d + ".exr", ".tmp-timings-" + d + ".csv",
+                                    ".tmp-frame_0004-" + live + ".exr", ".tmp-sky_0001-" + self + ".png",
+                                    std::string(".tmp-notours.exr"), std::string("frame_0000.exr"), ".tmp-x-" + d})
+        std::ofstream(dir + "/" + name) << "x";
+    std::vector<std::string> removed = remove_stale_temporaries(dir);
+    std::sort(removed.begin(), removed.end());
+    ASSERT_EQ(removed.size(), 3u);
+    EXPECT_EQ(removed[0], ".tmp-frame_0003-" + d + ".exr");
+    EXPECT_EQ(removed[1], ".tmp-timings-" + d + ".csv");
+    EXPECT_EQ(removed[2], ".tmp-x-" + d);
+    EXPECT_TRUE(fs::exists(dir + "/.tmp-frame_0004-" + live + ".exr"));  // a live process's
+    EXPECT_TRUE(fs::exists(dir + "/.tmp-sky_0001-" + self + ".png"));
+    EXPECT_TRUE(fs::exists(dir + "/.tmp-notours.exr"));
+    EXPECT_TRUE(fs::exists(dir + "/frame_0000.exr"));
+    EXPECT_EQ(fs::path(temporary_path(dir + "/frame_0007.exr")).filename().string(),
+              ".tmp-frame_0007-" + self + ".exr");
+    fs::remove_all(dir);
+}
+
+TEST(AtomicFile, OutputsThatAreInputsAreRefused) {
+    const std::string dir = test::temp_dir("atomic_inputs");
+    std::ofstream(dir + "/a.exr") << "x";
+    fs::create_directories(dir + "/seq");
+    fs::create_hard_link(dir + "/a.exr", dir + "/link.exr");
+    EXPECT_THROW(check_outputs_are_not_inputs({dir + "/a.exr"}, {dir + "/a.exr"}), Error);
+    EXPECT_THROW(check_outputs_are_not_inputs({dir + "/./seq/../a.exr"}, {dir + "/a.exr"}), Error);
+    EXPECT_THROW(check_outputs_are_not_inputs({dir + "/link.exr"}, {dir + "/a.exr"}), Error);  // the same file
+    EXPECT_THROW(check_outputs_are_not_inputs({dir + "/seq"}, {dir + "/seq/"}), Error);
+    EXPECT_THROW(check_outputs_are_not_inputs({dir + "/seq/out"}, {dir + "/seq"}), Error);
+    try {
+        check_outputs_are_not_inputs({"", dir + "/a.exr"}, {"procedural:3", dir + "/a.exr"});
+        ADD_FAILURE() << "not refused";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("is also an input"), std::string::npos) << e.what();
+    }
+    EXPECT_NO_THROW(check_outputs_are_not_inputs({dir + "/b.exr", dir + "/seq2", ""},
+                                                 {dir + "/a.exr", dir + "/seq", "builtin"}));
+    EXPECT_NO_THROW(check_outputs_are_not_inputs({dir}, {dir + "/a.exr"}));  // a folder holding an input file
+    fs::remove_all(dir);
+}
+
+TEST(Suggest, ClosestNames) {
+    EXPECT_EQ(edit_distance("render", "render"), 0);
+    EXPECT_EQ(edit_distance("rendr", "render"), 1);
+    EXPECT_EQ(edit_distance("redner", "render"), 1);  // a swap of neighbours is one edit
+    EXPECT_EQ(edit_distance("", "sky"), 3);
+    std::vector<std::string> commands{"render", "sky", "bench", "animate", "compare", "temporal"};
+    EXPECT_EQ(closest_name("rendr", commands), "render");
+    EXPECT_EQ(closest_name("animte", commands), "animate");
+    EXPECT_EQ(closest_name("skz", commands), "sky");
+    EXPECT_EQ(closest_name("anim", commands), "animate");  // the start of a name
+    EXPECT_EQ(closest_name("xyzzy", commands), "");
+    EXPECT_EQ(closest_name("--sppp", {"--spp", "--seed", "--sky"}), "--spp");
+}
+
+}  // namespace
+}  // namespace dynsky

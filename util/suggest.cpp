@@ -1,0 +1,35 @@
+#include "util/suggest.h"
+
+#include <algorithm>
+
+namespace dynsky {
+
+int edit_distance(const std::string& a, const std::string& b) {
+    const size_t n = a.size(), m = b.size();
+    std::vector<std::vector<int>> d(n + 1, std::vector<int>(m + 1));
+    for (size_t i = 0; i <= n; ++i) d[i][0] = int(i);
+    for (size_t j = 0; j <= m; ++j) d[0][j] = int(j);
+    for (size_t i = 1; i <= n; ++i)
+        for (size_t j = 1; j <= m; ++j) {
+            int cost = a[i - 1] == b[j - 1] ? 0 : 1;
+            d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
+                d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+        }
+    return d[n][m];
+}
+
+std::string closest_name(const std::string& word, const std::vector<std::string>& names) {
+    if (word.empty()) return "";
+    const int allowed = word.size() <= 4 ? 1 : word.size() <= 8 ? 2 : 3;
+    std::string best;
+    int best_distance = allowed + 1;
+    for (const std::string& name : names) {
+        int d = edit_distance(word, name);
+        if (word.size() >= 3 && name.rfind(word, 0) == 0) d = std::min(d, 1);
+        if (d < best_distance) best = name, best_distance = d;
+    }
+    return best;
+}
+
+}  // namespace dynsky
