@@ -28,7 +28,15 @@ AnimationReport render_animation(const AnimationSettings& o) {
     if (!(o.duration > 0)) throw Error("--duration must be positive");
     if (!(o.fps > 0 && o.fps <= 1000)) throw Error("--fps must be in (0, 1000]");
     if (o.spp < 1) throw Error("--spp must be at least 1");
-    const int total = std::max(1, int(std::lround(o.duration * o.fps)));
+    const double frames = std::round(o.duration * o.fps);
+    if (!(frames <= kMaxAnimationFrames)) {
+        char text[200];
+        std::snprintf(text, sizeof text,
+                      "--duration %g s at --fps %g is %.4g frames, more than the %.0f one animation may have",
+                      o.duration, o.fps, frames, kMaxAnimationFrames);
+        throw Error(text);
+    }
+    const int total = std::max(1, int(frames));
     int first, last;
     parse_frame_range(o.frames, total, &first, &last);
 

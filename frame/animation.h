@@ -26,6 +26,10 @@ namespace dynsky {
 //   threads 0                worker threads (0: all cores)
 //   exposure NaN             PNG exposure in stops; NaN: from the sky's irradiance at t = 0
 //   no_video false, quiet false
+// The most frames one animation may have (as a procedural sequence): duration * fps is computed in
+// double precision and checked against it, so a huge --duration cannot wrap into a short animation.
+constexpr double kMaxAnimationFrames = 100000;
+
 struct AnimationSettings {
     SceneSpec scene;
     SkySourceSpec sky;

@@ -12,6 +12,7 @@
 #include "sky/clear_sky.h"
 #include "util/data_path.h"
 #include "util/error.h"
+#include "util/parse.h"
 #include "util/image.h"
 
 namespace dynsky {
@@ -94,7 +95,8 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
             if (o.sky[10] != ':' || o.sky.size() == 11 ||
                 o.sky.find_first_not_of("0123456789", 11) != std::string::npos)
                 throw Error("--sky '" + o.sky + "': expected 'procedural' or 'procedural:SEED' (SEED a whole number)");
-            seed = std::stoull(o.sky.substr(11));
+            seed = uint64_t(parse_whole_number(o.sky.substr(11), "--sky '" + o.sky + "' (the seed)", 0,
+                                               999999999999999999LL));
         }
         Vec3d sun = compute_sun_position(clock->start, where).direction();
         ProceduralSkyParams p = procedural_params(o, seed, sun);
