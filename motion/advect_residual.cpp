@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "motion/advection.h"
@@ -24,7 +25,14 @@ std::string cloud_model_kind(const std::string& folder) {
     const std::string path = (fs::path(folder) / "model.json").string();
     if (!fs::is_directory(folder)) throw_file_error(folder, "model folder not found");
     if (!fs::exists(path)) throw_file_error(path, "model description not found (is this a model folder?)");
-    nlohmann::json j = read_json(path);
+    if (!fs::is_regular_file(path)) throw_file_error(path, "not a regular file (a directory, a FIFO or a device?)");
+    nlohmann::json j;
+    try {
+        std::ifstream f(path);
+        j = nlohmann::json::parse(f);
+    } catch (const nlohmann::json::exception& e) {
+        throw_file_error(path, std::string("not a valid model description: ") + e.what());
+    }
     if (!j.is_object()) throw_file_error(path, "not a model description (expected a JSON object)");
     if (!j.contains("format") || j["format"] != "dynsky-cloud-model")
         throw_file_error(path, "\"format\" is " + (j.contains("format") ? j["format"].dump() : std::string("missing")) +
