@@ -30,25 +30,36 @@ void register_animate_command(CLI::App& app) {
     cmd->option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
     add_scene_options(cmd, &a->scene);
     add_sky_source_options(cmd, &a->sky, &a->model);
-    cmd->add_option("--duration", a->duration, "Length of the animation in seconds of sky time")->capture_default_str();
-    cmd->add_option("--fps", a->fps, "Frames per second (frame k shows the sky at t = k / fps)")->capture_default_str();
-    cmd->add_option("--spp", a->spp, "Samples per pixel")->capture_default_str();
+    cmd->add_option("--duration", a->duration, "Length of the animation in seconds of sky time")
+        ->check(finite_above(0, 1e9))
+        ->capture_default_str();
+    cmd->add_option("--fps", a->fps, "Frames per second (frame k shows the sky at t = k / fps)")
+        ->check(finite_above(0, 1000))
+        ->capture_default_str();
+    cmd->add_option("--spp", a->spp, "Samples per pixel")->check(CLI::Range(1, kMaxSpp))->capture_default_str();
     cmd->add_option("--res", o->resolution, "Frame size WIDTHxHEIGHT")->capture_default_str();
     cmd->add_option(
            "--out,-o", a->out,
            "Output folder: frame_NNNN.exr/.png, sky_NNNN.png, timings.csv, contact_sheet.png, animation.mp4, sky.mp4")
         ->capture_default_str();
     cmd->add_option("--frames", a->frames, "Render only frames A-B (inclusive, numbered from 0), e.g. 0-11 or 5");
-    cmd->add_option("--seed", a->seed, "Random seed of the path tracer")->capture_default_str();
+    cmd->add_option("--seed", a->seed, "Random seed of the path tracer")
+        ->check(non_negative_whole())
+        ->capture_default_str();
     cmd->add_flag(
         "--seed-per-frame", a->seed_per_frame,
         "A different seed every frame (independent noise; default: the same seed every frame, i.e. correlated\n"
         "sampling, which keeps Monte Carlo noise from flickering between frames)");
-    cmd->add_option("--threads", a->threads, "Worker threads (0: all cores)")->capture_default_str();
-    cmd->add_option("--max-depth", a->max_depth, "Maximum path length (bounces)")->capture_default_str();
+    cmd->add_option("--threads", a->threads, "Worker threads (0: all cores)")
+        ->check(CLI::Range(0, kMaxThreads))
+        ->capture_default_str();
+    cmd->add_option("--max-depth", a->max_depth, "Maximum path length (bounces)")
+        ->check(CLI::Range(0, kMaxDepth))
+        ->capture_default_str();
     cmd->add_option(
         "--exposure", a->exposure,
-        "PNG exposure in stops for every frame (default: from the sky's irradiance at t = 0, the same for all frames)");
+        "PNG exposure in stops for every frame (default: from the sky's irradiance at t = 0, the same for all frames)")
+        ->check(finite_in(-64, 64));
     cmd->add_option("--aovs", a->aovs,
                     "Extra passes in each frame's EXR: albedo, normal, depth, alpha (as for 'dynsky render')");
     cmd->add_option("--clamp-indirect", a->clamp_indirect,

@@ -30,17 +30,26 @@ void register_compare_command(CLI::App& app) {
     add_scene_options(cmd, &c->scene);
     add_sky_source_options(cmd, &c->sky, &c->model);
     cmd->add_option("--res", o->resolution, "Size of the side-by-side frames, WIDTHxHEIGHT")->capture_default_str();
-    cmd->add_option("--spp", c->spp, "Samples per pixel of the side-by-side frames")->capture_default_str();
+    cmd->add_option("--spp", c->spp, "Samples per pixel of the side-by-side frames")
+        ->check(CLI::Range(1, kMaxSpp))
+        ->capture_default_str();
     cmd->add_option("--out,-o", c->out, "Output folder")->capture_default_str();
     cmd->add_option("--points", c->points, "Chart points as fractions of the image: X,Y;X,Y;... (0,0 = top left)")
         ->capture_default_str();
-    cmd->add_option("--duration", c->duration, "Chart: seconds of sky time")->capture_default_str();
-    cmd->add_option("--chart-frames", c->chart_frames, "Chart: frames rendered over --duration")->capture_default_str();
+    cmd->add_option("--duration", c->duration, "Chart: seconds of sky time")
+        ->check(finite_above(0, 1e9))
+        ->capture_default_str();
+    cmd->add_option("--chart-frames", c->chart_frames, "Chart: frames rendered over --duration")
+        ->check(CLI::Range(2, 100000))
+        ->capture_default_str();
     cmd->add_option("--chart-res", o->chart_resolution, "Chart: frame size")->capture_default_str();
     cmd->add_option("--chart-spp", c->chart_spp, "Chart: samples per pixel (the same seed every frame)")
+        ->check(CLI::Range(1, kMaxSpp))
         ->capture_default_str();
-    cmd->add_option("--seed", c->seed, "Random seed")->capture_default_str();
-    cmd->add_option("--threads", c->threads, "Worker threads (0: all cores)")->capture_default_str();
+    cmd->add_option("--seed", c->seed, "Random seed")->check(non_negative_whole())->capture_default_str();
+    cmd->add_option("--threads", c->threads, "Worker threads (0: all cores)")
+        ->check(CLI::Range(0, kMaxThreads))
+        ->capture_default_str();
     cmd->callback([o] {
         parse_frame_size(o->resolution, &o->settings.width, &o->settings.height);
         parse_frame_size(o->chart_resolution, &o->settings.chart_width, &o->settings.chart_height);

@@ -1,8 +1,45 @@
 #include "cli/options.h"
 
+#include <cmath>
 #include <cstdio>
 
 namespace dynsky::cli {
+
+namespace {
+
+std::string number_text(double v) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", v);
+    return text;
+}
+
+CLI::Validator finite_range(double min, double max, bool open_min) {
+    std::string range = (open_min ? "(" : "[") + number_text(min) + ", " + number_text(max) + "]";
+    return CLI::Validator(
+        [=](std::string& text) -> std::string {
+            double v = 0;
+            if (!CLI::detail::lexical_cast(text, v)) return "'" + text + "' is not a number";
+            if (!std::isfinite(v) || v < min || v > max || (open_min && v == min))
+                return "'" + text + "' is not a finite number in " + range;
+            return "";
+        },
+        "in " + range);
+}
+
+}  // namespace
+
+CLI::Validator non_negative_whole() {
+    return CLI::Validator(
+        [](std::string& text) -> std::string {
+            if (text.empty() || text.size() > 19 || text.find_first_not_of("0123456789") != std::string::npos)
+                return "'" + text + "' is not a whole number in 0..9999999999999999999";
+            return "";
+        },
+        "a whole number >= 0");
+}
+
+CLI::Validator finite_in(double min, double max) { return finite_range(min, max, false); }
+CLI::Validator finite_above(double min, double max) { return finite_range(min, max, true); }
 
 void add_scene_options(CLI::App* cmd, SceneSpec* o) {
     cmd->add_option("scene", o->scene,
@@ -11,6 +48,7 @@ void add_scene_options(CLI::App* cmd, SceneSpec* o) {
     cmd->add_option(
            "--camera", o->camera,
            "Index of the glTF camera, perspective or orthographic (the bounds are framed when the file has none)")
+        ->check(CLI::Range(0, 1 << 20))
         ->capture_default_str();
     cmd->add_option("--look-at", o->look_at,
                     "Camera override: eye_x,eye_y,eye_z,target_x,target_y,target_z (world metres, +Y up)")
@@ -18,6 +56,7 @@ void add_scene_options(CLI::App* cmd, SceneSpec* o) {
         ->expected(6);
     cmd->add_option("--fov", o->fov_deg, "Vertical field of view in degrees (overrides the camera's)");
     cmd->add_option("--ground-albedo", o->ground_albedo, "Albedo of the ground model below the horizon")
+        ->check(finite_in(0, 1))
         ->capture_default_str();
 }
 
@@ -40,6 +79,7 @@ void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {
     cmd->add_option(
            "--dt", m->dt,
            "Delta t: seconds between medium steps (0: a network model's own Delta t from its model.json, else the paper's 10 s)")
+        ->check(finite_in(0, 86400))
         ->capture_default_str();
     cmd->add_option("--gamma", m->gamma,
                     "The in-between of two medium steps: 'constant' (both steps advected along the motion to the\n"
@@ -48,36 +88,49 @@ void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {
         ->check(CLI::IsMember({"constant", "paper"}))
         ->capture_default_str();
     add_generated_sky_options(cmd, o);
-    cmd->add_option("--coverage", o->coverage, "Cloud cover of the procedural sky, 0..1")->capture_default_str();
+    cmd->add_option("--coverage", o->coverage, "Cloud cover of the procedural sky, 0..1")
+        ->check(finite_in(0, 1))
+        ->capture_default_str();
     cmd->add_option("--wind-from", o->wind_from_deg,
                     "Where the wind at the clouds blows from, degrees clockwise from north (moves the procedural\n"
                     "sky and, for any input sky, the clouds of the models that take a motion)")
+        ->check(finite_in(-360, 360))
         ->capture_default_str();
-    cmd->add_option("--wind-speed", o->wind_speed_mps, "Wind speed at the clouds, m/s")->capture_default_str();
-    cmd->add_option("--cloud-height", o->cloud_height_m,
-                    "Height of the cloud layer the wind moves, metres (1500: fair-weather cumulus; only speed / height\n"
-                    "matters for the motion seen from the ground)")
+    cmd->add_option("--wind-speed", o->wind_speed_mps, "Wind speed at the clouds, m/s")
+        ->check(finite_in(0, 300))
+        ->capture_default_str();
+    cmd->add_option(
+           "--cloud-height", o->cloud_height_m,
+           "Height of the cloud layer the wind moves, metres (1500: fair-weather cumulus; only speed / height\n"
+           "matters for the motion seen from the ground)")
+        ->check(finite_above(0, 1e5))
         ->capture_default_str();
     cmd->add_option("--prev", o->previous,
                     "A previous frame of the input sky (canonical fisheye EXR): the clouds' motion is measured from it");
-    cmd->add_option("--prev-dt", o->previous_dt,
-                    "Seconds between --prev and the input sky (0: one medium step)")
+    cmd->add_option("--prev-dt", o->previous_dt, "Seconds between --prev and the input sky (0: one medium step)")
+        ->check(finite_in(0, 86400))
         ->capture_default_str();
     cmd->add_option("--drift", m->drift_deg_per_s,
                     "Flow model: first-step drift of a single input sky, degrees per second")
+        ->check(finite_in(-360, 360))
         ->capture_default_str();
 }
 
 void add_generated_sky_options(CLI::App* cmd, SkySourceSpec* o) {
     cmd->add_option("--sky-res", o->sky_resolution, "Resolution N of skies made here (procedural, clear)")
+        ->check(CLI::Range(16, 8192))
         ->capture_default_str();
     cmd->add_option(
         "--time", o->time,
         "UTC time of t = 0, ISO 8601 (e.g. 2026-06-21T16:00:00Z): the sun follows the clock from there.\n"
         "Default for 'procedural' and 'clear': 2026-06-21T16:00:00Z (at --lat, --lon: Paris); for an EXR: the sun\n"
         "stays where the file has it");
-    cmd->add_option("--lat", o->latitude, "Latitude of the place, degrees north (with --time)")->capture_default_str();
-    cmd->add_option("--lon", o->longitude, "Longitude of the place, degrees east (with --time)")->capture_default_str();
+    cmd->add_option("--lat", o->latitude, "Latitude of the place, degrees north (with --time)")
+        ->check(finite_in(-90, 90))
+        ->capture_default_str();
+    cmd->add_option("--lon", o->longitude, "Longitude of the place, degrees east (with --time)")
+        ->check(finite_in(-360, 360))
+        ->capture_default_str();
 }
 
 void add_quiet_flag(CLI::App* cmd) {

@@ -12,6 +12,20 @@ namespace dynsky::cli {
 
 void add_scene_options(CLI::App* cmd, SceneSpec* o);
 
+// Range checks on numeric options, run by CLI11 before any work: the message names the option and
+// the range (docs/input-limits.md). CLI11's own Range lets NaN through, hence these. Whole-number
+// options use CLI::Range, which also refuses a fraction or a value beyond the type.
+// A finite number in [min, max].
+CLI::Validator finite_in(double min, double max);
+// A finite number in (min, max] (a strictly positive one for min = 0).
+CLI::Validator finite_above(double min, double max);
+// A whole number >= 0 written as digits (a seed): "-1" is refused, not wrapped to 2^64 - 1.
+CLI::Validator non_negative_whole();
+// Limits shared by the commands.
+constexpr int kMaxThreads = 4096;
+constexpr int kMaxSpp = 1 << 20;
+constexpr int kMaxDepth = 1024;
+
 // An old spelling of an option, kept working but left out of --help (glossary: one name per thing).
 template <typename T>
 CLI::Option* add_hidden_alias(CLI::App* cmd, const std::string& old_name, T* variable) {

@@ -13,6 +13,7 @@
 #include "util/atomic_file.h"
 #include "util/parse.h"
 #include "cli/commands.h"
+#include "cli/options.h"
 #include "renderer/builtin_scene.h"
 #include "renderer/gltf_loader.h"
 #include "renderer/integrator.h"
@@ -177,22 +178,30 @@ void register_render_command(CLI::App& app) {
                     "Output image: .exr (linear, with metadata; a tone-mapped .png is written beside it) or .png")
         ->capture_default_str();
     cmd->add_option("--res", o->resolution, "Image size WIDTHxHEIGHT")->capture_default_str();
-    cmd->add_option("--spp", o->spp, "Samples per pixel")->capture_default_str();
+    cmd->add_option("--spp", o->spp, "Samples per pixel")->check(CLI::Range(1, kMaxSpp))->capture_default_str();
     cmd->add_option(
            "--camera", o->camera,
            "Index of the glTF camera (perspective or orthographic) to use (the scene's bounds are framed when it has none)")
+        ->check(CLI::Range(0, 1 << 20))
         ->capture_default_str();
     cmd->add_option("--seed", o->seed, "Random seed: the same seed gives the same image on any thread count")
+        ->check(non_negative_whole())
         ->capture_default_str();
-    cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")->capture_default_str();
+    cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")
+        ->check(CLI::Range(0, kMaxThreads))
+        ->capture_default_str();
     cmd->add_option(
            "--ground-albedo", o->ground_albedo,
            "Albedo of the ground model below the horizon: a Lambertian plane lit by the sky, radiance albedo * E_sky / pi")
+        ->check(finite_in(0, 1))
         ->capture_default_str();
-    cmd->add_option("--max-depth", o->max_depth, "Maximum path length (bounces)")->capture_default_str();
+    cmd->add_option("--max-depth", o->max_depth, "Maximum path length (bounces)")
+        ->check(CLI::Range(0, kMaxDepth))
+        ->capture_default_str();
     cmd->add_option(
-        "--exposure", o->exposure,
-        "Exposure of the PNG in stops (default: automatic, log-average luminance to middle grey; EXR pixels are never scaled)");
+           "--exposure", o->exposure,
+           "Exposure of the PNG in stops (default: automatic, log-average luminance to middle grey; EXR pixels are never scaled)")
+        ->check(finite_in(-64, 64));
     cmd->add_option(
            "--sampler", o->sampler,
            "Sky importance sampler: uniform, cosine, cdf, alias, mip, sun+cdf, sun+alias, sun+mip; pixel-based ones "

@@ -44,17 +44,23 @@ struct LatLongOptions {
 };
 
 void add_sun_options(CLI::App* cmd, SunOptions* o) {
-    cmd->add_option("--lat", o->lat, "Latitude in degrees, north positive (-90..90)")->required();
+    cmd->add_option("--lat", o->lat, "Latitude in degrees, north positive (-90..90)")
+        ->check(finite_in(-90, 90))
+        ->required();
     cmd->add_option("--lon", o->lon,
                     "Longitude in degrees, EAST positive (-180..180); write --lon=-105.2 or --lon -105.2")
+        ->check(finite_in(-360, 360))
         ->required();
     cmd->add_option("--time", o->time,
                     "Date and time, ISO 8601 with a zone: 2026-06-21T12:00:00Z (UTC) or 2026-06-21T14:00:00+02:00")
         ->required();
-    cmd->add_option("--elevation", o->elevation_m, "Height of the place above sea level in metres (default 0)");
+    cmd->add_option("--elevation", o->elevation_m, "Height of the place above sea level in metres (default 0)")
+        ->check(finite_in(-1000, 100000));
     cmd->add_flag("--no-refraction", o->no_refraction, "Geometric position: no atmospheric refraction");
-    cmd->add_option("--pressure", o->pressure_mbar, "Air pressure for refraction, mbar (default 1010)");
-    cmd->add_option("--temperature", o->temperature_c, "Air temperature for refraction, Celsius (default 10)");
+    cmd->add_option("--pressure", o->pressure_mbar, "Air pressure for refraction, mbar (default 1010)")
+        ->check(finite_above(0, 2000));
+    cmd->add_option("--temperature", o->temperature_c, "Air temperature for refraction, Celsius (default 10)")
+        ->check(finite_in(-100, 100));
 }
 
 SunPosition sun_from(const SunOptions& o, UtcTime* t) {
@@ -156,11 +162,15 @@ void register_sky_clear_commands(CLI::App& sky) {
         "position (Meeus/VSOP87, ~0.001 deg) is printed. A sun below the horizon is outside the model: the sky\n"
         "is made with the sun at the horizon and a warning is printed.");
     add_sun_options(clear, &clear_opts->sun);
-    clear->add_option("--turbidity", clear_opts->turbidity,
-                      "Atmospheric turbidity, 1..10 (2: very clear, 3: clear, 6+: hazy; default 3)");
-    clear->add_option("--albedo", clear_opts->albedo, "Ground albedo seen by the sky model, 0..1 (default 0.3)");
+    clear
+        ->add_option("--turbidity", clear_opts->turbidity,
+                     "Atmospheric turbidity, 1..10 (2: very clear, 3: clear, 6+: hazy; default 3)")
+        ->check(finite_in(1, 10));
+    clear->add_option("--albedo", clear_opts->albedo, "Ground albedo seen by the sky model, 0..1 (default 0.3)")
+        ->check(finite_in(0, 1));
     clear->add_flag("--no-sun", clear_opts->no_sun, "Leave the solar disc out (sky only)");
     clear->add_option("--sky-res", clear_opts->resolution, "Fisheye size N in pixels (N x N), 16..16384")
+        ->check(CLI::Range(16, 16384))
         ->capture_default_str();
     add_hidden_alias(clear, "--res", &clear_opts->resolution);
     clear->add_option("--out,-o", clear_opts->out, "Output sky, .exr")->required();
@@ -191,7 +201,8 @@ void register_sky_clear_commands(CLI::App& sky) {
         "our north (-Z). Energy-preserving: a one-pixel sun is neither missed nor doubled.");
     ll->add_option("sky", ll_opts->sky, "Input fisheye sky (.exr)")->required();
     ll->add_option("--out,-o", ll_opts->out, "Output lat-long image, .exr")->required();
-    ll->add_option("--width", ll_opts->width, "Width W in pixels, even (height W/2); default 2N for an N x N sky");
+    ll->add_option("--width", ll_opts->width, "Width W in pixels, even (height W/2); default 2N for an N x N sky")
+        ->check(CLI::Range(4, 65536));
     ll->add_option("--ground", ll_opts->ground,
                    "Radiance of the lower half: one value or R,G,B in W m^-2 sr^-1 (default 0, black)");
     ll->add_option("--preview", ll_opts->preview, "Also write a tone-mapped .png preview (auto exposure)");

@@ -252,19 +252,24 @@ void register_sky_import_commands(CLI::App& sky) {
                         "Options given explicitly override it");
     imp->add_option("--center", io->center,
                     "Sky circle centre X,Y in photo pixels (pixel centres at integers); default: found automatically");
-    imp->add_option("--radius", io->radius, "Sky circle radius in pixels: distance from the centre to 90 deg off-axis");
+    imp->add_option("--radius", io->radius, "Sky circle radius in pixels: distance from the centre to 90 deg off-axis")
+        ->check(finite_above(0, 1e6));
     imp->add_flag("--auto-circle", io->auto_circle, "Find the circle automatically even if the preset gives one");
     io->lens_opt = imp->add_option("--lens", io->lens,
                                    "Lens law: equidistant (default), equisolid, orthographic, stereographic");
-    io->north_opt = imp->add_option(
-        "--north", io->north, "Where north appears in the photo, degrees clockwise from its top (default 0: north up)");
+    io->north_opt =
+        imp->add_option("--north", io->north,
+                        "Where north appears in the photo, degrees clockwise from its top (default 0: north up)")
+            ->check(finite_in(-360, 360));
     imp->add_flag("--mirror", io->mirror,
                   "The photo is mirror-reversed (east clockwise from north), as mirror imagers (TSI) show the sky "
                   "(arm-tsi sets it already)");
     io->tilt_opt = imp->add_option("--tilt", io->tilt,
-                                   "Zenith angle of the camera's optical axis, degrees (default 0: level)");
+                                   "Zenith angle of the camera's optical axis, degrees (default 0: level)")
+                       ->check(finite_in(-90, 90));
     io->tilt_az_opt = imp->add_option("--tilt-azimuth", io->tilt_azimuth,
-                                      "Azimuth the optical axis leans towards, degrees east of north");
+                                      "Azimuth the optical axis leans towards, degrees east of north")
+                          ->check(finite_in(-360, 360));
     imp->add_option("--mask", io->mask,
                     "Non-sky mask image (photo-sized; black = not sky unless --mask-layout says otherwise)");
     imp->add_option(
@@ -280,18 +285,24 @@ void register_sky_import_commands(CLI::App& sky) {
     imp->add_option(
         "--time", io->time,
         "When the photo was taken, ISO 8601 with a zone (2017-05-24T17:00:00Z); default: from the file name");
-    io->offset_opt = imp->add_option(
-        "--utc-offset", io->utc_offset,
-        "Hours the file name's clock is ahead of UTC, for names without a zone (default 0; presets know theirs)");
-    io->lat_opt = imp->add_option("--lat", io->lat, "Latitude of the camera, degrees north");
-    io->lon_opt = imp->add_option("--lon", io->lon, "Longitude of the camera, degrees EAST (write --lon=-97.485)");
-    io->elev_opt = imp->add_option("--elevation", io->elevation, "Height above sea level, metres");
+    io->offset_opt =
+        imp->add_option(
+               "--utc-offset", io->utc_offset,
+               "Hours the file name's clock is ahead of UTC, for names without a zone (default 0; presets know theirs)")
+            ->check(finite_in(-24, 24));
+    io->lat_opt = imp->add_option("--lat", io->lat, "Latitude of the camera, degrees north")->check(finite_in(-90, 90));
+    io->lon_opt = imp->add_option("--lon", io->lon, "Longitude of the camera, degrees EAST (write --lon=-97.485)")
+                      ->check(finite_in(-360, 360));
+    io->elev_opt = imp->add_option("--elevation", io->elevation, "Height above sea level, metres")
+                       ->check(finite_in(-1000, 100000));
     imp->add_option(
         "--hdr", io->hdr,
         "none: linear relative values; calibrated: absolute radiance (W m^-2 sr^-1) from the clear-sky model and "
         "the sun restored; auto (default): calibrated when time and place are known");
-    imp->add_option("--turbidity", io->turbidity, "Clear-sky model turbidity for the calibration (default 3)");
+    imp->add_option("--turbidity", io->turbidity, "Clear-sky model turbidity for the calibration (default 3)")
+        ->check(finite_in(1, 10));
     imp->add_option("--sky-res", io->resolution, "Output fisheye size N (N x N pixels), 16..16384")
+        ->check(CLI::Range(16, 16384))
         ->capture_default_str();
     add_hidden_alias(imp, "--res", &io->resolution);
     imp->add_option("--out,-o", io->out, "Output sky, .exr")->required();
@@ -306,12 +317,14 @@ void register_sky_import_commands(CLI::App& sky) {
         "0.46; on WSISEG's human labels 0.75 agrees far better (docs/sky-import.md).");
     mask->add_option("input", mo->input, "Photograph (JPEG/PNG) or canonical sky (.exr)")->required();
     mask->add_option("--out,-o", mo->out, "Output mask, .png")->required();
-    mask->add_option("--threshold", mo->threshold, "Rule threshold (default 0.46, the paper's r/b)");
+    mask->add_option("--threshold", mo->threshold, "Rule threshold (default 0.46, the paper's r/b)")
+        ->check(finite_in(-1e6, 1e6));
     mask->add_option("--rule", mo->rule,
                      "rb: cloud if r/b > threshold (default); nbr: cloud if (b-r)/(b+r) < threshold");
     mask->add_option("--preset", mo->preset, "Camera preset for the sky circle and non-sky mask (" + presets + ")");
     mask->add_option("--center", mo->center, "Sky circle centre X,Y in pixels (photos only; default: preset or found)");
-    mask->add_option("--radius", mo->radius, "Sky circle radius in pixels (with --center)");
+    mask->add_option("--radius", mo->radius, "Sky circle radius in pixels (with --center)")
+        ->check(finite_above(0, 1e6));
     mask->add_option("--mask", mo->mask, "Photo-sized non-sky mask (black = not sky)");
     mask->add_flag("--whole-image", mo->whole_image, "Photos: classify every pixel (no sky circle)");
     mask->callback([mo] { run_mask(*mo); });

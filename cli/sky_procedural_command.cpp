@@ -21,14 +21,19 @@ void register_sky_procedural_command(CLI::App& sky) {
         "+y down, and the cloud opacity) and DIR/manifest.json. Frames are at t = 0, dt, 2 dt, ...\n"
         "up to --duration. See docs/procedural-sky.md.");
     cmd->add_option("--seed", o->seed, "Random seed: the same seed and options give identical frames")
+        ->check(non_negative_whole())
         ->capture_default_str();
     cmd->add_option("--coverage", o->coverage, "Fraction of each cloud layer holding cloud, 0 (clear) to 1 (overcast)")
+        ->check(finite_in(0, 1))
         ->capture_default_str();
     cmd->add_option("--duration", o->duration, "Length of the sequence in seconds (frames at 0, dt, ..., <= duration)")
+        ->check(finite_in(0, 1e9))
         ->capture_default_str();
     cmd->add_option("--dt", o->dt, "Time step between frames in seconds; also the span of each flow field")
+        ->check(finite_above(0, 86400))
         ->capture_default_str();
     cmd->add_option("--sky-res", o->resolution, "Resolution N of the N x N fisheye images (8..16384)")
+        ->check(CLI::Range(8, 16384))
         ->capture_default_str();
     add_hidden_alias(cmd, "--res", &o->resolution);
     cmd->add_option("--out,-o", o->out, "Output folder (created if missing; files in it are overwritten)")->required();
@@ -44,6 +49,7 @@ void register_sky_procedural_command(CLI::App& sky) {
         ->delimiter(',')
         ->expected(2);
     cmd->add_option("--cumulus-altitude", o->cumulus_altitude, "Height of the cumulus layer above the viewer, metres")
+        ->check(finite_above(0, 1e5))
         ->capture_default_str();
     cmd->add_option("--evolution", o->evolution,
                     "Seconds for the cumulus shapes to change completely; 0 freezes them (pure advection)")
@@ -55,22 +61,28 @@ void register_sky_procedural_command(CLI::App& sky) {
                     "Width in metres of the square the mask covers on its layer (0: out to 60 deg from the zenith)")
         ->capture_default_str();
     cmd->add_option("--mask-detail", o->mask_detail, "How much noise erodes the mask's soft edges, in [0, 1)")
+        ->check(finite_in(0, 1))
         ->capture_default_str();
     auto* elevation = cmd->add_option("--sun-elevation", o->sun_elevation, "Sun elevation above the horizon, degrees")
+                          ->check(finite_in(-90, 90))
                           ->capture_default_str();
     auto* azimuth = cmd->add_option("--sun-azimuth", o->sun_azimuth, "Sun azimuth, degrees clockwise from north")
+                        ->check(finite_in(-360, 360))
                         ->capture_default_str();
     auto* lat = cmd->add_option("--lat", o->latitude,
                                 "Latitude in degrees (north +); with --lon and --time the sun\n"
-                                "follows its true path over the sequence");
-    auto* lon = cmd->add_option("--lon", o->longitude, "Longitude in degrees (east +)");
+                                "follows its true path over the sequence")
+                    ->check(finite_in(-90, 90));
+    auto* lon = cmd->add_option("--lon", o->longitude, "Longitude in degrees (east +)")->check(finite_in(-360, 360));
     auto* time = cmd->add_option("--time", o->time_iso, "Start time, ISO 8601 with a zone, e.g. 2024-06-21T14:00:00Z");
     lat->excludes(elevation)->excludes(azimuth);
     lon->excludes(elevation)->excludes(azimuth);
     time->excludes(elevation)->excludes(azimuth);
     cmd->add_option("--turbidity", o->turbidity, "Clear-sky turbidity, 1..10 (2 very clear, 3 clear, 6+ hazy)")
+        ->check(finite_in(1, 10))
         ->capture_default_str();
     cmd->add_option("--visibility", o->visibility, "Distance in metres over which far clouds fade into the sky (1/e)")
+        ->check(finite_above(0, 1e9))
         ->capture_default_str();
     cmd->add_flag("--preview", o->preview,
                   "Also write tone-mapped PNGs: frame_NNNN.png and flow_NNNN.png (colour-coded)");

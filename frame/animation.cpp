@@ -106,7 +106,15 @@ AnimationReport render_animation(const AnimationSettings& o) {
     const SamplePattern pattern = parse_sample_pattern(o.sampler_pattern);
     if (!(o.clamp_indirect >= 0)) throw Error("--clamp-indirect must be 0 (off) or positive");
     if (!(o.filter_glossy >= 0)) throw Error("--filter-glossy must be 0 (off) or positive");
-    const int total = std::max(1, int(std::lround(o.duration * o.fps)));
+    const double frames = std::round(o.duration * o.fps);
+    if (!(frames <= kMaxAnimationFrames)) {
+        char text[200];
+        std::snprintf(text, sizeof text,
+                      "--duration %g s at --fps %g is %.4g frames, more than the %.0f one animation may have",
+                      o.duration, o.fps, frames, kMaxAnimationFrames);
+        throw Error(text);
+    }
+    const int total = std::max(1, int(frames));
     int first, last;
     parse_frame_range(o.frames, total, &first, &last);
     // The frame folder must not be (or hold) an input: its frames would replace or join them.

@@ -33,6 +33,10 @@ namespace dynsky {
 //   exposure NaN             PNG exposure in stops; NaN: from the sky's irradiance at t = 0
 //   force false              render every frame of the range even if complete
 //   no_video false, quiet false
+// The most frames one animation may have (as a procedural sequence): duration * fps is computed in
+// double precision and checked against it, so a huge --duration cannot wrap into a short animation.
+constexpr double kMaxAnimationFrames = 100000;
+
 struct AnimationSettings {
     SceneSpec scene;
     SkySourceSpec sky;

@@ -88,7 +88,14 @@ std::vector<std::pair<double, double>> parse_chart_points(const std::string& tex
         std::smatch m;
         if (!std::regex_match(item, m, re))
             throw Error("--points '" + text + "': expected X,Y;X,Y;... with X, Y in [0, 1]");
-        double x = std::stod(m[1]), y = std::stod(m[2]);
+        double x = 0, y = 0;
+        try {
+            size_t used_x = 0, used_y = 0;
+            x = std::stod(m[1], &used_x), y = std::stod(m[2], &used_y);
+            if (used_x != m[1].length() || used_y != m[2].length()) throw std::invalid_argument("");
+        } catch (const std::exception&) {
+            throw Error("--points '" + text + "': '" + item + "' is not X,Y with X, Y in [0, 1]");
+        }
         if (x > 1 || y > 1) throw Error("--points '" + text + "': coordinates are fractions of the image, in [0, 1]");
         out.emplace_back(x, y);
     }

@@ -6,6 +6,7 @@
 #include "frame/frame_metadata.h"
 #include "util/error.h"
 #include "util/image.h"
+#include "util/parse.h"
 #include "util/frame_names.h"
 
 namespace dynsky {
@@ -57,8 +58,8 @@ void parse_frame_range(const std::string& text, int total, int* first, int* last
     std::smatch m;
     if (!std::regex_match(text, m, std::regex("^([0-9]+)(-([0-9]+))?$")))
         throw Error("--frames '" + text + "': expected A-B (inclusive, from 0) or a single frame number");
-    *first = std::stoi(m[1]);
-    *last = m[3].matched ? std::stoi(m[3]) : *first;
+    *first = int(parse_whole_number(m[1], "--frames '" + text + "'", 0, 1 << 30));
+    *last = m[3].matched ? int(parse_whole_number(m[3], "--frames '" + text + "'", 0, 1 << 30)) : *first;
     if (*first > *last || *last >= total)
         throw Error("--frames '" + text + "': the animation has frames 0-" + std::to_string(total - 1));
 }

@@ -12,6 +12,7 @@
 #include "sky/clear_sky.h"
 #include "util/data_path.h"
 #include "util/error.h"
+#include "util/parse.h"
 #include "util/image.h"
 
 namespace dynsky {
@@ -42,7 +43,7 @@ uint64_t procedural_seed(const std::string& sky) {
     if (sky.size() <= 10) return 0;
     if (sky[10] != ':' || sky.size() == 11 || sky.find_first_not_of("0123456789", 11) != std::string::npos)
         throw Error("--sky '" + sky + "': expected 'procedural' or 'procedural:SEED' (SEED a whole number)");
-    return std::stoull(sky.substr(11));
+    return uint64_t(parse_whole_number(sky.substr(11), "--sky '" + sky + "' (the seed)", 0, 999999999999999999LL));
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "motion/advection.h"
@@ -25,10 +26,22 @@ std::string cloud_model_kind(const std::string& folder) {
     const std::string path = (fs::path(folder) / "model.json").string();
     if (!fs::is_directory(folder)) throw_file_error(folder, "model folder not found");
     if (!fs::exists(path)) throw_file_error(path, "model description not found (is this a model folder?)");
-    nlohmann::json j = read_json(path);
+    if (!fs::is_regular_file(path)) throw_file_error(path, "not a regular file (a directory, a FIFO or a device?)");
+    nlohmann::json j;
+    try {
+        std::ifstream f(path);
+        j = nlohmann::json::parse(f);
+    } catch (const nlohmann::json::exception& e) {
+        throw_file_error(path, std::string("not a valid model description: ") + e.what());
+    }
     if (!j.is_object()) throw_file_error(path, "not a model description (expected a JSON object)");
-    if (j.contains("format") && j["format"] != "dynsky-cloud-model")
-        throw_file_error(path, "format is not dynsky-cloud-model");
+    if (!j.contains("format") || j["format"] != "dynsky-cloud-model")
+        throw_file_error(path, "\"format\" is " + (j.contains("format") ? j["format"].dump() : std::string("missing")) +
+                                   ", expected \"dynsky-cloud-model\" (is this a dynsky model folder?)");
+    if (!j.contains("version") || !j["version"].is_number_integer())
+        throw_file_error(path, "\"version\" is " +
+                                   (j.contains("version") ? j["version"].dump() : std::string("missing")) +
+                                   ": a model description needs a whole version number");
     return j.value("kind", std::string("flownet-cloudnet"));
 }
 
@@ -80,7 +93,7 @@ AdvectResidualNetwork AdvectResidualNetwork::load(const std::string& folder) {
     // One run on zeros: a network that does not take 8 and give 3 N x N planes fails here.
     const int n = info.resolution;
     QuietOpenCv quiet;
-    cv::Mat out = from_blob(run_net(m.net_, to_blob({cv::Mat(n, n, CV_32FC(8), cv::Scalar::all(0))}), onnx), onnx);
+    cv::Mat out = probe_net(m.net_, to_blob({cv::Mat(n, n, CV_32FC(8), cv::Scalar::all(0))}), onnx, n);
     if (out.rows != n || out.cols != n || out.channels() != 3)
         throw_file_error(onnx, "returns " + shape_text(out) + ", expected " + std::to_string(n) + " x " +
                                    std::to_string(n) + " x 3 (model.json's resolution)");

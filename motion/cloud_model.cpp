@@ -1,5 +1,6 @@
 #include "motion/cloud_model.h"
 
+#include "motion/advect_residual.h"
 #include "motion/onnx_net.h"
 
 #include <opencv2/core/utils/logger.hpp>
@@ -39,12 +40,18 @@ CloudModel CloudModel::load(const std::string& folder) {
     if (!fs::is_directory(folder)) throw_file_error(folder, "model folder not found");
     const std::string json_path = (fs::path(folder) / "model.json").string();
     if (!fs::exists(json_path)) throw_file_error(json_path, "model description not found (is this a model folder?)");
+    cloud_model_kind(folder);  // a JSON object of format dynsky-cloud-model with a version
     CloudModel model;
     CloudModelInfo& info = model.info_;
     info.folder = folder;
     try {
         std::ifstream f(json_path);
         nlohmann::json j = nlohmann::json::parse(f);
+        // cloud_model_kind() has checked the format; this reader knows version 1 only.
+        if (j.value("kind", std::string("flownet-cloudnet")) != "flownet-cloudnet")
+            throw Error("kind '" + j.value("kind", std::string()) + "' is not a FlowNet + CloudNet model");
+        if (j.at("version").get<int>() != 1)
+            throw Error("version " + j.at("version").dump() + " (this dynsky reads version 1)");
         info.name = j.value("name", fs::path(folder).filename().string());
         info.resolution = j.at("resolution").get<int>();
         info.dt = j.at("dt_s").get<double>();
@@ -81,11 +88,11 @@ CloudModel CloudModel::load(const std::string& folder) {
     // with our message (OpenCV's own log lines about the failure are silenced meanwhile).
     QuietOpenCv quiet;
     cv::Mat zero(n, n, CV_32FC3, cv::Scalar::all(0));
-    cv::Mat f = from_blob(run_net(model.flownet_, to_blob({zero}), flow_path), flow_path);
+    cv::Mat f = probe_net(model.flownet_, to_blob({zero}), flow_path, n);
     if (f.rows != n || f.cols != n || f.channels() != 3)
         throw_file_error(flow_path, "returns " + shape_text(f) + ", expected " + std::to_string(n) + " x " +
                                         std::to_string(n) + " x 3 (model.json's resolution)");
-    cv::Mat c = from_blob(run_net(model.cloudnet_, to_blob({zero, f}), cloud_path), cloud_path);
+    cv::Mat c = probe_net(model.cloudnet_, to_blob({zero, f}), cloud_path, n);
     if (c.rows != n || c.cols != n || c.channels() != 3)
         throw_file_error(cloud_path, "returns " + shape_text(c) + ", expected " + std::to_string(n) + " x " +
                                          std::to_string(n) + " x 3 (model.json's resolution)");

@@ -76,4 +76,18 @@ cv::Mat run_net(cv::dnn::Net& net, const cv::Mat& blob, const std::string& what)
     }
 }
 
+cv::Mat probe_net(cv::dnn::Net& net, const cv::Mat& blob, const std::string& onnx_path, int resolution) {
+    cv::Mat out;
+    try {
+        net.setInput(blob);
+        out = net.forward().clone();
+    } catch (const cv::Exception& e) {
+        const std::string n = std::to_string(resolution);
+        throw_file_error(onnx_path,
+                         "does not run at model.json's resolution " + n + " x " + n +
+                             " (a network made for another size, or an edited model.json?); OpenCV: " + e.err);
+    }
+    return from_blob(out, onnx_path);
+}
+
 }  // namespace dynsky

@@ -22,6 +22,11 @@ cv::dnn::Net read_onnx(const std::string& path);
 // One forward pass; throws naming `what` when OpenCV fails.
 cv::Mat run_net(cv::dnn::Net& net, const cv::Mat& blob, const std::string& what);
 
+// The first run of a model folder's network, on zeros at model.json's resolution: a network made
+// for another size fails inside OpenCV's layers, reported as "ONNX_PATH: does not run at
+// model.json's resolution N x N ...". Returns the output as an image (from_blob).
+cv::Mat probe_net(cv::dnn::Net& net, const cv::Mat& blob, const std::string& onnx_path, int resolution);
+
 // OpenCV logs its own lines about a bad model before throwing; dynsky reports the problem itself.
 struct QuietOpenCv {
     QuietOpenCv();

@@ -1,5 +1,7 @@
 #include "renderer/gltf_loader.h"
 
+#include <nlohmann/json.hpp>
+#include <stb/stb_image.h>
 #include <tbb/parallel_for.h>
 #include <tiny_gltf.h>
 
@@ -9,8 +11,10 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <map>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <tuple>
@@ -18,6 +22,7 @@
 
 #include "renderer/mesh_attributes.h"
 #include "util/error.h"
+#include "util/image.h"
 
 namespace dynsky {
 
@@ -37,6 +42,13 @@ Eigen::Matrix3f texture_transform_matrix(const Vec2& offset, float rotation, con
 namespace {
 
 namespace tg = tinygltf;
+
+// Input limits (docs/input-limits.md).
+constexpr size_t kMaxJsonDepth = 256;               // nesting of JSON objects and arrays
+constexpr double kMinTransformDeterminant = 1e-30;  // |det| of a world transform's 3x3 part, and 1 / it
+// An accessor without a bufferView is zeros (plus sparse values): it may hold at most as many
+// elements as the file's buffers hold bytes, plus this many.
+constexpr size_t kZeroAccessorSlack = size_t(1) << 20;
 
 // Extensions whose meaning the loader fully implements (KHR_mesh_quantization only widens the
 // accessor types allowed for attributes, which the accessor reader handles anyway).
@@ -78,6 +90,133 @@ std::string describe_foreign_bytes(const std::vector<unsigned char>& b) {
 
 uint32_t read_u32(const unsigned char* p) {
     return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
+}
+
+// The deepest nesting of JSON objects and arrays, strings skipped. JSON parsers recurse once per
+// level, so a file nested 20,000 deep overflows the stack: it is measured before any parsing.
+size_t json_depth(const char* text, size_t size) {
+    size_t depth = 0, deepest = 0;
+    bool in_string = false;
+    for (size_t i = 0; i < size; ++i) {
+        char c = text[i];
+        if (in_string) {
+            if (c == '\\') ++i;
+            else if (c == '"') in_string = false;
+        } else if (c == '"') {
+            in_string = true;
+        } else if (c == '{' || c == '[') {
+            deepest = std::max(deepest, ++depth);
+        } else if ((c == '}' || c == ']') && depth > 0) {
+            --depth;
+        }
+    }
+    return deepest;
+}
+
+// %XX escapes decoded, as tinygltf decodes URIs before opening them.
+std::string percent_decoded(const std::string& uri) {
+    std::string out;
+    for (size_t i = 0; i < uri.size(); ++i) {
+        if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit((unsigned char)uri[i + 1]) &&
+            std::isxdigit((unsigned char)uri[i + 2])) {
+            out += char(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
+            i += 2;
+        } else {
+            out += uri[i];
+        }
+    }
+    return out;
+}
+
+// Why a buffer or image URI may not be opened ("" when it may): it must name a file inside the
+// asset's folder, by a relative path that does not climb out of it.
+std::string uri_problem(const std::string& uri) {
+    if (uri.rfind("data:", 0) == 0) return "";
+    const std::string path = percent_decoded(uri);
+    static const std::regex scheme("^[A-Za-z][A-Za-z0-9+.-]*:.*");
+    if (path.empty()) return "is empty";
+    if (path[0] == '/' || path[0] == '\\' || std::regex_match(path, scheme))
+        return "is an absolute path or URL: glTF files may only refer to files inside their own folder";
+    std::filesystem::path normal = std::filesystem::path(path).lexically_normal();
+    if (!normal.empty() && *normal.begin() == "..")
+        return "leaves the asset's folder ('..'): glTF files may only refer to files inside their own folder";
+    return "";
+}
+
+// True when `inner` is `folder` or lies below it (both absolute and normalised).
+bool is_inside(const std::filesystem::path& inner, const std::filesystem::path& folder) {
+    auto f = folder.begin(), i = inner.begin();
+    for (; f != folder.end(); ++f, ++i) {
+        if (f->empty() && std::next(f) == folder.end()) break;  // a trailing separator
+        if (i == inner.end() || *i != *f) return false;
+    }
+    return true;
+}
+
+// The file callbacks given to tinygltf for buffers and images: each file must lie inside the
+// asset's folder once symbolic links are resolved, and be a regular file (a FIFO would block
+// forever, a directory ends in bad_alloc). The first refusal is kept for the error message.
+struct AssetFolder {
+    std::filesystem::path folder;    // absolute, canonical (links resolved)
+    std::filesystem::path as_given;  // absolute, lexically normal (as tinygltf joins paths to it)
+    std::string refusal;
+};
+
+bool asset_file_exists(const std::string& path, void* user) {
+    namespace fs = std::filesystem;
+    const auto* asset = static_cast<const AssetFolder*>(user);
+    std::error_code ec;
+    // tinygltf also tries the working directory: only files inside the asset's folder count.
+    fs::path p = fs::absolute(path, ec).lexically_normal();
+    return !ec && is_inside(p, asset->as_given) && fs::exists(p, ec);
+}
+
+std::string asset_expand_path(const std::string& path, void*) { return path; }  // no shell expansion
+
+bool asset_read_file(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
+    namespace fs = std::filesystem;
+    auto* asset = static_cast<AssetFolder*>(user);
+    auto refuse = [&](const std::string& problem) {
+        if (asset->refusal.empty()) asset->refusal = problem;
+        if (err) *err += problem;
+        return false;
+    };
+    std::error_code ec;
+    fs::path real = fs::canonical(path, ec);
+    if (ec) return refuse("URI target '" + path + "' cannot be resolved: " + ec.message());
+    if (!is_inside(real, asset->folder))
+        return refuse("URI target '" + path + "' resolves to " + real.string() + ", outside the asset's folder " +
+                      asset->folder.string() + " (a symbolic link out?): refused");
+    if (!fs::is_regular_file(real, ec))
+        return refuse("URI target '" + path + "' is not a regular file (a directory, a FIFO or a device): refused");
+    uintmax_t size = fs::file_size(real, ec);
+    if (ec || size > std::numeric_limits<unsigned int>::max())
+        return refuse("URI target '" + path + "' is larger than 4 GiB or unreadable: refused");
+    std::ifstream in(real, std::ios::binary);
+    out->resize(size_t(size));
+    if (!in || !in.read(reinterpret_cast<char*>(out->data()), std::streamsize(size)))
+        return refuse("URI target '" + path + "' cannot be read: " + std::strerror(errno));
+    return true;
+}
+
+bool asset_write_file(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
+    if (err) *err += "dynsky never writes glTF files";
+    return false;
+}
+
+// Why a node's world transform cannot instance geometry ("" when it can): Embree stores it in
+// single precision and inverts it, so it must be finite there and far from singular.
+std::string transform_problem(const Eigen::Matrix4d& world) {
+    Eigen::Matrix<double, 3, 4> m = world.topRows<3>().cast<float>().cast<double>();
+    if (!m.allFinite()) return "is not finite (NaN, infinite, or beyond single precision)";
+    double det = m.leftCols<3>().determinant();
+    if (!(std::abs(det) >= kMinTransformDeterminant && std::abs(det) <= 1.0 / kMinTransformDeterminant)) {
+        char text[32];
+        std::snprintf(text, sizeof text, "%.3g", det);
+        return std::string("is singular or degenerate (determinant ") + text +
+               ", outside 1e-30..1e30: a zero or flattened scale?)";
+    }
+    return "";
 }
 
 // The image callback given to tinygltf: keep the encoded bytes and decode later, in parallel and
@@ -283,16 +422,31 @@ class GltfLoader {
         } else {
             check_glb_header(bytes);
         }
+        const char* json = reinterpret_cast<const char*>(bytes.data()) + (binary ? 20 : 0);
+        const size_t json_size = binary ? read_u32(&bytes[12]) : bytes.size();
+        if (size_t depth = json_depth(json, json_size); depth > kMaxJsonDepth)
+            fail("JSON nested " + std::to_string(depth) + " levels deep, more than the " +
+                 std::to_string(kMaxJsonDepth) + " dynsky reads (a corrupt or hostile file?)");
+        check_uris(json, json_size);
 
+        namespace fs = std::filesystem;
+        std::string base_dir = fs::path(path_).parent_path().string();
+        std::error_code ec;
+        const fs::path folder = base_dir.empty() ? fs::path(".") : fs::path(base_dir);
+        AssetFolder asset{fs::canonical(folder, ec), fs::absolute(folder).lexically_normal(), ""};
+        if (ec) fail("cannot resolve the file's folder: " + ec.message());
+        if (!asset.as_given.has_filename()) asset.as_given = asset.as_given.parent_path();  // "dir/" -> "dir"
         tg::TinyGLTF gltf;
         gltf.SetImageLoader(&keep_encoded_image, nullptr);
+        gltf.SetFsCallbacks(tg::FsCallbacks{&asset_file_exists, &asset_expand_path, &asset_read_file, &asset_write_file,
+                                            &asset});
         std::string err, warn_text;
-        std::string base_dir = std::filesystem::path(path_).parent_path().string();
         bool ok = binary
                       ? gltf.LoadBinaryFromMemory(&model_, &err, &warn_text, bytes.data(), unsigned(bytes.size()),
                                                   base_dir)
                       : gltf.LoadASCIIFromString(&model_, &err, &warn_text, reinterpret_cast<const char*>(bytes.data()),
                                                  unsigned(bytes.size()), base_dir);
+        if (!asset.refusal.empty()) fail(asset.refusal);
         if (!ok) {
             std::vector<std::string> lines = split_lines(err);
             std::string text = join(lines, "; ");
@@ -314,6 +468,24 @@ class GltfLoader {
             if (l.rfind("File not found", 0) != 0 &&
                 l.find("Failed to load external 'uri' for image") == std::string::npos)
                 warn("tinygltf: " + l);
+    }
+
+    // Every buffer and image URI, before tinygltf opens any: relative and inside the asset's folder.
+    void check_uris(const char* json, size_t size) const {
+        nlohmann::json j = nlohmann::json::parse(json, json + size, nullptr, false);
+        if (!j.is_object()) return;  // tinygltf reports the syntax error
+        for (const char* kind : {"buffers", "images"}) {
+            auto list = j.find(kind);
+            if (list == j.end() || !list->is_array()) continue;
+            for (size_t i = 0; i < list->size(); ++i) {
+                const nlohmann::json& item = (*list)[i];
+                if (!item.is_object() || !item.contains("uri") || !item["uri"].is_string()) continue;
+                const std::string uri = item["uri"].get<std::string>();
+                if (std::string problem = uri_problem(uri); !problem.empty())
+                    fail(std::string(kind).substr(0, std::strlen(kind) - 1) + " " + std::to_string(i) + " URI " +
+                         in_quotes(uri.size() > 200 ? uri.substr(0, 200) + "..." : uri) + " " + problem);
+            }
+        }
     }
 
     void check_extensions() {
@@ -392,10 +564,16 @@ class GltfLoader {
         if (components_out) *components_out = ncomp;
         size_t element_size = csize * size_t(ncomp);
         size_t count = a.count;
-        // An accessor without a bufferView is all zeros: cap its size so a hostile count cannot
-        // exhaust memory (real data is bounded by its bufferView below).
-        if (a.bufferView < 0 && count > (size_t(1) << 28))
-            fail(what + " has an implausible count " + std::to_string(count));
+        // An accessor without a bufferView is all zeros (but for its sparse values): bound it by the
+        // data the file holds so a hostile count cannot exhaust memory (data read from a bufferView
+        // is bounded by the view, checked before allocation below).
+        if (a.bufferView < 0) {
+            size_t buffer_bytes = 0;
+            for (const tg::Buffer& b : model_.buffers) buffer_bytes += b.data.size();
+            if (count > buffer_bytes + kZeroAccessorSlack)
+                fail(what + " has count " + std::to_string(count) + " without a bufferView: more elements than the " +
+                     std::to_string(buffer_bytes) + " bytes of buffers (plus 2^20) dynsky allows");
+        }
 
         std::vector<Out> out;
         if (a.bufferView >= 0) {
@@ -589,6 +767,16 @@ class GltfLoader {
         };
         std::vector<Decoded> decoded(images.size());
         tbb::parallel_for(size_t(0), images.size(), [&](size_t k) {
+            // The size in the header decides the allocation: check it before stb decodes.
+            int header_w = 0, header_h = 0, header_c = 0;
+            if (encoded[k].second <= size_t(std::numeric_limits<int>::max()) &&
+                stbi_info_from_memory(encoded[k].first, int(encoded[k].second), &header_w, &header_h, &header_c)) {
+                std::string problem = image_size_problem(header_w, header_h, 4);
+                if (!problem.empty()) {
+                    decoded[k].error = problem;
+                    return;
+                }
+            }
             tg::Image img;
             std::string err, warn_text;
             if (encoded[k].second > size_t(std::numeric_limits<int>::max()) ||
@@ -964,19 +1152,28 @@ class GltfLoader {
             const tg::Node& node = model_.nodes[size_t(index)];
             Eigen::Matrix4d world = parent_world * local_matrix(node);
             std::string what = "node " + (node.name.empty() ? std::to_string(index) : in_quotes(node.name));
+            auto check_transform = [&](const Eigen::Matrix4d& m, const std::string& which) {
+                if (std::string problem = transform_problem(m); !problem.empty())
+                    fail(which + ": its world transform " + problem);
+            };
             if (node.mesh >= 0) {
                 if (node.skin >= 0) warn("skins ignored: skinned meshes are drawn in their bind pose");
                 int group = mesh_group(node.mesh);
                 if (group >= 0) {
                     std::vector<Eigen::Matrix4d> instances = gpu_instances(node, what);
                     if (instances.empty()) {
+                        check_transform(world, what);
                         scene_.instances.push_back({group, to_affine(world)});
                     } else {
-                        for (const Eigen::Matrix4d& m : instances)
-                            scene_.instances.push_back({group, to_affine(world * m)});
+                        for (size_t i = 0; i < instances.size(); ++i) {
+                            check_transform(world * instances[i], what + " instance " + std::to_string(i));
+                            scene_.instances.push_back({group, to_affine(world * instances[i])});
+                        }
                     }
                 }
             }
+            if (node.camera >= 0 && !world.topRows<3>().cast<float>().allFinite())
+                fail(what + ": the camera's world transform is not finite");
             add_camera(node, index, world);
             for (auto c = node.children.rbegin(); c != node.children.rend(); ++c) stack.emplace_back(*c, world);
         }

@@ -239,6 +239,14 @@ SkyCircle find_sky_circle(const Image& photo, const std::string& name, double mi
     if (!(min_fraction > 0 && max_fraction > min_fraction))
         throw Error("sky circle search: the radius range must satisfy 0 < min < max (got " + fmt(min_fraction, 3) +
                     ", " + fmt(max_fraction, 3) + ")");
+    // The search scales the photo to 400 pixels: a sliver (a side under 16 pixels, or one 8 times
+    // the other) would become an empty image, on which OpenCV asserts.
+    if (photo.width < kMinPhotoSide || photo.height < kMinPhotoSide ||
+        std::max(photo.width, photo.height) > 8 * std::min(photo.width, photo.height))
+        throw_file_error(name, "the photograph is " + std::to_string(photo.width) + " x " +
+                                   std::to_string(photo.height) +
+                                   " pixels: no sky circle can be searched for in it (each side at least 16, "
+                                   "at most 8 times the other); give --center and --radius");
     cv::Mat grey = image_to_grey8(photo, true);
     int shorter_side = std::min(photo.width, photo.height);
     {
@@ -441,8 +449,36 @@ ImportedPhoto import_photo(const std::string& path, const PhotoImportParams& par
     return result;
 }
 
+namespace {
+
+ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, const PhotoImportParams& params,
+                                   const Image* extra_not_sky);
+
+}  // namespace
+
 ImportedPhoto import_photo_image(const Image& photo, const std::string& name, const PhotoImportParams& params,
                                  const Image* extra_not_sky) {
+    // A sky circle needs room: a photo a few pixels wide (or one row) is not an all-sky photograph,
+    // and OpenCV's resizing and circle search would assert on it.
+    if (!photo.empty() && (photo.width < kMinPhotoSide || photo.height < kMinPhotoSide))
+        throw_file_error(name, "the photograph is " + std::to_string(photo.width) + " x " +
+                                   std::to_string(photo.height) +
+                                   " pixels: too small for an all-sky photograph (each "
+                                   "side at least " +
+                                   std::to_string(kMinPhotoSide) + ")");
+    try {
+        return import_checked_photo(photo, name, params, extra_not_sky);
+    } catch (const cv::Exception& e) {
+        // Any other OpenCV failure still names the file instead of surfacing as a raw assertion.
+        throw_file_error(name, "OpenCV failed on this " + std::to_string(photo.width) + " x " +
+                                   std::to_string(photo.height) + " photograph: " + e.err);
+    }
+}
+
+namespace {
+
+ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, const PhotoImportParams& params,
+                                   const Image* extra_not_sky) {
     const int n = params.resolution;
     if (n < 8 || n > 16384) throw Error("sky resolution " + std::to_string(n) + " is not in 8..16384 pixels");
     if (photo.empty()) throw_file_error(name, "image has no pixels");
@@ -587,6 +623,8 @@ ImportedPhoto import_photo_image(const Image& photo, const std::string& name, co
     }
     return out;
 }
+
+}  // namespace
 
 CameraPreset camera_preset(const std::string& name) {
     CameraPreset p;

@@ -118,8 +118,12 @@ struct ImportedPhoto {
 // pixels, no detectable sky circle, a mask of the wrong size, ...
 ImportedPhoto import_photo(const std::string& path, const PhotoImportParams& params);
 
+// The smallest photograph side import_photo_image and find_sky_circle accept, pixels.
+constexpr int kMinPhotoSide = 16;
+
 // Same on an image already in memory (`name` is used in messages and as the sky's source).
 // `extra_not_sky`, if given, is a photo-sized 1-channel image, > 0.5 = not sky (added to the mask file).
+
 ImportedPhoto import_photo_image(const Image& photo, const std::string& name, const PhotoImportParams& params,
                                  const Image* extra_not_sky = nullptr);
 

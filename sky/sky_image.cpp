@@ -1,11 +1,22 @@
 #include "sky/sky_image.h"
 
 #include <cmath>
+#include <cstdio>
 
 #include "sky/fisheye.h"
 #include "util/error.h"
 
 namespace dynsky {
+
+namespace {
+
+std::string format_number(double v) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.3g", v);
+    return text;
+}
+
+}  // namespace
 
 bool SkyImage::in_disc(int i, int j) const {
     Vec2 uv = fisheye::pixel_center_uv(i, j, resolution);
@@ -28,6 +39,11 @@ void validate_sky(const SkyImage& sky, const std::string& name) {
                     throw_file_error(name, "sky pixel (" + std::to_string(i) + ", " + std::to_string(j) +
                                                ") is negative (" + std::to_string(c[k]) +
                                                "): radiance cannot be negative");
+                if (c[k] > kMaxSkyRadiance)
+                    throw_file_error(name, "sky pixel (" + std::to_string(i) + ", " + std::to_string(j) + ") is " +
+                                               format_number(c[k]) +
+                                               " W m^-2 sr^-1, above the limit of 1e9 (the sun is about 2e7): a "
+                                               "corrupt or mis-scaled sky");
             }
             if (sky.in_disc(i, j)) total += c.sum();
         }
@@ -74,7 +90,14 @@ SkyImage sky_from_image(const Image& image, const std::string& name) {
 }
 
 SkyImage load_sky(const std::string& path) {
-    SkyImage sky = sky_from_image(read_image(path), path);
+    Image image = read_image(path);
+    const std::string& type = image.file_pixel_type;
+    if (type != "half" && type != "float" && type != "double")
+        throw_file_error(path, "is a " + (image.file_format.empty() ? std::string("non-EXR") : image.file_format) +
+                                   " file of " + type +
+                                   " pixels: integer pixels are display-encoded values, not linear radiance. A sky "
+                                   "is a float EXR; make one from a photograph with 'dynsky sky import'");
+    SkyImage sky = sky_from_image(image, path);
     validate_sky(sky, path);
     if (sky.source.empty()) sky.source = path;
     return sky;

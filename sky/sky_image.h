@@ -32,11 +32,17 @@ struct SkyImage {
     bool in_disc(int i, int j) const;
 };
 
-// Checks a sky is usable as radiance: square, finite, non-negative, not all black.
-// Throws dynsky::Error starting with `name` (usually the file path).
+// The brightest radiance a sky pixel may hold, W m^-2 sr^-1: the sun's disc is about 2e7, so a
+// larger value is a corrupt or mis-scaled file (a 1e35 pixel would swallow all the light and
+// render black). docs/input-limits.md.
+constexpr double kMaxSkyRadiance = 1e9;
+
+// Checks a sky is usable as radiance: square, finite, non-negative, at most kMaxSkyRadiance, not
+// all black. Throws dynsky::Error starting with `name` (usually the file path).
 void validate_sky(const SkyImage& sky, const std::string& name);
 
-// EXR in, validated. Reads the "dynsky:time" and "dynsky:sun_*" attributes when present.
+// EXR in, validated. A file of integer pixels (8-bit JPEG/PNG, 16-bit PNG: display-encoded values,
+// whatever its name) is refused: photographs are made skies by `dynsky sky import`. Reads the "dynsky:time" and "dynsky:sun_*" attributes when present.
 SkyImage load_sky(const std::string& path);
 
 // EXR out (atomic), with time, sun direction and source as attributes. If preview_png is

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <unistd.h>
 
 #include "util/atomic_file.h"
@@ -31,23 +32,93 @@ int Image::channel_index(const std::string& name) const {
     return -1;
 }
 
+std::string image_size_problem(long long width, long long height, long long channels) {
+    if (width <= 0 || height <= 0 || channels <= 0) return "image has no pixels";
+    if (width > kMaxImageSide || height > kMaxImageSide || channels > kMaxImageChannels ||
+        width * height > kMaxImagePixels || width * height * channels > kMaxImageValues)
+        return "image is " + std::to_string(width) + " x " + std::to_string(height) + " with " +
+               std::to_string(channels) +
+               " channels, beyond what dynsky reads (each side at most 16384, at most 2^28 pixels, 2^29 values and "
+               "64 channels; docs/input-limits.md)";
+    return "";
+}
+
+void check_image_size(const std::string& name, long long width, long long height, long long channels) {
+    if (std::string problem = image_size_problem(width, height, channels); !problem.empty())
+        throw_file_error(name, problem);
+}
+
+namespace {
+
+// libjpeg fills a file cut short with grey and only warns, which OpenImageIO does not report: walk
+// the markers to the end-of-image marker instead. Returns "" when it is there, else the problem.
+std::string jpeg_truncation(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::vector<unsigned char> b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const size_t n = b.size();
+    if (n < 4 || b[0] != 0xFF || b[1] != 0xD8) return "no JPEG start-of-image marker";
+    size_t i = 2;
+    while (i + 1 < n) {
+        if (b[i] != 0xFF) return "corrupt JPEG: no marker at byte " + std::to_string(i);
+        const unsigned char m = b[i + 1];
+        if (m == 0xFF) {  // fill byte before a marker
+            ++i;
+            continue;
+        }
+        if (m == 0xD9) return "";                     // end of image
+        if (m == 0x01 || (m >= 0xD0 && m <= 0xD7)) {  // TEM, RSTn: no length
+            i += 2;
+            continue;
+        }
+        if (i + 3 >= n) break;
+        const size_t length = size_t(b[i + 2]) << 8 | b[i + 3];
+        if (length < 2) return "corrupt JPEG: bad segment length at byte " + std::to_string(i);
+        i += 2 + length;
+        if (m == 0xDA)  // start of scan: entropy-coded data (FF only as FF 00 or RSTn) up to the next marker
+            while (i + 1 < n && !(b[i] == 0xFF && b[i + 1] != 0x00 && !(b[i + 1] >= 0xD0 && b[i + 1] <= 0xD7))) ++i;
+    }
+    return "the JPEG is cut short (" + std::to_string(n) +
+           " bytes, no end-of-image marker): a truncated download or copy?";
+}
+
+}  // namespace
+
 Image read_image(const std::string& path) {
-    if (!fs::exists(path)) throw_file_error(path, "no such file");
-    if (fs::is_directory(path)) throw_file_error(path, "is a directory, not an image");
+    std::error_code ec;
+    if (!fs::exists(path, ec)) throw_file_error(path, "no such file");
+    if (fs::is_directory(path, ec)) throw_file_error(path, "is a directory, not an image");
+    // A FIFO or device would block or never end: images are read from regular files only.
+    if (!fs::is_regular_file(path, ec)) throw_file_error(path, "not a regular file (a FIFO or a device?)");
     auto in = OIIO::ImageInput::open(path);
     if (!in) {
         std::string why = OIIO::geterror();
         throw_file_error(path, "not a readable image" + (why.empty() ? std::string() : " (" + why + ")"));
     }
-    const OIIO::ImageSpec& spec = in->spec();
-    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) throw_file_error(path, "image has no pixels");
+    const OIIO::ImageSpec spec = in->spec();
+    // Sizes come from the header: check them before anything is allocated.
+    check_image_size(path, spec.width, spec.height, spec.nchannels);
+    if (spec.depth > 1) throw_file_error(path, "is a volume image (depth " + std::to_string(spec.depth) + ")");
+    if (in->seek_subimage(1, 0)) {
+        int parts = 2;
+        while (parts < 1000 && in->seek_subimage(parts, 0)) ++parts;
+        throw_file_error(path, "has " + std::to_string(parts) +
+                                   " parts (a multi-part EXR or multi-page file): dynsky reads single-part images "
+                                   "only; write the part you mean to its own file (oiiotool FILE --subimage N -o "
+                                   "PART.exr)");
+    }
+    (void)in->geterror();  // seeking past the last part may leave a message
+    if (!in->seek_subimage(0, 0)) throw_file_error(path, "cannot read its first part: " + in->geterror());
     Image image(spec.width, spec.height, spec.nchannels);
-    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
+    image.file_format = in->format_name();
+    image.file_pixel_type = spec.format.c_str();
+    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()) || in->has_error()) {
         std::string why = in->geterror();
         throw_file_error(path, "could not decode pixels (truncated or corrupt?)" +
                                    (why.empty() ? std::string() : ": " + why));
     }
     for (const std::string& name : spec.channelnames) image.channel_names.push_back(name);
+    if (image.file_format == "jpeg")
+        if (std::string why = jpeg_truncation(path); !why.empty()) throw_file_error(path, why);
     for (const auto& p : spec.extra_attribs) {
         std::string name = p.name().string();
         if (p.type() == OIIO::TypeDesc::STRING) image.metadata.strings[name] = p.get_string();

@@ -21,6 +21,9 @@ struct Image {
     // Names of the channels in an EXR ("R", "G", "B", "A", "Normal.X", ...; OpenEXR's layer.channel
     // convention); empty: the writer's defaults (R, G, B, A for up to four channels).
     std::vector<std::string> channel_names;
+    // For images read from a file: OpenImageIO's name of its format ("openexr", "png", "jpeg") and
+    // of its stored pixel type ("uint8", "uint16", "half", "float"); empty for images made here.
+    std::string file_format, file_pixel_type;
 
     Image() = default;
     Image(int w, int h, int c) : width(w), height(h), channels(c), pixels(size_t(w) * h * c, 0.0f) {}
@@ -31,8 +34,23 @@ struct Image {
     int channel_index(const std::string& name) const;
 };
 
+// The largest image read from a file (docs/input-limits.md): checked on the header, before any
+// pixel is allocated, so a hostile or corrupt header cannot exhaust memory.
+constexpr long long kMaxImageSide = 16384;        // pixels, each of width and height
+constexpr long long kMaxImagePixels = 1LL << 28;  // width * height (16384 x 16384)
+constexpr long long kMaxImageValues = 1LL << 29;  // width * height * channels (2 GiB as float)
+constexpr long long kMaxImageChannels = 64;
+
+// What is wrong with an image of this size (from a header): "" when it is within the limits.
+std::string image_size_problem(long long width, long long height, long long channels);
+// Throws dynsky::Error "NAME: PROBLEM" when image_size_problem finds one.
+void check_image_size(const std::string& name, long long width, long long height, long long channels);
+
 // Reads any format OpenImageIO knows, as float. 8-bit files come back as their encoded values
-// in [0, 1] (no sRGB decode here: callers decide). Throws dynsky::Error naming the file.
+// in [0, 1] (no sRGB decode here: callers decide). Throws dynsky::Error naming the file for a
+// missing file, one that is not a regular file, a header beyond the limits above, a file of
+// several parts (multi-part EXR, multi-page TIFF: which one would be meant?) and a truncated or
+// corrupt file (including a JPEG cut short, which its decoder would silently fill with grey).
 Image read_image(const std::string& path);
 
 // Writes by extension: .exr (linear float, metadata as header attributes), .png/.jpg (8-bit,

@@ -10,7 +10,10 @@ namespace dynsky {
 namespace fs = std::filesystem;
 
 nlohmann::json read_json(const std::string& path) {
-    if (!fs::exists(path)) throw_file_error(path, "not found");
+    std::error_code ec;
+    if (!fs::exists(path, ec)) throw_file_error(path, "not found");
+    // A FIFO would block forever, a directory reads as nothing.
+    if (!fs::is_regular_file(path, ec)) throw_file_error(path, "not a regular file (a directory, a FIFO or a device?)");
     try {
         std::ifstream f(path);
         return nlohmann::json::parse(f);

@@ -9,6 +9,17 @@
 
 namespace dynsky {
 
+long long parse_whole_number(const std::string& text, const std::string& what, long long min, long long max) {
+    auto refuse = [&]() -> long long {
+        throw Error(what + ": '" + text + "' is not a whole number in " + std::to_string(min) + ".." +
+                    std::to_string(max));
+    };
+    if (text.empty() || text.size() > 18 || text.find_first_not_of("0123456789") != std::string::npos) refuse();
+    long long v = std::stoll(text);
+    if (v < min || v > max) refuse();
+    return v;
+}
+
 std::vector<int> parse_int_list(const std::string& text, const std::string& option) {
     std::vector<int> out;
     std::stringstream ss(text);
@@ -33,8 +44,12 @@ void parse_frame_size(const std::string& text, int* w, int* h) {
     std::smatch m;
     if (!std::regex_match(text, m, std::regex("^([0-9]+)x([0-9]+)$")))
         throw Error("--res '" + text + "': expected WIDTHxHEIGHT, e.g. 1280x720");
-    *w = std::stoi(m[1]), *h = std::stoi(m[2]);
-    if (*w < 1 || *h < 1 || *w > 16384 || *h > 16384) throw Error("--res '" + text + "': each side must be 1..16384");
+    auto side = [&](const std::string& digits) {
+        if (digits.size() > 5 || std::stoi(digits) < 1 || std::stoi(digits) > 16384)
+            throw Error("--res '" + text + "': each side must be 1..16384");
+        return std::stoi(digits);
+    };
+    *w = side(m[1]), *h = side(m[2]);
 }
 
 }  // namespace dynsky

@@ -6,6 +6,10 @@
 
 namespace dynsky {
 
+// A whole number in [min, max] (digits only, no sign), or dynsky::Error "WHAT: 'TEXT' is not a whole
+// number in MIN..MAX" (never std::stoi's bare "stoi" for an over-long number).
+long long parse_whole_number(const std::string& text, const std::string& what, long long min, long long max);
+
 // "1,2,3,6" -> {1, 2, 3, 6}, sorted, duplicates removed, each >= 1. Throws dynsky::Error naming
 // `option` and the bad item.
 std::vector<int> parse_int_list(const std::string& text, const std::string& option);

@@ -85,7 +85,7 @@ TEST(SkyClearCli, BadInputFailsAndWritesNothing) {
         {base + "--time 2026-06-21T12:00:00Z --turbidity 12 --out " + out, "turbidity"},
         {base + "--time 2026-06-21T12:00:00Z --albedo -1 --out " + out, "albedo"},
         {base + "--time 2026-06-21T12:00:00Z --out " + dir + "/sky.png", "sky.png"},
-        {"sky clear --lat 95 --lon 20 --res 32 --time 2026-06-21T12:00:00Z --out " + out, "latitude"},
+        {"sky clear --lat 95 --lon 20 --res 32 --time 2026-06-21T12:00:00Z --out " + out, "--lat"},
         {"sky clear --lat 10 --lon 20 --res 0 --time 2026-06-21T12:00:00Z --out " + out, "--res"},
     };
     // The program starts in ~0.5 s of CPU (shared libraries): run the cases side by side.

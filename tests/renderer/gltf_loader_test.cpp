@@ -674,5 +674,61 @@ TEST(GltfLoader, OutOfRangeAccessorsIndicesAndNodesThrow) {
     }
 }
 
+TEST(GltfLoader, HostileInputIsRefusedAtItsRoot) {
+    std::string root = test::temp_dir("gltf");
+    std::string dir = root + "/asset";
+    fs::create_directories(dir);
+    MiniGltf g;
+    int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+    int zeros = g.accessor(-1, kFloat, size_t(1) << 28, "VEC3");  // no bufferView: 3.2 GB of zeros
+    auto mesh = [](int p) { return "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(p) + "}}]}"; };
+    auto node_scene = [&](const std::string& node) {
+        return "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[" + node + "],\"meshes\":[" + mesh(pos) + "]";
+    };
+    // A good file loads, with its scale.
+    Scene ok = load_gltf(g.write(dir, "ok", node_scene("{\"mesh\":0,\"scale\":[2,2,2]}")));
+    ASSERT_EQ(ok.instances.size(), 1u);
+    EXPECT_FLOAT_EQ(ok.instances[0].transform.linear()(0, 0), 2.0f);
+
+    struct Case {
+        std::string name, body, expect;
+    };
+    std::vector<Case> cases = {
+        {"scale0", node_scene("{\"mesh\":0,\"scale\":[0,1,1]}"), "node 0: its world transform is singular"},
+        {"named", node_scene("{\"name\":\"flat\",\"mesh\":0,\"scale\":[1e-11,1e-11,1e-11]}"),
+         "node 'flat': its world transform is singular"},
+        {"overflow", node_scene("{\"mesh\":0,\"translation\":[1e300,0,0]}"), "not finite"},
+        {"zeros", one_node_scene(mesh(zeros)), "without a bufferView"},
+    };
+    for (const Case& c : cases) {
+        std::string e = load_error(g.write(dir, c.name, c.body));
+        EXPECT_NE(e.find(c.name + ".gltf"), std::string::npos) << c.name << ": " << e;
+        EXPECT_NE(e.find(c.expect), std::string::npos) << c.name << ": " << e;
+    }
+    // 256 levels of JSON load, 257 do not (the limit is measured, not guessed at by a crash).
+    std::string base = read_text(dir + "/ok.gltf");
+    for (int depth : {255, 257}) {
+        std::string deep = std::string(size_t(depth - 2), '[') + "0" + std::string(size_t(depth - 2), ']');
+        std::string json = base;
+        json.replace(json.find("\"asset\":{"), 9, "\"asset\":{\"extras\":" + deep + ",");
+        write_bytes(dir + "/deep" + std::to_string(depth) + ".gltf", json);
+        std::string e = load_error(dir + "/deep" + std::to_string(depth) + ".gltf");
+        if (depth <= 256) EXPECT_EQ(e, "") << depth;
+        else EXPECT_NE(e.find("nested 257 levels deep"), std::string::npos) << e;
+    }
+    // The buffer outside the asset's folder is never read: by '..', or through a link.
+    fs::copy_file(dir + "/ok.bin", root + "/outside.bin");
+    fs::create_symlink(root + "/outside.bin", dir + "/link.bin");
+    for (const std::string& uri : {std::string("../outside.bin"), root + "/outside.bin", std::string("link.bin")}) {
+        std::string json = base;
+        json.replace(json.find("\"ok.bin\""), 8, "\"" + uri + "\"");
+        write_bytes(dir + "/escape.gltf", json);
+        std::string e = load_error(dir + "/escape.gltf");
+        EXPECT_NE(e.find("escape.gltf"), std::string::npos) << uri << ": " << e;
+        EXPECT_TRUE(e.find("asset's folder") != std::string::npos || e.find("absolute") != std::string::npos)
+            << uri << ": " << e;
+    }
+}
+
 }  // namespace
 }  // namespace dynsky

@@ -94,5 +94,33 @@ TEST(SkyImage, SavingAnotherFormatOrLoadingABadSkyFailsNamingTheFile) {
     fs::remove_all(dir);
 }
 
+TEST(SkyImage, RadianceAboveTheLimitOrIntegerFilesAreNotSkies) {
+    std::string dir = test::temp_dir("sky_image_limits");
+    SkyImage sky(8);
+    for (float& v : sky.rgb) v = 1.0f;
+    sky.set_pixel(3, 4, Color(1, float(kMaxSkyRadiance), 1));  // at the limit: a sky
+    EXPECT_NO_THROW(validate_sky(sky, "at_limit"));
+    sky.set_pixel(3, 4, Color(1, 1e35f, 1));
+    try {
+        validate_sky(sky, "bright.exr");
+        ADD_FAILURE() << "a 1e35 pixel was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("bright.exr: sky pixel (3, 4) is 1e+35"), std::string::npos) << e.what();
+    }
+    // The same values in an 8-bit PNG: display-encoded, not radiance, whatever the name says.
+    Image im(8, 8, 3);
+    for (float& v : im.pixels) v = 0.5f;
+    write_image(dir + "/sky.png", im);
+    fs::rename(dir + "/sky.png", dir + "/renamed.exr");
+    try {
+        load_sky(dir + "/renamed.exr");
+        ADD_FAILURE() << "an 8-bit PNG loaded as a sky";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("renamed.exr: is a png file of uint8 pixels"), std::string::npos)
+            << e.what();
+    }
+    fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace dynsky

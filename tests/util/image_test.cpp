@@ -54,5 +54,50 @@ TEST(ImageIo, UnsupportedExtensionWritesNothing) {
     EXPECT_TRUE(fs::is_empty(dir));
 }
 
+TEST(ImageIo, SizeLimitsAreExactAndNameTheFile) {
+    EXPECT_EQ(image_size_problem(16384, 16384, 2), "");  // 2^28 pixels, 2^29 values: the largest allowed
+    EXPECT_EQ(image_size_problem(1, 16384, 64), "");
+    EXPECT_NE(image_size_problem(16384, 16384, 3), "");  // 3 * 2^28 values
+    EXPECT_NE(image_size_problem(16385, 1, 1), "");
+    EXPECT_NE(image_size_problem(1, 1, 65), "");
+    EXPECT_NE(image_size_problem(30000, 30000, 3), "");
+    EXPECT_NE(image_size_problem(0, 5, 3), "");
+    try {
+        check_image_size("big.exr", 30000, 30000, 3);
+        ADD_FAILURE() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("big.exr: image is 30000 x 30000 with 3 channels"), std::string::npos)
+            << e.what();
+    }
+}
+
+TEST(ImageIo, ReadingRecordsTheFileFormatAndRefusesCutJpegs) {
+    std::string dir = test::temp_dir("image");
+    Image image(40, 30, 3);
+    for (size_t k = 0; k < image.pixels.size(); ++k) image.pixels[k] = float(k % 97) / 97.0f;
+    write_image(dir + "/a.jpg", image);
+    write_image(dir + "/a.exr", image);
+    Image jpg = read_image(dir + "/a.jpg");
+    EXPECT_EQ(jpg.file_format, "jpeg");
+    EXPECT_EQ(jpg.file_pixel_type, "uint8");
+    Image exr = read_image(dir + "/a.exr");
+    EXPECT_EQ(exr.file_format, "openexr");
+    EXPECT_EQ(exr.file_pixel_type, "float");
+    std::ifstream in(dir + "/a.jpg", std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    for (size_t keep : {bytes.size() / 10, bytes.size() / 2, bytes.size() - 2}) {
+        std::ofstream(dir + "/cut.jpg", std::ios::binary) << bytes.substr(0, keep);
+        try {
+            read_image(dir + "/cut.jpg");
+            ADD_FAILURE() << "a JPEG cut to " << keep << " of " << bytes.size() << " bytes was read";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("cut.jpg"), std::string::npos) << e.what();
+        }
+    }
+    // Bytes after the end-of-image marker (as some cameras append) are not a truncation.
+    std::ofstream(dir + "/tail.jpg", std::ios::binary) << bytes << "trailing camera data";
+    EXPECT_NO_THROW(read_image(dir + "/tail.jpg"));
+}
+
 }  // namespace
 }  // namespace dynsky
