@@ -8,7 +8,7 @@ packages=(
   libembree-dev libtinygltf-dev nlohmann-json3-dev libstb-dev
   libopenimageio-dev openimageio-tools libopenexr-dev
   libopencv-dev libeigen3-dev libtbb-dev
-  libgtest-dev libbenchmark-dev libcli11-dev
+  libgtest-dev libbenchmark-dev libcli11-dev zlib1g-dev
   ffmpeg python3-matplotlib python3-numpy
   python3-torch python3-onnx
 )
