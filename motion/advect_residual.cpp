@@ -237,6 +237,7 @@ void CloudRollout::set_background(const cv::Mat& given) {
     background_ = background.empty() ? cv::Mat() : background * background_weight_;
     background_ext_ = background_.empty() ? cv::Mat() : extend_past_rim_exact(background_);
     clouds_ext_ = background_ext_.empty() ? start_ext_ : start_ext_ - background_ext_;
+    clouds_ = background_.empty() ? start_ : start_ - background_;
     background_n_ = background_;
     const int n = network_->info().resolution;
     if (!background_.empty() && background_.rows != n) {
@@ -278,8 +279,7 @@ const cv::Mat& CloudRollout::advance() {
             if (cv::countNonZero(reads.weights[i]) == 0) continue;
             if (!offset.empty() && i < 3) reads.positions[i] -= sample_exact(offset, reads.positions[i]);
             // Read 3 is the pixel itself: the start as it was (not rim-extended).
-            const cv::Mat read = i == 3 ? (background_.empty() ? start_ : cv::Mat(start_ - background_))
-                                        : sample_exact(clouds_ext_, reads.positions[i]);
+            const cv::Mat read = i == 3 ? clouds_ : sample_exact(clouds_ext_, reads.positions[i]);
             tbb::parallel_for(0, big, [&](int y) {
                 const float* w = reads.weights[i].ptr<float>(y);
                 const cv::Vec3f* r = read.ptr<cv::Vec3f>(y);
@@ -345,13 +345,16 @@ void AdvectResidualNetwork::rollout(const SkyImage& sky, const CloudFlow& flow, 
     const cv::Mat sun = fill_saturated_pixels(&state);
     const bool has_sun = cv::countNonZero(sun) > 0;
     if (background.empty() && sky.sun_direction) background = this->background(*sky.sun_direction, sky.resolution);
-    rollout_network_form(state, flow, steps, [&](int k, const cv::Mat& s) {
-        SkyImage next = from_network_form(s, sky, info_.form);
-        next.time_seconds = sky.time_seconds + k * info_.dt;
-        // What was cut out comes back dimmed by the cloud the rollout moved over the sun.
-        if (has_sun) restore_pixels(&next, sky, sun, relative_sun_transmittance(next, sky));
-        on_step(k, next);
-    }, background);
+    rollout_network_form(
+        state, flow, steps,
+        [&](int k, const cv::Mat& s) {
+            SkyImage next = from_network_form(s, sky, info_.form);
+            next.time_seconds = sky.time_seconds + k * info_.dt;
+            // What was cut out comes back dimmed by the cloud the rollout moved over the sun.
+            if (has_sun) restore_pixels(&next, sky, sun, relative_sun_transmittance(next, sky));
+            on_step(k, next);
+        },
+        background);
 }
 
 cv::Mat network_form_flow(const SkyImage& previous, const SkyImage& current, const NetworkFormParams& form, int n) {

@@ -166,6 +166,7 @@ class CloudRollout {
     cv::Mat departure_;                       // measured - wind flow (pixels per step), relaxing
     double departure_sum_ = 0;                // sum of its relaxation weights so far
     cv::Mat clouds_ext_;                      // start_ext_ - background_ext_: what the paths carry
+    cv::Mat clouds_;                          // start_ - background_: what a pixel shows of its own start
     double background_weight_ = 1.0;
     int steps_ = 0;
 };

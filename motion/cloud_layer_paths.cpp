@@ -63,6 +63,7 @@ CloudLayerPaths::CloudLayerPaths(int n, const cv::Vec2d& step, const CloudLayerP
     tile_radius_ = std::tan(params.tile_zenith_deg * kHalfPi / 90.0);
     trigger_radius_.create(n, n, CV_64FC1);
     beyond_.assign(size_t(n) * n, 0);
+    points_.create(n, n, CV_64FC2);
     const double root_stretch = std::sqrt(params.max_stretch);
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x) {
@@ -70,6 +71,7 @@ CloudLayerPaths::CloudLayerPaths(int n, const cv::Vec2d& step, const CloudLayerP
             const double trigger = std::min(std::acos(std::cos(zenith_of(u, v)) / root_stretch), kMaxZenith);
             trigger_radius_.at<double>(y, x) = std::max(tile_radius_, std::tan(trigger));
             beyond_[size_t(y) * n + x] = std::hypot(u, v) * kHalfPi > kMaxZenith;
+            points_.at<cv::Vec2d>(y, x) = layer_point(x, y, n);
         }
 }
 
@@ -87,13 +89,14 @@ CloudLayerPaths::Reads CloudLayerPaths::at(double k) const {
         for (int i = 0; i < 4; ++i)
             pos[i] = reads.positions[i].ptr<cv::Vec2f>(y), wgt[i] = reads.weights[i].ptr<float>(y);
         const double* trigger = trigger_radius_.ptr<double>(y);
+        const cv::Vec2d* point = points_.ptr<cv::Vec2d>(y);
         for (int x = 0; x < n_; ++x) {
             for (int i = 0; i < 4; ++i) pos[i][x] = cv::Vec2f(float(x), float(y));
             if (beyond_[y * n_ + x]) {  // past 88 degrees the layer does not move (as wind_flow)
                 wgt[3][x] = 1.0f;
                 continue;
             }
-            const cv::Vec2d source = layer_point(x, y, n_) - k * step_;
+            const cv::Vec2d source = point[x] - k * step_;
             const double s = source.dot(along_), c = source.dot(across_);
             // The real start image, while the cloud's start position is in the tile or not too
             // foreshortened.

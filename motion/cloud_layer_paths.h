@@ -73,6 +73,7 @@ class CloudLayerPaths {
     bool moving_ = false;
     cv::Mat trigger_radius_;       // CV_64FC1: the ground radius at which each pixel starts to recycle
     std::vector<uint8_t> beyond_;  // pixels past 88 degrees from the zenith
+    cv::Mat points_;               // CV_64FC2: the layer point seen at each pixel (layer_point)
 };
 
 }  // namespace dynsky
