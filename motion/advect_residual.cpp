@@ -201,9 +201,11 @@ CloudRollout::CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start,
     flow_small_ = flow.resized(n);
     disc_big_ = sky_disc_mask(big), disc_n_ = sky_disc_mask(n);
     start_ext_ = extend_past_rim_exact(start_);
-    positions_ = cv::Mat(big, big, CV_32FC2);
-    for (int y = 0; y < big; ++y)
-        for (int x = 0; x < big; ++x) positions_.at<cv::Vec2f>(y, x) = cv::Vec2f(float(x), float(y));
+    if (!flow.recycle) {  // the composed source positions (with a wind the layer's paths serve instead)
+        positions_ = cv::Mat(big, big, CV_32FC2);
+        for (int y = 0; y < big; ++y)
+            for (int x = 0; x < big; ++x) positions_.at<cv::Vec2f>(y, x) = cv::Vec2f(float(x), float(y));
+    }
     corrections_ = cv::Mat(big, big, CV_32FC3, cv::Scalar::all(0));
     if (!flow.hold_background) {
         // Held by the clear share of the start sky (the cloud rule on the networks' image).
