@@ -40,7 +40,9 @@ std::string join(const std::vector<std::string>& names) {
 // "dynsky sky" for the command a word belongs to.
 std::string command_path(const CLI::App* app) {
     std::string s;
-    for (; app; app = app->get_parent()) s = app->get_name().empty() ? s : app->get_name() + (s.empty() ? "" : " " + s);
+    // The root's own name is the program's path as typed (argv[0]): "dynsky" stands for it.
+    for (; app && app->get_parent(); app = app->get_parent())
+        s = app->get_name().empty() ? s : app->get_name() + (s.empty() ? "" : " " + s);
     return "dynsky" + (s.empty() ? "" : " " + s);
 }
 
