@@ -1,6 +1,6 @@
 // End-to-end tests of `dynsky animate`: a run killed with SIGKILL mid-frame, mid-write or at random
 // moments resumes to the same frames as an uninterrupted run (EXR and PNG pixels bit for bit; the
-// files' bytes differ only in the timings their headers record) with no temporary left; resume
+// headers record no timings, so the files are the same bytes too) with no temporary left; resume
 // re-renders damaged frames and frames of other settings and says so; --force starts over; frame
 // ranges rendered separately equal one run; bad input fails cleanly.
 #include <gtest/gtest.h>
