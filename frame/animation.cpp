@@ -193,6 +193,11 @@ AnimationReport render_animation(const AnimationSettings& o) {
     }
     int replaced = 0;
     for (const auto& [reason, frames] : replace_reasons) {
+        if (stage == "encode") {  // renders nothing: says what is wrong with them instead
+            std::fprintf(stderr, "dynsky: frame(s) %s of %s: %s\n", frame_list(frames).c_str(), o.out.c_str(),
+                         reason.c_str());
+            continue;
+        }
         std::fprintf(stderr, "dynsky: rendering again frame(s) %s of %s (%s)\n", frame_list(frames).c_str(),
                      o.out.c_str(), reason.c_str());
         replaced += int(frames.size());
