@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # A throwaway single-node Slurm cluster in a folder, for tests: munged with a generated key,
 # slurmctld and slurmd with a generated slurm.conf (no cgroups, no accounting, free ports), all
-# state under the folder, all running as the calling user. Source it, then:
+# state under the folder, all running as the calling user, on 127.0.0.1 (the host name need not
+# resolve). Source it, then:
 #   slurm_cluster_start DIR   # exports SLURM_CONF; returns non-zero (with the reason on stderr) when
 #                             # Slurm is missing or does not come up
 #   slurm_cluster_stop        # kills what slurm_cluster_start started (by pid) and nothing else
@@ -45,7 +46,7 @@ slurm_cluster_start() {
     while [[ $slurmd_port == "$ctld_port" ]]; do slurmd_port=$(slurm_cluster_free_port); done
     cat >"$dir/slurm.conf" <<CONF
 ClusterName=dynskytest
-SlurmctldHost=$host
+SlurmctldHost=$host(127.0.0.1)
 SlurmctldPort=$ctld_port
 SlurmdPort=$slurmd_port
 SlurmUser=$user
@@ -74,7 +75,7 @@ InactiveLimit=0
 MinJobAge=300
 KillWait=2
 SchedulerParameters=sched_interval=1,defer=0
-NodeName=$host CPUs=$cpus State=UNKNOWN
+NodeName=$host NodeAddr=127.0.0.1 CPUs=$cpus State=UNKNOWN
 PartitionName=test Nodes=$host Default=YES MaxTime=INFINITE State=UP OverSubscribe=FORCE:4
 CONF
     export SLURM_CONF=$dir/slurm.conf
