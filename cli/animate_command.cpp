@@ -1,4 +1,5 @@
 // dynsky animate: a lit scene under a moving sky, frame by frame, resumable (frame/animation.h).
+#include <cstdio>
 #include <memory>
 #include <string>
 
@@ -14,6 +15,7 @@ namespace {
 struct AnimateOptions {
     AnimationSettings settings;
     std::string resolution = "480x270";
+    bool count_frames = false;
 };
 
 }  // namespace
@@ -57,8 +59,8 @@ void register_animate_command(CLI::App& app) {
         ->check(CLI::Range(0, kMaxDepth))
         ->capture_default_str();
     cmd->add_option(
-        "--exposure", a->exposure,
-        "PNG exposure in stops for every frame (default: from the sky's irradiance at t = 0, the same for all frames)")
+           "--exposure", a->exposure,
+           "PNG exposure in stops for every frame (default: from the sky's irradiance at t = 0, the same for all frames)")
         ->check(finite_in(-64, 64));
     cmd->add_option("--aovs", a->aovs,
                     "Extra passes in each frame's EXR: albedo, normal, depth, alpha (as for 'dynsky render')");
@@ -73,8 +75,23 @@ void register_animate_command(CLI::App& app) {
     cmd->add_flag("--force", a->force, "Render every frame again, even those complete with the same settings");
     cmd->add_flag("--no-video", a->no_video, "Do not run ffmpeg (no MP4s)");
     cmd->add_flag("--quiet,-q", a->quiet, "No per-frame report");
+    cmd->add_option("--timeline", a->timeline,
+                    "Read the medium steps from this stored timeline folder ('dynsky sky timeline' or --stage keys)\n"
+                    "instead of computing them; the frames are the same bytes either way (docs/render-farm.md)");
+    cmd->add_option("--stage", a->stage,
+                    "For render farms (docs/render-farm.md): all (render, then encode once complete), keys (write\n"
+                    "--timeline for the whole duration), frames (render --frames only: no videos or contact sheet),\n"
+                    "encode (render nothing: every frame must be complete; the MP4s and contact sheet)")
+        ->check(CLI::IsMember({"all", "keys", "frames", "encode"}))
+        ->capture_default_str();
+    cmd->add_flag("--count-frames", o->count_frames,
+                  "Print the animation's number of frames (round(duration x fps)) and exit (for farm scripts)");
     cmd->callback([o] {
         parse_frame_size(o->resolution, &o->settings.width, &o->settings.height);
+        if (o->count_frames) {
+            std::printf("%d\n", animation_frame_count(o->settings));
+            return;
+        }
         render_animation(o->settings);
     });
 }

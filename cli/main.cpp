@@ -55,6 +55,7 @@ int main(int argc, char** argv) {
     dynsky::cli::register_sky_import_commands(*sky);
     dynsky::cli::register_sky_procedural_command(*sky);
     dynsky::cli::register_sky_model_commands(*sky);
+    dynsky::cli::register_sky_timeline_command(*sky);
     dynsky::cli::register_bench_commands(app);
     dynsky::cli::register_animate_command(app);
     dynsky::cli::register_compare_command(app);

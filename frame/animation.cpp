@@ -10,6 +10,7 @@
 #include <iterator>
 #include <map>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <vector>
 
@@ -64,22 +65,12 @@ void append_timing(const std::string& path, const std::string& line, bool start_
 
 FrameSettings animation_frame_settings(const AnimationSettings& o, const std::string& model_name, double dt,
                                        float png_exposure_ev) {
-    FrameSettings s;
+    FrameSettings s = sky_timeline_settings(o.sky, o.model);  // as asked; the model and Delta t as resolved:
+    s["model"] = model_name;
+    s["dt"] = number(dt);
     s["scene"] = describe_input(o.scene.scene);
     s["camera"] = std::to_string(o.scene.camera);
     s["ground_albedo"] = number(o.scene.ground_albedo);
-    s["sky"] = describe_input(o.sky.sky);
-    s["sky_res"] = std::to_string(o.sky.sky_resolution);
-    s["time"] = o.sky.time;
-    s["lat"] = number(o.sky.latitude), s["lon"] = number(o.sky.longitude);
-    s["coverage"] = number(o.sky.coverage);
-    s["wind_from"] = number(o.sky.wind_from_deg), s["wind_speed"] = number(o.sky.wind_speed_mps);
-    s["cloud_height"] = number(o.sky.cloud_height_m);
-    s["prev"] = o.sky.previous.empty() ? "" : describe_input(o.sky.previous);
-    s["prev_dt"] = number(o.sky.previous_dt);
-    s["model"] = model_name;
-    s["dt"] = number(dt);
-    s["drift"] = number(o.model.drift_deg_per_s);
     s["fps"] = number(o.fps);
     s["spp"] = std::to_string(o.spp);
     s["res"] = std::to_string(o.width) + "x" + std::to_string(o.height);
@@ -96,16 +87,9 @@ FrameSettings animation_frame_settings(const AnimationSettings& o, const std::st
     return s;
 }
 
-AnimationReport render_animation(const AnimationSettings& o) {
-    const int width = o.width, height = o.height;
-    if (width < 1 || height < 1) throw Error("animation: the frame size must be positive");
+int animation_frame_count(const AnimationSettings& o) {
     if (!(o.duration > 0)) throw Error("--duration must be positive");
     if (!(o.fps > 0 && o.fps <= 1000)) throw Error("--fps must be in (0, 1000]");
-    if (o.spp < 1) throw Error("--spp must be at least 1");
-    const AovSelection aovs = parse_aovs(o.aovs);
-    const SamplePattern pattern = parse_sample_pattern(o.sampler_pattern);
-    if (!(o.clamp_indirect >= 0)) throw Error("--clamp-indirect must be 0 (off) or positive");
-    if (!(o.filter_glossy >= 0)) throw Error("--filter-glossy must be 0 (off) or positive");
     const double frames = std::round(o.duration * o.fps);
     if (!(frames <= kMaxAnimationFrames)) {
         char text[200];
@@ -114,23 +98,65 @@ AnimationReport render_animation(const AnimationSettings& o) {
                       o.duration, o.fps, frames, kMaxAnimationFrames);
         throw Error(text);
     }
-    const int total = std::max(1, int(frames));
+    return std::max(1, int(frames));
+}
+
+AnimationReport render_animation(const AnimationSettings& o) {
+    const int width = o.width, height = o.height;
+    if (width < 1 || height < 1) throw Error("animation: the frame size must be positive");
+    if (o.spp < 1) throw Error("--spp must be at least 1");
+    const AovSelection aovs = parse_aovs(o.aovs);
+    const SamplePattern pattern = parse_sample_pattern(o.sampler_pattern);
+    if (!(o.clamp_indirect >= 0)) throw Error("--clamp-indirect must be 0 (off) or positive");
+    if (!(o.filter_glossy >= 0)) throw Error("--filter-glossy must be 0 (off) or positive");
+    const int total = animation_frame_count(o);
+    const std::string& stage = o.stage;
+    if (stage != "all" && stage != "keys" && stage != "frames" && stage != "encode")
+        throw Error("--stage '" + stage + "': expected all, keys, frames or encode");
+    if (stage == "keys" && o.timeline.empty()) throw Error("--stage keys needs --timeline FOLDER (where to write it)");
     int first, last;
     parse_frame_range(o.frames, total, &first, &last);
     // The frame folder must not be (or hold) an input: its frames would replace or join them.
-    check_outputs_are_not_inputs({o.out}, {o.sky.sky, o.sky.previous, o.scene.scene});
+    check_outputs_are_not_inputs({o.out}, {o.sky.sky, o.sky.previous, o.scene.scene, o.timeline});
 
     std::unique_ptr<tbb::global_control> threads;
     if (o.threads > 0)
         threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
+    if (stage == "keys") {
+        write_sky_timeline(o.sky, o.model, o.duration, o.timeline, o.quiet);
+        AnimationReport report;
+        report.total = total, report.first = first, report.last = last;
+        return report;
+    }
 
-    SkyTimeline timeline = make_sky_timeline(o.sky, o.model);
-    LoadedScene scene = load_scene(o.scene, float(width) / height);
+    SkyTimeline timeline = o.timeline.empty() ? make_sky_timeline(o.sky, o.model)
+                                              : load_sky_timeline(o.timeline, o.sky, o.model);
+    if (timeline.stored_last_step() >= 0 && timeline.last_step_for(last / o.fps) > timeline.stored_last_step())
+        throw_file_error(o.timeline,
+                         "the stored sky timeline ends at t = " + number(timeline.stored_last_step() * timeline.dt()) +
+                             " s, before frame " + std::to_string(last) + " (t = " + number(last / o.fps) +
+                             " s): make it with this --duration");
+    // The scene is read only by stages that render (encode checks the frames' files and settings).
+    std::optional<LoadedScene> scene;
+    if (stage != "encode") scene = load_scene(o.scene, float(width) / height);
     std::error_code ec;
     fs::create_directories(o.out, ec);
     if (ec) throw_file_error(o.out, "cannot create the output folder: " + ec.message());
     const FrameStore store(o.out);
-    const std::vector<std::string> stale = remove_stale_temporaries(o.out);
+    // A farm task writes only its own frames and timings, so it removes only their temporaries:
+    // the folder's others may be another task's, live on another machine.
+    const bool farm_task = stage == "frames";
+    const std::string timings_name = farm_task
+                                         ? "timings_" + std::to_string(first) + "-" + std::to_string(last) + ".csv"
+                                         : "timings.csv";
+    std::vector<std::string> own_stems{fs::path(timings_name).stem().string()};
+    for (int k = first; k <= last; ++k)
+        for (const std::string& file : {store.frame_exr(k), store.sky_png(k)})
+            own_stems.push_back(fs::path(file).stem().string());
+    const std::vector<std::string> stale = farm_task ? remove_stale_temporaries(o.out, own_stems)
+                                           : stage == "encode"
+                                               ? remove_stale_temporaries(o.out, {"animation", "sky", "contact_sheet"})
+                                               : remove_stale_temporaries(o.out);
     if (!stale.empty())
         std::fprintf(stderr, "dynsky: removed %zu temporary file(s) left in %s by a killed run (%s%s)\n", stale.size(),
                      o.out.c_str(), stale[0].c_str(), stale.size() > 1 ? ", ..." : "");
@@ -140,8 +166,9 @@ AnimationReport render_animation(const AnimationSettings& o) {
             stderr,
             "scene: %s (%zu triangles); sky: %s, model %s, Delta t %g s, Gamma %s; %d frames at %g fps, rendering "
             "%d-%d\n",
-            scene.path.c_str(), scene.scene.triangle_count(), timeline.step(0)->source.c_str(),
-            timeline.model().name().c_str(), timeline.dt(), gamma_name(timeline.gamma()), total, o.fps, first, last);
+            scene ? scene->path.c_str() : o.scene.scene.c_str(), scene ? scene->scene.triangle_count() : size_t(0),
+            timeline.step(0)->source.c_str(), timeline.model().name().c_str(), timeline.dt(),
+            gamma_name(timeline.gamma()), total, o.fps, first, last);
 
     // One exposure for the whole animation (per-frame auto exposure would flicker), from the sky
     // at t = 0 so every frame range agrees on it.
@@ -158,7 +185,7 @@ AnimationReport render_animation(const AnimationSettings& o) {
     std::vector<char> keep(size_t(total), 0);
     std::map<std::string, std::vector<int>> replace_reasons;
     for (int k = first; k <= last; ++k) {
-        if (o.force) continue;
+        if (o.force && stage != "encode") continue;
         FrameCheck c = store.check(k, width, height, settings);
         keep[size_t(k)] = c.state == FrameCheck::Complete;
         if (c.state == FrameCheck::Damaged) replace_reasons["damaged: " + c.reason].push_back(k);
@@ -166,14 +193,37 @@ AnimationReport render_animation(const AnimationSettings& o) {
     }
     int replaced = 0;
     for (const auto& [reason, frames] : replace_reasons) {
+        if (stage == "encode") {  // renders nothing: says what is wrong with them instead
+            std::fprintf(stderr, "dynsky: frame(s) %s of %s: %s\n", frame_list(frames).c_str(), o.out.c_str(),
+                         reason.c_str());
+            continue;
+        }
         std::fprintf(stderr, "dynsky: rendering again frame(s) %s of %s (%s)\n", frame_list(frames).c_str(),
                      o.out.c_str(), reason.c_str());
         replaced += int(frames.size());
     }
+    if (stage == "encode") {
+        std::vector<int> missing;
+        for (int k = 0; k < total; ++k)
+            if ((k >= first && k <= last) ? !keep[size_t(k)]
+                                          : store.check(k, width, height, settings).state != FrameCheck::Complete)
+                missing.push_back(k);
+        if (!missing.empty())
+            throw_file_error(o.out, "--stage encode: frame(s) " + frame_list(missing) + " of 0-" +
+                                        std::to_string(total - 1) +
+                                        " are not complete with these settings; render them first");
+        if (!o.no_video) {
+            make_video(o.out, "frame", o.fps, store.file("animation.mp4"), o.quiet);
+            make_video(o.out, "sky", o.fps, store.file("sky.mp4"), o.quiet);
+        }
+        make_contact_sheet(store, total, o.fps, store.file("contact_sheet.png"));
+        if (!o.quiet) std::fprintf(stderr, "wrote %s\n", store.file("contact_sheet.png").c_str());
+        return AnimationReport{total, first, last, 0, total, 0, true, settings};
+    }
     if (o.force && !o.quiet) std::fprintf(stderr, "--force: rendering every frame of %d-%d\n", first, last);
 
-    Accel accel(scene.scene);
-    const std::string timings = store.file("timings.csv");
+    Accel accel(scene->scene);
+    const std::string timings = store.file(timings_name);
     bool timings_start_over = o.force;
     double sum_sky = 0, sum_build = 0, sum_render = 0;
     int rendered = 0, skipped = 0;
@@ -201,16 +251,22 @@ AnimationReport render_animation(const AnimationSettings& o) {
         render.clamp_indirect = o.clamp_indirect, render.filter_glossy = o.filter_glossy;
         render.pattern = pattern;
         PathIntegrator integrator(accel, light, render);
-        RenderResult result = integrator.render(scene.camera);
+        RenderResult result = integrator.render(scene->camera);
 
         Image& image = result.color;
         FrameMetadata meta;
         meta.frame = k, meta.time_seconds = t, meta.fps = o.fps, meta.spp = o.spp, meta.seed = render.seed;
-        meta.sky_seconds = sky_s, meta.distribution_seconds = light.last_build_seconds();
-        meta.render_seconds = result.stats.seconds, meta.medium_step_seconds = timeline.dt(), meta.png_exposure_ev = ev;
+        meta.medium_step_seconds = timeline.dt(), meta.png_exposure_ev = ev;
         meta.sky = sky->source, meta.sky_model = timeline.model().name(), meta.scene = o.scene.scene;
-        meta.camera = scene.camera.name, meta.gamma = gamma_name(timeline.gamma());
+        meta.camera = scene->camera.name, meta.gamma = gamma_name(timeline.gamma());
         meta.settings = settings;
+        if (is_generated_sky(o.sky.sky) || !o.sky.time.empty()) {
+            const UtcTime when = add_seconds(start_time(o.sky), t);
+            char text[32];
+            std::snprintf(text, sizeof text, "%04d:%02d:%02d %02d:%02d:%02d", when.year, when.month, when.day,
+                          when.hour, when.minute, int(std::floor(when.second)));
+            meta.date_time = text;
+        }
         meta.write_to(&image.metadata);
         write_image(store.frame_exr(k), aovs.any() ? render_layers(result) : image);
         write_image(store.frame_png(k), tonemap_to_display(image, ev));
@@ -238,6 +294,9 @@ AnimationReport render_animation(const AnimationSettings& o) {
                 sum_render / rendered * 1e3, 100.0 * (sum_sky + sum_build) / (sum_sky + sum_build + sum_render));
     }
 
+    // A farm task does not look at the other tasks' frames (each would decode every frame: quadratic
+    // over the farm); the encode stage checks them all, once.
+    if (farm_task) return AnimationReport{total, first, last, rendered, skipped, replaced, false, settings};
     // Frames outside the range count only when complete with these settings too.
     std::vector<int> not_complete;
     for (int k = 0; k < total; ++k)

@@ -33,6 +33,19 @@ namespace dynsky {
 //   exposure NaN             PNG exposure in stops; NaN: from the sky's irradiance at t = 0
 //   force false              render every frame of the range even if complete
 //   no_video false, quiet false
+//   timeline ""              a stored timeline's folder (frame/sky_source.h write_sky_timeline): the
+//                            medium steps and flows are read from it instead of computed; the
+//                            frames are the same bytes either way (docs/render-farm.md)
+//   stage "all"              what this run does, for render farms (docs/render-farm.md):
+//                              all     render the range, then the videos and contact sheet once
+//                                      every frame is complete (a run on one machine)
+//                              keys    only write the stored timeline into `timeline` (the whole
+//                                      duration); no scene is read, no frame rendered
+//                              frames  only render the range (a farm task): no videos, no contact
+//                                      sheet; timings into timings_A-B.csv; only this range's own
+//                                      temporaries are cleaned up (other tasks write beside it)
+//                              encode  render nothing: every frame must be complete (else an
+//                                      error naming those that are not); the videos and contact sheet
 // The most frames one animation may have (as a procedural sequence): duration * fps is computed in
 // double precision and checked against it, so a huge --duration cannot wrap into a short animation.
 constexpr double kMaxAnimationFrames = 100000;
@@ -58,6 +71,8 @@ struct AnimationSettings {
     bool force = false;
     bool no_video = false;
     bool quiet = false;
+    std::string timeline;
+    std::string stage = "all";
 };
 
 struct AnimationReport {
@@ -71,6 +86,9 @@ struct AnimationReport {
 // The settings frames of this animation are made with (the exposure as resolved, the model by name).
 FrameSettings animation_frame_settings(const AnimationSettings& settings, const std::string& model_name, double dt,
                                        float png_exposure_ev);
+
+// round(duration * fps), at least 1, after checking duration and fps (what --frames counts in).
+int animation_frame_count(const AnimationSettings& settings);
 
 AnimationReport render_animation(const AnimationSettings& settings);
 

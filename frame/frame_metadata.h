@@ -1,5 +1,7 @@
 // What a rendered frame records about itself (glossary: "frame metadata"), stored as dynsky:*
 // attributes of its EXR header (util/image.h ImageMetadata), so a frame file says how it was made.
+// Only what follows from the settings: no timings (they are in timings*.csv), so a frame's file is
+// the same bytes wherever and whenever it is rendered (docs/render-farm.md).
 #pragma once
 
 #include <cstdint>
@@ -36,14 +38,15 @@ struct FrameMetadata {
     double fps = 0;
     int spp = 0;
     uint64_t seed = 0;
-    double sky_seconds = 0;           // Gamma + amortised xi for this frame
-    double distribution_seconds = 0;  // the sky's sampling distribution rebuild
-    double render_seconds = 0;
     double medium_step_seconds = 0;  // Delta t
     double png_exposure_ev = 0;
     std::string sky, sky_model, scene, camera;
-    std::string gamma;  // the in-between: constant | paper (dynsky:gamma)
+    std::string gamma;     // the in-between: constant | paper (dynsky:gamma)
     std::string settings;  // canonical_settings of the run (dynsky:settings, dynsky:settings_hash)
+    // The EXR's DateTime ("YYYY:MM:DD HH:MM:SS"): the UTC moment the frame shows when its sky follows
+    // a clock, else EXIF's "unknown" (blanks and colons). Always set: OpenImageIO would otherwise
+    // stamp the time of writing, and the file would differ from run to run.
+    std::string date_time;
 
     void write_to(ImageMetadata* m) const;
 };

@@ -11,6 +11,7 @@
 #include "motion/procedural_step_model.h"
 #include "sky/clear_sky.h"
 #include "util/data_path.h"
+#include "util/atomic_file.h"
 #include "util/error.h"
 #include "util/parse.h"
 #include "util/image.h"
@@ -159,6 +160,76 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
         std::fprintf(stderr, "dynsky: warning: --dt %g s, but the network was trained for Delta t = %g s\n", dt,
                      model->native_dt());
     SkyTimeline timeline(std::move(input), std::move(model), dt, clock);
+    timeline.set_gamma(gamma);
+    return timeline;
+}
+
+
+FrameSettings sky_timeline_settings(const SkySourceSpec& o, const StepModelSpec& m) {
+    auto number = [](double v) {
+        char buf[40];
+        std::snprintf(buf, sizeof buf, "%.17g", v);
+        return std::string(buf);
+    };
+    FrameSettings s;
+    s["sky"] = describe_input(o.sky);
+    s["sky_res"] = std::to_string(o.sky_resolution);
+    s["time"] = o.time;
+    s["lat"] = number(o.latitude), s["lon"] = number(o.longitude);
+    s["coverage"] = number(o.coverage);
+    s["wind_from"] = number(o.wind_from_deg), s["wind_speed"] = number(o.wind_speed_mps);
+    s["cloud_height"] = number(o.cloud_height_m);
+    s["prev"] = o.previous.empty() ? "" : describe_input(o.previous);
+    s["prev_dt"] = number(o.previous_dt);
+    s["model"] = m.model;
+    s["dt"] = number(m.dt);
+    s["drift"] = number(m.drift_deg_per_s);
+    return s;
+}
+
+int write_sky_timeline(const SkySourceSpec& sky, const StepModelSpec& model, double duration, const std::string& folder,
+                       bool quiet) {
+    if (!(duration > 0)) throw Error("--duration must be positive");
+    check_outputs_are_not_inputs({folder}, {sky.sky, sky.previous});
+    const std::string settings = canonical_settings(sky_timeline_settings(sky, model));
+    // A rerun (a requeued keys job) keeps a complete timeline of the same settings.
+    std::error_code ec;
+    if (fs::exists(fs::path(folder) / "timeline.json", ec)) {
+        try {
+            std::string stored;
+            SkyTimeline old = SkyTimeline::load(folder, &stored);
+            if (stored == settings && old.stored_last_step() >= old.last_step_for(duration)) {
+                if (!quiet)
+                    std::fprintf(stderr, "%s: the stored timeline (steps 0-%d) covers %g s: kept\n", folder.c_str(),
+                                 old.stored_last_step(), duration);
+                return old.stored_last_step();
+            }
+        } catch (const Error&) {
+            // Damaged or of another version: made again below.
+        }
+    }
+    SkyTimeline timeline = make_sky_timeline(sky, model);
+    const int last = std::max(1, timeline.last_step_for(duration));
+    if (!quiet)
+        std::fprintf(stderr, "sky timeline: model %s, Delta t %g s, steps 0-%d (t <= %g s) into %s\n",
+                     timeline.model().name().c_str(), timeline.dt(), last, last * timeline.dt(), folder.c_str());
+    remove_stale_temporaries(folder);
+    timeline.save(folder, last, settings);
+    if (!quiet)
+        std::fprintf(stderr, "sky timeline: %d medium step(s) in %.1f s\n", timeline.timings().medium_steps,
+                     timeline.timings().medium_seconds);
+    return last;
+}
+
+SkyTimeline load_sky_timeline(const std::string& folder, const SkySourceSpec& sky, const StepModelSpec& model) {
+    const GammaKind gamma = parse_gamma(model.gamma);
+    std::string stored;
+    SkyTimeline timeline = SkyTimeline::load(folder, &stored);
+    const std::string settings = canonical_settings(sky_timeline_settings(sky, model));
+    if (stored != settings)
+        throw_file_error(folder, "the stored sky timeline was made with other settings (" +
+                                     describe_settings_change(parse_settings(stored), parse_settings(settings)) +
+                                     "): make it again with these options");
     timeline.set_gamma(gamma);
     return timeline;
 }

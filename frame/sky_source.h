@@ -6,6 +6,7 @@
 
 #include <string>
 
+#include "frame/frame_metadata.h"
 #include "motion/sky_timeline.h"
 #include "sky/sun_position.h"
 
@@ -61,6 +62,21 @@ SkyImage make_generated_sky(const SkySourceSpec& sky);
 
 // Validates everything (files, ranges) before any step is computed.
 SkyTimeline make_sky_timeline(const SkySourceSpec& sky, const StepModelSpec& model);
+
+// What a sky timeline depends on, as frame settings (a subset of `animate`'s, the same keys; the
+// model and Delta t as asked: "auto", 0 when automatic). A stored timeline records them and is used
+// only for the same.
+FrameSettings sky_timeline_settings(const SkySourceSpec& sky, const StepModelSpec& model);
+
+// A stored timeline (glossary "stored timeline"): makes the timeline and saves the steps covering
+// t in [0, duration] into `folder` (motion/sky_timeline.h SkyTimeline::save). A folder already
+// holding one of these settings that covers the duration is kept (a rerun does nothing). Returns
+// the last step stored.
+int write_sky_timeline(const SkySourceSpec& sky, const StepModelSpec& model, double duration, const std::string& folder,
+                       bool quiet);
+// Reads a stored timeline for these settings; throws dynsky::Error naming the folder when it was
+// made with others (and which differ) or is not a complete timeline. Gamma from `model`.
+SkyTimeline load_sky_timeline(const std::string& folder, const SkySourceSpec& sky, const StepModelSpec& model);
 
 // The UTC time of t = 0 (the default when the spec gives none: 2026-06-21T16:00:00Z).
 UtcTime start_time(const SkySourceSpec& sky);

@@ -76,8 +76,15 @@ std::optional<Vec3d> SkyTimeline::sun_direction_at(double t) const {
     return input_sun_;
 }
 
+int SkyTimeline::last_step_for(double t) const {
+    const double x = t / dt_;
+    const int i = int(std::floor(x + 1e-9));
+    return x - i < 1e-9 ? i : i + 1;  // sky_at's own rounding: at a step it needs that step alone
+}
+
 std::shared_ptr<const SkyImage> SkyTimeline::step(int i) {
     if (i < 0) throw Error("sky timeline: negative step index");
+    if (stored_last_step_ >= 0) return stored_step(i);
     while (int(steps_.size()) <= i) {
         auto t0 = std::chrono::steady_clock::now();
         double t_next = double(steps_.size()) * dt_;
@@ -107,7 +114,8 @@ SkyTimeline::Interval& SkyTimeline::interval(int i) {
     auto a = step(i), b = step(i + 1);
     auto t0 = std::chrono::steady_clock::now();
     Interval iv;
-    iv.flow = estimate_sky_flow(*a, *b, flow_params_);
+    if (stored_last_step_ >= 0) iv.flow = stored_flow(i);
+    else iv.flow = estimate_sky_flow(*a, *b, flow_params_);
     timings_.medium_seconds += seconds_since(t0);
     // Frames run forwards: intervals two behind are not needed again.
     intervals_.erase(intervals_.begin(), intervals_.lower_bound(i - 1));

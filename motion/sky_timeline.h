@@ -28,6 +28,11 @@
 // over it: the frame's sun transmittance, estimated from the sky around the sun, relative to the
 // input's (motion/sun_patch.h relative_sun_transmittance). Models that make their own sun
 // (ProceduralStepModel) keep it.
+//
+// Stored timelines (motion/sky_timeline_store.cpp, glossary "stored timeline"): save() writes the
+// steps, flows and sun patches of the whole duration to a folder once; load() gives a timeline that
+// reads them instead of running the model, so a frame rendered from it anywhere (a render farm's
+// task) has exactly the pixels of the same frame of one run that computed the steps itself.
 #pragma once
 
 #include <map>
@@ -93,7 +98,22 @@ class SkyTimeline {
     // The sun direction at t (the input's, or the clock's); nullopt when unknown.
     std::optional<Vec3d> sun_direction_at(double t) const;
 
+    // Writes steps 0..last_step and flows 0..last_step-1 (computing them first) into `folder`:
+    // step_NNNN.exr (float), flow_NNNN.npy and timeline.json, written last, with everything else
+    // (sun patches, clock, model, `settings`: what the caller checks on load). Every file atomic.
+    void save(const std::string& folder, int last_step, const std::string& settings);
+    // A timeline reading a saved folder (steps loaded when first needed). *settings gets the saved
+    // settings. Throws dynsky::Error naming the folder when it is not a complete stored timeline.
+    static SkyTimeline load(const std::string& folder, std::string* settings = nullptr);
+    // The last step a loaded timeline holds (-1: computes its steps); asking beyond it throws.
+    int stored_last_step() const { return stored_last_step_; }
+    // The last step sky_at needs for times up to t (t > 0: the step after the interval holding t).
+    int last_step_for(double t) const;
+
   private:
+    SkyTimeline() = default;
+    std::shared_ptr<const SkyImage> stored_step(int i);
+    cv::Mat stored_flow(int i) const;
     struct Interval {
         cv::Mat flow;
         SkyImage third, two_thirds;  // the paper's keys: made when first needed
@@ -103,7 +123,7 @@ class SkyTimeline {
     Interval& interval_with_keys(int i);
 
     std::unique_ptr<MediumStepModel> model_;
-    double dt_;
+    double dt_ = 0;
     GammaKind gamma_ = GammaKind::constant;
     std::optional<SunClock> clock_;
     SkyFlowParams flow_params_;
@@ -115,6 +135,9 @@ class SkyTimeline {
     double last_sun_weight_ = 1.0;
     double input_time_ = 0;
     SkyTimelineTimings timings_;
+    std::string stored_folder_;  // a loaded timeline's folder (steps and flows read from there)
+    int stored_last_step_ = -1;
+    std::string stored_steps_json_;  // its steps' entries in timeline.json (file, time, sun, source)
 };
 
 // Upsilon: (1 - w) a + w b, pixel by pixel (same resolution); metadata from a.

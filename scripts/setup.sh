@@ -11,10 +11,14 @@ packages=(
   libgtest-dev libbenchmark-dev libcli11-dev zlib1g-dev
   ffmpeg python3-matplotlib python3-numpy
   python3-torch python3-onnx
+  munge slurmctld slurmd slurm-client
 )
 # python3-torch and python3-onnx: the cloud networks' training code and its tests (NetworksTraining)
 # run under /usr/bin/python3; the program itself runs the networks through OpenCV and needs neither.
 # (--training is still accepted: everything is installed either way.)
+# munge slurmctld slurmd slurm-client: the render-farm test (SlurmFarm) starts a single-node Slurm
+# cluster of its own from them (docs/render-farm.md); dynsky itself needs none of them. Debian
+# starts no daemon of theirs here without systemd; the test runs its own with its own key.
 
 missing=()
 for p in "${packages[@]}"; do

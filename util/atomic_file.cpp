@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cstring>
@@ -124,22 +125,35 @@ void write_file_atomic(const std::string& path, const std::string& bytes) {
     tmp.commit("the write", bytes.empty());
 }
 
-std::vector<std::string> remove_stale_temporaries(const std::string& folder) {
+namespace {
+
+std::vector<std::string> remove_temporaries(const std::string& folder, const std::vector<std::string>* stems) {
     std::vector<std::string> removed;
     std::error_code ec;
     if (!fs::is_directory(folder, ec)) return removed;
-    static const std::regex naming(R"(^\.tmp-.*-([0-9]+)(\.[A-Za-z0-9]+)?$)");
+    static const std::regex naming(R"(^\.tmp-(.*)-([0-9]+)(\.[A-Za-z0-9]+)?$)");
     for (const auto& entry : fs::directory_iterator(folder, ec)) {
         const std::string name = entry.path().filename().string();
         std::smatch m;
         if (!std::regex_match(name, m, naming)) continue;
-        long pid = std::strtol(m[1].str().c_str(), nullptr, 10);
+        if (stems && std::find(stems->begin(), stems->end(), m[1].str()) == stems->end()) continue;
+        long pid = std::strtol(m[2].str().c_str(), nullptr, 10);
         // Alive (ours, or another run writing here now): kill(pid, 0) succeeds or is refused.
         if (pid > 0 && pid == long(::getpid())) continue;
         if (pid > 0 && pid <= 4194304 && (::kill(pid_t(pid), 0) == 0 || errno == EPERM)) continue;
         if (fs::remove(entry.path(), ec)) removed.push_back(name);
     }
     return removed;
+}
+
+}  // namespace
+
+std::vector<std::string> remove_stale_temporaries(const std::string& folder) {
+    return remove_temporaries(folder, nullptr);
+}
+
+std::vector<std::string> remove_stale_temporaries(const std::string& folder, const std::vector<std::string>& stems) {
+    return remove_temporaries(folder, &stems);
 }
 
 void check_outputs_are_not_inputs(const std::vector<std::string>& outputs, const std::vector<std::string>& inputs) {

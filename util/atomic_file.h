@@ -45,6 +45,10 @@ void remove_active_temporary() noexcept;
 
 // Removes the temporaries (our naming only) in folder whose process is gone; returns their names.
 std::vector<std::string> remove_stale_temporaries(const std::string& folder);
+// Only those of the outputs named by `stems` (file names without extension: frame_0003, timings):
+// a render farm's task cleans up after its own killed attempt, never the temporaries of another
+// task writing into the same folder from another machine (whose process ids mean nothing here).
+std::vector<std::string> remove_stale_temporaries(const std::string& folder, const std::vector<std::string>& stems);
 
 // Throws before any work if an output would replace one of the inputs (the same file or folder,
 // by canonical path; an output inside an input folder counts too). Empty names are ignored.

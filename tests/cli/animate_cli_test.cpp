@@ -1,6 +1,6 @@
 // End-to-end tests of `dynsky animate`: a run killed with SIGKILL mid-frame, mid-write or at random
 // moments resumes to the same frames as an uninterrupted run (EXR and PNG pixels bit for bit; the
-// files' bytes differ only in the timings their headers record) with no temporary left; resume
+// headers record no timings, so the files are the same bytes too) with no temporary left; resume
 // re-renders damaged frames and frames of other settings and says so; --force starts over; frame
 // ranges rendered separately equal one run; bad input fails cleanly.
 #include <gtest/gtest.h>
@@ -9,6 +9,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <random>
 
 #include "tests/test_support.h"
@@ -228,6 +229,49 @@ TEST(AnimateCli, FrameRangesEqualOneRun) {
     ASSERT_EQ(test::run_command(animate(parts, "--frames 0-4")).exit_code, 0);
     expect_same_frames(full, parts, 8);
     EXPECT_TRUE(fs::exists(parts + "/contact_sheet.png"));
+    fs::remove_all(dir);
+}
+
+std::string bytes_of(const std::string& path) {
+    std::ifstream f(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+}
+
+// The render farm's commands (docs/render-farm.md): `sky timeline` with the animation's sky options,
+// then ranges rendered from it, then encode: every frame file the same bytes as one run's.
+TEST(AnimateCli, FramesFromSkyTimelineEqualOneRunByteForByte) {
+    std::string dir = test::temp_dir("animate_farm");
+    std::string full = dir + "/full", farm = dir + "/farm", timeline = dir + "/timeline";
+    ASSERT_EQ(test::run_command(animate(full)).exit_code, 0);
+    auto r = test::run_command(std::string(DYNSKY_EXE) +
+                               " sky timeline --sky procedural:3 --model procedural --sky-res 96 --dt 0.5 --duration 1"
+                               " --quiet --out " +
+                               timeline);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    r = test::run_command(animate(farm, "--count-frames"));
+    EXPECT_EQ(r.exit_code, 0);
+    EXPECT_EQ(r.output, "8\n");
+    for (const char* range : {"4-7", "0-3"}) {
+        r = test::run_command(animate(farm,
+                                      std::string("--stage frames --frames ") + range + " --timeline " + timeline));
+        ASSERT_EQ(r.exit_code, 0) << r.output;
+    }
+    EXPECT_FALSE(fs::exists(farm + "/contact_sheet.png"));
+    r = test::run_command(animate(farm, "--stage encode --timeline " + timeline));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    for (int k = 0; k < 8; ++k)
+        for (const char* prefix : {"frame", "sky"})
+            for (const char* ext : {".exr", ".png"}) {
+                if (std::string(prefix) == "sky" && std::string(ext) == ".exr") continue;
+                EXPECT_TRUE(bytes_of(numbered(full, prefix, k, ext)) == bytes_of(numbered(farm, prefix, k, ext)))
+                    << numbered(farm, prefix, k, ext);
+            }
+    EXPECT_TRUE(bytes_of(full + "/contact_sheet.png") == bytes_of(farm + "/contact_sheet.png"));
+    // Another sky than the timeline's: refused, naming what differs (exit 1, runtime error).
+    r = test::run_command(animate(farm, "--stage frames --coverage 0.7 --timeline " + timeline));
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.output.find("coverage"), std::string::npos) << r.output;
+    EXPECT_EQ(test::run_command(animate(farm, "--stage nope")).exit_code, 2);
     fs::remove_all(dir);
 }
 

@@ -73,6 +73,91 @@ TEST(Animation, FrameRangesRenderedApartEqualOneRun) {
     fs::remove_all(dir);
 }
 
+std::string file_bytes(const std::string& path) {
+    std::ifstream f(path, std::ios::binary);
+    EXPECT_TRUE(f.good()) << path;
+    return std::string(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+}
+
+// The render farm's path (docs/render-farm.md): keys stored once, frame ranges rendered from them
+// as separate tasks in any order, then encoded: every file equals one single run's, byte for byte.
+TEST(Animation, FrameRangesFromAStoredTimelineEqualOneRunByteForByte) {
+    for (const char* gamma : {"constant", "paper"}) {
+        SCOPED_TRACE(gamma);
+        const std::string dir = test::temp_dir(std::string("frame_farm_") + gamma);
+        AnimationSettings one = small_animation(dir + "/one");
+        one.model.gamma = gamma;
+        one.duration = 1.5, one.fps = 4.0;  // 6 frames, steps 0-3: two whole intervals and one part
+        AnimationReport whole = render_animation(one);
+        ASSERT_TRUE(whole.complete);
+
+        AnimationSettings farm = one;
+        farm.out = dir + "/farm";
+        farm.timeline = dir + "/farm/timeline";
+        farm.stage = "keys";
+        render_animation(farm);
+        ASSERT_TRUE(fs::exists(farm.timeline + "/timeline.json"));
+        EXPECT_TRUE(fs::exists(farm.timeline + "/step_0003.exr"));
+        EXPECT_FALSE(fs::exists(farm.timeline + "/step_0004.exr"));
+        farm.stage = "frames";
+        for (const char* range : {"3-5", "0-2"}) {
+            farm.frames = range;
+            AnimationReport r = render_animation(farm);
+            EXPECT_EQ(r.rendered, 3);
+            EXPECT_EQ(r.settings, whole.settings);
+        }
+        // No task writes another's file, nor what the encode stage writes.
+        EXPECT_TRUE(fs::exists(dir + "/farm/timings_0-2.csv"));
+        EXPECT_TRUE(fs::exists(dir + "/farm/timings_3-5.csv"));
+        EXPECT_FALSE(fs::exists(dir + "/farm/timings.csv"));
+        EXPECT_FALSE(fs::exists(dir + "/farm/contact_sheet.png"));
+        farm.stage = "encode";
+        farm.frames = "";
+        EXPECT_TRUE(render_animation(farm).complete);
+
+        const FrameStore a(one.out), b(farm.out);
+        for (int k = 0; k < 6; ++k)
+            for (const std::string& f : {a.frame_exr(k), a.frame_png(k), a.sky_png(k)}) {
+                const std::string g = b.file(fs::path(f).filename().string());
+                EXPECT_TRUE(file_bytes(f) == file_bytes(g)) << f << " and " << g << " differ";
+            }
+        EXPECT_TRUE(file_bytes(a.file("contact_sheet.png")) == file_bytes(b.file("contact_sheet.png")));
+        fs::remove_all(dir);
+    }
+}
+
+TEST(Animation, StoredTimelineOfOtherSettingsOrTooShortIsRefused) {
+    const std::string dir = test::temp_dir("frame_farm_refused");
+    AnimationSettings a = small_animation(dir + "/frames");
+    a.timeline = dir + "/timeline";
+    a.stage = "keys";
+    render_animation(a);
+    a.stage = "frames";
+    AnimationSettings other = a;
+    other.sky.coverage = 0.7;
+    try {
+        render_animation(other);
+        FAIL() << "a timeline of other settings was used";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("coverage"), std::string::npos) << e.what();
+    }
+    AnimationSettings longer = a;
+    longer.duration = 3.0;  // frames up to t = 2.75 s; the timeline ends at 1 s
+    longer.frames = "8-11";
+    EXPECT_THROW(render_animation(longer), Error);
+    // Encoding before every frame exists names the missing ones.
+    a.frames = "0-1";
+    render_animation(a);
+    a.stage = "encode", a.frames = "";
+    try {
+        render_animation(a);
+        FAIL() << "encoded an incomplete animation";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("2-3"), std::string::npos) << e.what();
+    }
+    fs::remove_all(dir);
+}
+
 TEST(Animation, ResumeKeepsCompleteFramesAndRendersTheRest) {
     const std::string dir = test::temp_dir("frame_resume");
     const FrameStore whole(dir + "/whole"), resumed(dir + "/resumed");

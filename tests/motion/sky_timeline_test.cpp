@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <opencv2/imgproc.hpp>
 
 #include "sky/clear_sky.h"
@@ -267,6 +268,45 @@ TEST(SkyTimeline, SunIsCutOutAndFollowsTheClock) {
     double angle = std::acos(std::clamp(fisheye::direction_from_pixel(bi, bj, 256).dot(expected), -1.0, 1.0)) * 180 /
                    kPiD;
     EXPECT_LT(angle, 1.0);
+}
+
+// A stored timeline (the render farm's keys) gives the very skies of the timeline that computed
+// them, with a sun cut out and put back dimmed by the clock, in both Gamma forms, asked in any order.
+TEST(SkyTimeline, SavedAndLoadedGivesTheSameSkiesBitForBit) {
+    ClearSkyParams p;
+    SunClock clock{parse_utc_time("2026-06-21T10:00:00Z"), GeoLocation{48.85, 2.35, 0}};
+    p.sun_direction = compute_sun_position(clock.start, clock.where).direction();
+    SkyImage input = make_clear_sky(p, 96);
+    const SkyImage texture = textured_sky(96, 4);
+    for (size_t k = 0; k < input.rgb.size(); ++k) input.rgb[k] += 0.2f * texture.rgb[k];  // something to track
+    const std::string dir = ::testing::TempDir() + "/dynsky_stored_timeline";
+    std::filesystem::remove_all(dir);
+    for (GammaKind gamma : {GammaKind::constant, GammaKind::paper}) {
+        SkyTimeline computed(input, std::make_unique<FlowExtrapolationStepModel>(250.0, 0.4), 5.0, clock);
+        computed.set_gamma(gamma);
+        if (gamma == GammaKind::constant) computed.save(dir, 3, "settings-a");
+        std::string settings;
+        SkyTimeline loaded = SkyTimeline::load(dir, &settings);
+        loaded.set_gamma(gamma);
+        EXPECT_EQ(settings, "settings-a");
+        EXPECT_EQ(loaded.stored_last_step(), 3);
+        EXPECT_EQ(loaded.model().name(), computed.model().name());
+        EXPECT_EQ(loaded.dt(), 5.0);
+        for (double t : {12.5, 0.0, 3.0, 5.0, 7.25, 15.0, 1.0}) {
+            SkyImage a = computed.sky_at(t), b = loaded.sky_at(t);
+            EXPECT_TRUE(a.rgb == b.rgb) << "t = " << t;
+            EXPECT_EQ(a.time_seconds, b.time_seconds);
+            EXPECT_EQ(a.source, b.source);
+            ASSERT_TRUE(a.sun_direction && b.sun_direction);
+            EXPECT_TRUE(*a.sun_direction == *b.sun_direction);
+            EXPECT_EQ(computed.last_sun_weight(), loaded.last_sun_weight());
+        }
+        EXPECT_EQ(loaded.last_step_for(15.0), 3);
+        EXPECT_THROW(loaded.sky_at(15.5), Error);  // needs step 4: beyond what was stored
+    }
+    std::filesystem::remove(dir + "/timeline.json");
+    EXPECT_THROW(SkyTimeline::load(dir), Error);
+    std::filesystem::remove_all(dir);
 }
 
 TEST(SkyTimeline, AddSecondsCrossesDays) {

@@ -1,0 +1,204 @@
+// Stored timelines (motion/sky_timeline.h SkyTimeline::save / load): the medium steps, the flows
+// between them and the sun patches, written once so that frames rendered anywhere read them.
+//
+// Exactness is the point: steps are float EXRs (zip, lossless) and flows float .npy, so the values
+// read back are the values computed; every double and float of the metadata goes through JSON,
+// whose numbers round-trip. A frame made from a loaded timeline therefore has the same bits as the
+// frame of a run that computed the steps itself.
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "motion/sky_timeline.h"
+#include "util/atomic_file.h"
+#include "util/error.h"
+#include "util/npy.h"
+
+namespace dynsky {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr const char* kFormat = "dynsky sky timeline 1";
+
+std::string numbered(const std::string& folder, const char* prefix, int i, const char* ext) {
+    char name[64];
+    std::snprintf(name, sizeof name, "%s_%04d%s", prefix, i, ext);
+    return (fs::path(folder) / name).string();
+}
+
+// Stands in for the model of a loaded timeline: its name and sun habit, never asked for a step
+// (the stored steps answer, and asking beyond them is an error before the model is reached).
+class StoredStepModel : public MediumStepModel {
+  public:
+    StoredStepModel(std::string name, bool own_sun, double native_dt)
+        : name_(std::move(name)), own_sun_(own_sun), native_dt_(native_dt) {}
+    SkyImage step(const std::vector<std::shared_ptr<const SkyImage>>&, double) override {
+        throw Error("stored sky timeline: the model cannot run here");
+    }
+    std::string name() const override { return name_; }
+    bool makes_own_sun() const override { return own_sun_; }
+    double native_dt() const override { return native_dt_; }
+
+  private:
+    std::string name_;
+    bool own_sun_;
+    double native_dt_;
+};
+
+json vec_json(const std::optional<Vec3>& v) {
+    if (!v) return nullptr;
+    return json::array({(*v)[0], (*v)[1], (*v)[2]});
+}
+
+std::optional<Vec3> vec_from(const json& j) {
+    if (j.is_null()) return std::nullopt;
+    return Vec3(j.at(0).get<float>(), j.at(1).get<float>(), j.at(2).get<float>());
+}
+
+}  // namespace
+
+void SkyTimeline::save(const std::string& folder, int last_step, const std::string& settings) {
+    if (last_step < 1) throw Error("sky timeline: a stored timeline holds at least steps 0 and 1");
+    std::error_code ec;
+    fs::create_directories(folder, ec);
+    if (ec) throw_file_error(folder, "cannot create the timeline folder: " + ec.message());
+    json steps = json::array(), flows = json::array();
+    for (int i = 0; i <= last_step; ++i) {
+        auto s = step(i);
+        const std::string file = numbered(folder, "step", i, ".exr");
+        save_sky(file, *s);
+        steps.push_back({{"file", fs::path(file).filename().string()},
+                         {"time", s->time_seconds},
+                         {"sun", vec_json(s->sun_direction)},
+                         {"source", s->source}});
+        if (i == 0) continue;
+        cv::Mat f = flow(i - 1);
+        if (f.type() != CV_32FC2 || !f.isContinuous()) f = f.clone();
+        if (f.type() != CV_32FC2) throw Error("sky timeline: a flow is not 2-channel float");
+        const std::string flow_file = numbered(folder, "flow", i - 1, ".npy");
+        write_npy(flow_file, {size_t(f.rows), size_t(f.cols), 2}, f.ptr<float>());
+        flows.push_back(fs::path(flow_file).filename().string());
+    }
+    json suns = json::array();
+    for (const SunPatch& p : suns_) {
+        json excess = json::array();
+        for (const Color& c : p.excess) excess.push_back({c[0], c[1], c[2]});
+        suns.push_back({{"di", p.di}, {"dj", p.dj}, {"excess", excess}});
+    }
+    json clock = nullptr;
+    if (clock_)
+        clock = {{"start",
+                  {clock_->start.year, clock_->start.month, clock_->start.day, clock_->start.hour, clock_->start.minute,
+                   clock_->start.second}},
+                 {"lat", clock_->where.latitude_deg},
+                 {"lon", clock_->where.longitude_deg},
+                 {"elevation", clock_->where.elevation_m}};
+    json j = {{"format", kFormat},
+              {"settings", settings},
+              {"dt", dt_},
+              {"last_step", last_step},
+              {"model", model_->name()},
+              {"model_makes_own_sun", model_->makes_own_sun()},
+              {"model_native_dt", model_->native_dt()},
+              {"input_time", input_time_},
+              {"input_sun",
+               input_sun_ ? json::array({(*input_sun_)[0], (*input_sun_)[1], (*input_sun_)[2]}) : json(nullptr)},
+              {"input_transmittance", input_transmittance_},
+              {"clock", clock},
+              {"steps", steps},
+              {"flows", flows},
+              {"suns", suns}};
+    // Written last: a folder without it (a killed keys job) is not a timeline.
+    write_file_atomic((fs::path(folder) / "timeline.json").string(), j.dump(1) + "\n");
+}
+
+SkyTimeline SkyTimeline::load(const std::string& folder, std::string* settings) {
+    const std::string path = (fs::path(folder) / "timeline.json").string();
+    std::ifstream in(path, std::ios::binary);
+    if (!in)
+        throw_file_error(folder,
+                         "no stored sky timeline here (timeline.json missing: make it with 'dynsky sky "
+                         "timeline' or 'dynsky animate --stage keys')");
+    json j;
+    try {
+        j = json::parse(in);
+        if (j.at("format").get<std::string>() != kFormat)
+            throw_file_error(path, "not a stored sky timeline of this version (format '" +
+                                       j.at("format").get<std::string>() + "')");
+        SkyTimeline t;
+        t.dt_ = j.at("dt").get<double>();
+        t.stored_last_step_ = j.at("last_step").get<int>();
+        if (!(t.dt_ > 0) || t.stored_last_step_ < 1) throw_file_error(path, "bad Delta t or step count");
+        t.stored_folder_ = folder;
+        t.model_ = std::make_unique<StoredStepModel>(j.at("model").get<std::string>(),
+                                                     j.at("model_makes_own_sun").get<bool>(),
+                                                     j.at("model_native_dt").get<double>());
+        t.input_time_ = j.at("input_time").get<double>();
+        if (!j.at("input_sun").is_null())
+            t.input_sun_ = Vec3d(j["input_sun"][0].get<double>(), j["input_sun"][1].get<double>(),
+                                 j["input_sun"][2].get<double>());
+        t.input_transmittance_ = j.at("input_transmittance").get<double>();
+        if (!j.at("clock").is_null()) {
+            const json& c = j["clock"];
+            const json& s = c.at("start");
+            UtcTime start{s.at(0).get<int>(), s.at(1).get<int>(), s.at(2).get<int>(),
+                          s.at(3).get<int>(), s.at(4).get<int>(), s.at(5).get<double>()};
+            t.clock_ = SunClock{start, GeoLocation{c.at("lat").get<double>(), c.at("lon").get<double>(),
+                                                   c.at("elevation").get<double>()}};
+        }
+        for (const json& p : j.at("suns")) {
+            SunPatch patch;
+            patch.di = p.at("di").get<std::vector<int>>();
+            patch.dj = p.at("dj").get<std::vector<int>>();
+            for (const json& c : p.at("excess"))
+                patch.excess.emplace_back(c[0].get<float>(), c[1].get<float>(), c[2].get<float>());
+            t.suns_.push_back(std::move(patch));
+        }
+        if (int(t.suns_.size()) != t.stored_last_step_ + 1 || int(j.at("steps").size()) != t.stored_last_step_ + 1 ||
+            int(j.at("flows").size()) != t.stored_last_step_)
+            throw_file_error(path, "the step, flow and sun lists do not agree with last_step");
+        t.steps_.resize(size_t(t.stored_last_step_) + 1);
+        t.stored_steps_json_ = j.at("steps").dump();
+        if (settings) *settings = j.at("settings").get<std::string>();
+        t.step(0);  // read now: a broken folder fails before any frame
+        return t;
+    } catch (const json::exception& e) {
+        throw_file_error(path, std::string("not a readable stored sky timeline: ") + e.what());
+    }
+}
+
+std::shared_ptr<const SkyImage> SkyTimeline::stored_step(int i) {
+    if (i > stored_last_step_)
+        throw_file_error(stored_folder_, "the stored sky timeline ends at step " + std::to_string(stored_last_step_) +
+                                             " (t = " + std::to_string(stored_last_step_ * dt_) +
+                                             " s); make it again with a --duration covering every frame");
+    if (!steps_[size_t(i)]) {
+        const json entry = json::parse(stored_steps_json_).at(size_t(i));
+        SkyImage s = load_sky((fs::path(stored_folder_) / entry.at("file").get<std::string>()).string());
+        // The metadata as computed (the EXR's sun is normalised again on reading).
+        s.time_seconds = entry.at("time").get<double>();
+        s.sun_direction = vec_from(entry.at("sun"));
+        s.source = entry.at("source").get<std::string>();
+        steps_[size_t(i)] = std::make_shared<const SkyImage>(std::move(s));
+        // Frames run forwards: steps two behind are not needed again (step 0 is: t = 0's exposure).
+        for (int k = 1; k < i - 1; ++k) steps_[size_t(k)].reset();
+    }
+    return steps_[size_t(i)];
+}
+
+cv::Mat SkyTimeline::stored_flow(int i) const {
+    const std::string file = numbered(stored_folder_, "flow", i, ".npy");
+    NpyArray a = read_npy(file);
+    const int n = steps_[0]->resolution;
+    if (a.shape != std::vector<size_t>{size_t(n), size_t(n), 2})
+        throw_file_error(file, "is not an N x N x 2 flow of this timeline's N = " + std::to_string(n));
+    cv::Mat f(n, n, CV_32FC2);
+    std::copy(a.data.begin(), a.data.end(), f.ptr<float>());
+    return f;
+}
+
+}  // namespace dynsky
