@@ -47,7 +47,8 @@ void register_sky_model_commands(CLI::App& sky) {
         cmd->add_option("--every", o->every, "Write only every M-th step (and the last)")->capture_default_str();
         cmd->add_option("--stats", o->stats,
                         "CSV of per-step statistics (mean luminance, mean/min/max of the [0,1] form, cloud\n"
-                        "coverage, high-frequency energy, non-finite pixel count), step 0 = the input");
+                        "coverage, high-frequency energy, non-finite pixel count, mean luminance without the\n"
+                        "start's sun pixels), step 0 = the input");
         cmd->add_flag("--preview", o->preview,
                       "Also write tone-mapped PNGs beside the EXRs (the input's auto exposure)");
         cmd->add_flag("--quiet,-q", o->quiet, "No progress bar or summary");
@@ -68,15 +69,18 @@ void register_sky_model_commands(CLI::App& sky) {
             "PSNR tables, the paper's one-step table (MSE, PSNR, SSIM), verdicts, a CSV and charts.");
         cmd->add_option("--model", o->model, "Model: auto, advect or a model folder (as for 'sky predict')")
             ->capture_default_str();
-        cmd->add_option("--sequence", o->sequence, "A named sequence in the shared data: arm-tsi, arm-clear, arm-dusk, mobotix");
+        cmd->add_option("--sequence", o->sequence,
+                        "A named sequence in the shared data: arm-tsi, arm-clear, arm-dusk, mobotix");
         cmd->add_option("--photos", o->photos,
                         "Any folder of photographs of one camera (or its images/ sub-folder), times in the file names");
         cmd->add_option("--preset", o->preset, "Camera preset of --photos: arm-tsi or mobotix");
-        cmd->add_option("--frames", o->frames,
-                        "Start frames A-B to score (default: the model's held-out part of a sequence it was trained on,\n"
-                        "else every frame)");
+        cmd->add_option(
+            "--frames", o->frames,
+            "Start frames A-B to score (default: the model's held-out part of a sequence it was trained on,\n"
+            "else every frame)");
         cmd->add_option("--horizons", o->horizons, "Steps ahead to score, comma-separated")->capture_default_str();
-        cmd->add_option("--res", o->resolutions, "Resolutions N to score at, comma-separated (each divides --import-res)")
+        cmd->add_option("--res", o->resolutions,
+                        "Resolutions N to score at, comma-separated (each divides --import-res)")
             ->capture_default_str();
         cmd->add_option("--shared", o->shared, "The shared data folder (default: ../shared beside the source tree)");
         cmd->add_option("--report,-o", o->report, "Markdown file to write (a .csv and charts beside it)")

@@ -32,6 +32,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "motion/cloud_layer_paths.h"
 #include "motion/flow.h"
@@ -165,6 +166,8 @@ class CloudRollout {
     std::unique_ptr<CloudLayerPaths> paths_;  // with a wind
     cv::Mat departure_;                       // measured - wind flow (pixels per step), relaxing
     double departure_sum_ = 0;                // sum of its relaxation weights so far
+    std::vector<double> ring_profile_;        // the start's mean cloud signal per pixel ring
+    cv::Mat background_field_;                // scales the model's clear sky to the start's
     cv::Mat clouds_ext_;                      // start_ext_ - background_ext_: what the paths carry
     cv::Mat clouds_;                          // start_ - background_: what a pixel shows of its own start
     double background_weight_ = 1.0;

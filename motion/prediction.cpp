@@ -10,6 +10,7 @@
 #include "motion/advect_residual.h"
 #include "motion/cloud_model.h"
 #include "motion/network_step_model.h"
+#include "motion/sun_patch.h"
 #include "util/data_path.h"
 #include "motion/metrics.h"
 #include "util/atomic_file.h"
@@ -32,7 +33,8 @@ void write_prediction(const PredictionOptions& o) {
     const bool advect_kind = folder == "advect" || cloud_model_kind(folder) == "advect-residual";
     std::optional<CloudModel> paper;
     std::optional<AdvectResidualNetwork> advect;
-    if (advect_kind) advect = folder == "advect" ? AdvectResidualNetwork::pure_advection() : AdvectResidualNetwork::load(folder);
+    if (advect_kind)
+        advect = folder == "advect" ? AdvectResidualNetwork::pure_advection() : AdvectResidualNetwork::load(folder);
     else paper = CloudModel::load(folder);
     if (!advect_kind && (!o.previous.empty() || o.wind))
         throw Error("--prev and --wind-*: the paper's model (" + folder + ") takes its motion from the sky alone");
@@ -59,10 +61,18 @@ void write_prediction(const PredictionOptions& o) {
     const cv::Mat disc = sky_disc_mask(n);
     fs::create_directories(o.out);
     std::ostringstream csv;
-    csv << "step,time_s,mean_luminance,mean_unit,min_unit,max_unit,cloud_coverage,hf_energy,nonfinite\n";
+    csv << "step,time_s,mean_luminance,mean_unit,min_unit,max_unit,cloud_coverage,hf_energy,nonfinite,"
+           "mean_luminance_without_sun\n";
+    // The start's sun (the pixels the networks' form clips, restored into every step and dimmed
+    // when a cloud covers it): left out of the last column, which follows the clouds alone.
+    cv::Mat sun_pixels;
+    {
+        cv::Mat start_form = to_network_form(sky, form);
+        sun_pixels = fill_saturated_pixels(&start_form);
+    }
     auto stats_row = [&](int k, const SkyImage& s) {
-        double lum = 0;
-        long nonfinite = 0, count = 0;
+        double lum = 0, lum_without_sun = 0;
+        long nonfinite = 0, count = 0, count_without_sun = 0;
         for (int j = 0; j < s.resolution; ++j)
             for (int i = 0; i < s.resolution; ++i) {
                 if (!s.in_disc(i, j)) continue;
@@ -72,6 +82,7 @@ void write_prediction(const PredictionOptions& o) {
                     continue;
                 }
                 lum += luminance(c), ++count;
+                if (!sun_pixels.at<uint8_t>(j, i)) lum_without_sun += luminance(c), ++count_without_sun;
             }
         cv::Mat unit = to_network_form(s, form, n);
         cv::Mat finite_unit = unit.clone();
@@ -82,9 +93,10 @@ void write_prediction(const PredictionOptions& o) {
         double coverage = double(cv::countNonZero(network_cloud_mask(finite_unit, form) & disc)) /
                           cv::countNonZero(disc);
         char line[256];
-        std::snprintf(line, sizeof line, "%d,%.3f,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%ld\n", k, s.time_seconds,
+        std::snprintf(line, sizeof line, "%d,%.3f,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%ld,%.9g\n", k, s.time_seconds,
                       count ? lum / count : 0.0, (mean[0] + mean[1] + mean[2]) / 3, mn, mx, coverage,
-                      high_frequency_energy(finite_unit, disc), nonfinite);
+                      high_frequency_energy(finite_unit, disc), nonfinite,
+                      count_without_sun ? lum_without_sun / count_without_sun : 0.0);
         csv << line;
     };
     if (!o.stats.empty()) stats_row(0, sky);
@@ -105,8 +117,7 @@ void write_prediction(const PredictionOptions& o) {
     progress.finish();
     if (!o.stats.empty()) write_file_atomic(o.stats, csv.str());
     if (!o.quiet)
-        std::printf("wrote %d predicted skies (Delta t = %g s, %d steps) to %s\n", written, dt,
-                    o.steps, o.out.c_str());
+        std::printf("wrote %d predicted skies (Delta t = %g s, %d steps) to %s\n", written, dt, o.steps, o.out.c_str());
 }
 
 }  // namespace dynsky

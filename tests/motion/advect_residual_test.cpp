@@ -209,12 +209,12 @@ TEST(AdvectResidual, ThreeHourRolloutsFromEveryKindOfStartStayInBandAndKeepMovin
         EXPECT_TRUE(r.finite) << name;
         EXPECT_GE(r.min, 0.0f) << name;
         EXPECT_LE(r.max, 1.0f) << name;
-        // Issue 10's band is 20 %. Measured here (sun pixels left out of the mean, 128 px): the
-        // procedural start peaks at 1.21x: its sunlit clouds near the sun keep their brightness as
-        // the recycled layer carries them (mirrored) across the sky. The 256 px stability run with
-        // the sun counted stays within 0.95-1.08 (docs/networks-advect-residual.md). 25 % is held
-        // for it here, 20 % for the others.
-        const double band = name == "procedural" ? 0.25 : 0.2;
+        // Issue 10's band: 20 %, the sun's pixels left out of the mean (a covered sun is lighting,
+        // not drift). Measured at 128 px: procedural 1.00-1.14x (1.21x before the recycled tile took
+        // the start's cloud signal per zenith angle), photograph 0.84-1.00x, clear 1.00x.
+        std::printf("%s: mean %.3f..%.3f of the start (sun left out), detail >= %.2f of the start's\n", name.c_str(),
+                    r.mean_min / r.mean0, r.mean_max / r.mean0, r.hf_min / r.hf0);
+        const double band = 0.2;
         EXPECT_GT(r.mean_min, (1 - band) * r.mean0) << name;
         EXPECT_LT(r.mean_max, (1 + band) * r.mean0) << name;
         if (name == "clear") continue;
