@@ -191,6 +191,27 @@ void run_import(const ImportOptions& o) {
     if (!o.preview.empty()) write_preview(o.preview, sky_to_image(sky));
 }
 
+// Without its mask file, a preset's own obstruction geometry in the photo's grid (as import uses it):
+// fixed rectangles, the shadow band at the sun's azimuth for the file name's time, the horizon profile.
+std::vector<unsigned char> preset_geometry_not_sky(const std::string& preset, const std::string& photo,
+                                                   const SkyCircle& circle, int width, int height) {
+    const PresetImportPlan plan = plan_preset_import(preset, photo, 64);
+    const PhotoImportParams& p = plan.params;
+    PhotoGeometry g;
+    g.circle = circle;
+    g.lens = p.lens, g.north_deg = p.north_deg, g.mirrored = p.mirrored;
+    g.tilt_deg = p.tilt_deg, g.tilt_azimuth_deg = p.tilt_azimuth_deg;
+    std::vector<unsigned char> out = horizon_obstruction_mask(p.horizon_obstructions, circle, width, height);
+    if (p.shadow_band) {
+        const auto band = shadow_band_mask(*p.shadow_band, g, width, height);
+        for (size_t k = 0; k < out.size(); ++k) out[k] |= band[k];
+    }
+    for (const auto& r : p.not_sky_rects)
+        for (int y = std::max(0, r[1]); y < std::min(height, r[1] + r[3]); ++y)
+            for (int x = std::max(0, r[0]); x < std::min(width, r[0] + r[2]); ++x) out[size_t(y) * width + x] = 1;
+    return out;
+}
+
 void run_mask(const MaskOptions& o) {
     check_extension("--out", o.out, ".png");
     check_outputs_are_not_inputs({o.out}, {o.input, o.mask});
@@ -224,6 +245,8 @@ void run_mask(const MaskOptions& o) {
             if (!mask_path.empty())
                 not_sky = load_not_sky_mask(mask_path, o.mask.empty() ? pp.mask_layout : MaskLayout::PhotoBlackIsNotSky,
                                             photo.width, photo.height);
+            else if (!o.preset.empty())
+                not_sky = preset_geometry_not_sky(o.preset, o.input, c, photo.width, photo.height);
             for (int y = 0; y < photo.height; ++y)
                 for (int x = 0; x < photo.width; ++x) {
                     double dx = x - c.center_x, dy = y - c.center_y;

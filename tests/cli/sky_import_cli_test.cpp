@@ -61,6 +61,19 @@ TEST(SkyImportCli, TsiPhotoWithoutItsMaskWritesTheFilledMask) {
         for (int i = 0; i < 128; ++i)
             if (sky.in_disc(i, j)) ++disc, set += filled.at(i, j, 0) > 0.5f;
     EXPECT_NEAR(double(set) / double(disc), 0.14, 0.015);
+    // sky mask --preset leaves out the same obstructions as with the imager's mask file.
+    auto sky_pixels = [](const std::string& output) {
+        const size_t at = output.find(" sky pixels");
+        const size_t from = output.rfind(' ', at - 1);
+        return at == std::string::npos ? -1.0 : std::stod(output.substr(from + 1, at - from - 1));
+    };
+    auto without = test::run_command(exe() + " sky mask " + photo + " --preset arm-tsi --out " + dir + "/m1.png");
+    auto with = test::run_command(exe() + " sky mask " +
+                                  test::shared_path("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg") +
+                                  " --preset arm-tsi --out " + dir + "/m2.png");
+    ASSERT_EQ(without.exit_code, 0) << without.output;
+    ASSERT_EQ(with.exit_code, 0) << with.output;
+    EXPECT_NEAR(sky_pixels(without.output) / sky_pixels(with.output), 1.0, 0.02) << without.output << with.output;
     fs::remove_all(dir);
 }
 
