@@ -44,6 +44,7 @@ void import_bench(benchmark::State& state, const Camera& cam, bool hdr) {
     hp.time = parse_utc_time(time_from_file_name(path, preset.filename_utc_offset_hours));
     hp.location = {preset.latitude_deg, preset.longitude_deg, preset.elevation_m};
     hp.sun_search_deg = preset.sun_search_deg;
+    hp.camera_colour = preset.colour;
     double cpu0 = process_cpu_seconds();
     for (auto _ : state) {
         ImportedPhoto imp = import_photo(path, params);

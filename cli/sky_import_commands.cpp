@@ -26,11 +26,12 @@ namespace {
 struct ImportOptions {
     std::string photo, preset, center, lens, mask, mask_layout = "photo", encoding = "auto";
     double radius = 0, north = 0, tilt = 0, tilt_azimuth = 0;
-    bool mirror = false, auto_circle = false, no_preset_mask = false, detect = false, no_inpaint = false;
+    bool mirror = false, keep_colours = false, auto_circle = false, no_preset_mask = false, detect = false,
+         no_inpaint = false;
     std::string time, hdr = "auto";
     double lat = 0, lon = 0, elevation = 0, utc_offset = 0, turbidity = 3.0;
     int resolution = 512;
-    std::string out, preview;
+    std::string out, preview, filled_mask;
     // Set by CLI11 when given, so presets can be overridden option by option.
     CLI::Option *lens_opt = nullptr, *north_opt = nullptr, *lat_opt = nullptr, *lon_opt = nullptr, *elev_opt = nullptr,
                 *offset_opt = nullptr, *tilt_opt = nullptr, *tilt_az_opt = nullptr;
@@ -56,7 +57,8 @@ void run_import(const ImportOptions& o) {
     // Check everything cheap first, so a bad run writes nothing.
     check_extension("--out", o.out, ".exr");
     if (!o.preview.empty()) check_extension("--preview", o.preview, ".png");
-    check_outputs_are_not_inputs({o.out, o.preview}, {o.photo, o.mask});
+    if (!o.filled_mask.empty()) check_extension("--filled-mask", o.filled_mask, ".png");
+    check_outputs_are_not_inputs({o.out, o.preview, o.filled_mask}, {o.photo, o.mask});
     if (o.resolution < 16 || o.resolution > 16384)
         throw Error("--res " + std::to_string(o.resolution) + ": the fisheye must be 16..16384 pixels wide");
     if (o.hdr != "auto" && o.hdr != "none" && o.hdr != "calibrated")
@@ -64,25 +66,27 @@ void run_import(const ImportOptions& o) {
 
     PhotoImportParams params;
     double lat = o.lat, lon = o.lon, elevation = o.elevation, utc_offset = o.utc_offset, sun_search = 3;
+    std::optional<CameraColour> camera_colour;
     bool have_location = o.lat_opt->count() && o.lon_opt->count();
+    std::string obstructions;
     if (!o.preset.empty()) {
         // The preset's decisions (sky/preset_import.h), then the options that override them.
-        PresetImportPlan plan = plan_preset_import(o.preset, o.photo, o.resolution);
-        const CameraPreset& preset = plan.preset;
-        params = preset.params;
+        const CameraPreset preset = camera_preset(o.preset);
         if (!o.lat_opt->count()) lat = preset.latitude_deg;
         if (!o.lon_opt->count()) lon = preset.longitude_deg;
         if (!o.elev_opt->count()) elevation = preset.elevation_m;
         if (!o.offset_opt->count()) utc_offset = preset.filename_utc_offset_hours;
         sun_search = preset.sun_search_deg;
+        camera_colour = preset.colour;
         have_location = true;
-        if (o.mask.empty() && !o.no_preset_mask) {
-            if (!plan.mask_found)
-                std::fprintf(stderr, "dynsky: warning: no %s mask found beside %s%s\n", o.preset.c_str(),
-                             o.photo.c_str(),
-                             params.detect_obstructions ? "" : "; detecting dark obstructions instead");
-            params.mask_path = plan.params.mask_path;
-            params.detect_obstructions = plan.params.detect_obstructions;
+        // The shadow band follows the sun at the time used (given, or the file name's on its clock).
+        std::string band_time = o.time.empty() ? time_from_file_name(o.photo, utc_offset) : o.time;
+        if (o.mask.empty()) {
+            PresetImportPlan plan = plan_preset_import(o.preset, o.photo, o.resolution, band_time, !o.no_preset_mask);
+            params = plan.params;
+            obstructions = plan.obstructions;
+        } else {
+            params = preset.params;  // a mask given replaces the preset's own obstructions
         }
     }
     params.resolution = o.resolution;
@@ -143,9 +147,17 @@ void run_import(const ImportOptions& o) {
                     imported.clip_level < 1.0
                         ? ("clipped at encoded level " + std::to_string(imported.clip_level)).c_str()
                         : "no clipping plateau found");
+    if (obstructions.empty() && !params.mask_path.empty()) obstructions = "mask " + params.mask_path;
     std::printf("not-sky pixels filled: %.1f%% of the disc%s%s\n", disc ? 100.0 * filled / disc : 0.0,
-                params.mask_path.empty() ? "" : (" (mask " + params.mask_path + ")").c_str(),
+                obstructions.empty() ? "" : (" (" + obstructions + ")").c_str(),
                 params.inpaint ? "" : " (left black: --no-inpaint)");
+    if (!o.filled_mask.empty()) {
+        // 255 where the import filled the sky in (arm, band, masts, unseen), 0 elsewhere: what
+        // evaluations and training leave out.
+        Image m(o.resolution, o.resolution, 1);
+        for (size_t p = 0; p < imported.not_sky.size(); ++p) m.pixels[p] = imported.not_sky[p] ? 1.0f : 0.0f;
+        write_image(o.filled_mask, m);
+    }
 
     SkyImage sky = imported.sky;
     std::string unit = "relative linear units (decoded photo values)";
@@ -158,6 +170,8 @@ void run_import(const ImportOptions& o) {
             hp.location = where;
             hp.turbidity = o.turbidity;
             hp.sun_search_deg = sun_search;
+            hp.camera_colour = camera_colour;
+            hp.white_balance = !o.keep_colours;
             HdrCalibrationReport report;
             sky = recover_hdr(imported, hp, &report);
             std::printf("time %s; %s\n", format_utc_time(utc).c_str(), report.summary().c_str());
@@ -175,6 +189,27 @@ void run_import(const ImportOptions& o) {
     save_sky(o.out, sky);
     std::printf("wrote %s (%dx%d fisheye, %s)\n", o.out.c_str(), o.resolution, o.resolution, unit.c_str());
     if (!o.preview.empty()) write_preview(o.preview, sky_to_image(sky));
+}
+
+// Without its mask file, a preset's own obstruction geometry in the photo's grid (as import uses it):
+// fixed rectangles, the shadow band at the sun's azimuth for the file name's time, the horizon profile.
+std::vector<unsigned char> preset_geometry_not_sky(const std::string& preset, const std::string& photo,
+                                                   const SkyCircle& circle, int width, int height) {
+    const PresetImportPlan plan = plan_preset_import(preset, photo, 64);
+    const PhotoImportParams& p = plan.params;
+    PhotoGeometry g;
+    g.circle = circle;
+    g.lens = p.lens, g.north_deg = p.north_deg, g.mirrored = p.mirrored;
+    g.tilt_deg = p.tilt_deg, g.tilt_azimuth_deg = p.tilt_azimuth_deg;
+    std::vector<unsigned char> out = horizon_obstruction_mask(p.horizon_obstructions, circle, width, height);
+    if (p.shadow_band) {
+        const auto band = shadow_band_mask(*p.shadow_band, g, width, height);
+        for (size_t k = 0; k < out.size(); ++k) out[k] |= band[k];
+    }
+    for (const auto& r : p.not_sky_rects)
+        for (int y = std::max(0, r[1]); y < std::min(height, r[1] + r[3]); ++y)
+            for (int x = std::max(0, r[0]); x < std::min(width, r[0] + r[2]); ++x) out[size_t(y) * width + x] = 1;
+    return out;
 }
 
 void run_mask(const MaskOptions& o) {
@@ -210,6 +245,8 @@ void run_mask(const MaskOptions& o) {
             if (!mask_path.empty())
                 not_sky = load_not_sky_mask(mask_path, o.mask.empty() ? pp.mask_layout : MaskLayout::PhotoBlackIsNotSky,
                                             photo.width, photo.height);
+            else if (!o.preset.empty())
+                not_sky = preset_geometry_not_sky(o.preset, o.input, c, photo.width, photo.height);
             for (int y = 0; y < photo.height; ++y)
                 for (int x = 0; x < photo.width; ++x) {
                     double dx = x - c.center_x, dy = y - c.center_y;
@@ -276,7 +313,8 @@ void register_sky_import_commands(CLI::App& sky) {
         "--mask-layout", io->mask_layout,
         "photo (default: photo-sized, black = not sky), tsi (a TSI tsi_cloudmask/ frame: black inside its circle, "
         "extended radially beyond) or alonso-planar (the Mobotix background_mask.png)");
-    imp->add_flag("--no-preset-mask", io->no_preset_mask, "Do not look for the preset's mask beside the photo");
+    imp->add_flag("--no-preset-mask", io->no_preset_mask,
+                  "Do not look for the preset's mask beside the photo: use the preset's obstruction geometry");
     imp->add_flag("--detect-obstructions", io->detect,
                   "Also detect dark obstructions (shadow band, arm, masts) and fill them");
     imp->add_flag("--no-inpaint", io->no_inpaint, "Leave non-sky pixels black instead of filling them");
@@ -299,6 +337,9 @@ void register_sky_import_commands(CLI::App& sky) {
         "--hdr", io->hdr,
         "none: linear relative values; calibrated: absolute radiance (W m^-2 sr^-1) from the clear-sky model and "
         "the sun restored; auto (default): calibrated when time and place are known");
+    imp->add_flag("--keep-camera-colours", io->keep_colours,
+                  "Calibrate one scale for all channels, keeping the camera's colours (default: colours corrected "
+                  "to the clear-sky model on the clear sky, clouds kept grey; docs/sky-import.md)");
     imp->add_option("--turbidity", io->turbidity, "Clear-sky model turbidity for the calibration (default 3)")
         ->check(finite_in(1, 10));
     imp->add_option("--sky-res", io->resolution, "Output fisheye size N (N x N pixels), 16..16384")
@@ -307,6 +348,9 @@ void register_sky_import_commands(CLI::App& sky) {
     add_hidden_alias(imp, "--res", &io->resolution);
     imp->add_option("--out,-o", io->out, "Output sky, .exr")->required();
     imp->add_option("--preview", io->preview, "Also write a tone-mapped .png preview");
+    imp->add_option("--filled-mask", io->filled_mask,
+                    "Also write the pixels the import filled in (arm, band, masts; 255) as a .png of the sky's size, "
+                    "for evaluations and training to leave out");
     imp->callback([io] { run_import(*io); });
 
     auto mo = std::make_shared<MaskOptions>();

@@ -12,6 +12,11 @@ namespace dynsky {
 
 namespace {
 
+double smoothstep01(double x) {
+    x = std::clamp(x, 0.0, 1.0);
+    return x * x * (3 - 2 * x);
+}
+
 cv::Mat saturated_pixels(const cv::Mat& unit) {
     std::vector<cv::Mat> ch;
     cv::split(unit, ch);
@@ -145,20 +150,24 @@ double estimate_sun_transmittance(const SkyImage& sky, const Vec3d& sun_in, cons
             const Color v = sky.pixel(i, j), m = model.sky_radiance(w);
             const double lv = luminance(v), lm = luminance(m);
             if (!(lm > 0) || !(m[2] > 0)) continue;
-            const double angle = std::max(std::acos(std::clamp(c, -1.0, 1.0)), kPiD / 180);
-            const double weight = 1.0 / (angle * angle);  // the cloud at the sun counts most
+            const double angle = std::acos(std::clamp(c, -1.0, 1.0)), core = p.core_deg * kPiD / 180;
+            const double weight = 1.0 / (angle * angle + core * core);  // the cloud at the sun counts most
             const double rb = (v[0] + 1e-9) / (v[2] + 1e-9), rb_clear = m[0] / m[2];
-            const double brightness = lv / lm;
-            const bool cloud = rb > p.cloud_ratio * rb_clear || brightness > p.brightness_ratio ||
-                               brightness < 1.0 / p.brightness_ratio;
+            const double brightness = std::max(lv, 1e-12) / lm;
+            // How far towards cloud, in units of each threshold (1: at the threshold).
+            const double whiter = std::log(rb / rb_clear) / std::log(p.cloud_ratio);
+            const double departs = std::abs(std::log(brightness)) / std::log(p.brightness_ratio);
+            const double x = std::max(whiter, departs);
+            double cloud;
+            if (p.edge_softness <= 0) cloud = x > 1 ? 1 : 0;
+            else cloud = smoothstep01((x - (1 - p.edge_softness)) / (2 * p.edge_softness));
             total += weight;
-            if (!cloud) clear += weight;
+            clear += weight * (1 - cloud);
         }
     if (!(total > 0)) return 1.0;
     // The clear share through a smoothstep: three quarters clear around the sun lets it all
     // through, a quarter none (a sun is behind a cloud or not; the share only says how likely).
-    const double x = std::clamp((clear / total - p.covered_share) / (p.clear_share - p.covered_share), 0.0, 1.0);
-    return x * x * (3 - 2 * x);
+    return smoothstep01((clear / total - p.covered_share) / (p.clear_share - p.covered_share));
 }
 
 double relative_sun_transmittance(const SkyImage& moved, const SkyImage& start, std::optional<Vec3d> sun) {

@@ -47,17 +47,23 @@ void restore_pixels(SkyImage* sky, const SkyImage& from, const cv::Mat& mask, do
 // How much of the direct sun a sky lets through (glossary: "sun transmittance"), estimated from
 // the sky around the sun, since the sun itself has been cut out (or hidden by a shadow band): the
 // pixels within outer_deg of the sun's direction are compared with the clear sky (Hosek-Wilkie) of
-// that sun, pixel by pixel; a pixel is cloud when its colour is whiter than the clear sky's
-// (red/blue ratio over the model's beyond cloud_ratio) or its luminance departs from the model's by
-// more than brightness_ratio either way. The clear share of those pixels, each weighted by
-// 1 / max(angle to the sun, 1 degree)^2 (the cloud at the sun counts most), goes through a
-// smoothstep from covered_share (0) to clear_share (1).
+// that sun, pixel by pixel. A pixel's cloudiness rises smoothly (a smoothstep in log units) as its
+// colour turns whiter than the clear sky's (red/blue ratio over the model's towards cloud_ratio) or
+// its luminance departs from the model's towards brightness_ratio either way: a cloud's edge, where
+// the sky turns gradually, counts gradually, so a cloud sliding over the sun dims it without a
+// jump. The clear share of those pixels, each weighted by 1 / (angle to the sun^2 + core_deg^2)
+// (the cloud at the sun counts most), goes through a smoothstep from covered_share (0) to
+// clear_share (1).
 // Thresholds calibrated on the ARM TSI day against the imager's own cloud masks
 // (docs/animation.md, "The sun and passing clouds").
 struct SunTransmittanceParams {
     double inner_deg = 0.0, outer_deg = 12.0;  // the disc (or ring) around the sun
-    double cloud_ratio = 1.25;                 // (r/b) / (r/b)_clear beyond this: cloud
-    double brightness_ratio = 2.5;             // luminance / clear luminance beyond this or below its inverse: cloud
+    double cloud_ratio = 1.25;                 // (r/b) / (r/b)_clear at this: half cloud
+    double brightness_ratio = 2.5;             // luminance / clear luminance at this or its inverse: half cloud
+    // Width of the cloudiness ramp in units of the log thresholds above: a pixel is clear below
+    // (1 - edge_softness) x the threshold and cloud beyond (1 + edge_softness) x it (0: a hard switch).
+    double edge_softness = 0.5;
+    double core_deg = 0.5;                            // the weights' core (the sun's own pixel is finite)
     double covered_share = 0.25, clear_share = 0.75;  // the smoothstep's ends
     double turbidity = 3.0;                           // of the clear sky compared with
 };

@@ -29,6 +29,10 @@ std::string HdrCalibrationReport::summary() const {
     s << "HDR calibration: " << method << ", scale " << scale << " W m^-2 sr^-1 per unit";
     s.precision(3);
     s << ", clear pixels " << clear_fraction * 100 << "% of the disc (ratio spread " << ratio_spread * 100 << "%)";
+    s << ", colour: " << white_balance_method;
+    if (white_balance_method.rfind("none", 0) != 0)
+        s << " (grey R/G " << std::exp(grey_rg) << " B/G " << std::exp(grey_bg) << ", chroma stretch " << chroma_rg
+          << " " << chroma_bg << ")";
     s << ", sun elevation " << sun_elevation_deg << " deg";
     if (sun_elevation_deg < 0) s << " (below the horizon: the model is a sunset sky, the scale is unreliable)";
     if (sun_offset_deg >= 0) s << ", clipped sun seen " << sun_offset_deg << " deg from the computed one";
@@ -147,9 +151,12 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) disc += in.in_disc(i, j) ? 1 : 0;
     int stride = std::max(1, int(std::sqrt(double(disc) / 40000.0)));
-    std::vector<double> ratios;
+    struct Sample {
+        Color photo, model;
+        bool clear;
+    };
+    std::vector<Sample> samples;  // clear and cloudy, for the scale's fallback too
     long long clear = 0;
-    double sum_model = 0, sum_photo = 0;
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
             size_t p = size_t(j) * n + i;
@@ -161,14 +168,80 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
             // Clipped pixels are only lower bounds: never calibrate on them.
             bool is_clear = !photo.clipped[p] && !is_cloud(e[0], e[1], e[2], params.clear_rule);
             if (is_clear) ++clear;
-            double y_photo = luminance(in.pixel(i, j));
-            double y_model = luminance(model.sky_radiance(w));
-            sum_model += y_model;
-            sum_photo += y_photo;
-            if (is_clear && y_photo > 1e-4) ratios.push_back(y_model / y_photo);
+            samples.push_back({in.pixel(i, j), model.sky_radiance(w), is_clear});
         }
     rep.clear_pixels = clear * stride * stride;  // counted on the subsample
     rep.clear_fraction = disc ? std::min(1.0, double(rep.clear_pixels) / double(disc)) : 0;
+
+    // Colour: log chromaticities (log R/G, log B/G) of the clear pixels against the model's.
+    const float floor = 1e-4f;  // darker channels say nothing about colour
+    std::vector<double> photo_rg, photo_bg, model_rg, model_bg;
+    for (const Sample& s : samples)
+        if (s.clear && s.photo.minCoeff() > floor && s.model.minCoeff() > 0) {
+            photo_rg.push_back(std::log(s.photo[0] / s.photo[1]));
+            photo_bg.push_back(std::log(s.photo[2] / s.photo[1]));
+            model_rg.push_back(std::log(s.model[0] / s.model[1]));
+            model_bg.push_back(std::log(s.model[2] / s.model[1]));
+        }
+    const bool fit = rep.clear_fraction >= params.min_white_balance_fraction && photo_rg.size() >= 20;
+    const auto& cam = params.camera_colour;
+    if (!params.white_balance) {
+        rep.white_balance_method = "none (the camera's colours kept)";
+    } else if (cam) {
+        rep.grey_rg = std::log(cam->grey[0] / cam->grey[1]);
+        rep.grey_bg = std::log(cam->grey[2] / cam->grey[1]);
+        rep.chroma_rg = cam->chroma_rg, rep.chroma_bg = cam->chroma_bg;
+        // The stretch that takes the clear pixels' colour, seen from the camera's grey, to the model's.
+        // Only where the model's sky is clearly coloured on that axis, and within a plausible range
+        // (an overcast taken for clear sky gives a stretch near 0).
+        auto stretch = [](double photo, double grey, double model, double* k) {
+            if (std::abs(model) < 0.15) return false;
+            const double v = (photo - grey) / model;
+            if (!(v >= 0.5 && v <= 4)) return false;
+            *k = v;
+            return true;
+        };
+        double krg = 0, kbg = 0;
+        if (fit && stretch(median_of(photo_rg), rep.grey_rg, median_of(model_rg), &krg) &&
+            stretch(median_of(photo_bg), rep.grey_bg, median_of(model_bg), &kbg)) {
+            rep.chroma_rg = krg, rep.chroma_bg = kbg;
+            rep.white_balance_method = "clear-sky pixels, from the camera's grey";
+        } else {
+            rep.white_balance_method = fit ? "the camera's typical colour (the clear pixels' colour is implausible)"
+                                           : "the camera's typical colour (too few clear pixels to fit it)";
+        }
+    } else if (fit) {
+        rep.grey_rg = median_of(photo_rg) - median_of(model_rg);
+        rep.grey_bg = median_of(photo_bg) - median_of(model_bg);
+        rep.white_balance_method = "clear-sky pixels (per-channel gains)";
+    } else {
+        rep.white_balance_method = "none (too few clear pixels to fit it, and the camera's colour is unknown)";
+    }
+    const bool recolour = params.white_balance && rep.white_balance_method.rfind("none", 0) != 0;
+    // One pixel's colour corrected, its luminance kept. Near saturation in every channel (the sun's
+    // clipped aureole and what the fill spreads from it) the camera's colour is lost, not tinted:
+    // such pixels go to grey instead, smoothly from 85 % to 97 % of the clip level.
+    const double clip = photo.clip_level;
+    auto corrected = [&](Color c) -> Color {
+        if (!recolour || !(c.minCoeff() > 0)) return c;
+        const double rg = (std::log(c[0] / c[1]) - rep.grey_rg) / rep.chroma_rg;
+        const double bg = (std::log(c[2] / c[1]) - rep.grey_bg) / rep.chroma_bg;
+        Color out(float(std::exp(rg)), 1.0f, float(std::exp(bg)));
+        const double y = luminance(c);
+        const double white = std::clamp((linear_to_srgb(c.minCoeff()) / clip - 0.85) / 0.12, 0.0, 1.0);
+        const double w = white * white * (3 - 2 * white);
+        return (1 - w) * out * float(y / luminance(out)) + w * Color(float(y), float(y), float(y));
+    };
+    for (Sample& s : samples) s.photo = corrected(s.photo);
+
+    std::vector<double> ratios;
+    double sum_model = 0, sum_photo = 0;
+    for (const Sample& s : samples) {
+        const double y_photo = luminance(s.photo), y_model = luminance(s.model);
+        sum_model += y_model;
+        sum_photo += y_photo;
+        if (s.clear && y_photo > 1e-4) ratios.push_back(y_model / y_photo);
+    }
     if (rep.clear_fraction >= params.min_clear_fraction && ratios.size() >= 20) {
         rep.method = "clear-sky pixels";
         rep.scale = median_of(ratios);
@@ -182,7 +255,9 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     }
 
     SkyImage out = in;
-    for (float& v : out.rgb) v = float(v * rep.scale);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+            if (in.in_disc(i, j)) out.set_pixel(i, j, corrected(in.pixel(i, j)) * float(rep.scale));
 
     if (params.restore_sun && rep.sun_visible && rep.used_sun.y() > 0) {
         // The disc, splatted conserving its energy exactly as make_clear_sky does, but only onto

@@ -5,11 +5,16 @@
 //  1. the photo is already linear (sRGB-decoded by sky/photo_import.h), but its scale is unknown;
 //  2. the clear-sky model (sky/clear_sky.h, Hosek-Wilkie, W m^-2 sr^-1) is evaluated for the sun's
 //     position at the photo's time and place;
-//  3. on the photo's CLEAR pixels (cloud rule says clear, not clipped, not filled, away from the sun
-//     and the horizon) the ratio model luminance / photo luminance is taken; its median is the
-//     scale applied to the whole photo (colours keep the camera's white balance);
-//     with too few clear pixels (overcast) the scale instead matches the photo's mean luminance to
-//     the clear model's: a weak, documented fallback;
+//  3. colour (docs/sky-import.md): with a camera's colour known (CameraColour: its grey and typical
+//     chroma stretch), every pixel's log(R/G), log(B/G) is taken relative to the camera's grey and
+//     divided by the chroma stretch, fitted per photo so that the CLEAR pixels (cloud rule says clear,
+//     not clipped, not filled, away from the sun and the horizon) get the model's colour: clouds stay
+//     grey and the clear sky gets the model's blue. Without it, per-channel gains (a diagonal white
+//     balance) fitted on the clear pixels. Luminance is kept; too few clear pixels: the camera's
+//     typical colour, or none;
+//     then the ratio model luminance / photo luminance on the clear pixels is taken, and its median
+//     is the scale applied to the whole photo; with too few clear pixels (overcast) the scale instead
+//     matches the photo's mean luminance to the clear model's: a weak, documented fallback;
 //  4. the sun: clipped pixels near the sun (the sun seen, saturated) get max(scaled photo, model
 //     sky + disc), which restores the disc's true radiance and the aureole's clipped core. A sun
 //     hidden by a shadow band counts as seen if the sky around the band near it is clear or clipped.
@@ -18,6 +23,7 @@
 // exactly invertible below max_radiance (which by default exceeds any sun pixel the model makes).
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "sky/cloud_mask.h"
@@ -42,6 +48,13 @@ struct HdrCalibrationParams {
     bool restore_sun = true;
     double sun_search_deg = 3;     // a clipped blob this close to the computed sun is the sun
     bool use_observed_sun = true;  // place the sun where the photo shows it (if seen)
+    // Colour against the model (step 3); false keeps the camera's colours (one scale for all three
+    // channels).
+    bool white_balance = true;
+    // Clear pixels needed to fit the colour, as a fraction of the disc.
+    double min_white_balance_fraction = 0.03;
+    // The camera's colour rendering (CameraPreset::colour); none: per-channel gains.
+    std::optional<CameraColour> camera_colour;
 };
 
 struct HdrCalibrationReport {
@@ -50,7 +63,12 @@ struct HdrCalibrationReport {
     long long clear_pixels = 0;  // pixels used (before subsampling)
     double clear_fraction = 0;   // of the disc
     double ratio_spread = 0;     // median absolute deviation / median of the per-pixel ratios
-    bool sun_visible = false;    // clipped sun found, or sun behind the band with clear sky around
+    // Colour correction applied before the scale (luminance kept): log(R/G), log(B/G) minus
+    // grey_rg/grey_bg (the camera's grey, or the fitted gains' log), divided by chroma_rg/chroma_bg;
+    // and where it came from ("clear-sky pixels", "the camera's typical colour (...)", "none (...)").
+    double grey_rg = 0, grey_bg = 0, chroma_rg = 1, chroma_bg = 1;
+    std::string white_balance_method = "none";
+    bool sun_visible = false;  // clipped sun found, or sun behind the band with clear sky around
     bool sun_restored = false;
     double sun_offset_deg = -1;    // angle between the clipped sun seen and the computed sun (-1: not seen)
     double sun_elevation_deg = 0;  // computed

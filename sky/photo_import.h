@@ -79,6 +79,24 @@ enum class MaskLayout {
     AlonsoPlanarGreenIsNotSky,
 };
 
+// A TSI's shadow band as the photo shows it: a strip through the sky circle's centre towards the
+// sun's azimuth (the imager turns its mirror so the band hides the sun), from start_px along that
+// direction (negative: it begins behind the centre) to beyond the rim. Measured on the imager's own
+// masks (docs/sky-import.md): the strip's centre line lies within 0.1 deg of the sun's azimuth.
+struct ShadowBand {
+    double azimuth_deg = 0;     // the sun's at the photo's time (set per photo)
+    double half_width_px = 30;  // photo pixels either side of the centre line
+    double start_px = -20;      // where the strip begins, along its direction from the circle's centre
+};
+
+// An obstruction on the horizon (roof, railing, mast) in the photo: from radius_fraction x the sky
+// circle's radius outwards, between two image angles (degrees clockwise from the photo's top).
+// A list of these is a horizon profile: everything below an object's top is hidden too.
+struct HorizonObstruction {
+    double from_deg = 0, to_deg = 0;
+    double radius_fraction = 1;
+};
+
 struct PhotoImportParams {
     int resolution = 512;               // N of the N x N canonical output
     std::optional<SkyCircle> circle;    // none: found automatically (find_sky_circle)
@@ -94,7 +112,9 @@ struct PhotoImportParams {
     bool detect_obstructions = false;  // also find dark obstructions (detect_dark_obstructions)
     // Photo rectangles that are never sky, {x, y, width, height} in pixels (burnt-in captions).
     std::vector<std::array<int, 4>> not_sky_rects;
-    bool inpaint = true;  // fill non-sky pixels (cv::inpaint, Telea); else leave 0
+    std::optional<ShadowBand> shadow_band;                 // also not sky: a band at the sun's azimuth
+    std::vector<HorizonObstruction> horizon_obstructions;  // also not sky: a horizon profile
+    bool inpaint = true;                                   // fill non-sky pixels (cv::inpaint, Telea); else leave 0
     // Input encoding: "auto" (8-bit formats are sRGB-encoded, .exr/.hdr/.pfm are linear), "srgb", "linear".
     std::string encoding = "auto";
     // Saturation: a pixel is "clipped" if its largest channel is within 2/255 of this encoded level.
@@ -141,9 +161,25 @@ SkyCircle find_sky_circle(const Image& photo, const std::string& name, double mi
 std::vector<unsigned char> detect_dark_obstructions(const Image& encoded_photo, const SkyCircle& circle,
                                                     double darkness = 0.45);
 
+// The band's and the horizon profile's pixels in the photo's grid as 0/1 (1 = not sky), for the
+// photo's circle and orientation (`geometry`).
+std::vector<unsigned char> shadow_band_mask(const ShadowBand& band, const PhotoGeometry& geometry, int photo_width,
+                                            int photo_height);
+std::vector<unsigned char> horizon_obstruction_mask(const std::vector<HorizonObstruction>& profile,
+                                                    const SkyCircle& circle, int photo_width, int photo_height);
+
 // Reads a mask file into the photo's grid as 0/1 (1 = not sky). Throws naming the mask file.
 std::vector<unsigned char> load_not_sky_mask(const std::string& path, MaskLayout layout, int photo_width,
                                              int photo_height);
+
+// How a camera renders colour, against a grey and the clear-sky model (sky/hdr_recovery.h): a grey
+// (a cloud lit by the sun and sky) comes out as `grey` (R, G, B, relative), and the sky's colour
+// away from that grey is stretched: log(R/G) and log(B/G), measured from the grey's, are chroma_rg
+// and chroma_bg times the clear-sky model's (typical values; fitted per photo when it shows clear sky).
+struct CameraColour {
+    Color grey = Color(1, 1, 1);
+    double chroma_rg = 1, chroma_bg = 1;
+};
 
 // Camera presets for the real data sets in ../shared/skies (docs/sky-import.md says how each was
 // measured): "arm-tsi" (ARM SGP C1 Total Sky Imager) and "mobotix" (Mobotix, Sophia Antipolis).
@@ -155,6 +191,15 @@ struct CameraPreset {
     // Offset of the file names' clock from UTC, hours (local = UTC + offset). TSI names are UTC.
     double filename_utc_offset_hours = 0;
     double sun_search_deg = 3;  // how far from the computed sun a seen sun may lie (HDR recovery)
+    // The camera's own obstructions as geometry, used when its mask file is not beside the photo
+    // (plan_preset_import): fixed rectangles (the TSI's camera arm and housing), a shadow band at the
+    // sun's azimuth, a horizon profile (the Mobotix's roofs and masts). Derived once from the masks
+    // in ../shared/skies (docs/sky-import.md), so no mask file is shipped or needed.
+    std::vector<std::array<int, 4>> fixed_not_sky_rects;
+    std::optional<ShadowBand> shadow_band;
+    std::vector<HorizonObstruction> horizon_obstructions;
+    // How the camera renders colour (sky/hdr_recovery.h CameraColour); none: unknown.
+    std::optional<CameraColour> colour;
 };
 CameraPreset camera_preset(const std::string& name);
 std::vector<std::string> camera_preset_names();

@@ -3,8 +3,11 @@
 // builder and the evaluation of cloud models alike.
 //
 // Decisions: the preset's geometry; its mask file found beside the photo (find_preset_mask), else
-// detection of dark obstructions; the place; the time from the file name on the preset's clock;
-// HDR calibration against the clear-sky model (sky/hdr_recovery.h) when the time is known.
+// the preset's own obstruction geometry (the TSI's arm, housing and a shadow band at the sun's
+// azimuth for the photo's time; the Mobotix's horizon profile), or detection of dark obstructions
+// for what the geometry cannot place (a band without a time); the place; the time from the file
+// name on the preset's clock; HDR calibration against the clear-sky model (sky/hdr_recovery.h)
+// when the time is known.
 #pragma once
 
 #include <string>
@@ -21,9 +24,13 @@ struct PresetImportPlan {
     GeoLocation location;      // the preset's place
     std::string time;          // ISO 8601 from the file name ("" if none)
     bool mask_found = false;   // the preset's mask file lies beside the photo
+    std::string obstructions;  // for people: where the not-sky pixels come from
 };
 
-PresetImportPlan plan_preset_import(const std::string& preset, const std::string& photo, int resolution);
+// `time` (ISO 8601 with a zone) overrides the file name's; the band follows the time used.
+// look_for_mask false: the preset's geometry even if a mask file lies beside the photo.
+PresetImportPlan plan_preset_import(const std::string& preset, const std::string& photo, int resolution,
+                                    const std::string& time = "", bool look_for_mask = true);
 
 // The HDR sky exactly as `dynsky sky import --preset P --res R` writes it, with the import's
 // not-sky mask (1 = hidden by the arm, band or masts and filled in) when asked for.

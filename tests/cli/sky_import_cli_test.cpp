@@ -18,8 +18,9 @@ std::string exe() { return DYNSKY_EXE; }
 TEST(SkyImportCli, HelpDescribesTheOptions) {
     auto r = test::run_command(exe() + " sky import --help");
     EXPECT_EQ(r.exit_code, 0) << r.output;
-    for (const char* word : {"--preset", "--center", "--radius", "--lens", "--north", "--mirror", "--mask", "--time",
-                             "--lat", "--lon", "--hdr", "--sky-res", "--out", "--preview", "equisolid"})
+    for (const char* word :
+         {"--preset", "--center", "--radius", "--lens", "--north", "--mirror", "--mask", "--time", "--lat", "--lon",
+          "--hdr", "--sky-res", "--out", "--preview", "--filled-mask", "equisolid"})
         EXPECT_NE(r.output.find(word), std::string::npos) << word;
 }
 
@@ -36,6 +37,43 @@ TEST(SkyImportCli, ImportsATsiFrameWithItsPreset) {
     ASSERT_TRUE(sky.sun_direction.has_value());
     EXPECT_GT(sky.sun_direction->y(), 0.8f);  // 65 degrees up at 17:00 UTC
     EXPECT_TRUE(fs::exists(dir + "/tsi.png"));
+    fs::remove_all(dir);
+}
+
+// A TSI photo alone in a folder (no tsi_cloudmask/ beside it): the preset draws the arm, housing
+// and band itself, says so, and --filled-mask writes the filled pixels (about 14 % of the disc).
+TEST(SkyImportCli, TsiPhotoWithoutItsMaskWritesTheFilledMask) {
+    DYNSKY_REQUIRE_SHARED();
+    std::string dir = test::temp_dir("sky-import-cli-nomask");
+    fs::create_directories(dir + "/set/images");
+    const std::string photo = dir + "/set/images/tsi_sgpC1_20170524170000Z.jpg";
+    fs::copy_file(test::shared_path("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg"), photo);
+    auto r = test::run_command(exe() + " sky import " + photo + " --preset arm-tsi --res 128 --out " + dir +
+                               "/tsi.exr --filled-mask " + dir + "/filled.png");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("shadow band at the sun's azimuth"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("from the camera's grey"), std::string::npos) << r.output;
+    Image filled = read_image(dir + "/filled.png");
+    ASSERT_EQ(filled.width, 128);
+    SkyImage sky = load_sky(dir + "/tsi.exr");
+    long long disc = 0, set = 0;
+    for (int j = 0; j < 128; ++j)
+        for (int i = 0; i < 128; ++i)
+            if (sky.in_disc(i, j)) ++disc, set += filled.at(i, j, 0) > 0.5f;
+    EXPECT_NEAR(double(set) / double(disc), 0.14, 0.015);
+    // sky mask --preset leaves out the same obstructions as with the imager's mask file.
+    auto sky_pixels = [](const std::string& output) {
+        const size_t at = output.find(" sky pixels");
+        const size_t from = output.rfind(' ', at - 1);
+        return at == std::string::npos ? -1.0 : std::stod(output.substr(from + 1, at - from - 1));
+    };
+    auto without = test::run_command(exe() + " sky mask " + photo + " --preset arm-tsi --out " + dir + "/m1.png");
+    auto with = test::run_command(exe() + " sky mask " +
+                                  test::shared_path("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg") +
+                                  " --preset arm-tsi --out " + dir + "/m2.png");
+    ASSERT_EQ(without.exit_code, 0) << without.output;
+    ASSERT_EQ(with.exit_code, 0) << with.output;
+    EXPECT_NEAR(sky_pixels(without.output) / sky_pixels(with.output), 1.0, 0.02) << without.output << with.output;
     fs::remove_all(dir);
 }
 

@@ -77,11 +77,17 @@ TEST(SunTransmittance, CloudCrossingTheSunDimsItAsTheProceduralSkyDoes) {
     SkyImage cut = input;
     remove_sun(&cut);
     const double sun_lx = sky_illuminance(input) - sky_illuminance(cut);
-    double worst = 0, worst_undimmed = 0, sum = 0;
+    // When the cloud's edge reaches the sun (the truth's transmittance first below one half).
+    double t_cover = -1;
+    for (double t = 0; t <= duration + 1e-9 && t_cover < 0; t += 5)
+        if (truth.sun_transmittance(t) < 0.5) t_cover = t;
+    double worst = 0, worst_undimmed = 0, worst_edge = 0, sum = 0;
     int frames = 0;
     for (double t = 0; t <= duration + 1e-9; t += 5) {
         SkyImage frame = timeline.sky_at(t);
         double want = sky_illuminance(truth.render(t, n)), got = sky_illuminance(frame);
+        if (t >= t_cover - 10 - 1e-9 && t <= t_cover + 1e-9)
+            worst_edge = std::max(worst_edge, std::abs(got / want - 1));
         double undimmed = got + (1 - timeline.last_sun_weight()) * sun_lx;  // the sun put back as it was
         worst = std::max(worst, std::abs(got / want - 1));
         worst_undimmed = std::max(worst_undimmed, std::abs(undimmed / want - 1));
@@ -89,11 +95,18 @@ TEST(SunTransmittance, CloudCrossingTheSunDimsItAsTheProceduralSkyDoes) {
         std::printf("t %5.1f s  truth %7.0f lx (sun T %.2f)  timeline %7.0f lx (sun weight %.2f)  undimmed %7.0f lx\n",
                     t, want, truth.sun_transmittance(t), got, timeline.last_sun_weight(), undimmed);
     }
-    std::printf("seed %llu: largest error %.1f %% (mean %.1f %%); with the sun put back undimmed %.1f %%\n",
-                (unsigned long long)p.seed, 100 * worst, 100 * sum / frames, 100 * worst_undimmed);
-    // Follows the truth: the mean relative error over the frames within 15 % (the largest, at the
-    // instant the cloud's edge crosses the sun, is reported).
-    EXPECT_LT(sum / frames, 0.15);
+    std::printf(
+        "seed %llu: largest error %.1f %% (mean %.1f %%), in the 10 s up to the edge covering the sun (t = %.0f s) "
+        "%.1f %%; with the sun put back undimmed %.1f %%\n",
+        (unsigned long long)p.seed, 100 * worst, 100 * sum / frames, t_cover, 100 * worst_edge, 100 * worst_undimmed);
+    // Follows the truth: within 15 % from 10 s before the cloud's edge covers the sun to the frame it
+    // does (a hard clear/cloud switch per pixel missed by 28.7 % there, dimming 5 s early), mean
+    // within 7 %. Every frame within 20 %:
+    // once covered, the moved sky is 14-18 % over the truth whatever the sun's weight (the aureole
+    // painted into the input travels with the clouds, while the truth's stays behind its cloud).
+    EXPECT_LT(worst_edge, 0.15);
+    EXPECT_LT(sum / frames, 0.07);
+    EXPECT_LT(worst, 0.20);
     EXPECT_GT(worst_undimmed, 0.5) << "the cloud over the sun must matter, or the test says nothing";
 }
 
@@ -138,6 +151,7 @@ TEST(SunTransmittance, AgreesWithTheImagersMasksOnTheArmDay) {
         hp.time = parse_utc_time(plan.time);
         hp.location = plan.location;
         hp.sun_search_deg = plan.preset.sun_search_deg;
+        hp.camera_colour = plan.preset.colour;
         HdrCalibrationReport report;
         SkyImage sky = recover_hdr(imported, hp, &report);
         int labelled = 0;
