@@ -16,13 +16,12 @@
 #include "sky/fisheye.h"
 #include "util/allocation.h"
 #include "util/error.h"
-#include "util/json_file.h"
 
 namespace dynsky {
 
 namespace fs = std::filesystem;
 
-std::string cloud_model_kind(const std::string& folder) {
+nlohmann::json read_model_description(const std::string& folder) {
     const std::string path = (fs::path(folder) / "model.json").string();
     if (!fs::is_directory(folder)) throw_file_error(folder, "model folder not found");
     if (!fs::exists(path)) throw_file_error(path, "model description not found (is this a model folder?)");
@@ -42,7 +41,11 @@ std::string cloud_model_kind(const std::string& folder) {
         throw_file_error(path, "\"version\" is " +
                                    (j.contains("version") ? j["version"].dump() : std::string("missing")) +
                                    ": a model description needs a whole version number");
-    return j.value("kind", std::string("flownet-cloudnet"));
+    return j;
+}
+
+std::string cloud_model_kind(const std::string& folder) {
+    return read_model_description(folder).value("kind", std::string("flownet-cloudnet"));
 }
 
 AdvectResidualNetwork AdvectResidualNetwork::pure_advection(int resolution, double dt) {
@@ -55,14 +58,14 @@ AdvectResidualNetwork AdvectResidualNetwork::pure_advection(int resolution, doub
 }
 
 AdvectResidualNetwork AdvectResidualNetwork::load(const std::string& folder) {
-    const std::string kind = cloud_model_kind(folder);
+    const nlohmann::json j = read_model_description(folder);
+    const std::string kind = j.value("kind", std::string("flownet-cloudnet"));
     const std::string json_path = (fs::path(folder) / "model.json").string();
     if (kind != "advect-residual") throw_file_error(json_path, "kind '" + kind + "' is not an advect-residual model");
     AdvectResidualNetwork m;
     AdvectResidualInfo& info = m.info_;
     info.folder = folder;
     try {
-        nlohmann::json j = read_json(json_path);
         const int version = j.value("version", 0);
         if (version != 2)
             throw_file_error(json_path, "version " + std::to_string(version) + " (this dynsky reads version 2)");

@@ -32,6 +32,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <nlohmann/json.hpp>
 #include <vector>
 
 #include "motion/cloud_layer_paths.h"
@@ -206,5 +207,8 @@ class AdvectResidualStepModel : public MediumStepModel {
 // The kind of a model folder's model.json ("advect-residual", or "flownet-cloudnet" for the
 // paper's v1 folders without a kind). Throws naming the file when it is missing or unreadable.
 std::string cloud_model_kind(const std::string& folder);
+// FOLDER/model.json, parsed once and checked to be a dynsky-cloud-model with a whole version; throws
+// naming the file otherwise.
+nlohmann::json read_model_description(const std::string& folder);
 
 }  // namespace dynsky

@@ -40,14 +40,12 @@ CloudModel CloudModel::load(const std::string& folder) {
     if (!fs::is_directory(folder)) throw_file_error(folder, "model folder not found");
     const std::string json_path = (fs::path(folder) / "model.json").string();
     if (!fs::exists(json_path)) throw_file_error(json_path, "model description not found (is this a model folder?)");
-    cloud_model_kind(folder);  // a JSON object of format dynsky-cloud-model with a version
+    const nlohmann::json j = read_model_description(folder);  // format checked, a whole version
     CloudModel model;
     CloudModelInfo& info = model.info_;
     info.folder = folder;
     try {
-        std::ifstream f(json_path);
-        nlohmann::json j = nlohmann::json::parse(f);
-        // cloud_model_kind() has checked the format; this reader knows version 1 only.
+        // This reader knows version 1 only.
         if (j.value("kind", std::string("flownet-cloudnet")) != "flownet-cloudnet")
             throw Error("kind '" + j.value("kind", std::string()) + "' is not a FlowNet + CloudNet model");
         if (j.at("version").get<int>() != 1)
