@@ -98,9 +98,27 @@ bool Accel::intersect_raw(const Ray& ray, float* t) const {
     return true;
 }
 
-bool Accel::intersect(const Ray& ray, SurfaceHit* hit) const {
+void Accel::setup_ray_hit(const Ray& ray, RTCRayHit* rh) {
+    setup_ray(ray, &rh->ray);
+    rh->hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+}
+
+void Accel::intersect_coherent(RTCRayHit* rays, unsigned n) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    rtcIntersect1M(top_, &ctx, rays, n, sizeof(RTCRayHit));
+}
+
+bool Accel::intersect(const Ray& ray, SurfaceHit* hit, bool all_attributes) const {
     RTCRayHit rh;
     if (!trace_closest(ray, &rh)) return false;
+    return surface_hit(ray, rh, hit, all_attributes);
+}
+
+bool Accel::surface_hit(const Ray& ray, const RTCRayHit& rh, SurfaceHit* hit, bool all_attributes) const {
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
 
     int inst = int(rh.hit.instID[0]);
     const Instance& instance = scene_.instances[size_t(inst)];
@@ -112,11 +130,19 @@ bool Accel::intersect(const Ray& ray, SurfaceHit* hit) const {
     hit->t = rh.ray.tfar;
     hit->position = ray.origin + hit->t * ray.direction;
     hit->instance = inst, hit->primitive = int(rh.hit.geomID), hit->triangle = int(tri);
-    hit->material = &scene_.material(mesh.material);
+    const Material& material = scene_.material(mesh.material);
+    hit->material = &material;
 
     const Eigen::Matrix3f& nm = normal_matrices_[size_t(inst)];
-    const Vec3 &p0 = mesh.positions[i0], &p1 = mesh.positions[i1], &p2 = mesh.positions[i2];
-    Vec3 ng = nm * (p1 - p0).cross(p2 - p0);
+    Vec3 ng;
+    if (all_attributes) {
+        const Vec3 &p0 = mesh.positions[i0], &p1 = mesh.positions[i1], &p2 = mesh.positions[i2];
+        ng = nm * (p1 - p0).cross(p2 - p0);
+    } else {
+        // Embree's normal (object space for instances; its sign does not matter, shading puts the
+        // normals on the viewer's side).
+        ng = nm * Vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+    }
     float len = ng.norm();
     hit->geometric_normal = len > 0 ? Vec3(ng / len) : Vec3(0, 1, 0);
     if (!mesh.normals.empty()) {
@@ -126,7 +152,10 @@ bool Accel::intersect(const Ray& ray, SurfaceHit* hit) const {
     } else {
         hit->shading_normal = hit->geometric_normal;
     }
-    if (!mesh.tangents.empty()) {
+    const bool textured = material.base_color_texture.present() || material.metallic_roughness_texture.present() ||
+                          material.normal_texture.present() || material.emissive_texture.present() ||
+                          material.occlusion_texture.present();
+    if (!mesh.tangents.empty() && (all_attributes || material.normal_texture.present())) {
         Vec4 t = b0 * mesh.tangents[i0] + b1 * mesh.tangents[i1] + b2 * mesh.tangents[i2];
         Vec3 tw = instance.transform.linear() * t.head<3>();
         float l = tw.norm();
@@ -137,7 +166,8 @@ bool Accel::intersect(const Ray& ray, SurfaceHit* hit) const {
     }
     for (int k = 0; k < 2; ++k) {
         const auto& uv = mesh.texcoords[k];
-        hit->texcoord[k] = uv.empty() ? Vec2::Zero() : Vec2(b0 * uv[i0] + b1 * uv[i1] + b2 * uv[i2]);
+        hit->texcoord[k] = uv.empty() || !(all_attributes || textured) ? Vec2::Zero()
+                                                                       : Vec2(b0 * uv[i0] + b1 * uv[i1] + b2 * uv[i2]);
     }
     hit->color = mesh.colors.empty() ? Vec4::Ones()
                                      : Vec4(b0 * mesh.colors[i0] + b1 * mesh.colors[i1] + b2 * mesh.colors[i2]);

@@ -37,7 +37,17 @@ class Accel {
     Accel(const Accel&) = delete;
     Accel& operator=(const Accel&) = delete;
 
-    bool intersect(const Ray& ray, SurfaceHit* hit) const;
+    // all_attributes false (the integrator): texture coordinates only for materials with textures and
+    // tangents only for normal-mapped ones (zero otherwise), and the geometric normal from Embree's,
+    // so a hit reads no more of the mesh than its shading needs (the loads of unused vertex
+    // attributes miss the cache and evict the BVH).
+    bool intersect(const Ray& ray, SurfaceHit* hit, bool all_attributes = true) const;
+    // Closest hits of n rays at once, through Embree's stream API with the coherent flag (for camera
+    // rays, which Embree then traverses as packets). Each record is set up by setup_ray_hit first.
+    void intersect_coherent(RTCRayHit* rays, unsigned n) const;
+    static void setup_ray_hit(const Ray& ray, RTCRayHit* rh);
+    // The SurfaceHit of a record that intersect_coherent filled (false: the ray missed); as intersect.
+    bool surface_hit(const Ray& ray, const RTCRayHit& rh, SurfaceHit* hit, bool all_attributes = true) const;
     // Closest hit distance only (for benchmarks of raw traversal).
     bool intersect_raw(const Ray& ray, float* t) const;
     bool occluded(const Ray& ray) const;

@@ -279,6 +279,17 @@ Color EnvLight::radiance_filtered(const Vec3& w) const {
     return fisheye::bilinear_in_disc(sky_->rgb.data(), n, fx, fy, &c) ? c : radiance(w);
 }
 
+void EnvLight::prefetch(const Vec3& w) const {
+    Vec2 uv;
+    if (!sky_ || !fisheye::uv_from_direction(w, &uv)) return;
+    const int n = sky_->resolution;
+    const int i = std::clamp(int((uv.x() + 1) * 0.5f * n), 0, n - 1);
+    const int j = std::clamp(int((uv.y() + 1) * 0.5f * n), 0, n - 1);
+    __builtin_prefetch(&sky_->rgb[(size_t(j) * n + i) * 3]);
+    if (const Distribution2D* d = sampler_->distribution(); d && d->width() == n && d->height() == n)
+        d->prefetch_cell(i, j);
+}
+
 float EnvLight::pdf(const Vec3& w) const {
     if (w.y() < 0) return (1 - sky_probability_) / (2 * kPi);
     return sky_probability_ * sampler_->pdf(w);

@@ -51,6 +51,10 @@ class EnvLight {
     // weight, so it need not match the pdf, and a low-resolution sky then looks smooth, not blocky.
     Color radiance_filtered(const Vec3& w) const;
     float pdf(const Vec3& w) const;
+    // Starts loading the sky pixel and sampling weights that radiance(w) and pdf(w) read, so a path
+    // can overlap those cache misses (the image and its weights are megabytes, read at random by
+    // escaping rays) with the traversal of a ray towards w. Changes nothing else.
+    void prefetch(const Vec3& w) const;
     bool sample(float u_choice, const Vec2& u, EnvLightSample* out) const;
 
     float ground_albedo() const { return ground_albedo_; }
