@@ -40,9 +40,10 @@ class EnvLight {
     // when the resolution is unchanged). The scene is untouched.
     void set_sky(std::shared_ptr<const SkyImage> sky);
     // Radiance below the horizon from an image instead of the ground model (a lat-long HDRI's lower
-    // half, sky/latlong.h latlong_to_fisheye with lower = true); nullptr: back to the model. Kept
-    // across set_sky. The ground stays sampled uniformly (in proportion to its mean power), which
-    // is unbiased whatever it holds.
+    // half, sky/latlong.h latlong_to_fisheye with lower = true, mirrored: its zenith is the nadir);
+    // nullptr: back to the model. Kept across set_sky. The image is importance sampled like the sky
+    // (a sampler of the same method over luminance x solid angle, nearest-pixel radiance, so sample,
+    // pdf and radiance agree); the model's uniform ground is sampled uniformly.
     void set_ground_image(std::shared_ptr<const SkyImage> ground);
     double last_build_seconds() const { return build_seconds_; }
 
@@ -90,6 +91,8 @@ class EnvLight {
     // outside the disc, the nearest pixel inward.
     int lookup_pixel(const Vec2& uv) const;
     Color ground(const Vec3& w) const;
+    // Density of ground samples per unit solid angle (w below the horizon), given the ground is chosen.
+    float ground_pdf(const Vec3& w) const;
 
     std::shared_ptr<const SkyImage> sky_;
     SkySamplerOptions sampler_options_;
@@ -105,6 +108,9 @@ class EnvLight {
     int table_resolution_ = 0;
     float ground_albedo_;
     std::shared_ptr<const SkyImage> ground_image_;
+    std::unique_ptr<SkySampler> ground_sampler_;  // over ground_image_ (null for the model)
+    std::vector<float> ground_weights_;
+    std::vector<uint16_t> ground_jacobian_;
     Color ground_image_mean_ = Color::Zero();
     Color ground_radiance_ = Color::Zero();
     Color sky_irradiance_ = Color::Zero();
