@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <limits>
 #include <filesystem>
 #include <memory>
@@ -50,6 +51,13 @@ struct RenderOptions {
     std::string override_material = "none";
     SkySourceSpec generated;  // --sky clear|procedural[:SEED] with --sky-res, --time, --lat, --lon
 };
+
+// CPU seconds of this process, all threads together.
+double process_cpu_seconds() {
+    timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
 
 // The default sky when --sky is not given: a clear afternoon over Paris at the summer solstice.
 std::shared_ptr<SkyImage> default_sky() {
@@ -141,12 +149,16 @@ int run_render(const RenderOptions& o) {
     settings.noise_threshold = o.noise_threshold, settings.time_limit_seconds = o.time_limit;
     settings.clamp_indirect = o.clamp_indirect, settings.filter_glossy = o.filter_glossy;
     PathIntegrator integrator(accel, light, settings);
+    const double cpu_before = process_cpu_seconds();
     RenderResult result = integrator.render(camera);
+    const double render_cpu_seconds = process_cpu_seconds() - cpu_before;
 
     Image& image = result.color;
     image.metadata.numbers["dynsky:spp"] = o.spp;
     image.metadata.numbers["dynsky:seed"] = double(o.seed);
     image.metadata.numbers["dynsky:render_seconds"] = result.stats.seconds;
+    // CPU time of all threads: comparable across runs on a shared machine (bench/cycles_equal_error.sh).
+    image.metadata.numbers["dynsky:render_cpu_seconds"] = render_cpu_seconds;
     image.metadata.numbers["dynsky:sky_distribution_seconds"] = light.last_build_seconds();
     image.metadata.numbers["dynsky:ground_albedo"] = o.ground_albedo;
     image.metadata.numbers["dynsky:time"] = sky->time_seconds;  // frame time (glossary)
