@@ -302,6 +302,7 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
 
 void PathIntegrator::sample_tile(const Camera& camera, float tan_half, float aspect, const TilePixel* pixels, int n,
                                  int count, RenderStats* stats) const {
+    if (n == 0) return;
     const bool features = settings_.aovs.any();
     const bool sobol = settings_.pattern == SamplePattern::ZSobol;
     std::vector<ZSobolSampler> zsobol(sobol ? size_t(n) : 0,

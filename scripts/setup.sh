@@ -15,6 +15,11 @@ packages=(
 # python3-torch and python3-onnx: the cloud networks' training code and its tests (NetworksTraining)
 # run under /usr/bin/python3; the program itself runs the networks through OpenCV and needs neither.
 # (--training is still accepted: everything is installed either way.)
+# --cycles also installs Blender (optional, large): the Cycles cross-checks in tools/cycles and
+# bench/cycles_equal_error.sh call it when present; no test needs it.
+for arg in "$@"; do
+  if [[ $arg == --cycles ]]; then packages+=(blender); fi
+done
 
 missing=()
 for p in "${packages[@]}"; do
