@@ -1,6 +1,11 @@
 #include "renderer/accel.h"
 
+#include <cstdlib>
 #include <cstring>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 #include "util/error.h"
 
@@ -45,6 +50,32 @@ Accel::Accel(const Scene& scene) : scene_(scene) {
         mesh_scenes_[g] = ms;
     }
 
+    // Per-triangle corner normals (see accel.h), on transparent huge pages when available.
+    corner_first_.resize(scene.meshes.size());
+    int64_t triangles = 0;
+    for (size_t g = 0; g < scene.meshes.size(); ++g)
+        for (const TriangleMesh& mesh : scene.meshes[g].primitives) {
+            corner_first_[g].push_back(mesh.normals.empty() ? -1 : triangles);
+            if (!mesh.normals.empty()) triangles += int64_t(mesh.triangle_count());
+        }
+    if (triangles > 0) {
+        constexpr size_t kHuge = size_t(1) << 21;
+        const size_t bytes = (size_t(triangles) * 9 * sizeof(float) + kHuge - 1) / kHuge * kHuge;
+        corner_normals_.reset(static_cast<float*>(std::aligned_alloc(kHuge, bytes)));
+        if (!corner_normals_) throw Error("out of memory for the corner normals");
+#if defined(MADV_HUGEPAGE)
+        madvise(corner_normals_.get(), bytes, MADV_HUGEPAGE);  // advice only: fine if refused
+#endif
+        for (size_t g = 0; g < scene.meshes.size(); ++g)
+            for (size_t p = 0; p < scene.meshes[g].primitives.size(); ++p) {
+                const TriangleMesh& mesh = scene.meshes[g].primitives[p];
+                if (corner_first_[g][p] < 0) continue;
+                float* out = corner_normals_.get() + 9 * corner_first_[g][p];
+                for (size_t k = 0; k < mesh.indices.size(); ++k)
+                    std::memcpy(out + 3 * k, mesh.normals[mesh.indices[k]].data(), 3 * sizeof(float));
+            }
+    }
+
     top_ = rtcNewScene(device_);
     normal_matrices_.resize(scene.instances.size());
     for (size_t i = 0; i < scene.instances.size(); ++i) {
@@ -66,6 +97,8 @@ Accel::Accel(const Scene& scene) : scene_(scene) {
         bounds_.extend(Vec3(b.upper_x, b.upper_y, b.upper_z));
     }
 }
+
+void Accel::FreeDeleter::operator()(float* p) const { std::free(p); }
 
 Accel::~Accel() {
     if (top_) rtcReleaseScene(top_);
@@ -124,13 +157,20 @@ bool Accel::surface_hit(const Ray& ray, const RTCRayHit& rh, SurfaceHit* hit, bo
     const Instance& instance = scene_.instances[size_t(inst)];
     const TriangleMesh& mesh = scene_.meshes[size_t(instance.mesh_group)].primitives[rh.hit.geomID];
     uint32_t tri = rh.hit.primID;
-    uint32_t i0 = mesh.indices[3 * tri], i1 = mesh.indices[3 * tri + 1], i2 = mesh.indices[3 * tri + 2];
     float b1 = rh.hit.u, b2 = rh.hit.v, b0 = 1 - b1 - b2;
+    const Material& material = scene_.material(mesh.material);
+    const bool textured = material.base_color_texture.present() || material.metallic_roughness_texture.present() ||
+                          material.normal_texture.present() || material.emissive_texture.present() ||
+                          material.occlusion_texture.present();
+    const int64_t corners = corner_first_[size_t(instance.mesh_group)][rh.hit.geomID];
+    // The index buffer only when some attribute needs it (the corner normals serve the rest).
+    const bool indexed = all_attributes || textured || !mesh.colors.empty() || (!mesh.normals.empty() && corners < 0);
+    uint32_t i0 = 0, i1 = 0, i2 = 0;
+    if (indexed) i0 = mesh.indices[3 * tri], i1 = mesh.indices[3 * tri + 1], i2 = mesh.indices[3 * tri + 2];
 
     hit->t = rh.ray.tfar;
     hit->position = ray.origin + hit->t * ray.direction;
     hit->instance = inst, hit->primitive = int(rh.hit.geomID), hit->triangle = int(tri);
-    const Material& material = scene_.material(mesh.material);
     hit->material = &material;
 
     const Eigen::Matrix3f& nm = normal_matrices_[size_t(inst)];
@@ -145,16 +185,18 @@ bool Accel::surface_hit(const Ray& ray, const RTCRayHit& rh, SurfaceHit* hit, bo
     }
     float len = ng.norm();
     hit->geometric_normal = len > 0 ? Vec3(ng / len) : Vec3(0, 1, 0);
-    if (!mesh.normals.empty()) {
+    if (!mesh.normals.empty() && !indexed) {
+        const float* c = corner_normals_.get() + 9 * (corners + int64_t(tri));
+        Vec3 ns = nm * (b0 * Vec3(c[0], c[1], c[2]) + b1 * Vec3(c[3], c[4], c[5]) + b2 * Vec3(c[6], c[7], c[8]));
+        float l = ns.norm();
+        hit->shading_normal = l > 0 ? Vec3(ns / l) : hit->geometric_normal;
+    } else if (!mesh.normals.empty()) {
         Vec3 ns = nm * (b0 * mesh.normals[i0] + b1 * mesh.normals[i1] + b2 * mesh.normals[i2]);
         float l = ns.norm();
         hit->shading_normal = l > 0 ? Vec3(ns / l) : hit->geometric_normal;
     } else {
         hit->shading_normal = hit->geometric_normal;
     }
-    const bool textured = material.base_color_texture.present() || material.metallic_roughness_texture.present() ||
-                          material.normal_texture.present() || material.emissive_texture.present() ||
-                          material.occlusion_texture.present();
     if (!mesh.tangents.empty() && (all_attributes || material.normal_texture.present())) {
         Vec4 t = b0 * mesh.tangents[i0] + b1 * mesh.tangents[i1] + b2 * mesh.tangents[i2];
         Vec3 tw = instance.transform.linear() * t.head<3>();
