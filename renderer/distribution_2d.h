@@ -48,6 +48,7 @@ class Distribution2D {
         if (baseline_) __builtin_prefetch(&baseline_[k]);
     }
 
+    const std::vector<float>& weights() const { return weights_; }
     int width() const { return width_; }
     int height() const { return height_; }
     // Integral of the piecewise-constant function over [0,1]^2 (sum of weights / (W H)).

@@ -6,6 +6,13 @@
 #include <emmintrin.h>
 #endif
 
+#if defined(__linux__)
+#include <sys/mman.h>
+#ifndef MADV_COLLAPSE
+#define MADV_COLLAPSE 25  // Linux 6.1; older kernels refuse it (EINVAL), which is fine
+#endif
+#endif
+
 #include <algorithm>
 #include <chrono>
 #include <limits>
@@ -217,7 +224,27 @@ void EnvLight::set_sky(std::shared_ptr<const SkyImage> sky) {
         weights.mis_floor = 0;
         sampler_->build(*sky_, weights);
     }
+    // Escaping rays read the image, the weights and the MIS baseline at random: with 4 KB pages each
+    // read is also a page walk (the prefetch waits on it). Once per buffer, not per frame.
+    back_by_huge_pages(sky_->rgb.data(), sky_->rgb.size() * sizeof(float));
+    back_by_huge_pages(jacobian_table_.data(), jacobian_table_.size() * sizeof(uint16_t));
+    if (const Distribution2D* d = sampler_->distribution())
+        back_by_huge_pages(d->weights().data(), d->weights().size() * sizeof(float));
     build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void EnvLight::back_by_huge_pages(const void* data, size_t bytes) {
+#if defined(__linux__)
+    constexpr uintptr_t kHuge = uintptr_t(1) << 21;
+    const uintptr_t lo = (reinterpret_cast<uintptr_t>(data) + kHuge - 1) & ~(kHuge - 1);
+    const uintptr_t hi = (reinterpret_cast<uintptr_t>(data) + bytes) & ~(kHuge - 1);
+    if (hi <= lo || std::find(huge_buffers_.begin(), huge_buffers_.end(), data) != huge_buffers_.end()) return;
+    madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_COLLAPSE);  // advice: refused is fine
+    if (huge_buffers_.size() >= 8) huge_buffers_.erase(huge_buffers_.begin());
+    huge_buffers_.push_back(data);
+#else
+    (void)data, (void)bytes;
+#endif
 }
 
 void EnvLight::set_ground_image(std::shared_ptr<const SkyImage> ground) {

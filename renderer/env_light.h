@@ -116,6 +116,9 @@ class EnvLight {
     Color sky_irradiance_ = Color::Zero();
     float sky_probability_ = 1.0f;
     double build_seconds_ = 0;
+    // Buffers already backed by huge pages (see back_by_huge_pages in env_light.cpp).
+    std::vector<const void*> huge_buffers_;
+    void back_by_huge_pages(const void* data, size_t bytes);
 };
 
 }  // namespace dynsky
