@@ -60,11 +60,14 @@ Accel::Accel(const Scene& scene) : scene_(scene) {
         }
     if (triangles > 0) {
         constexpr size_t kHuge = size_t(1) << 21;
-        const size_t bytes = (size_t(triangles) * 9 * sizeof(float) + kHuge - 1) / kHuge * kHuge;
-        corner_normals_.reset(static_cast<float*>(std::aligned_alloc(kHuge, bytes)));
+        const size_t used = size_t(triangles) * 9 * sizeof(float);
+        // Huge-page granules only where they pay (a small scene's records fit the cache anyway).
+        const size_t align = used >= kHuge ? kHuge : 64;
+        const size_t bytes = (used + align - 1) / align * align;
+        corner_normals_.reset(static_cast<float*>(std::aligned_alloc(align, bytes)));
         if (!corner_normals_) throw Error("out of memory for the corner normals");
 #if defined(MADV_HUGEPAGE)
-        madvise(corner_normals_.get(), bytes, MADV_HUGEPAGE);  // advice only: fine if refused
+        if (align == kHuge) madvise(corner_normals_.get(), bytes, MADV_HUGEPAGE);  // advice: refused is fine
 #endif
         for (size_t g = 0; g < scene.meshes.size(); ++g)
             for (size_t p = 0; p < scene.meshes[g].primitives.size(); ++p) {
