@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <limits>
 #include <filesystem>
 #include <memory>
@@ -47,8 +48,16 @@ struct RenderOptions {
     float noise_threshold = 0, clamp_indirect = 0, filter_glossy = 0;
     double time_limit = 0;
     std::string sampler_pattern = "random";
+    std::string override_material = "none";
     SkySourceSpec generated;  // --sky clear|procedural[:SEED] with --sky-res, --time, --lat, --lon
 };
+
+// CPU seconds of this process, all threads together.
+double process_cpu_seconds() {
+    timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
 
 // The default sky when --sky is not given: a clear afternoon over Paris at the summer solstice.
 std::shared_ptr<SkyImage> default_sky() {
@@ -59,6 +68,24 @@ std::shared_ptr<SkyImage> default_sky() {
     auto sky = std::make_shared<SkyImage>(make_clear_sky(p, 1024));
     sky->source = "builtin: clear sky, Paris 2026-06-21T16:00:00Z, turbidity 3";
     return sky;
+}
+
+// Every surface a Lambertian of its base colour (textures and vertex colours kept), as
+// tools/cycles/render_cycles.py --override-material lambert does in Cycles: the two renderers then
+// share an exact BRDF, which separates geometry and lighting from material models. Emission goes
+// too, as it does there.
+void override_lambert(Scene* scene) {
+    int white = -1;
+    for (MeshGroup& group : scene->meshes)
+        for (TriangleMesh& mesh : group.primitives)
+            if (mesh.material < 0) {
+                if (white < 0) {
+                    scene->materials.push_back(Scene::default_material());
+                    white = int(scene->materials.size()) - 1;
+                }
+                mesh.material = white;
+            }
+    for (Material& m : scene->materials) m.metallic = 0, m.specular = 0, m.emissive = Color::Zero();
 }
 
 int run_render(const RenderOptions& o) {
@@ -90,8 +117,9 @@ int run_render(const RenderOptions& o) {
 
     LoadedScene loaded = load_scene(SceneSpec{o.scene, o.camera, o.ground_albedo, o.look_at, o.fov},
                                     float(width) / height);
-    const Scene& scene = loaded.scene;
+    Scene& scene = loaded.scene;
     const Camera& camera = loaded.camera;
+    if (o.override_material == "lambert") override_lambert(&scene);
 
     std::shared_ptr<SkyImage> sky, ground;  // ground: a lat-long environment's lower half
     if (o.sky.empty() && o.generated.time.empty()) {
@@ -121,12 +149,16 @@ int run_render(const RenderOptions& o) {
     settings.noise_threshold = o.noise_threshold, settings.time_limit_seconds = o.time_limit;
     settings.clamp_indirect = o.clamp_indirect, settings.filter_glossy = o.filter_glossy;
     PathIntegrator integrator(accel, light, settings);
+    const double cpu_before = process_cpu_seconds();
     RenderResult result = integrator.render(camera);
+    const double render_cpu_seconds = process_cpu_seconds() - cpu_before;
 
     Image& image = result.color;
     image.metadata.numbers["dynsky:spp"] = o.spp;
     image.metadata.numbers["dynsky:seed"] = double(o.seed);
     image.metadata.numbers["dynsky:render_seconds"] = result.stats.seconds;
+    // CPU time of all threads: comparable across runs on a shared machine (bench/cycles_equal_error.sh).
+    image.metadata.numbers["dynsky:render_cpu_seconds"] = render_cpu_seconds;
     image.metadata.numbers["dynsky:sky_distribution_seconds"] = light.last_build_seconds();
     image.metadata.numbers["dynsky:ground_albedo"] = o.ground_albedo;
     image.metadata.numbers["dynsky:time"] = sky->time_seconds;  // frame time (glossary)
@@ -244,6 +276,11 @@ void register_render_command(CLI::App& app) {
                     "Sample values: 'random' (independent PCG32 streams per pixel, the reference) or 'sobol'\n"
                     "(Owen-scrambled Sobol in Z order, pbrt-v4's ZSobol: lower error per sample); both give the same\n"
                     "image on any thread count")
+        ->capture_default_str();
+    cmd->add_option("--override-material", o->override_material,
+                    "'lambert': every surface a Lambertian of its base colour (to compare lighting and geometry\n"
+                    "with tools/cycles/render_cycles.py --override-material lambert); 'none' (default)")
+        ->check(CLI::IsMember({"none", "lambert"}))
         ->capture_default_str();
     cmd->add_flag("--quiet,-q", o->quiet, "No progress bar or summary");
     cmd->callback([o] { run_render(*o); });

@@ -1,6 +1,11 @@
 #include "renderer/accel.h"
 
+#include <cstdlib>
 #include <cstring>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 #include "util/error.h"
 
@@ -45,6 +50,35 @@ Accel::Accel(const Scene& scene) : scene_(scene) {
         mesh_scenes_[g] = ms;
     }
 
+    // Per-triangle corner normals (see accel.h), on transparent huge pages when available.
+    corner_first_.resize(scene.meshes.size());
+    int64_t triangles = 0;
+    for (size_t g = 0; g < scene.meshes.size(); ++g)
+        for (const TriangleMesh& mesh : scene.meshes[g].primitives) {
+            corner_first_[g].push_back(mesh.normals.empty() ? -1 : triangles);
+            if (!mesh.normals.empty()) triangles += int64_t(mesh.triangle_count());
+        }
+    if (triangles > 0) {
+        constexpr size_t kHuge = size_t(1) << 21;
+        const size_t used = size_t(triangles) * 9 * sizeof(float);
+        // Huge-page granules only where they pay (a small scene's records fit the cache anyway).
+        const size_t align = used >= kHuge ? kHuge : 64;
+        const size_t bytes = (used + align - 1) / align * align;
+        corner_normals_.reset(static_cast<float*>(std::aligned_alloc(align, bytes)));
+        if (!corner_normals_) throw Error("out of memory for the corner normals");
+#if defined(MADV_HUGEPAGE)
+        if (align == kHuge) madvise(corner_normals_.get(), bytes, MADV_HUGEPAGE);  // advice: refused is fine
+#endif
+        for (size_t g = 0; g < scene.meshes.size(); ++g)
+            for (size_t p = 0; p < scene.meshes[g].primitives.size(); ++p) {
+                const TriangleMesh& mesh = scene.meshes[g].primitives[p];
+                if (corner_first_[g][p] < 0) continue;
+                float* out = corner_normals_.get() + 9 * corner_first_[g][p];
+                for (size_t k = 0; k < mesh.indices.size(); ++k)
+                    std::memcpy(out + 3 * k, mesh.normals[mesh.indices[k]].data(), 3 * sizeof(float));
+            }
+    }
+
     top_ = rtcNewScene(device_);
     normal_matrices_.resize(scene.instances.size());
     for (size_t i = 0; i < scene.instances.size(); ++i) {
@@ -66,6 +100,8 @@ Accel::Accel(const Scene& scene) : scene_(scene) {
         bounds_.extend(Vec3(b.upper_x, b.upper_y, b.upper_z));
     }
 }
+
+void Accel::FreeDeleter::operator()(float* p) const { std::free(p); }
 
 Accel::~Accel() {
     if (top_) rtcReleaseScene(top_);
@@ -98,35 +134,73 @@ bool Accel::intersect_raw(const Ray& ray, float* t) const {
     return true;
 }
 
-bool Accel::intersect(const Ray& ray, SurfaceHit* hit) const {
+void Accel::setup_ray_hit(const Ray& ray, RTCRayHit* rh) {
+    setup_ray(ray, &rh->ray);
+    rh->hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+}
+
+void Accel::intersect_coherent(RTCRayHit* rays, unsigned n) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    rtcIntersect1M(top_, &ctx, rays, n, sizeof(RTCRayHit));
+}
+
+bool Accel::intersect(const Ray& ray, SurfaceHit* hit, bool all_attributes) const {
     RTCRayHit rh;
     if (!trace_closest(ray, &rh)) return false;
+    return surface_hit(ray, rh, hit, all_attributes);
+}
+
+bool Accel::surface_hit(const Ray& ray, const RTCRayHit& rh, SurfaceHit* hit, bool all_attributes) const {
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
 
     int inst = int(rh.hit.instID[0]);
     const Instance& instance = scene_.instances[size_t(inst)];
     const TriangleMesh& mesh = scene_.meshes[size_t(instance.mesh_group)].primitives[rh.hit.geomID];
     uint32_t tri = rh.hit.primID;
-    uint32_t i0 = mesh.indices[3 * tri], i1 = mesh.indices[3 * tri + 1], i2 = mesh.indices[3 * tri + 2];
     float b1 = rh.hit.u, b2 = rh.hit.v, b0 = 1 - b1 - b2;
+    const Material& material = scene_.material(mesh.material);
+    const bool textured = material.base_color_texture.present() || material.metallic_roughness_texture.present() ||
+                          material.normal_texture.present() || material.emissive_texture.present() ||
+                          material.occlusion_texture.present();
+    const int64_t corners = corner_first_[size_t(instance.mesh_group)][rh.hit.geomID];
+    // The index buffer only when some attribute needs it (the corner normals serve the rest).
+    const bool indexed = all_attributes || textured || !mesh.colors.empty() || (!mesh.normals.empty() && corners < 0);
+    uint32_t i0 = 0, i1 = 0, i2 = 0;
+    if (indexed) i0 = mesh.indices[3 * tri], i1 = mesh.indices[3 * tri + 1], i2 = mesh.indices[3 * tri + 2];
 
     hit->t = rh.ray.tfar;
     hit->position = ray.origin + hit->t * ray.direction;
     hit->instance = inst, hit->primitive = int(rh.hit.geomID), hit->triangle = int(tri);
-    hit->material = &scene_.material(mesh.material);
+    hit->material = &material;
 
     const Eigen::Matrix3f& nm = normal_matrices_[size_t(inst)];
-    const Vec3 &p0 = mesh.positions[i0], &p1 = mesh.positions[i1], &p2 = mesh.positions[i2];
-    Vec3 ng = nm * (p1 - p0).cross(p2 - p0);
+    Vec3 ng;
+    if (all_attributes) {
+        const Vec3 &p0 = mesh.positions[i0], &p1 = mesh.positions[i1], &p2 = mesh.positions[i2];
+        ng = nm * (p1 - p0).cross(p2 - p0);
+    } else {
+        // Embree's normal (object space for instances; its sign does not matter, shading puts the
+        // normals on the viewer's side).
+        ng = nm * Vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+    }
     float len = ng.norm();
     hit->geometric_normal = len > 0 ? Vec3(ng / len) : Vec3(0, 1, 0);
-    if (!mesh.normals.empty()) {
+    if (!mesh.normals.empty() && !indexed) {
+        const float* c = corner_normals_.get() + 9 * (corners + int64_t(tri));
+        Vec3 ns = nm * (b0 * Vec3(c[0], c[1], c[2]) + b1 * Vec3(c[3], c[4], c[5]) + b2 * Vec3(c[6], c[7], c[8]));
+        float l = ns.norm();
+        hit->shading_normal = l > 0 ? Vec3(ns / l) : hit->geometric_normal;
+    } else if (!mesh.normals.empty()) {
         Vec3 ns = nm * (b0 * mesh.normals[i0] + b1 * mesh.normals[i1] + b2 * mesh.normals[i2]);
         float l = ns.norm();
         hit->shading_normal = l > 0 ? Vec3(ns / l) : hit->geometric_normal;
     } else {
         hit->shading_normal = hit->geometric_normal;
     }
-    if (!mesh.tangents.empty()) {
+    if (!mesh.tangents.empty() && (all_attributes || material.normal_texture.present())) {
         Vec4 t = b0 * mesh.tangents[i0] + b1 * mesh.tangents[i1] + b2 * mesh.tangents[i2];
         Vec3 tw = instance.transform.linear() * t.head<3>();
         float l = tw.norm();
@@ -137,7 +211,8 @@ bool Accel::intersect(const Ray& ray, SurfaceHit* hit) const {
     }
     for (int k = 0; k < 2; ++k) {
         const auto& uv = mesh.texcoords[k];
-        hit->texcoord[k] = uv.empty() ? Vec2::Zero() : Vec2(b0 * uv[i0] + b1 * uv[i1] + b2 * uv[i2]);
+        hit->texcoord[k] = uv.empty() || !(all_attributes || textured) ? Vec2::Zero()
+                                                                       : Vec2(b0 * uv[i0] + b1 * uv[i1] + b2 * uv[i2]);
     }
     hit->color = mesh.colors.empty() ? Vec4::Ones()
                                      : Vec4(b0 * mesh.colors[i0] + b1 * mesh.colors[i1] + b2 * mesh.colors[i2]);

@@ -6,6 +6,7 @@
 #include <embree3/rtcore.h>
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "renderer/scene.h"
@@ -37,7 +38,17 @@ class Accel {
     Accel(const Accel&) = delete;
     Accel& operator=(const Accel&) = delete;
 
-    bool intersect(const Ray& ray, SurfaceHit* hit) const;
+    // all_attributes false (the integrator): texture coordinates only for materials with textures and
+    // tangents only for normal-mapped ones (zero otherwise), and the geometric normal from Embree's,
+    // so a hit reads no more of the mesh than its shading needs (the loads of unused vertex
+    // attributes miss the cache and evict the BVH).
+    bool intersect(const Ray& ray, SurfaceHit* hit, bool all_attributes = true) const;
+    // Closest hits of n rays at once, through Embree's stream API with the coherent flag (for camera
+    // rays, which Embree then traverses as packets). Each record is set up by setup_ray_hit first.
+    void intersect_coherent(RTCRayHit* rays, unsigned n) const;
+    static void setup_ray_hit(const Ray& ray, RTCRayHit* rh);
+    // The SurfaceHit of a record that intersect_coherent filled (false: the ray missed); as intersect.
+    bool surface_hit(const Ray& ray, const RTCRayHit& rh, SurfaceHit* hit, bool all_attributes = true) const;
     // Closest hit distance only (for benchmarks of raw traversal).
     bool intersect_raw(const Ray& ray, float* t) const;
     bool occluded(const Ray& ray) const;
@@ -52,6 +63,15 @@ class Accel {
     RTCScene top_ = nullptr;
     std::vector<RTCScene> mesh_scenes_;
     std::vector<Eigen::Matrix3f> normal_matrices_;  // per instance: inverse transpose of the linear part
+    // The three vertex normals of every triangle (9 floats, primitives of all meshes one after the
+    // other; corner_first_[group][primitive] is a primitive's first triangle, -1 without normals):
+    // a hit then reads one record instead of the index buffer and three scattered normals. On huge
+    // pages where the system allows it (fewer TLB misses on large scenes).
+    struct FreeDeleter {
+        void operator()(float* p) const;
+    };
+    std::unique_ptr<float[], FreeDeleter> corner_normals_;
+    std::vector<std::vector<int64_t>> corner_first_;
     bool has_non_opaque_ = false;
     Bounds3 bounds_;
 };

@@ -85,6 +85,19 @@ MetalRoughBsdf::MetalRoughBsdf(const Color& base_color, float metallic, float ro
       specular_(clamp(specular, 0.0f, 1.0f)) {
     roughness_ = clamp(roughness, 0.0f, 1.0f);
     alpha_ = std::max(roughness_ * roughness_, kMinAlpha);
+    if (specular_ > 0) e_avg_ = specular_ * SpecularAlbedoTable::get().average(roughness_);
+}
+
+float MetalRoughBsdf::specular_albedo(float mu) const {
+    return specular_ * SpecularAlbedoTable::get().albedo(mu, roughness_);
+}
+
+void MetalRoughBsdf::set_wo(const Vec3& wo) {
+    cached_wo_z_ = -1;
+    if (!(wo.z() > 0)) return;
+    cached_e_o_ = specular_albedo(wo.z());
+    cached_ps_ = specular_probability_for(wo, cached_e_o_);
+    cached_wo_z_ = wo.z();
 }
 
 float MetalRoughBsdf::ggx_d(const Vec3& wm, float alpha) {
@@ -137,12 +150,10 @@ Color MetalRoughBsdf::eval(const Vec3& wo, const Vec3& wi) const {
     float spec = ggx_d(wm, alpha_) * smith_g1(wo, alpha_) * smith_g1(wi, alpha_) / (4 * wo.z() * wi.z());
     // Dielectric: fresnel_mix(ior 1.5) of Lambert base and specular; metal: conductor Fresnel.
     float f_dielectric = specular_ * (0.04f + 0.96f * w);
-    const auto& table = SpecularAlbedoTable::get();
     float diffuse_weight = 1.0f;
     if (specular_ > 0) {
-        float e_avg = specular_ * table.average(roughness_);
-        diffuse_weight = (1 - specular_ * table.albedo(wo.z(), roughness_)) *
-                         (1 - specular_ * table.albedo(wi.z(), roughness_)) / std::max(1 - e_avg, 1e-4f);
+        float e_o = wo.z() == cached_wo_z_ ? cached_e_o_ : specular_albedo(wo.z());
+        diffuse_weight = (1 - e_o) * (1 - specular_albedo(wi.z())) / std::max(1 - e_avg_, 1e-4f);
     }
     Color dielectric = diffuse_weight * base_ * kInvPi + Color::Constant(f_dielectric * spec);
     Color metal = (base_ + (1 - base_) * w) * spec;
@@ -150,9 +161,13 @@ Color MetalRoughBsdf::eval(const Vec3& wo, const Vec3& wi) const {
 }
 
 float MetalRoughBsdf::specular_probability(const Vec3& wo) const {
+    if (wo.z() == cached_wo_z_) return cached_ps_;
+    return specular_probability_for(wo, metallic_ >= 1 ? 0.0f : specular_albedo(wo.z()));
+}
+
+float MetalRoughBsdf::specular_probability_for(const Vec3& wo, float e_spec) const {
     if (metallic_ >= 1) return 1.0f;
     float w = schlick_weight(std::max(0.0f, wo.z()));
-    float e_spec = specular_ * SpecularAlbedoTable::get().albedo(wo.z(), roughness_);
     float spec = (1 - metallic_) * e_spec + metallic_ * luminance(base_ + (1 - base_) * w);
     float diff = (1 - metallic_) * (1 - e_spec) * luminance(base_);
     if (spec <= 0) return 0.0f;  // pure Lambertian

@@ -27,6 +27,11 @@ class MetalRoughBsdf {
     // u_lobe picks the lobe; u picks the direction within it.
     bool sample(const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* out) const;
 
+    // Precomputes what depends on wo alone (the specular lobe's albedo towards wo, the lobe
+    // probability): a path vertex evaluates, samples and takes pdfs for the same wo several times.
+    // Results are bitwise those without it; calls with another wo still work.
+    void set_wo(const Vec3& wo);
+
     float alpha() const { return alpha_; }
     // Probability of sampling the specular lobe for this wo.
     float specular_probability(const Vec3& wo) const;
@@ -39,8 +44,14 @@ class MetalRoughBsdf {
     static float ggx_vndf_pdf_wi(const Vec3& wo, const Vec3& wi, float alpha);
 
   private:
+    float specular_albedo(float mu) const;  // specular_ x E(mu): what the specular lobe reflects
+    float specular_probability_for(const Vec3& wo, float e_spec) const;
+
     Color base_;
     float metallic_, roughness_, alpha_, specular_;
+    float e_avg_ = 0;  // specular_ x the lobe's cosine-weighted mean albedo
+    // set_wo's cache: wo.z(), specular_albedo(wo.z()) and the lobe probability (valid: cached_wo_z_ > 0).
+    float cached_wo_z_ = -1, cached_e_o_ = 0, cached_ps_ = 0;
 };
 
 }  // namespace dynsky

@@ -40,7 +40,15 @@ class Distribution2D {
     // Density per unit area of [0, 1]^2 of the cell containing xy.
     float pdf(const Vec2& xy) const;
     float cell_pdf(int x, int y) const { return cell_weight(size_t(y) * width_ + x) * pdf_scale_; }
+    // Starts loading what cell_pdf(x, y) reads (see EnvLight::prefetch).
+    void prefetch_cell(int x, int y) const {
+        const size_t k = size_t(y) * width_ + x;
+        if (k >= weights_.size()) return;
+        __builtin_prefetch(&weights_[k]);
+        if (baseline_) __builtin_prefetch(&baseline_[k]);
+    }
 
+    const std::vector<float>& weights() const { return weights_; }
     int width() const { return width_; }
     int height() const { return height_; }
     // Integral of the piecewise-constant function over [0,1]^2 (sum of weights / (W H)).

@@ -6,6 +6,13 @@
 #include <emmintrin.h>
 #endif
 
+#if defined(__linux__)
+#include <sys/mman.h>
+#ifndef MADV_COLLAPSE
+#define MADV_COLLAPSE 25  // Linux 6.1; older kernels refuse it (EINVAL), which is fine
+#endif
+#endif
+
 #include <algorithm>
 #include <chrono>
 #include <limits>
@@ -217,7 +224,27 @@ void EnvLight::set_sky(std::shared_ptr<const SkyImage> sky) {
         weights.mis_floor = 0;
         sampler_->build(*sky_, weights);
     }
+    // Escaping rays read the image, the weights and the MIS baseline at random: with 4 KB pages each
+    // read is also a page walk (the prefetch waits on it). Once per buffer, not per frame.
+    back_by_huge_pages(sky_->rgb.data(), sky_->rgb.size() * sizeof(float));
+    back_by_huge_pages(jacobian_table_.data(), jacobian_table_.size() * sizeof(uint16_t));
+    if (const Distribution2D* d = sampler_->distribution())
+        back_by_huge_pages(d->weights().data(), d->weights().size() * sizeof(float));
     build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void EnvLight::back_by_huge_pages(const void* data, size_t bytes) {
+#if defined(__linux__)
+    constexpr uintptr_t kHuge = uintptr_t(1) << 21;
+    const uintptr_t lo = (reinterpret_cast<uintptr_t>(data) + kHuge - 1) & ~(kHuge - 1);
+    const uintptr_t hi = (reinterpret_cast<uintptr_t>(data) + bytes) & ~(kHuge - 1);
+    if (hi <= lo || std::find(huge_buffers_.begin(), huge_buffers_.end(), data) != huge_buffers_.end()) return;
+    madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_COLLAPSE);  // advice: refused is fine
+    if (huge_buffers_.size() >= 8) huge_buffers_.erase(huge_buffers_.begin());
+    huge_buffers_.push_back(data);
+#else
+    (void)data, (void)bytes;
+#endif
 }
 
 void EnvLight::set_ground_image(std::shared_ptr<const SkyImage> ground) {
@@ -236,14 +263,69 @@ void EnvLight::set_ground_image(std::shared_ptr<const SkyImage> ground) {
                 area += a;
             }
         ground_image_mean_ = area > 0 ? Color((sum / area).cast<float>()) : Color::Zero();
+        // Weights as the sky's: luminance x dw/(du dv) in the same fixed point (0 off the disc).
+        constexpr float kToFixed = 65535.0f / (kPi * kPi / 4);
+        const float du = 2.0f / n;
+        ground_jacobian_.assign(size_t(n) * n, 0);
+        ground_weights_.assign(size_t(n) * n, 0.0f);
+        double total = 0, jacobian_sum = 0;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                float u = (i + 0.5f) * du - 1.0f, v = (j + 0.5f) * du - 1.0f, r2 = u * u + v * v;
+                if (r2 > 1.0f) continue;
+                const size_t k = size_t(j) * n + i;
+                ground_jacobian_[k] = uint16_t(std::lround(jacobian_from_r2(r2) * kToFixed));
+                Color c = ground_image_->pixel(i, j);
+                ground_weights_[k] = luminance(Color(sane(c[0]), sane(c[1]), sane(c[2]))) * float(ground_jacobian_[k]);
+                total += ground_weights_[k], jacobian_sum += ground_jacobian_[k];
+            }
+        ground_sampler_ = make_sky_sampler(sampler_options_);
+        SkyWeights weights;
+        weights.values = &ground_weights_;
+        weights.jacobian = ground_jacobian_.data();
+        weights.n = n;
+        if (sampler_options_.mis_compensation && jacobian_sum > 0) weights.mis_floor = float(total / jacobian_sum);
+        ground_sampler_->build(*ground_image_, weights);
+        if (!ground_sampler_->has_weight() && total > 0) {
+            // Nothing above the mean (a uniform ground): uniform in solid angle over the disc.
+            ground_weights_.resize(size_t(n) * n);
+            for (size_t k = 0; k < ground_weights_.size(); ++k) ground_weights_[k] = float(ground_jacobian_[k]);
+            weights.mis_floor = 0;
+            ground_sampler_->build(*ground_image_, weights);
+        }
+        if (!ground_sampler_->has_weight()) ground_sampler_.reset();  // a black ground: sampled uniformly
+    } else {
+        ground_sampler_.reset();
     }
     if (sky_) set_sky(sky_);  // the sky / ground split of light samples follows the ground's power
 }
 
 Color EnvLight::ground(const Vec3& w) const {
     if (!ground_image_) return ground_radiance_;
-    Color c = sample_sky(*ground_image_, Vec3d(w.x(), -w.y(), w.z()));
+    // The nearest pixel of the mirrored fisheye (rim pixels inward, as the sky's), the cell the
+    // sampler's pdf reads.
+    const SkyImage& g = *ground_image_;
+    const int n = g.resolution;
+    Vec2 p;
+    fisheye::uv_from_direction(Vec3(w.x(), -w.y(), w.z()), &p);
+    int k = (n / 2) * n + n / 2;
+    for (int step = 0; step < 4; ++step) {
+        int i = std::clamp(int((p.x() + 1) * 0.5f * n), 0, n - 1);
+        int j = std::clamp(int((p.y() + 1) * 0.5f * n), 0, n - 1);
+        if (fisheye::pixel_center_uv(i, j, n).squaredNorm() <= 1.0f) {
+            k = j * n + i;
+            break;
+        }
+        float r = p.norm();
+        p *= std::max(0.0f, (r - 1.0f / n)) / std::max(r, 1e-12f);
+    }
+    const float* c = &g.rgb[size_t(k) * 3];
     return Color(sane(c[0]), sane(c[1]), sane(c[2]));
+}
+
+float EnvLight::ground_pdf(const Vec3& w) const {
+    if (!ground_sampler_) return 1 / (2 * kPi);
+    return ground_sampler_->pdf(Vec3(w.x(), -w.y(), w.z()));
 }
 
 int EnvLight::lookup_pixel(const Vec2& uv) const {
@@ -279,8 +361,19 @@ Color EnvLight::radiance_filtered(const Vec3& w) const {
     return fisheye::bilinear_in_disc(sky_->rgb.data(), n, fx, fy, &c) ? c : radiance(w);
 }
 
+void EnvLight::prefetch(const Vec3& w) const {
+    Vec2 uv;
+    if (!sky_ || !fisheye::uv_from_direction(w, &uv)) return;
+    const int n = sky_->resolution;
+    const int i = std::clamp(int((uv.x() + 1) * 0.5f * n), 0, n - 1);
+    const int j = std::clamp(int((uv.y() + 1) * 0.5f * n), 0, n - 1);
+    __builtin_prefetch(&sky_->rgb[(size_t(j) * n + i) * 3]);
+    if (const Distribution2D* d = sampler_->distribution(); d && d->width() == n && d->height() == n)
+        d->prefetch_cell(i, j);
+}
+
 float EnvLight::pdf(const Vec3& w) const {
-    if (w.y() < 0) return (1 - sky_probability_) / (2 * kPi);
+    if (w.y() < 0) return (1 - sky_probability_) * ground_pdf(w);
     return sky_probability_ * sampler_->pdf(w);
 }
 
@@ -290,6 +383,15 @@ bool EnvLight::sample(float u_choice, const Vec2& u, EnvLightSample* out) const 
         if (!sampler_->sample(u, &out->wi, &pdf)) return false;
         out->radiance = radiance(out->wi);
         out->pdf = sky_probability_ * pdf;
+        return out->pdf > 0;
+    }
+    if (ground_sampler_) {
+        Vec3 up;  // in the mirrored fisheye: its up is down
+        float pdf;
+        if (!ground_sampler_->sample(u, &up, &pdf)) return false;
+        out->wi = Vec3(up.x(), -up.y(), up.z());
+        out->radiance = ground(out->wi);
+        out->pdf = (1 - sky_probability_) * pdf;
         return out->pdf > 0;
     }
     Vec3 h = sample_uniform_hemisphere(u);  // about +Z; map +Z to -Y (down)

@@ -40,9 +40,10 @@ class EnvLight {
     // when the resolution is unchanged). The scene is untouched.
     void set_sky(std::shared_ptr<const SkyImage> sky);
     // Radiance below the horizon from an image instead of the ground model (a lat-long HDRI's lower
-    // half, sky/latlong.h latlong_to_fisheye with lower = true); nullptr: back to the model. Kept
-    // across set_sky. The ground stays sampled uniformly (in proportion to its mean power), which
-    // is unbiased whatever it holds.
+    // half, sky/latlong.h latlong_to_fisheye with lower = true, mirrored: its zenith is the nadir);
+    // nullptr: back to the model. Kept across set_sky. The image is importance sampled like the sky
+    // (a sampler of the same method over luminance x solid angle, nearest-pixel radiance, so sample,
+    // pdf and radiance agree); the model's uniform ground is sampled uniformly.
     void set_ground_image(std::shared_ptr<const SkyImage> ground);
     double last_build_seconds() const { return build_seconds_; }
 
@@ -51,6 +52,10 @@ class EnvLight {
     // weight, so it need not match the pdf, and a low-resolution sky then looks smooth, not blocky.
     Color radiance_filtered(const Vec3& w) const;
     float pdf(const Vec3& w) const;
+    // Starts loading the sky pixel and sampling weights that radiance(w) and pdf(w) read, so a path
+    // can overlap those cache misses (the image and its weights are megabytes, read at random by
+    // escaping rays) with the traversal of a ray towards w. Changes nothing else.
+    void prefetch(const Vec3& w) const;
     bool sample(float u_choice, const Vec2& u, EnvLightSample* out) const;
 
     float ground_albedo() const { return ground_albedo_; }
@@ -86,6 +91,8 @@ class EnvLight {
     // outside the disc, the nearest pixel inward.
     int lookup_pixel(const Vec2& uv) const;
     Color ground(const Vec3& w) const;
+    // Density of ground samples per unit solid angle (w below the horizon), given the ground is chosen.
+    float ground_pdf(const Vec3& w) const;
 
     std::shared_ptr<const SkyImage> sky_;
     SkySamplerOptions sampler_options_;
@@ -101,11 +108,17 @@ class EnvLight {
     int table_resolution_ = 0;
     float ground_albedo_;
     std::shared_ptr<const SkyImage> ground_image_;
+    std::unique_ptr<SkySampler> ground_sampler_;  // over ground_image_ (null for the model)
+    std::vector<float> ground_weights_;
+    std::vector<uint16_t> ground_jacobian_;
     Color ground_image_mean_ = Color::Zero();
     Color ground_radiance_ = Color::Zero();
     Color sky_irradiance_ = Color::Zero();
     float sky_probability_ = 1.0f;
     double build_seconds_ = 0;
+    // Buffers already backed by huge pages (see back_by_huge_pages in env_light.cpp).
+    std::vector<const void*> huge_buffers_;
+    void back_by_huge_pages(const void* data, size_t bytes);
 };
 
 }  // namespace dynsky

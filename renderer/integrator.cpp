@@ -153,7 +153,7 @@ float PathIntegrator::transmittance(const Ray& shadow_ray, RenderStats* stats) c
     float tr = 1.0f;
     for (int layer = 0; layer < 64; ++layer) {
         SurfaceHit hit;
-        if (!accel_.intersect(ray, &hit)) return tr;
+        if (!accel_.intersect(ray, &hit, false)) return tr;
         const Material& m = *hit.material;
         if (m.alpha_mode == AlphaMode::Opaque) return 0.0f;
         float alpha = surface_alpha(hit);
@@ -180,8 +180,8 @@ Color PathIntegrator::trace(const Ray& ray, Rng& rng, RenderStats* stats, FirstH
 }
 
 template <class Sampler>
-Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderStats* stats,
-                                 FirstHit* first_hit) const {
+Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderStats* stats, FirstHit* first_hit,
+                                 const RTCRayHit* primary) const {
     Color L = Color::Zero(), beta = Color::Ones();
     Ray ray = camera_ray_in;
     float prev_bsdf_pdf = 0;  // 0 at the camera: directly visible sky gets full weight
@@ -205,7 +205,8 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
         bool found = false;
         for (int layer = 0; layer < 64; ++layer) {
             if (observer_) observer_(ray, false);
-            found = accel_.intersect(ray, &hit);
+            found = depth == 0 && layer == 0 && primary ? accel_.surface_hit(ray, *primary, &hit, false)
+                                                        : accel_.intersect(ray, &hit, false);
             if (!found || !passes_through(hit, rng.uniform())) break;
             ray.tmin = hit.t * (1 + 1e-5f) + 1e-5f;  // continue through the transparent surface
             ++stats->extension_rays;
@@ -245,6 +246,7 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
         MetalRoughBsdf bsdf(sp.base_color, sp.metallic, roughness, sp.specular);
         Vec3 wo = sp.to_local(-ray.direction.normalized());
         if (wo.z() <= 0) break;
+        bsdf.set_wo(wo);
 
         // Next-event estimation of the sky (and ground).
         if (use_light) {
@@ -288,6 +290,7 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
             beta /= 1 - q;
         }
         if (!(beta.maxCoeff() > 0) || !beta.allFinite()) break;
+        if (use_bsdf_hits) light_.prefetch(wi_world);  // in cache by the time the ray escapes
         ray.origin = offset_ray_origin(hit.position, sp.geometric_normal, wi_world);
         ray.direction = wi_world;
         ray.tmin = 0;
@@ -297,35 +300,47 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
     return L;
 }
 
-void PathIntegrator::sample_pixel(const Camera& camera, float tan_half, float aspect, int x, int y, int count,
-                                  PixelState* st, RenderStats* stats) const {
+void PathIntegrator::sample_tile(const Camera& camera, float tan_half, float aspect, const TilePixel* pixels, int n,
+                                 int count, RenderStats* stats) const {
+    if (n == 0) return;
     const bool features = settings_.aovs.any();
     const bool sobol = settings_.pattern == SamplePattern::ZSobol;
-    ZSobolSampler zsobol(settings_.width, settings_.height, settings_.spp, settings_.seed);
+    std::vector<ZSobolSampler> zsobol(sobol ? size_t(n) : 0,
+                                      ZSobolSampler(settings_.width, settings_.height, settings_.spp, settings_.seed));
+    std::vector<Ray> rays{size_t(n)};
+    std::vector<RTCRayHit> primary{size_t(n)};
+    const Vec3 forward = (camera.camera_to_world.linear() * Vec3(0, 0, -1)).normalized();
     for (int s = 0; s < count; ++s) {
-        if (sobol) zsobol.start(x, y, st->n);
-        Vec2 jitter = sobol ? zsobol.uniform2() : st->rng.uniform2();
-        Ray ray = camera_ray(camera, tan_half, aspect, x + jitter.x(), y + jitter.y());
-        ++stats->camera_rays;
-        FirstHit first;
-        FirstHit* fh = features ? &first : nullptr;
-        Color c = sobol ? trace_path(ray, zsobol, stats, fh) : trace_path(ray, st->rng, stats, fh);
-        if (!c.allFinite()) c = Color::Zero();  // never let one bad path poison a pixel
-        Eigen::Array3d cd = c.cast<double>();
-        st->sum += cd;
-        st->sum2 += cd * cd;
-        double lum = 0.2126 * cd[0] + 0.7152 * cd[1] + 0.0722 * cd[2];
-        st->lum_sum += lum, st->lum_sum2 += lum * lum;
-        if (features && first.surface) {
-            st->albedo += first.albedo.cast<double>();
-            st->normal += first.normal.cast<double>().array();
-            st->alpha += 1;
-            if (st->n == 0) {
-                Vec3 forward = (camera.camera_to_world.linear() * Vec3(0, 0, -1)).normalized();
-                st->depth = (first.position - camera.camera_to_world.translation()).dot(forward);
-            }
+        for (int p = 0; p < n; ++p) {
+            PixelState* st = pixels[p].state;
+            if (sobol) zsobol[size_t(p)].start(pixels[p].x, pixels[p].y, st->n);
+            Vec2 jitter = sobol ? zsobol[size_t(p)].uniform2() : st->rng.uniform2();
+            rays[size_t(p)] = camera_ray(camera, tan_half, aspect, pixels[p].x + jitter.x(), pixels[p].y + jitter.y());
+            Accel::setup_ray_hit(rays[size_t(p)], &primary[size_t(p)]);
         }
-        ++st->n;
+        accel_.intersect_coherent(primary.data(), unsigned(n));
+        for (int p = 0; p < n; ++p) {
+            PixelState* st = pixels[p].state;
+            ++stats->camera_rays;
+            FirstHit first;
+            FirstHit* fh = features ? &first : nullptr;
+            const Ray& ray = rays[size_t(p)];
+            Color c = sobol ? trace_path(ray, zsobol[size_t(p)], stats, fh, &primary[size_t(p)])
+                            : trace_path(ray, st->rng, stats, fh, &primary[size_t(p)]);
+            if (!c.allFinite()) c = Color::Zero();  // never let one bad path poison a pixel
+            Eigen::Array3d cd = c.cast<double>();
+            st->sum += cd;
+            st->sum2 += cd * cd;
+            double lum = 0.2126 * cd[0] + 0.7152 * cd[1] + 0.0722 * cd[2];
+            st->lum_sum += lum, st->lum_sum2 += lum * lum;
+            if (features && first.surface) {
+                st->albedo += first.albedo.cast<double>();
+                st->normal += first.normal.cast<double>().array();
+                st->alpha += 1;
+                if (st->n == 0) st->depth = (first.position - camera.camera_to_world.translation()).dot(forward);
+            }
+            ++st->n;
+        }
     }
 }
 
@@ -381,13 +396,16 @@ RenderResult PathIntegrator::render(const Camera& camera) const {
     auto pixel_rng = [&](int x, int y) {
         return Rng(mix_bits(settings_.seed * 0x9E3779B97F4A7C15ULL + 1), uint64_t(y) * w + x);
     };
-    // Calls f(x, y, tile stats) for every pixel of every tile, tiles in parallel.
+    // Calls f(tile pixels, tile stats) for every tile, tiles in parallel.
     auto for_each_tile = [&](auto&& f) {
         tbb::parallel_for(0, tiles, [&](int tile) {
             RenderStats stats;
             int x0 = region.x0 + (tile % tiles_x) * ts, y0 = region.y0 + (tile / tiles_x) * ts;
+            std::vector<TilePixel> pixels;
+            pixels.reserve(size_t(ts) * ts);
             for (int y = y0; y < std::min(y0 + ts, region.y1); ++y)
-                for (int x = x0; x < std::min(x0 + ts, region.x1); ++x) f(x, y, &stats);
+                for (int x = x0; x < std::min(x0 + ts, region.x1); ++x) pixels.push_back({x, y, nullptr});
+            f(pixels, &stats);
             camera_rays += stats.camera_rays, extension_rays += stats.extension_rays;
             shadow_rays += stats.shadow_rays;
             progress.advance();
@@ -395,10 +413,13 @@ RenderResult PathIntegrator::render(const Camera& camera) const {
     };
 
     if (!by_rounds) {
-        for_each_tile([&](int x, int y, RenderStats* stats) {
-            PixelState st(pixel_rng(x, y));
-            sample_pixel(camera, tan_half, aspect, x, y, settings_.spp, &st, stats);
-            store_pixel(camera, st, x - region.x0, y - region.y0, &result);
+        for_each_tile([&](std::vector<TilePixel>& pixels, RenderStats* stats) {
+            std::vector<PixelState> states;
+            states.reserve(pixels.size());
+            for (TilePixel& p : pixels) states.emplace_back(pixel_rng(p.x, p.y));
+            for (size_t k = 0; k < pixels.size(); ++k) pixels[k].state = &states[k];
+            sample_tile(camera, tan_half, aspect, pixels.data(), int(pixels.size()), settings_.spp, stats);
+            for (const TilePixel& p : pixels) store_pixel(camera, *p.state, p.x - region.x0, p.y - region.y0, &result);
         });
         result.rounds = 1;
     } else {
@@ -410,13 +431,19 @@ RenderResult PathIntegrator::render(const Camera& camera) const {
         while (taken < settings_.spp) {
             const int count = std::min(round_spp, settings_.spp - taken);
             std::atomic<long long> active{0};
-            for_each_tile([&](int x, int y, RenderStats* stats) {
-                PixelState& st = states[size_t(y - region.y0) * rw + (x - region.x0)];
-                if (st.done) return;
-                sample_pixel(camera, tan_half, aspect, x, y, count, &st, stats);
-                if (adaptive && pixel_relative_error(st.n, st.lum_sum, st.lum_sum2) < settings_.noise_threshold)
-                    st.done = true;
-                else ++active;
+            for_each_tile([&](std::vector<TilePixel>& pixels, RenderStats* stats) {
+                std::vector<TilePixel> live;  // the pixels still taking samples
+                for (TilePixel p : pixels) {
+                    p.state = &states[size_t(p.y - region.y0) * rw + (p.x - region.x0)];
+                    if (!p.state->done) live.push_back(p);
+                }
+                sample_tile(camera, tan_half, aspect, live.data(), int(live.size()), count, stats);
+                for (const TilePixel& p : live) {
+                    PixelState& st = *p.state;
+                    if (adaptive && pixel_relative_error(st.n, st.lum_sum, st.lum_sum2) < settings_.noise_threshold)
+                        st.done = true;
+                    else ++active;
+                }
             });
             taken += count, ++result.rounds;
             if (active == 0) break;

@@ -125,14 +125,22 @@ class PathIntegrator {
 
   private:
     struct PixelState;
+    struct TilePixel {
+        int x, y;
+        PixelState* state;
+    };
     // The path tracer over any source of samples with uniform() and uniform2() (Rng, ZSobolSampler).
+    // primary: the camera ray's first intersection when already traced (Accel::intersect_coherent).
     template <class Sampler>
-    Color trace_path(const Ray& ray, Sampler& sampler, RenderStats* stats, FirstHit* first_hit) const;
+    Color trace_path(const Ray& ray, Sampler& sampler, RenderStats* stats, FirstHit* first_hit,
+                     const RTCRayHit* primary = nullptr) const;
     // tan_half: tan(yfov / 2) of the camera (ymag for orthographic ones), computed once per render.
     Ray camera_ray(const Camera& camera, float tan_half, float aspect, float px, float py) const;
-    // Takes samples [state.n, state.n + count) of pixel (x, y).
-    void sample_pixel(const Camera& camera, float tan_half, float aspect, int x, int y, int count, PixelState* state,
-                      RenderStats* stats) const;
+    // Takes samples [state.n, state.n + count) of each of n pixels (of one tile), sample by sample: the
+    // camera rays of one round over the pixels are traced together (coherent, as packets), then each
+    // path goes on alone. A pixel's samples use its own stream in its own order, as before.
+    void sample_tile(const Camera& camera, float tan_half, float aspect, const TilePixel* pixels, int n, int count,
+                     RenderStats* stats) const;
     void store_pixel(const Camera& camera, const PixelState& state, int x, int y, RenderResult* result) const;
     // Visibility along a shadow ray through alpha-tested and blended surfaces (transmittance).
     float transmittance(const Ray& ray, RenderStats* stats) const;

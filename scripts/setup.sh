@@ -19,6 +19,11 @@ packages=(
 # munge slurmctld slurmd slurm-client: the render-farm test (SlurmFarm) starts a single-node Slurm
 # cluster of its own from them (docs/render-farm.md); dynsky itself needs none of them. Debian
 # starts no daemon of theirs here without systemd; the test runs its own with its own key.
+# --cycles also installs Blender (optional, large): the Cycles cross-checks in tools/cycles and
+# bench/cycles_equal_error.sh call it when present; no test needs it.
+for arg in "$@"; do
+  if [[ $arg == --cycles ]]; then packages+=(blender); fi
+done
 
 missing=()
 for p in "${packages[@]}"; do

@@ -169,6 +169,70 @@ TEST(EnvLight, EstimatedIntegralOfRadianceMatchesPixelSum) {
     EXPECT_NEAR(mean, exact, 4 * se + 1e-3 * exact) << "se " << se;
 }
 
+// A lat-long's ground (a fisheye of the lower hemisphere, mirrored) is importance sampled: light
+// samples below the horizon report the pdf that pdf() gives, the radiance that radiance() gives,
+// the pdf integrates to 1, E[L / p] is the exact integral, and a bright patch on the ground gets
+// most of the ground's samples.
+TEST(EnvLight, GroundImageIsImportanceSampled) {
+    const int n = 64;
+    auto sky = tiny_sun_sky(n, fisheye::direction_from_angles(0.5, 1.0), 1e3);
+    auto ground = std::make_shared<SkyImage>(n);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+            if (ground->in_disc(i, j)) ground->set_pixel(i, j, Color(0.1f, 0.1f, 0.1f));
+    for (int j = 40; j < 46; ++j)  // a bright patch off the nadir
+        for (int i = 20; i < 26; ++i) ground->set_pixel(i, j, Color(50, 40, 30));
+    for (const char* method : {"cdf+mis", "cdf", "alias"}) {
+        SCOPED_TRACE(method);
+        EnvLight light(sky, 0.3f, parse_sky_sampler(method));
+        light.set_ground_image(ground);
+        double exact = 0, patch_solid_angle = 0;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                double a = fisheye::pixel_solid_angle(i, j, n);
+                if (sky->in_disc(i, j)) exact += luminance(sky->pixel(i, j)) * a;
+                if (ground->in_disc(i, j)) exact += luminance(ground->pixel(i, j)) * a;
+                if (i >= 20 && i < 26 && j >= 40 && j < 46) patch_solid_angle += a;
+            }
+        Rng rng(5, 7);
+        const int m = 200000;
+        double sum = 0, sum2 = 0;
+        int below = 0, in_patch = 0;
+        for (int k = 0; k < m; ++k) {
+            EnvLightSample s;
+            double v = 0;
+            if (light.sample(rng.uniform(), rng.uniform2(), &s)) {
+                v = luminance(s.radiance) / s.pdf;
+                if (s.wi.y() < 0) {
+                    ++below;
+                    ASSERT_EQ(s.pdf, light.pdf(s.wi));
+                    ASSERT_TRUE((s.radiance == light.radiance(s.wi)).all());
+                    in_patch += luminance(s.radiance) > 10;
+                }
+            }
+            sum += v, sum2 += v * v;
+        }
+        double mean = sum / m, se = std::sqrt(std::max(0.0, sum2 / m - mean * mean) / m);
+        // Light samples alone are unbiased without MIS compensation (with it, BSDF sampling covers
+        // the rest). The parts of rim pixels below the horizon (0.3 % here) are left to BSDF
+        // sampling, as the sky's are.
+        if (std::string(method).find("mis") == std::string::npos) EXPECT_NEAR(mean, exact, 4 * se + 5e-3 * exact);
+        ASSERT_GT(below, 1000);
+        // Uniform sampling would put patch_solid_angle / 2 pi of them there (about 1.3 %).
+        EXPECT_LT(patch_solid_angle / (2 * kPiD), 0.02);
+        EXPECT_GT(double(in_patch) / below, 0.5);
+        // pdf integrates to 1 over the sphere (stratified directions).
+        const int q = 600;
+        double integral = 0;
+        for (int a = 0; a < q; ++a)
+            for (int b = 0; b < q; ++b) {
+                double z = 1 - 2 * (a + 0.5) / q, phi = 2 * kPiD * (b + 0.5) / q, r = std::sqrt(1 - z * z);
+                integral += light.pdf(Vec3(float(r * std::cos(phi)), float(z), float(r * std::sin(phi)))) * 4 * kPiD;
+            }
+        EXPECT_NEAR(integral / (double(q) * q), 1.0, 2e-2);
+    }
+}
+
 TEST(EnvLight, UniformSkyLightsAWhiteGroundToTheSameRadiance) {
     auto sky = std::make_shared<SkyImage>(256);
     for (int j = 0; j < 256; ++j)
