@@ -192,37 +192,29 @@ constexpr double kCorrectionSteps = 1.0;
 constexpr double kDepartureHoldSteps = 8.0;
 const double kCorrectionFade = std::exp(-1.0 / kCorrectionSteps);
 
-// The mean cloud signal (start - background, mean of the channels) of each one-pixel ring about the
-// zenith, averaged over +-N/32 px of radius and floored at a tenth of its largest value (a
-// divisor). Recycled clouds are scaled by its ratio between where they are shown and where they
-// were read: the tile lies high in the sky, where clouds are brighter and denser than near the
-// horizon, and carried unscaled across the whole sky it brightened a 3-hour procedural rollout
-// to 1.21x its start (1.14x with the scaling).
-std::vector<double> cloud_ring_profile(const cv::Mat& clouds, const cv::Mat& disc) {
-    const int big = clouds.rows, bins = big / 2 + 2;
-    const double c = (big - 1) / 2.0;
-    std::vector<double> sum(size_t(bins), 0.0), count(size_t(bins), 0.0);
-    for (int y = 0; y < big; ++y)
-        for (int x = 0; x < big; ++x) {
-            if (!disc.at<uint8_t>(y, x)) continue;
-            const cv::Vec3f v = clouds.at<cv::Vec3f>(y, x);
-            const int b = std::min(bins - 1, int(std::hypot(x - c, y - c)));
-            sum[size_t(b)] += (v[0] + v[1] + v[2]) / 3.0, count[size_t(b)] += 1;
-        }
-    const int half = std::max(1, big / 32);
-    std::vector<double> profile(size_t(bins), 0.0);
+// The start's cloud signal (start - background, mean of the channels) averaged over the sky around
+// each pixel (a normalised Gaussian, sigma a tenth of the image, worked out at most at 128 px),
+// floored at a tenth of its largest value (a divisor). Recycled clouds are scaled by its ratio
+// between where they are shown and where they were read: the recycled tile lies high in the sky,
+// where clouds are denser and, on the sun's side, brighter; carried unscaled across the whole sky
+// it brightened 3-hour rollouts to 1.20-1.21x their start (ARM photograph, procedural sky; within
+// 0.88-1.02x with it, networks/stability_advect.py).
+cv::Mat cloud_signal_field(const cv::Mat& clouds) {
+    const int big = clouds.rows, w = std::min(big, 128);
+    cv::Mat lum, small, weight, num, den, field;
+    cv::transform(clouds, lum, cv::Matx13f(1.f / 3, 1.f / 3, 1.f / 3));
+    cv::resize(lum, small, cv::Size(w, w), 0, 0, cv::INTER_AREA);
+    const cv::Mat disc = sky_disc_mask(w);
+    disc.convertTo(weight, CV_32F, 1.0 / 255);
+    const double sigma = 0.1 * w;
+    cv::GaussianBlur(small.mul(weight), num, cv::Size(0, 0), sigma, sigma, cv::BORDER_REPLICATE);
+    cv::GaussianBlur(weight, den, cv::Size(0, 0), sigma, sigma, cv::BORDER_REPLICATE);
+    cv::Mat g = num / cv::max(den, 1e-3);
     double top = 0;
-    for (int b = 0; b < bins; ++b) {
-        double s = 0, n = 0;
-        for (int d = -half; d <= half; ++d) {
-            const int j = std::clamp(b + d, 0, bins - 1);
-            s += sum[size_t(j)], n += count[size_t(j)];
-        }
-        profile[size_t(b)] = n > 0 ? s / n : 0.0;
-        top = std::max(top, profile[size_t(b)]);
-    }
-    for (double& g : profile) g = std::max(g, 0.1 * top + 1e-6);
-    return profile;
+    cv::minMaxLoc(g, nullptr, &top, nullptr, nullptr, disc);
+    g = cv::max(g, 0.1 * std::max(top, 0.0) + 1e-6);
+    cv::resize(g, field, cv::Size(big, big), 0, 0, cv::INTER_LINEAR);
+    return field;
 }
 
 // The smooth per-channel field that scales the model's clear sky to the start's own on the start's
@@ -317,7 +309,7 @@ void CloudRollout::set_background(const cv::Mat& given) {
     background_ext_ = background_.empty() ? cv::Mat() : extend_past_rim_exact(background_);
     clouds_ext_ = background_ext_.empty() ? start_ext_ : start_ext_ - background_ext_;
     clouds_ = background_.empty() ? start_ : start_ - background_;
-    ring_profile_ = cloud_ring_profile(clouds_, disc_big_);
+    cloud_field_ = cloud_signal_field(clouds_);
     background_n_ = background_;
     const int n = network_->info().resolution;
     if (!background_.empty() && background_.rows != n) {
@@ -362,19 +354,19 @@ const cv::Mat& CloudRollout::advance() {
             if (!offset.empty() && i < 3) reads.positions[i] -= sample_exact(offset, reads.positions[i]);
             // Read 3 is the pixel itself: the start as it was (not rim-extended).
             cv::Mat read = i == 3 ? clouds_ : sample_exact(clouds_ext_, reads.positions[i]);
-            if ((i == 1 || i == 2) && !ring_profile_.empty()) {
-                // The recycled tile takes the start's cloud signal at the zenith angle it is shown
-                // at (cloud_ring_profile).
-                const double c = (big - 1) / 2.0;
-                const int bins = int(ring_profile_.size());
-                auto g = [&](double r) { return ring_profile_[size_t(std::clamp(int(r), 0, bins - 1))]; };
+            if (i == 1 || i == 2) {
+                // The recycled tile takes the start's cloud signal where it is shown
+                // (cloud_signal_field).
                 tbb::parallel_for(0, big, [&](int y) {
                     const cv::Vec2f* p = reads.positions[i].ptr<cv::Vec2f>(y);
                     const float* w = reads.weights[i].ptr<float>(y);
+                    const float* here = cloud_field_.ptr<float>(y);
                     cv::Vec3f* v = read.ptr<cv::Vec3f>(y);
                     for (int x = 0; x < big; ++x) {
                         if (w[x] == 0) continue;
-                        const double gain = g(std::hypot(x - c, y - c)) / g(std::hypot(p[x][0] - c, p[x][1] - c));
+                        const int px = std::clamp(int(std::lround(p[x][0])), 0, big - 1);
+                        const int py = std::clamp(int(std::lround(p[x][1])), 0, big - 1);
+                        const double gain = here[x] / cloud_field_.at<float>(py, px);
                         v[x] *= float(std::clamp(gain, 0.5, 2.0));
                     }
                 });

@@ -167,7 +167,7 @@ class CloudRollout {
     std::unique_ptr<CloudLayerPaths> paths_;  // with a wind
     cv::Mat departure_;                       // measured - wind flow (pixels per step), relaxing
     double departure_sum_ = 0;                // sum of its relaxation weights so far
-    std::vector<double> ring_profile_;        // the start's mean cloud signal per pixel ring
+    cv::Mat cloud_field_;                     // the start's cloud signal around each pixel (CV_32FC1)
     cv::Mat background_field_;                // scales the model's clear sky to the start's
     cv::Mat clouds_ext_;                      // start_ext_ - background_ext_: what the paths carry
     cv::Mat clouds_;                          // start_ - background_: what a pixel shows of its own start
