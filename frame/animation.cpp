@@ -206,8 +206,7 @@ AnimationReport render_animation(const AnimationSettings& o) {
         Image& image = result.color;
         FrameMetadata meta;
         meta.frame = k, meta.time_seconds = t, meta.fps = o.fps, meta.spp = o.spp, meta.seed = render.seed;
-        meta.sky_seconds = sky_s, meta.distribution_seconds = light.last_build_seconds();
-        meta.render_seconds = result.stats.seconds, meta.medium_step_seconds = timeline.dt(), meta.png_exposure_ev = ev;
+        meta.medium_step_seconds = timeline.dt(), meta.png_exposure_ev = ev;
         meta.sky = sky->source, meta.sky_model = timeline.model().name(), meta.scene = o.scene.scene;
         meta.camera = scene.camera.name, meta.gamma = gamma_name(timeline.gamma());
         meta.settings = settings;

@@ -99,9 +99,6 @@ void FrameMetadata::write_to(ImageMetadata* m) const {
     m->numbers["dynsky:fps"] = fps;
     m->numbers["dynsky:spp"] = spp;
     m->numbers["dynsky:seed"] = double(seed);
-    m->numbers["dynsky:sky_seconds"] = sky_seconds;
-    m->numbers["dynsky:sky_distribution_seconds"] = distribution_seconds;
-    m->numbers["dynsky:render_seconds"] = render_seconds;
     m->numbers["dynsky:medium_step_seconds"] = medium_step_seconds;
     m->numbers["dynsky:png_exposure_ev"] = png_exposure_ev;
     m->strings["dynsky:sky"] = sky;

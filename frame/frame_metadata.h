@@ -36,13 +36,12 @@ struct FrameMetadata {
     double fps = 0;
     int spp = 0;
     uint64_t seed = 0;
-    double sky_seconds = 0;           // Gamma + amortised xi for this frame
-    double distribution_seconds = 0;  // the sky's sampling distribution rebuild
-    double render_seconds = 0;
+    // No timings: a frame file depends only on its settings, so a resumed frame is byte for byte
+    // the one an uninterrupted run writes. Per-frame times go to timings.csv beside the frames.
     double medium_step_seconds = 0;  // Delta t
     double png_exposure_ev = 0;
     std::string sky, sky_model, scene, camera;
-    std::string gamma;  // the in-between: constant | paper (dynsky:gamma)
+    std::string gamma;     // the in-between: constant | paper (dynsky:gamma)
     std::string settings;  // canonical_settings of the run (dynsky:settings, dynsky:settings_hash)
 
     void write_to(ImageMetadata* m) const;

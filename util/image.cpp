@@ -145,6 +145,10 @@ void write_image(const std::string& path, const Image& image) {
     OIIO::ImageSpec spec(image.width, image.height, image.channels,
                          is_exr ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
     if (is_exr) spec.attribute("compression", "zip");
+    // OpenImageIO stamps an EXR with the wall-clock time (capDate) unless DateTime is set; an empty
+    // one writes none, so a file depends only on its pixels and metadata (a resumed animation's
+    // frames equal an uninterrupted run's byte for byte). An image read with a DateTime keeps it.
+    if (is_exr) spec.attribute("DateTime", "");
     // Names that do not match the channels (an image reshaped after reading) fall back to the defaults.
     if (is_exr && int(image.channel_names.size()) == image.channels) {
         spec.channelnames = image.channel_names;
