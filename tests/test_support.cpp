@@ -6,11 +6,17 @@
 
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 
 namespace dynsky::test {
 
 namespace fs = std::filesystem;
+
+bool small_run() {
+    const char* v = std::getenv("DYNSKY_TEST_SMALL");
+    return v && *v && std::string(v) != "0";
+}
 
 bool shared_available() { return fs::exists(fs::path(DYNSKY_SHARED_DIR) / "CONVENTIONS.md"); }
 
