@@ -1,4 +1,4 @@
-// What the libFuzzer targets share (scripts/fuzz.sh, docs/fuzzing.md). dynsky's loaders read files,
+// What the libFuzzer targets share (scripts/fuzz.sh, docs/testing.md). dynsky's loaders read files,
 // as the program does, so each input is written to a file of a private temporary folder first; a
 // bad input may only end in dynsky::Error (the clean refusal the program reports), anything else
 // (another exception, a crash, a leak, undefined behaviour) is a finding.

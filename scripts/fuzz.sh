@@ -4,7 +4,7 @@
 # Seeds are made now, in a temporary folder, from ../shared (its small GLB/glTF scenes, sky EXRs
 # and crops of its photographs; nothing is copied into the repository); fuzz/regressions/ (inputs
 # of past findings) is replayed first. A crash, leak, timeout, out-of-memory or UBSan report fails
-# the script; the input is kept as build-fuzz/findings/TARGET-*. docs/fuzzing.md.
+# the script; the input is kept as build-fuzz/findings/TARGET-*. docs/testing.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
