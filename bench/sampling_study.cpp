@@ -274,6 +274,8 @@ std::string machine_description() {
 int run_sampling_study(const SamplingStudyOptions& o) {
     auto start = Clock::now();
     for (const std::string& name : o.samplers) parse_sky_sampler(name);  // a clear error before any output
+    // The report and cache folders must not be, or lie in, the shared data the study reads.
+    check_outputs_are_not_inputs({o.out, o.cache}, {o.shared});
     fs::path out(o.out);
     fs::create_directories(out);
     fs::path cache = o.cache.empty() ? out / "cache" : fs::path(o.cache);

@@ -109,6 +109,16 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
     if (o.chart_frames < 2) throw Error("--chart-frames must be at least 2");
     if (!(o.duration > 0)) throw Error("--duration must be positive");
     auto points = parse_chart_points(o.points);
+    {
+        // Neither the output folder nor a file written in it may be an input (a sky EXR named
+        // OUT/clear.exr would be replaced), nor lie in an input folder (a model's).
+        std::vector<std::string> outputs = {o.out};
+        for (const char* name :
+             {"clear.exr", "cloudy.exr", "side_by_side.png", "difference.png", "illuminance.csv", "illuminance.png"})
+            outputs.push_back((fs::path(o.out) / name).string());
+        const std::string model = o.model.model.rfind("network:", 0) == 0 ? o.model.model.substr(8) : "";
+        check_outputs_are_not_inputs(outputs, {o.sky.sky, o.sky.previous, o.scene.scene, model});
+    }
     std::unique_ptr<tbb::global_control> threads;
     if (o.threads > 0)
         threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);

@@ -38,6 +38,8 @@ struct FrameMetadata {
     double fps = 0;
     int spp = 0;
     uint64_t seed = 0;
+    // No timings: a frame file depends only on its settings, so a resumed frame is byte for byte
+    // the one an uninterrupted run writes. Per-frame times go to timings.csv beside the frames.
     double medium_step_seconds = 0;  // Delta t
     double png_exposure_ev = 0;
     std::string sky, sky_model, scene, camera;

@@ -74,16 +74,31 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
     if (o.import_resolution < 16 || o.import_resolution > 2048) throw Error("--import-res: must be 16..2048");
     for (int r : resolutions)
         if (r > o.import_resolution || o.import_resolution % r != 0)
-            throw Error("--res " + std::to_string(r) + ": must divide --import-res " + std::to_string(o.import_resolution));
+            throw Error("--res " + std::to_string(r) + ": must divide --import-res " +
+                        std::to_string(o.import_resolution));
     if (o.sequence.empty() == o.photos.empty())
-        throw Error("--sequence, --photos: give exactly one of --sequence (arm-tsi, arm-clear, arm-dusk, mobotix) and --photos DIR --preset P");
+        throw Error(
+            "--sequence, --photos: give exactly one of --sequence (arm-tsi, arm-clear, arm-dusk, mobotix) and --photos DIR --preset P");
     if (!o.photos.empty() && o.preset.empty()) throw Error("--photos needs --preset (arm-tsi or mobotix)");
-    PhotoSequence seq = o.sequence.empty() ? photo_sequence_from_folder(o.photos, o.preset)
-                                           : named_photo_sequence(o.sequence, o.shared.empty() ? default_shared_dir() : o.shared);
+    {
+        // The report and what is written beside it must not replace an input or land in an input
+        // folder (the photographs, the shared data of a named sequence, a model folder).
+        const std::string base = fs::path(o.report).replace_extension("").string();
+        std::vector<std::string> outputs = {o.report, base + ".csv"};
+        for (int r : resolutions)
+            for (const char* ext : {".csv", ".png"}) outputs.push_back(base + "_" + std::to_string(r) + ext);
+        const std::string shared = o.shared.empty() && !o.sequence.empty() ? default_shared_dir() : o.shared;
+        const bool model_folder = o.model != "auto" && o.model != "advect" && o.model != "paper";
+        check_outputs_are_not_inputs(outputs, {o.photos, shared, model_folder ? o.model : ""});
+    }
+    PhotoSequence seq = o.sequence.empty()
+                            ? photo_sequence_from_folder(o.photos, o.preset)
+                            : named_photo_sequence(o.sequence, o.shared.empty() ? default_shared_dir() : o.shared);
 
     // The models.
     const std::string folder = resolve_cloud_model(o.model);
-    AdvectResidualNetwork model = folder == "advect" ? AdvectResidualNetwork::pure_advection() : AdvectResidualNetwork::load(folder);
+    AdvectResidualNetwork model = folder == "advect" ? AdvectResidualNetwork::pure_advection()
+                                                     : AdvectResidualNetwork::load(folder);
     AdvectResidualNetwork advect = AdvectResidualNetwork::pure_advection(model.info().resolution, model.info().dt);
     std::optional<CloudModel> paper;
     if (o.paper) {
@@ -103,7 +118,8 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
         int a = 0, b = 0;
         std::stringstream ss(o.frames);
         char dash = 0;
-        if (!(ss >> a) || (ss >> dash && (dash != '-' || !(ss >> b)))) throw Error("--frames '" + o.frames + "': expected A-B");
+        if (!(ss >> a) || (ss >> dash && (dash != '-' || !(ss >> b))))
+            throw Error("--frames '" + o.frames + "': expected A-B");
         if (!dash) b = a;
         first = std::max(1, a), last = std::min(last, b);
         part = "start frames " + o.frames + " (--frames)";
@@ -114,7 +130,8 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
             if (split.contains(seq.name) && split[seq.name].contains("heldout")) {
                 first = std::max(1, split[seq.name]["heldout"].at(0).get<int>());
                 last = std::min(last, split[seq.name]["heldout"].at(1).get<int>() - 1 - hmax);
-                part = "the held-out frames of the model's split.json (last in time, never trained on or used to choose)";
+                part =
+                    "the held-out frames of the model's split.json (last in time, never trained on or used to choose)";
             }
         }
     }
@@ -180,8 +197,10 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
                 const cv::Mat mask = at(t + h).valid & at(t).valid & ~sat_t & ~saturated_mask(truth);
                 if (cv::countNonZero(mask) == 0) continue;
                 acc[r][h]["persistence"].add(compare_images(at(t).image, truth, mask));
-                acc[r][h]["farneback"].add(compare_images(warp_in_disc(at(t).image, prev_flow * double(h)), truth, mask));
-                for (const auto& [name, list] : pred) acc[r][h][name].add(compare_images(list[size_t(h - 1)], truth, mask));
+                acc[r][h]["farneback"].add(compare_images(warp_in_disc(at(t).image, prev_flow * double(h)), truth,
+                                                          mask));
+                for (const auto& [name, list] : pred)
+                    acc[r][h][name].add(compare_images(list[size_t(h - 1)], truth, mask));
             }
             progress2.advance();
         }
@@ -194,7 +213,8 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
     // The report.
     std::ostringstream md, csv;
     csv << "resolution,horizon,ahead_s,method,psnr_db,ssim,mse,frames\n";
-    md << "# Cloud model evaluation: " << (folder == "advect" ? "advect" : model.info().name) << " on " << seq.name << "\n\n";
+    md << "# Cloud model evaluation: " << (folder == "advect" ? "advect" : model.info().name) << " on " << seq.name
+       << "\n\n";
     md << "Photographs: `" << seq.folder << "` (" << count << " frames every " << seq.dt << " s, preset " << seq.preset
        << "); scored: " << part << ", start frames " << first << ".." << last << ". Imported at " << big
        << " px and area-averaged to each resolution; network form; pixels seen in both frames and not saturated. "

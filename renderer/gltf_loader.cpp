@@ -908,6 +908,12 @@ class GltfLoader {
         const size_t n = pos.count;
         if (n > size_t(std::numeric_limits<uint32_t>::max())) fail(what + ": too many vertices");
         mesh->positions = to_vectors<3>(pos);
+        // Embree's bounds and every intersection with a NaN or infinite vertex are meaningless (a
+        // NaN poisons the whole BVH node): refused, as a corrupt file, with the first such vertex.
+        for (size_t i = 0; i < n; ++i)
+            if (!mesh->positions[i].allFinite())
+                fail(what + " POSITION " + std::to_string(i) + " is not finite (" +
+                     (mesh->positions[i].hasNaN() ? "NaN" : "infinite") + "): a corrupt file?");
 
         std::vector<uint32_t> stream;
         if (p.indices >= 0) {

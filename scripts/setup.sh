@@ -12,7 +12,10 @@ packages=(
   ffmpeg python3-matplotlib python3-numpy
   python3-torch python3-onnx
   munge slurmctld slurmd slurm-client
+  clang libclang-rt-14-dev llvm
 )
+# clang and libclang-rt-14-dev: the libFuzzer targets (scripts/fuzz.sh; libFuzzer and clang's
+# sanitizer runtimes); llvm: llvm-symbolizer, so sanitizer reports name files and lines.
 # python3-torch and python3-onnx: the cloud networks' training code and its tests (NetworksTraining)
 # run under /usr/bin/python3; the program itself runs the networks through OpenCV and needs neither.
 # (--training is still accepted: everything is installed either way.)

@@ -6,11 +6,17 @@
 
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 
 namespace dynsky::test {
 
 namespace fs = std::filesystem;
+
+bool small_run() {
+    const char* v = std::getenv("DYNSKY_TEST_SMALL");
+    return v && *v && std::string(v) != "0";
+}
 
 bool shared_available() { return fs::exists(fs::path(DYNSKY_SHARED_DIR) / "CONVENTIONS.md"); }
 
@@ -38,6 +44,11 @@ CommandResult run_command(const std::string& command_line) {
     while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0) result.output.append(buffer.data(), n);
     int status = ::pclose(pipe);
     result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    // In the sanitizer build a report exits 1 (ASan, UBSan) or 23 (LeakSanitizer), which a test
+    // expecting a refusal would take for one: any report in a command's output fails the test.
+    for (const char* report : {"ERROR: AddressSanitizer", "ERROR: LeakSanitizer", "runtime error: "})
+        if (result.output.find(report) != std::string::npos)
+            ADD_FAILURE() << "sanitizer report (" << report << ") from: " << command_line << "\n" << result.output;
     return result;
 }
 

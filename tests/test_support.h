@@ -13,6 +13,16 @@ bool shared_available();
 // A fresh, empty temporary directory unique to this test (removed by the caller or left in /tmp).
 std::string temp_dir(const std::string& tag);
 
+// True when DYNSKY_TEST_SMALL is set to anything but "" or "0": the ASan + UBSan run
+// (scripts/test_sanitizers.sh, several times slower) asks long tests for a smaller size that
+// checks the same property (fewer steps, pixels or frames). docs/testing.md.
+bool small_run();
+// `full` normally, `small` under DYNSKY_TEST_SMALL.
+template <typename T>
+T run_size(T full, T small) {
+    return small_run() ? small : full;
+}
+
 struct CommandResult {
     int exit_code = -1;
     std::string output;  // stdout and stderr together

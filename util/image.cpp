@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cctype>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -81,14 +82,49 @@ std::string jpeg_truncation(const std::string& path) {
            " bytes, no end-of-image marker): a truncated download or copy?";
 }
 
+// A PNG's chunks must all lie inside the file, up to its IEND chunk. libpng reports a file cut
+// short from OpenImageIO's read callback by a longjmp that skips the callback's C++ destructors
+// (a leak in the system library), and names no file: a truncated PNG is found here first, and
+// never reaches the decoder. Returns "" for a complete chunk sequence, else the problem.
+std::string png_truncation(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::vector<unsigned char> b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const size_t n = b.size();
+    size_t i = 8;  // after the signature
+    while (i + 8 <= n) {
+        const size_t length = size_t(b[i]) << 24 | size_t(b[i + 1]) << 16 | size_t(b[i + 2]) << 8 | b[i + 3];
+        if (length > 0x7FFFFFFFu)
+            return "corrupt PNG: chunk length " + std::to_string(length) + " at byte " + std::to_string(i);
+        if (n - i - 8 < length + 4) break;  // data and CRC
+        if (std::memcmp(&b[i + 4], "IEND", 4) == 0) return "";
+        i += 12 + length;
+    }
+    return "the PNG is cut short (" + std::to_string(n) +
+           " bytes, no complete IEND chunk): a truncated download "
+           "or copy?";
+}
+
+bool has_png_signature(const std::string& path) {
+    static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+    unsigned char head[8] = {};
+    std::ifstream in(path, std::ios::binary);
+    return in.read(reinterpret_cast<char*>(head), 8) && std::memcmp(head, signature, 8) == 0;
+}
+
 }  // namespace
 
-Image read_image(const std::string& path) {
+std::string image_file_problem(const std::string& path) {
     std::error_code ec;
-    if (!fs::exists(path, ec)) throw_file_error(path, "no such file");
-    if (fs::is_directory(path, ec)) throw_file_error(path, "is a directory, not an image");
+    if (!fs::exists(path, ec)) return "no such file";
+    if (fs::is_directory(path, ec)) return "is a directory, not an image";
     // A FIFO or device would block or never end: images are read from regular files only.
-    if (!fs::is_regular_file(path, ec)) throw_file_error(path, "not a regular file (a FIFO or a device?)");
+    if (!fs::is_regular_file(path, ec)) return "not a regular file (a FIFO or a device?)";
+    if (has_png_signature(path)) return png_truncation(path);
+    return "";
+}
+
+Image read_image(const std::string& path) {
+    if (std::string why = image_file_problem(path); !why.empty()) throw_file_error(path, why);
     auto in = OIIO::ImageInput::open(path);
     if (!in) {
         std::string why = OIIO::geterror();
@@ -145,6 +181,10 @@ void write_image(const std::string& path, const Image& image) {
     OIIO::ImageSpec spec(image.width, image.height, image.channels,
                          is_exr ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
     if (is_exr) spec.attribute("compression", "zip");
+    // OpenImageIO stamps an EXR with the wall-clock time (capDate) unless DateTime is set; an empty
+    // one writes none, so a file depends only on its pixels and metadata (a resumed animation's
+    // frames equal an uninterrupted run's byte for byte). An image read with a DateTime keeps it.
+    if (is_exr) spec.attribute("DateTime", "");
     // Names that do not match the channels (an image reshaped after reading) fall back to the defaults.
     if (is_exr && int(image.channel_names.size()) == image.channels) {
         spec.channelnames = image.channel_names;

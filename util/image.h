@@ -46,6 +46,10 @@ std::string image_size_problem(long long width, long long height, long long chan
 // Throws dynsky::Error "NAME: PROBLEM" when image_size_problem finds one.
 void check_image_size(const std::string& name, long long width, long long height, long long channels);
 
+// Why the file cannot be read as an image, from the checks made before any decoder opens it ("" when
+// none): missing, a directory, not a regular file, a PNG cut short (its chunks end before IEND).
+std::string image_file_problem(const std::string& path);
+
 // Reads any format OpenImageIO knows, as float. 8-bit files come back as their encoded values
 // in [0, 1] (no sRGB decode here: callers decide). Throws dynsky::Error naming the file for a
 // missing file, one that is not a regular file, a header beyond the limits above, a file of

@@ -14,6 +14,7 @@
 #include <cstring>
 #include <filesystem>
 #include <future>
+#include <limits>
 #include <fstream>
 #include <set>
 #include <string>
@@ -312,6 +313,29 @@ TEST(BadInputCli, SingularOrNonFiniteNodeTransformsAreRefused) {
         std::string file = std::string(c.name) + ".gltf";
         triangle_gltf(dir + "/" + file, c.nodes);
         bad.add(render_args(dir + "/" + file, dir), {file, "node", "world transform", c.says});
+    }
+    bad.check();
+}
+
+TEST(BadInputCli, NonFiniteVertexPositionsAreRefused) {
+    const std::string dir = test::temp_dir("bad");
+    Refusals bad(dir);
+    const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+    struct Case {
+        const char* name;
+        int component;  // of the 9 floats of the triangle
+        float value;
+        const char* says;
+    } cases[] = {{"nan_x", 0, nan, "POSITION 0 is not finite (NaN)"},
+                 {"inf_y", 4, inf, "POSITION 1 is not finite (infinite)"},
+                 {"minus_inf_z", 8, -inf, "POSITION 2 is not finite (infinite)"}};
+    for (const Case& c : cases) {
+        float p[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+        p[c.component] = c.value;
+        const std::string bin = std::string(c.name) + ".bin", file = std::string(c.name) + ".gltf";
+        write_bytes(dir + "/" + bin, std::string(reinterpret_cast<const char*>(p), sizeof p));
+        triangle_gltf(dir + "/" + file, R"([{"mesh":0}])", bin);
+        bad.add(render_args(dir + "/" + file, dir), {file, c.says});
     }
     bad.check();
 }

@@ -96,8 +96,9 @@ TEST(OutputsCli, FullDiskFailsCleanlyForEveryFormat) {
     uniform.pixels.assign(uniform.pixels.size(), 1.0f);
     write_image(dir + "/uniform.exr", uniform);
     ASSERT_LT(fs::file_size(dir + "/uniform.exr"), 4096u);
-    r = run_with_full_disk("sky predict --sky " + dir + "/uniform.exr --model advect --steps 200 --every 1000 --stats " +
-                           dir + "/stats.csv -q --out " + dir + "/pred");
+    r = run_with_full_disk("sky predict --sky " + dir +
+                           "/uniform.exr --model advect --steps 200 --every 1000 --stats " + dir +
+                           "/stats.csv -q --out " + dir + "/pred");
     expect_clean_failure(r, dir + "/stats.csv", dir);
 
     // animate: frames, then (all frames there) the contact sheet, then the chart of `temporal`.
@@ -170,6 +171,53 @@ TEST(OutputsCli, OutputThatIsAnInputIsRefusedBeforeAnyWork) {
     auto r = test::run_command(kExe + " animate builtin --sky " + dir + "/seq --res 16x8 --out " + dir + "/seq");
     EXPECT_EQ(r.exit_code, 1) << r.output;
     EXPECT_FALSE(fs::exists(dir + "/seq/frame_0000.exr"));
+    fs::remove_all(dir);
+}
+
+TEST(OutputsCli, CompareBenchAndEvaluateRefuseAnOutputThatIsAnInput) {
+    const std::string dir = test::temp_dir("outputs_same_reports");
+    fs::create_directories(dir + "/cmp");
+    ASSERT_EQ(test::run_command(kExe +
+                                " sky clear --lat 48.85 --lon 2.35 --time 2026-06-21T16:00:00Z --sky-res 32 -q "
+                                "--out " +
+                                dir + "/cmp/clear.exr")
+                  .exit_code,
+              0);
+    const std::string sky = dir + "/cmp/clear.exr";
+    const auto before = fs::file_size(sky);
+    const auto mtime = fs::last_write_time(sky);
+    fs::create_directories(dir + "/photos");
+    fs::create_directories(dir + "/shared/scenes");
+    std::ofstream(dir + "/photos/tsi_sgpC1_20170524164530Z.jpg") << "not read";
+    std::ofstream(dir + "/shared/scenes/keep.txt") << "kept\n";
+    const std::string compare = " compare builtin --res 16x8 --spp 1 --chart-res 8x4 --chart-spp 1 --sky " + sky;
+    struct Case {
+        std::string args, says;
+    } cases[] = {
+        {compare + " --out " + dir + "/cmp", "is also an input"},  // would write cmp/clear.exr over the sky
+        {compare + " --out " + sky, "is also an input"},
+        {" bench sampling --quick --shared " + dir + "/shared --out " + dir + "/shared", "is also an input"},
+        {" bench sampling --quick --shared " + dir + "/shared --out " + dir + "/shared/report",
+         "is inside the input folder"},
+        {" bench sampling --quick --shared " + dir + "/shared --out " + dir + "/r --cache " + dir + "/shared/scenes",
+         "is inside the input folder"},
+        {" sky evaluate --photos " + dir + "/photos --preset arm-tsi --report " + dir + "/photos/eval.md",
+         "is inside the input folder"},
+        {" sky evaluate --photos " + dir + "/photos --preset arm-tsi --report " + dir + "/photos", "is also an input"},
+        {" sky evaluate --sequence arm-tsi --shared " + dir + "/shared --report " + dir + "/shared/eval.md",
+         "is inside the input folder"},
+    };
+    for (const Case& c : cases) {
+        auto r = test::run_command(kExe + c.args);
+        EXPECT_EQ(r.exit_code, 1) << c.args << ": " << r.output;
+        EXPECT_NE(r.output.find(c.says), std::string::npos) << c.args << ": " << r.output;
+        EXPECT_EQ(fs::file_size(sky), before);
+        EXPECT_EQ(fs::last_write_time(sky), mtime);
+    }
+    // Nothing was written into the input folders.
+    EXPECT_EQ(std::distance(fs::directory_iterator(dir + "/cmp"), fs::directory_iterator()), 1);
+    EXPECT_EQ(std::distance(fs::directory_iterator(dir + "/photos"), fs::directory_iterator()), 1);
+    EXPECT_EQ(std::distance(fs::recursive_directory_iterator(dir + "/shared"), fs::recursive_directory_iterator()), 2);
     fs::remove_all(dir);
 }
 

@@ -1,0 +1,79 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets of fuzz/ (clang; ASan + UBSan) in build-fuzz/ and runs each for
+# FUZZ_SECONDS (default 60): the glTF loader, the sky image loader and the photograph import.
+# Seeds are made now, in a temporary folder, from ../shared (its small GLB/glTF scenes, sky EXRs
+# and crops of its photographs; nothing is copied into the repository); fuzz/regressions/ (inputs
+# of past findings) is replayed first. A crash, leak, timeout, out-of-memory or UBSan report fails
+# the script; the input is kept as build-fuzz/findings/TARGET-*. docs/testing.md.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root=$PWD
+seconds=${FUZZ_SECONDS:-60}
+shared=${DYNSKY_SHARED_DIR:-$root/../shared}
+targets=(gltf_loader sky_image photo_import)
+
+# -O1 with line tables: libFuzzer's usual build (quick to compile, reports name files and lines).
+cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only -DNDEBUG" -DCMAKE_CXX_COMPILER=clang++ -DDYNSKY_FUZZ=ON \
+  >/dev/null
+ninja -C build-fuzz -j "$(nproc)" "${targets[@]/#/fuzz_}"
+
+work=$(mktemp -d "${TMPDIR:-/tmp}/dynsky-fuzz-seeds-XXXXXX")
+trap 'rm -rf "$work"' EXIT
+for t in "${targets[@]}"; do mkdir -p "$work/$t"; done
+
+# Seeds. glTF: every scene file under 64 kB (GLB, or glTF whose buffers are data: URIs or missing),
+# and a one-triangle glTF with its buffer inline.
+echo '{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0,"translation":[0,1,0]}],
+"meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"material":0}]}],"materials":[{}],
+"buffers":[{"byteLength":42,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAABAAIA"}],
+"bufferViews":[{"buffer":0,"byteLength":36},{"buffer":0,"byteOffset":36,"byteLength":6}],
+"accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]},
+{"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"}]}' >"$work/gltf_loader/triangle.gltf"
+if [[ -d $shared/scenes ]]; then
+  find "$shared/scenes" \( -name '*.glb' -o -name '*.gltf' \) -size -64k -exec cp -t "$work/gltf_loader" {} +
+fi
+# Skies: small half and float EXRs (several compressions) from photographs, and 8-bit PNG/JPEG,
+# which the sky loader must refuse. Photographs: reductions and crops of each camera's.
+photos=()
+if [[ -d $shared/skies ]]; then
+  for d in arm_tsi_sgp_20170524 arm_tsi_sgp_20170524_overcast_dusk mobotix_sophia_20200812_morning; do
+    p=$(find "$shared/skies/$d/images" -name '*.jpg' 2>/dev/null | sort | sed -n 1p)
+    [[ -n $p ]] && photos+=("$p")
+  done
+fi
+i=0
+for p in "${photos[@]}"; do
+  i=$((i + 1))
+  s="$work/sky_image/sky$i"
+  oiiotool "$p" --resize 32x32 -d half --compression zip -o "$s-half-zip.exr" \
+    --resize 16x16 -d float --compression none -o "$s-float.exr" \
+    -d half --compression piz -o "$s-half-piz.exr" -d uint8 -o "$s.png" -o "$s.jpg"
+  oiiotool "$p" --fit 160x160 -o "$work/photo_import/photo$i-small.jpg"
+  oiiotool "$p" --fit 320x320 --cut 200x200+40+40 -o "$work/photo_import/photo$i-crop.jpg"
+done
+
+status=0
+for t in "${targets[@]}"; do
+  bin=build-fuzz/fuzz/fuzz_$t
+  mkdir -p "build-fuzz/corpus/$t" build-fuzz/findings
+  if compgen -G "fuzz/regressions/$t/*" >/dev/null; then
+    echo "fuzz: $t: replaying fuzz/regressions/$t"
+    "$bin" fuzz/regressions/$t/* >"$work/$t-regressions.log" 2>&1 || {
+      cat "$work/$t-regressions.log"
+      status=1
+    }
+  fi
+  echo "fuzz: $t for $seconds s ($(ls "$work/$t" | wc -l) seeds)"
+  if ! "$bin" -max_total_time="$seconds" -timeout=30 -rss_limit_mb=2560 -print_final_stats=1 \
+    -artifact_prefix="build-fuzz/findings/$t-" "build-fuzz/corpus/$t" "$work/$t" >"$work/$t.log" 2>&1; then
+    tail -n 60 "$work/$t.log"
+    echo "fuzz: $t FAILED: the input is in build-fuzz/findings/"
+    status=1
+  fi
+  runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$work/$t.log" | tail -1)
+  rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$work/$t.log" | tail -1)
+  cov=$(grep -o 'cov: [0-9]*' "$work/$t.log" | tail -1)
+  echo "fuzz: $t: ${runs:-?} executions, ${rate:-?}/s, $cov"
+done
+exit $status
