@@ -71,9 +71,9 @@ for t in "${targets[@]}"; do
     echo "fuzz: $t FAILED: the input is in build-fuzz/findings/"
     status=1
   fi
-  runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$work/$t.log" | tail -1)
-  rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$work/$t.log" | tail -1)
-  cov=$(grep -o 'cov: [0-9]*' "$work/$t.log" | tail -1)
+  runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$work/$t.log" | tail -1 || true)
+  rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$work/$t.log" | tail -1 || true)
+  cov=$(grep -o 'cov: [0-9]*' "$work/$t.log" | tail -1 || true)
   echo "fuzz: $t: ${runs:-?} executions, ${rate:-?}/s, $cov"
 done
 exit $status

@@ -6,7 +6,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
-# abort_on_error=0: a finding exits non-zero with its report; leaks in uninstrumented system
+# A finding exits non-zero with its report (UBSan too: halt_on_error); leaks in uninstrumented system
 # libraries only are suppressed by name (tests/sanitizers/lsan.supp). The variables also reach the
 # test discovery that runs each test program at build time.
 export ASAN_OPTIONS="detect_leaks=1:check_initialization_order=1"
