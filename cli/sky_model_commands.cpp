@@ -47,8 +47,8 @@ void register_sky_model_commands(CLI::App& sky) {
         cmd->add_option("--every", o->every, "Write only every M-th step (and the last)")->capture_default_str();
         cmd->add_option("--stats", o->stats,
                         "CSV of per-step statistics (mean luminance, mean/min/max of the [0,1] form, cloud\n"
-                        "coverage, high-frequency energy, non-finite pixel count, mean luminance without the\n"
-                        "start's sun pixels), step 0 = the input");
+                        "coverage, high-frequency energy, mean luminance without the start's sun pixels,\n"
+                        "non-finite pixel count), step 0 = the input");
         cmd->add_flag("--preview", o->preview,
                       "Also write tone-mapped PNGs beside the EXRs (the input's auto exposure)");
         cmd->add_flag("--quiet,-q", o->quiet, "No progress bar or summary");

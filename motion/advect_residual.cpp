@@ -367,7 +367,8 @@ const cv::Mat& CloudRollout::advance() {
                         const int px = std::clamp(int(std::lround(p[x][0])), 0, big - 1);
                         const int py = std::clamp(int(std::lround(p[x][1])), 0, big - 1);
                         const double gain = here[x] / cloud_field_.at<float>(py, px);
-                        v[x] *= float(std::clamp(gain, 0.5, 2.0));
+                        // (A field equal to within rounding leaves the clouds bit for bit as read.)
+                        if (std::abs(gain - 1.0) > 1e-4) v[x] *= float(std::clamp(gain, 0.5, 2.0));
                     }
                 });
             }

@@ -61,8 +61,8 @@ void write_prediction(const PredictionOptions& o) {
     const cv::Mat disc = sky_disc_mask(n);
     fs::create_directories(o.out);
     std::ostringstream csv;
-    csv << "step,time_s,mean_luminance,mean_unit,min_unit,max_unit,cloud_coverage,hf_energy,nonfinite,"
-           "mean_luminance_without_sun\n";
+    csv << "step,time_s,mean_luminance,mean_unit,min_unit,max_unit,cloud_coverage,hf_energy,"
+           "mean_luminance_without_sun,nonfinite\n";
     // The start's sun (the pixels the networks' form clips, restored into every step and dimmed
     // when a cloud covers it): left out of the last column, which follows the clouds alone.
     cv::Mat sun_pixels;
@@ -93,10 +93,10 @@ void write_prediction(const PredictionOptions& o) {
         double coverage = double(cv::countNonZero(network_cloud_mask(finite_unit, form) & disc)) /
                           cv::countNonZero(disc);
         char line[256];
-        std::snprintf(line, sizeof line, "%d,%.3f,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%ld,%.9g\n", k, s.time_seconds,
+        std::snprintf(line, sizeof line, "%d,%.3f,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%ld\n", k, s.time_seconds,
                       count ? lum / count : 0.0, (mean[0] + mean[1] + mean[2]) / 3, mn, mx, coverage,
-                      high_frequency_energy(finite_unit, disc), nonfinite,
-                      count_without_sun ? lum_without_sun / count_without_sun : 0.0);
+                      high_frequency_energy(finite_unit, disc),
+                      count_without_sun ? lum_without_sun / count_without_sun : 0.0, nonfinite);
         csv << line;
     };
     if (!o.stats.empty()) stats_row(0, sky);
