@@ -22,16 +22,6 @@ using namespace dynsky;
 
 namespace {
 
-double horizontal_illuminance(const SkyImage& s) {
-    double e = 0;
-    for (int j = 0; j < s.resolution; ++j)
-        for (int i = 0; i < s.resolution; ++i)
-            if (s.in_disc(i, j))
-                e += luminance(s.pixel(i, j)) * fisheye::direction_from_pixel(i, j, s.resolution).y() *
-                     fisheye::pixel_solid_angle(i, j, s.resolution);
-    return 683.0 * e;
-}
-
 // Mean flow magnitude over the inner sky disc (r < 0.9), degrees (equidistant: n / 2 px = 90 deg).
 double mean_displacement_deg(const SkyImage& a, const SkyImage& b) {
     cv::Mat f = estimate_sky_flow(a, b);

@@ -116,4 +116,14 @@ void clear_outside_disc(SkyImage* sky) {
             if (!sky->in_disc(i, j)) sky->set_pixel(i, j, Color::Zero());
 }
 
+double horizontal_illuminance(const SkyImage& sky) {
+    double e = 0;
+    for (int j = 0; j < sky.resolution; ++j)
+        for (int i = 0; i < sky.resolution; ++i)
+            if (sky.in_disc(i, j))
+                e += luminance(sky.pixel(i, j)) * fisheye::direction_from_pixel(i, j, sky.resolution).y() *
+                     fisheye::pixel_solid_angle(i, j, sky.resolution);
+    return 683.0 * e;
+}
+
 }  // namespace dynsky

@@ -60,4 +60,8 @@ SkyImage sky_from_image(const Image& image, const std::string& name);
 // Sets every pixel outside the disc to zero (they hold no sky).
 void clear_outside_disc(SkyImage* sky);
 
+// The illuminance the sky gives a horizontal plane, lx: 683 x the integral of luminance x cos(zenith)
+// over the disc's solid angle.
+double horizontal_illuminance(const SkyImage& sky);
+
 }  // namespace dynsky

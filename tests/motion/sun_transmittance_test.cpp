@@ -27,17 +27,6 @@ namespace {
 namespace fs = std::filesystem;
 
 
-// Horizontal illuminance of a sky, lx (683 x the cosine-weighted luminance integral).
-double sky_illuminance(const SkyImage& s) {
-    double e = 0;
-    for (int j = 0; j < s.resolution; ++j)
-        for (int i = 0; i < s.resolution; ++i)
-            if (s.in_disc(i, j))
-                e += luminance(s.pixel(i, j)) * fisheye::direction_from_pixel(i, j, s.resolution).y() *
-                     fisheye::pixel_solid_angle(i, j, s.resolution);
-    return 683.0 * e;
-}
-
 TEST(SunTransmittance, ClearSkyLetsTheSunThrough) {
     ClearSkyParams p;
     p.sun_direction = fisheye::direction_from_angles(0.8, 2.0);
@@ -77,7 +66,7 @@ TEST(SunTransmittance, CloudCrossingTheSunDimsItAsTheProceduralSkyDoes) {
     // The sun's share of the input's illuminance (what a cloud over it can take away).
     SkyImage cut = input;
     remove_sun(&cut);
-    const double sun_lx = sky_illuminance(input) - sky_illuminance(cut);
+    const double sun_lx = horizontal_illuminance(input) - horizontal_illuminance(cut);
     // When the cloud's edge reaches the sun (the truth's transmittance first below one half).
     double t_cover = -1;
     for (double t = 0; t <= duration + 1e-9 && t_cover < 0; t += 5)
@@ -86,7 +75,7 @@ TEST(SunTransmittance, CloudCrossingTheSunDimsItAsTheProceduralSkyDoes) {
     int frames = 0;
     for (double t = 0; t <= duration + 1e-9; t += 5) {
         SkyImage frame = timeline.sky_at(t);
-        double want = sky_illuminance(truth.render(t, n)), got = sky_illuminance(frame);
+        double want = horizontal_illuminance(truth.render(t, n)), got = horizontal_illuminance(frame);
         if (t >= t_cover - 10 - 1e-9 && t <= t_cover + 1e-9)
             worst_edge = std::max(worst_edge, std::abs(got / want - 1));
         double undimmed = got + (1 - timeline.last_sun_weight()) * sun_lx;  // the sun put back as it was
