@@ -80,6 +80,7 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
         throw Error(
             "--sequence, --photos: give exactly one of --sequence (arm-tsi, arm-clear, arm-dusk, mobotix) and --photos DIR --preset P");
     if (!o.photos.empty() && o.preset.empty()) throw Error("--photos needs --preset (arm-tsi or mobotix)");
+    const std::string shared = o.shared.empty() && !o.sequence.empty() ? default_shared_dir() : o.shared;
     {
         // The report and what is written beside it must not replace an input or land in an input
         // folder (the photographs, the shared data of a named sequence, a model folder).
@@ -87,13 +88,11 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
         std::vector<std::string> outputs = {o.report, base + ".csv"};
         for (int r : resolutions)
             for (const char* ext : {".csv", ".png"}) outputs.push_back(base + "_" + std::to_string(r) + ext);
-        const std::string shared = o.shared.empty() && !o.sequence.empty() ? default_shared_dir() : o.shared;
         const bool model_folder = o.model != "auto" && o.model != "advect" && o.model != "paper";
         check_outputs_are_not_inputs(outputs, {o.photos, shared, model_folder ? o.model : ""});
     }
-    PhotoSequence seq = o.sequence.empty()
-                            ? photo_sequence_from_folder(o.photos, o.preset)
-                            : named_photo_sequence(o.sequence, o.shared.empty() ? default_shared_dir() : o.shared);
+    PhotoSequence seq = o.sequence.empty() ? photo_sequence_from_folder(o.photos, o.preset)
+                                           : named_photo_sequence(o.sequence, shared);
 
     // The models.
     const std::string folder = resolve_cloud_model(o.model);

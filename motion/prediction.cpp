@@ -66,7 +66,7 @@ void write_prediction(const PredictionOptions& o) {
     // The start's sun (the pixels the networks' form clips, restored into every step and dimmed
     // when a cloud covers it): left out of the last column, which follows the clouds alone.
     cv::Mat sun_pixels;
-    {
+    if (!o.stats.empty()) {
         cv::Mat start_form = to_network_form(sky, form);
         sun_pixels = fill_saturated_pixels(&start_form);
     }
