@@ -78,11 +78,25 @@ void Distribution2D::finish_marginal() {
     pdf_scale_ = total > 0 ? float(double(width_) * height_ / total) : 0.0f;
 }
 
+// std::upper_bound(s, s + n, t) - s without branches: the comparisons of a binary search over a
+// CDF go either way at random, and mispredicting them cost more than the loads (the result is the
+// same index).
+template <typename T>
+static int upper_bound_index(const T* s, int n, T t) {
+    if (n <= 0) return 0;
+    const T* base = s;
+    for (int len = n; len > 1;) {
+        const int half = len / 2;
+        base += half * int(base[half - 1] <= t);  // arithmetic, not a branch
+        len -= half;
+    }
+    return int(base - s) + (*base <= t);
+}
+
 // Index i with cdf[i] <= t < cdf[i + 1] among n cells, never landing on an empty cell.
 template <typename T>
 static int find_interval(const T* cdf, int n, T t) {
-    const T* it = std::upper_bound(cdf + 1, cdf + n + 1, t);
-    int i = std::clamp(int(it - cdf) - 1, 0, n - 1);
+    int i = std::clamp(upper_bound_index(cdf + 1, n, t), 0, n - 1);
     while (i < n - 1 && cdf[i + 1] <= cdf[i]) ++i;
     while (i > 0 && cdf[i + 1] <= cdf[i]) --i;  // t at the very top: step back to a non-empty cell
     return i;
@@ -90,7 +104,7 @@ static int find_interval(const T* cdf, int n, T t) {
 
 // The same over inclusive running sums s[0..n) (block b spans [s[b-1], s[b]), s[-1] = 0).
 static int find_block(const float* s, int n, float t) {
-    int b = std::min(int(std::upper_bound(s, s + n, t) - s), n - 1);
+    int b = std::min(upper_bound_index(s, n, t), n - 1);
     auto lower = [&](int i) { return i > 0 ? s[i - 1] : 0.0f; };
     while (b < n - 1 && s[b] <= lower(b)) ++b;
     while (b > 0 && s[b] <= lower(b)) --b;
