@@ -48,6 +48,9 @@ class EnvLight {
     double last_build_seconds() const { return build_seconds_; }
 
     Color radiance(const Vec3& w) const;
+    // radiance(w) and pdf(w) of one direction (an escaping BSDF-sampled ray needs both): the same
+    // values, the direction mapped to the fisheye once.
+    Color radiance(const Vec3& w, float* pdf) const;
     // Bilinear radiance, for the sky seen directly by the camera: a camera ray carries no MIS
     // weight, so it need not match the pdf, and a low-resolution sky then looks smooth, not blocky.
     Color radiance_filtered(const Vec3& w) const;
@@ -90,6 +93,8 @@ class EnvLight {
     // Pixel holding the radiance of uv (with r <= 1): itself, or for rim pixels whose centre lies
     // outside the disc, the nearest pixel inward.
     int lookup_pixel(const Vec2& uv) const;
+    Color sky_radiance(const Vec2& uv) const { return pixel_radiance(lookup_pixel(uv)); }
+    Color pixel_radiance(int k) const;
     Color ground(const Vec3& w) const;
     // Density of ground samples per unit solid angle (w below the horizon), given the ground is chosen.
     float ground_pdf(const Vec3& w) const;

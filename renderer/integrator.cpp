@@ -217,9 +217,10 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
                 L += beta * light_.radiance_filtered(w);
                 break;
             }
-            Color le = light_.radiance(w);
             if (use_bsdf_hits) {
-                float weight = settings_.strategy == LightStrategy::Mis ? power_heuristic(prev_bsdf_pdf, light_.pdf(w))
+                float light_pdf;
+                Color le = light_.radiance(w, &light_pdf);
+                float weight = settings_.strategy == LightStrategy::Mis ? power_heuristic(prev_bsdf_pdf, light_pdf)
                                                                         : 1.0f;
                 add(beta * le * weight, depth);
             }

@@ -49,9 +49,10 @@ namespace {
 class UniformSampler : public SkySampler {
   public:
     void build(const SkyImage&, SkyWeights&) override {}
-    bool sample(const Vec2& u, Vec3* wi, float* pdf) const override {
+    bool sample(const Vec2& u, Vec3* wi, float* pdf, Vec2* uv) const override {
         Vec3 h = sample_uniform_hemisphere(u);
         *wi = Vec3(h.x(), h.z(), h.y());
+        fisheye::uv_from_direction(*wi, uv);
         *pdf = this->pdf(*wi);
         return *pdf > 0;
     }
@@ -62,9 +63,10 @@ class UniformSampler : public SkySampler {
 class CosineSampler : public SkySampler {
   public:
     void build(const SkyImage&, SkyWeights&) override {}
-    bool sample(const Vec2& u, Vec3* wi, float* pdf) const override {
+    bool sample(const Vec2& u, Vec3* wi, float* pdf, Vec2* uv) const override {
         Vec3 h = sample_cosine_hemisphere(u);
         *wi = Vec3(h.x(), h.z(), h.y());
+        fisheye::uv_from_direction(*wi, uv);
         *pdf = this->pdf(*wi);
         return *pdf > 0;
     }
@@ -76,19 +78,29 @@ class CosineSampler : public SkySampler {
 
 class PixelSampler : public SkySampler {
   public:
-    bool sample(const Vec2& u, Vec3* wi, float* pdf) const override {
+    bool sample(const Vec2& u, Vec3* wi, float* pdf, Vec2* uv_wi) const override {
         Vec2 xy;
         if (n_ == 0 || !(total_ > 0) || !sample_xy(u, &xy)) return false;
+        // The caller reads this pixel's radiance next (nearly always this pixel, the rim aside): its
+        // load, a cache miss in a large sky, overlaps the mapping to a direction and back.
+        if (rgb_)
+            __builtin_prefetch(rgb_ + 3 * (size_t(std::min(int(xy.y() * n_), n_ - 1)) * n_ +
+                                           size_t(std::min(int(xy.x() * n_), n_ - 1))));
         Vec2 uv = 2.0f * xy - Vec2::Ones();
         if (uv.squaredNorm() > 1.0f) return false;  // the part of a rim pixel below the horizon
         *wi = fisheye::direction_from_uv(uv);
-        *pdf = this->pdf(*wi);  // from the direction, exactly as pdf() sees it
+        fisheye::uv_from_direction(*wi, uv_wi);
+        *pdf = pdf_uv(*wi, *uv_wi);  // from the direction, exactly as pdf() sees it
         return *pdf > 0;
     }
     float pdf(const Vec3& w) const override {
         if (n_ == 0 || w.y() < 0 || !(total_ > 0)) return 0;
         Vec2 uv;
         fisheye::uv_from_direction(w, &uv);
+        return pdf_uv(w, uv);
+    }
+    float pdf_uv(const Vec3& w, const Vec2& uv) const override {
+        if (n_ == 0 || w.y() < 0 || !(total_ > 0)) return 0;
         int i = std::clamp(int((uv.x() + 1) * 0.5f * n_), 0, n_ - 1);
         int j = std::clamp(int((uv.y() + 1) * 0.5f * n_), 0, n_ - 1);
         return cell_pdf(i, j) * 0.25f / EnvLight::jacobian_from_r2(uv.squaredNorm());
@@ -104,13 +116,15 @@ class PixelSampler : public SkySampler {
     virtual float cell_pdf(int i, int j) const = 0;
     int n_ = 0;
     double total_ = 0;
+    const float* rgb_ = nullptr;  // the image built on, only prefetched (the caller keeps it alive)
 };
 
 class CdfSampler : public PixelSampler {
   public:
     // One read-only pass over the weights (compensated where they are read, not written back).
-    void build(const SkyImage&, SkyWeights& w) override {
+    void build(const SkyImage& sky, SkyWeights& w) override {
         n_ = w.n;
+        rgb_ = sky.rgb.data();
         dist_.build_in_place(w.values, n_, n_, w.jacobian, w.mis_floor);
         w.mis_floor = 0;  // values now hold the distribution's old buffer: nothing to read there
         total_ = dist_.integral() * double(n_) * n_;
@@ -178,10 +192,11 @@ inline int alias_pick(const float* prob, const uint16_t* alias, int n, double u,
 // table's remainder places the point inside the pixel, so both uniforms stay stratified.
 class AliasSampler : public PixelSampler {
   public:
-    void build(const SkyImage&, SkyWeights& weights) override {
+    void build(const SkyImage& sky, SkyWeights& weights) override {
         const int n = weights.n;
         if (n > 65536) throw Error("alias sky sampler: resolution above 65536");
         n_ = n;
+        rgb_ = sky.rgb.data();
         std::vector<float>& w = *weights.values;
         weights_ = &w;
         prob_.resize(size_t(n) * n), alias_.resize(size_t(n) * n);
@@ -229,11 +244,12 @@ class AliasSampler : public PixelSampler {
 // down choosing a column half by u.x and a row half by u.y at each level, rescaling each uniform.
 class MipSampler : public PixelSampler {
   public:
-    void build(const SkyImage&, SkyWeights& weights) override {
+    void build(const SkyImage& sky, SkyWeights& weights) override {
         weights.apply_compensation();
         const int n = weights.n;
         std::vector<float>& w = *weights.values;
         n_ = n;
+        rgb_ = sky.rgb.data();
         weights_ = &w;
         int size = 1;
         while (size < n) size *= 2;
@@ -337,7 +353,7 @@ class SunSplitSampler : public SkySampler {
         if (removed > 0) sun_probability_ = float(removed / (removed + rest));
         cone_pdf_ = sun_probability_ > 0 ? float(1 / (2 * kPiD * one_minus_cos_)) : 0.0f;
     }
-    bool sample(const Vec2& u, Vec3* wi, float* pdf) const override {
+    bool sample(const Vec2& u, Vec3* wi, float* pdf, Vec2* uv) const override {
         if (u.x() < sun_probability_) {
             // Uniform in the cone; 1 - cos computed directly keeps a tiny cone precise in float.
             double a = std::min(double(u.x()) / sun_probability_, 1.0) * one_minus_cos_;
@@ -347,18 +363,25 @@ class SunSplitSampler : public SkySampler {
                          .normalized();
             if (d.y() < 0) return false;  // the cone's part below the horizon: no sky sample
             *wi = d;
+            fisheye::uv_from_direction(d, uv);
         } else {
             Vec2 v((u.x() - sun_probability_) / (1 - sun_probability_), u.y());
             v.x() = std::min(v.x(), 0x1.fffffep-1f);
             float unused;
-            if (!base_->sample(v, wi, &unused)) return false;
+            if (!base_->sample(v, wi, &unused, uv)) return false;
         }
-        *pdf = this->pdf(*wi);
+        *pdf = pdf_uv(*wi, *uv);
         return *pdf > 0;
     }
     float pdf(const Vec3& w) const override {
         if (w.y() < 0) return 0;
-        float p = (1 - sun_probability_) * base_->pdf(w);
+        Vec2 uv;
+        fisheye::uv_from_direction(w, &uv);
+        return pdf_uv(w, uv);
+    }
+    float pdf_uv(const Vec3& w, const Vec2& uv) const override {
+        if (w.y() < 0) return 0;
+        float p = (1 - sun_probability_) * base_->pdf_uv(w, uv);
         if (sun_probability_ > 0 && 1 - double(w.dot(sun_)) <= one_minus_cos_) p += sun_probability_ * cone_pdf_;
         return p;
     }

@@ -75,11 +75,15 @@ class SkySampler {
     virtual void build(const SkyImage& sky, SkyWeights& weights) = 0;
     // False when the build left nothing to sample (every final weight 0).
     virtual bool has_weight() const { return true; }
-    // A direction above the horizon and its density per unit solid angle (= pdf(wi)); false when
-    // no sample is produced (empty sky, a sample outside the disc), which counts as zero.
-    virtual bool sample(const Vec2& u, Vec3* wi, float* pdf) const = 0;
+    // A direction above the horizon, its density per unit solid angle (= pdf(wi)) and its fisheye
+    // uv as fisheye::uv_from_direction(wi) gives it (the caller's radiance lookup reads it: the
+    // mapping, an atan, is computed once); false when no sample is produced (empty sky, a sample
+    // outside the disc), which counts as zero.
+    virtual bool sample(const Vec2& u, Vec3* wi, float* pdf, Vec2* uv) const = 0;
     // Density per unit solid angle of sampling w (0 below the horizon).
     virtual float pdf(const Vec3& w) const = 0;
+    // pdf(w) for a w whose uv (fisheye::uv_from_direction) the caller already has: the same value.
+    virtual float pdf_uv(const Vec3& w, const Vec2& uv) const { return pdf(w); }
     virtual size_t memory_bytes() const = 0;
     // The sun cone of a sun split (cos of its half-angle, probability); probability 0 if none.
     virtual float sun_probability() const { return 0; }
