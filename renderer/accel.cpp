@@ -153,6 +153,31 @@ bool Accel::intersect(const Ray& ray, SurfaceHit* hit, bool all_attributes) cons
     return surface_hit(ray, rh, hit, all_attributes);
 }
 
+static bool has_textures(const Material& m) {
+    return m.base_color_texture.present() || m.metallic_roughness_texture.present() || m.normal_texture.present() ||
+           m.emissive_texture.present() || m.occlusion_texture.present();
+}
+
+bool Accel::reads_indices(const TriangleMesh& mesh, const Material& material, int64_t corners,
+                          bool all_attributes) const {
+    // The index buffer only when some attribute needs it (the corner normals serve the rest).
+    return all_attributes || has_textures(material) || !mesh.colors.empty() || (!mesh.normals.empty() && corners < 0);
+}
+
+void Accel::prefetch(const RTCRayHit& rh) const {
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return;
+    const Instance& instance = scene_.instances[size_t(rh.hit.instID[0])];
+    const TriangleMesh& mesh = scene_.meshes[size_t(instance.mesh_group)].primitives[rh.hit.geomID];
+    const int64_t corners = corner_first_[size_t(instance.mesh_group)][rh.hit.geomID];
+    const uint32_t tri = rh.hit.primID;
+    if (reads_indices(mesh, scene_.material(mesh.material), corners, false)) {
+        __builtin_prefetch(&mesh.indices[3 * size_t(tri)]);
+    } else if (corners >= 0) {
+        const float* c = corner_normals_.get() + 9 * (corners + int64_t(tri));
+        __builtin_prefetch(c), __builtin_prefetch(c + 8);  // 36 bytes: may straddle two lines
+    }
+}
+
 bool Accel::surface_hit(const Ray& ray, const RTCRayHit& rh, SurfaceHit* hit, bool all_attributes) const {
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
 
@@ -162,12 +187,9 @@ bool Accel::surface_hit(const Ray& ray, const RTCRayHit& rh, SurfaceHit* hit, bo
     uint32_t tri = rh.hit.primID;
     float b1 = rh.hit.u, b2 = rh.hit.v, b0 = 1 - b1 - b2;
     const Material& material = scene_.material(mesh.material);
-    const bool textured = material.base_color_texture.present() || material.metallic_roughness_texture.present() ||
-                          material.normal_texture.present() || material.emissive_texture.present() ||
-                          material.occlusion_texture.present();
+    const bool textured = has_textures(material);
     const int64_t corners = corner_first_[size_t(instance.mesh_group)][rh.hit.geomID];
-    // The index buffer only when some attribute needs it (the corner normals serve the rest).
-    const bool indexed = all_attributes || textured || !mesh.colors.empty() || (!mesh.normals.empty() && corners < 0);
+    const bool indexed = reads_indices(mesh, material, corners, all_attributes);
     uint32_t i0 = 0, i1 = 0, i2 = 0;
     if (indexed) i0 = mesh.indices[3 * tri], i1 = mesh.indices[3 * tri + 1], i2 = mesh.indices[3 * tri + 2];
 

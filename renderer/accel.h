@@ -49,6 +49,9 @@ class Accel {
     static void setup_ray_hit(const Ray& ray, RTCRayHit* rh);
     // The SurfaceHit of a record that intersect_coherent filled (false: the ray missed); as intersect.
     bool surface_hit(const Ray& ray, const RTCRayHit& rh, SurfaceHit* hit, bool all_attributes = true) const;
+    // Starts loading the mesh data surface_hit(..., false) will read for this record (a batch of
+    // hits then waits on memory once, not once per hit).
+    void prefetch(const RTCRayHit& rh) const;
     // Closest hit distance only (for benchmarks of raw traversal).
     bool intersect_raw(const Ray& ray, float* t) const;
     bool occluded(const Ray& ray) const;
@@ -58,6 +61,8 @@ class Accel {
 
   private:
     bool trace_closest(const Ray& ray, RTCRayHit* rh) const;
+    // Whether surface_hit reads the index buffer of a hit on mesh (with per-triangle record `corners`).
+    bool reads_indices(const TriangleMesh& mesh, const Material& material, int64_t corners, bool all_attributes) const;
     const Scene& scene_;
     RTCDevice device_ = nullptr;
     RTCScene top_ = nullptr;

@@ -129,6 +129,7 @@ class PathIntegrator {
         int x, y;
         PixelState* state;
     };
+    struct TileScratch;
     // The path tracer over any source of samples with uniform() and uniform2() (Rng, ZSobolSampler).
     // primary: the camera ray's first intersection when already traced (Accel::intersect_coherent).
     template <class Sampler>
