@@ -184,6 +184,7 @@ class CloudRollout {
     cv::Mat clouds_;                          // start_ - background_: what a pixel shows of its own start
     cv::Mat opacity_ext_;                     // the start's a x background_, a, share_ (CV_32FC(5))
     cv::Mat opacity_, carried_opacity_;       // a at the start, and where the clouds have taken it
+    cv::Mat alpha_ext_;                       // a alone (what the recycled reads carry)
     cv::Mat unseen_;
     cv::Mat share_;             // circumsolar share (where a cloud hides the background)
     std::optional<Vec3d> sun_;  // the background's
