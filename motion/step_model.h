@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/core.hpp>
+
 #include "sky/sky_image.h"
 
 namespace dynsky {
@@ -25,6 +27,13 @@ class MediumStepModel {
     virtual void set_sun_direction(const Vec3d&) {}
     // The Delta t the model was made for (a trained network's), 0 when any is fine.
     virtual double native_dt() const { return 0.0; }
+    // How opaque the clouds are that the step just made shows, when the model knows more than the
+    // sky's look: it moved the input's clouds and measured their opacity where they were seen
+    // (motion/advect_residual.h CloudRollout::opacity). A square CV_32FC1 map in the sky's layout (0
+    // clear .. 1 cloud) at any resolution; empty: no opinion (the timeline judges the sun from the
+    // sky alone, motion/sun_patch.h). input_cloud_opacity: the same for the input.
+    virtual cv::Mat last_cloud_opacity() const { return cv::Mat(); }
+    virtual cv::Mat input_cloud_opacity() const { return cv::Mat(); }
     // True when only native_dt() is right (the paper's networks learnt one step's motion); models
     // that take their motion as an input work at any Delta t.
     virtual bool dt_is_fixed() const { return native_dt() > 0; }

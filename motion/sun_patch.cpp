@@ -7,6 +7,7 @@
 
 #include "sky/clear_sky.h"
 #include "sky/fisheye.h"
+#include "util/error.h"
 
 namespace dynsky {
 
@@ -23,7 +24,24 @@ cv::Mat saturated_pixels(const cv::Mat& unit) {
     return (ch[0] >= 0.999f) | (ch[1] >= 0.999f) | (ch[2] >= 0.999f);
 }
 
+int sun_cut_radius(int n) { return int(std::ceil(n / 180.0)) + 2; }  // 1 degree + 2 px
+
 }  // namespace
+
+cv::Mat sun_cut_mask(int n, const Vec3d& sun) {
+    cv::Mat mask = cv::Mat::zeros(n, n, CV_8UC1);
+    if (!(sun.y() > 0)) return mask;
+    double x, y;
+    fisheye::pixel_from_direction(sun.normalized(), n, &x, &y);
+    // remove_sun's disc, dilated by one pixel as it dilates its cut (3 x 3: the square's corners too).
+    const int r = sun_cut_radius(n), ci = int(std::lround(x)), cj = int(std::lround(y));
+    for (int j = std::max(0, cj - r - 1); j <= std::min(n - 1, cj + r + 1); ++j)
+        for (int i = std::max(0, ci - r - 1); i <= std::min(n - 1, ci + r + 1); ++i) {
+            const int dx = std::max(0, std::abs(i - ci) - 1), dy = std::max(0, std::abs(j - cj) - 1);
+            if (dx * dx + dy * dy <= r * r) mask.at<uint8_t>(j, i) = 255;
+        }
+    return mask;
+}
 
 SunPatch remove_sun(SkyImage* sky) {
     SunPatch patch;
@@ -32,7 +50,7 @@ SunPatch remove_sun(SkyImage* sky) {
     double x, y;
     fisheye::pixel_from_direction(sky->sun_direction->cast<double>(), n, &x, &y);
     const int ci = int(std::lround(x)), cj = int(std::lround(y));
-    const int radius = int(std::ceil(n / 180.0)) + 2, margin = 3 * radius;
+    const int radius = sun_cut_radius(n), margin = 3 * radius;
     const int i0 = std::max(0, ci - margin), i1 = std::min(n - 1, ci + margin);
     const int j0 = std::max(0, cj - margin), j1 = std::min(n - 1, cj + margin);
     if (i1 <= i0 || j1 <= j0) return patch;
@@ -124,15 +142,26 @@ void restore_pixels(SkyImage* sky, const SkyImage& from, const cv::Mat& mask, do
             if (mask.at<uint8_t>(y, x)) sky->set_pixel(x, y, t * from.pixel(x, y) + (1.0f - t) * sky->pixel(x, y));
 }
 
-double estimate_sun_transmittance(const SkyImage& sky, const Vec3d& sun_in, const SunTransmittanceParams& p) {
-    const Vec3d sun = sun_in.normalized();
-    if (!(sun.y() > 0.0)) return 1.0;
-    const int n = sky.resolution;
-    ClearSkyParams cp;
-    cp.sun_direction = sun;
-    cp.turbidity = p.turbidity;
-    cp.sun_disc = false;
-    const ClearSkyModel model(cp, false);
+double cloudiness(const Color& v, const Color& m, const SunTransmittanceParams& p) {
+    const double lv = luminance(v), lm = luminance(m);
+    if (!(lm > 0) || !(m[2] > 0)) return 0.0;
+    const double rb = (v[0] + 1e-9) / (v[2] + 1e-9), rb_clear = m[0] / m[2];
+    const double brightness = std::max(lv, 1e-12) / lm;
+    // How far towards cloud, in units of each threshold (1: at the threshold).
+    const double whiter = std::log(rb / rb_clear) / std::log(p.cloud_ratio);
+    const double departs = std::abs(std::log(brightness)) / std::log(p.brightness_ratio);
+    const double x = std::max(whiter, departs);
+    if (p.edge_softness <= 0) return x > 1 ? 1 : 0;
+    return smoothstep01((x - (1 - p.edge_softness)) / (2 * p.edge_softness));
+}
+
+namespace {
+
+// The clear share of the pixels within outer_deg of the sun (cloud_at(i, j, direction): the
+// pixel's cloudiness, negative to leave it out), each weighted by 1 / (angle^2 + core_deg^2),
+// through the smoothstep from covered_share to clear_share; 1 when no pixel counts.
+template <typename CloudAt>
+double transmittance_around_sun(int n, const Vec3d& sun, const SunTransmittanceParams& p, CloudAt cloud_at) {
     const double cos_in = std::cos(p.inner_deg * kPiD / 180), cos_out = std::cos(p.outer_deg * kPiD / 180);
     // The ring's bounding box in pixels (the mapping is equidistant: 90 degrees = n / 2 pixels).
     double sx, sy;
@@ -143,24 +172,14 @@ double estimate_sun_transmittance(const SkyImage& sky, const Vec3d& sun_in, cons
     double clear = 0, total = 0;
     for (int j = std::max(0, int(sy) - reach); j <= std::min(n - 1, int(sy) + reach); j += stride)
         for (int i = std::max(0, int(sx) - reach); i <= std::min(n - 1, int(sx) + reach); i += stride) {
-            if (!sky.in_disc(i, j)) continue;
+            if (fisheye::pixel_center_uv(i, j, n).squaredNorm() > 1.0f) continue;  // SkyImage::in_disc
             const Vec3d w = fisheye::direction_from_pixel(i, j, n);
             const double c = w.dot(sun);
             if (c > cos_in || c < cos_out || w.y() < 0.05) continue;
-            const Color v = sky.pixel(i, j), m = model.sky_radiance(w);
-            const double lv = luminance(v), lm = luminance(m);
-            if (!(lm > 0) || !(m[2] > 0)) continue;
+            const double cloud = cloud_at(i, j, w);
+            if (cloud < 0) continue;
             const double angle = std::acos(std::clamp(c, -1.0, 1.0)), core = p.core_deg * kPiD / 180;
             const double weight = 1.0 / (angle * angle + core * core);  // the cloud at the sun counts most
-            const double rb = (v[0] + 1e-9) / (v[2] + 1e-9), rb_clear = m[0] / m[2];
-            const double brightness = std::max(lv, 1e-12) / lm;
-            // How far towards cloud, in units of each threshold (1: at the threshold).
-            const double whiter = std::log(rb / rb_clear) / std::log(p.cloud_ratio);
-            const double departs = std::abs(std::log(brightness)) / std::log(p.brightness_ratio);
-            const double x = std::max(whiter, departs);
-            double cloud;
-            if (p.edge_softness <= 0) cloud = x > 1 ? 1 : 0;
-            else cloud = smoothstep01((x - (1 - p.edge_softness)) / (2 * p.edge_softness));
             total += weight;
             clear += weight * (1 - cloud);
         }
@@ -168,6 +187,33 @@ double estimate_sun_transmittance(const SkyImage& sky, const Vec3d& sun_in, cons
     // The clear share through a smoothstep: three quarters clear around the sun lets it all
     // through, a quarter none (a sun is behind a cloud or not; the share only says how likely).
     return smoothstep01((clear / total - p.covered_share) / (p.clear_share - p.covered_share));
+}
+
+}  // namespace
+
+double estimate_sun_transmittance(const SkyImage& sky, const Vec3d& sun_in, const SunTransmittanceParams& p) {
+    const Vec3d sun = sun_in.normalized();
+    if (!(sun.y() > 0.0)) return 1.0;
+    ClearSkyParams cp;
+    cp.sun_direction = sun;
+    cp.turbidity = p.turbidity;
+    cp.sun_disc = false;
+    const ClearSkyModel model(cp, false);
+    return transmittance_around_sun(sky.resolution, sun, p, [&](int i, int j, const Vec3d& w) {
+        const Color m = model.sky_radiance(w);
+        if (!(luminance(m) > 0) || !(m[2] > 0)) return -1.0;
+        return cloudiness(sky.pixel(i, j), m, p);
+    });
+}
+
+double sun_transmittance_of_opacity(const cv::Mat& opacity, const Vec3d& sun_in, const SunTransmittanceParams& p) {
+    const Vec3d sun = sun_in.normalized();
+    if (!(sun.y() > 0.0) || opacity.empty()) return 1.0;
+    if (opacity.type() != CV_32FC1 || opacity.rows != opacity.cols)
+        throw Error("sun transmittance: the opacity map must be square CV_32FC1");
+    return transmittance_around_sun(opacity.rows, sun, p, [&](int i, int j, const Vec3d&) {
+        return double(std::clamp(opacity.at<float>(j, i), 0.0f, 1.0f));
+    });
 }
 
 double relative_sun_transmittance(const SkyImage& moved, const SkyImage& start, std::optional<Vec3d> sun) {
