@@ -92,7 +92,7 @@ std::vector<std::pair<double, double>> parse_chart_points(const std::string& tex
         try {
             size_t used_x = 0, used_y = 0;
             x = std::stod(m[1], &used_x), y = std::stod(m[2], &used_y);
-            if (used_x != m[1].length() || used_y != m[2].length()) throw std::invalid_argument("");
+            if (used_x != size_t(m[1].length()) || used_y != size_t(m[2].length())) throw std::invalid_argument("");
         } catch (const std::exception&) {
             throw Error("--points '" + text + "': '" + item + "' is not X,Y with X, Y in [0, 1]");
         }
