@@ -3,12 +3,14 @@
 // against the imager's own cloud masks.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <optional>
+#include <vector>
 #include <sstream>
 
 #include "motion/network_step_model.h"
@@ -105,6 +107,61 @@ TEST(SunTransmittance, CloudCrossingTheSunDimsItAsTheProceduralSkyDoes) {
     EXPECT_LT(sum / frames, 0.04);
     EXPECT_LT(worst, 0.15);
     EXPECT_GT(worst_undimmed, 0.5) << "the cloud over the sun must matter, or the test says nothing";
+}
+
+// The first `count` seeds of the sky above whose sun starts clear and is covered within
+// `duration` s (chosen by that rule alone, not by how they fare).
+std::vector<ProceduralSkyParams> clouds_crossing_the_sun(int count, double duration, double dt) {
+    std::vector<ProceduralSkyParams> out;
+    ProceduralSkyParams p = *cloud_crossing_the_sun(duration, dt);
+    for (uint64_t seed = 1; seed < 500 && int(out.size()) < count; ++seed) {
+        p.seed = seed;
+        if (procedural_sun_transmittance(p, 0) < 0.95) continue;
+        for (double t = dt; t <= duration; t += dt)
+            if (procedural_sun_transmittance(p, t) < 0.1) {
+                out.push_back(p);
+                break;
+            }
+    }
+    return out;
+}
+
+// The same over several seeds, among them clouds already at the sun's edge in the input (covered
+// within 5-25 s), which the look near the sun calls clear. bench/sun_seeds measures more.
+TEST(SunTransmittance, CloudsCrossingTheSunOnSeveralSeeds) {
+    const double duration = 120, dt = 10;
+    // 8 seeds (3-12), 4 under DYNSKY_TEST_SMALL.
+    const std::vector<ProceduralSkyParams> seeds = clouds_crossing_the_sun(test::run_size(8, 4), duration, dt);
+    ASSERT_EQ(int(seeds.size()), test::run_size(8, 4));
+    const int n = 128;
+    double sum = 0;
+    int frames = 0;
+    std::vector<double> worst;
+    for (const ProceduralSkyParams& p : seeds) {
+        ProceduralSky truth(p);
+        CloudMotion motion;
+        motion.wind = Wind{p.layers[0].wind_from_deg, p.layers[0].wind_speed_mps, p.layers[0].altitude_m};
+        SkyTimeline timeline(truth.render(0, n), make_network_step_model("advect", motion), dt);
+        double w = 0, s = 0;
+        int f = 0;
+        for (double t = 0; t <= duration + 1e-9; t += 5) {
+            const double e =
+                std::abs(horizontal_illuminance(timeline.sky_at(t)) / horizontal_illuminance(truth.render(t, n)) - 1);
+            w = std::max(w, e), s += e, ++f;
+        }
+        std::printf("seed %llu: largest error %.1f %%, mean %.1f %%\n", (unsigned long long)p.seed, 100 * w,
+                    100 * s / f);
+        worst.push_back(w), sum += s, frames += f;
+    }
+    std::sort(worst.begin(), worst.end());
+    const double median_worst = worst[worst.size() / 2];
+    std::printf("mean frame error %.1f %%, median of the seeds' largest %.1f %%\n", 100 * sum / frames,
+                100 * median_worst);
+    // Measured 10.5 % and 60 % (4 seeds: 10.0 %, 59 %); with the sun's cut counted as clear sky
+    // (before): 12.5 % and 127 % (4 seeds: 14.9 %, 127 %). Some seeds still miss by 50-180 % in
+    // a few frames (docs/animation.md).
+    EXPECT_LT(sum / frames, 0.115);
+    EXPECT_LT(median_worst, 1.0);
 }
 
 // A stored timeline keeps the cloud opacity the model measured (the sun's weight comes from it):
