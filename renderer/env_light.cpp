@@ -377,20 +377,9 @@ Color EnvLight::radiance_filtered(const Vec3& w) const {
     // the disc) the disc tests of bilinear_in_disc all pass: the same sums without them (the tests
     // cost 8 divisions, and nearly every camera ray that sees the sky lands here).
     const float inner = 1.0f - 4.0f / n;
-    if (inner > 0 && uv.squaredNorm() <= inner * inner) {
-        const int x0 = int(std::floor(fx)), y0 = int(std::floor(fy));
-        const float tx = fx - x0, ty = fy - y0;
-        Color sum = Color::Zero();
-        float weight = 0;
-        for (int dy = 0; dy < 2; ++dy)
-            for (int dx = 0; dx < 2; ++dx) {
-                const float wt = (dx ? tx : 1 - tx) * (dy ? ty : 1 - ty);
-                const float* p = &sky_->rgb[(size_t(y0 + dy) * n + size_t(x0 + dx)) * 3];
-                sum += Color(p[0], p[1], p[2]) * wt;
-                weight += wt;
-            }
-        if (weight > 0) return sum / weight;
-    }
+    if (inner > 0 && uv.squaredNorm() <= inner * inner &&
+        fisheye::bilinear_in_disc<false>(sky_->rgb.data(), n, fx, fy, &c))
+        return c;
     return fisheye::bilinear_in_disc(sky_->rgb.data(), n, fx, fy, &c) ? c : radiance(w);
 }
 

@@ -53,7 +53,9 @@ void pixel_from_direction(const Vec3d& w, int n, double* x, double* y);
 // Bilinear lookup of an N x N x 3 fisheye (row-major floats) that uses only the neighbours whose
 // centres lie inside the disc, renormalising their weights (so the black corners never darken the
 // rim). x, y as above. Returns false when no neighbour is inside (the caller picks a fallback).
-template <typename Real>
+// kTestDisc = false skips the tests, for callers that know all four neighbours lie inside (the
+// renderer's camera rays away from the rim: the tests cost 8 divisions).
+template <bool kTestDisc = true, typename Real>
 bool bilinear_in_disc(const float* rgb, int n, Real x, Real y, Color* out) {
     const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
     const Real tx = x - x0, ty = y - y0;
@@ -62,7 +64,8 @@ bool bilinear_in_disc(const float* rgb, int n, Real x, Real y, Color* out) {
     for (int dy = 0; dy < 2; ++dy)
         for (int dx = 0; dx < 2; ++dx) {
             const int i = x0 + dx, j = y0 + dy;
-            if (i < 0 || j < 0 || i >= n || j >= n || pixel_center_uv(i, j, n).squaredNorm() > 1.0f) continue;
+            if (kTestDisc && (i < 0 || j < 0 || i >= n || j >= n || pixel_center_uv(i, j, n).squaredNorm() > 1.0f))
+                continue;
             const Real w = (dx ? tx : 1 - tx) * (dy ? ty : 1 - ty);
             const float* p = &rgb[(size_t(j) * n + i) * 3];
             sum += Color(p[0], p[1], p[2]) * float(w);

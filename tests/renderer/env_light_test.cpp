@@ -216,7 +216,9 @@ TEST(EnvLight, GroundImageIsImportanceSampled) {
         // Light samples alone are unbiased without MIS compensation (with it, BSDF sampling covers
         // the rest). The parts of rim pixels below the horizon (0.3 % here) are left to BSDF
         // sampling, as the sky's are.
-        if (std::string(method).find("mis") == std::string::npos) EXPECT_NEAR(mean, exact, 4 * se + 5e-3 * exact);
+        if (std::string(method).find("mis") == std::string::npos) {
+            EXPECT_NEAR(mean, exact, 4 * se + 5e-3 * exact);
+        }
         ASSERT_GT(below, 1000);
         // Uniform sampling would put patch_solid_angle / 2 pi of them there (about 1.3 %).
         EXPECT_LT(patch_solid_angle / (2 * kPiD), 0.02);
