@@ -71,11 +71,11 @@ SkyTimeline::SkyTimeline(SkyImage input, std::unique_ptr<MediumStepModel> model,
     steps_.push_back(std::make_shared<const SkyImage>(std::move(input)));
 }
 
-std::optional<double> SkyTimeline::model_sun_weight(int i, double s, const Vec3d& sun) {
+std::optional<double> SkyTimeline::model_sun_weight(int i, double s, const Vec3d& sun, bool relative) {
     auto opacity = [&](int k) { return size_t(k) < model_opacity_.size() ? model_opacity_[size_t(k)] : cv::Mat(); };
     const cv::Mat o0 = opacity(0), a = opacity(i), b = s > 0 ? opacity(i + 1) : a;
     if (o0.empty() || a.empty() || b.empty()) return std::nullopt;
-    const double before = std::max(sun_transmittance_of_opacity(o0, sun), 0.05);
+    const double before = relative ? std::max(sun_transmittance_of_opacity(o0, sun), 0.05) : 1.0;
     double t = sun_transmittance_of_opacity(a, sun);
     if (s > 0) {
         // Between two steps the clouds move as Gamma moves them: what covers the sun at s was at
@@ -95,6 +95,23 @@ std::optional<double> SkyTimeline::model_sun_weight(int i, double s, const Vec3d
         t = std::min(sun_transmittance_of_opacity(a, from), sun_transmittance_of_opacity(b, to));
     }
     return std::clamp(t / before, 0.0, 1.0);
+}
+
+const SunPatch& SkyTimeline::covered_input_sun(int n) {
+    if (!covered_checked_) {
+        covered_checked_ = true;
+        // A sun dimmed in the input (a cloud over it; an imported photo's sun not seen, so not
+        // restored) cannot be brightened by a weight relative to it when the cloud moves off.
+        // Only when the sky around the sun says so too: a cloud lit by forward scattering can look
+        // as clear as the aureole it hides, and then the look cannot tell when it moves off either.
+        if (input_sun_ && !model_->makes_own_sun() && sun_patch_share(suns_[0], n, *input_sun_) < 0.5) {
+            double around = input_transmittance_;
+            if (!model_opacity_.empty() && !model_opacity_[0].empty())
+                around = std::min(around, sun_transmittance_of_opacity(model_opacity_[0], *input_sun_));
+            if (around < 0.5) clear_sun_ = clear_sun_patch(n, *input_sun_);
+        }
+    }
+    return clear_sun_;
 }
 
 std::optional<Vec3d> SkyTimeline::sun_direction_at(double t) const {
@@ -213,14 +230,24 @@ void SkyTimeline::sky_at(double t, SkyImage* out) {
         out->sun_direction = sun->cast<float>();
         // A model that moves the input's clouds over the sun dims it (models with their own sun
         // already did). At the input itself the weight is 1: S_0 comes back exactly.
-        if (!model_->makes_own_sun() && !(i == 0 && s == 0) && !suns_[0].empty()) {
-            last_sun_weight_ = std::clamp(estimate_sun_transmittance(*out, *sun) / input_transmittance_, 0.0, 1.0);
-            // The model's, from the clouds it moved over the sun, when it knows them: a cloud is
-            // over the sun when either says so.
-            if (auto w = model_sun_weight(i, s, *sun)) last_sun_weight_ = std::min(last_sun_weight_, *w);
+        const bool at_input = i == 0 && s == 0;
+        if (!at_input && !covered_input_sun(out->resolution).empty()) {
+            // The input's sun was covered: the clear sun by the frame's own transmittance, the
+            // input's dim one by the rest (all of it while the cloud stays).
+            last_sun_weight_ = estimate_sun_transmittance(*out, *sun);
+            if (auto w = model_sun_weight(i, s, *sun, false)) last_sun_weight_ = std::min(last_sun_weight_, *w);
+            insert_sun(out, clear_sun_, *sun, last_sun_weight_);
+            insert_sun(out, suns_[0], *sun, 1.0 - last_sun_weight_);
+        } else {
+            if (!model_->makes_own_sun() && !at_input && !suns_[0].empty()) {
+                last_sun_weight_ = std::clamp(estimate_sun_transmittance(*out, *sun) / input_transmittance_, 0.0, 1.0);
+                // The model's, from the clouds it moved over the sun, when it knows them: a cloud is
+                // over the sun when either says so.
+                if (auto w = model_sun_weight(i, s, *sun)) last_sun_weight_ = std::min(last_sun_weight_, *w);
+            }
+            insert_sun(out, suns_[size_t(i)], *sun, (1.0 - s) * last_sun_weight_);
+            if (s > 0) insert_sun(out, suns_[size_t(i) + 1], *sun, s * last_sun_weight_);
         }
-        insert_sun(out, suns_[size_t(i)], *sun, (1.0 - s) * last_sun_weight_);
-        if (s > 0) insert_sun(out, suns_[size_t(i) + 1], *sun, s * last_sun_weight_);
     }
     timings_.gamma_seconds += seconds_since(t0);
 }

@@ -136,7 +136,14 @@ class SkyTimeline {
     // Per step (0: the input), the opacity of the clouds the model moved (MediumStepModel::
     // last_cloud_opacity; empty: none), and the sun's weight at s in interval i from them.
     std::vector<cv::Mat> model_opacity_;
-    std::optional<double> model_sun_weight(int i, double s, const Vec3d& sun);
+    // relative: over the input's opacity at the sun (in [0, 1]); else the transmittance itself.
+    std::optional<double> model_sun_weight(int i, double s, const Vec3d& sun, bool relative = true);
+    // The input's sun when a cloud dimmed it (it holds under half the clear sun's irradiance, or
+    // nothing was cut): the clear sun put back by the frame's own transmittance instead, made
+    // when first needed (empty otherwise). Set by covered_input_sun().
+    bool covered_checked_ = false;
+    SunPatch clear_sun_;
+    const SunPatch& covered_input_sun(int n);
     double input_time_ = 0;
     SkyTimelineTimings timings_;
     std::string stored_folder_;  // a loaded timeline's folder (steps and flows read from there)

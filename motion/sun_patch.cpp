@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/photo.hpp>
 
@@ -89,6 +90,45 @@ SunPatch remove_sun(SkyImage* sky) {
             patch.excess.push_back(before - after);
         }
     return patch;
+}
+
+SunPatch clear_sun_patch(int n, const Vec3d& sun_in, double turbidity) {
+    SunPatch patch;
+    const Vec3d sun = sun_in.normalized();
+    if (!(sun.y() > 0)) return patch;
+    ClearSkyParams cp;
+    cp.sun_direction = sun;
+    cp.turbidity = turbidity;
+    const ClearSkyModel model(cp, false);
+    double x, y;
+    fisheye::pixel_from_direction(sun, n, &x, &y);
+    const int ci = int(std::lround(x)), cj = int(std::lround(y));
+    std::map<std::pair<int, int>, Color> disc;  // a pixel may come several times
+    model.splat_sun_disc(n, [&](int i, int j, const Color& c) {
+        disc.emplace(std::make_pair(j, i), Color::Zero()).first->second += c;
+    });
+    for (const auto& [p, c] : disc) {
+        patch.di.push_back(p.second - ci), patch.dj.push_back(p.first - cj);
+        patch.excess.push_back(c);
+    }
+    return patch;
+}
+
+double sun_patch_share(const SunPatch& patch, int n, const Vec3d& sun_in, double turbidity) {
+    const Vec3d sun = sun_in.normalized();
+    if (patch.empty() || !(sun.y() > 0)) return 0.0;
+    ClearSkyParams cp;
+    cp.sun_direction = sun;
+    cp.turbidity = turbidity;
+    const double clear = luminance(ClearSkyModel(cp, false).sun_irradiance());
+    if (!(clear > 0)) return 0.0;
+    double x, y;
+    fisheye::pixel_from_direction(sun, n, &x, &y);
+    const int ci = int(std::lround(x)), cj = int(std::lround(y));
+    double e = 0;
+    for (size_t k = 0; k < patch.di.size(); ++k)
+        e += luminance(patch.excess[k]) * fisheye::pixel_solid_angle(ci + patch.di[k], cj + patch.dj[k], n);
+    return e / clear;
 }
 
 void insert_sun(SkyImage* sky, const SunPatch& patch, const Vec3d& direction, double weight) {

@@ -35,6 +35,15 @@ SunPatch remove_sun(SkyImage* sky);
 // limb's pixel beyond): CV_8UC1, all zero when the sun is below the horizon.
 cv::Mat sun_cut_mask(int n, const Vec3d& sun);
 
+// The clear sun of an n x n sky: the Hosek-Wilkie disc (turbidity as the clear sky compared with
+// in estimate_sun_transmittance) splatted as make_clear_sky and the photo import's sun restoration
+// splat it, as a patch centred on the pixel of `sun`. Empty below the horizon.
+SunPatch clear_sun_patch(int n, const Vec3d& sun, double turbidity = 3.0);
+
+// How much of that clear sun a patch cut from an n x n sky at `sun` holds: the luminance of its
+// irradiance over the clear disc's (0 for an empty patch; about 1 for a clear or restored sun).
+double sun_patch_share(const SunPatch& patch, int n, const Vec3d& sun, double turbidity = 3.0);
+
 // Adds weight x the patch back centred on the pixel of `direction` (skipped below the horizon).
 void insert_sun(SkyImage* sky, const SunPatch& patch, const Vec3d& direction, double weight = 1.0);
 
