@@ -397,6 +397,9 @@ void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3
         cv::Mat unknown = clipped.empty() ? cv::Mat() : clipped.clone();
         if (!unseen_.empty()) unknown = unknown.empty() ? unseen_.clone() : (unknown | unseen_);
         if (!unknown.empty()) fill_from_around(&alpha, unknown & disc_big_, disc_big_);
+        // A cloud lit by forward scattering can look as clear as the aureole: the sun it dimmed says more.
+        if (unseen_opacity_ > 0 && !unseen_.empty())
+            alpha.setTo(cv::Scalar(unseen_opacity_), unseen_ & disc_big_ & (alpha < unseen_opacity_));
         cv::Mat alpha3, carried;
         cv::merge(std::vector<cv::Mat>{alpha, alpha, alpha}, alpha3);
         share_ = circumsolar_share(start_.rows, sun_);
@@ -661,6 +664,8 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
         const cv::Mat unseen = input.sun_direction ? sun_cut_mask(input.resolution, input.sun_direction->cast<double>())
                                                    : cv::Mat();
         rollout_ = std::make_unique<CloudRollout>(&network_, start, flow_, cv::Mat(), unseen);
+        rollout_->set_unseen_opacity(sun_cover_);
+        background_ = cv::Mat();  // the new rollout needs its background (and opacity)
         rollout_input_ = history.front().get();
         for (int j = 1; j < k; ++j) rollout_->advance();  // catch up (not the timeline's order)
     }

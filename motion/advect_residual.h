@@ -163,6 +163,9 @@ class CloudRollout {
     // flow holds the background. With its sun, clouds hide the aureole they cover (moved onto it
     // they do not shine with it; moved off it they do not take it along).
     void set_background(const cv::Mat& background, const std::optional<Vec3d>& sun = std::nullopt);
+    // The unseen pixels' opacity is at least this from the next set_background (the input's sun
+    // was dimmed by a cloud there, however clear the sky around it looks).
+    void set_unseen_opacity(double a) { unseen_opacity_ = a; }
     // How opaque the clouds each pixel shows are (CV_32FC1, 0 clear .. 1 cloud): measured on the
     // start against the background (motion/sun_patch.h cloudiness) and carried with the clouds (the
     // network's corrections not included). The start's before the first step; empty without a
@@ -186,6 +189,7 @@ class CloudRollout {
     cv::Mat opacity_, carried_opacity_;       // a at the start, and where the clouds have taken it
     cv::Mat alpha_ext_;                       // a alone (what the recycled reads carry)
     cv::Mat unseen_;
+    double unseen_opacity_ = 0;
     cv::Mat share_;             // circumsolar share (where a cloud hides the background)
     std::optional<Vec3d> sun_;  // the background's
     double background_weight_ = 1.0;
@@ -210,6 +214,7 @@ class AdvectResidualStepModel : public MediumStepModel {
     // CloudRollout::opacity and start_opacity, at most at 256 px (the sun's weight needs no more).
     cv::Mat last_cloud_opacity() const override { return last_opacity_; }
     cv::Mat input_cloud_opacity() const override { return input_opacity_; }
+    void set_input_sun_cover(double c) override { sun_cover_ = c; }
 
   private:
     AdvectResidualNetwork network_;
@@ -223,6 +228,7 @@ class AdvectResidualStepModel : public MediumStepModel {
     Vec3 background_sun_ = Vec3::Zero();
     std::optional<Vec3> sun_;  // from the timeline, else the sky's own
     cv::Mat last_opacity_, input_opacity_;
+    double sun_cover_ = 0;
 };
 
 // The kind of a model folder's model.json ("advect-residual", or "flownet-cloudnet" for the

@@ -64,6 +64,10 @@ SkyTimeline::SkyTimeline(SkyImage input, std::unique_ptr<MediumStepModel> model,
     // The sun is cut out where the image has it; it is put back where the clock says.
     suns_.push_back(remove_sun(&input));
     if (input_sun_) input_transmittance_ = std::max(estimate_sun_transmittance(input, *input_sun_), 0.05);
+    if (input_sun_) {
+        const double share = sun_patch_share(suns_[0], input.resolution, *input_sun_);
+        if (share < 0.5) model_->set_input_sun_cover(1.0 - share);
+    }
     if (clock_) {
         validate_location(clock_->where);
         input.sun_direction = compute_sun_position(clock_->start, clock_->where).direction().cast<float>();

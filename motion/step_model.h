@@ -34,6 +34,9 @@ class MediumStepModel {
     // sky alone, motion/sun_patch.h). input_cloud_opacity: the same for the input.
     virtual cv::Mat last_cloud_opacity() const { return cv::Mat(); }
     virtual cv::Mat input_cloud_opacity() const { return cv::Mat(); }
+    // How much of the input's sun a cloud hid (1 - its share of the clear sun), told before the
+    // first step: models with an opacity count the sun's cut-out pixels at least this opaque.
+    virtual void set_input_sun_cover(double) {}
     // True when only native_dt() is right (the paper's networks learnt one step's motion); models
     // that take their motion as an input work at any Delta t.
     virtual bool dt_is_fixed() const { return native_dt() > 0; }
