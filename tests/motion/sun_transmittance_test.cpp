@@ -164,6 +164,31 @@ TEST(SunTransmittance, CloudsCrossingTheSunOnSeveralSeeds) {
     EXPECT_LT(median_worst, 1.0);
 }
 
+// The cumulus above on seed 1, whose sun starts covered and comes out at 25 s: the input's sun is
+// the dim one behind the cloud, so once the cloud moves off the clear sun must come back (it stayed
+// at 0.35 of the truth's illuminance when only the input's own sun was put back).
+TEST(SunTransmittance, SunComingOutOfACloudShinesAsTheClearSun) {
+    ProceduralSkyParams p;
+    p.coverage = 0.45;
+    p.layers = {cumulus_layer()};
+    p.layers[0].wind_from_deg = 250, p.layers[0].wind_speed_mps = 12, p.layers[0].evolution_time_s = 0;
+    p.clear_sky.sun_direction = fisheye::direction_from_angles(0.8, 1.2);
+    p.seed = 1;
+    ProceduralSky truth(p);
+    ASSERT_LT(truth.sun_transmittance(0), 0.1);
+    ASSERT_GT(truth.sun_transmittance(40), 0.95);
+    const int n = 128;
+    CloudMotion motion;
+    motion.wind = Wind{p.layers[0].wind_from_deg, p.layers[0].wind_speed_mps, p.layers[0].altitude_m};
+    SkyTimeline timeline(truth.render(0, n), make_network_step_model("advect", motion), 10);
+    for (double t = 0; t <= 60 + 1e-9; t += 5) {
+        const SkyImage moved = timeline.sky_at(t);
+        if (t < 30) continue;  // the cloud's edge at the sun
+        const double ratio = horizontal_illuminance(moved) / horizontal_illuminance(truth.render(t, n));
+        EXPECT_NEAR(ratio, 1.0, 0.15) << "t " << t << " s";
+    }
+}
+
 // A stored timeline keeps the cloud opacity the model measured (the sun's weight comes from it):
 // the skies of the loaded timeline are those of the one that computed them, the sun dimmed alike.
 TEST(SunTransmittance, StoredTimelineDimsTheSunAsTheComputedOne) {
