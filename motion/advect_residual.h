@@ -163,8 +163,9 @@ class CloudRollout {
     // flow holds the background. With its sun, clouds hide the aureole they cover (moved onto it
     // they do not shine with it; moved off it they do not take it along).
     void set_background(const cv::Mat& background, const std::optional<Vec3d>& sun = std::nullopt);
-    // The unseen pixels' opacity is at least this from the next set_background (the input's sun
-    // was dimmed by a cloud there, however clear the sky around it looks).
+    // The unseen pixels' opacity is at least this, and that of the pixels within a degree and a
+    // half of them at least 0.9 of it, from the next set_background (the input's sun was dimmed by
+    // a cloud there, however clear the sky around it looks).
     void set_unseen_opacity(double a) { unseen_opacity_ = a; }
     // How opaque the clouds each pixel shows are (CV_32FC1, 0 clear .. 1 cloud): measured on the
     // start against the background (motion/sun_patch.h cloudiness) and carried with the clouds (the

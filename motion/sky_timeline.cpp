@@ -236,12 +236,14 @@ void SkyTimeline::sky_at(double t, SkyImage* out) {
         // already did). At the input itself the weight is 1: S_0 comes back exactly.
         const bool at_input = i == 0 && s == 0;
         if (!at_input && !covered_input_sun(out->resolution).empty()) {
-            // The input's sun was covered: the clear sun by the frame's own transmittance, the
-            // input's dim one by the rest (all of it while the cloud stays).
+            // The input's sun was covered: the clear sun by the frame's own transmittance alone.
+            // The model's opacity holds the input's cover at the sun (set_input_sun_cover), so at
+            // the input this is its dim sun again. The input's dim sun added by 1 - that (as if its
+            // cloud stayed) kept shining through a thicker cloud moved over a half-covered sun: on
+            // a procedural seed 50 % over the truth for the whole run (docs/animation.md).
             last_sun_weight_ = estimate_sun_transmittance(*out, *sun);
             if (auto w = model_sun_weight(i, s, *sun, false)) last_sun_weight_ = std::min(last_sun_weight_, *w);
             insert_sun(out, clear_sun_, *sun, last_sun_weight_);
-            insert_sun(out, suns_[0], *sun, 1.0 - last_sun_weight_);
         } else {
             if (!model_->makes_own_sun() && !at_input && !suns_[0].empty()) {
                 last_sun_weight_ = std::clamp(estimate_sun_transmittance(*out, *sun) / input_transmittance_, 0.0, 1.0);
