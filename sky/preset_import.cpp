@@ -50,19 +50,21 @@ PresetImportPlan plan_preset_import(const std::string& preset, const std::string
     return plan;
 }
 
+HdrCalibrationParams hdr_calibration_params(const PresetImportPlan& plan) {
+    HdrCalibrationParams hp;
+    hp.time = parse_utc_time(plan.time);
+    hp.location = plan.location;
+    hp.sun_search_deg = plan.preset.sun_search_deg;
+    hp.camera_colour = plan.preset.colour;
+    return hp;
+}
+
 SkyImage import_preset_photo(const std::string& path, const std::string& preset, int import_resolution,
                              std::vector<unsigned char>* not_sky) {
     PresetImportPlan plan = plan_preset_import(preset, path, import_resolution);
     ImportedPhoto photo = import_photo(path, plan.params);
     SkyImage sky = photo.sky;
-    if (!plan.time.empty() && photo.display_referred) {
-        HdrCalibrationParams hp;
-        hp.time = parse_utc_time(plan.time);
-        hp.location = plan.location;
-        hp.sun_search_deg = plan.preset.sun_search_deg;
-        hp.camera_colour = plan.preset.colour;
-        sky = recover_hdr(photo, hp);
-    }
+    if (!plan.time.empty() && photo.display_referred) sky = recover_hdr(photo, hdr_calibration_params(plan));
     if (not_sky) *not_sky = photo.not_sky;
     return sky;
 }

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "sky/hdr_recovery.h"
 #include "sky/photo_import.h"
 #include "sky/sun_position.h"
 
@@ -31,6 +32,10 @@ struct PresetImportPlan {
 // look_for_mask false: the preset's geometry even if a mask file lies beside the photo.
 PresetImportPlan plan_preset_import(const std::string& preset, const std::string& photo, int resolution,
                                     const std::string& time = "", bool look_for_mask = true);
+
+// The HDR calibration of a planned import: the photo's time (from its file name unless overridden),
+// the camera's place, sun search radius and typical colour.
+HdrCalibrationParams hdr_calibration_params(const PresetImportPlan& plan);
 
 // The HDR sky exactly as `dynsky sky import --preset P --res R` writes it, with the import's
 // not-sky mask (1 = hidden by the arm, band or masts and filled in) when asked for.

@@ -255,13 +255,8 @@ TEST(SunTransmittance, AgreesWithTheImagersMasksOnTheArmDay) {
         if (!fs::exists(mask)) continue;
         PresetImportPlan plan = plan_preset_import("arm-tsi", photo, 128);
         ImportedPhoto imported = import_photo(photo, plan.params);
-        HdrCalibrationParams hp;
-        hp.time = parse_utc_time(plan.time);
-        hp.location = plan.location;
-        hp.sun_search_deg = plan.preset.sun_search_deg;
-        hp.camera_colour = plan.preset.colour;
         HdrCalibrationReport report;
-        SkyImage sky = recover_hdr(imported, hp, &report);
+        SkyImage sky = recover_hdr(imported, hdr_calibration_params(plan), &report);
         int labelled = 0;
         bool truth_covered = imager_says_covered(mask.string(), imported.geometry, report.computed_sun, &labelled);
         if (labelled < 50) continue;

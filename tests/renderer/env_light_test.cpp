@@ -117,6 +117,18 @@ void check_sampler_chi_square(const EnvLight& light, int block, int samples) {
     EXPECT_GT(r.p_value, 1e-3) << r.summary();
 }
 
+// The light's pdf integrated over the sphere on m x m stratified uniform directions
+// (E[pdf / (1 / 4pi)] = 1 for a normalised density).
+double pdf_integral_over_sphere(const EnvLight& light, int m) {
+    double sum = 0;
+    for (int a = 0; a < m; ++a)
+        for (int b = 0; b < m; ++b) {
+            double z = 1 - 2 * (a + 0.5) / m, phi = 2 * kPiD * (b + 0.5) / m, r = std::sqrt(1 - z * z);
+            sum += light.pdf(Vec3(float(r * std::cos(phi)), float(z), float(r * std::sin(phi)))) * 4 * kPiD;
+        }
+    return sum / (double(m) * m);
+}
+
 TEST(EnvLight, SamplerMatchesItsDensityOnARealSkyChiSquare) {
     DYNSKY_REQUIRE_SHARED();
     auto sky = real_photo_sky(128);
@@ -134,15 +146,7 @@ TEST(EnvLight, SamplerMatchesItsDensityOnATinySunSkyChiSquare) {
 TEST(EnvLight, PdfIntegratesToOneOverTheSphere) {
     auto sky = tiny_sun_sky(128, fisheye::direction_from_angles(0.5, 1.0), 1e3);
     EnvLight light(sky, 0.3f);
-    // Stratified uniform sphere directions: E[pdf / (1 / 4pi)] = 1.
-    const int m = 1000;
-    double sum = 0;
-    for (int a = 0; a < m; ++a)
-        for (int b = 0; b < m; ++b) {
-            double z = 1 - 2 * (a + 0.5) / m, phi = 2 * kPiD * (b + 0.5) / m, r = std::sqrt(1 - z * z);
-            sum += light.pdf(Vec3(float(r * std::cos(phi)), float(z), float(r * std::sin(phi)))) * 4 * kPiD;
-        }
-    EXPECT_NEAR(sum / (double(m) * m), 1.0, 1e-2);
+    EXPECT_NEAR(pdf_integral_over_sphere(light, 1000), 1.0, 1e-2);
 }
 
 TEST(EnvLight, EstimatedIntegralOfRadianceMatchesPixelSum) {
@@ -223,15 +227,7 @@ TEST(EnvLight, GroundImageIsImportanceSampled) {
         // Uniform sampling would put patch_solid_angle / 2 pi of them there (about 1.3 %).
         EXPECT_LT(patch_solid_angle / (2 * kPiD), 0.02);
         EXPECT_GT(double(in_patch) / below, 0.5);
-        // pdf integrates to 1 over the sphere (stratified directions).
-        const int q = 600;
-        double integral = 0;
-        for (int a = 0; a < q; ++a)
-            for (int b = 0; b < q; ++b) {
-                double z = 1 - 2 * (a + 0.5) / q, phi = 2 * kPiD * (b + 0.5) / q, r = std::sqrt(1 - z * z);
-                integral += light.pdf(Vec3(float(r * std::cos(phi)), float(z), float(r * std::sin(phi)))) * 4 * kPiD;
-            }
-        EXPECT_NEAR(integral / (double(q) * q), 1.0, 2e-2);
+        EXPECT_NEAR(pdf_integral_over_sphere(light, 600), 1.0, 2e-2);
     }
 }
 

@@ -251,11 +251,7 @@ Calibrated calibrate(const std::string& path, bool white_balance, int n = 128) {
     PresetImportPlan plan = plan_preset_import("arm-tsi", path, n);
     Calibrated c;
     c.imp = import_photo(path, plan.params);
-    HdrCalibrationParams hp;
-    hp.time = parse_utc_time(plan.time);
-    hp.location = plan.location;
-    hp.sun_search_deg = plan.preset.sun_search_deg;
-    hp.camera_colour = plan.preset.colour;
+    HdrCalibrationParams hp = hdr_calibration_params(plan);
     hp.white_balance = white_balance;
     c.sky = recover_hdr(c.imp, hp, &c.report);
     return c;
@@ -330,11 +326,8 @@ TEST(HdrRecovery, CloudsStayGreyAndOvercastFallsBack) {
     const std::string path = test::shared_path("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg");
     PresetImportPlan plan = plan_preset_import("arm-tsi", path, 128);
     ImportedPhoto imp = import_photo(path, plan.params);
-    HdrCalibrationParams hp;
-    hp.time = parse_utc_time(plan.time);
-    hp.location = plan.location;
-    hp.camera_colour = plan.preset.colour;
-    hp.min_white_balance_fraction = 2;  // never enough
+    HdrCalibrationParams hp = hdr_calibration_params(plan);  // (the arm-tsi's sun search: the default 3 deg)
+    hp.min_white_balance_fraction = 2;                       // never enough
     HdrCalibrationReport rep;
     SkyImage sky = recover_hdr(imp, hp, &rep);
     EXPECT_NE(rep.white_balance_method.find("typical"), std::string::npos) << rep.white_balance_method;
