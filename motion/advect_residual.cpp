@@ -16,6 +16,7 @@
 #include "sky/fisheye.h"
 #include "util/allocation.h"
 #include "util/error.h"
+#include "util/math.h"
 
 namespace dynsky {
 
@@ -324,8 +325,7 @@ cv::Mat circumsolar_share(int n, const std::optional<Vec3d>& sun) {
         float* o = share.ptr<float>(y);
         for (int x = 0; x < n; ++x) {
             const double c = fisheye::direction_from_pixel(double(x), double(y), n).dot(s);
-            const double a = std::clamp((c - outer) / (inner - outer), 0.0, 1.0);
-            o[x] = float(a * a * (3 - 2 * a));
+            o[x] = float(smoothstep01((c - outer) / (inner - outer)));
         }
     });
     return share;

@@ -9,15 +9,11 @@
 #include "sky/clear_sky.h"
 #include "sky/fisheye.h"
 #include "util/error.h"
+#include "util/math.h"
 
 namespace dynsky {
 
 namespace {
-
-double smoothstep01(double x) {
-    x = std::clamp(x, 0.0, 1.0);
-    return x * x * (3 - 2 * x);
-}
 
 cv::Mat saturated_pixels(const cv::Mat& unit) {
     std::vector<cv::Mat> ch;

@@ -10,6 +10,7 @@
 #include "sky/fisheye.h"
 #include "util/color.h"
 #include "util/error.h"
+#include "util/math.h"
 
 namespace dynsky {
 
@@ -228,8 +229,7 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
         const double bg = (std::log(c[2] / c[1]) - rep.grey_bg) / rep.chroma_bg;
         Color out(float(std::exp(rg)), 1.0f, float(std::exp(bg)));
         const double y = luminance(c);
-        const double white = std::clamp((linear_to_srgb(c.minCoeff()) / clip - 0.85) / 0.12, 0.0, 1.0);
-        const double w = white * white * (3 - 2 * white);
+        const double w = smoothstep01((linear_to_srgb(c.minCoeff()) / clip - 0.85) / 0.12);
         return (1 - w) * out * float(y / luminance(out)) + w * Color(float(y), float(y), float(y));
     };
     for (Sample& s : samples) s.photo = corrected(s.photo);

@@ -42,6 +42,12 @@ inline T clamp(T x, T lo, T hi) {
 
 inline float safe_sqrt(float x) { return std::sqrt(std::max(0.0f, x)); }
 
+// 0 below 0, 1 above 1, 3 x^2 - 2 x^3 between: a switch without kinks at its ends.
+inline double smoothstep01(double x) {
+    x = std::clamp(x, 0.0, 1.0);
+    return x * x * (3 - 2 * x);
+}
+
 // Orthonormal basis from one unit vector (Duff et al. 2017, "Building an Orthonormal Basis, Revisited").
 inline void orthonormal_basis(const Vec3& n, Vec3* t, Vec3* b) {
     float sign = std::copysign(1.0f, n.z());
