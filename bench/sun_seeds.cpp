@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
@@ -26,6 +27,9 @@
 #include "sky/clear_sky.h"
 #include "sky/fisheye.h"
 #include "sky/procedural_clouds.h"
+#include "util/atomic_file.h"
+#include "util/error.h"
+#include "util/parse.h"
 
 using namespace dynsky;
 namespace fs = std::filesystem;
@@ -96,10 +100,11 @@ void write_opacity(const std::string& path, const cv::Mat& opacity, const Vec3d&
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
     const fs::path out_dir = argc > 1 ? argv[1] : "docs";
-    const int want_crossing = argc > 2 ? std::atoi(argv[2]) : 14, want_clearing = argc > 3 ? std::atoi(argv[3]) : 6;
-    const uint64_t png_seed = argc > 4 ? std::strtoull(argv[4], nullptr, 10) : 0;
+    const int want_crossing = argc > 2 ? int(parse_whole_number(argv[2], "CROSSING", 0, 200)) : 14;
+    const int want_clearing = argc > 3 ? int(parse_whole_number(argv[3], "CLEARING", 0, 200)) : 6;
+    const uint64_t png_seed = argc > 4 ? uint64_t(parse_whole_number(argv[4], "PNG_SEED", 0, 999)) : 0;
     fs::create_directories(out_dir);
     std::vector<std::pair<uint64_t, int>> seeds;
     int crossing = 0, clearing = 0;
@@ -109,7 +114,8 @@ int main(int argc, char** argv) {
         if (k == 2 && clearing < want_clearing) seeds.push_back({seed, k}), ++clearing;
     }
     if (png_seed) seeds = {{png_seed, kind_of(cumulus(png_seed))}};
-    std::ofstream csv(out_dir / (png_seed ? "sun-seed.csv" : "sun-seeds.csv"));
+    // Written once every seed is done (atomically: never a half-written table).
+    std::ostringstream csv;
     csv << "seed,kind,t_s,truth_lx,moved_lx,truth_sun_T,sun_weight,undimmed_lx\n";
     double sum_worst = 0, sum_mean = 0;
     for (auto [seed, kind] : seeds) {
@@ -188,5 +194,24 @@ int main(int argc, char** argv) {
     }
     std::printf("%zu seeds: mean of worst %.1f %%, mean of means %.1f %%\n", seeds.size(),
                 100 * sum_worst / seeds.size(), 100 * sum_mean / seeds.size());
+    write_file_atomic((out_dir / (png_seed ? "sun-seed.csv" : "sun-seeds.csv")).string(), csv.str());
     return 0;
+}
+
+int main(int argc, char** argv) {
+    if (argc > 1 && (std::string(argv[1]) == "-h" || std::string(argv[1]) == "--help")) {
+        std::printf(
+            "usage: sun_seeds [OUT=docs] [CROSSING=14] [CLEARING=6] [PNG_SEED=0]\n"
+            "The moved sky's horizontal illuminance against the procedural truth on the first CROSSING seeds\n"
+            "whose sun starts clear and is covered, and the first CLEARING whose sun starts covered and comes\n"
+            "out; writes OUT/sun-seeds.csv (scripts/sun_seeds_chart.py draws the chart). PNG_SEED > 0: that\n"
+            "seed alone, with crops of the sky around the sun in OUT/sun-seed-S/.\n");
+        return 0;
+    }
+    try {
+        return run(argc, argv);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "sun_seeds: %s\n", e.what());
+        return 1;
+    }
 }
