@@ -229,6 +229,35 @@ cv::Mat cloud_signal_field(const cv::Mat& clouds) {
     return field;
 }
 
+// The radiance of the start's clouds themselves (start - (1 - a) x background, over a; mean of the
+// channels) averaged over the sky around each pixel, weighted by a^2 (the opaque ones say most; a
+// normalised Gaussian, sigma a tenth of the image, worked out at most at 128 px), tending to the
+// average over the whole sky where no cloud is near. Recycled clouds are scaled by its ratio
+// between where they are shown and where they were read: clouds on the sun's side are brighter.
+cv::Mat cloud_brightness_field(const cv::Mat& start, const cv::Mat& background, const cv::Mat& alpha) {
+    const int big = start.rows, w = std::min(big, 128);
+    cv::Mat own, lum, a2, small, small_a2, num, den, field;
+    cv::Mat alpha3;
+    cv::merge(std::vector<cv::Mat>{alpha, alpha, alpha}, alpha3);
+    own = start - background + background.mul(alpha3);  // a x the cloud's own radiance
+    cv::transform(own, lum, cv::Matx13f(1.f / 3, 1.f / 3, 1.f / 3));
+    a2 = alpha.mul(alpha);
+    const cv::Mat disc = sky_disc_mask(big);
+    lum.setTo(0, ~disc), a2.setTo(0, ~disc);
+    lum = lum.mul(alpha);  // a^2 x the radiance
+    cv::resize(lum, small, cv::Size(w, w), 0, 0, cv::INTER_AREA);
+    cv::resize(a2, small_a2, cv::Size(w, w), 0, 0, cv::INTER_AREA);
+    const double total_a2 = cv::sum(small_a2)[0];
+    const double mean = total_a2 > 1e-6 ? cv::sum(small)[0] / total_a2 : 1.0;
+    const double sigma = 0.1 * w, prior = 0.02;  // the whole sky's average weighs as a^2 = 0.02
+    cv::GaussianBlur(small, num, cv::Size(0, 0), sigma, sigma, cv::BORDER_REPLICATE);
+    cv::GaussianBlur(small_a2, den, cv::Size(0, 0), sigma, sigma, cv::BORDER_REPLICATE);
+    cv::Mat g = (num + prior * mean) / (den + prior);
+    g = cv::max(g, 0.05 * std::max(mean, 1e-6));
+    cv::resize(g, field, cv::Size(big, big), 0, 0, cv::INTER_LINEAR);
+    return field;
+}
+
 // The smooth per-channel field that scales the model's clear sky to the start's own on the start's
 // clear pixels (not cloud by the networks' rule, not clipped, inside 94 % of the radius): a
 // normalised Gaussian average (sigma a tenth of the image) of start / model there, falling back to
@@ -282,6 +311,45 @@ void fill_from_around(cv::Mat* map, const cv::Mat& unknown, const cv::Mat& disc)
                 remaining.at<uint8_t>(y, x) = 0;
             }
     }
+}
+
+// The clear pixels (opacity under a half) of holes enclosed by cloud, smaller than 2 % of the sky
+// and reaching within the circumsolar share (share > 0.5): the sun's aureole seen "through" a cloud
+// lit from behind (CV_8UC1, 255), widened by 2 % of the image.
+cv::Mat enclosed_clear_near_sun(const cv::Mat& alpha, const cv::Mat& share, const cv::Mat& disc) {
+    cv::Mat clear = (alpha < 0.5f) & disc, labels, stats, centroids;
+    const int count = cv::connectedComponentsWithStats(clear, labels, stats, centroids, 8, CV_32S);
+    cv::Mat near = share > 0.5f, out = cv::Mat::zeros(alpha.size(), CV_8UC1);
+    const int n = alpha.rows, limit = int(0.02 * cv::countNonZero(disc));
+    std::vector<uint8_t> keep(count, 0);
+    for (int l = 1; l < count; ++l) {
+        const int x0 = stats.at<int>(l, cv::CC_STAT_LEFT), y0 = stats.at<int>(l, cv::CC_STAT_TOP);
+        const int x1 = x0 + stats.at<int>(l, cv::CC_STAT_WIDTH), y1 = y0 + stats.at<int>(l, cv::CC_STAT_HEIGHT);
+        // Enclosed: its box stays off the rim (a clear patch reaching the horizon is sky, not a hole).
+        const double c = (n - 1) / 2.0, r = 0.47 * n;
+        const bool inside = std::hypot(x0 - c, y0 - c) < r && std::hypot(x1 - c, y0 - c) < r &&
+                            std::hypot(x0 - c, y1 - c) < r && std::hypot(x1 - c, y1 - c) < r;
+        keep[l] = inside && stats.at<int>(l, cv::CC_STAT_AREA) < limit;
+    }
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            const int l = labels.at<int>(y, x);
+            if (l > 0 && keep[l]) out.at<uint8_t>(y, x) = 255;
+        }
+    // Only the holes that reach the sun's surroundings.
+    cv::Mat touched = out & near, result = cv::Mat::zeros(out.size(), CV_8UC1);
+    if (cv::countNonZero(touched) == 0) return result;
+    std::vector<uint8_t> hit(count, 0);
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x)
+            if (touched.at<uint8_t>(y, x)) hit[labels.at<int>(y, x)] = 1;
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x)
+            if (hit[labels.at<int>(y, x)] && out.at<uint8_t>(y, x)) result.at<uint8_t>(y, x) = 255;
+    // With its soft edge (2 % of the image).
+    const int r = std::max(1, int(std::lround(0.02 * n)));
+    cv::dilate(result, result, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * r + 1, 2 * r + 1)));
+    return result & disc;
 }
 
 // How much of the clear background each pixel of the start hides (CV_32FC1, 0 clear .. 1 cloud): the
@@ -387,7 +455,7 @@ void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3
     }
     background_ = background.empty() ? cv::Mat() : background * background_weight_;
     background_ext_ = background_.empty() ? cv::Mat() : extend_past_rim_exact(background_);
-    opacity_ext_ = alpha_ext_ = opacity_ = cv::Mat();
+    opacity_ext_ = cloud_own_ext_ = opacity_ = cv::Mat();
     if (!background_.empty()) {
         // A cloud hides the sun's aureole it covers, where it was seen and wherever it goes: a
         // pixel moving onto or off it moves as opacity x its own value + (1 - opacity) x (its
@@ -431,13 +499,37 @@ void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3
         ch.push_back(share_);
         cv::merge(ch, carried);
         opacity_ext_ = extend_past_rim_exact(carried);
-        alpha_ext_ = extend_past_rim_exact(alpha);
+        // What the recycled tile carries: a x the cloud's own radiance (start - (1 - a) x
+        // background) and a. Where the start says nothing (the sun's cut, the clipped aureole) the
+        // radiance of the clouds around: as the start there it was the background's, and a cloud
+        // carried over the sun's place showed a clear hole where the sun had been.
+        // So do clear holes inside a cloud near the sun: a cloud lit from behind matches the
+        // aureole and reads clear there, and carried elsewhere it showed a blue hole.
+        cv::Mat own = start_ - background_ + background_.mul(alpha3), own_alpha = alpha.clone();
+        cv::Mat tile_unknown = enclosed_clear_near_sun(alpha, share_, disc_big_);
+        if (!unknown.empty()) tile_unknown |= unknown & disc_big_;
+        if (cv::countNonZero(tile_unknown) > 0) {
+            std::vector<cv::Mat> oc;
+            cv::split(own, oc);
+            for (cv::Mat& c : oc) fill_from_around(&c, tile_unknown, disc_big_);
+            cv::merge(oc, own);
+            fill_from_around(&own_alpha, tile_unknown, disc_big_);
+        }
+        std::vector<cv::Mat> oc;
+        cv::split(own, oc);
+        oc.push_back(own_alpha);
+        cv::merge(oc, own);
+        cloud_own_ext_ = extend_past_rim_exact(own);
         opacity_ = alpha;
         if (steps_ == 0) carried_opacity_ = alpha;
+        // The tile's seam through the start's clearest sky (once: the opacity hardly changes as
+        // the sun moves).
+        if (paths_ && !seam_chosen_) paths_->choose_seam(alpha), seam_chosen_ = true;
     }
     clouds_ext_ = background_ext_.empty() ? start_ext_ : start_ext_ - background_ext_;
     clouds_ = background_.empty() ? start_ : start_ - background_;
-    cloud_field_ = cloud_signal_field(clouds_);
+    cloud_field_ = opacity_.empty() ? cloud_signal_field(clouds_)
+                                    : cloud_brightness_field(start_, background_, opacity_);
     background_n_ = background_;
     const int n = network_->info().resolution;
     if (!background_.empty() && background_.rows != n) {
@@ -478,14 +570,44 @@ const cv::Mat& CloudRollout::advance() {
         CloudLayerPaths::Reads reads = paths_->at(k);
         moved = cv::Mat(big, big, CV_32FC3, cv::Scalar::all(0));
         if (!opacity_.empty()) carried_opacity_ = cv::Mat(big, big, CV_32FC1, cv::Scalar(0));
-        for (int i = 0; i < 4; ++i) {
+        for (int i = 0; i < CloudLayerPaths::kReadCount; ++i) {
             if (cv::countNonZero(reads.weights[i]) == 0) continue;
-            if (!offset.empty() && i < 3) reads.positions[i] -= sample_exact(offset, reads.positions[i]);
-            // Read 3 is the pixel itself: the start as it was (not rim-extended).
-            cv::Mat read = i == 3 ? clouds_ : sample_exact(clouds_ext_, reads.positions[i]);
-            if (i == 1 || i == 2) {
-                // The recycled tile takes the start's cloud signal where it is shown
-                // (cloud_signal_field).
+            const bool own = i == CloudLayerPaths::kOwnRead, real = i == CloudLayerPaths::kRealRead;
+            if (!offset.empty() && !own) reads.positions[i] -= sample_exact(offset, reads.positions[i]);
+            if (!own && !real && !opacity_.empty()) {
+                // The recycled tile: a cloud composed over the background where it is shown, its
+                // opacity x its own radiance (cloud_own_ext_), that radiance scaled by the clouds'
+                // brightness around here over there (cloud_brightness_field), + (1 - a) x the
+                // background here. Its cloud signal scaled instead (cloud_signal_field: how much
+                // cloud is around each place) made an opaque cloud carried into a clear part of the
+                // start translucent: a grey haze once the whole view had been carried away
+                // (docs/networks-advect-residual.md).
+                const cv::Mat there = sample_exact(cloud_own_ext_, reads.positions[i]);
+                tbb::parallel_for(0, big, [&](int y) {
+                    const cv::Vec2f* p = reads.positions[i].ptr<cv::Vec2f>(y);
+                    const float* w = reads.weights[i].ptr<float>(y);
+                    const float* here = cloud_field_.ptr<float>(y);
+                    const cv::Vec4f* o = there.ptr<cv::Vec4f>(y);
+                    const cv::Vec3f* b = background_.ptr<cv::Vec3f>(y);
+                    cv::Vec3f* m = moved.ptr<cv::Vec3f>(y);
+                    float* a = carried_opacity_.ptr<float>(y);
+                    for (int x = 0; x < big; ++x) {
+                        if (w[x] == 0) continue;
+                        const int px = std::clamp(int(std::lround(p[x][0])), 0, big - 1);
+                        const int py = std::clamp(int(std::lround(p[x][1])), 0, big - 1);
+                        const float gain = std::clamp(here[x] / cloud_field_.at<float>(py, px), 0.5f, 2.0f);
+                        m[x] += w[x] * (gain * cv::Vec3f(o[x][0], o[x][1], o[x][2]) - o[x][3] * b[x]);
+                        a[x] += w[x] * o[x][3];
+                    }
+                });
+                continue;
+            }
+            // The pixel itself (kOwnRead): the start as it was (not rim-extended).
+            cv::Mat read = own ? clouds_ : sample_exact(clouds_ext_, reads.positions[i]);
+            if (!own && !real) {
+                // The recycled tile without opacities: the start's cloud signal scaled where it is
+                // shown (cloud_signal_field).
+                read = read.clone();
                 tbb::parallel_for(0, big, [&](int y) {
                     const cv::Vec2f* p = reads.positions[i].ptr<cv::Vec2f>(y);
                     const float* w = reads.weights[i].ptr<float>(y);
@@ -502,15 +624,10 @@ const cv::Mat& CloudRollout::advance() {
                 });
             }
             // What a cloud hid where it was read stays hidden: its opacity x (the background there
-            // - the background here), when either place is near the sun (circumsolar_share). Not for
-            // the recycled tile (reads 1 and 2): new clouds, which take the cloud signal of where
-            // they are shown (cloud_signal_field) over the background there, as before. Read 3 is the
-            // pixel itself (nothing to add). Every read carries its opacity.
-            // (The recycled reads need only the opacity: a fifth of the lookups.)
-            const cv::Mat hidden = i != 0 || opacity_ext_.empty() ? cv::Mat()
-                                                                  : sample_exact(opacity_ext_, reads.positions[i]);
-            const cv::Mat alpha = i == 0 || i == 3 || alpha_ext_.empty() ? cv::Mat()
-                                                                         : sample_exact(alpha_ext_, reads.positions[i]);
+            // - the background here), when either place is near the sun (circumsolar_share). The
+            // pixel itself has nothing to add. Every read carries its opacity.
+            const cv::Mat hidden = !real || opacity_ext_.empty() ? cv::Mat()
+                                                                 : sample_exact(opacity_ext_, reads.positions[i]);
             tbb::parallel_for(0, big, [&](int y) {
                 const float* w = reads.weights[i].ptr<float>(y);
                 const cv::Vec3f* r = read.ptr<cv::Vec3f>(y);
@@ -519,7 +636,7 @@ const cv::Mat& CloudRollout::advance() {
                 if (opacity_.empty()) return;
                 float* a = carried_opacity_.ptr<float>(y);
                 if (hidden.empty()) {
-                    const float* read_alpha = (alpha.empty() ? opacity_ : alpha).ptr<float>(y);
+                    const float* read_alpha = opacity_.ptr<float>(y);
                     for (int x = 0; x < big; ++x) a[x] += w[x] * read_alpha[x];
                     return;
                 }

@@ -180,15 +180,16 @@ class CloudRollout {
     cv::Mat start_, start_ext_, state_, positions_, corrections_;
     cv::Mat background_, background_ext_, background_n_, disc_big_, disc_n_;
     std::unique_ptr<CloudLayerPaths> paths_;  // with a wind
-    cv::Mat departure_;                       // measured - wind flow (pixels per step), relaxing
-    double departure_sum_ = 0;                // sum of its relaxation weights so far
-    cv::Mat cloud_field_;                     // the start's cloud signal around each pixel (CV_32FC1)
-    cv::Mat background_field_;                // scales the model's clear sky to the start's
-    cv::Mat clouds_ext_;                      // start_ext_ - background_ext_: what the paths carry
-    cv::Mat clouds_;                          // start_ - background_: what a pixel shows of its own start
-    cv::Mat opacity_ext_;                     // the start's a x background_, a, share_ (CV_32FC(5))
-    cv::Mat opacity_, carried_opacity_;       // a at the start, and where the clouds have taken it
-    cv::Mat alpha_ext_;                       // a alone (what the recycled reads carry)
+    bool seam_chosen_ = false;
+    cv::Mat departure_;                  // measured - wind flow (pixels per step), relaxing
+    double departure_sum_ = 0;           // sum of its relaxation weights so far
+    cv::Mat cloud_field_;                // cloud_brightness_field (cloud_signal_field without opacities)
+    cv::Mat background_field_;           // scales the model's clear sky to the start's
+    cv::Mat clouds_ext_;                 // start_ext_ - background_ext_: what the paths carry
+    cv::Mat clouds_;                     // start_ - background_: what a pixel shows of its own start
+    cv::Mat opacity_ext_;                // the start's a x background_, a, share_ (CV_32FC(5))
+    cv::Mat cloud_own_ext_;              // a x the cloud's own radiance, a (CV_32FC4): what the tile carries
+    cv::Mat opacity_, carried_opacity_;  // a at the start, and where the clouds have taken it
     cv::Mat unseen_;
     double unseen_opacity_ = 0;
     cv::Mat share_;             // circumsolar share (where a cloud hides the background)

@@ -3,24 +3,34 @@
 // layer"). Used by motion/advect_residual.h CloudRollout when the motion has a wind.
 //
 // Parameters (defaults):
-//   tile_zenith_deg  = 55   the recycled tile: the part of the layer seen within this zenith angle
-//   max_stretch      = 4    a pixel keeps reading the real start image while the start's pixels it
-//                           reads are at most this many times more foreshortened than its own
-//                           (sec^2 of the zenith angle); beyond, it fades into the recycled tile
-//   entry_band       = 0.25 the fade into the tile, as a fraction of that trigger's ground radius
-//   cycle_band       = 0.2  the cross-fade between one pass of the tile and the next, as a fraction
-//                           of the pass
+//   tile_zenith_deg  = 60   the recycled tile: the layer repeats along the wind with a period of
+//                           twice the ground radius seen within this zenith angle (where the start
+//                           is foreshortened max_stretch times the zenith's)
+//   seam_range       = 0.2  the seam where one pass of the tile meets the next lies within this
+//                           fraction of that radius of the tile's upwind edge
+//   seam_slope       = 1    the seam's largest slope against the wind (layer units per unit)
+//   seam_band        = 0.2  past the seam, the pass before takes its leave over this fraction of a
+//                           pass (a dissolve: no seam is clear on every sky)
+//   max_stretch      = 4    a pixel upwind of the seam at the start keeps reading the real start
+//                           image while the start's pixels it reads are at most this many times
+//                           more foreshortened than its own (sec^2 of the zenith angle)
+//   entry_band       = 0.25 beyond that, its dissolve into the tile, as a fraction of that
+//                           trigger's ground radius
 //
 // Why: the layer is a plane at height h; a wind translates it by w per step (units of h). The sky
 // seen at a pixel is the layer point P(x) = tan(theta) (u, v) / r; after k steps its cloud was at
 // P(x) - k w. Read from the start image, that is exact while the point is in view, but within
 // minutes it is near the upwind horizon, where the start is foreshortened 10-1000x: the sky fills
 // with streaks and, past 88 degrees, has nothing left to show. Here the layer is taken as periodic
-// along the wind: each streamline (a line of constant cross-wind coordinate c) repeats its strip
-// -R <= s < R along the wind (R the tile's radius; one period for all streamlines, so the passes do
-// not shear the clouds), every other pass mirrored across the wind (c -> -c) so that the
-// repetition is twice as long and less regular; passes are cross-faded. The first pass is the real
-// start image, so short rollouts (minutes) are unchanged.
+// along the wind: each streamline (constant cross-wind coordinate c) repeats its strip
+// a(c) <= s < a(c) + 2R along the wind (one period for all streamlines, so the passes do not shear
+// the clouds), every other pass mirrored across the wind (c -> -c) so that the repetition is twice
+// as long and less regular. The seam a(c) (symmetric in c, for the mirror) is cut where the start
+// is clear at both its ends (choose_seam: least opacity, by dynamic programming across the wind),
+// so passes meet without blending and without cutting a cloud. A pixel reads the real start until
+// its path crosses the seam, then the tile, so the first pass is the real start image and short
+// rollouts (minutes) are unchanged. Cross-faded passes and a fade into the tile at a fixed ring
+// averaged cloud with clear sky: a grey haze with a circular seam (docs/networks-advect-residual.md).
 #pragma once
 
 #include <opencv2/core.hpp>
@@ -32,10 +42,12 @@
 namespace dynsky {
 
 struct CloudLayerPathsParams {
-    double tile_zenith_deg = 55.0;
+    double tile_zenith_deg = 60.0;
+    double seam_range = 0.2;
+    double seam_slope = 1.0;
+    double seam_band = 0.2;
     double max_stretch = 4.0;
     double entry_band = 0.25;
-    double cycle_band = 0.2;
 };
 
 // The layer point seen at continuous pixel position (x, y) of an n x n fisheye (units of the layer
@@ -53,17 +65,31 @@ class CloudLayerPaths {
     // n: the image's resolution; step: the layer displacement per step (units of its height).
     CloudLayerPaths(int n, const cv::Vec2d& step, const CloudLayerPathsParams& params = {});
 
+    // Cuts the seam through the clearest sky of the start: opacity (CV_32FC1, n x n, 0 clear .. 1
+    // cloud). Without it the seam is straight, across the wind at the tile's upwind edge.
+    void choose_seam(const cv::Mat& opacity);
+
+    // The seam: the along-wind coordinate a(c) where pass j meets pass j + 1 (units of the layer
+    // height; c beyond the range searched takes the last value).
+    double seam(double c) const;
+
+    enum Read { kRealRead = 0, kTileRead = 1, kLeavingRead = 2, kOwnRead = 3, kReadCount = 4 };
+
     // Up to four reads per pixel for step k (k may be fractional): positions (CV_32FC2 pixel
     // coordinates in the start image) and weights (CV_32FC1) that sum to 1: the real start image
-    // along the layer's path (0), two passes of the recycled tile (1, 2), and the pixel itself (3:
-    // where the path reads the outermost 3 % of the radius, or the pixel is past 88 degrees).
+    // along the layer's path (kRealRead), the recycled tile's pass (kTileRead), the pass before it
+    // taking its leave just past the seam (kLeavingRead), and the pixel itself
+    // (kOwnRead: where the path reads the outermost 3 % of the radius, or the pixel is past 88
+    // degrees).
     struct Reads {
-        std::array<cv::Mat, 4> positions, weights;
+        std::array<cv::Mat, kReadCount> positions, weights;
     };
     Reads at(double k) const;
 
     // False when the wind is too weak to ever leave the view (no recycling needed).
     bool moving() const { return moving_; }
+    double period() const { return 2.0 * tile_radius_; }  // along the wind, units of the layer height
+    cv::Vec2d along() const { return along_; }            // the wind's direction on the layer
 
   private:
     int n_;
@@ -71,6 +97,8 @@ class CloudLayerPaths {
     CloudLayerPathsParams params_;
     double tile_radius_ = 0;
     bool moving_ = false;
+    double seam_step_ = 0;         // spacing of seam_ across the wind
+    std::vector<double> seam_;     // a(c) at c = i seam_step_, i >= 0 (symmetric in c)
     cv::Mat trigger_radius_;       // CV_64FC1: the ground radius at which each pixel starts to recycle
     std::vector<uint8_t> beyond_;  // pixels past 88 degrees from the zenith
     cv::Mat points_;               // CV_64FC2: the layer point seen at each pixel (layer_point)
