@@ -738,16 +738,23 @@ void AdvectResidualNetwork::rollout_network_form(const cv::Mat& start, const Clo
     for (int k = 1; k <= steps; ++k) on_step(k, rollout.advance());
 }
 
-void AdvectResidualNetwork::rollout(const SkyImage& sky, const CloudFlow& flow, int steps,
+void AdvectResidualNetwork::rollout(const SkyImage& given, const CloudFlow& flow, int steps,
                                     const std::function<void(int, const SkyImage&)>& on_step, cv::Mat background) {
-    validate_sky(sky, sky.source.empty() ? std::string("input sky") : sky.source);
+    validate_sky(given, given.source.empty() ? std::string("input sky") : given.source);
+    const double scale = model_scale(given);
+    const SkyImage sky = scaled_sky(given, scale);
     cv::Mat state = to_network_form(sky, info_.form);
     const cv::Mat sun = fill_saturated_pixels(&state);
     const bool has_sun = cv::countNonZero(sun) > 0;
-    if (background.empty() && sky.sun_direction) background = this->background(*sky.sun_direction, sky.resolution);
+    // A sky that does not carry its sun (no time and place) has it estimated from its brightest
+    // pixels, for the clear background the clouds move over: without one the whole sky moved with
+    // the wind, its gradient, horizon and the sun's glare included.
     std::optional<Vec3d> at;
     if (sky.sun_direction) at = sky.sun_direction->cast<double>();
-    CloudRollout rollout(this, state, flow, background, at ? sun_cut_mask(sky.resolution, *at) : cv::Mat(), at);
+    else at = sun_from_brightest_pixels(sky);
+    if (background.empty() && at) background = this->background(at->cast<float>(), sky.resolution);
+    CloudRollout rollout(this, state, flow, background,
+                         sky.sun_direction ? sun_cut_mask(sky.resolution, *at) : cv::Mat(), at);
     for (int k = 1; k <= steps; ++k) {
         SkyImage next = from_network_form(rollout.advance(), sky, info_.form);
         next.time_seconds = sky.time_seconds + k * info_.dt;
@@ -757,7 +764,7 @@ void AdvectResidualNetwork::rollout(const SkyImage& sky, const CloudFlow& flow, 
             const double t = relative_sun_transmittance(next, sky);
             restore_pixels(&next, sky, sun, std::min(t, opacity_sun_weight(rollout, at).value_or(1.0)));
         }
-        on_step(k, next);
+        on_step(k, scale == 1.0 ? next : scaled_sky(next, 1.0 / scale));
     }
 }
 
@@ -775,9 +782,35 @@ cv::Mat network_form_flow(const SkyImage& previous, const SkyImage& current, con
 CloudFlow AdvectResidualNetwork::motion_flow(const SkyImage& sky, const CloudMotion& motion, double dt, int n) const {
     if (motion.previous) {
         double gap = motion.previous_dt > 0 ? motion.previous_dt : dt;
-        return CloudFlow::from_measured(network_form_flow(*motion.previous, sky, info_.form, n) * (dt / gap), dt);
+        const double scale = model_scale(sky);  // both frames alike
+        return CloudFlow::from_measured(network_form_flow(scaled_sky(*motion.previous, scale), scaled_sky(sky, scale),
+                                                          info_.form, n) *
+                                            (dt / gap),
+                                        dt);
     }
     return CloudFlow::from_wind(wind_flow(n, motion.wind ? *motion.wind : Wind{}, dt));
+}
+
+double model_scale(const SkyImage& sky) {
+    if (sky.sun_direction) return 1.0;
+    std::vector<float> values;
+    for (int j = 0; j < sky.resolution; ++j)
+        for (int i = 0; i < sky.resolution; ++i)
+            if (sky.in_disc(i, j)) {
+                const double l = luminance(sky.pixel(i, j));
+                if (std::isfinite(l) && l > 0) values.push_back(float(l));
+            }
+    if (values.empty()) return 1.0;
+    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+    const double median_lum = values[values.size() / 2];
+    return std::clamp(kUnknownScaleMedian / median_lum, 1e-6, 1e6);
+}
+
+SkyImage scaled_sky(const SkyImage& sky, double factor) {
+    SkyImage out = sky;
+    if (factor != 1.0)
+        for (float& v : out.rgb) v = float(v * factor);
+    return out;
 }
 
 cv::Mat AdvectResidualNetwork::background(const Vec3& sun, int n) const { return background_at(sun, n, info_.form); }
@@ -790,15 +823,26 @@ std::string AdvectResidualStepModel::name() const {
 }
 
 SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const SkyImage>>& history, double dt) {
-    const SkyImage& input = *history.front();
     const int k = int(history.size());  // this makes step k (S_k)
-    if (!rollout_ || flow_dt_ != dt || rollout_->steps() != k - 1 || rollout_input_ != history.front().get()) {
+    const bool fresh = !rollout_ || flow_dt_ != dt || rollout_->steps() != k - 1 ||
+                       rollout_input_ != history.front().get();
+    if (fresh) {
+        // A sky of unknown scale works at the networks' (model_scale); its steps come back at its own.
+        scale_ = model_scale(*history.front());
+        scaled_input_ = scale_ == 1.0 ? SkyImage() : scaled_sky(*history.front(), scale_);
+    }
+    const SkyImage& input = scale_ == 1.0 ? *history.front() : scaled_input_;
+    if (fresh) {
         // One rollout from the input S_0 (its motion measured once), kept across the timeline's
         // calls so the clouds keep their detail (motion/advect_residual.h CloudRollout).
-        flow_ = network_.motion_flow(input, motion_, dt, input.resolution);
+        flow_ = network_.motion_flow(*history.front(), motion_, dt, input.resolution);  // scales both frames
         flow_dt_ = dt;
         cv::Mat start = to_network_form(input, network_.info().form);
         sun_mask_ = fill_saturated_pixels(&start);
+        // A sky without its sun has it estimated from its brightest pixels (as rollout() does).
+        estimated_sun_.reset();
+        if (!input.sun_direction)
+            if (const auto d = sun_from_brightest_pixels(input)) estimated_sun_ = d->cast<float>();
         // The timeline cut the input's sun out (motion/sun_patch.h remove_sun) where the input has it.
         const cv::Mat unseen = input.sun_direction ? sun_cut_mask(input.resolution, input.sun_direction->cast<double>())
                                                    : cv::Mat();
@@ -808,7 +852,7 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
         rollout_input_ = history.front().get();
         for (int j = 1; j < k; ++j) rollout_->advance();  // catch up (not the timeline's order)
     }
-    const std::optional<Vec3> sun = sun_ ? sun_ : input.sun_direction;
+    const std::optional<Vec3> sun = sun_ ? sun_ : input.sun_direction ? input.sun_direction : estimated_sun_;
     if (sun && (background_.rows != input.resolution || (*sun - background_sun_).norm() > 0.0035)) {
         background_ = network_.background(*sun, input.resolution);
         background_sun_ = *sun;
@@ -825,7 +869,7 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
         restore_pixels(&next, input, sun_mask_, std::min(t, opacity_sun_weight(*rollout_, at).value_or(1.0)));
     }
     next.time_seconds = history.back()->time_seconds + dt;
-    return next;
+    return scale_ == 1.0 ? next : scaled_sky(next, 1.0 / scale_);
 }
 
 }  // namespace dynsky

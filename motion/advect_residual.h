@@ -140,6 +140,15 @@ class AdvectResidualNetwork {
     cv::dnn::Net net_;
 };
 
+// A sky of unknown scale (no sun direction: no time and place it could have been calibrated with,
+// e.g. an uncalibrated photograph in [0, 1] or an HDRI of its own scale) is brought to the
+// networks' range by a factor that puts its median luminance at kUnknownScaleMedian (W m^-2 sr^-1,
+// about a daylight sky's), and back after: in the networks' log map (0..300) a [0, 1] photograph
+// was nearly black and its clear sky 50x dimmer than any background. 1 for a sky with its sun.
+constexpr double kUnknownScaleMedian = 20.0;
+double model_scale(const SkyImage& sky);
+SkyImage scaled_sky(const SkyImage& sky, double factor);
+
 // One rollout in progress on the network form, semi-Lagrangian: the clouds are always read from the
 // start image along their accumulated paths, not re-warped from the last step's image, so hours of
 // steps do not blur them away. With a wind (CloudFlow::recycle) the paths are the layer's
@@ -225,6 +234,9 @@ class AdvectResidualStepModel : public MediumStepModel {
     double flow_dt_ = 0;
     std::unique_ptr<CloudRollout> rollout_;
     const SkyImage* rollout_input_ = nullptr;
+    SkyImage scaled_input_;              // the input at model_scale (when it is not 1)
+    double scale_ = 1.0;                 // model_scale of the input
+    std::optional<Vec3> estimated_sun_;  // from the input's brightest pixels, when it has no sun
     cv::Mat sun_mask_;
     cv::Mat background_;  // of background_sun_ (recomputed when the sun has moved by 0.2 degrees)
     Vec3 background_sun_ = Vec3::Zero();

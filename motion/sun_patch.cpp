@@ -140,6 +140,39 @@ void insert_sun(SkyImage* sky, const SunPatch& patch, const Vec3d& direction, do
     }
 }
 
+std::optional<Vec3d> sun_from_brightest_pixels(const SkyImage& sky) {
+    const int n = sky.resolution;
+    cv::Mat lum(n, n, CV_32FC1, cv::Scalar(0));
+    std::vector<float> values;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+            if (sky.in_disc(i, j)) {
+                const float l = float(luminance(sky.pixel(i, j)));
+                lum.at<float>(j, i) = std::isfinite(l) ? l : 0.0f;
+                values.push_back(lum.at<float>(j, i));
+            }
+    if (values.empty()) return std::nullopt;
+    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+    const double median_lum = values[values.size() / 2];
+    double top = 0;
+    cv::minMaxLoc(lum, nullptr, &top);
+    if (!(top > 0) || !(top > 2.0 * median_lum)) return std::nullopt;
+    const cv::Mat bright = lum >= 0.98f * float(top);
+    cv::Mat labels, stats, centroids;
+    const int count = cv::connectedComponentsWithStats(bright, labels, stats, centroids, 8, CV_32S);
+    int best = 0;
+    for (int l = 1; l < count; ++l)
+        if (best == 0 || stats.at<int>(l, cv::CC_STAT_AREA) > stats.at<int>(best, cv::CC_STAT_AREA)) best = l;
+    if (best == 0) return std::nullopt;
+    constexpr double kPi = 3.14159265358979323846;
+    const double area = stats.at<int>(best, cv::CC_STAT_AREA), disc = 0.25 * kPi * n * n;
+    const double d = std::max(stats.at<int>(best, cv::CC_STAT_WIDTH), stats.at<int>(best, cv::CC_STAT_HEIGHT));
+    if (area > 0.03 * disc || area < 0.33 * 0.25 * kPi * d * d) return std::nullopt;
+    const Vec3d sun = fisheye::direction_from_pixel(centroids.at<double>(best, 0), centroids.at<double>(best, 1), n);
+    if (!(sun.y() > std::sin(5.0 * kPi / 180.0))) return std::nullopt;
+    return sun.normalized();
+}
+
 cv::Mat fill_saturated_pixels(cv::Mat* unit) {
     cv::Mat& state = *unit;
     const cv::Mat disc_big = sky_disc_mask(state.rows);

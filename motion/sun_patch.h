@@ -53,6 +53,12 @@ void insert_sun(SkyImage* sky, const SunPatch& patch, const Vec3d& direction, do
 // all zero when nothing clipped, and then the image is unchanged).
 cv::Mat fill_saturated_pixels(cv::Mat* unit);
 
+// Where the sun probably is in a sky that does not say (no time and place): the centroid of the
+// largest blob of pixels within 2 % of the sky's brightest, when that is at least twice the median
+// and the blob is compact (at most 3 % of the disc, filling at least a third of its bounding circle)
+// and above 5 degrees of elevation; else nullopt (an overexposed cloud or horizon is not a sun).
+std::optional<Vec3d> sun_from_brightest_pixels(const SkyImage& sky);
+
 // Copies `from`'s pixels where mask (CV_8UC1, the skies' size) is set. With a transmittance T below
 // 1: T x from + (1 - T) x the sky's own pixel there (a cloud over the sun dims what is put back).
 void restore_pixels(SkyImage* sky, const SkyImage& from, const cv::Mat& mask, double transmittance = 1.0);

@@ -282,6 +282,44 @@ TEST(AdvectResidual, AFastWindOnAPhotographKeepsItsCloudsOpaque) {
     EXPECT_GT(spread_min, 0.65);
 }
 
+// A sky of unknown scale (no sun: no time and place, e.g. an uncalibrated photograph or an HDRI of
+// its own units) works at the networks' scale (model_scale) with its sun estimated from its
+// brightest pixels: its rollout is the same whatever its units, keeps its mean and grows no cloud.
+// The ARM photograph (calibrated, with its sun) at 1/50 and 1/5 of its radiance, its sun direction
+// dropped. Before, a [0, 1]-scaled sky was nearly black in the networks' log map and composed over
+// no background: the whole sky moved with the wind (a WSISEG photograph: mean 1.6x and cloud cover
+// 0.28 -> 0.49 within 5 steps).
+TEST(AdvectResidual, ASkyOfUnknownScaleMovesTheSameInAnyUnits) {
+    ASSERT_TRUE(test::shared_available());
+    AdvectResidualNetwork net = AdvectResidualNetwork::load(shipped());
+    SkyImage sky = import_preset_photo(
+        test::shared_path("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524171600Z.jpg"), "arm-tsi", 128);
+    sky.sun_direction.reset();
+    CloudMotion motion;
+    motion.wind = Wind{250, 10, 1500};
+    const int steps = 30;
+    std::vector<SkyImage> dim, bright;
+    const RolloutStats r = roll(net, scaled_sky(sky, 1.0 / 50), motion, steps,
+                                [&](int, const SkyImage& s) { dim.push_back(s); });
+    roll(net, scaled_sky(sky, 1.0 / 5), motion, steps, [&](int, const SkyImage& s) { bright.push_back(s); });
+    ASSERT_EQ(dim.size(), bright.size());
+    double worst = 0;
+    for (size_t k = 0; k < dim.size(); ++k) {
+        double diff = 0, sum = 0;
+        for (size_t p = 0; p < dim[k].rgb.size(); ++p)
+            diff += std::abs(10.0 * dim[k].rgb[p] - bright[k].rgb[p]), sum += bright[k].rgb[p];
+        worst = std::max(worst, diff / sum);
+    }
+    std::printf(
+        "1/50 x 10 vs 1/5: worst relative difference %.2e; mean %.3f..%.3f of the start, cover %.3f -> %.3f at most\n",
+        worst, r.mean_min / r.mean0, r.mean_max / r.mean0, r.cover0, r.cover_max);
+    EXPECT_LT(worst, 1e-3);
+    EXPECT_TRUE(r.finite);
+    EXPECT_GT(r.mean_min, 0.8 * r.mean0);
+    EXPECT_LT(r.mean_max, 1.2 * r.mean0);
+    EXPECT_LT(r.cover_max, r.cover0 + 0.065);  // +0.049 (+0.083 at the sky's own scale)
+}
+
 TEST(AdvectResidual, BadModelFoldersFailClearly) {
     const std::string dir = test::temp_dir("advect_bad");
     EXPECT_THROW(AdvectResidualNetwork::load(dir + "/missing"), Error);
