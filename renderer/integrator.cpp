@@ -110,6 +110,8 @@ struct PathIntegrator::PixelState {
 struct PathIntegrator::TileScratch {
     std::vector<Ray> rays;
     std::vector<RTCRayHit> primary;
+    std::vector<Vec3> sky_directions;  // of the camera rays that see the sky
+    std::vector<Color> sky;            // and their radiance
 };
 
 PathIntegrator::PathIntegrator(const Accel& accel, const EnvLight& light, const RenderSettings& settings)
@@ -124,8 +126,11 @@ Ray PathIntegrator::camera_ray(const Camera& camera, float tan_half, float aspec
         ray.direction = (camera.camera_to_world.linear() * Vec3(0, 0, -1)).normalized();
         return ray;
     }
-    ray.origin = camera.camera_to_world.translation();
-    ray.direction = (camera.camera_to_world.linear() * Vec3(x, y, -1)).normalized();
+    // Eigen's product with the 3x3 block of the 4x4 matrix is not vectorised: the same sums by
+    // columns, in its order (a0 x + (a1 y + a2 z)), give the same bits.
+    const Eigen::Matrix4f& m = camera.camera_to_world.matrix();
+    ray.origin = m.col(3).head<3>();
+    ray.direction = Vec3(m.col(0).head<3>() * x + (m.col(1).head<3>() * y - m.col(2).head<3>())).normalized();
     return ray;
 }
 
@@ -316,7 +321,10 @@ void PathIntegrator::sample_tile(const Camera& camera, float tan_half, float asp
     std::vector<ZSobolSampler> zsobol(sobol ? size_t(n) : 0,
                                       ZSobolSampler(settings_.width, settings_.height, settings_.spp, settings_.seed));
     thread_local TileScratch scratch;
-    if (scratch.rays.size() < size_t(n)) scratch.rays.resize(size_t(n)), scratch.primary.resize(size_t(n));
+    if (scratch.rays.size() < size_t(n)) {
+        scratch.rays.resize(size_t(n)), scratch.primary.resize(size_t(n));
+        scratch.sky_directions.resize(size_t(n)), scratch.sky.resize(size_t(n));
+    }
     Ray* rays = scratch.rays.data();
     RTCRayHit* primary = scratch.primary.data();
     const Vec3 forward = (camera.camera_to_world.linear() * Vec3(0, 0, -1)).normalized();
@@ -331,14 +339,28 @@ void PathIntegrator::sample_tile(const Camera& camera, float tan_half, float asp
         accel_.intersect_coherent(primary, unsigned(n));
         // The hits' mesh records start loading together, not one cache miss per path.
         for (int p = 0; p < n; ++p) accel_.prefetch(primary[p]);
+        // The sky seen directly (most camera samples), looked up together: what trace_path does for
+        // it, which draws no random numbers.
+        int misses = 0;
+        for (int p = 0; p < n; ++p)
+            if (primary[p].hit.geomID == RTC_INVALID_GEOMETRY_ID)
+                scratch.sky_directions[size_t(misses++)] = rays[p].direction;
+        light_.radiance_filtered(scratch.sky_directions.data(), misses, scratch.sky.data());
+        const Color* sky = scratch.sky.data();
         for (int p = 0; p < n; ++p) {
             PixelState* st = pixels[p].state;
             ++stats->camera_rays;
             FirstHit first;
             FirstHit* fh = features ? &first : nullptr;
             const Ray& ray = rays[p];
-            Color c = sobol ? trace_path(ray, zsobol[size_t(p)], stats, fh, &primary[p])
-                            : trace_path(ray, st->rng, stats, fh, &primary[p]);
+            Color c;
+            if (primary[p].hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+                if (observer_) observer_(ray, false);
+                c = *sky++;
+            } else {
+                c = sobol ? trace_path(ray, zsobol[size_t(p)], stats, fh, &primary[p])
+                          : trace_path(ray, st->rng, stats, fh, &primary[p]);
+            }
             if (!c.allFinite()) c = Color::Zero();  // never let one bad path poison a pixel
             Eigen::Array3d cd = c.cast<double>();
             st->sum += cd;
