@@ -440,18 +440,19 @@ RenderResult PathIntegrator::render(const Camera& camera) const {
     ProgressBar progress(tiles * max_rounds, "render", settings_.quiet);
     std::atomic<uint64_t> camera_rays{0}, extension_rays{0}, shadow_rays{0};
     auto start = std::chrono::steady_clock::now();
-    auto pixel_rng = [&](int x, int y) {
-        return Rng(mix_bits(settings_.seed * 0x9E3779B97F4A7C15ULL + 1), uint64_t(y) * w + x);
-    };
+    const uint64_t pixel_seed = mix_bits(settings_.seed * 0x9E3779B97F4A7C15ULL + 1);
+    auto pixel_rng = [&](int x, int y) { return Rng(pixel_seed, uint64_t(y) * w + x); };
     // Calls f(tile pixels, tile stats) for every tile, tiles in parallel.
     auto for_each_tile = [&](auto&& f) {
         tbb::parallel_for(0, tiles, [&](int tile) {
             RenderStats stats;
             int x0 = region.x0 + (tile % tiles_x) * ts, y0 = region.y0 + (tile / tiles_x) * ts;
             thread_local std::vector<TilePixel> pixels;  // reused, as TileScratch
-            pixels.clear();
-            for (int y = y0; y < std::min(y0 + ts, region.y1); ++y)
-                for (int x = x0; x < std::min(x0 + ts, region.x1); ++x) pixels.push_back({x, y, nullptr});
+            const int x1 = std::min(x0 + ts, region.x1), y1 = std::min(y0 + ts, region.y1);
+            pixels.resize(size_t(x1 - x0) * (y1 - y0));
+            TilePixel* out = pixels.data();
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x) *out++ = {x, y, nullptr};
             f(pixels, &stats);
             camera_rays += stats.camera_rays, extension_rays += stats.extension_rays;
             shadow_rays += stats.shadow_rays;
@@ -463,10 +464,10 @@ RenderResult PathIntegrator::render(const Camera& camera) const {
         for_each_tile([&](std::vector<TilePixel>& pixels, RenderStats* stats) {
             thread_local std::vector<PixelState> states;  // reused, as TileScratch
             thread_local std::vector<PixelExtra> extras;
-            states.clear();
+            if (states.size() < pixels.size()) states.resize(pixels.size(), PixelState(Rng(0, 0), nullptr));
             if (keep_extra) extras.assign(pixels.size(), PixelExtra());
             for (size_t k = 0; k < pixels.size(); ++k)
-                states.emplace_back(pixel_rng(pixels[k].x, pixels[k].y), keep_extra ? &extras[k] : nullptr);
+                states[k] = PixelState(pixel_rng(pixels[k].x, pixels[k].y), keep_extra ? &extras[k] : nullptr);
             for (size_t k = 0; k < pixels.size(); ++k) pixels[k].state = &states[k];
             sample_tile(camera, tan_half, aspect, pixels.data(), int(pixels.size()), settings_.spp, stats);
             for (const TilePixel& p : pixels) store_pixel(camera, *p.state, p.x - region.x0, p.y - region.y0, &result);
