@@ -76,6 +76,17 @@ void Distribution2D::finish_marginal() {
     }
     total_ = total;
     pdf_scale_ = total > 0 ? float(double(width_) * height_ / total) : 0.0f;
+    // The guide: for t_k = (k / K) total, the number of running sums marginal_[1..H] <= t_k (what
+    // upper_bound gives), by one merge-like walk.
+    int k_size = 1;
+    while (k_size < height_) k_size *= 2;
+    guide_.resize(size_t(k_size) + 1);
+    int r = 0;
+    for (int k = 0; k <= k_size; ++k) {
+        const double t = double(k) / k_size * total;
+        while (r < height_ && marginal_[size_t(r) + 1] <= t) ++r;
+        guide_[size_t(k)] = r;
+    }
 }
 
 // std::upper_bound(s, s + n, t) - s without branches: the comparisons of a binary search over a
@@ -93,13 +104,18 @@ static int upper_bound_index(const T* s, int n, T t) {
     return int(base - s) + (*base <= t);
 }
 
-// Index i with cdf[i] <= t < cdf[i + 1] among n cells, never landing on an empty cell.
+// Cell i of the search moved off empty cells (find_interval's last step).
 template <typename T>
-static int find_interval(const T* cdf, int n, T t) {
-    int i = std::clamp(upper_bound_index(cdf + 1, n, t), 0, n - 1);
+static int settle_interval(const T* cdf, int n, int i) {
     while (i < n - 1 && cdf[i + 1] <= cdf[i]) ++i;
     while (i > 0 && cdf[i + 1] <= cdf[i]) --i;  // t at the very top: step back to a non-empty cell
     return i;
+}
+
+// Index i with cdf[i] <= t < cdf[i + 1] among n cells, never landing on an empty cell.
+template <typename T>
+static int find_interval(const T* cdf, int n, T t) {
+    return settle_interval(cdf, n, std::clamp(upper_bound_index(cdf + 1, n, t), 0, n - 1));
 }
 
 // The same over inclusive running sums s[0..n) (block b spans [s[b-1], s[b]), s[-1] = 0).
@@ -114,7 +130,17 @@ static int find_block(const float* s, int n, float t) {
 bool Distribution2D::sample(const Vec2& u, Vec2* xy, float* pdf, int* cell_x, int* cell_y) const {
     if (empty()) return false;
     double ty = double(u.y()) * total_;
-    int y = find_interval(marginal_.data(), height_, ty);
+    int y;
+    if (u.y() >= 0 && u.y() < 1) {
+        // The guide bounds the search: K is a power of two, so u K is exact, t_k <= ty <= t_k+1
+        // (rounding is monotone) and the count of sums <= ty lies in [guide k, guide k+1]. The
+        // same row as the full search, in a step or two where the sun's rows hold most weight.
+        const int k = int(u.y() * float(guide_.size() - 1)), lo = guide_[size_t(k)], hi = guide_[size_t(k) + 1];
+        const int count = lo + upper_bound_index(marginal_.data() + 1 + lo, hi - lo, ty);
+        y = settle_interval(marginal_.data(), height_, std::clamp(count, 0, height_ - 1));
+    } else {
+        y = find_interval(marginal_.data(), height_, ty);
+    }
     double m0 = marginal_[size_t(y)], m1 = marginal_[size_t(y) + 1];
     float dy = m1 > m0 ? float((ty - m0) / (m1 - m0)) : 0.5f;
     const float* bs = &block_sums_[size_t(y) * blocks_];
@@ -154,7 +180,7 @@ float Distribution2D::pdf(const Vec2& xy) const {
 
 size_t Distribution2D::memory_bytes() const {
     return weights_.capacity() * sizeof(float) + block_sums_.capacity() * sizeof(float) +
-           marginal_.capacity() * sizeof(double);
+           marginal_.capacity() * sizeof(double) + guide_.capacity() * sizeof(int);
 }
 
 }  // namespace dynsky

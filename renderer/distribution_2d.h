@@ -66,6 +66,9 @@ class Distribution2D {
     std::vector<float> weights_;     // H x W cell weights
     std::vector<float> block_sums_;  // H x blocks_: running sums of each row's block totals
     std::vector<double> marginal_;   // H + 1 running sums of the row totals (first is 0)
+    // K + 1 bounds of the row search (K the power of two >= H): guide_[k] = number of running sums
+    // marginal_[1..H] <= (k / K) total, so a sample's search only spans its bucket's rows.
+    std::vector<int> guide_;
     const uint16_t* baseline_ = nullptr;
     float offset_ = 0;
     double total_ = 0;

@@ -53,7 +53,11 @@ class EnvLight {
     Color radiance(const Vec3& w, float* pdf) const;
     // Bilinear radiance, for the sky seen directly by the camera: a camera ray carries no MIS
     // weight, so it need not match the pdf, and a low-resolution sky then looks smooth, not blocky.
+    // Its direction-to-fisheye mapping takes a polynomial atan (within 2e-7 rad of libm's).
     Color radiance_filtered(const Vec3& w) const;
+    // radiance_filtered of n unit directions at once (a tile's camera rays that see the sky): all
+    // the texels are asked for before the first is read, so their cache misses overlap.
+    void radiance_filtered(const Vec3* w, int n, Color* out) const;
     float pdf(const Vec3& w) const;
     // Starts loading the sky pixel and sampling weights that radiance(w) and pdf(w) read, so a path
     // can overlap those cache misses (the image and its weights are megabytes, read at random by
@@ -94,6 +98,8 @@ class EnvLight {
     // outside the disc, the nearest pixel inward.
     int lookup_pixel(const Vec2& uv) const;
     Color sky_radiance(const Vec2& uv) const { return pixel_radiance(lookup_pixel(uv)); }
+    // radiance_filtered of w (above the horizon) at its fisheye position uv.
+    Color filtered_at(const Vec3& w, const Vec2& uv) const;
     Color pixel_radiance(int k) const;
     Color ground(const Vec3& w) const;
     // Density of ground samples per unit solid angle (w below the horizon), given the ground is chosen.

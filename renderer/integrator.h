@@ -125,6 +125,7 @@ class PathIntegrator {
 
   private:
     struct PixelState;
+    struct PixelExtra;
     struct TilePixel {
         int x, y;
         PixelState* state;
