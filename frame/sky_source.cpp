@@ -140,8 +140,9 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
                         ": not a sky EXR ('procedural', 'clear' or a canonical fisheye .exr; import photographs first "
                         "with 'dynsky sky import')");
         input = load_sky(sky_file);
-        if (motion.previous && motion.previous_dt == 0 && input.time_seconds > motion.previous->time_seconds)
-            motion.previous_dt = input.time_seconds - motion.previous->time_seconds;  // their own clocks
+        if (motion.previous)  // their own clocks, unless --prev-dt says
+            motion.previous_dt = previous_frame_gap(input, *motion.previous, motion.previous_dt, sky_file,
+                                                    previous_file);
         input.time_seconds = 0;
         if (input.source.empty()) input.source = sky_file;
     }

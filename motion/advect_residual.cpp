@@ -5,6 +5,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -789,6 +790,22 @@ CloudFlow AdvectResidualNetwork::motion_flow(const SkyImage& sky, const CloudMot
                                         dt);
     }
     return CloudFlow::from_wind(wind_flow(n, motion.wind ? *motion.wind : Wind{}, dt));
+}
+
+double previous_frame_gap(const SkyImage& sky, const SkyImage& previous, double given, const std::string& sky_name,
+                          const std::string& previous_name) {
+    if (!(given >= 0) || !std::isfinite(given)) throw Error("--prev-dt: must be a positive number of seconds");
+    if (given > 0) return given;
+    if (sky.time_seconds == 0 || previous.time_seconds == 0) return 0;  // a clock is missing
+    const double gap = sky.time_seconds - previous.time_seconds;
+    if (gap <= 0 || gap > 3600) {
+        char text[160];
+        std::snprintf(text, sizeof text, "%.0f s after", -gap);
+        if (gap > 0) std::snprintf(text, sizeof text, "%.0f s (over an hour) before", gap);
+        throw Error(previous_name + ": the previous frame's clock (dynsky:time) puts it " + text + " " + sky_name +
+                    ": not a previous frame of the same sky (give --prev-dt to override)");
+    }
+    return gap;
 }
 
 double model_scale(const SkyImage& sky) {

@@ -51,6 +51,13 @@ struct CloudMotion {
     double previous_dt = 0;
 };
 
+// The seconds between a previous frame and the sky: `given` when positive, else their clocks'
+// difference (dynsky:time) when both carry one, else 0 (one medium step). Throws naming both files
+// when their clocks put the previous frame at or after the sky, or more than an hour before it (not
+// a previous frame of the same sky: its motion says nothing about this one's).
+double previous_frame_gap(const SkyImage& sky, const SkyImage& previous, double given, const std::string& sky_name,
+                          const std::string& previous_name);
+
 // The flow of one rollout, per step, at one resolution. A measured flow (from a previous frame) is
 // trusted for the first steps and relaxes to the uniform wind that best explains it
 // (motion/flow.h fit_wind): measured - wind decays as exp(-(k - 1) / relax_steps). A fixed

@@ -45,9 +45,7 @@ void write_prediction(const PredictionOptions& o) {
     if (!o.previous.empty()) {
         if (o.wind) throw Error("--prev and --wind-*: give one source of motion, not both");
         motion.previous = std::make_shared<const SkyImage>(load_sky(o.previous));
-        if (motion.previous_dt == 0 && sky.time_seconds > motion.previous->time_seconds)
-            motion.previous_dt = sky.time_seconds - motion.previous->time_seconds;
-        if (motion.previous_dt < 0) throw Error("--prev-dt: must be positive");
+        motion.previous_dt = previous_frame_gap(sky, *motion.previous, o.previous_dt, o.in, o.previous);
     }
     const NetworkFormParams form = advect ? advect->info().form : paper->info().form;
     const int n = advect ? advect->info().resolution : paper->info().resolution;

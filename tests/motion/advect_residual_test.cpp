@@ -320,6 +320,28 @@ TEST(AdvectResidual, ASkyOfUnknownScaleMovesTheSameInAnyUnits) {
     EXPECT_LT(r.cover_max, r.cover0 + 0.065);  // +0.049 (+0.083 at the sky's own scale)
 }
 
+// --prev: the gap comes from the frames' clocks unless given; a "previous" frame from after the sky,
+// or hours before it, is refused naming both files (its motion says nothing about this sky's).
+TEST(AdvectResidual, APreviousFrameMustComeShortlyBeforeTheSky) {
+    SkyImage sky(8), previous(8);
+    sky.time_seconds = 1000, previous.time_seconds = 970;
+    EXPECT_DOUBLE_EQ(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), 30.0);
+    EXPECT_DOUBLE_EQ(previous_frame_gap(sky, previous, 60, "b.exr", "a.exr"), 60.0);  // given wins
+    previous.time_seconds = 1030;
+    try {
+        previous_frame_gap(sky, previous, 0, "b.exr", "a.exr");
+        FAIL() << "a later 'previous' frame was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("a.exr"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("b.exr"), std::string::npos) << e.what();
+    }
+    previous.time_seconds = 1000 - 7200;
+    EXPECT_THROW(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), Error);
+    previous.time_seconds = 0;  // no clock: one medium step
+    EXPECT_DOUBLE_EQ(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), 0.0);
+    EXPECT_THROW(previous_frame_gap(sky, previous, -5, "b.exr", "a.exr"), Error);
+}
+
 TEST(AdvectResidual, BadModelFoldersFailClearly) {
     const std::string dir = test::temp_dir("advect_bad");
     EXPECT_THROW(AdvectResidualNetwork::load(dir + "/missing"), Error);
