@@ -21,7 +21,8 @@ void register_sky_model_commands(CLI::App& sky) {
             "of Delta t (the model's, e.g. 30 s). The default model advects the clouds along a given motion\n"
             "(--prev: measured from a previous frame; --wind-from/--wind-speed; else the default wind) and a\n"
             "small network corrects. Writes DIR/step_0001.exr ... (canonical fisheye radiance; the sun of the\n"
-            "input is kept).");
+            "input is kept). A sky without its sun direction (imported without time and place, or an HDRI of its\n"
+            "own units) is moved at the networks' scale and back, its sun taken where it is brightest.");
         cmd->add_option("--model", o->model,
                         "Model: auto (networks/models/advect_residual), advect (pure advection along the motion),\n"
                         "paper (the paper's FlowNet + CloudNet, networks/models/arm_tsi), or a model folder")
