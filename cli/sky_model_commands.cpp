@@ -41,7 +41,10 @@ void register_sky_model_commands(CLI::App& sky) {
         cmd->parse_complete_callback([o, wind, from, speed, height] {
             if (from->count() || speed->count() || height->count()) o->wind = *wind;
         });
-        cmd->add_option("--sky", o->in, "Input sky (canonical fisheye EXR, any resolution)");
+        cmd->add_option(
+            "--sky", o->in,
+            "Input sky (canonical fisheye EXR, any resolution; or a 2:1 lat-long HDRI, whose upper half is\n"
+            "taken, as render does)");
         add_hidden_alias(cmd, "--in", &o->in);
         cmd->add_option("--out,-o", o->out, "Output folder (created if missing)")->required();
         cmd->add_option("--steps", o->steps, "Number of medium steps K (1..100000)")->capture_default_str();

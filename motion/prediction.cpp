@@ -10,6 +10,7 @@
 #include "motion/advect_residual.h"
 #include "motion/cloud_model.h"
 #include "motion/network_step_model.h"
+#include "sky/latlong.h"
 #include "motion/sun_patch.h"
 #include "util/data_path.h"
 #include "motion/metrics.h"
@@ -38,13 +39,16 @@ void write_prediction(const PredictionOptions& o) {
     else paper = CloudModel::load(folder);
     if (!advect_kind && (!o.previous.empty() || o.wind))
         throw Error("--prev and --wind-*: the paper's model (" + folder + ") takes its motion from the sky alone");
-    SkyImage sky = load_sky(o.in);
+    // A 2:1 lat-long (a downloaded HDRI) is taken as render takes it: its upper half (the ground
+    // does not move).
+    std::shared_ptr<SkyImage> unused_ground;
+    SkyImage sky = load_sky_or_latlong(o.in, &unused_ground);
     CloudMotion motion;
     motion.wind = o.wind;
     motion.previous_dt = o.previous_dt;
     if (!o.previous.empty()) {
         if (o.wind) throw Error("--prev and --wind-*: give one source of motion, not both");
-        motion.previous = std::make_shared<const SkyImage>(load_sky(o.previous));
+        motion.previous = std::make_shared<const SkyImage>(load_sky_or_latlong(o.previous, &unused_ground));
         motion.previous_dt = previous_frame_gap(sky, *motion.previous, o.previous_dt, o.in, o.previous);
     }
     const NetworkFormParams form = advect ? advect->info().form : paper->info().form;

@@ -11,6 +11,7 @@
 #include "motion/cloud_model.h"
 #include "sky/preset_import.h"
 #include "sky/fisheye.h"
+#include "sky/latlong.h"
 #include "sky/procedural_clouds.h"
 #include "sky/sky_image.h"
 #include "tests/test_support.h"
@@ -59,6 +60,29 @@ TEST(SkyModelCli, PredictWritesStepsAndStats) {
     fs::remove_all(dir);
 }
 
+// A 2:1 lat-long HDRI (as downloaded) is taken as render takes it: its upper half, converted to the
+// canonical fisheye. The prediction equals the one from that fisheye (written by sky latlong and
+// read back the same way).
+TEST(SkyModelCli, PredictTakesALatLongHdriAsRenderDoes) {
+    const std::string dir = test::temp_dir("predict_latlong");
+    const std::string in = small_sky(dir, 96);  // a lat-long 192 x 96: a fisheye of 96 (the model's 64 at least)
+    auto r = test::run_command(dynsky("sky latlong " + in + " -o " + dir + "/ll.exr"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    std::shared_ptr<SkyImage> ground;
+    const SkyImage upper = load_sky_or_latlong(dir + "/ll.exr", &ground);
+    ASSERT_TRUE(ground);
+    save_sky(dir + "/upper.exr", upper);
+    for (const std::string name : {"ll", "upper"}) {
+        r = test::run_command(dynsky("sky predict --quiet --in " + dir + "/" + name + ".exr --steps 2 --out " + dir +
+                                     "/" + name + "_out"));
+        ASSERT_EQ(r.exit_code, 0) << r.output;
+    }
+    const SkyImage a = load_sky(dir + "/ll_out/step_0002.exr"), b = load_sky(dir + "/upper_out/step_0002.exr");
+    ASSERT_EQ(a.resolution, b.resolution);
+    EXPECT_EQ(a.rgb, b.rgb);
+    fs::remove_all(dir);
+}
+
 TEST(SkyModelCli, PredictBadInputsFailClearlyAndWriteNothing) {
     const std::string dir = test::temp_dir("predict_bad");
     const std::string in = small_sky(dir, 32);
@@ -87,7 +111,8 @@ std::string photo_folder(const std::string& dir, int count, std::vector<int> ski
     std::sort(all.begin(), all.end());
     fs::create_directories(dir);
     for (int k = 0; k < count; ++k)
-        if (std::find(skip.begin(), skip.end(), k) == skip.end()) fs::create_symlink(all[size_t(100 + k)], fs::path(dir) / all[size_t(100 + k)].filename());
+        if (std::find(skip.begin(), skip.end(), k) == skip.end())
+            fs::create_symlink(all[size_t(100 + k)], fs::path(dir) / all[size_t(100 + k)].filename());
     return dir;
 }
 
@@ -108,8 +133,8 @@ TEST(SkyModelCli, EvaluateScoresAnyFolderOfPhotosWithEveryMethod) {
     const std::string md = read_text(dir + "/eval.md");
     EXPECT_NE(md.find("| 1 | 30 s |"), std::string::npos) << md;
     EXPECT_NE(md.find("| 2 | 60 s |"), std::string::npos) << md;
-    for (const char* m : {"persistence PSNR", "farneback PSNR", "advect+prev PSNR", "model+prev PSNR", "model+wind PSNR",
-                          "One step ahead (the paper's table)", "| 64 | farneback |"})
+    for (const char* m : {"persistence PSNR", "farneback PSNR", "advect+prev PSNR", "model+prev PSNR",
+                          "model+wind PSNR", "One step ahead (the paper's table)", "| 64 | farneback |"})
         EXPECT_NE(md.find(m), std::string::npos) << m << "\n" << md;
     EXPECT_EQ(md.find("nan"), std::string::npos) << md;
     // Six frames, horizons up to 2: start frames 1..3 (each needs the previous frame and two after).
@@ -152,7 +177,8 @@ TEST(SkyModelCli, EvaluateRejectsFoldersWithoutOneRegularSequence) {
     // A file whose name carries no time.
     fs::create_directories(dir + "/untimed");
     fs::copy_file(test::shared_path("skies/wsiseg/images/ASC100-1006_001.png"), dir + "/untimed/sky.png");
-    auto r = test::run_command(dynsky("sky evaluate --model advect --photos " + dir + "/untimed --preset arm-tsi 2>&1"));
+    auto r = test::run_command(dynsky("sky evaluate --model advect --photos " + dir +
+                                      "/untimed --preset arm-tsi 2>&1"));
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.output.find("carries no time"), std::string::npos) << r.output;
     fs::remove_all(dir);
