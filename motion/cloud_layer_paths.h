@@ -10,11 +10,11 @@
 //                           fraction of that radius of the tile's upwind edge
 //   seam_slope       = 1    the seam's largest slope against the wind (layer units per unit)
 //   seam_band        = 0.2  past the seam, the pass before takes its leave over this fraction of a
-//                           pass (a dissolve: no seam is clear on every sky)
+//                           pass (a linear fade: no seam is clear on every sky)
 //   max_stretch      = 4    a pixel upwind of the seam at the start keeps reading the real start
 //                           image while the start's pixels it reads are at most this many times
 //                           more foreshortened than its own (sec^2 of the zenith angle)
-//   entry_band       = 0.25 beyond that, its dissolve into the tile, as a fraction of that
+//   entry_band       = 0.25 beyond that, its fade into the tile, as a fraction of that
 //                           trigger's ground radius
 //
 // Why: the layer is a plane at height h; a wind translates it by w per step (units of h). The sky
