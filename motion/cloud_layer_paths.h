@@ -26,11 +26,12 @@
 // a(c) <= s < a(c) + 2R along the wind (one period for all streamlines, so the passes do not shear
 // the clouds), every other pass mirrored across the wind (c -> -c) so that the repetition is twice
 // as long and less regular. The seam a(c) (symmetric in c, for the mirror) is cut where the start
-// is clear at both its ends (choose_seam: least opacity, by dynamic programming across the wind),
-// so passes meet without blending and without cutting a cloud. A pixel reads the real start until
-// its path crosses the seam, then the tile, so the first pass is the real start image and short
-// rollouts (minutes) are unchanged. Cross-faded passes and a fade into the tile at a fixed ring
-// averaged cloud with clear sky: a grey haze with a circular seam (docs/networks-advect-residual.md).
+// is clearest at both its ends (choose_seam: least opacity, by dynamic programming across the
+// wind), so where the sky allows passes meet without cutting a cloud (past it, the pass before
+// fades out over seam_band). A pixel reads the real start until its path crosses the seam, then
+// the tile, so the first pass is the real start image and short rollouts (minutes) are unchanged.
+// Entered at a fixed ring (every pixel at 4x its own foreshortening) the tile showed a circular
+// seam (docs/networks-advect-residual.md); only pixels upwind of the seam at the start still are.
 #pragma once
 
 #include <opencv2/core.hpp>
