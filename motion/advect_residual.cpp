@@ -320,36 +320,28 @@ void fill_from_around(cv::Mat* map, const cv::Mat& unknown, const cv::Mat& disc)
 cv::Mat enclosed_clear_near_sun(const cv::Mat& alpha, const cv::Mat& share, const cv::Mat& disc) {
     cv::Mat clear = (alpha < 0.5f) & disc, labels, stats, centroids;
     const int count = cv::connectedComponentsWithStats(clear, labels, stats, centroids, 8, CV_32S);
-    cv::Mat near = share > 0.5f, out = cv::Mat::zeros(alpha.size(), CV_8UC1);
     const int n = alpha.rows, limit = int(0.02 * cv::countNonZero(disc));
-    std::vector<uint8_t> keep(count, 0);
+    const double c = (n - 1) / 2.0, r = 0.47 * n;
+    std::vector<uint8_t> keep(count, 0), hit(count, 0);
     for (int l = 1; l < count; ++l) {
         const int x0 = stats.at<int>(l, cv::CC_STAT_LEFT), y0 = stats.at<int>(l, cv::CC_STAT_TOP);
         const int x1 = x0 + stats.at<int>(l, cv::CC_STAT_WIDTH), y1 = y0 + stats.at<int>(l, cv::CC_STAT_HEIGHT);
         // Enclosed: its box stays off the rim (a clear patch reaching the horizon is sky, not a hole).
-        const double c = (n - 1) / 2.0, r = 0.47 * n;
         const bool inside = std::hypot(x0 - c, y0 - c) < r && std::hypot(x1 - c, y0 - c) < r &&
                             std::hypot(x0 - c, y1 - c) < r && std::hypot(x1 - c, y1 - c) < r;
         keep[l] = inside && stats.at<int>(l, cv::CC_STAT_AREA) < limit;
     }
-    for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x) {
-            const int l = labels.at<int>(y, x);
-            if (l > 0 && keep[l]) out.at<uint8_t>(y, x) = 255;
-        }
     // Only the holes that reach the sun's surroundings.
-    cv::Mat touched = out & near, result = cv::Mat::zeros(out.size(), CV_8UC1);
-    if (cv::countNonZero(touched) == 0) return result;
-    std::vector<uint8_t> hit(count, 0);
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x)
-            if (touched.at<uint8_t>(y, x)) hit[labels.at<int>(y, x)] = 1;
+            if (const int l = labels.at<int>(y, x); keep[l] && share.at<float>(y, x) > 0.5f) hit[l] = 1;
+    cv::Mat result = cv::Mat::zeros(alpha.size(), CV_8UC1);
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x)
-            if (hit[labels.at<int>(y, x)] && out.at<uint8_t>(y, x)) result.at<uint8_t>(y, x) = 255;
+            if (hit[labels.at<int>(y, x)]) result.at<uint8_t>(y, x) = 255;
     // With its soft edge (2 % of the image).
-    const int r = std::max(1, int(std::lround(0.02 * n)));
-    cv::dilate(result, result, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * r + 1, 2 * r + 1)));
+    const int grow = std::max(1, int(std::lround(0.02 * n)));
+    cv::dilate(result, result, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * grow + 1, 2 * grow + 1)));
     return result & disc;
 }
 
@@ -506,19 +498,14 @@ void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3
         // carried over the sun's place showed a clear hole where the sun had been.
         // So do clear holes inside a cloud near the sun: a cloud lit from behind matches the
         // aureole and reads clear there, and carried elsewhere it showed a blue hole.
-        cv::Mat own = start_ - background_ + background_.mul(alpha3), own_alpha = alpha.clone();
+        cv::Mat own = start_ - background_ + background_.mul(alpha3);
         cv::Mat tile_unknown = enclosed_clear_near_sun(alpha, share_, disc_big_);
         if (!unknown.empty()) tile_unknown |= unknown & disc_big_;
-        if (cv::countNonZero(tile_unknown) > 0) {
-            std::vector<cv::Mat> oc;
-            cv::split(own, oc);
-            for (cv::Mat& c : oc) fill_from_around(&c, tile_unknown, disc_big_);
-            cv::merge(oc, own);
-            fill_from_around(&own_alpha, tile_unknown, disc_big_);
-        }
         std::vector<cv::Mat> oc;
         cv::split(own, oc);
-        oc.push_back(own_alpha);
+        oc.push_back(alpha.clone());
+        if (cv::countNonZero(tile_unknown) > 0)
+            for (cv::Mat& c : oc) fill_from_around(&c, tile_unknown, disc_big_);
         cv::merge(oc, own);
         cloud_own_ext_ = extend_past_rim_exact(own);
         opacity_ = alpha;
