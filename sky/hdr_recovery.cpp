@@ -57,6 +57,15 @@ std::string HdrCalibrationReport::sun_offset_warning() const {
     return s.str();
 }
 
+namespace {
+
+// Clouds needed, as a share of the calibration's sky pixels, to white-balance on them, and the sun's
+// lowest elevation for it (below it the light is coloured: dusk).
+constexpr double kMinCloudFractionForGrey = 0.5;
+constexpr double kMinSunElevationForGreyDeg = 10;
+
+}  // namespace
+
 SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& params, HdrCalibrationReport* report_out) {
     if (!photo.display_referred)
         throw_file_error(photo.photo_path,
@@ -216,7 +225,27 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
         rep.grey_bg = median_of(photo_bg) - median_of(model_bg);
         rep.white_balance_method = "clear-sky pixels (per-channel gains)";
     } else {
-        rep.white_balance_method = "none (too few clear pixels to fit it, and the camera's colour is unknown)";
+        // An overcast photo from a camera of unknown colour, the sun well up: its clouds are made
+        // grey by per-channel gains (their median colour), as clouds come out where the clear sky
+        // sets the colour (the TSI's, R/G and B/G within 3 % of grey; the Mobotix's 12:00Z frame
+        // within 10 %). The camera's white balance drifts from frame to frame (the Mobotix's clouds
+        // run green in dark frames, pink at midday), so no fixed colour fits it. At dusk the light
+        // itself is coloured: the camera's colours are kept.
+        std::vector<double> cloud_rg, cloud_bg;
+        for (const Sample& s : samples)
+            if (!s.clear && s.photo.minCoeff() > floor) {
+                cloud_rg.push_back(std::log(s.photo[0] / s.photo[1]));
+                cloud_bg.push_back(std::log(s.photo[2] / s.photo[1]));
+            }
+        const double cloud_fraction = double(cloud_rg.size()) / double(std::max<size_t>(1, samples.size()));
+        if (cloud_rg.size() >= 20 && cloud_fraction >= kMinCloudFractionForGrey &&
+            rep.sun_elevation_deg >= kMinSunElevationForGreyDeg) {
+            rep.grey_rg = median_of(cloud_rg);
+            rep.grey_bg = median_of(cloud_bg);
+            rep.white_balance_method = "cloud pixels made grey (per-channel gains; too few clear pixels)";
+        } else {
+            rep.white_balance_method = "none (too few clear pixels to fit it, and the camera's colour is unknown)";
+        }
     }
     const bool recolour = params.white_balance && rep.white_balance_method.rfind("none", 0) != 0;
     // One pixel's colour corrected, its luminance kept. Near saturation in every channel (the sun's

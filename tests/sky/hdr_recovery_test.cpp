@@ -341,5 +341,46 @@ TEST(HdrRecovery, CloudsStayGreyAndOvercastFallsBack) {
     EXPECT_NEAR(a.bg, 1.0, 0.15);
 }
 
+// An overcast photo from a camera whose colour is unknown (the Mobotix preset has none) and too little
+// clear sky to fit on: its clouds are made grey, not left in the camera's drifting cast (green in
+// the dark morning frames); at dusk the camera's colours are kept. Ratio of the channel means over
+// the cloud pixels, against grey (the gains take the median pixel's colour to grey, so the mean's
+// is within a few per cent: 0.99-1.07 on these frames, the camera's own 0.69-0.86).
+TEST(HdrRecovery, OvercastCloudsOfACameraOfUnknownColourAreMadeGrey) {
+    DYNSKY_REQUIRE_SHARED();
+    int checked = 0;
+    for (const char* clock : {"07_30", "08_00", "09_00", "10_31", "11_30", "13_59"}) {
+        const std::string path =
+            test::shared_path(std::string("skies/mobotix_sophia_20200812_morning/images/2020-08-12_") + clock + ".jpg");
+        PresetImportPlan plan = plan_preset_import("mobotix", path, 128);
+        ImportedPhoto imp = import_photo(path, plan.params);
+        HdrCalibrationParams hp = hdr_calibration_params(plan);
+        HdrCalibrationReport after, before;
+        SkyImage balanced = recover_hdr(imp, hp, &after);
+        hp.white_balance = false;
+        SkyImage kept = recover_hdr(imp, hp, &before);
+        if (after.white_balance_method.rfind("cloud pixels made grey", 0) != 0) {
+            std::printf("%s: %s\n", clock, after.white_balance_method.c_str());
+            continue;  // enough clear sky to fit on: the clear-sky tests cover it
+        }
+        ColourCheck a = colour_against_model(balanced, imp, after.used_sun, true);
+        ColourCheck b = colour_against_model(kept, imp, before.used_sun, true);
+        std::printf("%s: clouds (%lld px) R/G %.3f B/G %.3f (camera colours %.3f %.3f)\n", clock, a.pixels, a.rg, a.bg,
+                    b.rg, b.bg);
+        ASSERT_GT(a.pixels, 500) << clock;
+        EXPECT_NEAR(a.rg, 1.0, 0.08) << clock << ": clouds tinted";
+        EXPECT_NEAR(a.bg, 1.0, 0.08) << clock << ": clouds tinted";
+        ++checked;
+    }
+    EXPECT_GE(checked, 4);
+    // The sun below 10 degrees (05:30 local, 03:30Z: before sunrise): the camera's colours kept.
+    const std::string dawn = test::shared_path("skies/mobotix_sophia_20200812_morning/images/2020-08-12_06_30.jpg");
+    PresetImportPlan plan = plan_preset_import("mobotix", dawn, 64);
+    ImportedPhoto imp = import_photo(dawn, plan.params);
+    HdrCalibrationReport rep;
+    recover_hdr(imp, hdr_calibration_params(plan), &rep);
+    EXPECT_EQ(rep.white_balance_method.rfind("none", 0), 0u) << rep.white_balance_method;
+}
+
 }  // namespace
 }  // namespace dynsky
