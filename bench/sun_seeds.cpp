@@ -7,7 +7,7 @@
 // (one row a frame) and prints per-seed worst and mean errors; scripts/sun_seeds_chart.py draws
 // OUT/sun-seeds.png from the CSV.
 //
-//   build/bench/sun_seeds [OUT=docs] [CROSSING=14] [CLEARING=6] [PNG_SEED=0]
+//   build/bench/sun_seeds [OUT=docs] [CROSSING=14] [CLEARING=6] [PNG_SEED=0] [RES=128]
 // PNG_SEED > 0: also writes OUT/sun-seed-S/ crops of the sky around the sun (truth, moved, the
 // carried opacity) for that seed, to look at.
 #include <algorithm>
@@ -37,7 +37,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr double kDuration = 120, kDt = 10, kFrame = 5;
-constexpr int kRes = 128;
+int kRes = 128;  // the skies' resolution (RES)
 
 ProceduralSkyParams cumulus(uint64_t seed) {
     ProceduralSkyParams p;
@@ -105,6 +105,7 @@ int run(int argc, char** argv) {
     const int want_crossing = argc > 2 ? int(parse_whole_number(argv[2], "CROSSING", 0, 200)) : 14;
     const int want_clearing = argc > 3 ? int(parse_whole_number(argv[3], "CLEARING", 0, 200)) : 6;
     const uint64_t png_seed = argc > 4 ? uint64_t(parse_whole_number(argv[4], "PNG_SEED", 0, 999)) : 0;
+    if (argc > 5) kRes = int(parse_whole_number(argv[5], "RES", 32, 2048));
     fs::create_directories(out_dir);
     std::vector<std::pair<uint64_t, int>> seeds;
     int crossing = 0, clearing = 0;
@@ -201,11 +202,11 @@ int run(int argc, char** argv) {
 int main(int argc, char** argv) {
     if (argc > 1 && (std::string(argv[1]) == "-h" || std::string(argv[1]) == "--help")) {
         std::printf(
-            "usage: sun_seeds [OUT=docs] [CROSSING=14] [CLEARING=6] [PNG_SEED=0]\n"
+            "usage: sun_seeds [OUT=docs] [CROSSING=14] [CLEARING=6] [PNG_SEED=0] [RES=128]\n"
             "The moved sky's horizontal illuminance against the procedural truth on the first CROSSING seeds\n"
             "whose sun starts clear and is covered, and the first CLEARING whose sun starts covered and comes\n"
             "out; writes OUT/sun-seeds.csv (scripts/sun_seeds_chart.py draws the chart). PNG_SEED > 0: that\n"
-            "seed alone, with crops of the sky around the sun in OUT/sun-seed-S/.\n");
+            "seed alone, with crops of the sky around the sun in OUT/sun-seed-S/. RES: the skies' resolution.\n");
         return 0;
     }
     try {

@@ -742,7 +742,7 @@ void AdvectResidualNetwork::rollout(const SkyImage& given, const CloudFlow& flow
     else at = sun_from_brightest_pixels(sky);
     if (background.empty() && at) background = this->background(at->cast<float>(), sky.resolution);
     CloudRollout rollout(this, state, flow, background,
-                         sky.sun_direction ? sun_cut_mask(sky.resolution, *at) : cv::Mat(), at);
+                         sky.sun_direction ? sun_unseen_mask(sky.resolution, *at) : cv::Mat(), at);
     for (int k = 1; k <= steps; ++k) {
         SkyImage next = from_network_form(rollout.advance(), sky, info_.form);
         next.time_seconds = sky.time_seconds + k * info_.dt;
@@ -847,8 +847,9 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
         estimated_sun_.reset();
         if (!input.sun_direction)
             if (const auto d = sun_from_brightest_pixels(input)) estimated_sun_ = d->cast<float>();
-        // The timeline cut the input's sun out (motion/sun_patch.h remove_sun) where the input has it.
-        const cv::Mat unseen = input.sun_direction ? sun_cut_mask(input.resolution, input.sun_direction->cast<double>())
+        // The timeline cut the input's sun out (motion/sun_patch.h remove_sun) where the input has it;
+        // around it the clouds' look says nothing (sun_unseen_mask).
+        const cv::Mat unseen = input.sun_direction ? sun_unseen_mask(input.resolution, input.sun_direction->cast<double>())
                                                    : cv::Mat();
         rollout_ = std::make_unique<CloudRollout>(&network_, start, flow_, cv::Mat(), unseen);
         rollout_->set_unseen_opacity(sun_cover_);
