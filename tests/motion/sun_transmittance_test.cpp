@@ -62,6 +62,32 @@ std::optional<ProceduralSkyParams> cloud_crossing_the_sun(double duration, doubl
 
 // The cumulus above moved by pure advection along its wind: the moved sky shows the cloud reaching
 // the sun, and the sun put back must follow the procedural sky's own.
+// What the moving sky cannot judge around the sun is the same part of the sky at any resolution:
+// every pixel within kSunUnseenDeg of the sun (the cut shrinks from 5.6 to 2.1 degrees between 128
+// and 512 px), the cut included, and nothing beyond the cut's reach or the disc's.
+TEST(SunTransmittance, UnseenSkyAroundTheSunIsTheSameAtAnyResolution) {
+    const Vec3d sun = fisheye::direction_from_angles(0.8, 1.2);
+    for (int n : {64, 128, 512, 1024}) {
+        const cv::Mat unseen = sun_unseen_mask(n, sun), cut = sun_cut_mask(n, sun);
+        EXPECT_EQ(cv::countNonZero(cut & ~unseen), 0) << n;
+        double farthest = 0, nearest_out = 180;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                if (fisheye::pixel_center_uv(i, j, n).squaredNorm() > 1) {
+                    EXPECT_EQ(unseen.at<uint8_t>(j, i), 0) << n << ": off the disc";
+                    continue;
+                }
+                const double a = std::acos(std::clamp(fisheye::direction_from_pixel(i, j, n).dot(sun), -1.0, 1.0)) *
+                                 180 / kPiD;
+                if (unseen.at<uint8_t>(j, i)) farthest = std::max(farthest, cut.at<uint8_t>(j, i) ? 0.0 : a);
+                else nearest_out = std::min(nearest_out, a);
+            }
+        EXPECT_GE(nearest_out, kSunUnseenDeg) << n << ": a pixel this close to the sun was left judged";
+        EXPECT_LE(farthest, kSunUnseenDeg) << n;
+    }
+    EXPECT_EQ(cv::countNonZero(sun_unseen_mask(128, Vec3d(0, -1, 0))), 0);  // the sun below the horizon
+}
+
 TEST(SunTransmittance, CloudCrossingTheSunDimsItAsTheProceduralSkyDoes) {
     const double duration = 120, dt = 10;
     const std::optional<ProceduralSkyParams> crossing = cloud_crossing_the_sun(duration, dt);
