@@ -37,7 +37,6 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr double kDuration = 120, kDt = 10, kFrame = 5;
-int kRes = 128;  // the skies' resolution (RES)
 
 ProceduralSkyParams cumulus(uint64_t seed) {
     ProceduralSkyParams p;
@@ -105,7 +104,7 @@ int run(int argc, char** argv) {
     const int want_crossing = argc > 2 ? int(parse_whole_number(argv[2], "CROSSING", 0, 200)) : 14;
     const int want_clearing = argc > 3 ? int(parse_whole_number(argv[3], "CLEARING", 0, 200)) : 6;
     const uint64_t png_seed = argc > 4 ? uint64_t(parse_whole_number(argv[4], "PNG_SEED", 0, 999)) : 0;
-    if (argc > 5) kRes = int(parse_whole_number(argv[5], "RES", 32, 2048));
+    const int res = argc > 5 ? int(parse_whole_number(argv[5], "RES", 32, 2048)) : 128;  // the skies'
     fs::create_directories(out_dir);
     std::vector<std::pair<uint64_t, int>> seeds;
     int crossing = 0, clearing = 0;
@@ -122,7 +121,7 @@ int run(int argc, char** argv) {
     for (auto [seed, kind] : seeds) {
         const ProceduralSkyParams p = cumulus(seed);
         ProceduralSky truth(p);
-        SkyImage input = truth.render(0, kRes);
+        SkyImage input = truth.render(0, res);
         CloudMotion motion;
         motion.wind = Wind{p.layers[0].wind_from_deg, p.layers[0].wind_speed_mps, p.layers[0].altitude_m};
         std::unique_ptr<MediumStepModel> model = make_network_step_model("advect", motion);
@@ -138,17 +137,17 @@ int run(int argc, char** argv) {
             // The start's pixels within 15 degrees of the sun: the truth's cloud opacity against
             // what their look says (radiance relative to the clear sky).
             Image flow;
-            const SkyImage s0 = truth.render(0, kRes, &flow, 1.0);
+            const SkyImage s0 = truth.render(0, res, &flow, 1.0);
             ClearSkyParams cp;
             cp.sun_direction = sun;
             cp.sun_disc = false;
             const ClearSkyModel clear(cp, false);
             std::ofstream px(png_dir / "pixels.csv");
             px << "i,j,angle_deg,alpha,r,g,b,cr,cg,cb,cloudiness\n";
-            for (int j = 0; j < kRes; ++j)
-                for (int i = 0; i < kRes; ++i) {
+            for (int j = 0; j < res; ++j)
+                for (int i = 0; i < res; ++i) {
                     if (!s0.in_disc(i, j)) continue;
-                    const Vec3d w = fisheye::direction_from_pixel(i, j, kRes);
+                    const Vec3d w = fisheye::direction_from_pixel(i, j, res);
                     const double a = std::acos(std::clamp(w.dot(sun), -1.0, 1.0)) * 180 / kPiD;
                     if (a > 30) continue;
                     const Color v = s0.pixel(i, j), m = clear.sky_radiance(w);
@@ -159,7 +158,7 @@ int run(int argc, char** argv) {
         double worst = 0, sum = 0, t_cover = -1;
         int frames = 0;
         for (double t = 0; t <= kDuration + 1e-9; t += kFrame) {
-            const SkyImage want_sky = truth.render(t, kRes);
+            const SkyImage want_sky = truth.render(t, res);
             const SkyImage frame = timeline.sky_at(t);
             const double want = horizontal_illuminance(want_sky), got = horizontal_illuminance(frame);
             const double w = timeline.last_sun_weight(), undimmed = got + (1 - w) * sun_lx,

@@ -167,8 +167,8 @@ SkyImage scaled_sky(const SkyImage& sky, double factor);
 class CloudRollout {
   public:
     // unseen (CV_8UC1, may be empty): pixels of the start whose cloud cannot be judged (the sun cut
-    // out and the sky around it, motion/sun_patch.h sun_unseen_mask); they count as clear in opacity(). sun: the background's
-    // (see set_background).
+    // out and the sky around it, motion/sun_patch.h sun_unseen_mask); they count as clear in
+    // opacity(). sun: the background's (see set_background).
     CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start, const CloudFlow& flow,
                  const cv::Mat& background = cv::Mat(), const cv::Mat& unseen = cv::Mat(),
                  const std::optional<Vec3d>& sun = std::nullopt);

@@ -47,17 +47,15 @@ cv::Mat sun_unseen_mask(int n, const Vec3d& sun) {
     const double cos_max = std::cos(kSunUnseenDeg * kPiD / 180);
     double x, y;
     fisheye::pixel_from_direction(s, n, &x, &y);
-    // The disc's pixels lie within this many pixels of the sun's (a degree spans at most n / 180 px
-    // radially and less across; 2 px spare).
+    // The disc's pixels lie within this many pixels of the sun's (a degree spans n / 180 px radially
+    // and at most pi / 2 times that across, at the horizon; 2 px spare).
     const int reach = int(std::ceil(kSunUnseenDeg * n / 180.0 * kPiD / 2)) + 2;
     const int ci = int(std::lround(x)), cj = int(std::lround(y));
     for (int j = std::max(0, cj - reach); j <= std::min(n - 1, cj + reach); ++j)
-        for (int i = std::max(0, ci - reach); i <= std::min(n - 1, ci + reach); ++i) {
-            const Vec2 uv = fisheye::pixel_center_uv(i, j, n);
-            if (uv.squaredNorm() > 1) continue;
-            if (fisheye::direction_from_uv(double(uv.x()), double(uv.y())).dot(s) >= cos_max)
+        for (int i = std::max(0, ci - reach); i <= std::min(n - 1, ci + reach); ++i)
+            if (fisheye::pixel_center_uv(i, j, n).squaredNorm() <= 1 &&
+                fisheye::direction_from_pixel(i, j, n).dot(s) >= cos_max)
                 mask.at<uint8_t>(j, i) = 255;
-        }
     return mask;
 }
 

@@ -185,13 +185,15 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
 
     // Colour: log chromaticities (log R/G, log B/G) of the clear pixels against the model's.
     const float floor = 1e-4f;  // darker channels say nothing about colour
+    auto add_chroma = [](const Color& c, std::vector<double>* rg, std::vector<double>* bg) {
+        rg->push_back(std::log(c[0] / c[1]));
+        bg->push_back(std::log(c[2] / c[1]));
+    };
     std::vector<double> photo_rg, photo_bg, model_rg, model_bg;
     for (const Sample& s : samples)
         if (s.clear && s.photo.minCoeff() > floor && s.model.minCoeff() > 0) {
-            photo_rg.push_back(std::log(s.photo[0] / s.photo[1]));
-            photo_bg.push_back(std::log(s.photo[2] / s.photo[1]));
-            model_rg.push_back(std::log(s.model[0] / s.model[1]));
-            model_bg.push_back(std::log(s.model[2] / s.model[1]));
+            add_chroma(s.photo, &photo_rg, &photo_bg);
+            add_chroma(s.model, &model_rg, &model_bg);
         }
     const bool fit = rep.clear_fraction >= params.min_white_balance_fraction && photo_rg.size() >= 20;
     const auto& cam = params.camera_colour;
@@ -233,10 +235,7 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
         // itself is coloured: the camera's colours are kept.
         std::vector<double> cloud_rg, cloud_bg;
         for (const Sample& s : samples)
-            if (!s.clear && s.photo.minCoeff() > floor) {
-                cloud_rg.push_back(std::log(s.photo[0] / s.photo[1]));
-                cloud_bg.push_back(std::log(s.photo[2] / s.photo[1]));
-            }
+            if (!s.clear && s.photo.minCoeff() > floor) add_chroma(s.photo, &cloud_rg, &cloud_bg);
         const double cloud_fraction = double(cloud_rg.size()) / double(std::max<size_t>(1, samples.size()));
         if (cloud_rg.size() >= 20 && cloud_fraction >= kMinCloudFractionForGrey &&
             rep.sun_elevation_deg >= kMinSunElevationForGreyDeg) {

@@ -60,8 +60,6 @@ std::optional<ProceduralSkyParams> cloud_crossing_the_sun(double duration, doubl
     return std::nullopt;
 }
 
-// The cumulus above moved by pure advection along its wind: the moved sky shows the cloud reaching
-// the sun, and the sun put back must follow the procedural sky's own.
 // What the moving sky cannot judge around the sun is the same part of the sky at any resolution:
 // every pixel within kSunUnseenDeg of the sun (the cut shrinks from 5.6 to 2.1 degrees between 128
 // and 512 px), the cut included, and nothing beyond the cut's reach or the disc's.
@@ -88,6 +86,8 @@ TEST(SunTransmittance, UnseenSkyAroundTheSunIsTheSameAtAnyResolution) {
     EXPECT_EQ(cv::countNonZero(sun_unseen_mask(128, Vec3d(0, -1, 0))), 0);  // the sun below the horizon
 }
 
+// The cumulus above moved by pure advection along its wind: the moved sky shows the cloud reaching
+// the sun, and the sun put back must follow the procedural sky's own.
 TEST(SunTransmittance, CloudCrossingTheSunDimsItAsTheProceduralSkyDoes) {
     const double duration = 120, dt = 10;
     const std::optional<ProceduralSkyParams> crossing = cloud_crossing_the_sun(duration, dt);

@@ -247,8 +247,8 @@ struct Calibrated {
     HdrCalibrationReport report;
 };
 
-Calibrated calibrate(const std::string& path, bool white_balance, int n = 128) {
-    PresetImportPlan plan = plan_preset_import("arm-tsi", path, n);
+Calibrated calibrate(const std::string& path, bool white_balance, int n = 128, const std::string& preset = "arm-tsi") {
+    PresetImportPlan plan = plan_preset_import(preset, path, n);
     Calibrated c;
     c.imp = import_photo(path, plan.params);
     HdrCalibrationParams hp = hdr_calibration_params(plan);
@@ -352,19 +352,13 @@ TEST(HdrRecovery, OvercastCloudsOfACameraOfUnknownColourAreMadeGrey) {
     for (const char* clock : {"07_30", "08_00", "09_00", "10_31", "11_30", "13_59"}) {
         const std::string path =
             test::shared_path(std::string("skies/mobotix_sophia_20200812_morning/images/2020-08-12_") + clock + ".jpg");
-        PresetImportPlan plan = plan_preset_import("mobotix", path, 128);
-        ImportedPhoto imp = import_photo(path, plan.params);
-        HdrCalibrationParams hp = hdr_calibration_params(plan);
-        HdrCalibrationReport after, before;
-        SkyImage balanced = recover_hdr(imp, hp, &after);
-        hp.white_balance = false;
-        SkyImage kept = recover_hdr(imp, hp, &before);
-        if (after.white_balance_method.rfind("cloud pixels made grey", 0) != 0) {
-            std::printf("%s: %s\n", clock, after.white_balance_method.c_str());
+        Calibrated after = calibrate(path, true, 128, "mobotix"), before = calibrate(path, false, 128, "mobotix");
+        if (after.report.white_balance_method.rfind("cloud pixels made grey", 0) != 0) {
+            std::printf("%s: %s\n", clock, after.report.white_balance_method.c_str());
             continue;  // enough clear sky to fit on: the clear-sky tests cover it
         }
-        ColourCheck a = colour_against_model(balanced, imp, after.used_sun, true);
-        ColourCheck b = colour_against_model(kept, imp, before.used_sun, true);
+        ColourCheck a = colour_against_model(after.sky, after.imp, after.report.used_sun, true);
+        ColourCheck b = colour_against_model(before.sky, before.imp, before.report.used_sun, true);
         std::printf("%s: clouds (%lld px) R/G %.3f B/G %.3f (camera colours %.3f %.3f)\n", clock, a.pixels, a.rg, a.bg,
                     b.rg, b.bg);
         ASSERT_GT(a.pixels, 500) << clock;
@@ -373,13 +367,11 @@ TEST(HdrRecovery, OvercastCloudsOfACameraOfUnknownColourAreMadeGrey) {
         ++checked;
     }
     EXPECT_GE(checked, 4);
-    // The sun below 10 degrees (05:30 local, 03:30Z: before sunrise): the camera's colours kept.
-    const std::string dawn = test::shared_path("skies/mobotix_sophia_20200812_morning/images/2020-08-12_06_30.jpg");
-    PresetImportPlan plan = plan_preset_import("mobotix", dawn, 64);
-    ImportedPhoto imp = import_photo(dawn, plan.params);
-    HdrCalibrationReport rep;
-    recover_hdr(imp, hdr_calibration_params(plan), &rep);
-    EXPECT_EQ(rep.white_balance_method.rfind("none", 0), 0u) << rep.white_balance_method;
+    // The sun below 10 degrees (06:30 local, 04:30Z: 1.4 degrees below the horizon): the camera's
+    // colours kept.
+    const Calibrated dawn = calibrate(
+        test::shared_path("skies/mobotix_sophia_20200812_morning/images/2020-08-12_06_30.jpg"), true, 64, "mobotix");
+    EXPECT_EQ(dawn.report.white_balance_method.rfind("none", 0), 0u) << dawn.report.white_balance_method;
 }
 
 }  // namespace
