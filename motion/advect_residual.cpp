@@ -762,9 +762,8 @@ cv::Mat network_form_flow(const SkyImage& previous, const SkyImage& current, con
                     ") differs from the sky's (" + std::to_string(current.resolution) + ")");
     const int w = std::min(256, current.resolution);
     cv::Mat a = to_network_form(previous, form, w), b = to_network_form(current, form, w);
-    fill_saturated_pixels(&a);
-    fill_saturated_pixels(&b);
-    return resize_flow(smooth_motion(farneback_flow(a, b)), n);
+    const cv::Mat clipped = fill_saturated_pixels(&a) | fill_saturated_pixels(&b);
+    return resize_flow(smooth_motion(farneback_flow(a, b), sky_disc_mask(w) & ~clipped), n);
 }
 
 CloudFlow AdvectResidualNetwork::motion_flow(const SkyImage& sky, const CloudMotion& motion, double dt, int n) const {
@@ -849,8 +848,9 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
             if (const auto d = sun_from_brightest_pixels(input)) estimated_sun_ = d->cast<float>();
         // The timeline cut the input's sun out (motion/sun_patch.h remove_sun) where the input has it;
         // around it the clouds' look says nothing (sun_unseen_mask).
-        const cv::Mat unseen = input.sun_direction ? sun_unseen_mask(input.resolution, input.sun_direction->cast<double>())
-                                                   : cv::Mat();
+        const cv::Mat unseen = input.sun_direction
+                                   ? sun_unseen_mask(input.resolution, input.sun_direction->cast<double>())
+                                   : cv::Mat();
         rollout_ = std::make_unique<CloudRollout>(&network_, start, flow_, cv::Mat(), unseen);
         rollout_->set_unseen_opacity(sun_cover_);
         background_ = cv::Mat();  // the new rollout needs its background (and opacity)

@@ -170,7 +170,10 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
             for (int k = t - 1; k <= t + hmax; ++k) f.push_back(resample_frame(frame(k), r));
             auto at = [&](int k) -> const NetworkFrame& { return f[size_t(k - (t - 1))]; };
             const cv::Mat prev_flow = flow_at_resolution(flow_from(t - 1), r);
-            const cv::Mat prev_motion = flow_at_resolution(smooth_motion(flow_from(t - 1)), r);  // the models' estimate
+            // The models' estimate: smoothed over the pixels both frames saw unclipped.
+            const cv::Mat trusted = frame(t - 1).valid & frame(t).valid & ~saturated_mask(frame(t - 1).image) &
+                                    ~saturated_mask(frame(t).image);
+            const cv::Mat prev_motion = flow_at_resolution(smooth_motion(flow_from(t - 1), trusted), r);
             const cv::Mat next_flow = flow_at_resolution(flow_from(t), r);
             cv::Mat start = at(t).image.clone();
             fill_saturated_pixels(&start);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
@@ -144,9 +145,29 @@ cv::Mat rotation_flow(int n, const Vec3d& axis, double angle) {
     return flow;
 }
 
-cv::Mat smooth_motion(const cv::Mat& flow) {
+cv::Mat smooth_motion(const cv::Mat& flow, const cv::Mat& trusted) {
+    const double sigma = flow.rows / 32.0;
     cv::Mat out;
-    cv::GaussianBlur(flow, out, cv::Size(0, 0), flow.rows / 32.0, flow.rows / 32.0, cv::BORDER_REPLICATE);
+    if (trusted.empty() || cv::countNonZero(trusted) == 0) {
+        cv::GaussianBlur(flow, out, cv::Size(0, 0), sigma, sigma, cv::BORDER_REPLICATE);
+        return out;
+    }
+    cv::Mat w, w2, weight;
+    trusted.convertTo(w, CV_32F, 1.0 / 255.0);
+    cv::merge(std::vector<cv::Mat>{w, w}, w2);
+    cv::GaussianBlur(flow.mul(w2), out, cv::Size(0, 0), sigma, sigma, cv::BORDER_REPLICATE);
+    cv::GaussianBlur(w, weight, cv::Size(0, 0), sigma, sigma, cv::BORDER_REPLICATE);
+    // Far from every trusted pixel the weight vanishes: widen the reach there, never divide by ~0.
+    cv::Mat wide_flow, wide_weight;
+    cv::GaussianBlur(flow.mul(w2), wide_flow, cv::Size(0, 0), 4 * sigma, 4 * sigma, cv::BORDER_REPLICATE);
+    cv::GaussianBlur(w, wide_weight, cv::Size(0, 0), 4 * sigma, 4 * sigma, cv::BORDER_REPLICATE);
+    for (int j = 0; j < out.rows; ++j)
+        for (int i = 0; i < out.cols; ++i) {
+            const float a = weight.at<float>(j, i), b = wide_weight.at<float>(j, i);
+            cv::Vec2f& o = out.at<cv::Vec2f>(j, i);
+            if (a > 1e-3f) o /= a;
+            else o = b > 1e-6f ? wide_flow.at<cv::Vec2f>(j, i) / b : cv::Vec2f(0, 0);
+        }
     return out;
 }
 

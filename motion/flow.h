@@ -84,7 +84,11 @@ Wind fit_wind(const cv::Mat& flow, const cv::Mat& weight, double dt, double clou
 // sky, flat overcast); smoothing keeps the clouds' common motion and drops the noise, which
 // otherwise shuffles a static background (measured: +0.37 dB one step ahead on held-out ARM frames,
 // never worse on the four real sequences; docs/networks.md).
-cv::Mat smooth_motion(const cv::Mat& flow);
+// With `trusted` (CV_8UC1, the flow's size, 255 where the flow measures the sky: inside the disc,
+// not clipped, not filled in by an import) the smoothing averages over those pixels only
+// (normalised convolution) and fills the rest from them: the black outside the disc and a static
+// sun or filled camera arm measure no motion, and would pull the clouds' flow near them to zero.
+cv::Mat smooth_motion(const cv::Mat& flow, const cv::Mat& trusted = cv::Mat());
 
 // A flow field measured at another resolution, area-averaged (or resized) to N and rescaled to
 // N's pixels.

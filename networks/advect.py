@@ -124,10 +124,23 @@ def compensation(background, flow):
     return (background - warp(background, flow)) * _disc_t(background.shape[-1], background.device)
 
 
-def smooth_motion(flow):
+def smooth_motion(flow, trusted=None):
     """The C++ motion/flow.h smooth_motion: the previous-frame flow Gaussian-smoothed, sigma N / 32,
-    replicate borders."""
-    return gaussian_blur(flow, flow.shape[-1] / 32.0)
+    replicate borders. trusted (B, 1, N, N), 1 where the flow measures the sky (seen and unclipped in
+    both frames): the average over those pixels only (normalised convolution), the rest filled from
+    them (a 4x wider reach where none is near)."""
+    sigma = flow.shape[-1] / 32.0
+    if trusted is None:
+        return gaussian_blur(flow, sigma)
+    num, den = gaussian_blur(flow * trusted, sigma), gaussian_blur(trusted, sigma)
+    wide_num, wide_den = gaussian_blur(flow * trusted, 4 * sigma), gaussian_blur(trusted, 4 * sigma)
+    wide = torch.where(wide_den > 1e-6, wide_num / wide_den.clamp_min(1e-6), torch.zeros_like(wide_num))
+    return torch.where(den > 1e-3, num / den.clamp_min(1e-3), wide)
+
+
+def trusted_flow_pixels(valid_a, valid_b, img_a, img_b):
+    """(B, 1, N, N): seen in both frames (valid, B x 1 x N x N) and clipped in neither."""
+    return valid_a * valid_b * (1 - saturated(img_a)) * (1 - saturated(img_b))
 
 
 def network_input(img, flow, comp=None):

@@ -57,6 +57,11 @@ def t_img(a):
     return torch.from_numpy(np.ascontiguousarray(a)).float().permute(0, 3, 1, 2)
 
 
+def t_valid(a):
+    """(K, N, N) valid masks as (K, 1, N, N) floats."""
+    return torch.from_numpy(np.ascontiguousarray(a).astype(np.float32))[:, None]
+
+
 def wind_weights(src, k, n):
     """Pixels the uniform-wind fit of Farneback (k - 1 -> k) uses: seen cloud pixels with r < 0.9
     (all seen pixels when fewer than 50 are cloud)."""
@@ -130,7 +135,9 @@ class Sampler:
                 kind = "prev"
                 f = t_img(s.flow[k - 1:k])
                 if self.smooth:
-                    f = A.smooth_motion(f)
+                    trusted = A.trusted_flow_pixels(t_valid(s.valid[k - 1:k]), t_valid(s.valid[k:k + 1]),
+                                                    t_img(s.images[k - 1:k]), t_img(s.images[k:k + 1]))
+                    f = A.smooth_motion(f, trusted)
             else:
                 kind = "true"
                 f = true_flow(s, [k])

@@ -48,7 +48,9 @@ def evaluate_source(model, src, split, part="heldout", horizons=(1, 2, 6), max_s
         sat0 = A.saturated(x0)
         f_prev = AD.t_img(src.flow[[k - 1 for k in ks]])
         # The models' motion estimate (smoothed, as the C++ side); the baseline keeps the raw flow.
-        f_model = A.smooth_motion(f_prev) if smooth else f_prev
+        trusted = A.trusted_flow_pixels(AD.t_valid(src.valid[[k - 1 for k in ks]]), v0,
+                                         AD.t_img(src.images[[k - 1 for k in ks]]), x0)
+        f_model = A.smooth_motion(f_prev, trusted) if smooth else f_prev
         bg = AD.t_img(src.background[ks]) if compensated and src.background is not None else None
         flows = {"model_prev": f_model, "advect_prev": f_model, "model_zero": torch.zeros_like(f_prev)}
         if "model_true" in methods:

@@ -4,8 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
 #include <cmath>
 
+#include "sky/fisheye.h"
 #include "sky/procedural_clouds.h"
 #include "util/error.h"
 #include "util/math.h"
@@ -77,6 +81,36 @@ TEST(WindFlow, FittingAWindRecoversIt) {
 TEST(WindFlow, RejectsBadLayers) {
     EXPECT_THROW(wind_flow(32, Wind{270, 10, 0}, 10), Error);
     EXPECT_THROW(wind_flow(32, Wind{270, std::nan(""), 1500}, 10), Error);
+}
+
+// A layer moving as one inside the disc, measured as zero outside it and on a static sun: smoothed
+// over the trusted pixels only, the clouds' flow keeps its speed up to the rim and beside the sun;
+// smoothed over everything, it is pulled towards zero there.
+TEST(SmoothMotion, AveragesOverTrustedPixelsOnly) {
+    const int n = 256;
+    const cv::Mat disc = sky_disc_mask(n);
+    cv::Mat sun = cv::Mat::zeros(n, n, CV_8UC1);
+    cv::circle(sun, cv::Point(170, 100), 10, cv::Scalar(255), cv::FILLED);
+    const cv::Mat trusted = disc & ~sun;
+    cv::Mat flow(n, n, CV_32FC2, cv::Scalar(3.0f, -1.0f));
+    flow.setTo(cv::Scalar(0.0f, 0.0f), ~trusted);
+    const cv::Mat plain = smooth_motion(flow), masked = smooth_motion(flow, trusted);
+    double worst_plain = 0, worst_masked = 0;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            if (!disc.at<unsigned char>(j, i)) continue;
+            worst_plain = std::max(worst_plain, std::abs(plain.at<cv::Vec2f>(j, i)[0] - 3.0));
+            worst_masked = std::max(worst_masked, std::abs(masked.at<cv::Vec2f>(j, i)[0] - 3.0) +
+                                                      std::abs(masked.at<cv::Vec2f>(j, i)[1] + 1.0));
+        }
+    EXPECT_GT(worst_plain, 1.0);    // the rim and the sun pull it to zero
+    EXPECT_LT(worst_masked, 1e-4);  // exact, the sun's pixels filled from around it
+    // Nothing trusted anywhere near: filled from farther, never divided by ~0.
+    cv::Mat corner = cv::Mat::zeros(n, n, CV_8UC1);
+    corner(cv::Rect(0, 0, 8, 8)).setTo(255);
+    const cv::Mat far = smooth_motion(flow, corner);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) ASSERT_TRUE(std::isfinite(far.at<cv::Vec2f>(j, i)[0]));
 }
 
 }  // namespace
