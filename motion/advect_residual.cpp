@@ -349,23 +349,72 @@ cv::Mat enclosed_clear_near_sun(const cv::Mat& alpha, const cv::Mat& share, cons
 // sun transmittance's soft per-pixel rule (motion/sun_patch.h cloudiness) against the background
 // made the start's own (clear_sky_field). Unlike the networks' red/blue rule it does not call the
 // aureole or a hazy horizon cloud: they match the background.
-cv::Mat background_opacity(const cv::Mat& start, const cv::Mat& background, const NetworkFormParams& form) {
+// Near the sun (circumsolar share, 1 within 15 degrees) the aureole is white and bright, so a grey
+// cloud in front of it departs from it by less than the rule's thresholds (procedural cumulus within
+// 6 degrees of the sun: luminance 0.78, red/blue 1.12-1.15 of the clear sky's) and read clear: carried
+// over the sun, it let the sun shine on. There the thresholds tighten towards what the start's own
+// clear sky allows: kClearSpreadFactor x the 90th percentile of the log departures of its clearly
+// clear pixels, never under kTightestCloudRatio / kTightestBrightnessRatio and never over the
+// rule's own. A sky that matches its clear model closely (procedural) is judged closely near the
+// sun; a photograph's clear sky, with its camera's departures, keeps the rule as it was. Both the
+// spread and the tightened rule compare with the clear-sky model itself (`model`), not with the
+// background made the start's own: that field, smooth and fitted at 128 px, is off by 3-10 % beside
+// clouds (procedural cumulus at 512 px), more than the tightened rule allows.
+constexpr double kClearSpreadFactor = 4.0;
+constexpr double kTightestCloudRatio = 1.06, kTightestBrightnessRatio = 1.12;
+
+cv::Mat background_opacity(const cv::Mat& start, const cv::Mat& background, const NetworkFormParams& form,
+                           const cv::Mat& share, const cv::Mat& model) {
     const int big = start.rows;
     cv::Mat opacity(big, big, CV_32FC1, cv::Scalar(0));
     const cv::Mat disc = sky_disc_mask(big);
+    auto radiance = [&](const cv::Vec3f& u) {
+        Color v;
+        for (int c = 0; c < 3; ++c) v[c] = unit_to_radiance(u[c], form.unit_map);
+        return v;
+    };
+    const SunTransmittanceParams rule;
     tbb::parallel_for(0, big, [&](int y) {
         const cv::Vec3f* s = start.ptr<cv::Vec3f>(y);
         const cv::Vec3f* b = background.ptr<cv::Vec3f>(y);
         const uint8_t* in = disc.ptr<uint8_t>(y);
         float* o = opacity.ptr<float>(y);
+        for (int x = 0; x < big; ++x)
+            if (in[x]) o[x] = float(cloudiness(radiance(s[x]), radiance(b[x]), rule));
+    });
+    if (share.empty() || model.empty() || cv::countNonZero(share > 0.0f) == 0) return opacity;
+    // How far the start's clearly clear pixels depart from the background (log units, 90th
+    // percentile; every fourth pixel each way is plenty).
+    std::vector<double> colour, brightness;
+    for (int y = 0; y < big; y += 4)
+        for (int x = 0; x < big; x += 4) {
+            if (!disc.at<uint8_t>(y, x) || opacity.at<float>(y, x) > 0.02f || share.at<float>(y, x) > 0.0f) continue;
+            const Color v = radiance(start.at<cv::Vec3f>(y, x)), m = radiance(model.at<cv::Vec3f>(y, x));
+            if (!(luminance(m) > 0) || !(m[2] > 0) || !(v[2] > 0)) continue;
+            colour.push_back(std::abs(std::log((v[0] / v[2]) / (m[0] / m[2]))));
+            brightness.push_back(std::abs(std::log(std::max(double(luminance(v)), 1e-12) / luminance(m))));
+        }
+    if (colour.size() < 100) return opacity;  // too little clear sky to say how closely it matches
+    auto median = [](std::vector<double>& v) {
+        std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+        return v[v.size() / 2];
+    };
+    const double log_c = std::log(rule.cloud_ratio), log_b = std::log(rule.brightness_ratio);
+    const double tight_c = std::clamp(kClearSpreadFactor * median(colour), std::log(kTightestCloudRatio), log_c);
+    const double tight_b = std::clamp(kClearSpreadFactor * median(brightness), std::log(kTightestBrightnessRatio),
+                                      log_b);
+    tbb::parallel_for(0, big, [&](int y) {
+        const cv::Vec3f* s = start.ptr<cv::Vec3f>(y);
+        const cv::Vec3f* b = model.ptr<cv::Vec3f>(y);
+        const float* sh = share.ptr<float>(y);
+        const uint8_t* in = disc.ptr<uint8_t>(y);
+        float* o = opacity.ptr<float>(y);
         for (int x = 0; x < big; ++x) {
-            if (!in[x]) continue;
-            Color v, m;
-            for (int c = 0; c < 3; ++c) {
-                v[c] = unit_to_radiance(s[x][c], form.unit_map);
-                m[c] = unit_to_radiance(b[x][c], form.unit_map);
-            }
-            o[x] = float(cloudiness(v, m));
+            if (!in[x] || !(sh[x] > 0)) continue;
+            SunTransmittanceParams p = rule;
+            p.cloud_ratio = std::exp(log_c + (tight_c - log_c) * sh[x]);
+            p.brightness_ratio = std::exp(log_b + (tight_b - log_b) * sh[x]);
+            o[x] = std::max(o[x], float(cloudiness(radiance(s[x]), radiance(b[x]), p)));
         }
     });
     return opacity;
@@ -457,7 +506,8 @@ void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3
         // procedural sky (tests/motion/sun_transmittance_test.cpp). Only near the sun
         // (circumsolar_share): over the whole sky it darkened a 3-hour rollout of the ARM photograph
         // to 0.78 of its start (0.82 additively; tests/motion/advect_residual_test.cpp).
-        cv::Mat alpha = background_opacity(start_, background, network_->info().form);
+        share_ = circumsolar_share(start_.rows, sun_);
+        cv::Mat alpha = background_opacity(start_, background, network_->info().form, share_, given);
         // The sun's pixels were cut out (darker than the clear sky's sun there, they would read as
         // cloud over it), and where the model's sky clips the background is the start itself: the
         // start says nothing there, so they take the opacity of the clouds around them. Counted
@@ -485,7 +535,6 @@ void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3
         }
         cv::Mat alpha3, carried;
         cv::merge(std::vector<cv::Mat>{alpha, alpha, alpha}, alpha3);
-        share_ = circumsolar_share(start_.rows, sun_);
         std::vector<cv::Mat> ch;
         cv::split(background_.mul(alpha3), ch);
         ch.push_back(alpha);

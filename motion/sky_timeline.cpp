@@ -79,7 +79,14 @@ std::optional<double> SkyTimeline::model_sun_weight(int i, double s, const Vec3d
     auto opacity = [&](int k) { return size_t(k) < model_opacity_.size() ? model_opacity_[size_t(k)] : cv::Mat(); };
     const cv::Mat o0 = opacity(0), a = opacity(i), b = s > 0 ? opacity(i + 1) : a;
     if (o0.empty() || a.empty() || b.empty()) return std::nullopt;
-    const double before = relative ? std::max(sun_transmittance_of_opacity(o0, sun), 0.05) : 1.0;
+    // Relative to the input's cover at the sun, but never to more cover than its sun showed: the
+    // opacity within 3 degrees of a sun the input shows whole (share of the clear sun ~1) often
+    // holds a cloud beside it, and relative to that a cloud moved over it later dimmed it only
+    // once thicker still (on 20 procedural skies, mean error 7.2 % so, 6.9 % with this).
+    double seen = 0.0;
+    if (relative && input_sun_ && !suns_.empty())
+        seen = std::min(1.0, sun_patch_share(suns_[0], steps_[0]->resolution, *input_sun_));
+    const double before = relative ? std::max({sun_transmittance_of_opacity(o0, sun), seen, 0.05}) : 1.0;
     double t = sun_transmittance_of_opacity(a, sun);
     if (s > 0) {
         // Between two steps the clouds move as Gamma moves them: what covers the sun at s was at
