@@ -353,8 +353,9 @@ cv::Mat enclosed_clear_near_sun(const cv::Mat& alpha, const cv::Mat& share, cons
 // cloud in front of it departs from it by less than the rule's thresholds (procedural cumulus within
 // 6 degrees of the sun: luminance 0.78, red/blue 1.12-1.15 of the clear sky's) and read clear: carried
 // over the sun, it let the sun shine on. There the thresholds tighten towards what the start's own
-// clear sky allows: kClearSpreadFactor x the 90th percentile of the log departures of its clearly
-// clear pixels, never under kTightestCloudRatio / kTightestBrightnessRatio and never over the
+// clear sky allows: kClearSpreadFactor x the median log departure of its clearly clear pixels
+// from the clear-sky model (a 90th percentile takes in the rule's own clear band, up to 1.12 in
+// colour), never under kTightestCloudRatio / kTightestBrightnessRatio and never over the
 // rule's own. A sky that matches its clear model closely (procedural) is judged closely near the
 // sun; a photograph's clear sky, with its camera's departures, keeps the rule as it was. Both the
 // spread and the tightened rule compare with the clear-sky model itself (`model`), not with the
@@ -383,8 +384,8 @@ cv::Mat background_opacity(const cv::Mat& start, const cv::Mat& background, cons
             if (in[x]) o[x] = float(cloudiness(radiance(s[x]), radiance(b[x]), rule));
     });
     if (share.empty() || model.empty() || cv::countNonZero(share > 0.0f) == 0) return opacity;
-    // How far the start's clearly clear pixels depart from the background (log units, 90th
-    // percentile; every fourth pixel each way is plenty).
+    // How far the start's clearly clear pixels, away from the sun, depart from the model (log units,
+    // median; every fourth pixel each way is plenty).
     std::vector<double> colour, brightness;
     for (int y = 0; y < big; y += 4)
         for (int x = 0; x < big; x += 4) {
