@@ -163,6 +163,18 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
         if (it == pair_flow.end()) it = pair_flow.emplace(k, farneback_flow(frame(k).image, frame(k + 1).image)).first;
         return it->second;
     };
+    // The models' estimate of the same (k -> k + 1): smoothed over the pixels both frames saw
+    // unclipped, computed once.
+    std::map<int, cv::Mat> pair_motion;
+    auto motion_from = [&](int k) -> const cv::Mat& {
+        auto it = pair_motion.find(k);
+        if (it == pair_motion.end()) {
+            const cv::Mat trusted = frame(k).valid & frame(k + 1).valid & ~saturated_mask(frame(k).image) &
+                                    ~saturated_mask(frame(k + 1).image);
+            it = pair_motion.emplace(k, smooth_motion(flow_from(k), trusted)).first;
+        }
+        return it->second;
+    };
     ProgressBar progress2(long(last - first + 1) * long(resolutions.size()), "evaluate", o.quiet);
     for (int r : resolutions) {
         for (int t = first; t <= last; ++t) {
@@ -170,10 +182,7 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
             for (int k = t - 1; k <= t + hmax; ++k) f.push_back(resample_frame(frame(k), r));
             auto at = [&](int k) -> const NetworkFrame& { return f[size_t(k - (t - 1))]; };
             const cv::Mat prev_flow = flow_at_resolution(flow_from(t - 1), r);
-            // The models' estimate: smoothed over the pixels both frames saw unclipped.
-            const cv::Mat trusted = frame(t - 1).valid & frame(t).valid & ~saturated_mask(frame(t - 1).image) &
-                                    ~saturated_mask(frame(t).image);
-            const cv::Mat prev_motion = flow_at_resolution(smooth_motion(flow_from(t - 1), trusted), r);
+            const cv::Mat prev_motion = flow_at_resolution(motion_from(t - 1), r);
             const cv::Mat next_flow = flow_at_resolution(flow_from(t), r);
             cv::Mat start = at(t).image.clone();
             fill_saturated_pixels(&start);

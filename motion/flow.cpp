@@ -155,11 +155,12 @@ cv::Mat smooth_motion(const cv::Mat& flow, const cv::Mat& trusted) {
     cv::Mat w, w2, weight;
     trusted.convertTo(w, CV_32F, 1.0 / 255.0);
     cv::merge(std::vector<cv::Mat>{w, w}, w2);
-    cv::GaussianBlur(flow.mul(w2), out, cv::Size(0, 0), sigma, sigma, cv::BORDER_REPLICATE);
+    const cv::Mat weighted = flow.mul(w2);
+    cv::GaussianBlur(weighted, out, cv::Size(0, 0), sigma, sigma, cv::BORDER_REPLICATE);
     cv::GaussianBlur(w, weight, cv::Size(0, 0), sigma, sigma, cv::BORDER_REPLICATE);
     // Far from every trusted pixel the weight vanishes: widen the reach there, never divide by ~0.
     cv::Mat wide_flow, wide_weight;
-    cv::GaussianBlur(flow.mul(w2), wide_flow, cv::Size(0, 0), 4 * sigma, 4 * sigma, cv::BORDER_REPLICATE);
+    cv::GaussianBlur(weighted, wide_flow, cv::Size(0, 0), 4 * sigma, 4 * sigma, cv::BORDER_REPLICATE);
     cv::GaussianBlur(w, wide_weight, cv::Size(0, 0), 4 * sigma, 4 * sigma, cv::BORDER_REPLICATE);
     for (int j = 0; j < out.rows; ++j)
         for (int i = 0; i < out.cols; ++i) {

@@ -144,6 +144,10 @@ class SkyTimeline {
     bool covered_checked_ = false;
     SunPatch clear_sun_;
     const SunPatch& covered_input_sun(int n);
+    // The input's cut sun over the clear sun's irradiance (sun_patch_share at the input's
+    // resolution; 0 without a sun), worked out when first needed.
+    std::optional<double> input_sun_share_;
+    double input_sun_share();
     double input_time_ = 0;
     SkyTimelineTimings timings_;
     std::string stored_folder_;  // a loaded timeline's folder (steps and flows read from there)
