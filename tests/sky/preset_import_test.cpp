@@ -70,8 +70,8 @@ TEST(PresetImport, TsiWithoutMasksFillsArmHousingAndBandOnEveryFrame) {
     const std::string root = test::temp_dir("preset_tsi");
     for (const std::string set :
          {"arm_tsi_sgp_20170524", "arm_tsi_sgp_20170524_clear_morning", "arm_tsi_sgp_20170524_overcast_dusk"}) {
-        const auto photos = copy_photos(set, root,
-                                        test::run_size(1, 4));  // every frame; every 4th under the sanitizers
+        // Every frame; every 4th under the sanitizers (the plain run's longest test, 70 s).
+        const auto photos = copy_photos(set, root, test::run_size(1, 4));
         ASSERT_GT(photos.size(), test::run_size(100u, 25u)) << set;
         double lo = 1, hi = 0, mask_lo = 1, mask_hi = 0, iou_sum = 0, iou_min = 1, sun_worst = 0;
         int compared = 0, suns = 0;
@@ -80,8 +80,8 @@ TEST(PresetImport, TsiWithoutMasksFillsArmHousingAndBandOnEveryFrame) {
             PresetImportPlan plan = plan_preset_import("arm-tsi", copy, n);
             ASSERT_FALSE(plan.mask_found) << copy;
             ASSERT_TRUE(plan.params.shadow_band.has_value()) << copy;
-            plan.params.inpaint = (k % size_t(test::run_size(20, 5)) ==
-                                   0);  // the share does not depend on the fill; the sun test does
+            // The share does not depend on the fill; the sun test does (every 20th frame).
+            plan.params.inpaint = k % size_t(test::run_size(20, 5)) == 0;
             ImportedPhoto imported = import_photo(copy, plan.params);
             const Share s = filled_share(imported);
             lo = std::min(lo, s.filled), hi = std::max(hi, s.filled);
