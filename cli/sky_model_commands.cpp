@@ -76,8 +76,11 @@ void register_sky_model_commands(CLI::App& sky) {
         cmd->add_option("--sequence", o->sequence,
                         "A named sequence in the shared data: arm-tsi, arm-clear, arm-dusk, mobotix");
         cmd->add_option("--photos", o->photos,
-                        "Any folder of photographs of one camera (or its images/ sub-folder), times in the file names");
-        cmd->add_option("--preset", o->preset, "Camera preset of --photos: arm-tsi or mobotix");
+                        "Any folder of photographs of one camera (or its images/ sub-folder), times in the file names; "
+                        "or of skies already imported from any camera ('dynsky sky import', .exr; a STEM.filled.png "
+                        "beside each, from --filled-mask, leaves its filled pixels out)");
+        cmd->add_option("--preset", o->preset,
+                        "Camera preset of --photos when they are photographs: arm-tsi or mobotix");
         cmd->add_option(
             "--frames", o->frames,
             "Start frames A-B to score (default: the model's held-out part of a sequence it was trained on,\n"

@@ -33,6 +33,21 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// True when the folder (or its images/ sub-folder) holds an EXR: skies already imported.
+bool folder_holds_skies(const std::string& folder) {
+    for (const fs::path dir : {fs::path(folder) / "images", fs::path(folder)}) {
+        std::error_code ec;
+        if (!fs::is_directory(dir, ec)) continue;
+        for (const auto& e : fs::directory_iterator(dir, ec)) {
+            std::string ext = e.path().extension().string();
+            for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+            if (ext == ".exr") return true;
+        }
+        return false;
+    }
+    return false;
+}
+
 struct Accumulator {
     double mse = 0, psnr = 0, ssim = 0;
     int count = 0;
@@ -79,7 +94,10 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
     if (o.sequence.empty() == o.photos.empty())
         throw Error(
             "--sequence, --photos: give exactly one of --sequence (arm-tsi, arm-clear, arm-dusk, mobotix) and --photos DIR --preset P");
-    if (!o.photos.empty() && o.preset.empty()) throw Error("--photos needs --preset (arm-tsi or mobotix)");
+    if (!o.photos.empty() && o.preset.empty() && !folder_holds_skies(o.photos))
+        throw Error(
+            "--photos needs --preset (arm-tsi or mobotix) for photographs; a folder of skies imported with "
+            "'dynsky sky import' (.exr, any camera) needs none");
     const std::string shared = o.shared.empty() && !o.sequence.empty() ? default_shared_dir() : o.shared;
     {
         // The report and what is written beside it must not replace an input or land in an input
@@ -226,8 +244,9 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
     csv << "resolution,horizon,ahead_s,method,psnr_db,ssim,mse,frames\n";
     md << "# Cloud model evaluation: " << (folder == "advect" ? "advect" : model.info().name) << " on " << seq.name
        << "\n\n";
-    md << "Photographs: `" << seq.folder << "` (" << count << " frames every " << seq.dt << " s, preset " << seq.preset
-       << "); scored: " << part << ", start frames " << first << ".." << last << ". Imported at " << big
+    md << "Photographs: `" << seq.folder << "` (" << count << " frames every " << seq.dt << " s, "
+       << (seq.preset.empty() ? std::string("imported skies") : "preset " + seq.preset) << "); scored: " << part
+       << ", start frames " << first << ".." << last << ". Imported at " << big
        << " px and area-averaged to each resolution; network form; pixels seen in both frames and not saturated. "
           "PSNR/SSIM: means of per-frame values. farneback = the previous pair's flow applied h times (one warp by h F, "
           "with the rim extended so it never pulls in black); "

@@ -1,13 +1,18 @@
 #include "motion/network_form.h"
 
+#include <filesystem>
+
 #include <opencv2/imgproc.hpp>
 
 #include "sky/clear_sky.h"
 #include "sky/fisheye.h"
 #include "sky/preset_import.h"
 #include "util/error.h"
+#include "util/image.h"
 
 namespace dynsky {
+
+namespace fs = std::filesystem;
 
 cv::Mat to_network_form(const SkyImage& sky, const NetworkFormParams& form, int resolution) {
     const int n = sky.resolution;
@@ -97,8 +102,28 @@ NetworkFrame network_frame(const SkyImage& sky, const std::vector<unsigned char>
 NetworkFrame network_frame_from_photo(const std::string& path, const std::string& preset, int import_resolution,
                                       int resolution, const NetworkFormParams& form) {
     std::vector<unsigned char> not_sky;
-    SkyImage sky = import_preset_photo(path, preset, import_resolution, &not_sky);
-    return network_frame(sky, not_sky, resolution, form);
+    if (!preset.empty()) {
+        SkyImage sky = import_preset_photo(path, preset, import_resolution, &not_sky);
+        return network_frame(sky, not_sky, resolution, form);
+    }
+    const SkyImage sky = load_sky(path);
+    if (sky.resolution < import_resolution)
+        throw_file_error(path, "is a " + std::to_string(sky.resolution) + " px sky, smaller than --import-res " +
+                                   std::to_string(import_resolution) +
+                                   " (import it larger or give a smaller --import-res)");
+    const fs::path filled = fs::path(path).replace_extension(".filled.png");
+    if (fs::exists(filled)) {
+        const Image m = read_image(filled.string());
+        if (m.width != sky.resolution || m.height != sky.resolution)
+            throw_file_error(filled.string(), "the filled-pixel mask is " + std::to_string(m.width) + "x" +
+                                                  std::to_string(m.height) + ", its sky " +
+                                                  std::to_string(sky.resolution) + " px square");
+        not_sky.resize(size_t(sky.resolution) * sky.resolution);
+        for (size_t p = 0; p < not_sky.size(); ++p) not_sky[p] = m.pixels[p * size_t(m.channels)] > 0.5f;
+    }
+    // At the import resolution first (area-averaged), then as above: as a photograph imported there.
+    NetworkFrame at_import = network_frame(sky, not_sky, import_resolution, form);
+    return resolution == import_resolution ? at_import : resample_frame(at_import, resolution);
 }
 
 cv::Mat clear_background(const Vec3d& sun_direction, int n, const NetworkFormParams& form) {

@@ -65,6 +65,10 @@ cv::Mat network_cloud_mask(const cv::Mat& image, const NetworkFormParams& form);
 // at import_resolution exactly as `dynsky sky import --preset P --res R` does (the preset's mask,
 // HDR calibrated from the file name's time and the preset's place), then as above. The import's
 // not-sky pixels (arm, shadow band, masts) are what the frame marks as not valid.
+// With no preset the file is a sky already imported (EXR, photo_sequence.h), resampled to
+// import_resolution (never up: a smaller sky is refused naming the file); the pixels its import
+// filled are left out when their mask lies beside it as STEM.filled.png (`dynsky sky import
+// --filled-mask`), of the sky's size.
 NetworkFrame network_frame_from_photo(const std::string& path, const std::string& preset, int import_resolution,
                                       int resolution, const NetworkFormParams& form);
 

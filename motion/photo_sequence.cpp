@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "sky/photo_import.h"
+#include "sky/sky_image.h"
 #include "sky/sun_position.h"
 #include "util/data_path.h"
 #include "util/math.h"
@@ -60,24 +61,50 @@ PhotoSequence named_photo_sequence(const std::string& name, const std::string& s
     return s;
 }
 
+namespace {
+
+// The UTC time an imported sky was photographed at: its file name's, else the "time=...Z" that
+// `dynsky sky import` writes into its source attribute (its dynsky:time is the sequence's own
+// clock, 0 for a single import). Empty when neither says.
+std::string imported_sky_time(const std::string& path) {
+    std::string time = time_from_file_name(path, 0);
+    if (!time.empty()) return time;
+    const std::string source = load_sky(path).source;
+    const size_t at = source.find("time=");
+    if (at == std::string::npos) return "";
+    const size_t end = source.find_first_of(" )", at);
+    return source.substr(at + 5, end == std::string::npos ? std::string::npos : end - at - 5);
+}
+
+}  // namespace
+
 PhotoSequence photo_sequence_from_folder(const std::string& folder, const std::string& preset) {
     if (!fs::is_directory(folder)) throw_file_error(folder, "not a folder of photographs");
-    const CameraPreset cam = camera_preset(preset);  // throws listing the presets
+    const bool skies = preset.empty();  // a folder of imported skies (EXR)
+    const double utc_offset = skies ? 0.0 : camera_preset(preset).filename_utc_offset_hours;  // throws listing them
     fs::path dir = fs::is_directory(fs::path(folder) / "images") ? fs::path(folder) / "images" : fs::path(folder);
     std::vector<std::pair<double, std::string>> timed;
     for (const auto& e : fs::directory_iterator(dir)) {
         if (!e.is_regular_file()) continue;
         std::string ext = e.path().extension().string();
         for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-        if (ext != ".jpg" && ext != ".jpeg" && ext != ".png") continue;
-        const std::string time = time_from_file_name(e.path().string(), cam.filename_utc_offset_hours);
+        if (skies ? ext != ".exr" : ext != ".jpg" && ext != ".jpeg" && ext != ".png") continue;
+        const std::string time = skies ? imported_sky_time(e.path().string())
+                                       : time_from_file_name(e.path().string(), utc_offset);
         if (time.empty())
-            throw_file_error(e.path().string(), "the file name carries no time (expected ..._YYYYMMDDhhmmssZ.jpg or "
-                                                "YYYY-MM-DD_hh_mm.jpg)");
+            throw_file_error(e.path().string(),
+                             skies ? "carries no time (none in its name, as ..._YYYYMMDDhhmmssZ.exr, nor the "
+                                     "photograph's time that 'dynsky sky import' records)"
+                                   : "the file name carries no time (expected ..._YYYYMMDDhhmmssZ.jpg or "
+                                     "YYYY-MM-DD_hh_mm.jpg)");
         timed.emplace_back(julian_date(parse_utc_time(time)) * 86400.0, e.path().string());
     }
-    if (timed.empty()) throw_file_error(dir.string(), "no photographs (.jpg, .jpeg, .png) in this folder");
-    if (timed.size() < 3) throw_file_error(dir.string(), "fewer than three photographs: nothing to predict and score");
+    if (timed.empty())
+        throw_file_error(dir.string(), skies ? "no imported skies (.exr) in this folder"
+                                             : "no photographs (.jpg, .jpeg, .png) in this folder");
+    if (timed.size() < 3)
+        throw_file_error(dir.string(), std::string("fewer than three ") + (skies ? "skies" : "photographs") +
+                                           ": nothing to predict and score");
     std::sort(timed.begin(), timed.end());
     std::vector<double> gaps;
     for (size_t k = 1; k < timed.size(); ++k) gaps.push_back(timed[k].first - timed[k - 1].first);
@@ -85,12 +112,14 @@ PhotoSequence photo_sequence_from_folder(const std::string& folder, const std::s
     for (size_t k = 1; k < timed.size(); ++k) {
         const double gap = timed[k].first - timed[k - 1].first;
         if (gap < 0.5)
-            throw_file_error(timed[k].second, "has the same time as " + fs::path(timed[k - 1].second).filename().string());
+            throw_file_error(timed[k].second,
+                             "has the same time as " + fs::path(timed[k - 1].second).filename().string());
         if (std::abs(gap - cadence) > std::max(1.0, 0.02 * cadence))
-            throw_file_error(timed[k].second, "comes " + std::to_string(long(std::lround(gap))) + " s after " +
-                                                  fs::path(timed[k - 1].second).filename().string() +
-                                                  ", but the cadence is " + std::to_string(long(std::lround(cadence))) +
-                                                  " s (mixed cadence or missing frames: give a folder of one regular sequence)");
+            throw_file_error(timed[k].second,
+                             "comes " + std::to_string(long(std::lround(gap))) + " s after " +
+                                 fs::path(timed[k - 1].second).filename().string() + ", but the cadence is " +
+                                 std::to_string(long(std::lround(cadence))) +
+                                 " s (mixed cadence or missing frames: give a folder of one regular sequence)");
     }
     PhotoSequence s;
     s.name = fs::path(folder).filename().string();

@@ -9,7 +9,7 @@ namespace dynsky {
 
 struct PhotoSequence {
     std::string name;    // the dataset's and split's name ("arm_tsi")
-    std::string preset;  // camera preset of the import (sky/preset_import.h)
+    std::string preset;  // camera preset of the import (sky/preset_import.h); empty: imported skies
     std::string folder;
     double dt = 0;                    // cadence: seconds between frames
     std::vector<std::string> photos;  // in time order
@@ -21,7 +21,9 @@ PhotoSequence named_photo_sequence(const std::string& name, const std::string& s
 
 // Any folder of photographs of one camera preset (JPEG/PNG in the folder or its images/ sub-folder),
 // ordered by the times their file names carry (sky/photo_import.h time_from_file_name, on the
-// preset's clock). The cadence is the median gap. Throws dynsky::Error naming the folder when it
+// preset's clock); or, with no preset, of skies already imported (EXR, any camera: `dynsky sky
+// import` with that camera's options), ordered by the times their names carry or, failing that,
+// the photograph's time the import recorded. The cadence is the median gap. Throws dynsky::Error naming the folder when it
 // holds no photographs, a name carries no time, two photographs share a time, or the gaps are not
 // all the cadence (mixed cadence or missing frames: the first offending pair is named).
 PhotoSequence photo_sequence_from_folder(const std::string& folder, const std::string& preset);
