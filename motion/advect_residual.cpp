@@ -752,12 +752,22 @@ const cv::Mat& CloudRollout::advance() {
 namespace {
 
 // The sun's weight from the clouds a rollout moved over it (CloudRollout::opacity): the transmittance
-// of the moved opacity relative to the start's, in [0, 1] (a start below 0.05 counts as 0.05);
-// nullopt without a sun or a background (no opacity).
-std::optional<double> opacity_sun_weight(const CloudRollout& rollout, const std::optional<Vec3d>& sun) {
+// of the moved opacity relative to the start's, as the timeline takes it (sun_weight_reference), in
+// [0, 1]; nullopt without a sun or a background (no opacity).
+std::optional<double> opacity_sun_weight(const CloudRollout& rollout, const std::optional<Vec3d>& sun,
+                                         double input_sun_share) {
     if (!sun || rollout.opacity().empty() || rollout.start_opacity().empty()) return std::nullopt;
-    const double before = std::max(sun_transmittance_of_opacity(rollout.start_opacity(), *sun), 0.05);
+    const double before = sun_weight_reference(sun_transmittance_of_opacity(rollout.start_opacity(), *sun),
+                                               input_sun_share);
     return std::clamp(sun_transmittance_of_opacity(rollout.opacity(), *sun) / before, 0.0, 1.0);
+}
+
+// How much of the clear sun a sky shows at its sun (sun_patch_share of the sun remove_sun would cut);
+// 0 without one.
+double shown_sun_share(const SkyImage& sky, const std::optional<Vec3d>& sun) {
+    if (!sun || !sky.sun_direction) return 0.0;
+    SkyImage copy = sky;
+    return sun_patch_share(remove_sun(&copy), sky.resolution, *sun);
 }
 
 cv::Mat at_most_256(const cv::Mat& map) {
@@ -793,6 +803,7 @@ void AdvectResidualNetwork::rollout(const SkyImage& given, const CloudFlow& flow
     if (background.empty() && at) background = this->background(at->cast<float>(), sky.resolution);
     CloudRollout rollout(this, state, flow, background,
                          sky.sun_direction ? sun_unseen_mask(sky.resolution, *at) : cv::Mat(), at);
+    const double share = has_sun ? shown_sun_share(sky, at) : 0.0;
     for (int k = 1; k <= steps; ++k) {
         SkyImage next = from_network_form(rollout.advance(), sky, info_.form);
         next.time_seconds = sky.time_seconds + k * info_.dt;
@@ -800,7 +811,7 @@ void AdvectResidualNetwork::rollout(const SkyImage& given, const CloudFlow& flow
         // step model does).
         if (has_sun) {
             const double t = relative_sun_transmittance(next, sky);
-            restore_pixels(&next, sky, sun, std::min(t, opacity_sun_weight(rollout, at).value_or(1.0)));
+            restore_pixels(&next, sky, sun, std::min(t, opacity_sun_weight(rollout, at, share).value_or(1.0)));
         }
         on_step(k, scale == 1.0 ? next : scaled_sky(next, 1.0 / scale));
     }
@@ -892,6 +903,7 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
         flow_dt_ = dt;
         cv::Mat start = to_network_form(input, network_.info().form);
         sun_mask_ = fill_saturated_pixels(&start);
+        input_sun_share_.reset();
         // A sky without its sun has it estimated from its brightest pixels (as rollout() does).
         estimated_sun_.reset();
         if (!input.sun_direction)
@@ -921,7 +933,9 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
     if (cv::countNonZero(sun_mask_) > 0) {
         // Dimmed by the cloud the sky shows at the sun or, when more, by the clouds moved there.
         const double t = relative_sun_transmittance(next, input, at);
-        restore_pixels(&next, input, sun_mask_, std::min(t, opacity_sun_weight(*rollout_, at).value_or(1.0)));
+        if (!input_sun_share_) input_sun_share_ = shown_sun_share(input, at);
+        restore_pixels(&next, input, sun_mask_,
+                       std::min(t, opacity_sun_weight(*rollout_, at, *input_sun_share_).value_or(1.0)));
     }
     next.time_seconds = history.back()->time_seconds + dt;
     return scale_ == 1.0 ? next : scaled_sky(next, 1.0 / scale_);

@@ -245,7 +245,8 @@ class AdvectResidualStepModel : public MediumStepModel {
     double scale_ = 1.0;                 // model_scale of the input
     std::optional<Vec3> estimated_sun_;  // from the input's brightest pixels, when it has no sun
     cv::Mat sun_mask_;
-    cv::Mat background_;  // of background_sun_ (recomputed when the sun has moved by 0.2 degrees)
+    std::optional<double> input_sun_share_;  // how much of the clear sun the input shows (sun_weight_reference)
+    cv::Mat background_;                     // of background_sun_ (recomputed when the sun has moved by 0.2 degrees)
     Vec3 background_sun_ = Vec3::Zero();
     std::optional<Vec3> sun_;  // from the timeline, else the sky's own
     cv::Mat last_opacity_, input_opacity_;

@@ -35,7 +35,7 @@ namespace fs = std::filesystem;
 
 // True when the folder (or its images/ sub-folder) holds an EXR: skies already imported.
 bool folder_holds_skies(const std::string& folder) {
-    for (const fs::path dir : {fs::path(folder) / "images", fs::path(folder)}) {
+    for (const fs::path& dir : {fs::path(folder) / "images", fs::path(folder)}) {
         std::error_code ec;
         if (!fs::is_directory(dir, ec)) continue;
         for (const auto& e : fs::directory_iterator(dir, ec)) {

@@ -82,12 +82,8 @@ std::optional<double> SkyTimeline::model_sun_weight(int i, double s, const Vec3d
     auto opacity = [&](int k) { return size_t(k) < model_opacity_.size() ? model_opacity_[size_t(k)] : cv::Mat(); };
     const cv::Mat o0 = opacity(0), a = opacity(i), b = s > 0 ? opacity(i + 1) : a;
     if (o0.empty() || a.empty() || b.empty()) return std::nullopt;
-    // Relative to the input's cover at the sun, but never to more cover than its sun showed: the
-    // opacity within 3 degrees of a sun the input shows whole (share of the clear sun ~1) often
-    // holds a cloud beside it, and relative to that a cloud moved over it later dimmed it only
-    // once thicker still (on 20 procedural skies, mean error 7.2 % so, 6.9 % with this).
-    const double before = relative ? std::max({sun_transmittance_of_opacity(o0, sun), std::min(1.0, input_sun_share()),
-                                               0.05})
+    // Relative to the input's cover at the sun, never more than its sun showed (sun_weight_reference).
+    const double before = relative ? sun_weight_reference(sun_transmittance_of_opacity(o0, sun), input_sun_share())
                                    : 1.0;
     double t = sun_transmittance_of_opacity(a, sun);
     if (s > 0) {

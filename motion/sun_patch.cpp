@@ -304,6 +304,10 @@ double sun_transmittance_of_opacity(const cv::Mat& opacity, const Vec3d& sun_in,
     });
 }
 
+double sun_weight_reference(double start_transmittance, double input_sun_share) {
+    return std::max({start_transmittance, std::min(1.0, input_sun_share), 0.05});
+}
+
 double relative_sun_transmittance(const SkyImage& moved, const SkyImage& start, std::optional<Vec3d> sun) {
     if (!sun && start.sun_direction) sun = start.sun_direction->cast<double>();
     if (!sun) return 1.0;

@@ -13,6 +13,8 @@
 #include <vector>
 #include <sstream>
 
+#include "motion/advect_residual.h"
+#include "motion/flow.h"
 #include "motion/network_step_model.h"
 #include "motion/photo_sequence.h"
 #include "motion/sky_timeline.h"
@@ -219,6 +221,35 @@ TEST(SunTransmittance, CloudsCrossingTheSunOnSeveralSeeds) {
     // 127 %). Some seeds still miss by 50-190 % in a few frames (docs/animation.md).
     EXPECT_LT(sum / frames, 0.095);
     EXPECT_LT(median_worst, 1.0);
+}
+
+// `sky predict` (AdvectResidualNetwork::rollout: no timeline, the sun cut where the sky clips) dims
+// the sun by the same rule as the timeline (sun_weight_reference), on the same seeds at the steps.
+TEST(SunTransmittance, PredictedStepsDimTheSunAsTheTimelineDoes) {
+    const double duration = 120, dt = 10;
+    const std::vector<ProceduralSkyParams> seeds = clouds_crossing_the_sun(test::run_size(8, 4), duration, dt);
+    const int n = 128;
+    AdvectResidualNetwork advect = AdvectResidualNetwork::pure_advection();
+    double sum = 0;
+    int frames = 0;
+    for (const ProceduralSkyParams& p : seeds) {
+        ProceduralSky truth(p);
+        const Wind wind{p.layers[0].wind_from_deg, p.layers[0].wind_speed_mps, p.layers[0].altitude_m};
+        double s = 0;
+        int f = 0;
+        advect.rollout(truth.render(0, n), CloudFlow::from_wind(wind_flow(n, wind, dt)), int(duration / dt),
+                       [&](int k, const SkyImage& sky) {
+                           s += std::abs(horizontal_illuminance(sky) / horizontal_illuminance(truth.render(k * dt, n)) -
+                                         1);
+                           ++f;
+                       });
+        std::printf("seed %llu: mean error %.1f %%\n", (unsigned long long)p.seed, 100 * s / f);
+        sum += s, frames += f;
+    }
+    std::printf("mean step error %.1f %%\n", 100 * sum / frames);
+    // Measured 9.7 % (4 seeds: 6.8 %); 11.1 % (4 seeds: 8.1 %) with the sun's weight relative to the
+    // start's cover at the sun alone, as `sky predict` had it. The timeline, every 5 s: 8.6 %.
+    EXPECT_LT(sum / frames, test::run_size(0.105, 0.075));
 }
 
 // The cumulus above on seed 1, whose sun starts covered and comes out at 25 s: the input's sun is
