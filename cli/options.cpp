@@ -67,24 +67,26 @@ void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {
            "a canonical fisheye EXR (from 'dynsky sky clear|import|procedural|predict'; photographs: import first), or a\n"
            "folder of them (a captured sequence: the last is the input, the one before it gives the motion)")
         ->capture_default_str();
-    cmd->add_option("--model", m->model,
-                    "Medium-step model xi: 'auto' (the shipped advect-residual network, networks/models/advect_residual:\n"
-                    "clouds advected along the motion, a small network corrects; pure advection when not installed),\n"
-                    "'advect' (pure advection along the motion), 'paper' (the paper's FlowNet + CloudNet,\n"
-                    "networks/models/arm_tsi), 'procedural' (the procedural sky's own next frame; procedural input only),\n"
-                    "'flow' (extrapolate the Farneback flow of the last two steps; a uniform drift first), or\n"
-                    "'network:FOLDER'. The motion: --prev when given, else the wind (--wind-from, --wind-speed,\n"
-                    "--cloud-height)")
+    cmd->add_option(
+           "--model", m->model,
+           "Medium-step model xi: 'auto' (the shipped advect-residual network, networks/models/advect_residual:\n"
+           "clouds advected along the motion, a small network corrects; pure advection when not installed),\n"
+           "'advect' (pure advection along the motion), 'paper' (the paper's FlowNet + CloudNet,\n"
+           "networks/models/arm_tsi), 'procedural' (the procedural sky's own next frame; procedural input only),\n"
+           "'flow' (extrapolate the Farneback flow of the last two steps; a uniform drift first), or\n"
+           "'network:FOLDER'. The motion: --prev when given, else the wind (--wind-from, --wind-speed,\n"
+           "--cloud-height)")
         ->capture_default_str();
     cmd->add_option(
            "--dt", m->dt,
            "Delta t: seconds between medium steps (0: a network model's own Delta t from its model.json, else the paper's 10 s)")
         ->check(finite_in(0, 86400))
         ->capture_default_str();
-    cmd->add_option("--gamma", m->gamma,
-                    "The in-between of two medium steps: 'constant' (both steps advected along the motion to the\n"
-                    "frame's moment and cross-faded by time: an even pace) or 'paper' (the paper's keys at 1/3 and 2/3:\n"
-                    "all change in the middle third of each interval)")
+    cmd->add_option(
+           "--gamma", m->gamma,
+           "The in-between of two medium steps: 'constant' (both steps advected along the motion to the\n"
+           "frame's moment and cross-faded by time: an even pace) or 'paper' (the paper's keys at 1/3 and 2/3:\n"
+           "all change in the middle third of each interval)")
         ->check(CLI::IsMember({"constant", "paper"}))
         ->capture_default_str();
     add_generated_sky_options(cmd, o);
@@ -105,9 +107,13 @@ void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {
            "matters for the motion seen from the ground)")
         ->check(finite_above(0, 1e5))
         ->capture_default_str();
-    cmd->add_option("--prev", o->previous,
-                    "A previous frame of the input sky (canonical fisheye EXR): the clouds' motion is measured from it");
-    cmd->add_option("--prev-dt", o->previous_dt, "Seconds between --prev and the input sky (0: one medium step)")
+    cmd->add_option(
+        "--prev", o->previous,
+        "A previous frame of the input sky (canonical fisheye EXR): the clouds' motion is measured from it");
+    cmd->add_option(
+           "--prev-dt", o->previous_dt,
+           "Seconds between --prev and the input sky (default 0: the frames' dynsky:time difference, else the photograph times "
+           "their imports recorded, else one medium step)")
         ->check(finite_in(0, 86400))
         ->capture_default_str();
     cmd->add_option("--drift", m->drift_deg_per_s,

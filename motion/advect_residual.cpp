@@ -843,13 +843,23 @@ double previous_frame_gap(const SkyImage& sky, const SkyImage& previous, double 
                           const std::string& previous_name) {
     if (!(given >= 0) || !std::isfinite(given)) throw Error("--prev-dt: must be a positive number of seconds");
     if (given > 0) return given;
-    if (sky.time_seconds == 0 || previous.time_seconds == 0) return 0;  // a clock is missing
-    const double gap = sky.time_seconds - previous.time_seconds;
+    // The sequence's clock (dynsky:time), else the UTC times the frames record (two imported
+    // photographs: both dynsky:time 0); a 60 s pair taken as one 30 s step moved the clouds twice
+    // as fast.
+    double gap = 0;
+    const char* clock = "clock (dynsky:time)";
+    if (sky.time_seconds != 0 && previous.time_seconds != 0) {
+        gap = sky.time_seconds - previous.time_seconds;
+    } else {
+        const auto a = sky_recorded_utc_seconds(previous), b = sky_recorded_utc_seconds(sky);
+        if (!a || !b) return 0;  // a clock is missing
+        gap = *b - *a, clock = "recorded time";
+    }
     if (gap <= 0 || gap > 3600) {
         char text[160];
         std::snprintf(text, sizeof text, "%.0f s after", -gap);
         if (gap > 0) std::snprintf(text, sizeof text, "%.0f s (over an hour) before", gap);
-        throw Error(previous_name + ": the previous frame's clock (dynsky:time) puts it " + text + " " + sky_name +
+        throw Error(previous_name + ": the previous frame's " + clock + " puts it " + text + " " + sky_name +
                     ": not a previous frame of the same sky (give --prev-dt to override)");
     }
     return gap;

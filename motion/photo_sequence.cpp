@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 #include "sky/photo_import.h"
 #include "sky/sky_image.h"
@@ -63,17 +64,12 @@ PhotoSequence named_photo_sequence(const std::string& name, const std::string& s
 
 namespace {
 
-// The UTC time an imported sky was photographed at: its file name's, else the "time=...Z" that
-// `dynsky sky import` writes into its source attribute (its dynsky:time is the sequence's own
-// clock, 0 for a single import). Empty when neither says.
-std::string imported_sky_time(const std::string& path) {
-    std::string time = time_from_file_name(path, 0);
-    if (!time.empty()) return time;
-    const std::string source = load_sky(path).source;
-    const size_t at = source.find("time=");
-    if (at == std::string::npos) return "";
-    const size_t end = source.find_first_of(" )", at);
-    return source.substr(at + 5, end == std::string::npos ? std::string::npos : end - at - 5);
+// The UTC time an imported sky was photographed at (Julian date x 86400): its file name's, else the
+// one its import recorded (sky_recorded_utc_seconds). nullopt when neither says.
+std::optional<double> imported_sky_time(const std::string& path) {
+    const std::string time = time_from_file_name(path, 0);
+    if (!time.empty()) return julian_date(parse_utc_time(time)) * 86400.0;
+    return sky_recorded_utc_seconds(load_sky(path));
 }
 
 }  // namespace
@@ -89,15 +85,19 @@ PhotoSequence photo_sequence_from_folder(const std::string& folder, const std::s
         std::string ext = e.path().extension().string();
         for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
         if (skies ? ext != ".exr" : ext != ".jpg" && ext != ".jpeg" && ext != ".png") continue;
-        const std::string time = skies ? imported_sky_time(e.path().string())
-                                       : time_from_file_name(e.path().string(), utc_offset);
-        if (time.empty())
+        std::optional<double> seconds;
+        if (skies) {
+            seconds = imported_sky_time(e.path().string());
+        } else if (const std::string time = time_from_file_name(e.path().string(), utc_offset); !time.empty()) {
+            seconds = julian_date(parse_utc_time(time)) * 86400.0;
+        }
+        if (!seconds)
             throw_file_error(e.path().string(),
                              skies ? "carries no time (none in its name, as ..._YYYYMMDDhhmmssZ.exr, nor the "
                                      "photograph's time that 'dynsky sky import' records)"
                                    : "the file name carries no time (expected ..._YYYYMMDDhhmmssZ.jpg or "
                                      "YYYY-MM-DD_hh_mm.jpg)");
-        timed.emplace_back(julian_date(parse_utc_time(time)) * 86400.0, e.path().string());
+        timed.emplace_back(*seconds, e.path().string());
     }
     if (timed.empty())
         throw_file_error(dir.string(), skies ? "no imported skies (.exr) in this folder"

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "sky/fisheye.h"
+#include "sky/sun_position.h"
 #include "util/error.h"
 
 namespace dynsky {
@@ -124,6 +125,19 @@ double horizontal_illuminance(const SkyImage& sky) {
                 e += luminance(sky.pixel(i, j)) * fisheye::direction_from_pixel(i, j, sky.resolution).y() *
                      fisheye::pixel_solid_angle(i, j, sky.resolution);
     return 683.0 * e;
+}
+
+std::optional<double> sky_recorded_utc_seconds(const SkyImage& sky) {
+    const size_t at = sky.source.rfind("time=");
+    if (at == std::string::npos || (at > 0 && sky.source[at - 1] != ' ' && sky.source[at - 1] != '('))
+        return std::nullopt;
+    const size_t end = sky.source.find_first_of(" )", at);
+    const std::string text = sky.source.substr(at + 5, end == std::string::npos ? std::string::npos : end - at - 5);
+    try {
+        return julian_date(parse_utc_time(text)) * 86400.0;
+    } catch (const Error&) {
+        return std::nullopt;
+    }
 }
 
 }  // namespace dynsky

@@ -49,6 +49,12 @@ SkyImage load_sky(const std::string& path);
 // non-empty, also writes a tone-mapped PNG there.
 void save_sky(const std::string& path, const SkyImage& sky, const std::string& preview_png = "");
 
+// The UTC time a sky shows, in seconds on one absolute scale (Julian date x 86400), as its source
+// records it ("... time=2017-05-24T17:29:30Z ...": `dynsky sky import` and `sky clear` write it);
+// nullopt when the source names no time or an unreadable one. Its dynsky:time is the sequence's own
+// clock instead (0 for a single import), so two imported photographs are told apart by this.
+std::optional<double> sky_recorded_utc_seconds(const SkyImage& sky);
+
 // A sky's own metadata in an image header: dynsky:time, dynsky:sun_x/y/z (when known) and
 // dynsky:source (when set). Every sky file writer uses it; load_sky reads it back.
 void write_sky_metadata(const SkyImage& sky, ImageMetadata* m);

@@ -340,6 +340,17 @@ TEST(AdvectResidual, APreviousFrameMustComeShortlyBeforeTheSky) {
     previous.time_seconds = 0;  // no clock: one medium step
     EXPECT_DOUBLE_EQ(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), 0.0);
     EXPECT_THROW(previous_frame_gap(sky, previous, -5, "b.exr", "a.exr"), Error);
+    // Two imported photographs (dynsky:time 0 on both): the times their import recorded, in any zone.
+    // Taken as one 30 s step, a 60 s Mobotix pair moved the clouds twice as fast.
+    sky.time_seconds = 0;
+    previous.source = "photo:/x/2020-08-12_09_19.jpg (hdr: mean-luminance fallback) time=2020-08-12T09:19:00+02:00";
+    sky.source = "photo:/x/2020-08-12_09_20.jpg (hdr: clear-sky pixels) time=2020-08-12T07:20:00Z";
+    EXPECT_NEAR(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), 60.0, 1e-3);
+    EXPECT_THROW(previous_frame_gap(previous, sky, 0, "a.exr", "b.exr"), Error);  // the other way round
+    sky.source = "photo:/x/2020-08-12_09_20.jpg (hdr: clear-sky pixels)";         // no time recorded
+    EXPECT_DOUBLE_EQ(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), 0.0);
+    sky.source = "photo:/x/y.jpg time=not-a-time";
+    EXPECT_DOUBLE_EQ(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), 0.0);
 }
 
 TEST(AdvectResidual, BadModelFoldersFailClearly) {
