@@ -843,16 +843,17 @@ double previous_frame_gap(const SkyImage& sky, const SkyImage& previous, double 
                           const std::string& previous_name) {
     if (!(given >= 0) || !std::isfinite(given)) throw Error("--prev-dt: must be a positive number of seconds");
     if (given > 0) return given;
-    // The sequence's clock (dynsky:time), else the UTC times the frames record (two imported
-    // photographs: both dynsky:time 0); a 60 s pair taken as one 30 s step moved the clouds twice
-    // as fast.
+    // The sequence's clock (dynsky:time), else, when neither has one (two imported photographs: both
+    // 0), the UTC times they record: a 60 s pair taken as one 30 s step moved the clouds twice as
+    // fast. Only one clock (an input and a step predicted from it, which records the input's time):
+    // one step.
     double gap = 0;
     const char* clock = "clock (dynsky:time)";
     if (sky.time_seconds != 0 && previous.time_seconds != 0) {
         gap = sky.time_seconds - previous.time_seconds;
     } else {
         const auto a = sky_recorded_utc_seconds(previous), b = sky_recorded_utc_seconds(sky);
-        if (!a || !b) return 0;  // a clock is missing
+        if (sky.time_seconds != 0 || previous.time_seconds != 0 || !a || !b) return 0;  // a clock is missing
         gap = *b - *a, clock = "recorded time";
     }
     if (gap <= 0 || gap > 3600) {

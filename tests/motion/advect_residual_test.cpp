@@ -347,7 +347,10 @@ TEST(AdvectResidual, APreviousFrameMustComeShortlyBeforeTheSky) {
     sky.source = "photo:/x/2020-08-12_09_20.jpg (hdr: clear-sky pixels) time=2020-08-12T07:20:00Z";
     EXPECT_NEAR(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), 60.0, 1e-3);
     EXPECT_THROW(previous_frame_gap(previous, sky, 0, "a.exr", "b.exr"), Error);  // the other way round
-    sky.source = "photo:/x/2020-08-12_09_20.jpg (hdr: clear-sky pixels)";         // no time recorded
+    previous.time_seconds = 30;  // one clock only (a step records the time of the sky it came from): one step
+    EXPECT_DOUBLE_EQ(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), 0.0);
+    previous.time_seconds = 0;
+    sky.source = "photo:/x/2020-08-12_09_20.jpg (hdr: clear-sky pixels)";  // no time recorded
     EXPECT_DOUBLE_EQ(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), 0.0);
     sky.source = "photo:/x/y.jpg time=not-a-time";
     EXPECT_DOUBLE_EQ(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), 0.0);
