@@ -110,12 +110,7 @@ void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {
     cmd->add_option(
         "--prev", o->previous,
         "A previous frame of the input sky (canonical fisheye EXR): the clouds' motion is measured from it");
-    cmd->add_option(
-           "--prev-dt", o->previous_dt,
-           "Seconds between --prev and the input sky (default 0: the frames' dynsky:time difference, else the photograph times "
-           "their imports recorded, else one medium step)")
-        ->check(finite_in(0, 86400))
-        ->capture_default_str();
+    cmd->add_option("--prev-dt", o->previous_dt, kPrevDtHelp)->check(finite_in(0, 86400))->capture_default_str();
     cmd->add_option("--drift", m->drift_deg_per_s,
                     "Flow model: first-step drift of a single input sky, degrees per second")
         ->check(finite_in(-360, 360))

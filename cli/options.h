@@ -25,6 +25,10 @@ CLI::Validator non_negative_whole();
 constexpr int kMaxThreads = 4096;
 constexpr int kMaxSpp = 1 << 20;
 constexpr int kMaxDepth = 1024;
+// --prev-dt's help, the same wherever --prev is taken (`sky predict`, `animate`, `compare`).
+inline constexpr const char* kPrevDtHelp =
+    "Seconds between --prev and the input sky (default 0: the frames' dynsky:time difference, else the photograph "
+    "times their imports recorded, else one medium step)";
 
 // An old spelling of an option, kept working but left out of --help (glossary: one name per thing).
 template <typename T>

@@ -36,10 +36,7 @@ void register_sky_model_commands(CLI::App& sky) {
                                       "Height of the cloud layer the wind moves, metres (default 1500: cumulus)");
         cmd->add_option("--prev", o->previous,
                         "A previous frame of the same sky (EXR): the motion is measured from it (previous -> --sky)");
-        cmd->add_option(
-            "--prev-dt", o->previous_dt,
-            "Seconds between --prev and the input sky (default 0: the frames' dynsky:time difference, else the photograph times "
-            "their imports recorded, else one medium step)");
+        cmd->add_option("--prev-dt", o->previous_dt, kPrevDtHelp);
         cmd->parse_complete_callback([o, wind, from, speed, height] {
             if (from->count() || speed->count() || height->count()) o->wind = *wind;
         });

@@ -33,21 +33,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// True when the folder (or its images/ sub-folder) holds an EXR: skies already imported.
-bool folder_holds_skies(const std::string& folder) {
-    for (const fs::path& dir : {fs::path(folder) / "images", fs::path(folder)}) {
-        std::error_code ec;
-        if (!fs::is_directory(dir, ec)) continue;
-        for (const auto& e : fs::directory_iterator(dir, ec)) {
-            std::string ext = e.path().extension().string();
-            for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-            if (ext == ".exr") return true;
-        }
-        return false;
-    }
-    return false;
-}
-
 struct Accumulator {
     double mse = 0, psnr = 0, ssim = 0;
     int count = 0;

@@ -11,6 +11,7 @@
 #include "util/data_path.h"
 #include "util/math.h"
 #include "util/error.h"
+#include "util/image.h"
 
 namespace dynsky {
 
@@ -72,18 +73,29 @@ std::optional<double> imported_sky_time(const std::string& path) {
     return sky_recorded_utc_seconds(load_sky(path));
 }
 
+// Where a sequence folder keeps its frames: its images/ sub-folder when it has one.
+fs::path frames_folder(const std::string& folder) {
+    return fs::is_directory(fs::path(folder) / "images") ? fs::path(folder) / "images" : fs::path(folder);
+}
+
 }  // namespace
+
+bool folder_holds_skies(const std::string& folder) {
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(frames_folder(folder), ec))
+        if (file_extension(e.path().string()) == ".exr") return true;
+    return false;
+}
 
 PhotoSequence photo_sequence_from_folder(const std::string& folder, const std::string& preset) {
     if (!fs::is_directory(folder)) throw_file_error(folder, "not a folder of photographs");
     const bool skies = preset.empty();  // a folder of imported skies (EXR)
     const double utc_offset = skies ? 0.0 : camera_preset(preset).filename_utc_offset_hours;  // throws listing them
-    fs::path dir = fs::is_directory(fs::path(folder) / "images") ? fs::path(folder) / "images" : fs::path(folder);
+    const fs::path dir = frames_folder(folder);
     std::vector<std::pair<double, std::string>> timed;
     for (const auto& e : fs::directory_iterator(dir)) {
         if (!e.is_regular_file()) continue;
-        std::string ext = e.path().extension().string();
-        for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+        const std::string ext = file_extension(e.path().string());
         if (skies ? ext != ".exr" : ext != ".jpg" && ext != ".jpeg" && ext != ".png") continue;
         std::optional<double> seconds;
         if (skies) {

@@ -28,6 +28,10 @@ PhotoSequence named_photo_sequence(const std::string& name, const std::string& s
 // all the cadence (mixed cadence or missing frames: the first offending pair is named).
 PhotoSequence photo_sequence_from_folder(const std::string& folder, const std::string& preset);
 
+// True when the folder of a sequence (its images/ sub-folder when it has one, as above) holds an
+// EXR: skies already imported, which need no preset.
+bool folder_holds_skies(const std::string& folder);
+
 // The shared data folder beside the source tree (the tests' ../shared).
 std::string default_shared_dir();
 
