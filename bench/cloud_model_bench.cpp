@@ -84,7 +84,8 @@ BENCHMARK(BM_SkyStep512)->Unit(benchmark::kMillisecond)->UseRealTime();
 AdvectResidualNetwork& advect_model() {
     static AdvectResidualNetwork m = [] {
         const char* env = std::getenv("DYNSKY_ADVECT_MODEL");
-        return AdvectResidualNetwork::load(env && *env ? std::string(env) : data_path("networks/models/advect_residual"));
+        return AdvectResidualNetwork::load(env && *env ? std::string(env)
+                                                       : data_path("networks/models/advect_residual"));
     }();
     return m;
 }
@@ -124,7 +125,8 @@ void BM_MotionFromPreviousFrame1024(benchmark::State& state) {
     p.clear_sky.sun_direction = fisheye::direction_from_angles(0.7, 2.5);
     ProceduralSky sky(p);
     SkyImage a = sky.render(0.0, 1024), b = sky.render(30.0, 1024);
-    for (auto _ : state) benchmark::DoNotOptimize(network_form_flow(a, b, advect_model().info().form, 1024).data);
+    for (auto _ : state)
+        benchmark::DoNotOptimize(network_form_flow(a, b, advect_model().info().form, 1024).confirmed.data);
 }
 BENCHMARK(BM_MotionFromPreviousFrame1024)->Unit(benchmark::kMillisecond)->UseRealTime();
 

@@ -156,12 +156,6 @@ cv::Mat background_at(const Vec3& sun, int n, const NetworkFormParams& form) {
     return up;
 }
 
-cv::Mat resize_flow(const cv::Mat& flow, int n) {
-    if (flow.rows == n) return flow;
-    cv::Mat out;
-    cv::resize(flow, out, cv::Size(n, n), 0, 0, n < flow.rows ? cv::INTER_AREA : cv::INTER_LINEAR);
-    return out * (double(n) / flow.rows);
-}
 
 }  // namespace
 
@@ -171,14 +165,15 @@ cv::Mat CloudFlow::at(int k) const {
     return wind + (measured - wind) * a;
 }
 
-CloudFlow CloudFlow::from_measured(const cv::Mat& measured, double dt) {
-    const int n = measured.rows;
+CloudFlow CloudFlow::from_measured(const MeasuredMotion& motion, double dt) {
+    const int n = motion.smoothed.rows;
     CloudFlow f;
-    f.measured = measured;
+    f.measured = motion.confirmed.empty() ? motion.smoothed : motion.confirmed;
+    if (!motion.confirmed.empty()) f.detail = motion.confirmed - motion.smoothed;
     // The wind that explains it, fitted inside 80 % of the radius (the rim is foreshortened).
     cv::Mat inner = cv::Mat::zeros(n, n, CV_8UC1);
     cv::circle(inner, cv::Point(n / 2, n / 2), int(0.4 * n), cv::Scalar(255), cv::FILLED);
-    f.wind = wind_flow(n, fit_wind(measured, inner, dt), dt);
+    f.wind = wind_flow(n, fit_wind(motion.smoothed, inner, dt), dt);
     f.relax_steps = 6.0;
     f.recycle = true;
     return f;
@@ -186,8 +181,9 @@ CloudFlow CloudFlow::from_measured(const cv::Mat& measured, double dt) {
 
 CloudFlow CloudFlow::resized(int n) const {
     CloudFlow f = *this;
-    f.measured = resize_flow(measured, n);
-    if (!wind.empty()) f.wind = resize_flow(wind, n);
+    f.measured = flow_at_resolution(measured, n);
+    if (!wind.empty()) f.wind = flow_at_resolution(wind, n);
+    if (!detail.empty()) f.detail = flow_at_resolution(detail, n);
     return f;
 }
 
@@ -472,7 +468,10 @@ CloudRollout::CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start,
     if (flow.recycle) {
         const bool relaxing = !flow.wind.empty() && flow.relax_steps > 0;
         const cv::Mat& wind = relaxing ? flow.wind : flow.measured;
-        if (relaxing) departure_ = flow.measured - flow.wind;
+        if (relaxing) {
+            departure_ = flow.measured - flow.wind;
+            if (!flow.detail.empty()) departure_ -= flow.detail, detail_ = flow.detail;
+        }
         paths_ = std::make_unique<CloudLayerPaths>(big, layer_step_of_flow(wind));
     }
     set_background(background, sun);
@@ -604,6 +603,9 @@ const cv::Mat& CloudRollout::advance() {
             const double fade = k <= kDepartureHoldSteps ? 1.0
                                                          : std::exp(-(k - kDepartureHoldSteps) / kDepartureHoldSteps);
             offset = departure_ * (departure_sum_ * fade);
+            // The confirmed detail moves them once, on the first step, and rides along (as much
+            // as the departure keeps): iterated, a sharp flow folds the clouds into swirls.
+            if (!detail_.empty()) offset += detail_ * fade;
         }
         CloudLayerPaths::Reads reads = paths_->at(k);
         moved = cv::Mat(big, big, CV_32FC3, cv::Scalar::all(0));
@@ -817,24 +819,25 @@ void AdvectResidualNetwork::rollout(const SkyImage& given, const CloudFlow& flow
     }
 }
 
-cv::Mat network_form_flow(const SkyImage& previous, const SkyImage& current, const NetworkFormParams& form, int n) {
+MeasuredMotion network_form_flow(const SkyImage& previous, const SkyImage& current, const NetworkFormParams& form,
+                                 int n) {
     if (previous.resolution != current.resolution)
         throw Error("previous frame: its resolution (" + std::to_string(previous.resolution) +
                     ") differs from the sky's (" + std::to_string(current.resolution) + ")");
     const int w = std::min(256, current.resolution);
     cv::Mat a = to_network_form(previous, form, w), b = to_network_form(current, form, w);
     const cv::Mat clipped = fill_saturated_pixels(&a) | fill_saturated_pixels(&b);
-    return resize_flow(smooth_motion(farneback_flow(a, b), sky_disc_mask(w) & ~clipped), n);
+    return measured_motion(a, b, sky_disc_mask(w) & ~clipped).at_resolution(n);
 }
 
 CloudFlow AdvectResidualNetwork::motion_flow(const SkyImage& sky, const CloudMotion& motion, double dt, int n) const {
     if (motion.previous) {
         double gap = motion.previous_dt > 0 ? motion.previous_dt : dt;
         const double scale = model_scale(sky);  // both frames alike
-        return CloudFlow::from_measured(network_form_flow(scaled_sky(*motion.previous, scale), scaled_sky(sky, scale),
-                                                          info_.form, n) *
-                                            (dt / gap),
-                                        dt);
+        MeasuredMotion m = network_form_flow(scaled_sky(*motion.previous, scale), scaled_sky(sky, scale), info_.form,
+                                             n);
+        m.smoothed *= dt / gap, m.confirmed *= dt / gap;
+        return CloudFlow::from_measured(m, dt);
     }
     return CloudFlow::from_wind(wind_flow(n, motion.wind ? *motion.wind : Wind{}, dt));
 }

@@ -80,12 +80,16 @@ struct CloudFlow {
     // (motion/cloud_layer_paths.h), so rollouts of any length keep moving; false: the flow's own
     // paths, with sky from beyond the horizon shown as the start showed it.
     bool recycle = false;
+    // With a measured flow: its confirmed detail (MeasuredMotion confirmed - smoothed, part of
+    // `measured`): it moves the clouds on the first step only, then rides along with them.
+    cv::Mat detail;
     cv::Mat at(int k) const;  // the flow of step k = 1, 2, ...
     CloudFlow resized(int n) const;
-    static CloudFlow from_wind(const cv::Mat& flow) { return CloudFlow{flow, cv::Mat(), 0.0, true, true}; }
-    static CloudFlow constant(const cv::Mat& flow) { return CloudFlow{flow, cv::Mat(), 0.0, false, false}; }
-    // A measured flow (per step of dt), relaxing to its fitted wind (inside 80 % of the radius).
-    static CloudFlow from_measured(const cv::Mat& measured, double dt);
+    static CloudFlow from_wind(const cv::Mat& flow) { return CloudFlow{flow, cv::Mat(), 0.0, true, true, cv::Mat()}; }
+    static CloudFlow constant(const cv::Mat& flow) { return CloudFlow{flow, cv::Mat(), 0.0, false, false, cv::Mat()}; }
+    // A measured motion (per step of dt), relaxing to the wind fitted to its smoothed field (inside
+    // 80 % of the radius); the first step's flow is the confirmed one.
+    static CloudFlow from_measured(const MeasuredMotion& motion, double dt);
 };
 
 struct AdvectResidualInfo {
@@ -197,7 +201,8 @@ class CloudRollout {
     cv::Mat background_, background_ext_, background_n_, disc_big_, disc_n_;
     std::unique_ptr<CloudLayerPaths> paths_;  // with a wind
     bool seam_chosen_ = false;
-    cv::Mat departure_;                  // measured - wind flow (pixels per step), relaxing
+    cv::Mat departure_;                  // smoothed measured - wind flow (pixels per step), relaxing
+    cv::Mat detail_;                     // the flow's confirmed detail: one step's displacement
     double departure_sum_ = 0;           // sum of its relaxation weights so far
     cv::Mat cloud_field_;                // cloud_brightness_field (cloud_signal_field without opacities)
     cv::Mat background_field_;           // scales the model's clear sky to the start's
@@ -214,10 +219,12 @@ class CloudRollout {
     int steps_ = 0;
 };
 
-// The motion measured from a previous frame: Farneback flow previous -> current on the network form
-// at min(256, N_sky) px (as the training flows were measured), smoothed (motion/flow.h
-// smooth_motion), returned at resolution n in pixels at n (per the gap between the frames).
-cv::Mat network_form_flow(const SkyImage& previous, const SkyImage& current, const NetworkFormParams& form, int n);
+// The motion measured from a previous frame: Farneback flow previous -> current (and back) on the
+// network form at min(256, N_sky) px (as the training flows were measured), smoothed and confirmed
+// (motion/flow.h measured_motion), returned at resolution n in pixels at n (per the gap between the
+// frames).
+MeasuredMotion network_form_flow(const SkyImage& previous, const SkyImage& current, const NetworkFormParams& form,
+                                 int n);
 
 // The step model: "network:FOLDER" for a folder of kind advect-residual, or "advect".
 class AdvectResidualStepModel : public MediumStepModel {

@@ -168,13 +168,16 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
     };
     // The models' estimate of the same (k -> k + 1): smoothed over the pixels both frames saw
     // unclipped, computed once.
-    std::map<int, cv::Mat> pair_motion;
-    auto motion_from = [&](int k) -> const cv::Mat& {
+    std::map<int, MeasuredMotion> pair_motion;
+    auto motion_from = [&](int k) -> const MeasuredMotion& {
         auto it = pair_motion.find(k);
         if (it == pair_motion.end()) {
             const cv::Mat trusted = frame(k).valid & frame(k + 1).valid & ~saturated_mask(frame(k).image) &
                                     ~saturated_mask(frame(k + 1).image);
-            it = pair_motion.emplace(k, smooth_motion(flow_from(k), trusted)).first;
+            it = pair_motion
+                     .emplace(k, consistent_motion(flow_from(k), farneback_flow(frame(k + 1).image, frame(k).image),
+                                                   trusted))
+                     .first;
         }
         return it->second;
     };
@@ -185,7 +188,7 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
             for (int k = t - 1; k <= t + hmax; ++k) f.push_back(resample_frame(frame(k), r));
             auto at = [&](int k) -> const NetworkFrame& { return f[size_t(k - (t - 1))]; };
             const cv::Mat prev_flow = flow_at_resolution(flow_from(t - 1), r);
-            const cv::Mat prev_motion = flow_at_resolution(motion_from(t - 1), r);
+            const MeasuredMotion prev_motion = motion_from(t - 1).at_resolution(r);
             const cv::Mat next_flow = flow_at_resolution(flow_from(t), r);
             cv::Mat start = at(t).image.clone();
             fill_saturated_pixels(&start);

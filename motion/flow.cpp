@@ -172,11 +172,45 @@ cv::Mat smooth_motion(const cv::Mat& flow, const cv::Mat& trusted) {
     return out;
 }
 
+MeasuredMotion consistent_motion(const cv::Mat& forward, const cv::Mat& backward, const cv::Mat& trusted) {
+    if (forward.type() != CV_32FC2 || backward.type() != CV_32FC2 || forward.size() != backward.size() ||
+        (!trusted.empty() && trusted.size() != forward.size()))
+        throw Error("consistent_motion: the two flows (and the trusted mask) must be CV_32FC2 of one size");
+    MeasuredMotion m;
+    m.smoothed = smooth_motion(forward, trusted);
+    m.confirmed = m.smoothed.clone();
+    // The backward flow where each pixel's content lands: forward + that = 0 for a consistent pair.
+    cv::Mat lands(forward.size(), CV_32FC2);
+    for (int j = 0; j < forward.rows; ++j)
+        for (int i = 0; i < forward.cols; ++i)
+            lands.at<cv::Vec2f>(j, i) = cv::Vec2f(float(i), float(j)) + forward.at<cv::Vec2f>(j, i);
+    cv::Mat back_at;
+    cv::remap(backward, back_at, lands, cv::Mat(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    const double tau = 0.5 * forward.rows / 256.0;
+    for (int j = 0; j < forward.rows; ++j)
+        for (int i = 0; i < forward.cols; ++i) {
+            if (!trusted.empty() && !trusted.at<unsigned char>(j, i)) continue;
+            const cv::Vec2f e = forward.at<cv::Vec2f>(j, i) + back_at.at<cv::Vec2f>(j, i);
+            const float a = float(std::exp(-double(e.dot(e)) / (tau * tau)));
+            cv::Vec2f& o = m.confirmed.at<cv::Vec2f>(j, i);
+            o = a * forward.at<cv::Vec2f>(j, i) + (1.0f - a) * o;
+        }
+    return m;
+}
+
+MeasuredMotion measured_motion(const cv::Mat& previous, const cv::Mat& current, const cv::Mat& trusted) {
+    return consistent_motion(farneback_flow(previous, current), farneback_flow(current, previous), trusted);
+}
+
+MeasuredMotion MeasuredMotion::at_resolution(int n) const {
+    return {flow_at_resolution(smoothed, n), flow_at_resolution(confirmed, n)};
+}
+
 cv::Mat flow_at_resolution(const cv::Mat& flow, int n) {
     if (flow.rows == n) return flow;
-    cv::Mat small;
-    cv::resize(flow, small, cv::Size(n, n), 0, 0, cv::INTER_AREA);
-    return small * (double(n) / flow.rows);
+    cv::Mat out;
+    cv::resize(flow, out, cv::Size(n, n), 0, 0, n < flow.rows ? cv::INTER_AREA : cv::INTER_LINEAR);
+    return out * (double(n) / flow.rows);
 }
 
 namespace {

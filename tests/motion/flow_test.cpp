@@ -113,5 +113,40 @@ TEST(SmoothMotion, AveragesOverTrustedPixelsOnly) {
         for (int i = 0; i < n; ++i) ASSERT_TRUE(std::isfinite(far.at<cv::Vec2f>(j, i)[0]));
 }
 
+// Two layers side by side, each moving as one: where the flow measured back confirms the forward
+// flow, consistent_motion's confirmed field keeps the sharp edge between them that smoothing blurs;
+// where it does not (a backward flow that disagrees), it is smooth_motion's field.
+TEST(ConsistentMotion, KeepsConfirmedFlowSharpAndSmoothsTheRest) {
+    const int n = 256;
+    const cv::Vec2f left(3.0f, 0.0f), right(-2.0f, 1.0f);
+    cv::Mat forward(n, n, CV_32FC2), backward(n, n, CV_32FC2);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            forward.at<cv::Vec2f>(j, i) = i < n / 2 ? left : right;
+            backward.at<cv::Vec2f>(j, i) = i < n / 2 ? -left : -right;
+        }
+    const MeasuredMotion m = consistent_motion(forward, backward);
+    const cv::Mat smoothed = smooth_motion(forward), &kept = m.confirmed;
+    EXPECT_LT(cv::norm(m.smoothed, smoothed, cv::NORM_INF), 1e-6);
+    double worst_smoothed = 0, worst_kept = 0;
+    for (int j = 0; j < n; ++j)
+        for (int i = n / 2 - 12; i < n / 2 + 12; ++i) {
+            if (std::abs(i - n / 2) < 4) continue;  // content that crosses the edge lands on the other layer
+            const cv::Vec2f truth = forward.at<cv::Vec2f>(j, i);
+            worst_smoothed = std::max(worst_smoothed, double(cv::norm(smoothed.at<cv::Vec2f>(j, i) - truth)));
+            worst_kept = std::max(worst_kept, double(cv::norm(kept.at<cv::Vec2f>(j, i) - truth)));
+        }
+    EXPECT_GT(worst_smoothed, 1.0);
+    EXPECT_LT(worst_kept, 1e-3);
+    // A backward flow that does not confirm it (here: no motion back): the smoothed field.
+    const cv::Mat unconfirmed = consistent_motion(forward, cv::Mat::zeros(n, n, CV_32FC2)).confirmed;
+    EXPECT_LT(cv::norm(unconfirmed, smoothed, cv::NORM_INF), 1e-4);
+    // Untrusted pixels take the smoothed field too.
+    const cv::Mat none = cv::Mat::zeros(n, n, CV_8UC1);
+    EXPECT_THROW(consistent_motion(forward, backward(cv::Rect(0, 0, 8, 8))), Error);
+    const cv::Mat masked = consistent_motion(forward, backward, none).confirmed;
+    EXPECT_LT(cv::norm(masked, smooth_motion(forward, none), cv::NORM_INF), 1e-4);
+}
+
 }  // namespace
 }  // namespace dynsky
