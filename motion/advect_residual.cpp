@@ -169,11 +169,24 @@ CloudFlow CloudFlow::from_measured(const MeasuredMotion& motion, double dt) {
     const int n = motion.smoothed.rows;
     CloudFlow f;
     f.measured = motion.confirmed.empty() ? motion.smoothed : motion.confirmed;
-    if (!motion.confirmed.empty()) f.detail = motion.confirmed - motion.smoothed;
     // The wind that explains it, fitted inside 80 % of the radius (the rim is foreshortened).
     cv::Mat inner = cv::Mat::zeros(n, n, CV_8UC1);
     cv::circle(inner, cv::Point(n / 2, n / 2), int(0.4 * n), cv::Scalar(255), cv::FILLED);
     f.wind = wind_flow(n, fit_wind(motion.smoothed, inner, dt), dt);
+    if (!motion.confirmed.empty()) {
+        // The departure from the wind that the clouds keep for several steps: the smoothed flow's,
+        // where the flow measured back agrees with it. Where it does not (flat cloud, Farneback's
+        // noise) the clouds take the wind from the second step on: held there, that noise turned
+        // big clouds into swirls (docs/networks-advect-residual.md). The rest of the confirmed
+        // flow is the first step's detail.
+        cv::Mat kept = motion.smoothed;
+        if (!motion.agreement.empty()) {
+            cv::Mat a2;
+            cv::merge(std::vector<cv::Mat>{motion.agreement, motion.agreement}, a2);
+            kept = f.wind + (motion.smoothed - f.wind).mul(a2);
+        }
+        f.detail = motion.confirmed - kept;
+    }
     f.relax_steps = 6.0;
     f.recycle = true;
     return f;

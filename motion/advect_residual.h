@@ -80,8 +80,10 @@ struct CloudFlow {
     // (motion/cloud_layer_paths.h), so rollouts of any length keep moving; false: the flow's own
     // paths, with sky from beyond the horizon shown as the start showed it.
     bool recycle = false;
-    // With a measured flow: its confirmed detail (MeasuredMotion confirmed - smoothed, part of
-    // `measured`): it moves the clouds on the first step only, then rides along with them.
+    // With a measured flow: what of `measured` (MeasuredMotion::confirmed) moves the clouds on
+    // the first step only, then rides along with them: confirmed - (wind + agreement x (smoothed -
+    // wind)). The rest, the smoothed flow's departure from the wind where the flow measured back
+    // agrees, is kept for several steps (CloudRollout).
     cv::Mat detail;
     cv::Mat at(int k) const;  // the flow of step k = 1, 2, ...
     CloudFlow resized(int n) const;

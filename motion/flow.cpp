@@ -187,14 +187,23 @@ MeasuredMotion consistent_motion(const cv::Mat& forward, const cv::Mat& backward
     cv::Mat back_at;
     cv::remap(backward, back_at, lands, cv::Mat(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
     const double tau = 0.5 * forward.rows / 256.0;
+    cv::Mat agree(forward.size(), CV_32FC1, cv::Scalar(0));
     for (int j = 0; j < forward.rows; ++j)
         for (int i = 0; i < forward.cols; ++i) {
             if (!trusted.empty() && !trusted.at<unsigned char>(j, i)) continue;
             const cv::Vec2f e = forward.at<cv::Vec2f>(j, i) + back_at.at<cv::Vec2f>(j, i);
             const float a = float(std::exp(-double(e.dot(e)) / (tau * tau)));
+            agree.at<float>(j, i) = a;
             cv::Vec2f& o = m.confirmed.at<cv::Vec2f>(j, i);
             o = a * forward.at<cv::Vec2f>(j, i) + (1.0f - a) * o;
         }
+    // The agreement around each pixel, over the trusted pixels and at the smoothing's scale.
+    const double sigma = forward.rows / 32.0;
+    cv::Mat w(forward.size(), CV_32FC1, cv::Scalar(1)), num, den;
+    if (!trusted.empty()) trusted.convertTo(w, CV_32F, 1.0 / 255.0);
+    cv::GaussianBlur(agree, num, cv::Size(0, 0), sigma, sigma, cv::BORDER_REPLICATE);
+    cv::GaussianBlur(w, den, cv::Size(0, 0), sigma, sigma, cv::BORDER_REPLICATE);
+    m.agreement = cv::min(num / cv::max(den, 1e-3f), 1.0f);
     return m;
 }
 
@@ -203,7 +212,11 @@ MeasuredMotion measured_motion(const cv::Mat& previous, const cv::Mat& current, 
 }
 
 MeasuredMotion MeasuredMotion::at_resolution(int n) const {
-    return {flow_at_resolution(smoothed, n), flow_at_resolution(confirmed, n)};
+    MeasuredMotion m{flow_at_resolution(smoothed, n), flow_at_resolution(confirmed, n), agreement};
+    if (!agreement.empty() && agreement.rows != n)
+        cv::resize(agreement, m.agreement, cv::Size(n, n), 0, 0,
+                   n < agreement.rows ? cv::INTER_AREA : cv::INTER_LINEAR);
+    return m;
 }
 
 cv::Mat flow_at_resolution(const cv::Mat& flow, int n) {

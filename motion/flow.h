@@ -102,8 +102,9 @@ cv::Mat smooth_motion(const cv::Mat& flow, const cv::Mat& trusted = cv::Mat());
 // flat skies (where smoothing is). Validation frames, model+prev one step ahead against iterated
 // Farneback: arm-tsi +1.12 -> +1.44 dB, the dusk and Mobotix within +-0.02 (docs/networks-advect-residual.md).
 struct MeasuredMotion {
-    cv::Mat smoothed, confirmed;                // N x N CV_32FC2, pixels per step
-    MeasuredMotion at_resolution(int n) const;  // both, as flow_at_resolution
+    cv::Mat smoothed, confirmed;  // N x N CV_32FC2, pixels per step
+    cv::Mat agreement;  // CV_32FC1 in [0, 1]: that weight averaged over the trusted pixels around (sigma N / 32)
+    MeasuredMotion at_resolution(int n) const;  // all, as flow_at_resolution
 };
 // `forward` and `backward` N x N CV_32FC2; `trusted` as for smooth_motion (untrusted pixels take
 // the smoothed field).

@@ -356,6 +356,44 @@ TEST(AdvectResidual, APreviousFrameMustComeShortlyBeforeTheSky) {
     EXPECT_DOUBLE_EQ(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), 0.0);
 }
 
+// A measured motion moves the clouds by its confirmed flow on the first step; after that only
+// the departure from the fitted wind that the flow measured back agreed with is kept: where it did
+// not agree, the clouds take the wind (Farneback's noise held for steps swirls big clouds).
+TEST(AdvectResidual, AMeasuredFlowKeepsOnlyItsAgreedDepartureAfterTheFirstStep) {
+    const int n = 64;
+    const double c = (n - 1) / 2.0;
+    MeasuredMotion m;
+    m.smoothed = cv::Mat(n, n, CV_32FC2), m.confirmed = cv::Mat(n, n, CV_32FC2);
+    m.agreement = cv::Mat(n, n, CV_32FC1);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            // A uniform wind plus a swirl, and a sharper detail on top of it.
+            const cv::Vec2f swirl(float(-(j - c) / c), float((i - c) / c));
+            m.smoothed.at<cv::Vec2f>(j, i) = cv::Vec2f(2.0f, 0.5f) + 0.6f * swirl;
+            m.confirmed.at<cv::Vec2f>(j, i) = m.smoothed.at<cv::Vec2f>(j, i) + cv::Vec2f(i % 4 == 0 ? 0.5f : 0.0f, 0);
+            m.agreement.at<float>(j, i) = i < n / 2 ? 0.0f : 1.0f;
+        }
+    const CloudFlow f = CloudFlow::from_measured(m, 30.0);
+    EXPECT_LT(cv::norm(f.measured, m.confirmed, cv::NORM_INF), 1e-6);  // the first step: as confirmed
+    const cv::Mat kept = f.measured - f.detail;
+    double off_wind = 0, off_smoothed = 0, departure = 0;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const cv::Vec2f k = kept.at<cv::Vec2f>(j, i);
+            if (i < n / 2) off_wind = std::max(off_wind, double(cv::norm(k - f.wind.at<cv::Vec2f>(j, i))));
+            else off_smoothed = std::max(off_smoothed, double(cv::norm(k - m.smoothed.at<cv::Vec2f>(j, i))));
+            departure = std::max(departure,
+                                 double(cv::norm(m.smoothed.at<cv::Vec2f>(j, i) - f.wind.at<cv::Vec2f>(j, i))));
+        }
+    EXPECT_GT(departure, 0.3);      // there is a departure to keep or drop
+    EXPECT_LT(off_wind, 1e-5);      // not agreed: the wind
+    EXPECT_LT(off_smoothed, 1e-5);  // agreed: the smoothed flow, departure and all
+    // Without the agreement (a motion from elsewhere) the whole smoothed departure is kept.
+    m.agreement = cv::Mat();
+    const CloudFlow g = CloudFlow::from_measured(m, 30.0);
+    EXPECT_LT(cv::norm(g.measured - g.detail, m.smoothed, cv::NORM_INF), 1e-5);
+}
+
 TEST(AdvectResidual, BadModelFoldersFailClearly) {
     const std::string dir = test::temp_dir("advect_bad");
     EXPECT_THROW(AdvectResidualNetwork::load(dir + "/missing"), Error);
