@@ -875,6 +875,7 @@ double previous_frame_gap(const SkyImage& sky, const SkyImage& previous, double 
     if (gap <= 0 || gap > 3600) {
         char text[160];
         std::snprintf(text, sizeof text, "%.0f s after", -gap);
+        if (std::abs(gap) < 0.5) std::snprintf(text, sizeof text, "at the same time as");
         if (gap > 0) std::snprintf(text, sizeof text, "%.0f s (over an hour) before", gap);
         throw Error(previous_name + ": the previous frame's " + clock + " puts it " + text + " " + sky_name +
                     ": not a previous frame of the same sky (give --prev-dt to override)");

@@ -335,6 +335,13 @@ TEST(AdvectResidual, APreviousFrameMustComeShortlyBeforeTheSky) {
         EXPECT_NE(std::string(e.what()).find("a.exr"), std::string::npos) << e.what();
         EXPECT_NE(std::string(e.what()).find("b.exr"), std::string::npos) << e.what();
     }
+    previous.time_seconds = 1000;  // the sky itself given as its previous frame
+    try {
+        previous_frame_gap(sky, previous, 0, "b.exr", "b.exr");
+        FAIL() << "a frame of the same time was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("at the same time as"), std::string::npos) << e.what();
+    }
     previous.time_seconds = 1000 - 7200;
     EXPECT_THROW(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), Error);
     previous.time_seconds = 0;  // no clock: one medium step
