@@ -167,7 +167,7 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
         return it->second;
     };
     // The models' estimate of the same (k -> k + 1): smoothed over the pixels both frames saw
-    // unclipped, computed once.
+    // unclipped, and confirmed by the flow measured back (motion/flow.h), computed once.
     std::map<int, MeasuredMotion> pair_motion;
     auto motion_from = [&](int k) -> const MeasuredMotion& {
         auto it = pair_motion.find(k);

@@ -7,8 +7,9 @@
 //                   stronger, iterated form of two-frame extrapolation), in one warp with the rim
 //                   extended (motion/advection.h warp_in_disc), so it never pulls in black
 //   advect+prev     pure advection along the models' motion estimate of the previous pair (that flow
-//                   smoothed where not confirmed backwards: motion/flow.h consistent_motion), stepped h times, over the clear background
-//                   of the frame's sun (only the clouds move; motion/advect_residual.h); no network
+//                   smoothed where the flow measured back does not confirm it: motion/flow.h
+//                   consistent_motion), stepped h times, over the clear background of the frame's
+//                   sun (only the clouds move; motion/advect_residual.h); no network
 //   model+prev      the advect-residual model given the previous frame (that motion, fixed)
 //   model+wind      the same model from one frame and the true wind: the uniform wind fitted to the
 //                   measured motion of the following pair (an oracle for "the wind is known")
