@@ -108,8 +108,20 @@ Vec4 Texture::evaluate(const Vec2& uv) const {
     float x0f = std::floor(fx), y0f = std::floor(fy);
     float tx = fx - x0f, ty = fy - y0f;
     int x0 = int(x0f), y0 = int(y0f);
-    int xa = wrap_index(x0, width_, wrap_s_), xb = wrap_index(x0 + 1, width_, wrap_s_);
-    int ya = wrap_index(y0, height_, wrap_t_), yb = wrap_index(y0 + 1, height_, wrap_t_);
+    // Inside the image (nearly every lookup) every wrap mode leaves the indices as they are.
+    int xa = x0, xb = x0 + 1, ya = y0, yb = y0 + 1;
+    if (x0 < 0 || xb >= width_) xa = wrap_index(x0, width_, wrap_s_), xb = wrap_index(x0 + 1, width_, wrap_s_);
+    if (y0 < 0 || yb >= height_) ya = wrap_index(y0, height_, wrap_t_), yb = wrap_index(y0 + 1, height_, wrap_t_);
+    if (!bytes_.empty()) {
+        // The four texels of 8-bit storage decoded in place (texel(), without its calls).
+        const uint8_t* row_a = &bytes_[size_t(ya) * size_t(width_) * 4];
+        const uint8_t* row_b = &bytes_[size_t(yb) * size_t(width_) * 4];
+        auto decoded = [this](const uint8_t* b) {
+            return Vec4(decode_rgb_[b[0]], decode_rgb_[b[1]], decode_rgb_[b[2]], float(b[3]) * (1.0f / 255.0f));
+        };
+        return (1 - ty) * ((1 - tx) * decoded(row_a + size_t(xa) * 4) + tx * decoded(row_a + size_t(xb) * 4)) +
+               ty * ((1 - tx) * decoded(row_b + size_t(xa) * 4) + tx * decoded(row_b + size_t(xb) * 4));
+    }
     return (1 - ty) * ((1 - tx) * texel(xa, ya) + tx * texel(xb, ya)) +
            ty * ((1 - tx) * texel(xa, yb) + tx * texel(xb, yb));
 }
