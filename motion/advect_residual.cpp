@@ -156,7 +156,6 @@ cv::Mat background_at(const Vec3& sun, int n, const NetworkFormParams& form) {
     return up;
 }
 
-
 }  // namespace
 
 cv::Mat CloudFlow::at(int k) const {

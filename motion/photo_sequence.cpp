@@ -69,7 +69,7 @@ namespace {
 // one its import recorded (sky_recorded_utc_seconds). nullopt when neither says.
 std::optional<double> imported_sky_time(const std::string& path) {
     const std::string time = time_from_file_name(path, 0);
-    if (!time.empty()) return julian_date(parse_utc_time(time)) * 86400.0;
+    if (!time.empty()) return utc_seconds(time);
     return sky_recorded_utc_seconds(load_sky(path));
 }
 
@@ -101,7 +101,7 @@ PhotoSequence photo_sequence_from_folder(const std::string& folder, const std::s
         if (skies) {
             seconds = imported_sky_time(e.path().string());
         } else if (const std::string time = time_from_file_name(e.path().string(), utc_offset); !time.empty()) {
-            seconds = julian_date(parse_utc_time(time)) * 86400.0;
+            seconds = utc_seconds(time);
         }
         if (!seconds)
             throw_file_error(e.path().string(),

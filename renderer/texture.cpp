@@ -87,10 +87,7 @@ Texture::Texture(std::string name, int width, int height, std::vector<float> rgb
 
 Vec4 Texture::texel(int x, int y) const {
     size_t i = (size_t(y) * size_t(width_) + size_t(x)) * 4;
-    if (!bytes_.empty()) {
-        const uint8_t* b = &bytes_[i];
-        return Vec4(decode_rgb_[b[0]], decode_rgb_[b[1]], decode_rgb_[b[2]], float(b[3]) * (1.0f / 255.0f));
-    }
+    if (!bytes_.empty()) return decoded(&bytes_[i]);
     const float* p = &rgba_[i];
     return Vec4(p[0], p[1], p[2], p[3]);
 }
@@ -113,12 +110,9 @@ Vec4 Texture::evaluate(const Vec2& uv) const {
     if (x0 < 0 || xb >= width_) xa = wrap_index(x0, width_, wrap_s_), xb = wrap_index(x0 + 1, width_, wrap_s_);
     if (y0 < 0 || yb >= height_) ya = wrap_index(y0, height_, wrap_t_), yb = wrap_index(y0 + 1, height_, wrap_t_);
     if (!bytes_.empty()) {
-        // The four texels of 8-bit storage decoded in place (texel(), without its calls).
+        // The four texels of 8-bit storage decoded in place (texel(), without its index and branch).
         const uint8_t* row_a = &bytes_[size_t(ya) * size_t(width_) * 4];
         const uint8_t* row_b = &bytes_[size_t(yb) * size_t(width_) * 4];
-        auto decoded = [this](const uint8_t* b) {
-            return Vec4(decode_rgb_[b[0]], decode_rgb_[b[1]], decode_rgb_[b[2]], float(b[3]) * (1.0f / 255.0f));
-        };
         return (1 - ty) * ((1 - tx) * decoded(row_a + size_t(xa) * 4) + tx * decoded(row_a + size_t(xb) * 4)) +
                ty * ((1 - tx) * decoded(row_b + size_t(xa) * 4) + tx * decoded(row_b + size_t(xb) * 4));
     }

@@ -30,6 +30,10 @@ class Texture {
 
   private:
     Vec4 texel(int x, int y) const;
+    // One texel of 8-bit storage (its four bytes at b), decoded.
+    Vec4 decoded(const uint8_t* b) const {
+        return Vec4(decode_rgb_[b[0]], decode_rgb_[b[1]], decode_rgb_[b[2]], float(b[3]) * (1.0f / 255.0f));
+    }
     std::string name_;
     int width_, height_;
     std::vector<float> rgba_;            // float storage (HDR or 16-bit sources)

@@ -134,7 +134,7 @@ std::optional<double> sky_recorded_utc_seconds(const SkyImage& sky) {
     const size_t end = sky.source.find_first_of(" )", at);
     const std::string text = sky.source.substr(at + 5, end == std::string::npos ? std::string::npos : end - at - 5);
     try {
-        return julian_date(parse_utc_time(text)) * 86400.0;
+        return utc_seconds(text);
     } catch (const Error&) {
         return std::nullopt;
     }

@@ -151,6 +151,8 @@ double julian_date(const UtcTime& t) {
            (t.hour + (t.minute + t.second / 60.0) / 60.0) / 24.0;
 }
 
+double utc_seconds(const std::string& iso8601) { return julian_date(parse_utc_time(iso8601)) * 86400.0; }
+
 double delta_t_seconds(double y) {
     // Espenak & Meeus (2006), the pieces covering 1900-2150.
     if (y < 1920) {

@@ -38,6 +38,10 @@ UtcTime add_seconds(const UtcTime& t, double seconds);
 // Julian date (UT) of a UTC time.
 double julian_date(const UtcTime& t);
 
+// parse_utc_time's time in seconds on one absolute scale (Julian date x 86400): for ordering and
+// subtracting times given in any zone. Throws as parse_utc_time does.
+double utc_seconds(const std::string& iso8601);
+
 // A place on Earth (WGS84 geodetic). Longitude is east-positive, in [-180, 180].
 struct GeoLocation {
     double latitude_deg = 0, longitude_deg = 0, elevation_m = 0;

@@ -141,10 +141,10 @@ TEST(ConsistentMotion, KeepsConfirmedFlowSharpAndSmoothsTheRest) {
     // Agreement everywhere but where content crosses the edge.
     EXPECT_GT(m.agreement.at<float>(n / 2, n / 4), 0.99f);
     // A backward flow that does not confirm it (here: no motion back): the smoothed field.
-    const cv::Mat unconfirmed = consistent_motion(forward, cv::Mat::zeros(n, n, CV_32FC2)).confirmed;
-    EXPECT_LT(cv::norm(unconfirmed, smoothed, cv::NORM_INF), 1e-4);
+    const MeasuredMotion unconfirmed = consistent_motion(forward, cv::Mat::zeros(n, n, CV_32FC2));
+    EXPECT_LT(cv::norm(unconfirmed.confirmed, smoothed, cv::NORM_INF), 1e-4);
     double most = 0;
-    cv::minMaxLoc(consistent_motion(forward, cv::Mat::zeros(n, n, CV_32FC2)).agreement, nullptr, &most);
+    cv::minMaxLoc(unconfirmed.agreement, nullptr, &most);
     EXPECT_LT(most, 1e-6);
     // Untrusted pixels take the smoothed field too.
     const cv::Mat none = cv::Mat::zeros(n, n, CV_8UC1);
