@@ -315,8 +315,9 @@ void register_sky_import_commands(CLI::App& sky) {
         "extended radially beyond) or alonso-planar (the Mobotix background_mask.png)");
     imp->add_flag("--no-preset-mask", io->no_preset_mask,
                   "Do not look for the preset's mask beside the photo: use the preset's obstruction geometry");
-    imp->add_flag("--detect-obstructions", io->detect,
-                  "Also detect dark obstructions (shadow band, arm, masts) and fill them");
+    imp->add_flag(
+        "--detect-obstructions", io->detect,
+        "Also detect dark obstructions and fill them: large ones (shadow band, arm) and thin ones (masts, wires, the housing's dark edge inside the circle)");
     imp->add_flag("--no-inpaint", io->no_inpaint, "Leave non-sky pixels black instead of filling them");
     imp->add_option("--encoding", io->encoding,
                     "Input values: auto (default: 8-bit formats are sRGB, .exr/.hdr/.pfm/.tif linear), srgb, linear");

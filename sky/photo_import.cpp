@@ -488,6 +488,49 @@ std::vector<unsigned char> detect_dark_obstructions(const Image& encoded_photo, 
     return out;
 }
 
+std::vector<unsigned char> detect_thin_dark_structures(const Image& encoded_photo, const SkyCircle& circle,
+                                                       double darkness) {
+    // The brightest channel: blue sky and white cloud are both bright in it, a mast or wire is
+    // dark in every channel.
+    cv::Mat rgb = to_rgb_mat(encoded_photo, "photo"), v;
+    if (rgb.channels() == 3) {
+        std::vector<cv::Mat> ch;
+        cv::split(rgb, ch);
+        v = cv::max(cv::max(ch[0], ch[1]), ch[2]);
+    } else {
+        v = rgb;
+    }
+    v.convertTo(v, CV_32F);
+    const cv::Point2d centre(circle.center_x, circle.center_y);
+    cv::Mat disc = cv::Mat::zeros(v.size(), CV_8U);
+    cv::circle(disc, centre, int(std::ceil(circle.radius)), 255, cv::FILLED);
+    // Beyond the circle counts as bright, so the housing's dark edge inside it is a thin
+    // structure too.
+    double top = 0;
+    cv::minMaxLoc(v, nullptr, &top, nullptr, nullptr, disc);
+    cv::Mat around = v.clone();
+    around.setTo(cv::Scalar(top), ~disc);
+    const int k = std::max(5, 2 * int(std::lround(0.015 * circle.radius)) + 1);
+    cv::Mat closed;
+    cv::morphologyEx(around, closed, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
+    // Darker than `darkness` x the sky around it, and by a visible step (dim, quantised dawn
+    // frames are full of small dark specks that are only a few code values deep).
+    cv::Mat thin = (v < darkness * closed) & (closed - v > 0.04f * float(top)) & disc;
+    cv::Mat labels, stats, centroids;
+    const int count = cv::connectedComponentsWithStats(thin, labels, stats, centroids, 8);
+    std::vector<unsigned char> keep_label(size_t(count), 0);
+    for (int l = 1; l < count; ++l) {
+        // The closing only finds what is narrower than k; of that, only long pieces (several
+        // times k) are objects: a short dark fleck may be sky (a bird, a cloud's dark speck).
+        const double w = stats.at<int>(l, cv::CC_STAT_WIDTH), h = stats.at<int>(l, cv::CC_STAT_HEIGHT);
+        keep_label[size_t(l)] = std::hypot(w, h) >= 0.08 * circle.radius;
+    }
+    std::vector<unsigned char> out(size_t(v.cols) * v.rows, 0);
+    for (int y = 0; y < v.rows; ++y)
+        for (int x = 0; x < v.cols; ++x) out[size_t(y) * v.cols + x] = keep_label[size_t(labels.at<int>(y, x))];
+    return out;
+}
+
 ImportedPhoto import_photo(const std::string& path, const PhotoImportParams& params) {
     Image photo = read_image(path);
     ImportedPhoto result = import_photo_image(photo, path, params);
@@ -580,9 +623,10 @@ ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, 
     }
     if (params.detect_obstructions) {
         auto m = detect_dark_obstructions(out.display_referred ? photo : tone_mapped_grey(rgb), circle);
+        const auto t = detect_thin_dark_structures(out.display_referred ? photo : tone_mapped_grey(rgb), circle);
         for (int y = 0; y < rgb.rows; ++y)
             for (int x = 0; x < rgb.cols; ++x)
-                if (m[size_t(y) * rgb.cols + x]) not_sky.at<unsigned char>(y, x) = 1;
+                if (m[size_t(y) * rgb.cols + x] || t[size_t(y) * rgb.cols + x]) not_sky.at<unsigned char>(y, x) = 1;
     }
     if (params.mask_dilate_px > 0 && cv::countNonZero(not_sky) > 0) {
         int k = 2 * params.mask_dilate_px + 1;

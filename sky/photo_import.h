@@ -161,6 +161,12 @@ SkyCircle find_sky_circle(const Image& photo, const std::string& name, double mi
 std::vector<unsigned char> detect_dark_obstructions(const Image& encoded_photo, const SkyCircle& circle,
                                                     double darkness = 0.45);
 
+// Thin dark objects (masts, wires, lightning rods, the housing's dark edge inside the circle):
+// pixels whose brightest channel is below `darkness` x that of the sky within about 1.5 % of the
+// radius around them (a morphological closing), in long, thin connected pieces. Photo-sized 0/1.
+std::vector<unsigned char> detect_thin_dark_structures(const Image& encoded_photo, const SkyCircle& circle,
+                                                       double darkness = 0.5);
+
 // The band's and the horizon profile's pixels in the photo's grid as 0/1 (1 = not sky), for the
 // photo's circle and orientation (`geometry`).
 std::vector<unsigned char> shadow_band_mask(const ShadowBand& band, const PhotoGeometry& geometry, int photo_width,

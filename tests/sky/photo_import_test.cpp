@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -18,6 +19,13 @@ namespace dynsky {
 namespace {
 
 constexpr double kDeg = kPiD / 180.0;
+
+// The circle's pixels (255) in a w x h mask.
+cv::Mat sky_circle_test_disc(int w, int h, const SkyCircle& c) {
+    cv::Mat m = cv::Mat::zeros(h, w, CV_8U);
+    cv::circle(m, cv::Point2d(c.center_x, c.center_y), int(c.radius), 255, cv::FILLED);
+    return m;
+}
 
 // A smooth, asymmetric sky pattern (no symmetry a wrong rotation or mirror could hide behind).
 Color pattern(const Vec3d& w) {
@@ -259,6 +267,56 @@ TEST(PhotoImport, StrongDownsamplingAveragesInsteadOfAliasing) {
             if (fisheye::pixel_center_uv(i, j, n).norm() < 0.9)
                 worst = std::max(worst, double(std::abs(imp.sky.pixel(i, j)[0] - 0.5f)));
     EXPECT_LT(worst, 0.08);
+}
+
+// A synthetic photo (encoded values): blue sky with white clouds and a thin blue gap between two
+// of them, a mast, a wire and the housing's dark edge inside the circle.
+TEST(PhotoImport, ThinDarkObjectsAreFoundAndCloudGapsAreNot) {
+    const int w = 400, h = 400;
+    const SkyCircle circle{200, 200, 180};
+    Image photo(w, h, 3);
+    cv::Mat object = cv::Mat::zeros(h, w, CV_8U), gap = cv::Mat::zeros(h, w, CV_8U);
+    cv::line(object, {200, 372}, {200, 300}, 255, 3);                  // the mast, 5 px wide
+    cv::line(object, {110, 110}, {330, 60}, 255, 1);                   // the wire
+    cv::ellipse(object, {200, 200}, {180, 180}, 0, 150, 250, 255, 6);  // the housing's edge
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const double r = std::hypot(x - 200.0, y - 200.0);
+            Color c(0.0f, 0.0f, 0.0f);
+            if (r <= 180) {
+                c = Color(0.25f, 0.45f, 0.85f);  // blue sky
+                // Two clouds 3 px apart: the blue gap between them is darker in grey, not in blue.
+                const bool left = std::hypot(x - 150.0, y - 220.0) < 40, right = std::hypot(x - 233.0, y - 220.0) < 40;
+                if (left || right) c = Color(0.95f, 0.95f, 0.95f);
+                if (!left && !right && std::abs(x - 191.5) < 2 && std::abs(y - 220) < 25) gap.at<uint8_t>(y, x) = 255;
+                if (object.at<uint8_t>(y, x)) c = Color(0.12f, 0.12f, 0.14f);
+            }
+            for (int k = 0; k < 3; ++k) photo.at(x, y, k) = c[k];
+        }
+    object &= sky_circle_test_disc(w, h, circle);
+    const std::vector<unsigned char> found = detect_thin_dark_structures(photo, circle);
+    long hit = 0, objects = 0, false_sky = 0, sky = 0, gap_hit = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const bool f = found[size_t(y) * w + x];
+            if (object.at<uint8_t>(y, x)) ++objects, hit += f;
+            else if (std::hypot(x - 200.0, y - 200.0) <= 170) ++sky, false_sky += f;
+            if (gap.at<uint8_t>(y, x)) gap_hit += f;
+        }
+    EXPECT_GT(double(hit) / double(objects), 0.9);
+    EXPECT_LT(double(false_sky) / double(sky), 0.002);
+    EXPECT_EQ(gap_hit, 0);
+
+    // A dim, quantised dawn frame (a few code values, specks one code deep) has nothing thin.
+    std::mt19937 rng(3);
+    std::uniform_int_distribution<int> code(3, 6);
+    Image dim(w, h, 3);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            if (std::hypot(x - 200.0, y - 200.0) <= 180)
+                for (int k = 0; k < 3; ++k) dim.at(x, y, k) = float(code(rng)) / 255.0f;
+    const std::vector<unsigned char> none = detect_thin_dark_structures(dim, circle);
+    EXPECT_EQ(std::count(none.begin(), none.end(), 1), 0);
 }
 
 TEST(SkyCircle, FoundOnSyntheticPhotos) {
