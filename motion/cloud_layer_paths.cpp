@@ -56,7 +56,8 @@ CloudLayerPaths::CloudLayerPaths(int n, const cv::Vec2d& step, const CloudLayerP
     : n_(n), step_(step), params_(params) {
     if (n < 2) throw Error("CloudLayerPaths: the resolution must be at least 2");
     if (!(params.tile_zenith_deg > 10 && params.tile_zenith_deg < 85) || !(params.max_stretch >= 1) ||
-        !(params.entry_band > 0) || !(params.seam_range >= 0 && params.seam_range < 0.9) || !(params.seam_slope > 0))
+        !(params.entry_band > 0) || !(params.seam_edge_band > 0) ||
+        !(params.seam_range >= 0 && params.seam_range < 0.9) || !(params.seam_slope > 0))
         throw Error("CloudLayerPaths: parameters out of range");
     const double length = std::hypot(step[0], step[1]);
     moving_ = std::isfinite(length) && length > 1e-9;
@@ -161,14 +162,16 @@ CloudLayerPaths::Reads CloudLayerPaths::at(double k) const {
             // wind on odd passes).
             double into_tile = 0;
             if (moving_ && s < a) {
-                if (point[x].dot(along_) >= a) {
-                    into_tile = 1;
-                } else {
-                    // Upwind of the seam at the start (near the upwind horizon): the real start
-                    // while it is not too foreshortened, then a dissolve into the tile.
-                    const double rho_t = trigger[x], s_t = -std::sqrt(std::max(rho_t * rho_t - c * c, R * R));
-                    into_tile = std::clamp((s_t - s) / (params_.entry_band * rho_t), 0.0, 1.0);
-                }
+                // Upwind of the seam at the start (near the upwind horizon) a pixel keeps the real
+                // start while it is not too foreshortened, then dissolves into the tile; downwind
+                // of it, a pixel reads the tile once its path has crossed the seam. Within
+                // seam_edge_band of the seam line the downwind pixels blend in the upwind rule,
+                // so the two meet without a hard arc fixed in the image.
+                const double rho_t = trigger[x], s_t = -std::sqrt(std::max(rho_t * rho_t - c * c, R * R));
+                const double upwind_rule = std::clamp((s_t - s) / (params_.entry_band * rho_t), 0.0, 1.0);
+                const double past_seam = point[x].dot(along_) - a;
+                const double w = past_seam < 0 ? 0.0 : std::min(1.0, past_seam / (params_.seam_edge_band * R));
+                into_tile = w + (1.0 - w) * upwind_rule;
             }
             if (into_tile > 0) {
                 // Pass j, and over the first seam_band of it the pass before (j - 1 = 0: the real

@@ -16,6 +16,10 @@
 //                           more foreshortened than its own (sec^2 of the zenith angle)
 //   entry_band       = 0.25 beyond that, its fade into the tile, as a fraction of that
 //                           trigger's ground radius
+//   seam_edge_band   = 0.5  pixels upwind of the seam at the start within this fraction of the
+//                           tile's radius of the seam line switch as those downwind of it do,
+//                           blending the two rules (else they met at a hard, jagged arc fixed in
+//                           the image, seen 3-9 minutes into `sky predict --prev` rollouts)
 //
 // Why: the layer is a plane at height h; a wind translates it by w per step (units of h). The sky
 // seen at a pixel is the layer point P(x) = tan(theta) (u, v) / r; after k steps its cloud was at
@@ -31,7 +35,8 @@
 // fades out over seam_band). A pixel reads the real start until its path crosses the seam, then
 // the tile, so the first pass is the real start image and short rollouts (minutes) are unchanged.
 // Entered at a fixed ring (every pixel at 4x its own foreshortening) the tile showed a circular
-// seam (docs/networks-advect-residual.md); only pixels upwind of the seam at the start still are.
+// seam (docs/networks-advect-residual.md); only pixels upwind of the seam at the start still are,
+// blended near the seam line into the rule of those downwind of it (seam_edge_band).
 #pragma once
 
 #include <opencv2/core.hpp>
@@ -49,6 +54,7 @@ struct CloudLayerPathsParams {
     double seam_band = 0.2;
     double max_stretch = 4.0;
     double entry_band = 0.25;
+    double seam_edge_band = 0.5;
 };
 
 // The layer point seen at continuous pixel position (x, y) of an n x n fisheye (units of the layer

@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "motion/flow.h"
 
@@ -115,6 +117,37 @@ TEST(CloudLayerPaths, TheSeamRunsThroughClearSky) {
     for (double c = -2.0; c <= 2.0; c += 0.05) worst = std::max(worst, std::abs(paths.seam(c) - lane(c)));
     std::printf("seam off the clear lane by at most %.3f (lane half-width 0.25; a straight seam 0.3)\n", worst);
     EXPECT_LT(worst, 0.15);
+}
+
+// Pixels upwind of the seam at the start (near the upwind horizon) and those downwind of it switch
+// into the tile by different rules; where they meet, the share of the tile must not jump (it did,
+// 0 to 1 across one pixel: a hard arc fixed in the image, 3-9 minutes into fast rollouts).
+TEST(CloudLayerPaths, NoHardEdgeWhereThePixelsUpwindOfTheSeamMeetTheRest) {
+    const int n = 256;
+    const cv::Vec2d step(0.24, 0.0);  // 12 m/s at 1500 m, 30 s steps, along +x
+    auto largest_jump = [&](const CloudLayerPathsParams& params) {
+        CloudLayerPaths paths(n, step, params);
+        double worst = 0;
+        for (double k : {4.0, 8.0, 12.0, 18.0}) {
+            const CloudLayerPaths::Reads reads = paths.at(k);
+            cv::Mat tile = reads.weights[CloudLayerPaths::kTileRead] + reads.weights[CloudLayerPaths::kLeavingRead];
+            for (int y = 0; y < n; ++y)
+                for (int x = 0; x + 1 < n; ++x) {
+                    const double u = 2.0 * (x + 1.0) / n - 1, v = 2.0 * (y + 0.5) / n - 1;
+                    if (std::hypot(u, v) > 0.9) continue;
+                    worst = std::max(worst, double(std::abs(tile.at<float>(y, x + 1) - tile.at<float>(y, x))));
+                }
+        }
+        return worst;
+    };
+    const double blended = largest_jump(CloudLayerPathsParams{});
+    CloudLayerPathsParams hard;
+    hard.seam_edge_band = 1e-6;  // the two rules meeting at the seam line
+    const double cut = largest_jump(hard);
+    std::printf("largest step of the tile's share between neighbours: %.2f (rules meeting at the line: %.2f)\n",
+                blended, cut);
+    EXPECT_GT(cut, 0.8);
+    EXPECT_LT(blended, 0.25);
 }
 
 }  // namespace
