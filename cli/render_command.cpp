@@ -118,6 +118,8 @@ int run_render(const RenderOptions& o) {
     LoadedScene loaded = load_scene(SceneSpec{o.scene, o.camera, o.ground_albedo, o.look_at, o.fov},
                                     float(width) / height);
     Scene& scene = loaded.scene;
+    // Nor may it replace one of the files the scene was read from (a texture beside it).
+    check_outputs_are_not_inputs({o.out, png_beside}, scene.source_files);
     const Camera& camera = loaded.camera;
     if (o.override_material == "lambert") override_lambert(&scene);
 

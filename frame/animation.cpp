@@ -131,6 +131,7 @@ AnimationReport render_animation(const AnimationSettings& o) {
 
     SkyTimeline timeline = o.timeline.empty() ? make_sky_timeline(o.sky, o.model)
                                               : load_sky_timeline(o.timeline, o.sky, o.model);
+    timeline.check_span(o.duration);
     if (timeline.stored_last_step() >= 0 && timeline.last_step_for(last / o.fps) > timeline.stored_last_step())
         throw_file_error(o.timeline,
                          "the stored sky timeline ends at t = " + number(timeline.stored_last_step() * timeline.dt()) +

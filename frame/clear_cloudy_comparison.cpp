@@ -109,13 +109,13 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
     if (o.chart_frames < 2) throw Error("--chart-frames must be at least 2");
     if (!(o.duration > 0)) throw Error("--duration must be positive");
     auto points = parse_chart_points(o.points);
+    // Neither the output folder nor a file written in it may be an input (a sky EXR named
+    // OUT/clear.exr would be replaced), nor lie in an input folder (a model's).
+    std::vector<std::string> outputs = {o.out};
+    for (const char* name :
+         {"clear.exr", "cloudy.exr", "side_by_side.png", "difference.png", "illuminance.csv", "illuminance.png"})
+        outputs.push_back((fs::path(o.out) / name).string());
     {
-        // Neither the output folder nor a file written in it may be an input (a sky EXR named
-        // OUT/clear.exr would be replaced), nor lie in an input folder (a model's).
-        std::vector<std::string> outputs = {o.out};
-        for (const char* name :
-             {"clear.exr", "cloudy.exr", "side_by_side.png", "difference.png", "illuminance.csv", "illuminance.png"})
-            outputs.push_back((fs::path(o.out) / name).string());
         const std::string model = o.model.model.rfind("network:", 0) == 0 ? o.model.model.substr(8) : "";
         check_outputs_are_not_inputs(outputs, {o.sky.sky, o.sky.previous, o.scene.scene, model});
     }
@@ -125,6 +125,7 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
 
     const SkySourceSpec& so = o.sky;
     SkyTimeline cloudy = make_sky_timeline(so, o.model);
+    cloudy.check_span(o.duration);
     // The clear sky takes the cloudy one's sun at every moment: the clock's (skies made here, or
     // --time), else where the sky EXR has it.
     if (!cloudy.sun_direction_at(0.0))
@@ -132,6 +133,7 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
                     ": the sky has no sun direction (dynsky:sun_* attributes): give --time (and --lat, --lon) "
                     "so the clear sky knows where the sun is");
     LoadedScene scene = load_scene(o.scene, float(w) / h);
+    check_outputs_are_not_inputs(outputs, scene.scene.source_files);  // a texture beside the scene
     fs::create_directories(o.out);
     const int sky_n = cloudy.step(0)->resolution;
     auto clear_at = [&](double t) {

@@ -210,6 +210,7 @@ int write_sky_timeline(const SkySourceSpec& sky, const StepModelSpec& model, dou
         }
     }
     SkyTimeline timeline = make_sky_timeline(sky, model);
+    timeline.check_span(duration);
     const int last = std::max(1, timeline.last_step_for(duration));
     if (!quiet)
         std::fprintf(stderr, "sky timeline: model %s, Delta t %g s, steps 0-%d (t <= %g s) into %s\n",

@@ -917,16 +917,23 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
     const int k = int(history.size());  // this makes step k (S_k)
     const bool fresh = !rollout_ || flow_dt_ != dt || rollout_->steps() != k - 1 ||
                        rollout_input_ != history.front().get();
+    const int given_resolution = history.front()->resolution;
     if (fresh) {
+        // A sky smaller than the network works at its resolution (upsampled), its steps come back
+        // at its own (area-averaged).
+        const int n = network_.info().resolution;
+        front_ = given_resolution < n ? resampled_sky(*history.front(), n) : SkyImage();
         // A sky of unknown scale works at the networks' (model_scale); its steps come back at its own.
-        scale_ = model_scale(*history.front());
-        scaled_input_ = scale_ == 1.0 ? SkyImage() : scaled_sky(*history.front(), scale_);
+        const SkyImage& front = front_.resolution > 0 ? front_ : *history.front();
+        scale_ = model_scale(front);
+        scaled_input_ = scale_ == 1.0 ? SkyImage() : scaled_sky(front, scale_);
     }
-    const SkyImage& input = scale_ == 1.0 ? *history.front() : scaled_input_;
+    const SkyImage& front = front_.resolution > 0 ? front_ : *history.front();
+    const SkyImage& input = scale_ == 1.0 ? front : scaled_input_;
     if (fresh) {
         // One rollout from the input S_0 (its motion measured once), kept across the timeline's
         // calls so the clouds keep their detail (motion/advect_residual.h CloudRollout).
-        flow_ = network_.motion_flow(*history.front(), motion_, dt, input.resolution);  // scales both frames
+        flow_ = network_.motion_flow(front, motion_, dt, input.resolution);  // scales both frames
         flow_dt_ = dt;
         cv::Mat start = to_network_form(input, network_.info().form);
         sun_mask_ = fill_saturated_pixels(&start);
@@ -965,7 +972,8 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
                        std::min(t, opacity_sun_weight(*rollout_, at, *input_sun_share_).value_or(1.0)));
     }
     next.time_seconds = history.back()->time_seconds + dt;
-    return scale_ == 1.0 ? next : scaled_sky(next, 1.0 / scale_);
+    if (scale_ != 1.0) next = scaled_sky(next, 1.0 / scale_);
+    return next.resolution == given_resolution ? next : resampled_sky(next, given_resolution);
 }
 
 }  // namespace dynsky

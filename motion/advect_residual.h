@@ -250,6 +250,7 @@ class AdvectResidualStepModel : public MediumStepModel {
     double flow_dt_ = 0;
     std::unique_ptr<CloudRollout> rollout_;
     const SkyImage* rollout_input_ = nullptr;
+    SkyImage front_;                     // the input upsampled to the network's resolution (when smaller)
     SkyImage scaled_input_;              // the input at model_scale (when it is not 1)
     double scale_ = 1.0;                 // model_scale of the input
     std::optional<Vec3> estimated_sun_;  // from the input's brightest pixels, when it has no sun

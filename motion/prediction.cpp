@@ -54,11 +54,17 @@ void write_prediction(const PredictionOptions& o) {
     const NetworkFormParams form = advect ? advect->info().form : paper->info().form;
     const int n = advect ? advect->info().resolution : paper->info().resolution;
     const double dt = advect ? advect->info().dt : paper->info().dt;
+    // A sky smaller than the network is stepped at the network's resolution (upsampled) and each
+    // step written at its own (area-averaged).
+    const SkyImage work = advect && sky.resolution < n ? resampled_sky(sky, n) : SkyImage();
+    const SkyImage& stepped = work.resolution > 0 ? work : sky;
     CloudFlow flow;
-    if (advect) flow = advect->motion_flow(sky, motion, dt, sky.resolution);
+    if (advect) flow = advect->motion_flow(stepped, motion, dt, stepped.resolution);
     auto rollout = [&](const std::function<void(int, const SkyImage&)>& on_step) {
-        if (advect) advect->rollout(sky, flow, o.steps, on_step);
-        else paper->rollout(sky, o.steps, on_step);
+        if (!advect) return paper->rollout(sky, o.steps, on_step);
+        advect->rollout(stepped, flow, o.steps, [&](int k, const SkyImage& s) {
+            on_step(k, s.resolution == sky.resolution ? s : resampled_sky(s, sky.resolution));
+        });
     };
     const cv::Mat disc = sky_disc_mask(n);
     fs::create_directories(o.out);

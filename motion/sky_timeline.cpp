@@ -1,5 +1,7 @@
 #include "motion/sky_timeline.h"
 
+#include <cstdio>
+#include <limits>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -128,8 +130,21 @@ std::optional<Vec3d> SkyTimeline::sun_direction_at(double t) const {
     return input_sun_;
 }
 
+void SkyTimeline::check_span(double seconds) const {
+    const double steps = seconds / dt_;
+    if (!(steps <= kMaxSteps)) {
+        char text[240];
+        std::snprintf(text, sizeof text,
+                      "--duration %g s at a medium step of %g s (--dt) is %.4g steps, more than the %.0f one sky "
+                      "timeline may span: a longer --dt or a shorter --duration",
+                      seconds, dt_, steps, kMaxSteps);
+        throw Error(text);
+    }
+}
+
 int SkyTimeline::last_step_for(double t) const {
     const double x = t / dt_;
+    if (!(x < 1e9)) return std::numeric_limits<int>::max();  // beyond any timeline (check_span)
     const int i = int(std::floor(x + 1e-9));
     return x - i < 1e-9 ? i : i + 1;  // sky_at's own rounding: at a step it needs that step alone
 }

@@ -109,6 +109,11 @@ class SkyTimeline {
     int stored_last_step() const { return stored_last_step_; }
     // The last step sky_at needs for times up to t (t > 0: the step after the interval holding t).
     int last_step_for(double t) const;
+    // The most medium steps one timeline may span (as many as an animation may have frames).
+    static constexpr double kMaxSteps = 100000;
+    // Throws dynsky::Error naming --duration and --dt when `seconds` spans more than kMaxSteps
+    // steps: a --dt of 1e-9 s (or a --duration of 1e9 s) would otherwise compute steps for days.
+    void check_span(double seconds) const;
 
   private:
     SkyTimeline() = default;

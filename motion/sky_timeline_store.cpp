@@ -5,10 +5,12 @@
 // read back are the values computed; every double and float of the metadata goes through JSON,
 // whose numbers round-trip. A frame made from a loaded timeline therefore has the same bits as the
 // frame of a run that computed the steps itself.
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "motion/sky_timeline.h"
 #include "util/atomic_file.h"
@@ -21,6 +23,17 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
+
+// Throws naming `file` unless every value of `a` is finite and within [lo, hi].
+void check_values(const NpyArray& a, const std::string& file, const std::string& what, float lo, float hi) {
+    for (size_t k = 0; k < a.data.size(); ++k) {
+        const float v = a.data[k];
+        if (!std::isfinite(v) || v < lo || v > hi)
+            throw_file_error(file, "value " + std::to_string(k) + " is " + std::to_string(v) + ": not " + what +
+                                       " (expected finite values in [" + std::to_string(lo) + ", " +
+                                       std::to_string(hi) + "]); a damaged timeline: make it again");
+    }
+}
 
 constexpr const char* kFormat = "dynsky sky timeline 1";
 
@@ -183,6 +196,7 @@ SkyTimeline SkyTimeline::load(const std::string& folder, std::string* settings) 
             NpyArray a = read_npy(file);
             if (a.shape.size() != 2 || a.shape[0] != a.shape[1] || a.shape[0] == 0)
                 throw_file_error(file, "is not a square cloud opacity map");
+            check_values(a, file, "a cloud opacity", -1e-3f, 1.001f);
             cv::Mat o(int(a.shape[0]), int(a.shape[1]), CV_32FC1);
             std::copy(a.data.begin(), a.data.end(), o.ptr<float>());
             t.model_opacity_[i] = o;
@@ -221,6 +235,9 @@ cv::Mat SkyTimeline::stored_flow(int i) const {
     const int n = steps_[0]->resolution;
     if (a.shape != std::vector<size_t>{size_t(n), size_t(n), 2})
         throw_file_error(file, "is not an N x N x 2 flow of this timeline's N = " + std::to_string(n));
+    // A step moves a cloud less than across the whole image; anything else is a damaged file
+    // (a NaN here crashed the warp).
+    check_values(a, file, "a flow (pixels per step)", -2.0f * float(n), 2.0f * float(n));
     cv::Mat f(n, n, CV_32FC2);
     std::copy(a.data.begin(), a.data.end(), f.ptr<float>());
     return f;

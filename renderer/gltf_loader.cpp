@@ -160,6 +160,7 @@ struct AssetFolder {
     std::filesystem::path folder;    // absolute, canonical (links resolved)
     std::filesystem::path as_given;  // absolute, lexically normal (as tinygltf joins paths to it)
     std::string refusal;
+    std::vector<std::string> read;  // the files read (canonical)
 };
 
 bool asset_file_exists(const std::string& path, void* user) {
@@ -196,6 +197,7 @@ bool asset_read_file(std::vector<unsigned char>* out, std::string* err, const st
     out->resize(size_t(size));
     if (!in || !in.read(reinterpret_cast<char*>(out->data()), std::streamsize(size)))
         return refuse("URI target '" + path + "' cannot be read: " + std::strerror(errno));
+    asset->read.push_back(real.string());
     return true;
 }
 
@@ -447,6 +449,8 @@ class GltfLoader {
                       : gltf.LoadASCIIFromString(&model_, &err, &warn_text, reinterpret_cast<const char*>(bytes.data()),
                                                  unsigned(bytes.size()), base_dir);
         if (!asset.refusal.empty()) fail(asset.refusal);
+        scene_.source_files = {path_};
+        scene_.source_files.insert(scene_.source_files.end(), asset.read.begin(), asset.read.end());
         if (!ok) {
             std::vector<std::string> lines = split_lines(err);
             std::string text = join(lines, "; ");

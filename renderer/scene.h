@@ -96,8 +96,9 @@ struct Scene {
     std::vector<Instance> instances;
     std::vector<Material> materials;
     std::vector<std::shared_ptr<Texture>> textures;
-    std::vector<Camera> cameras;        // glTF cameras (perspective and orthographic), in file order
-    std::vector<std::string> warnings;  // e.g. extensions used but not supported
+    std::vector<Camera> cameras;            // glTF cameras (perspective and orthographic), in file order
+    std::vector<std::string> warnings;      // e.g. extensions used but not supported
+    std::vector<std::string> source_files;  // the files it was read from (glTF, buffers, images): never outputs
 
     Bounds3 world_bounds() const;
     size_t triangle_count() const;  // counting every instance

@@ -1,7 +1,10 @@
 #include "sky/sky_image.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+
+#include <opencv2/imgproc.hpp>
 
 #include "sky/fisheye.h"
 #include "sky/sun_position.h"
@@ -90,8 +93,20 @@ SkyImage sky_from_image(const Image& image, const std::string& name) {
     return sky;
 }
 
+long zero_compression_ringing(Image* image) {
+    float top = 0;
+    for (float v : image->pixels)
+        if (std::isfinite(v)) top = std::max(top, v);
+    const float floor = -1e-3f * top;
+    long count = 0;
+    for (float& v : image->pixels)
+        if (v < 0 && v >= floor) v = 0, ++count;
+    return count;
+}
+
 SkyImage load_sky(const std::string& path) {
     Image image = read_image(path);
+    zero_compression_ringing(&image);
     const std::string& type = image.file_pixel_type;
     if (type != "half" && type != "float" && type != "double")
         throw_file_error(path, "is a " + (image.file_format.empty() ? std::string("non-EXR") : image.file_format) +
@@ -109,6 +124,40 @@ void save_sky(const std::string& path, const SkyImage& sky, const std::string& p
     Image image = sky_to_image(sky);
     write_image(path, image);
     if (!preview_png.empty()) write_image(preview_png, tonemap_to_display(image));
+}
+
+SkyImage resampled_sky(const SkyImage& sky, int n) {
+    if (n < 1) throw Error("resampled_sky: the resolution must be positive");
+    if (n == sky.resolution) return sky;
+    const int m = sky.resolution;
+    cv::Mat image(m, m, CV_32FC3), out;
+    const double c = (m - 1) / 2.0, rim = m / 2.0 - 0.5;  // the last ring of pixel centres inside
+    for (int j = 0; j < m; ++j)
+        for (int i = 0; i < m; ++i) {
+            int si = i, sj = j;
+            if (!sky.in_disc(i, j)) {  // the nearest pixel inside along the radius
+                const double x = i - c, y = j - c, r = std::hypot(x, y), f = r > 0 ? rim / r : 0.0;
+                si = std::clamp(int(std::lround(c + x * f)), 0, m - 1);
+                sj = std::clamp(int(std::lround(c + y * f)), 0, m - 1);
+                for (int step = 0; step < m && !sky.in_disc(si, sj); ++step) {  // rounding left it outside
+                    si += si < c ? 1 : si > c ? -1 : 0;
+                    sj += sj < c ? 1 : sj > c ? -1 : 0;
+                }
+            }
+            const Color v = sky.pixel(si, sj);
+            image.at<cv::Vec3f>(j, i) = cv::Vec3f(v[0], v[1], v[2]);
+        }
+    cv::resize(image, out, cv::Size(n, n), 0, 0, n > m ? cv::INTER_LINEAR : cv::INTER_AREA);
+    SkyImage r = sky;
+    r.resolution = n;
+    r.rgb.assign(size_t(n) * n * 3, 0.0f);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+            if (r.in_disc(i, j)) {
+                const cv::Vec3f v = out.at<cv::Vec3f>(j, i);
+                r.set_pixel(i, j, Color(std::max(v[0], 0.0f), std::max(v[1], 0.0f), std::max(v[2], 0.0f)));
+            }
+    return r;
 }
 
 void clear_outside_disc(SkyImage* sky) {

@@ -59,9 +59,19 @@ std::optional<double> sky_recorded_utc_seconds(const SkyImage& sky);
 // dynsky:source (when set). Every sky file writer uses it; load_sky reads it back.
 void write_sky_metadata(const SkyImage& sky, ImageMetadata* m);
 
+// Lossily compressed EXRs (DWAA, DWAB, B44) ring slightly below zero next to bright pixels (-5e-6
+// beside a clear sky's 0.1, more beside the sun): values below zero by at most 1e-3 of the
+// image's largest finite value are set to 0. Larger negatives stay (validation refuses them).
+// Returns how many were set.
+long zero_compression_ringing(Image* image);
+
 // Conversions between SkyImage and the generic Image (3 channels).
 Image sky_to_image(const SkyImage& sky);
 SkyImage sky_from_image(const Image& image, const std::string& name);
+
+// The sky at resolution n (its metadata kept): bilinear up, area-averaged down, the disc's rim
+// extended outwards first so that neither darkens it; 0 outside the disc.
+SkyImage resampled_sky(const SkyImage& sky, int n);
 
 // Sets every pixel outside the disc to zero (they hold no sky).
 void clear_outside_disc(SkyImage* sky);

@@ -11,6 +11,7 @@
 #include <fstream>
 
 #include "tests/test_support.h"
+#include "util/data_path.h"
 #include "util/error.h"
 #include "util/image.h"
 
@@ -218,6 +219,27 @@ TEST(OutputsCli, CompareBenchAndEvaluateRefuseAnOutputThatIsAnInput) {
     EXPECT_EQ(std::distance(fs::directory_iterator(dir + "/cmp"), fs::directory_iterator()), 1);
     EXPECT_EQ(std::distance(fs::directory_iterator(dir + "/photos"), fs::directory_iterator()), 1);
     EXPECT_EQ(std::distance(fs::recursive_directory_iterator(dir + "/shared"), fs::recursive_directory_iterator()), 2);
+    fs::remove_all(dir);
+}
+
+// Nor a file the scene was read from: `render house.gltf -o Textures/colormap.exr` wrote its PNG
+// beside the EXR, over the scene's texture, and exited 0.
+TEST(OutputsCli, ASceneTextureIsNeverOverwritten) {
+    const std::string dir = test::temp_dir("outputs_texture");
+    fs::copy(data_path("scenes/house"), dir + "/house", fs::copy_options::recursive);
+    const std::string texture = dir + "/house/Textures/colormap.png";
+    const auto before = fs::file_size(texture);
+    const auto mtime = fs::last_write_time(texture);
+    const std::string render = kExe + " render " + dir + "/house/house.gltf --res 16x8 --spp 1 -q --out ";
+    for (const std::string& out : {dir + "/house/Textures/colormap.exr", texture}) {
+        auto r = test::run_command(render + out);
+        EXPECT_NE(r.exit_code, 0) << out << ": " << r.output;
+        EXPECT_NE(r.output.find("is also an input"), std::string::npos) << out << ": " << r.output;
+        EXPECT_EQ(fs::file_size(texture), before);
+        EXPECT_EQ(fs::last_write_time(texture), mtime);
+    }
+    EXPECT_FALSE(fs::exists(dir + "/house/Textures/colormap.exr"));
+    EXPECT_EQ(test::run_command(render + dir + "/beside.exr").exit_code, 0);  // elsewhere: rendered
     fs::remove_all(dir);
 }
 

@@ -16,6 +16,8 @@
 
 #include "motion/advection.h"
 #include "motion/metrics.h"
+#include "motion/network_step_model.h"
+#include "motion/sky_timeline.h"
 #include "sky/clear_sky.h"
 #include "sky/fisheye.h"
 #include "sky/preset_import.h"
@@ -163,6 +165,32 @@ RolloutStats roll(AdvectResidualNetwork& net, const SkyImage& sky, const CloudMo
         if (also) also(k, s);
     });
     return r;
+}
+
+// A sky smaller than the network (a 32 px preview, a 2 px sky) is stepped at the network's
+// resolution and each step comes back at its own: before, "the state is smaller than the network's
+// 64 px", after writing the first frames.
+TEST(AdvectResidual, ASkySmallerThanTheNetworkStepsAtItsOwnResolution) {
+    ProceduralSkyParams pc;
+    pc.coverage = 0.5;
+    pc.clear_sky.sun_disc = false;  // the clouds' light alone (the sun's dimming is tested elsewhere)
+    const SkyImage big = render_procedural_sky(pc, 0.0, 128);
+    for (int n : {32, 2}) {
+        SkyImage small = resampled_sky(big, n);
+        CloudMotion motion;
+        motion.wind = Wind{270.0, 12.0, 1500.0};
+        SkyTimeline timeline(small, make_network_step_model(shipped(), motion), 30.0);
+        const SkyImage last = timeline.sky_at(120.0);  // 4 steps
+        ASSERT_EQ(last.resolution, n);
+        double mean0 = 0, mean = 0, moved = 0;
+        for (size_t p = 0; p < last.rgb.size(); ++p) {
+            ASSERT_TRUE(std::isfinite(last.rgb[p]));
+            mean0 += small.rgb[p], mean += last.rgb[p], moved += std::abs(last.rgb[p] - small.rgb[p]);
+        }
+        std::printf("%d px: mean %.3f of the start, moved %.3f\n", n, mean / mean0, moved / mean0);
+        EXPECT_NEAR(mean / mean0, 1.0, 0.2) << n;
+        if (n == 32) EXPECT_GT(moved / mean0, 0.02) << "the clouds of the 32 px sky did not move";
+    }
 }
 
 TEST(AdvectResidual, ClearSkiesStayClearUnderAnyWind) {

@@ -1,6 +1,8 @@
 // Gamma (the short timescale between medium steps) and the timeline's caching and sun handling.
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -12,6 +14,7 @@
 #include "sky/fisheye.h"
 #include "motion/advection.h"
 #include "motion/sky_timeline.h"
+#include "util/npy.h"
 #include "motion/flow_extrapolation_model.h"
 #include "motion/network_step_model.h"
 #include "motion/procedural_step_model.h"
@@ -307,6 +310,47 @@ TEST(SkyTimeline, SavedAndLoadedGivesTheSameSkiesBitForBit) {
     std::filesystem::remove(dir + "/timeline.json");
     EXPECT_THROW(SkyTimeline::load(dir), Error);
     std::filesystem::remove_all(dir);
+}
+
+// A stored timeline damaged after it was written (a NaN or absurd flow, an opacity out of [0, 1])
+// is refused naming the file, not warped (a NaN flow crashed the warp); and a timeline never spans
+// more than kMaxSteps steps (a --dt of 1e-9 s ran for days).
+TEST(SkyTimeline, DamagedStoredFlowsAndEndlessSpansAreRefused) {
+    ClearSkyParams p;
+    SunClock clock{parse_utc_time("2026-06-21T10:00:00Z"), GeoLocation{48.85, 2.35, 0}};
+    p.sun_direction = compute_sun_position(clock.start, clock.where).direction();
+    SkyImage input = make_clear_sky(p, 64);
+    const SkyImage texture = textured_sky(64, 4);
+    for (size_t k = 0; k < input.rgb.size(); ++k) input.rgb[k] += 0.2f * texture.rgb[k];
+    const std::string dir = ::testing::TempDir() + "/dynsky_damaged_timeline";
+    std::filesystem::remove_all(dir);
+    SkyTimeline computed(input, std::make_unique<FlowExtrapolationStepModel>(250.0, 0.4), 5.0, clock);
+    computed.save(dir, 3, "settings");
+    EXPECT_NO_THROW(SkyTimeline::load(dir).sky_at(12.0));
+    for (float bad : {std::nanf(""), 1e30f}) {
+        const std::string flow = dir + "/flow_0001.npy";
+        NpyArray a = read_npy(flow);
+        a.data[100] = bad;
+        write_npy(flow, a.shape, a.data.data());
+        SkyTimeline loaded = SkyTimeline::load(dir);
+        try {
+            loaded.sky_at(7.0);  // needs steps 1 and 2, hence flow 1
+            ADD_FAILURE() << "a flow holding " << bad << " was used";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("flow_0001.npy: value 100 is"), std::string::npos) << e.what();
+        }
+    }
+    std::filesystem::remove_all(dir);
+
+    EXPECT_NO_THROW(computed.check_span(5.0 * SkyTimeline::kMaxSteps));
+    try {
+        computed.check_span(5.0 * SkyTimeline::kMaxSteps + 10.0);
+        ADD_FAILURE() << "a span of more than kMaxSteps steps was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("--duration"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(computed.check_span(1e300), Error);
+    EXPECT_EQ(computed.last_step_for(1e300), std::numeric_limits<int>::max());
 }
 
 TEST(SkyTimeline, AddSecondsCrossesDays) {

@@ -122,5 +122,57 @@ TEST(SkyImage, RadianceAboveTheLimitOrIntegerFilesAreNotSkies) {
     fs::remove_all(dir);
 }
 
+// Lossily compressed EXRs (DWAA/DWAB/B44, common among downloaded HDRIs) ring slightly below zero
+// beside bright pixels: such values read as 0; a negative that is not ringing is still refused.
+TEST(SkyImage, LossyCompressionRingingReadsAsZeroRealNegativesAreRefused) {
+    const std::string dir = test::temp_dir("sky_image_ringing");
+    SkyImage sky(16);
+    for (float& v : sky.rgb) v = 0.1f;
+    sky.set_pixel(8, 8, Color(50.0f, 50.0f, 50.0f));
+    sky.set_pixel(9, 8, Color(-5e-6f, 0.1f, 0.1f));  // ringing beside the bright pixel
+    Image image = sky_to_image(sky);
+    write_image(dir + "/ringing.exr", image);
+    const SkyImage loaded = load_sky(dir + "/ringing.exr");
+    EXPECT_EQ(loaded.pixel(9, 8)[0], 0.0f);
+    EXPECT_EQ(loaded.pixel(8, 8)[0], 50.0f);
+    image.pixels[(size_t(8) * 16 + 9) * 3] = -0.2f;  // 0.4 % of the brightest: not ringing
+    write_image(dir + "/negative.exr", image);
+    try {
+        load_sky(dir + "/negative.exr");
+        ADD_FAILURE() << "a sky with a -0.2 pixel loaded";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("negative.exr: sky pixel (9, 8) is negative"), std::string::npos)
+            << e.what();
+    }
+    fs::remove_all(dir);
+}
+
+// Resampling keeps a uniform sky uniform up to the rim, up and down (the rim neither darkened by
+// the black outside the disc nor lost), and keeps the metadata.
+TEST(SkyImage, ResampledUpOrDownKeepsTheRimAndTheMetadata) {
+    SkyImage sky(32);
+    for (int j = 0; j < 32; ++j)
+        for (int i = 0; i < 32; ++i)
+            if (sky.in_disc(i, j)) sky.set_pixel(i, j, Color(0.5f, 0.25f, 2.0f));
+    sky.time_seconds = 12.0;
+    sky.sun_direction = Vec3(0, 1, 0);
+    for (int n : {64, 100, 17}) {
+        const SkyImage r = resampled_sky(sky, n);
+        ASSERT_EQ(r.resolution, n);
+        EXPECT_EQ(r.time_seconds, 12.0);
+        ASSERT_TRUE(r.sun_direction);
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                const Color c = r.pixel(i, j);
+                if (!r.in_disc(i, j)) {
+                    EXPECT_EQ(c.sum(), 0.0f);
+                    continue;
+                }
+                EXPECT_NEAR(c[0], 0.5f, 1e-5) << n << ": " << i << ", " << j;
+                EXPECT_NEAR(c[2], 2.0f, 1e-5) << n << ": " << i << ", " << j;
+            }
+    }
+}
+
 }  // namespace
 }  // namespace dynsky
