@@ -6,6 +6,7 @@
 #include <cstring>
 #include <exception>
 #include <functional>
+#include <new>
 
 #include "cli/commands.h"
 #include "cli/exit_codes.h"
@@ -74,6 +75,11 @@ int main(int argc, char** argv) {
     } catch (const dynsky::Error& e) {
         std::fprintf(stderr, "dynsky: error: %s\n", e.what());
         return dynsky::cli::exit_code_of(e);
+    } catch (const std::bad_alloc&) {
+        std::fprintf(stderr,
+                     "dynsky: error: out of memory: the images asked for (--res, --sky-res, --width, the scene's "
+                     "textures) do not fit in this machine's memory; ask for smaller ones\n");
+        return dynsky::cli::kRuntimeError;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "dynsky: error: %s\n", e.what());
         return dynsky::cli::kRuntimeError;

@@ -3,6 +3,9 @@
 #include <cmath>
 #include <cstdio>
 
+#include "sky/sun_position.h"
+#include "util/error.h"
+
 namespace dynsky::cli {
 
 namespace {
@@ -39,6 +42,19 @@ CLI::Validator non_negative_whole() {
 }
 
 CLI::Validator finite_in(double min, double max) { return finite_range(min, max, false); }
+
+CLI::Validator utc_time() {
+    return CLI::Validator(
+        [](std::string& text) -> std::string {
+            try {
+                parse_utc_time(text);
+            } catch (const Error& e) {
+                return e.what();
+            }
+            return "";
+        },
+        "ISO 8601 with a zone");
+}
 CLI::Validator finite_above(double min, double max) { return finite_range(min, max, true); }
 
 void add_scene_options(CLI::App* cmd, SceneSpec* o) {
@@ -122,10 +138,11 @@ void add_generated_sky_options(CLI::App* cmd, SkySourceSpec* o) {
         ->check(CLI::Range(16, 8192))
         ->capture_default_str();
     cmd->add_option(
-        "--time", o->time,
-        "UTC time of t = 0, ISO 8601 (e.g. 2026-06-21T16:00:00Z): the sun follows the clock from there.\n"
-        "Default for 'procedural' and 'clear': 2026-06-21T16:00:00Z (at --lat, --lon: Paris); for an EXR: the sun\n"
-        "stays where the file has it");
+           "--time", o->time,
+           "UTC time of t = 0, ISO 8601 (e.g. 2026-06-21T16:00:00Z): the sun follows the clock from there.\n"
+           "Default for 'procedural' and 'clear': 2026-06-21T16:00:00Z (at --lat, --lon: Paris); for an EXR: the sun\n"
+           "stays where the file has it")
+        ->check(utc_time());
     cmd->add_option("--lat", o->latitude, "Latitude of the place, degrees north (with --time)")
         ->check(finite_in(-90, 90))
         ->capture_default_str();

@@ -17,6 +17,8 @@ void add_scene_options(CLI::App* cmd, SceneSpec* o);
 // options use CLI::Range, which also refuses a fraction or a value beyond the type.
 // A finite number in [min, max].
 CLI::Validator finite_in(double min, double max);
+// A time parse_utc_time reads (ISO 8601 with a zone): a bad one is a usage error naming the option.
+CLI::Validator utc_time();
 // A finite number in (min, max] (a strictly positive one for min = 0).
 CLI::Validator finite_above(double min, double max);
 // A whole number >= 0 written as digits (a seed): "-1" is refused, not wrapped to 2^64 - 1.

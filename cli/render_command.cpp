@@ -178,7 +178,15 @@ int run_render(const RenderOptions& o) {
     image.metadata.numbers["dynsky:png_exposure_ev"] = ev;
     if (ext == ".exr") {
         write_image(o.out, settings.aovs.any() ? render_layers(result) : image);
-        write_image(png_beside, tonemap_to_display(image, ev));
+        // A render is its two files: if the PNG cannot be written (a full disk, a folder of its
+        // name), the EXR does not stay behind either.
+        try {
+            write_image(png_beside, tonemap_to_display(image, ev));
+        } catch (const Error&) {
+            std::error_code ec;
+            std::filesystem::remove(o.out, ec);
+            throw;
+        }
         if (!o.quiet) std::fprintf(stderr, "wrote %s and %s\n", o.out.c_str(), png_beside.c_str());
     } else {
         write_image(o.out, tonemap_to_display(image, ev));

@@ -53,6 +53,7 @@ void add_sun_options(CLI::App* cmd, SunOptions* o) {
         ->required();
     cmd->add_option("--time", o->time,
                     "Date and time, ISO 8601 with a zone: 2026-06-21T12:00:00Z (UTC) or 2026-06-21T14:00:00+02:00")
+        ->check(utc_time())
         ->required();
     cmd->add_option("--elevation", o->elevation_m, "Height of the place above sea level in metres (default 0)")
         ->check(finite_in(-1000, 100000));

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <sstream>
 #include <vector>
 
@@ -27,7 +28,7 @@ struct ImportOptions {
     std::string photo, preset, center, lens, mask, mask_layout = "photo", encoding = "auto";
     double radius = 0, north = 0, tilt = 0, tilt_azimuth = 0;
     bool mirror = false, keep_colours = false, auto_circle = false, no_preset_mask = false, detect = false,
-         no_inpaint = false;
+         keep_thin = false, no_inpaint = false;
     std::string time, hdr = "auto";
     double lat = 0, lon = 0, elevation = 0, utc_offset = 0, turbidity = 3.0;
     int resolution = 512;
@@ -59,6 +60,9 @@ void run_import(const ImportOptions& o) {
     if (!o.preview.empty()) check_extension("--preview", o.preview, ".png");
     if (!o.filled_mask.empty()) check_extension("--filled-mask", o.filled_mask, ".png");
     check_outputs_are_not_inputs({o.out, o.preview, o.filled_mask}, {o.photo, o.mask});
+    if (!o.preview.empty() && !o.filled_mask.empty() &&
+        std::filesystem::weakly_canonical(o.preview) == std::filesystem::weakly_canonical(o.filled_mask))
+        throw Error("--filled-mask " + o.filled_mask + ": the same file as --preview (one would replace the other)");
     if (o.resolution < 16 || o.resolution > 16384)
         throw Error("--res " + std::to_string(o.resolution) + ": the fisheye must be 16..16384 pixels wide");
     if (o.hdr != "auto" && o.hdr != "none" && o.hdr != "calibrated")
@@ -107,6 +111,7 @@ void run_import(const ImportOptions& o) {
         else throw Error("--mask-layout '" + o.mask_layout + "': use photo, tsi or alonso-planar");
     }
     if (o.detect) params.detect_obstructions = true;
+    if (o.keep_thin) params.detect_thin_obstructions = false;
     if (o.no_inpaint) params.inpaint = false;
 
     // Time: given, or from the file name (UTC "...YYYYMMDDhhmmssZ", or "YYYY-MM-DD_hh_mm" on a clock
@@ -317,13 +322,17 @@ void register_sky_import_commands(CLI::App& sky) {
                   "Do not look for the preset's mask beside the photo: use the preset's obstruction geometry");
     imp->add_flag(
         "--detect-obstructions", io->detect,
-        "Also detect dark obstructions and fill them: large ones (shadow band, arm) and thin ones (masts, wires, the housing's dark edge inside the circle)");
+        "Also detect large dark obstructions (shadow band, arm, rooftops) and fill them (thin ones are found by default)");
+    imp->add_flag("--keep-thin-objects", io->keep_thin,
+                  "Do not look for thin dark objects (masts, wires, the housing's dark edge inside the circle), which "
+                  "are otherwise found and filled on any photograph");
     imp->add_flag("--no-inpaint", io->no_inpaint, "Leave non-sky pixels black instead of filling them");
     imp->add_option("--encoding", io->encoding,
                     "Input values: auto (default: 8-bit formats are sRGB, .exr/.hdr/.pfm/.tif linear), srgb, linear");
     imp->add_option(
-        "--time", io->time,
-        "When the photo was taken, ISO 8601 with a zone (2017-05-24T17:00:00Z); default: from the file name");
+           "--time", io->time,
+           "When the photo was taken, ISO 8601 with a zone (2017-05-24T17:00:00Z); default: from the file name")
+        ->check(utc_time());
     io->offset_opt =
         imp->add_option(
                "--utc-offset", io->utc_offset,

@@ -117,15 +117,18 @@ void register_sky_model_commands(CLI::App& sky) {
             ->capture_default_str();
         cmd->add_option("--unit-scale", o->form.unit_map.scale,
                         "HDR -> [0, 1] log map (sky/hdr_recovery.h): radiance scale, W m^-2 sr^-1")
+            ->check(finite_above(0, 1e9))
             ->capture_default_str();
         cmd->add_option(
                "--unit-max", o->form.unit_map.max_radiance,
                "HDR -> [0, 1] log map: radiance that maps to 1 (brighter clips; the sun is re-inserted on output)")
+            ->check(finite_above(0, 1e9))
             ->capture_default_str();
         cmd->add_option("--cloud-rule", o->cloud_rule,
                         "Cloud mask rule: rb (red / blue > t) or nbr ((b - r) / (b + r) < t)")
             ->capture_default_str();
         cmd->add_option("--cloud-threshold", o->form.cloud_rule.threshold, "Cloud mask threshold t")
+            ->check(finite_in(-1000, 1000))
             ->capture_default_str();
         cmd->add_option("--out,-o", o->out, "Output folder")->required();
         cmd->add_flag("--quiet,-q", o->quiet, "No progress bars or summary");

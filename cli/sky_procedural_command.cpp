@@ -74,7 +74,8 @@ void register_sky_procedural_command(CLI::App& sky) {
                                 "follows its true path over the sequence")
                     ->check(finite_in(-90, 90));
     auto* lon = cmd->add_option("--lon", o->longitude, "Longitude in degrees (east +)")->check(finite_in(-360, 360));
-    auto* time = cmd->add_option("--time", o->time_iso, "Start time, ISO 8601 with a zone, e.g. 2024-06-21T14:00:00Z");
+    auto* time = cmd->add_option("--time", o->time_iso, "Start time, ISO 8601 with a zone, e.g. 2024-06-21T14:00:00Z")
+                     ->check(utc_time());
     lat->excludes(elevation)->excludes(azimuth);
     lon->excludes(elevation)->excludes(azimuth);
     time->excludes(elevation)->excludes(azimuth);

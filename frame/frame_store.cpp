@@ -1,5 +1,6 @@
 #include "frame/frame_store.h"
 
+#include <cmath>
 #include <filesystem>
 #include <regex>
 
@@ -34,6 +35,11 @@ FrameCheck FrameStore::check(int k, int width, int height, const std::string& se
                                                    std::to_string(frame.height) + " -> " + std::to_string(width) + "x" +
                                                    std::to_string(height)};
         read_image(sky);
+        // A frame the renderer wrote is finite everywhere: a NaN or infinite pixel means the file
+        // was damaged (or replaced) since.
+        for (size_t i = 0; i < frame.pixels.size(); ++i)
+            if (!std::isfinite(frame.pixels[i]))
+                return {FrameCheck::Damaged, name(exr) + ": a pixel is not finite (value " + std::to_string(i) + ")"};
     } catch (const Error& e) {
         std::string why = e.what();
         size_t colon = why.find(": ");  // "PATH: problem" -> the file's name and the problem

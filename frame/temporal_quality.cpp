@@ -42,11 +42,21 @@ void analyse_temporal_quality(const std::string& folder) {
     std::string csv = (fs::path(o.folder) / "temporal.csv").string();
     std::ostringstream f;  // written whole once every frame is read: a bad frame leaves no table
     f << "time_s,relative change (%),boundary\n";
-    Image prev = read_image(files[0]);
+    // A rendered frame is finite everywhere; one that is not was damaged since (its NaN would
+    // make the whole table NaN).
+    auto read_frame = [](const std::string& file) {
+        Image image = read_image(file);
+        for (size_t i = 0; i < image.pixels.size(); ++i)
+            if (!std::isfinite(image.pixels[i]))
+                throw_file_error(file, "a pixel is not finite (value " + std::to_string(i) +
+                                           "): a damaged frame; render it again (dynsky animate resumes)");
+        return image;
+    };
+    Image prev = read_frame(files[0]);
     double sum_b = 0, sum_w = 0;
     int nb = 0, nw = 0;
     for (size_t k = 1; k < files.size(); ++k) {
-        Image cur = read_image(files[k]);
+        Image cur = read_frame(files[k]);
         if (cur.width != prev.width || cur.height != prev.height)
             throw_file_error(files[k], "size differs from the previous frame");
         double t0 = prev.metadata.numbers["dynsky:time"], t1 = cur.metadata.numbers["dynsky:time"];

@@ -1,13 +1,13 @@
 #include "motion/sky_timeline.h"
 
-#include <cstdio>
-#include <limits>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <ctime>
+#include <limits>
 #include <opencv2/photo.hpp>
 
 #include "motion/advection.h"

@@ -153,6 +153,16 @@ bool is_inside(const std::filesystem::path& inner, const std::filesystem::path& 
     return true;
 }
 
+std::string short_number(double v) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", v);
+    return text;
+}
+
+// The largest emissive strength read: a million (a bright lamp is 10-1000); beyond it a file is
+// broken, and 1e39 is infinite in single precision.
+constexpr double kMaxEmissiveStrength = 1e6;
+
 // The file callbacks given to tinygltf for buffers and images: each file must lie inside the
 // asset's folder once symbolic links are resolved, and be a regular file (a FIFO would block
 // forever, a directory ends in bad_alloc). The first refusal is kept for the error message.
@@ -690,7 +700,7 @@ class GltfLoader {
             const tg::Material& m = model_.materials[i];
             Material out;
             out.name = m.name.empty() ? "material " + std::to_string(i) : m.name;
-            std::string what = "material " + in_quotes(out.name);
+            std::string what = m.name.empty() ? out.name : "material " + in_quotes(out.name);
             const tg::PbrMetallicRoughness& pbr = m.pbrMetallicRoughness;
             if (pbr.baseColorFactor.size() == 4) {
                 out.base_color = Color(float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]),
@@ -713,8 +723,33 @@ class GltfLoader {
             if (m.emissiveFactor.size() == 3)
                 out.emissive = Color(float(m.emissiveFactor[0]), float(m.emissiveFactor[1]),
                                      float(m.emissiveFactor[2]));
+            double strength = 1.0;
             if (const tg::Value* es = extension(m.extensions, "KHR_materials_emissive_strength"))
-                out.emissive *= float(number_or(member(*es, "emissiveStrength"), 1.0));
+                strength = number_or(member(*es, "emissiveStrength"), 1.0);
+            // The spec's ranges: factors in [0, 1], strength >= 0. Negative, non-finite or absurd
+            // values mean a broken file (1e39 overflowed to an infinite emission that rendered
+            // black); an emissive factor above 1 is common (exporters before the strength
+            // extension) and kept, a base colour above 1 (more light out than in) is clamped.
+            for (int c = 0; c < 3; ++c) {
+                const double e = m.emissiveFactor.size() == 3 ? m.emissiveFactor[size_t(c)] : 0.0;
+                if (!(e >= -1e-4 && e <= kMaxEmissiveStrength))
+                    fail(what + ": emissiveFactor " + short_number(e) + " is outside [0, 1]");
+            }
+            if (!(strength >= 0 && strength <= kMaxEmissiveStrength))
+                fail(what + ": KHR_materials_emissive_strength " + short_number(strength) + " is outside [0, " +
+                     short_number(kMaxEmissiveStrength) + "]");
+            if ((out.emissive * float(strength)).maxCoeff() > kMaxEmissiveStrength)
+                fail(what + ": emission " + short_number((out.emissive * float(strength)).maxCoeff()) +
+                     " (emissiveFactor x strength) is above " + short_number(kMaxEmissiveStrength));
+            for (size_t c = 0; c < pbr.baseColorFactor.size(); ++c) {
+                const double b = pbr.baseColorFactor[c];
+                if (!(b >= -1e-4 && b <= kMaxEmissiveStrength))
+                    fail(what + ": baseColorFactor " + short_number(b) + " is outside [0, 1]");
+                if (b > 1 + 1e-4 && c < 3) warn(what + ": baseColorFactor " + short_number(b) + " above 1, taken as 1");
+            }
+            out.emissive = out.emissive.max(0.0f) * float(strength);
+            out.base_color = out.base_color.max(0.0f).min(1.0f);
+            out.base_alpha = std::clamp(out.base_alpha, 0.0f, 1.0f);
             if (const tg::Value* sp = extension(m.extensions, "KHR_materials_specular"))
                 out.specular = clamp(float(number_or(member(*sp, "specularFactor"), 1.0)), 0.0f, 1.0f);
             if (m.alphaMode == "MASK") out.alpha_mode = AlphaMode::Mask;

@@ -488,6 +488,10 @@ std::vector<unsigned char> detect_dark_obstructions(const Image& encoded_photo, 
     return out;
 }
 
+// The least share of the sky disc an import must see (the rest filled in): a TSI's arm, housing
+// and band hide 13-15 %, a Mobotix horizon ring about 20 %.
+constexpr double kMinSeenSkyShare = 0.25;
+
 std::vector<unsigned char> detect_thin_dark_structures(const Image& encoded_photo, const SkyCircle& circle,
                                                        double darkness) {
     // The brightest channel: blue sky and white cloud are both bright in it, a mast or wire is
@@ -521,9 +525,12 @@ std::vector<unsigned char> detect_thin_dark_structures(const Image& encoded_phot
     std::vector<unsigned char> keep_label(size_t(count), 0);
     for (int l = 1; l < count; ++l) {
         // The closing only finds what is narrower than k; of that, only long pieces (several
-        // times k) are objects: a short dark fleck may be sky (a bird, a cloud's dark speck).
+        // times k) are objects: a short dark fleck may be sky (a bird, a cloud's dark speck). And
+        // only thin ones: on average at most 2 k wide over their extent (a curved rim crescent is
+        // longer than its box's diagonal), not a mesh of dark texture joined at its corners.
         const double w = stats.at<int>(l, cv::CC_STAT_WIDTH), h = stats.at<int>(l, cv::CC_STAT_HEIGHT);
-        keep_label[size_t(l)] = std::hypot(w, h) >= 0.08 * circle.radius;
+        const double length = std::hypot(w, h), area = stats.at<int>(l, cv::CC_STAT_AREA);
+        keep_label[size_t(l)] = length >= 0.08 * circle.radius && area <= 2.0 * k * length;
     }
     std::vector<unsigned char> out(size_t(v.cols) * v.rows, 0);
     for (int y = 0; y < v.rows; ++y)
@@ -622,12 +629,16 @@ ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, 
                 if (band[p] || horizon[p]) not_sky.at<unsigned char>(y, x) = 1;
             }
     }
-    if (params.detect_obstructions) {
-        auto m = detect_dark_obstructions(out.display_referred ? photo : tone_mapped_grey(rgb), circle);
-        const auto t = detect_thin_dark_structures(out.display_referred ? photo : tone_mapped_grey(rgb), circle);
+    if (params.detect_obstructions || params.detect_thin_obstructions) {
+        const Image encoded = out.display_referred ? photo : tone_mapped_grey(rgb);
+        std::vector<unsigned char> m, t;
+        if (params.detect_obstructions) m = detect_dark_obstructions(encoded, circle);
+        if (params.detect_thin_obstructions) t = detect_thin_dark_structures(encoded, circle);
         for (int y = 0; y < rgb.rows; ++y)
-            for (int x = 0; x < rgb.cols; ++x)
-                if (m[size_t(y) * rgb.cols + x] || t[size_t(y) * rgb.cols + x]) not_sky.at<unsigned char>(y, x) = 1;
+            for (int x = 0; x < rgb.cols; ++x) {
+                const size_t p = size_t(y) * rgb.cols + x;
+                if ((!m.empty() && m[p]) || (!t.empty() && t[p])) not_sky.at<unsigned char>(y, x) = 1;
+            }
     }
     if (params.mask_dilate_px > 0 && cv::countNonZero(not_sky) > 0) {
         int k = 2 * params.mask_dilate_px + 1;
@@ -695,6 +706,20 @@ ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, 
 
     // Any obstruction in a pixel's bilinear footprint taints it: fill it.
     cv::Mat fill = (sky_not_sky > 0.01f) | (unseen > 0);
+    {
+        // A sky that is nearly all filled in is invented, not imported (a circle given off the
+        // photograph, a mask that hides everything).
+        const cv::Mat disc = sky_disc_mask(n);
+        const double seen = 1.0 - double(cv::countNonZero(fill & disc)) / std::max(1, cv::countNonZero(disc));
+        if (seen < kMinSeenSkyShare) {
+            char text[160];
+            std::snprintf(text, sizeof text,
+                          "only %.1f%% of the sky disc is seen sky (the circle at %.1f, %.1f, radius %.1f px, "
+                          "off the photograph, or a mask hiding it): nothing to import",
+                          100.0 * seen, circle.center_x, circle.center_y, circle.radius);
+            throw_file_error(name, text);
+        }
+    }
     out.not_sky.assign(size_t(n) * n, 0);
     out.clipped.assign(size_t(n) * n, 0);
     for (int j = 0; j < n; ++j)
@@ -722,6 +747,7 @@ ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, 
                               Color(std::max(0.0f, row[i][0]), std::max(0.0f, row[i][1]), std::max(0.0f, row[i][2])));
         }
     }
+    validate_sky(out.sky, name);  // e.g. an HDR photograph of 1e31 values: no sky to light with
     return out;
 }
 

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-
 #include <opencv2/imgproc.hpp>
 
 #include "sky/fisheye.h"
@@ -30,7 +29,7 @@ bool SkyImage::in_disc(int i, int j) const {
 void validate_sky(const SkyImage& sky, const std::string& name) {
     int n = sky.resolution;
     if (n <= 0 || sky.rgb.size() != size_t(n) * n * 3) throw_file_error(name, "sky image has no pixels");
-    double total = 0;
+    double total = 0, brightest = 0;
     for (int j = 0; j < n; ++j) {
         for (int i = 0; i < n; ++i) {
             Color c = sky.pixel(i, j);
@@ -49,10 +48,15 @@ void validate_sky(const SkyImage& sky, const std::string& name) {
                                                " W m^-2 sr^-1, above the limit of 1e9 (the sun is about 2e7): a "
                                                "corrupt or mis-scaled sky");
             }
-            if (sky.in_disc(i, j)) total += c.sum();
+            if (sky.in_disc(i, j)) total += c.sum(), brightest = std::max(brightest, double(c.maxCoeff()));
         }
     }
     if (!(total > 0)) throw_file_error(name, "sky is black everywhere inside the fisheye disc: nothing to light with");
+    // Light this faint underflows single precision on its way to a pixel: a black render.
+    if (brightest < kMinSkyRadiance)
+        throw_file_error(name, "sky's brightest pixel is " + format_number(brightest) + ", below " +
+                                   format_number(kMinSkyRadiance) +
+                                   ": too faint to light with in single precision (a mis-scaled sky?)");
 }
 
 void write_sky_metadata(const SkyImage& sky, ImageMetadata* m) {

@@ -36,6 +36,9 @@ struct SkyImage {
 // larger value is a corrupt or mis-scaled file (a 1e35 pixel would swallow all the light and
 // render black). docs/input-limits.md.
 constexpr double kMaxSkyRadiance = 1e9;
+// The least brightest pixel a usable sky has: fainter light underflows single precision between
+// the sky and a pixel (a sky of 1e-38 rendered black and exited 0). A night sky is about 1e-6.
+constexpr double kMinSkyRadiance = 1e-20;
 
 // Checks a sky is usable as radiance: square, finite, non-negative, at most kMaxSkyRadiance, not
 // all black. Throws dynsky::Error starting with `name` (usually the file path).

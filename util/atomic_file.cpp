@@ -44,8 +44,10 @@ void rename_into_place(const fs::path& tmp, const fs::path& target) {
     std::error_code ec;
     fs::rename(tmp, target, ec);
     if (ec) {
+        std::string why = ec.message();  // before the clean-up's own code replaces it ("Success")
+        if (fs::is_directory(target, ec)) why = "a folder of that name is in the way";
         fs::remove(tmp, ec);
-        throw_file_error(target.string(), "could not write the file: " + ec.message());
+        throw_file_error(target.string(), "could not write the file: " + why);
     }
     sync_path(target.parent_path().empty() ? fs::path(".") : target.parent_path(), O_RDONLY | O_DIRECTORY);
 }

@@ -5,6 +5,8 @@
 // ranges rendered separately equal one run; bad input fails cleanly.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <sys/stat.h>
 
 #include <filesystem>
@@ -207,6 +209,23 @@ TEST(AnimateCli, ResumeRerendersDamagedFramesAndFramesOfOtherSettings) {
     EXPECT_TRUE(read_image(frame(a, 5)).pixels == frame5.pixels);
     EXPECT_GT(fs::file_size(numbered(a, "frame", 5, ".png")), 0u);
     EXPECT_TRUE(fs::exists(numbered(a, "sky", 6, ".png")));
+
+    // A frame whose EXR was overwritten with a NaN pixel (its settings intact): `temporal` refuses
+    // it naming the file (its table was all NaN), and a resumed run renders it again.
+    {
+        Image nan_frame = read_image(frame(a, 3));
+        nan_frame.pixels[7] = std::nanf("");
+        write_image(frame(a, 3), nan_frame);
+    }
+    r = test::run_command(std::string(DYNSKY_EXE) + " temporal " + a);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("frame_0003.exr: a pixel is not finite"), std::string::npos) << r.output;
+    r = test::run_command(animate(a));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("rendering again frame(s) 3 of " + a + " (damaged: frame_0003.exr: a pixel is not finite"),
+              std::string::npos)
+        << r.output;
+    for (float v : read_image(frame(a, 3)).pixels) ASSERT_TRUE(std::isfinite(v));
 
     // --force: every frame written anew.
     r = test::run_command(animate(a, "--force"));

@@ -639,6 +639,55 @@ TEST(BadInputCli, PhotographsOfOddSizesFailNamingTheFile) {
 
 // ---- 6. Options -------------------------------------------------------------------------------
 
+// Found by a bad-input audit (ninth session): each exited 0 with garbage, hung, or crashed.
+TEST(BadInputCli, AuditedInputsAreRefusedClearly) {
+    const std::string dir = test::temp_dir("bad");
+    Refusals bad(dir);
+    // A sky so faint its light underflows single precision: rendered black, exit 0.
+    bad.add(render_args("builtin", dir, "--sky " + sky_exr(dir + "/faint.exr", 16, 1e-30f)),
+            {"faint.exr", "too faint to light with"});
+    // Emission beyond the glTF spec's ranges (1e39 overflowed to infinity and rendered black).
+    write_triangle_bin(dir);
+    std::string gltf = read_bytes(triangle_gltf(dir + "/tri.gltf"));
+    gltf.pop_back();
+    write_bytes(dir + "/emissive.gltf",
+                gltf + R"(,"materials":[{"emissiveFactor":[1,1,1],"extensions":{"KHR_materials_emissive_strength":)"
+                       R"({"emissiveStrength":1e39}}}],"extensionsUsed":["KHR_materials_emissive_strength"]})");
+    std::string with_material = read_bytes(dir + "/emissive.gltf");
+    const std::string attributes = R"("attributes":{"POSITION":0})";
+    with_material.replace(with_material.find(attributes), attributes.size(), attributes + R"(,"material":0)");
+    write_bytes(dir + "/emissive.gltf", with_material);
+    write_bytes(dir + "/dark.gltf",
+                gltf + R"(,"materials":[{"pbrMetallicRoughness":{"baseColorFactor":[-1,0,0,1]}}]})");
+    bad.add(render_args(dir + "/emissive.gltf", dir), {"emissive.gltf", "material 0", "emissive_strength 1e+39"});
+    bad.add(render_args(dir + "/dark.gltf", dir), {"dark.gltf", "baseColorFactor -1 is outside [0, 1]"});
+    // A sky circle off the photograph: the whole sky was invented by inpainting, exit 0.
+    const std::string photo = ldr_image(dir + "/photo.png", 200, 160);
+    bad.add("sky import " + photo + " --center 5000,5000 --radius 100 -o " + dir + "/s.exr",
+            {"photo.png", "of the sky disc is seen sky"});
+    // An HDR photograph of absurd values: imported, then refused only by render.
+    bad.add("sky import " + sky_exr(dir + "/huge.exr", 64, 1e31f) + " --center 32,32 --radius 30 -o " + dir + "/s.exr",
+            {"huge.exr", "above the limit"});
+    // A medium step of a nanosecond: hung (a billion steps).
+    bad.add(
+        "animate builtin --sky procedural --sky-res 32 --duration 1 --fps 2 --dt 1e-9 --res 8x6 --spp 1 -q "
+        "--no-video -o " +
+            dir + "/anim",
+        {"--duration 1 s at a medium step of 1e-09 s (--dt)", "more than the 100000"});
+    // A bad --time is a usage error naming the option (exit 2).
+    bad.add("sky clear --lat 0 --lon 0 --time 2026-13-01T00:00:00Z -o " + dir + "/c.exr", {"--time", "month 13"},
+            false);
+    // The render's PNG cannot be written (a folder of its name): no EXR left, and a reason, not
+    // "Success".
+    fs::create_directories(dir + "/busy/out.png");
+    bad.add("render builtin --res 8x6 --spp 1 -q -o " + dir + "/busy/out.exr",
+            {"out.png", "a folder of that name is in the way"});
+    const std::vector<std::string> outputs = bad.check();
+    EXPECT_NE(outputs[6].find("usage error"), std::string::npos) << outputs[6];
+    EXPECT_FALSE(fs::exists(dir + "/busy/out.exr"));
+    fs::remove_all(dir);
+}
+
 TEST(BadInputCli, OutOfRangeNumericOptionsAreRefusedNamingTheOption) {
     const std::string dir = test::temp_dir("bad");
     Refusals bad(dir);
