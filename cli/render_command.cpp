@@ -263,7 +263,8 @@ void register_render_command(CLI::App& app) {
            "camera at the eye looking at the target")
         ->delimiter(',')
         ->expected(6);
-    cmd->add_option("--fov", o->fov, "Vertical field of view in degrees (overrides the camera's)");
+    cmd->add_option("--fov", o->fov, "Vertical field of view in degrees (overrides the camera's)")
+        ->check(finite_above(0, 179.9));
     cmd->add_option(
            "--noise-threshold", o->noise_threshold,
            "Adaptive sampling (0: off): a pixel stops taking samples, in rounds of 16, once the relative error\n"

@@ -60,7 +60,10 @@ TEST(SkyImportCli, TsiPhotoWithoutItsMaskWritesTheFilledMask) {
     for (int j = 0; j < 128; ++j)
         for (int i = 0; i < 128; ++i)
             if (sky.in_disc(i, j)) ++disc, set += filled.at(i, j, 0) > 0.5f;
-    EXPECT_NEAR(double(set) / double(disc), 0.14, 0.015);
+    // 13-15 % at 256 px on every frame (PresetImport.TsiWithoutMasksFillsArmHousingAndBandOnEveryFrame);
+    // at 128 px a filled photo pixel taints a larger share of the coarser fisheye (15.5 % here, of
+    // which 0.2 % is the band's dark edge that the thin-object pass adds).
+    EXPECT_NEAR(double(set) / double(disc), 0.145, 0.015);
     // sky mask --preset leaves out the same obstructions as with the imager's mask file.
     auto sky_pixels = [](const std::string& output) {
         const size_t at = output.find(" sky pixels");
