@@ -308,11 +308,10 @@ int run_sampling_study(const SamplingStudyOptions& o) {
         scenes = make_scenes(o, float(w) / h, &notes);
         // Nothing to measure is an error, not an empty report.
         if (scenes.empty())
-            throw Error("--scenes: none of the selected scenes could be loaded (" + o.shared +
-                        "/scenes missing?):\n" + notes);
+            throw Error("--scenes: none of the selected scenes could be loaded (" + o.shared + "/scenes missing?):\n" +
+                        notes);
     }
-    if (run_accuracy && skies.empty())
-        throw Error("--skies: none of the selected skies could be made:\n" + notes);
+    if (run_accuracy && skies.empty()) throw Error("--skies: none of the selected skies could be made:\n" + notes);
 
     // ---- Accuracy against time ----
     std::vector<Run> runs;
