@@ -275,13 +275,20 @@ TEST(SkyTimeline, SunIsCutOutAndFollowsTheClock) {
 
 // A stored timeline (the render farm's keys) gives the very skies of the timeline that computed
 // them, with a sun cut out and put back dimmed by the clock, in both Gamma forms, asked in any order.
-TEST(SkyTimeline, SavedAndLoadedGivesTheSameSkiesBitForBit) {
+// The clear sky of Paris at 10:00 UTC with a texture to track, n x n (the stored timelines' input).
+SkyImage clocked_textured_sky(int n, SunClock* clock) {
+    *clock = SunClock{parse_utc_time("2026-06-21T10:00:00Z"), GeoLocation{48.85, 2.35, 0}};
     ClearSkyParams p;
-    SunClock clock{parse_utc_time("2026-06-21T10:00:00Z"), GeoLocation{48.85, 2.35, 0}};
-    p.sun_direction = compute_sun_position(clock.start, clock.where).direction();
-    SkyImage input = make_clear_sky(p, 96);
-    const SkyImage texture = textured_sky(96, 4);
+    p.sun_direction = compute_sun_position(clock->start, clock->where).direction();
+    SkyImage input = make_clear_sky(p, n);
+    const SkyImage texture = textured_sky(n, 4);
     for (size_t k = 0; k < input.rgb.size(); ++k) input.rgb[k] += 0.2f * texture.rgb[k];  // something to track
+    return input;
+}
+
+TEST(SkyTimeline, SavedAndLoadedGivesTheSameSkiesBitForBit) {
+    SunClock clock;
+    const SkyImage input = clocked_textured_sky(96, &clock);
     const std::string dir = ::testing::TempDir() + "/dynsky_stored_timeline";
     std::filesystem::remove_all(dir);
     for (GammaKind gamma : {GammaKind::constant, GammaKind::paper}) {
@@ -316,12 +323,8 @@ TEST(SkyTimeline, SavedAndLoadedGivesTheSameSkiesBitForBit) {
 // is refused naming the file, not warped (a NaN flow crashed the warp); and a timeline never spans
 // more than kMaxSteps steps (a --dt of 1e-9 s ran for days).
 TEST(SkyTimeline, DamagedStoredFlowsAndEndlessSpansAreRefused) {
-    ClearSkyParams p;
-    SunClock clock{parse_utc_time("2026-06-21T10:00:00Z"), GeoLocation{48.85, 2.35, 0}};
-    p.sun_direction = compute_sun_position(clock.start, clock.where).direction();
-    SkyImage input = make_clear_sky(p, 64);
-    const SkyImage texture = textured_sky(64, 4);
-    for (size_t k = 0; k < input.rgb.size(); ++k) input.rgb[k] += 0.2f * texture.rgb[k];
+    SunClock clock;
+    const SkyImage input = clocked_textured_sky(64, &clock);
     const std::string dir = ::testing::TempDir() + "/dynsky_damaged_timeline";
     std::filesystem::remove_all(dir);
     SkyTimeline computed(input, std::make_unique<FlowExtrapolationStepModel>(250.0, 0.4), 5.0, clock);
