@@ -668,6 +668,10 @@ TEST(BadInputCli, AuditedInputsAreRefusedClearly) {
     // An HDR photograph of absurd values: imported, then refused only by render.
     bad.add("sky import " + sky_exr(dir + "/huge.exr", 64, 1e31f) + " --center 32,32 --radius 30 -o " + dir + "/s.exr",
             {"huge.exr", "above the limit"});
+    // The preview and the filled mask asked into one file: one silently replaced the other.
+    bad.add("sky import " + photo + " --center 100,80 --radius 70 -o " + dir + "/s.exr --preview " + dir +
+                "/p.png --filled-mask " + dir + "/p.png",
+            {"--filled-mask", "the same file as --preview"});
     // A medium step of a nanosecond: hung (a billion steps).
     bad.add(
         "animate builtin --sky procedural --sky-res 32 --duration 1 --fps 2 --dt 1e-9 --res 8x6 --spp 1 -q "
@@ -683,7 +687,7 @@ TEST(BadInputCli, AuditedInputsAreRefusedClearly) {
     bad.add("render builtin --res 8x6 --spp 1 -q -o " + dir + "/busy/out.exr",
             {"out.png", "a folder of that name is in the way"});
     const std::vector<std::string> outputs = bad.check();
-    EXPECT_NE(outputs[6].find("usage error"), std::string::npos) << outputs[6];
+    EXPECT_NE(outputs[7].find("usage error"), std::string::npos) << outputs[7];
     EXPECT_FALSE(fs::exists(dir + "/busy/out.exr"));
     fs::remove_all(dir);
 }
