@@ -147,8 +147,18 @@ Image read_image(const std::string& path) {
     Image image(spec.width, spec.height, spec.nchannels);
     image.file_format = in->format_name();
     image.file_pixel_type = spec.format.c_str();
-    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()) || in->has_error()) {
-        std::string why = in->geterror();
+    bool read = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()) &&
+                !in->has_error();
+    if (!read) {
+        // Some readers (WebP) cannot go back to the first image once asked for a second: read it
+        // from a fresh open before calling the file broken.
+        (void)in->geterror();
+        in = OIIO::ImageInput::open(path);
+        read = in && in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()) &&
+               !in->has_error();
+    }
+    if (!read) {
+        std::string why = in ? in->geterror() : OIIO::geterror();
         throw_file_error(path, "could not decode pixels (truncated or corrupt?)" +
                                    (why.empty() ? std::string() : ": " + why));
     }

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <OpenImageIO/imageio.h>
+
 #include <filesystem>
 #include <fstream>
 
@@ -124,6 +126,31 @@ TEST(ImageIo, PngCutAnywhereIsRefusedNamingTheFile) {
     }
     std::ofstream(dir + "/tail.png", std::ios::binary) << bytes << "bytes after IEND";
     EXPECT_NO_THROW(read_image(dir + "/tail.png"));
+    fs::remove_all(dir);
+}
+
+// A WebP photograph (as a web download of an all-sky camera comes): OpenImageIO's WebP reader
+// cannot go back to the first image after the multi-part check asked for a second, and the read
+// failed as "could not decode pixels".
+TEST(ImageIo, WebpPhotographsAreRead) {
+    const std::string dir = test::temp_dir("webp");
+    const std::string path = dir + "/photo.webp";
+    {
+        OIIO::ImageSpec spec(40, 30, 3, OIIO::TypeDesc::UINT8);
+        std::vector<unsigned char> pixels(40 * 30 * 3);
+        for (size_t i = 0; i < pixels.size(); ++i) pixels[i] = (unsigned char)(i % 3 == 2 ? 200 : 60);
+        auto out = OIIO::ImageOutput::create(path);
+        if (!out) GTEST_SKIP() << "this OpenImageIO writes no WebP";
+        spec.attribute("compression", "webp:100");
+        ASSERT_TRUE(out->open(path, spec));
+        ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, pixels.data()));
+        out->close();
+    }
+    const Image image = read_image(path);
+    ASSERT_EQ(image.width, 40);
+    ASSERT_EQ(image.height, 30);
+    EXPECT_NEAR(image.at(20, 15, 2), 200.0f / 255.0f, 0.05f);
+    EXPECT_NEAR(image.at(20, 15, 0), 60.0f / 255.0f, 0.05f);
     fs::remove_all(dir);
 }
 
