@@ -147,8 +147,7 @@ Image read_image(const std::string& path) {
     Image image(spec.width, spec.height, spec.nchannels);
     image.file_format = in->format_name();
     image.file_pixel_type = spec.format.c_str();
-    bool read = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()) &&
-                !in->has_error();
+    bool read = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()) && !in->has_error();
     if (!read) {
         // Some readers (WebP) cannot go back to the first image once asked for a second: read it
         // from a fresh open before calling the file broken.
