@@ -5,16 +5,11 @@
 
 #include "sky/sun_position.h"
 #include "util/error.h"
+#include "util/parse.h"
 
 namespace dynsky::cli {
 
 namespace {
-
-std::string number_text(double v) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%g", v);
-    return text;
-}
 
 CLI::Validator finite_range(double min, double max, bool open_min) {
     std::string range = (open_min ? "(" : "[") + number_text(min) + ", " + number_text(max) + "]";

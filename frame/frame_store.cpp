@@ -1,6 +1,5 @@
 #include "frame/frame_store.h"
 
-#include <cmath>
 #include <filesystem>
 #include <regex>
 
@@ -37,9 +36,8 @@ FrameCheck FrameStore::check(int k, int width, int height, const std::string& se
         read_image(sky);
         // A frame the renderer wrote is finite everywhere: a NaN or infinite pixel means the file
         // was damaged (or replaced) since.
-        for (size_t i = 0; i < frame.pixels.size(); ++i)
-            if (!std::isfinite(frame.pixels[i]))
-                return {FrameCheck::Damaged, name(exr) + ": a pixel is not finite (value " + std::to_string(i) + ")"};
+        if (const long i = first_non_finite(frame); i >= 0)
+            return {FrameCheck::Damaged, name(exr) + ": a pixel is not finite (value " + std::to_string(i) + ")"};
     } catch (const Error& e) {
         std::string why = e.what();
         size_t colon = why.find(": ");  // "PATH: problem" -> the file's name and the problem

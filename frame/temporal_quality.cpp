@@ -46,10 +46,9 @@ void analyse_temporal_quality(const std::string& folder) {
     // make the whole table NaN).
     auto read_frame = [](const std::string& file) {
         Image image = read_image(file);
-        for (size_t i = 0; i < image.pixels.size(); ++i)
-            if (!std::isfinite(image.pixels[i]))
-                throw_file_error(file, "a pixel is not finite (value " + std::to_string(i) +
-                                           "): a damaged frame; render it again (dynsky animate resumes)");
+        if (const long i = first_non_finite(image); i >= 0)
+            throw_file_error(file, "a pixel is not finite (value " + std::to_string(i) +
+                                       "): a damaged frame; render it again (dynsky animate resumes)");
         return image;
     };
     Image prev = read_frame(files[0]);

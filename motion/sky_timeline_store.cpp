@@ -16,6 +16,7 @@
 #include "util/atomic_file.h"
 #include "util/error.h"
 #include "util/npy.h"
+#include "util/parse.h"
 
 namespace dynsky {
 
@@ -29,9 +30,9 @@ void check_values(const NpyArray& a, const std::string& file, const std::string&
     for (size_t k = 0; k < a.data.size(); ++k) {
         const float v = a.data[k];
         if (!std::isfinite(v) || v < lo || v > hi)
-            throw_file_error(file, "value " + std::to_string(k) + " is " + std::to_string(v) + ": not " + what +
-                                       " (expected finite values in [" + std::to_string(lo) + ", " +
-                                       std::to_string(hi) + "]); a damaged timeline: make it again");
+            throw_file_error(file, "value " + std::to_string(k) + " is " + number_text(v) + ": not " + what +
+                                       " (expected finite values in [" + number_text(lo) + ", " + number_text(hi) +
+                                       "]); a damaged timeline: make it again");
     }
 }
 

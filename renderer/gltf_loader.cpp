@@ -23,6 +23,7 @@
 #include "renderer/mesh_attributes.h"
 #include "util/error.h"
 #include "util/image.h"
+#include "util/parse.h"
 
 namespace dynsky {
 
@@ -153,12 +154,6 @@ bool is_inside(const std::filesystem::path& inner, const std::filesystem::path& 
     return true;
 }
 
-std::string short_number(double v) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%g", v);
-    return text;
-}
-
 // The largest emissive strength read: a million (a bright lamp is 10-1000); beyond it a file is
 // broken, and 1e39 is infinite in single precision.
 constexpr double kMaxEmissiveStrength = 1e6;
@@ -223,9 +218,7 @@ std::string transform_problem(const Eigen::Matrix4d& world) {
     if (!m.allFinite()) return "is not finite (NaN, infinite, or beyond single precision)";
     double det = m.leftCols<3>().determinant();
     if (!(std::abs(det) >= kMinTransformDeterminant && std::abs(det) <= 1.0 / kMinTransformDeterminant)) {
-        char text[32];
-        std::snprintf(text, sizeof text, "%.3g", det);
-        return std::string("is singular or degenerate (determinant ") + text +
+        return "is singular or degenerate (determinant " + number_text(det, 3) +
                ", outside 1e-30..1e30: a zero or flattened scale?)";
     }
     return "";
@@ -733,19 +726,20 @@ class GltfLoader {
             for (int c = 0; c < 3; ++c) {
                 const double e = m.emissiveFactor.size() == 3 ? m.emissiveFactor[size_t(c)] : 0.0;
                 if (!(e >= -1e-4 && e <= kMaxEmissiveStrength))
-                    fail(what + ": emissiveFactor " + short_number(e) + " is outside [0, 1]");
+                    fail(what + ": emissiveFactor " + number_text(e) + " is outside [0, 1]");
             }
             if (!(strength >= 0 && strength <= kMaxEmissiveStrength))
-                fail(what + ": KHR_materials_emissive_strength " + short_number(strength) + " is outside [0, " +
-                     short_number(kMaxEmissiveStrength) + "]");
-            if ((out.emissive * float(strength)).maxCoeff() > kMaxEmissiveStrength)
-                fail(what + ": emission " + short_number((out.emissive * float(strength)).maxCoeff()) +
-                     " (emissiveFactor x strength) is above " + short_number(kMaxEmissiveStrength));
+                fail(what + ": KHR_materials_emissive_strength " + number_text(strength) + " is outside [0, " +
+                     number_text(kMaxEmissiveStrength) + "]");
+            const double emission = (out.emissive.max(0.0f) * float(strength)).maxCoeff();
+            if (emission > kMaxEmissiveStrength)
+                fail(what + ": emission " + number_text(emission) + " (emissiveFactor x strength) is above " +
+                     number_text(kMaxEmissiveStrength));
             for (size_t c = 0; c < pbr.baseColorFactor.size(); ++c) {
                 const double b = pbr.baseColorFactor[c];
                 if (!(b >= -1e-4 && b <= kMaxEmissiveStrength))
-                    fail(what + ": baseColorFactor " + short_number(b) + " is outside [0, 1]");
-                if (b > 1 + 1e-4 && c < 3) warn(what + ": baseColorFactor " + short_number(b) + " above 1, taken as 1");
+                    fail(what + ": baseColorFactor " + number_text(b) + " is outside [0, 1]");
+                if (b > 1 + 1e-4 && c < 3) warn(what + ": baseColorFactor " + number_text(b) + " above 1, taken as 1");
             }
             out.emissive = out.emissive.max(0.0f) * float(strength);
             out.base_color = out.base_color.max(0.0f).min(1.0f);

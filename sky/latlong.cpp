@@ -138,16 +138,13 @@ SkyImage latlong_to_fisheye(const Image& latlong, int resolution, bool lower) {
 }
 
 LatlongEnvironment load_latlong_environment(const std::string& path, int resolution) {
-    Image image = read_image(path);
-    zero_compression_ringing(&image);
-    return latlong_environment(image, path, resolution);
+    return latlong_environment(read_radiance_image(path), path, resolution);
 }
 
 SkyImage load_sky_or_latlong(const std::string& path, std::shared_ptr<SkyImage>* ground) {
     *ground = nullptr;
-    Image image = read_image(path);
+    Image image = read_radiance_image(path);
     if (!is_latlong_shape(image.width, image.height)) return load_sky(path);
-    zero_compression_ringing(&image);
     LatlongEnvironment env = latlong_environment(image, path);
     *ground = std::make_shared<SkyImage>(std::move(env.ground));
     return std::move(env.sky);

@@ -2,24 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <opencv2/imgproc.hpp>
 
 #include "sky/fisheye.h"
 #include "sky/sun_position.h"
 #include "util/error.h"
+#include "util/parse.h"
 
 namespace dynsky {
-
-namespace {
-
-std::string format_number(double v) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%.3g", v);
-    return text;
-}
-
-}  // namespace
 
 bool SkyImage::in_disc(int i, int j) const {
     Vec2 uv = fisheye::pixel_center_uv(i, j, resolution);
@@ -44,7 +34,7 @@ void validate_sky(const SkyImage& sky, const std::string& name) {
                                                "): radiance cannot be negative");
                 if (c[k] > kMaxSkyRadiance)
                     throw_file_error(name, "sky pixel (" + std::to_string(i) + ", " + std::to_string(j) + ") is " +
-                                               format_number(c[k]) +
+                                               number_text(c[k], 3) +
                                                " W m^-2 sr^-1, above the limit of 1e9 (the sun is about 2e7): a "
                                                "corrupt or mis-scaled sky");
             }
@@ -54,8 +44,8 @@ void validate_sky(const SkyImage& sky, const std::string& name) {
     if (!(total > 0)) throw_file_error(name, "sky is black everywhere inside the fisheye disc: nothing to light with");
     // Light this faint underflows single precision on its way to a pixel: a black render.
     if (brightest < kMinSkyRadiance)
-        throw_file_error(name, "sky's brightest pixel is " + format_number(brightest) + ", below " +
-                                   format_number(kMinSkyRadiance) +
+        throw_file_error(name, "sky's brightest pixel is " + number_text(brightest, 3) + ", below " +
+                                   number_text(kMinSkyRadiance, 3) +
                                    ": too faint to light with in single precision (a mis-scaled sky?)");
 }
 
@@ -97,20 +87,19 @@ SkyImage sky_from_image(const Image& image, const std::string& name) {
     return sky;
 }
 
-long zero_compression_ringing(Image* image) {
+Image read_radiance_image(const std::string& path) {
+    Image image = read_image(path);
     float top = 0;
-    for (float v : image->pixels)
+    for (float v : image.pixels)
         if (std::isfinite(v)) top = std::max(top, v);
     const float floor = -1e-3f * top;
-    long count = 0;
-    for (float& v : image->pixels)
-        if (v < 0 && v >= floor) v = 0, ++count;
-    return count;
+    for (float& v : image.pixels)
+        if (v < 0 && v >= floor) v = 0;
+    return image;
 }
 
 SkyImage load_sky(const std::string& path) {
-    Image image = read_image(path);
-    zero_compression_ringing(&image);
+    Image image = read_radiance_image(path);
     const std::string& type = image.file_pixel_type;
     if (type != "half" && type != "float" && type != "double")
         throw_file_error(path, "is a " + (image.file_format.empty() ? std::string("non-EXR") : image.file_format) +

@@ -62,11 +62,11 @@ std::optional<double> sky_recorded_utc_seconds(const SkyImage& sky);
 // dynsky:source (when set). Every sky file writer uses it; load_sky reads it back.
 void write_sky_metadata(const SkyImage& sky, ImageMetadata* m);
 
-// Lossily compressed EXRs (DWAA, DWAB, B44) ring slightly below zero next to bright pixels (-5e-6
-// beside a clear sky's 0.1, more beside the sun): values below zero by at most 1e-3 of the
-// image's largest finite value are set to 0. Larger negatives stay (validation refuses them).
-// Returns how many were set.
-long zero_compression_ringing(Image* image);
+// read_image for a file of radiance (a sky, a lat-long environment, an HDR photograph): lossily
+// compressed EXRs (DWAA, DWAB, B44) ring slightly below zero next to bright pixels (-5e-6 beside a
+// clear sky's 0.1, more beside the sun), so values below zero by at most 1e-3 of the image's
+// largest finite value read as 0. Larger negatives stay (validation refuses them).
+Image read_radiance_image(const std::string& path);
 
 // Conversions between SkyImage and the generic Image (3 channels).
 Image sky_to_image(const SkyImage& sky);

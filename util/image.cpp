@@ -123,6 +123,12 @@ std::string image_file_problem(const std::string& path) {
     return "";
 }
 
+long first_non_finite(const Image& image) {
+    for (size_t i = 0; i < image.pixels.size(); ++i)
+        if (!std::isfinite(image.pixels[i])) return long(i);
+    return -1;
+}
+
 Image read_image(const std::string& path) {
     if (std::string why = image_file_problem(path); !why.empty()) throw_file_error(path, why);
     auto in = OIIO::ImageInput::open(path);

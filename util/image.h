@@ -57,6 +57,10 @@ std::string image_file_problem(const std::string& path);
 // corrupt file (including a JPEG cut short, which its decoder would silently fill with grey).
 Image read_image(const std::string& path);
 
+// The index (in Image::pixels) of the first value that is NaN or infinite, or -1 when there is
+// none: what a renderer wrote is finite everywhere, so such a frame was damaged since.
+long first_non_finite(const Image& image);
+
 // Writes by extension: .exr (linear float, metadata as header attributes), .png/.jpg (8-bit,
 // values taken as already display-encoded in [0, 1]). Atomic (temporary name, then rename).
 void write_image(const std::string& path, const Image& image);

@@ -1,6 +1,7 @@
 #include "util/parse.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <regex>
 #include <sstream>
 #include <stdexcept>
@@ -8,6 +9,12 @@
 #include "util/error.h"
 
 namespace dynsky {
+
+std::string number_text(double v, int significant) {
+    char text[40];
+    std::snprintf(text, sizeof text, "%.*g", significant, v);
+    return text;
+}
 
 long long parse_whole_number(const std::string& text, const std::string& what, long long min, long long max) {
     auto refuse = [&]() -> long long {

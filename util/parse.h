@@ -1,4 +1,5 @@
-// Parsing option values: lists and numbers with messages that name the option.
+// Parsing option values: lists and numbers with messages that name the option; and numbers
+// written into messages.
 #pragma once
 
 #include <string>
@@ -16,5 +17,8 @@ std::vector<int> parse_int_list(const std::string& text, const std::string& opti
 
 // "1280x720" -> 1280, 720 (each 1..16384). Throws dynsky::Error naming --res.
 void parse_frame_size(const std::string& text, int* w, int* h);
+
+// A number for a message, printf's %g with `significant` digits: 1e+35, 0.5, 128.
+std::string number_text(double v, int significant = 6);
 
 }  // namespace dynsky
