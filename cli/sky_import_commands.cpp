@@ -29,7 +29,7 @@ struct ImportOptions {
     double radius = 0, north = 0, tilt = 0, tilt_azimuth = 0;
     bool mirror = false, keep_colours = false, auto_circle = false, no_preset_mask = false, detect = false,
          keep_thin = false, no_inpaint = false;
-    std::string time, hdr = "auto";
+    std::string time, hdr = "auto", fill = "texture";
     double lat = 0, lon = 0, elevation = 0, utc_offset = 0, turbidity = 3.0;
     int resolution = 512;
     std::string out, preview, filled_mask;
@@ -113,6 +113,8 @@ void run_import(const ImportOptions& o) {
     if (o.detect) params.detect_obstructions = true;
     if (o.keep_thin) params.detect_thin_obstructions = false;
     if (o.no_inpaint) params.inpaint = false;
+    params.fill_method = o.fill == "smooth" ? PhotoImportParams::FillMethod::Smooth
+                                            : PhotoImportParams::FillMethod::Texture;
 
     // Time: given, or from the file name (UTC "...YYYYMMDDhhmmssZ", or "YYYY-MM-DD_hh_mm" on a clock
     // --utc-offset hours ahead of UTC, which presets know).
@@ -327,6 +329,11 @@ void register_sky_import_commands(CLI::App& sky) {
                   "Do not look for thin dark objects (masts, wires, the housing's dark edge inside the circle), which "
                   "are otherwise found and filled on any photograph");
     imp->add_flag("--no-inpaint", io->no_inpaint, "Leave non-sky pixels black instead of filling them");
+    imp->add_option("--fill", io->fill,
+                    "How non-sky pixels are filled: texture (default: the sky's own clouds and blue copied in, "
+                    "so a moved sky carries no smooth streak; ~4 s at 512 px) or smooth (Telea inpainting: fast, "
+                    "the same from frame to frame, as sequences are imported)")
+        ->check(CLI::IsMember({"texture", "smooth"}));
     imp->add_option("--encoding", io->encoding,
                     "Input values: auto (default: 8-bit formats are sRGB, .exr/.hdr/.pfm/.tif linear), srgb, linear");
     imp->add_option(

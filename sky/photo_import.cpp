@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <opencv2/imgproc.hpp>
+#include <opencv2/xphoto.hpp>
 #include <opencv2/photo.hpp>
 #include <regex>
 #include <sstream>
@@ -137,7 +138,10 @@ double find_clip_level(const cv::Mat& rgb_encoded, const SkyCircle& circle, cons
 // values (OpenCV 4.6 fills a 0.2-0.4 ramp with 1.0 and -0.3): each channel is scaled so its 99th
 // percentile is 255 first. Above 512 px the fill is computed at 512 and upsampled: inpainting is
 // smooth anyway, and its cost grows with the filled area (seconds at 2048^2).
-void inpaint_float(cv::Mat& rgb, const cv::Mat& fill) {
+void inpaint_texture(cv::Mat& rgb, const cv::Mat& fill);
+
+void inpaint_float(cv::Mat& rgb, const cv::Mat& fill, PhotoImportParams::FillMethod method) {
+    if (method == PhotoImportParams::FillMethod::Texture) return inpaint_texture(rgb, fill);
     const int work = 512;
     cv::Mat src = rgb, mask = fill;
     bool reduced = rgb.cols > work;
@@ -169,6 +173,60 @@ void inpaint_float(cv::Mat& rgb, const cv::Mat& fill) {
     cv::merge(ch, result);
     if (reduced) cv::resize(result, result, rgb.size(), 0, 0, cv::INTER_LINEAR);
     result.copyTo(rgb, fill);
+}
+
+// The shift-map fill (cv::xphoto::inpaint, INPAINT_SHIFTMAP) of the filled pixels inside
+// kTextureFillRadius of the horizon: each copies a known pixel at an offset chosen by a graph cut, so
+// a band across the sky gets the sky's own clouds and blue and its edges are seams of real texture.
+// Near the horizon the smooth fill stays: there the known pixels are few and dark (housings, roofs,
+// the rim), and copied they made jagged dark arcs on two cameras (looked at). Judged in CIELAB of
+// the linear values over the known pixels' 99th percentile (clipped at 4: the sun's few pixels), at
+// most kTextureFillWork px (upsampled beyond: its cost grows with the image and the filled area).
+constexpr double kTextureFillRadius = 0.92;
+constexpr int kTextureFillWork = 384;
+
+void inpaint_texture(cv::Mat& rgb, const cv::Mat& fill) {
+    inpaint_float(rgb, fill, PhotoImportParams::FillMethod::Smooth);  // the horizon's, and the sources' start
+    const int n = rgb.cols, work = std::min(n, kTextureFillWork);
+    cv::Mat interior = cv::Mat::zeros(work, work, CV_8U), src = rgb, f = fill;
+    if (work != n) {
+        cv::resize(rgb, src, cv::Size(work, work), 0, 0, cv::INTER_AREA);
+        cv::Mat m;
+        fill.convertTo(m, CV_32F);
+        cv::resize(m, m, cv::Size(work, work), 0, 0, cv::INTER_AREA);
+        f = m > 0.01f;
+    }
+    const double c = (work - 1) / 2.0, r_max = kTextureFillRadius * work / 2.0;
+    for (int y = 0; y < work; ++y)
+        for (int x = 0; x < work; ++x)
+            if (f.at<unsigned char>(y, x) && std::hypot(x - c, y - c) < r_max) interior.at<unsigned char>(y, x) = 255;
+    if (cv::countNonZero(interior) == 0) return;
+    std::vector<float> known;
+    for (int y = 0; y < work; ++y)
+        for (int x = 0; x < work; ++x)
+            if (!f.at<unsigned char>(y, x)) {
+                const cv::Vec3f& p = src.at<cv::Vec3f>(y, x);
+                known.push_back(std::max({p[0], p[1], p[2]}));
+            }
+    float scale = 1.0f;
+    if (!known.empty()) {
+        const size_t q = size_t(0.99 * (known.size() - 1));
+        std::nth_element(known.begin(), known.begin() + q, known.end());
+        if (known[q] > 0) scale = 1.0f / known[q];
+    }
+    cv::Mat lab, filled;
+    cv::min(src * scale, 4.0f, lab);
+    cv::cvtColor(lab, lab, cv::COLOR_LRGB2Lab);
+    cv::xphoto::inpaint(lab, ~interior, filled, cv::xphoto::INPAINT_SHIFTMAP);
+    cv::cvtColor(filled, filled, cv::COLOR_Lab2LRGB);
+    filled = cv::max(filled / scale, 0.0f);
+    cv::Mat where = interior;
+    if (work != n) {
+        cv::resize(filled, filled, rgb.size(), 0, 0, cv::INTER_LINEAR);
+        cv::resize(interior, where, rgb.size(), 0, 0, cv::INTER_NEAREST);
+        where &= fill;
+    }
+    filled.copyTo(rgb, where);
 }
 
 }  // namespace
@@ -728,7 +786,7 @@ ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, 
         }
 
     if (cv::countNonZero(fill) > 0) {
-        if (params.inpaint) inpaint_float(sky, fill);
+        if (params.inpaint) inpaint_float(sky, fill, params.fill_method);
         else sky.setTo(cv::Scalar::all(0), fill);
     }
 

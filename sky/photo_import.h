@@ -118,7 +118,13 @@ struct PhotoImportParams {
     std::vector<std::array<int, 4>> not_sky_rects;
     std::optional<ShadowBand> shadow_band;                 // also not sky: a band at the sun's azimuth
     std::vector<HorizonObstruction> horizon_obstructions;  // also not sky: a horizon profile
-    bool inpaint = true;                                   // fill non-sky pixels (cv::inpaint, Telea); else leave 0
+    bool inpaint = true;                                   // fill non-sky pixels (fill_method); else leave 0
+    // How: Smooth (default; cv::inpaint, Telea: smooth and the same from frame to frame, for
+    // sequences) or Texture (cv::xphoto::inpaint shift-map: the sky's own texture copied in, for
+    // one sky that will be moved: a smooth fill of a wide band (the TSI's shadow band) drags the
+    // sun's glare along it, and in rollouts that light streak flies across the sky). Texture costs
+    // about 1 s at 256 px, 4 s at 512 (computed at most at 512).
+    enum class FillMethod { Smooth, Texture } fill_method = FillMethod::Smooth;
     // Input encoding: "auto" (8-bit formats are sRGB-encoded, .exr/.hdr/.pfm are linear), "srgb", "linear".
     std::string encoding = "auto";
     // Saturation: a pixel is "clipped" if its largest channel is within 2/255 of this encoded level.

@@ -248,6 +248,72 @@ TEST(PhotoImport, MaskedObstructionIsInpaintedPlausibly) {
         }
 }
 
+// A wide band across broken cloud with the sun's glare at its inner end (the TSI's shadow band):
+// the smooth fill drags the glare along the band as a bright, featureless streak; the texture fill
+// puts the sky's own clouds and blue there, and is the same on every run.
+TEST(PhotoImport, TextureFillPutsCloudsInAWideBandNotAGlareStreak) {
+    TestCamera cam{200.0, 200.0, 180.0, 0.0, LensLaw::Equidistant, false};
+    Image photo(400, 400, 3), band(400, 400, 1);
+    auto sky_at = [](double x, double y) {
+        const double cloud = 0.5 + 0.25 * (std::sin(0.21 * x + 0.07 * y) + std::sin(0.17 * y - 0.05 * x + 1.3));
+        const double a = std::clamp((cloud - 0.45) / 0.15, 0.0, 1.0);  // broken cumulus, ~15 px across
+        const double glare = 6.0 * std::exp(-std::hypot(x - 215.0, y - 185.0) / 12.0);
+        return Color(float(0.2 + 0.7 * a + glare), float(0.35 + 0.55 * a + glare), float(0.8 + 0.1 * a + glare));
+    };
+    for (int y = 0; y < 400; ++y)
+        for (int x = 0; x < 400; ++x) {
+            const bool inside = std::hypot(x - 200.0, y - 200.0) <= 180;
+            const Color c = inside ? sky_at(x, y) : Color(0.05f, 0.05f, 0.05f);
+            for (int k = 0; k < 3; ++k) photo.at(x, y, k) = c[k];
+            // 30 px wide, from just beside the glare to the horizon (down-left).
+            const double along = ((200.0 - x) + (y - 200.0)) / std::sqrt(2.0), across = ((x - 200.0) + (y - 200.0)) / std::sqrt(2.0);
+            if (along > 10 && std::abs(across) < 15) band.at(x, y, 0) = 1.0f;
+        }
+    PhotoImportParams p = params_for(cam, 128, false);
+    p.detect_thin_obstructions = false;
+    p.fill_method = PhotoImportParams::FillMethod::Smooth;
+    const ImportedPhoto smooth = import_photo_image(photo, "band", p, &band);
+    p.fill_method = PhotoImportParams::FillMethod::Texture;
+    const ImportedPhoto texture = import_photo_image(photo, "band", p, &band);
+    const ImportedPhoto again = import_photo_image(photo, "band", p, &band);
+    EXPECT_EQ(texture.sky.rgb, again.sky.rgb);  // deterministic
+
+    // Over the band's pixels within 80 % of the radius, away from the glare (the unmasked import
+    // brighter than any cloud there): the fine detail (luminance minus its 5 x 5 mean) against the
+    // seen sky's, and the mean against the hidden sky's (the same photograph imported unmasked).
+    const ImportedPhoto truth = import_photo_image(photo, "band", p);
+    auto measure = [&](const ImportedPhoto& im, double* detail_ratio, double* mean_ratio) {
+        const int n = 128;
+        cv::Mat lum(n, n, CV_32F), blur;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) lum.at<float>(j, i) = im.sky.pixel(i, j).mean();
+        cv::blur(lum, blur, cv::Size(5, 5));
+        double d_band = 0, d_seen = 0, m_band = 0, m_truth = 0;
+        long c_band = 0, c_seen = 0;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                if (fisheye::pixel_center_uv(i, j, n).norm() > 0.8 || truth.sky.pixel(i, j).mean() > 1.6) continue;
+                const double hf = std::abs(lum.at<float>(j, i) - blur.at<float>(j, i));
+                if (im.not_sky[size_t(j) * n + i])
+                    d_band += hf, m_band += lum.at<float>(j, i), m_truth += truth.sky.pixel(i, j).mean(), ++c_band;
+                else
+                    d_seen += hf, ++c_seen;
+            }
+        ASSERT_GT(c_band, 100);
+        *detail_ratio = (d_band / c_band) / (d_seen / c_seen);
+        *mean_ratio = m_band / m_truth;
+    };
+    double smooth_detail = 0, smooth_mean = 0, texture_detail = 0, texture_mean = 0;
+    measure(smooth, &smooth_detail, &smooth_mean);
+    measure(texture, &texture_detail, &texture_mean);
+    EXPECT_LT(smooth_detail, 0.5) << "the smooth fill is smooth";
+    EXPECT_GT(texture_detail, 0.75);
+    EXPECT_LT(texture_detail, 1.5);
+    EXPECT_NEAR(texture_mean, 1.0, 0.15);
+    std::printf("band detail / seen sky's: smooth %.2f texture %.2f; band mean / hidden sky's: smooth %.2f texture %.2f\n",
+                smooth_detail, texture_detail, smooth_mean, texture_mean);
+}
+
 TEST(PhotoImport, StrongDownsamplingAveragesInsteadOfAliasing) {
     // A fine checkerboard far above the output's Nyquist rate must import as its mean (0.5), not
     // as a beat pattern.
