@@ -176,7 +176,10 @@ TEST(SkyModelCli, EvaluateScoresAFolderOfImportedSkiesAsItsPhotographs) {
     for (size_t k = 0; k < list.size(); ++k) {
         // Named against their order (frame_5 is the first), so only the recorded time can order them.
         const std::string stem = dir + "/skies/frame_" + std::to_string(list.size() - 1 - k);
-        auto r = test::run_command(dynsky("sky import --quiet --preset arm-tsi --sky-res 256 " + list[k].string() +
+        // Sequences fill non-sky pixels smoothly (the same from frame to frame); `sky import`
+        // does so with --fill smooth.
+        auto r = test::run_command(dynsky("sky import --quiet --fill smooth --preset arm-tsi --sky-res 256 " +
+                                          list[k].string() +
                                           " -o " + stem + ".exr --filled-mask " + stem + ".filled.png"));
         ASSERT_EQ(r.exit_code, 0) << r.output;
     }
@@ -271,11 +274,12 @@ TEST(SkyModelCli, EvaluateRejectsBadArguments) {
 
 TEST(SkyModelCli, TrainingDataImportsExactlyAsSkyImport) {
     // The dataset builder imports in-process (it needs the not-sky mask); the sky it sees must be
-    // the one `dynsky sky import --preset arm-tsi` writes.
+    // the one `dynsky sky import --preset arm-tsi --fill smooth` writes (sequences are filled
+    // smoothly; a single import's default texture fill differs in the filled pixels only).
     DYNSKY_REQUIRE_SHARED();
     const std::string dir = test::temp_dir("import_same");
     const std::string photo = test::shared_path("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg");
-    auto r = test::run_command(dynsky("sky import --preset arm-tsi --res 64 " + photo + " --out " + dir + "/cli.exr"));
+    auto r = test::run_command(dynsky("sky import --preset arm-tsi --fill smooth --res 64 " + photo + " --out " + dir + "/cli.exr"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     SkyImage cli = load_sky(dir + "/cli.exr");
     SkyImage lib = import_preset_photo(photo, "arm-tsi", 64);
