@@ -179,9 +179,10 @@ void inpaint_float(cv::Mat& rgb, const cv::Mat& fill, PhotoImportParams::FillMet
 // kTextureFillRadius of the horizon: each copies a known pixel at an offset chosen by a graph cut, so
 // a band across the sky gets the sky's own clouds and blue and its edges are seams of real texture.
 // Near the horizon the smooth fill stays: there the known pixels are few and dark (housings, roofs,
-// the rim), and copied they made jagged dark arcs on two cameras (looked at). Judged in CIELAB of
-// the linear values over the known pixels' 99th percentile (clipped at 4: the sun's few pixels), at
-// most kTextureFillWork px (upsampled beyond: its cost grows with the image and the filled area).
+// the rim), and copied they made jagged dark arcs on two cameras (looked at). Judged and copied in
+// CIELAB of the linear values over the seen pixels' 99th percentile, clipped at 4 (a sun copied into
+// the band would come back no brighter than that), at most kTextureFillWork px (upsampled beyond:
+// the cost grows with the image and the filled area).
 constexpr double kTextureFillRadius = 0.92;
 constexpr int kTextureFillWork = 384;
 
