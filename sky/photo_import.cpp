@@ -178,13 +178,15 @@ void inpaint_float(cv::Mat& rgb, const cv::Mat& fill, PhotoImportParams::FillMet
 // The shift-map fill (cv::xphoto::inpaint, INPAINT_SHIFTMAP) of the filled pixels inside
 // kTextureFillRadius of the horizon: each copies a known pixel at an offset chosen by a graph cut, so
 // a band across the sky gets the sky's own clouds and blue and its edges are seams of real texture.
-// Near the horizon the smooth fill stays: there the known pixels are few and dark (housings, roofs,
+// Only regions at least 4 % of the radius wide; thin ones and those near the horizon keep the
+// smooth fill. Near the horizon: there the known pixels are few and dark (housings, roofs,
 // the rim), and copied they made jagged dark arcs on two cameras (looked at). Judged and copied in
 // CIELAB of the linear values over the seen pixels' 99th percentile, clipped at 4 (a sun copied into
 // the band would come back no brighter than that), at most kTextureFillWork px (upsampled beyond:
 // the cost grows with the image and the filled area).
 constexpr double kTextureFillRadius = 0.92;
 constexpr int kTextureFillWork = 384;
+constexpr double kTextureFillMinWidth = 0.02;  // x the radius, half the width of the narrowest region
 
 void inpaint_texture(cv::Mat& rgb, const cv::Mat& fill) {
     inpaint_float(rgb, fill, PhotoImportParams::FillMethod::Smooth);  // the horizon's, and the sources' start
@@ -201,6 +203,15 @@ void inpaint_texture(cv::Mat& rgb, const cv::Mat& fill) {
     for (int y = 0; y < work; ++y)
         for (int x = 0; x < work; ++x)
             if (f.at<unsigned char>(y, x) && std::hypot(x - c, y - c) < r_max) interior.at<unsigned char>(y, x) = 255;
+    // Only wide regions (the band, an arm): a thin object's gap (a mast, a wire) is filled well
+    // smoothly, and the same from frame to frame, so that sequences imported one by one measure no
+    // motion there.
+    const int half = std::max(2, int(std::lround(kTextureFillMinWidth * work / 2.0)));
+    const cv::Mat round = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * half + 1, 2 * half + 1));
+    cv::Mat wide;
+    cv::morphologyEx(interior, wide, cv::MORPH_OPEN, round);
+    cv::dilate(wide, wide, round);
+    interior &= wide;
     if (cv::countNonZero(interior) == 0) return;
     std::vector<float> known;
     for (int y = 0; y < work; ++y)
