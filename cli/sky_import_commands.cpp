@@ -84,7 +84,7 @@ void run_import(const ImportOptions& o) {
         camera_colour = preset.colour;
         have_location = true;
         // The shadow band follows the sun at the time used (given, or the file name's on its clock).
-        std::string band_time = o.time.empty() ? time_from_file_name(o.photo, utc_offset) : o.time;
+        std::string band_time = o.time.empty() ? photo_time(o.photo, utc_offset).iso : o.time;
         if (o.mask.empty()) {
             PresetImportPlan plan = plan_preset_import(o.preset, o.photo, o.resolution, band_time, !o.no_preset_mask);
             params = plan.params;
@@ -116,12 +116,20 @@ void run_import(const ImportOptions& o) {
     params.fill_method = o.fill == "smooth" ? PhotoImportParams::FillMethod::Smooth
                                             : PhotoImportParams::FillMethod::Texture;
 
-    // Time: given, or from the file name (UTC "...YYYYMMDDhhmmssZ", or "YYYY-MM-DD_hh_mm" on a clock
-    // --utc-offset hours ahead of UTC, which presets know).
+    // Time: given, or the photograph's (its file name's, else its EXIF's: sky/photo_import.h
+    // photo_time); one without a zone is on a clock --utc-offset hours ahead of UTC, which presets
+    // know; without a preset or --utc-offset such a time is not guessed.
     std::string time = o.time;
-    if (time.empty()) time = time_from_file_name(o.photo, utc_offset);
-    if (time.find('Z') == std::string::npos && o.preset.empty() && !o.offset_opt->count() && o.time.empty())
-        time.clear();
+    if (time.empty()) {
+        const PhotoTime found = photo_time(o.photo, utc_offset);
+        time = found.iso;
+        if (!time.empty() && !found.zone_in_file && o.preset.empty() && !o.offset_opt->count()) {
+            std::printf("note: %s: its %s gives a time without a zone (%s): give --utc-offset HOURS (or --time) "
+                        "to use it\n",
+                        o.photo.c_str(), found.source.c_str(), time.substr(0, 19).c_str());
+            time.clear();
+        }
+    }
     bool calibrate = o.hdr == "calibrated" || (o.hdr == "auto" && have_location && !time.empty());
     UtcTime utc;
     GeoLocation where{lat, lon, elevation};
@@ -338,7 +346,8 @@ void register_sky_import_commands(CLI::App& sky) {
                     "Input values: auto (default: 8-bit formats are sRGB, .exr/.hdr/.pfm/.tif linear), srgb, linear");
     imp->add_option(
            "--time", io->time,
-           "When the photo was taken, ISO 8601 with a zone (2017-05-24T17:00:00Z); default: from the file name")
+           "When the photo was taken, ISO 8601 with a zone (2017-05-24T17:00:00Z); default: from the file name, "
+           "else its EXIF DateTimeOriginal (docs/sky-import.md lists the names understood)")
         ->check(utc_time());
     io->offset_opt =
         imp->add_option(

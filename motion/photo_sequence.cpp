@@ -100,15 +100,16 @@ PhotoSequence photo_sequence_from_folder(const std::string& folder, const std::s
         std::optional<double> seconds;
         if (skies) {
             seconds = imported_sky_time(e.path().string());
-        } else if (const std::string time = time_from_file_name(e.path().string(), utc_offset); !time.empty()) {
+        } else if (const std::string time = photo_time(e.path().string(), utc_offset).iso; !time.empty()) {
             seconds = utc_seconds(time);
         }
         if (!seconds)
             throw_file_error(e.path().string(),
                              skies ? "carries no time (none in its name, as ..._YYYYMMDDhhmmssZ.exr, nor the "
                                      "photograph's time that 'dynsky sky import' records)"
-                                   : "the file name carries no time (expected ..._YYYYMMDDhhmmssZ.jpg or "
-                                     "YYYY-MM-DD_hh_mm.jpg)");
+                                   : "carries no time: none in its file name (as ..._YYYYMMDDhhmmssZ.jpg, "
+                                     "YYYY-MM-DD_hh_mm.jpg, YYYY-MM-DDThh:mm:ss.jpg or YYYYMMDD_hhmmss.jpg) and no EXIF "
+                                     "DateTimeOriginal");
         timed.emplace_back(*seconds, e.path().string());
     }
     if (timed.empty())

@@ -15,6 +15,7 @@
 #include "sky/fisheye.h"
 #include "util/color.h"
 #include "util/error.h"
+#include "util/image.h"
 
 namespace dynsky {
 
@@ -924,21 +925,86 @@ std::string find_preset_mask(const std::string& preset, const std::string& photo
     return "";
 }
 
-std::string time_from_file_name(const std::string& path, double utc_offset_hours) {
-    std::string file = fs::path(path).filename().string();
-    std::smatch m;
-    if (std::regex_search(file, m, std::regex("(\\d{4})(\\d{2})(\\d{2})(\\d{2})(\\d{2})(\\d{2})Z")))
-        return m[1].str() + "-" + m[2].str() + "-" + m[3].str() + "T" + m[4].str() + ":" + m[5].str() + ":" +
-               m[6].str() + "Z";
-    if (std::regex_search(file, m, std::regex("(\\d{4})-(\\d{2})-(\\d{2})_(\\d{2})_(\\d{2})(?:_(\\d{2}))?"))) {
-        int minutes = int(std::lround(std::abs(utc_offset_hours) * 60));
-        char zone[16];
-        std::snprintf(zone, sizeof zone, "%c%02d:%02d", utc_offset_hours < 0 ? '-' : '+', minutes / 60, minutes % 60);
-        std::string sec = m[6].matched ? m[6].str() : "00";
-        return m[1].str() + "-" + m[2].str() + "-" + m[3].str() + "T" + m[4].str() + ":" + m[5].str() + ":" + sec +
-               zone;
+namespace {
+
+std::string clock_zone(double utc_offset_hours) {
+    const int minutes = int(std::lround(std::abs(utc_offset_hours) * 60));
+    char zone[16];
+    std::snprintf(zone, sizeof zone, "%c%02d:%02d", utc_offset_hours < 0 ? '-' : '+', minutes / 60, minutes % 60);
+    return zone;
+}
+
+// ISO 8601 from parts, "" unless they make a plausible date and time (years 1900-2199).
+std::string iso_time(const std::string& y, const std::string& mo, const std::string& d, const std::string& h,
+                     const std::string& mi, const std::string& sec, const std::string& zone) {
+    const int year = std::stoi(y), month = std::stoi(mo), day = std::stoi(d), hour = std::stoi(h),
+              minute = std::stoi(mi), second = sec.empty() ? 0 : std::stoi(sec);
+    if (year < 1900 || year > 2199 || month < 1 || month > 12 || day < 1 || day > 31 || hour > 23 || minute > 59 ||
+        second > 60)
+        return "";
+    return y + "-" + mo + "-" + d + "T" + h + ":" + mi + ":" + (sec.empty() ? "00" : sec) + zone;
+}
+
+// "Z", "+hh:mm", "-hhmm" as given -> "Z" / "+hh:mm"; "" when absent or implausible.
+std::string zone_text(const std::string& z) {
+    if (z.empty() || z == "Z") return z;
+    const std::string digits = z.substr(1, 2) + z.substr(z.size() - 2);
+    const int h = std::stoi(digits.substr(0, 2)), m = std::stoi(digits.substr(2));
+    if (h > 14 || m > 59) return "";
+    return z.substr(0, 1) + digits.substr(0, 2) + ":" + digits.substr(2);
+}
+
+}  // namespace
+
+std::string time_from_file_name(const std::string& path, double utc_offset_hours, bool* zone_in_name) {
+    const std::string file = fs::path(path).filename().string();
+    if (zone_in_name) *zone_in_name = false;
+    // Each pattern: the first match whose date and time are plausible.
+    static const std::regex patterns[] = {
+        // ISO-like with separators, optional seconds, fraction and zone.
+        std::regex("(?:^|\\D)(\\d{4})-(\\d{2})-(\\d{2})[T_ ](\\d{2})[:\\-_.](\\d{2})(?:[:\\-_.](\\d{2}))?(?:\\.\\d+)?"
+                   "(Z|[+\\-]\\d{2}:\\d{2}|[+\\-]\\d{4}(?!\\d))?(?!\\d)"),
+        // Compact: 14 digits (optionally a separator after the date), optional Z.
+        std::regex("(?:^|\\D)(\\d{4})(\\d{2})(\\d{2})[T_\\-]?(\\d{2})(\\d{2})(\\d{2})(Z?)(?!\\d)"),
+        // Compact without seconds: date, a separator, 4 digits.
+        std::regex("(?:^|\\D)(\\d{4})(\\d{2})(\\d{2})[T_\\-](\\d{2})(\\d{2})()()(?!\\d)"),
+    };
+    for (const std::regex& re : patterns) {
+        for (auto it = std::sregex_iterator(file.begin(), file.end(), re); it != std::sregex_iterator(); ++it) {
+            const std::smatch& m = *it;
+            const std::string given = zone_text(m[7].str());
+            const std::string zone = given.empty() ? clock_zone(utc_offset_hours) : given;
+            const std::string iso = iso_time(m[1], m[2], m[3], m[4], m[5], m[6], zone);
+            if (iso.empty()) continue;
+            if (zone_in_name) *zone_in_name = !given.empty();
+            return iso;
+        }
     }
     return "";
+}
+
+PhotoTime photo_time(const std::string& path, double utc_offset_hours) {
+    PhotoTime t;
+    t.iso = time_from_file_name(path, utc_offset_hours, &t.zone_in_file);
+    if (!t.iso.empty()) {
+        t.source = "file name";
+        return t;
+    }
+    // EXIF: "YYYY:MM:DD hh:mm:ss", its zone (EXIF 2.31) "+hh:mm".
+    std::string when = image_header_string(path, "Exif:DateTimeOriginal");
+    if (when.empty()) when = image_header_string(path, "DateTime");
+    std::smatch m;
+    static const std::regex exif("^\\s*(\\d{4}):(\\d{2}):(\\d{2})[ T](\\d{2}):(\\d{2}):(\\d{2})");
+    if (!std::regex_search(when, m, exif)) return t;
+    std::string given = image_header_string(path, "Exif:OffsetTimeOriginal");
+    static const std::regex offset("^\\s*([+\\-]\\d{2}:\\d{2})\\s*$");
+    std::smatch z;
+    given = std::regex_search(given, z, offset) ? zone_text(z[1].str()) : "";
+    t.iso = iso_time(m[1], m[2], m[3], m[4], m[5], m[6], given.empty() ? clock_zone(utc_offset_hours) : given);
+    if (t.iso.empty()) return t;
+    t.zone_in_file = !given.empty();
+    t.source = "EXIF";
+    return t;
 }
 
 }  // namespace dynsky

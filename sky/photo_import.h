@@ -226,8 +226,22 @@ std::vector<std::string> camera_preset_names();
 std::string find_preset_mask(const std::string& preset, const std::string& photo_path);
 
 // The frame time encoded in a file name, ISO 8601 with an explicit zone, or "" if none is
-// recognised: "..._YYYYMMDDhhmmssZ.jpg" (UTC) and "YYYY-MM-DD_hh_mm.jpg" (clock with the given
-// utc_offset_hours, written as "+hh:mm").
-std::string time_from_file_name(const std::string& path, double utc_offset_hours = 0);
+// recognised. Recognised (the first valid date and time in the name; digits not part of a longer
+// run): "YYYYMMDDhhmmssZ" (UTC), "YYYY-MM-DD?hh?mm[?ss]" with any of T _ space between date and
+// time and : - _ . within it, then optionally Z or +hh:mm / -hhmm (as given), "YYYYMMDDhhmmss" and
+// "YYYYMMDD?hhmmss" / "YYYYMMDD?hhmm" with ? one of T _ -. A time without a zone is on a clock
+// utc_offset_hours ahead of UTC (written as "+hh:mm"); *zone_in_name (optional) tells whether the
+// name gave the zone.
+std::string time_from_file_name(const std::string& path, double utc_offset_hours = 0, bool* zone_in_name = nullptr);
+
+// When a photograph was taken: its file name's time (above), else its EXIF DateTimeOriginal (or
+// DateTime) with OffsetTimeOriginal when the camera recorded one, else the clock utc_offset_hours
+// ahead of UTC. ISO 8601 with a zone, or "" when neither says.
+struct PhotoTime {
+    std::string iso;            // "" when none
+    bool zone_in_file = false;  // the name or the EXIF gave the zone (else utc_offset_hours was assumed)
+    std::string source;         // "file name" or "EXIF"
+};
+PhotoTime photo_time(const std::string& path, double utc_offset_hours = 0);
 
 }  // namespace dynsky

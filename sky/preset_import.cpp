@@ -16,7 +16,7 @@ PresetImportPlan plan_preset_import(const std::string& preset, const std::string
     plan.params.mask_path = look_for_mask ? find_preset_mask(preset, photo) : "";
     plan.mask_found = !plan.params.mask_path.empty();
     plan.location = GeoLocation{cam.latitude_deg, cam.longitude_deg, cam.elevation_m};
-    plan.time = time.empty() ? time_from_file_name(photo, cam.filename_utc_offset_hours) : time;
+    plan.time = time.empty() ? photo_time(photo, cam.filename_utc_offset_hours).iso : time;
     if (plan.mask_found) {
         plan.obstructions = "mask " + plan.params.mask_path;
         return plan;

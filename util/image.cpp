@@ -129,6 +129,16 @@ long first_non_finite(const Image& image) {
     return -1;
 }
 
+std::string image_header_string(const std::string& path, const std::string& name) {
+    if (!image_file_problem(path).empty()) return "";
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) {
+        (void)OIIO::geterror();
+        return "";
+    }
+    return in->spec().get_string_attribute(name);
+}
+
 Image read_image(const std::string& path) {
     if (std::string why = image_file_problem(path); !why.empty()) throw_file_error(path, why);
     auto in = OIIO::ImageInput::open(path);

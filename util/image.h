@@ -57,6 +57,10 @@ std::string image_file_problem(const std::string& path);
 // corrupt file (including a JPEG cut short, which its decoder would silently fill with grey).
 Image read_image(const std::string& path);
 
+// A string attribute of an image file's header (OpenImageIO's name: "Exif:DateTimeOriginal",
+// "DateTime", ...), read without decoding pixels; "" when the file cannot be opened or has none.
+std::string image_header_string(const std::string& path, const std::string& name);
+
 // The index (in Image::pixels) of the first value that is NaN or infinite, or -1 when there is
 // none: what a renderer wrote is finite everywhere, so such a frame was damaged since.
 long first_non_finite(const Image& image);

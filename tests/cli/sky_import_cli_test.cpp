@@ -1,6 +1,8 @@
 // End-to-end: dynsky sky import | mask.
 #include <gtest/gtest.h>
 
+#include <OpenImageIO/imageio.h>
+
 #include <filesystem>
 #include <fstream>
 
@@ -37,6 +39,44 @@ TEST(SkyImportCli, ImportsATsiFrameWithItsPreset) {
     ASSERT_TRUE(sky.sun_direction.has_value());
     EXPECT_GT(sky.sun_direction->y(), 0.8f);  // 65 degrees up at 17:00 UTC
     EXPECT_TRUE(fs::exists(dir + "/tsi.png"));
+    fs::remove_all(dir);
+}
+
+// Another camera's name carries no time: the EXIF's is used (with its zone), and a time without a
+// zone is not guessed (a note says what to give).
+TEST(SkyImportCli, TimeFromTheExifWhenTheNameHasNone) {
+    DYNSKY_REQUIRE_SHARED();
+    std::string dir = test::temp_dir("sky-import-exif");
+    const Image photo = read_image(test::shared_path("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg"));
+    auto write_jpeg = [&](const std::string& path, const char* offset) {
+        auto out = OIIO::ImageOutput::create(path);
+        ASSERT_TRUE(out);
+        OIIO::ImageSpec spec(photo.width, photo.height, 3, OIIO::TypeDesc::UINT8);
+        spec.attribute("Exif:DateTimeOriginal", "2017:05:24 11:00:00");  // 17:00 UTC on a UTC-6 clock
+        if (offset) spec.attribute("Exif:OffsetTimeOriginal", offset);
+        spec.attribute("Compression", "jpeg:98");
+        ASSERT_TRUE(out->open(path, spec));
+        ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, photo.pixels.data()));
+        out->close();
+    };
+    write_jpeg(dir + "/zoned.jpg", "-06:00");
+    auto r = test::run_command(exe() + " sky import " + dir + "/zoned.jpg --preset arm-tsi --res 64 --out " + dir +
+                               "/zoned.exr");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("time 2017-05-24T17:00:00Z"), std::string::npos) << r.output;
+    SkyImage sky = load_sky(dir + "/zoned.exr");
+    ASSERT_TRUE(sky.sun_direction.has_value());
+    EXPECT_GT(sky.sun_direction->y(), 0.8f);  // 65 degrees up at 17:00 UTC
+
+    write_jpeg(dir + "/local.jpg", nullptr);
+    r = test::run_command(exe() + " sky import " + dir + "/local.jpg --lat 36.605 --lon -97.485 --mirror --res 64 --out " +
+                          dir + "/local.exr");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("its EXIF gives a time without a zone"), std::string::npos) << r.output;
+    r = test::run_command(exe() + " sky import " + dir + "/local.jpg --lat 36.605 --lon -97.485 --mirror --utc-offset -6 "
+                          "--res 64 --out " + dir + "/local2.exr");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("time 2017-05-24T17:00:00Z"), std::string::npos) << r.output;
     fs::remove_all(dir);
 }
 

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <OpenImageIO/imageio.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -494,6 +496,54 @@ TEST(PhotoImport, PresetsFileNamesAndTimes) {
     EXPECT_EQ(time_from_file_name("x/2020-08-12_10_07.jpg", 2.0), "2020-08-12T10:07:00+02:00");
     EXPECT_EQ(time_from_file_name("x/2020-08-12_10_07.jpg", -5.5), "2020-08-12T10:07:00-05:30");
     EXPECT_EQ(time_from_file_name("holiday.jpg"), "");
+    // Other cameras' names: ISO-like with or without a zone, compact with a separator.
+    bool zone = true;
+    EXPECT_EQ(time_from_file_name("cam/2021-03-04T05:06:07Z.jpg", 0, &zone), "2021-03-04T05:06:07Z");
+    EXPECT_TRUE(zone);
+    EXPECT_EQ(time_from_file_name("2021-03-04 05-06-07.123+0130.png", 0, &zone), "2021-03-04T05:06:07+01:30");
+    EXPECT_TRUE(zone);
+    EXPECT_EQ(time_from_file_name("img_2021-03-04_05.06.jpg", 1.0, &zone), "2021-03-04T05:06:00+01:00");
+    EXPECT_FALSE(zone);
+    EXPECT_EQ(time_from_file_name("sky_20210304_050607.jpg", -3.0, &zone), "2021-03-04T05:06:07-03:00");
+    EXPECT_FALSE(zone);
+    EXPECT_EQ(time_from_file_name("20210304T0506.jpg"), "2021-03-04T05:06:00+00:00");
+    EXPECT_EQ(time_from_file_name("20210304050607.jpg"), "2021-03-04T05:06:07+00:00");
+    // Not times: a longer digit run (a serial), an impossible date, then the first plausible one.
+    EXPECT_EQ(time_from_file_name("cam_1234567890123456.jpg"), "");
+    EXPECT_EQ(time_from_file_name("2017-13-45_10_07.jpg"), "");
+    EXPECT_EQ(time_from_file_name("run_99999999_999999_then_2020-08-12_10_07.jpg"), "2020-08-12T10:07:00+00:00");
+}
+
+TEST(PhotoImport, PhotoTimeFallsBackToExif) {
+    const std::string dir = test::temp_dir("photo_time_exif");
+    auto write_jpeg = [&](const std::string& path, const char* when, const char* offset) {
+        auto out = OIIO::ImageOutput::create(path);
+        ASSERT_TRUE(out);
+        OIIO::ImageSpec spec(16, 16, 3, OIIO::TypeDesc::UINT8);
+        if (when) spec.attribute("Exif:DateTimeOriginal", when);
+        if (offset) spec.attribute("Exif:OffsetTimeOriginal", offset);
+        std::vector<unsigned char> px(16 * 16 * 3, 128);
+        ASSERT_TRUE(out->open(path, spec));
+        ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, px.data()));
+        out->close();
+    };
+    write_jpeg(dir + "/a.jpg", "2021:03:04 05:06:07", nullptr);
+    PhotoTime t = photo_time(dir + "/a.jpg", 2.0);
+    EXPECT_EQ(t.iso, "2021-03-04T05:06:07+02:00");
+    EXPECT_EQ(t.source, "EXIF");
+    EXPECT_FALSE(t.zone_in_file);
+    write_jpeg(dir + "/b.jpg", "2021:03:04 05:06:07", "-04:00");
+    t = photo_time(dir + "/b.jpg", 2.0);
+    EXPECT_EQ(t.iso, "2021-03-04T05:06:07-04:00");
+    EXPECT_TRUE(t.zone_in_file);
+    write_jpeg(dir + "/c.jpg", nullptr, nullptr);
+    EXPECT_EQ(photo_time(dir + "/c.jpg").iso, "");
+    // The name wins over the EXIF.
+    write_jpeg(dir + "/sky_20200101_000000.jpg", "2021:03:04 05:06:07", nullptr);
+    t = photo_time(dir + "/sky_20200101_000000.jpg");
+    EXPECT_EQ(t.iso, "2020-01-01T00:00:00+00:00");
+    EXPECT_EQ(t.source, "file name");
+    std::filesystem::remove_all(dir);
     EXPECT_EQ(camera_preset_names().size(), 2u);
     EXPECT_TRUE(camera_preset("arm-tsi").params.mirrored);
     EXPECT_EQ(camera_preset("mobotix").filename_utc_offset_hours, 2.0);
