@@ -833,11 +833,12 @@ void AdvectResidualNetwork::rollout(const SkyImage& given, const CloudFlow& flow
 
 MeasuredMotion network_form_flow(const SkyImage& previous, const SkyImage& current, const NetworkFormParams& form,
                                  int n) {
-    if (previous.resolution != current.resolution)
-        throw Error("previous frame: its resolution (" + std::to_string(previous.resolution) +
-                    ") differs from the sky's (" + std::to_string(current.resolution) + ")");
+    // A previous frame of another resolution is resampled to the sky's: only its motion is read.
+    const SkyImage resampled = previous.resolution != current.resolution ? resampled_sky(previous, current.resolution)
+                                                                         : SkyImage();
     const int w = std::min(256, current.resolution);
-    cv::Mat a = to_network_form(previous, form, w), b = to_network_form(current, form, w);
+    cv::Mat a = to_network_form(resampled.resolution > 0 ? resampled : previous, form, w),
+            b = to_network_form(current, form, w);
     const cv::Mat clipped = fill_saturated_pixels(&a) | fill_saturated_pixels(&b);
     return measured_motion(a, b, sky_disc_mask(w) & ~clipped).at_resolution(n);
 }

@@ -224,7 +224,7 @@ class CloudRollout {
 // The motion measured from a previous frame: Farneback flow previous -> current (and back) on the
 // network form at min(256, N_sky) px (as the training flows were measured), smoothed and confirmed
 // (motion/flow.h measured_motion), returned at resolution n in pixels at n (per the gap between the
-// frames).
+// frames). A previous frame of another resolution is resampled to the sky's first.
 MeasuredMotion network_form_flow(const SkyImage& previous, const SkyImage& current, const NetworkFormParams& form,
                                  int n);
 

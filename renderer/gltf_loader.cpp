@@ -136,6 +136,8 @@ std::string uri_problem(const std::string& uri) {
     const std::string path = percent_decoded(uri);
     static const std::regex scheme("^[A-Za-z][A-Za-z0-9+.-]*:.*");
     if (path.empty()) return "is empty";
+    if (path.find('\0') != std::string::npos)
+        return "contains a NUL byte (%00): it would name another file than it says";
     if (path[0] == '/' || path[0] == '\\' || std::regex_match(path, scheme))
         return "is an absolute path or URL: glTF files may only refer to files inside their own folder";
     std::filesystem::path normal = std::filesystem::path(path).lexically_normal();
@@ -354,11 +356,13 @@ class GltfLoader {
     Scene load() {
         scene_.source = path_;
         parse_file();
+        check_version();
         check_extensions();
         validate_buffer_views();
         build_materials();
         build_textures();
         traverse_nodes();
+        check_extent();
         if (!model_.animations.empty())
             warn(std::to_string(model_.animations.size()) +
                  " animation(s) ignored: the scene is rendered in its rest pose");
@@ -493,6 +497,19 @@ class GltfLoader {
                          in_quotes(uri.size() > 200 ? uri.substr(0, 200) + "..." : uri) + " " + problem);
             }
         }
+    }
+
+    // glTF 2.x only (asset.version "2.x"; a minVersion above 2.0 needs features dynsky lacks).
+    void check_version() {
+        const std::string& v = model_.asset.version;
+        if (!v.empty() && v.rfind("2.", 0) != 0 && v != "2")
+            fail("glTF version " + in_quotes(v) + ": only glTF 2.x is supported");
+        const std::string& m = model_.asset.minVersion;
+        if (!m.empty() && m != "2.0" && m != "2")
+            fail("needs glTF " + in_quotes(m) + " at least (asset.minVersion): dynsky reads glTF 2.0");
+        if (model_.defaultScene >= int(model_.scenes.size()))
+            fail("the scene to show is " + std::to_string(model_.defaultScene) + ", but the file has " +
+                 std::to_string(model_.scenes.size()) + " scene(s)");
     }
 
     void check_extensions() {
@@ -671,6 +688,8 @@ class GltfLoader {
             Vec2 sc = vec2_or(member(*tt, "scale"), Vec2(1, 1));
             float rotation = float(number_or(member(*tt, "rotation"), 0.0));
             slot->uv_transform = texture_transform_matrix(offset, rotation, sc);
+            if (!slot->uv_transform.allFinite())
+                fail(what + ": KHR_texture_transform is not finite (offset, scale or rotation beyond single precision)");
             if (const tg::Value* tc = member(*tt, "texCoord"); tc && tc->IsNumber())
                 slot->texcoord = tc->GetNumberAsInt();
         }
@@ -937,6 +956,13 @@ class GltfLoader {
         }
         if (!p.targets.empty()) warn("morph targets ignored: meshes are drawn with their base shape");
 
+        if (size_t(attr("POSITION")) < model_.accessors.size() &&
+            model_.accessors[size_t(attr("POSITION"))].componentType != TINYGLTF_COMPONENT_TYPE_FLOAT &&
+            std::find(model_.extensionsUsed.begin(), model_.extensionsUsed.end(), "KHR_mesh_quantization") ==
+                model_.extensionsUsed.end())
+            fail(what + " POSITION has integer components (componentType " +
+                 std::to_string(model_.accessors[size_t(attr("POSITION"))].componentType) +
+                 ") but the file does not use KHR_mesh_quantization: glTF 2.0 positions are floats");
         FloatArray pos = read_floats(attr("POSITION"), what + " POSITION", {TINYGLTF_TYPE_VEC3});
         const size_t n = pos.count;
         if (n > size_t(std::numeric_limits<uint32_t>::max())) fail(what + ": too many vertices");
@@ -962,6 +988,17 @@ class GltfLoader {
         mesh->indices = triangulate(mode, stream, what);
         if (mesh->indices.empty()) {
             warn(what + ": no triangles, skipped");
+            return false;
+        }
+        bool any_area = false;  // a primitive of zero-area triangles only is never hit: nothing to draw
+        for (size_t t = 0; t + 2 < mesh->indices.size() && !any_area; t += 3) {
+            const Vec3& a = mesh->positions[mesh->indices[t]];
+            any_area = (mesh->positions[mesh->indices[t + 1]] - a)
+                           .cross(mesh->positions[mesh->indices[t + 2]] - a)
+                           .squaredNorm() > 0;
+        }
+        if (!any_area) {
+            warn(what + ": every triangle has zero area, skipped");
             return false;
         }
 
@@ -1213,6 +1250,8 @@ class GltfLoader {
             }
             if (node.camera >= 0 && !world.topRows<3>().cast<float>().allFinite())
                 fail(what + ": the camera's world transform is not finite");
+            if (node.camera >= 0 && !(std::abs(world.topLeftCorner<3, 3>().determinant()) > 1e-30))
+                fail(what + ": the camera's world transform is singular (a zero scale?): it has no view direction");
             add_camera(node, index, world);
             for (auto c = node.children.rbegin(); c != node.children.rend(); ++c) stack.emplace_back(*c, world);
         }
@@ -1221,6 +1260,19 @@ class GltfLoader {
             return std::tie(a.camera_index, a.node_index) < std::tie(b.camera_index, b.node_index);
         });
         for (NodeCamera& c : cameras_) scene_.cameras.push_back(std::move(c.camera));
+    }
+
+    // Single-precision ray tracing resolves nothing of a scene placed this far out (the ray
+    // offsets, the BVH): 1e10 m already rendered differently, 1e20 as sky alone.
+    static constexpr double kMaxCoordinate = 1e8;  // metres from the origin
+    void check_extent() const {
+        const Bounds3 b = scene_.world_bounds();
+        if (b.empty()) return;
+        const double far = std::max(double(b.lo.cwiseAbs().maxCoeff()), double(b.hi.cwiseAbs().maxCoeff()));
+        if (!(far <= kMaxCoordinate))
+            fail("geometry reaches " + number_text(far, 3) + " m from the origin, beyond " +
+                 number_text(kMaxCoordinate, 3) +
+                 " m: single precision cannot resolve it (units not metres? georeferenced? move it near the origin)");
     }
 
     static constexpr int kNotBuilt = -2;

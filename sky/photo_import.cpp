@@ -790,6 +790,19 @@ ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, 
             throw_file_error(name, text);
         }
     }
+    {
+        // A photograph whose seen sky is black holds no sky (a lens cap, a night frame, a black
+        // file): nothing a fill, a calibration or a restored sun could make light from.
+        const cv::Mat seen_sky = ~fill & sky_disc_mask(n);
+        float brightest = 0;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i)
+                if (seen_sky.at<unsigned char>(j, i)) {
+                    const cv::Vec3f& p = sky.at<cv::Vec3f>(j, i);
+                    brightest = std::max({brightest, p[0], p[1], p[2]});
+                }
+        if (!(brightest > 0)) throw_file_error(name, "the sky it shows is black everywhere: nothing to import");
+    }
     out.not_sky.assign(size_t(n) * n, 0);
     out.clipped.assign(size_t(n) * n, 0);
     for (int j = 0; j < n; ++j)

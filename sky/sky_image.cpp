@@ -73,15 +73,53 @@ SkyImage sky_from_image(const Image& image, const std::string& name) {
                                    ", but a canonical fisheye sky must be square");
     if (image.channels < 3)
         throw_file_error(name, "sky image needs 3 colour channels, has " + std::to_string(image.channels));
+    // The colour channels by name (R, G, B, or one layer's LAYER.R, .G, .B), wherever the file
+    // keeps them; a file without names gives its first three.
+    int rgb[3] = {0, 1, 2};
+    if (!image.channel_names.empty()) {
+        std::string layer, listed;
+        for (int c = 0; c < 3; ++c) {
+            const std::string want(1, "RGB"[c]);
+            rgb[c] = -1;
+            for (int k = 0; k < int(image.channel_names.size()); ++k) {
+                const std::string& n = image.channel_names[size_t(k)];
+                if (n == want || (n.size() > 2 && n.compare(n.size() - 2, 2, "." + want) == 0)) {
+                    const std::string l = n.substr(0, n.size() - 1);
+                    if (rgb[c] >= 0 && l != layer)
+                        throw_file_error(name, "has colour channels in more than one layer (" + layer + want + ", " + n +
+                                                   "): write the one that is the sky to its own file");
+                    if (rgb[c] < 0) rgb[c] = k, layer = l;
+                }
+            }
+            if (rgb[c] < 0) {
+                for (const std::string& n : image.channel_names) listed += (listed.empty() ? "" : ", ") + n;
+                throw_file_error(name, "has no " + want + " channel (its channels: " + listed +
+                                           "): a sky needs R, G and B radiance");
+            }
+        }
+    }
     SkyImage sky(image.width);
     for (size_t p = 0; p < size_t(image.width) * image.height; ++p)
-        for (int c = 0; c < 3; ++c) sky.rgb[p * 3 + c] = image.pixels[p * image.channels + c];
+        for (int c = 0; c < 3; ++c) sky.rgb[p * 3 + c] = image.pixels[p * image.channels + size_t(rgb[c])];
     const auto& num = image.metadata.numbers;
+    const auto& str = image.metadata.strings;
+    for (const char* key : {"dynsky:time", "dynsky:sun_x", "dynsky:sun_y", "dynsky:sun_z"}) {
+        if (str.count(key)) throw_file_error(name, std::string(key) + " is text ('" + str.at(key) + "'), not a number");
+        if (num.count(key) && !std::isfinite(num.at(key)))
+            throw_file_error(name, std::string(key) + " is " + number_text(num.at(key)) + ", not a finite number");
+    }
     if (auto it = num.find("dynsky:time"); it != num.end()) sky.time_seconds = it->second;
-    if (num.count("dynsky:sun_x") && num.count("dynsky:sun_y") && num.count("dynsky:sun_z"))
-        sky.sun_direction = Vec3(float(num.at("dynsky:sun_x")), float(num.at("dynsky:sun_y")),
-                                 float(num.at("dynsky:sun_z")))
-                                .normalized();
+    const int sun_parts = int(num.count("dynsky:sun_x") + num.count("dynsky:sun_y") + num.count("dynsky:sun_z"));
+    if (sun_parts != 0 && sun_parts != 3)
+        throw_file_error(name, "has only part of the sun's direction (dynsky:sun_x, _y, _z: all three or none)");
+    if (sun_parts == 3) {
+        const Vec3d d(num.at("dynsky:sun_x"), num.at("dynsky:sun_y"), num.at("dynsky:sun_z"));
+        if (!(d.norm() > 1e-6) || !std::isfinite(d.norm()))
+            throw_file_error(name, "its sun direction (dynsky:sun_x, _y, _z) is (" + number_text(d.x()) + ", " +
+                                       number_text(d.y()) + ", " + number_text(d.z()) +
+                                       "), not a direction: fix or remove those attributes");
+        sky.sun_direction = d.normalized().cast<float>();
+    }
     if (auto it = image.metadata.strings.find("dynsky:source"); it != image.metadata.strings.end())
         sky.source = it->second;
     return sky;

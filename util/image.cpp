@@ -150,6 +150,15 @@ Image read_image(const std::string& path) {
     // Sizes come from the header: check them before anything is allocated.
     check_image_size(path, spec.width, spec.height, spec.nchannels);
     if (spec.depth > 1) throw_file_error(path, "is a volume image (depth " + std::to_string(spec.depth) + ")");
+    if (spec.x != spec.full_x || spec.y != spec.full_y || spec.width != spec.full_width ||
+        spec.height != spec.full_height)
+        throw_file_error(path, "its pixels (data window " + std::to_string(spec.width) + "x" +
+                                   std::to_string(spec.height) + " at " + std::to_string(spec.x) + "," +
+                                   std::to_string(spec.y) + ") do not cover its image (display window " +
+                                   std::to_string(spec.full_width) + "x" + std::to_string(spec.full_height) + " at " +
+                                   std::to_string(spec.full_x) + "," + std::to_string(spec.full_y) +
+                                   "): which part is meant? Write it with matching windows (oiiotool FILE "
+                                   "--fullpixels -o OUT.exr to use the pixels, --croptofull for the image)");
     if (in->seek_subimage(1, 0)) {
         int parts = 2;
         while (parts < 1000 && in->seek_subimage(parts, 0)) ++parts;

@@ -674,6 +674,67 @@ TEST(GltfLoader, OutOfRangeAccessorsIndicesAndNodesThrow) {
     }
 }
 
+// A bad-input audit's finds: each once loaded silently and rendered nothing, or the wrong thing.
+TEST(GltfLoader, ScenesThatWouldRenderNothingOrTheWrongThingAreRefused) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    const int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+    const int idx = g.accessor(g.view(std::vector<uint16_t>{0, 1, 2, 0, 2, 3}), kUShort, 6, "SCALAR");
+    std::vector<float> far = quad_positions();
+    for (float& v : far) v = v * 1e19f + 1e20f;
+    const int huge = g.accessor(g.view(far), kFloat, 4, "VEC3");
+    const int line = g.accessor(g.view(std::vector<float>{0, 0, 0, 1, 0, 0, 2, 0, 0}), kFloat, 3, "VEC3");
+    const int ushort_pos = g.accessor(g.view(std::vector<uint16_t>{0, 0, 0, 1, 0, 0, 0, 1, 0, 0}), kUShort, 3, "VEC3");
+    auto mesh = [&](int p) {
+        return "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(p) + "},\"indices\":" +
+               std::to_string(p == pos ? idx : -1) + "}]}";
+    };
+    auto plain = [&](int p) { return "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(p) + "}}]}"; };
+    const std::string quad = mesh(pos);
+    const std::string camera = "\"cameras\":[{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.8,\"znear\":0.1}}]";
+    const std::string textured =
+        "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0,\"extensions\":{"
+        "\"KHR_texture_transform\":{\"scale\":[1e300,1]}}}}}],\"textures\":[{\"source\":0}],\"images\":[{\"uri\":"
+        "\"t.png\"}],\"extensionsUsed\":[\"KHR_texture_transform\"]";
+    struct Case {
+        std::string name, body, expect;
+    };
+    const std::vector<Case> cases = {
+        {"far_away", one_node_scene(plain(huge)), "from the origin"},
+        {"camera_scale0",
+         "\"scene\":0,\"scenes\":[{\"nodes\":[0,1]}],\"nodes\":[{\"mesh\":0},{\"camera\":0,\"scale\":[0,0,0]}],"
+         "\"meshes\":[" + quad + "]," + camera,
+         "singular"},
+        {"scene_index", "\"scene\":5,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[" + quad + "]",
+         "scene to show is 5"},
+        {"integer_positions", one_node_scene(plain(ushort_pos)), "KHR_mesh_quantization"},
+        {"transform_inf",
+         "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[{\"primitives\":[{"
+         "\"attributes\":{\"POSITION\":0},\"indices\":1,\"material\":0}]}]," + textured,
+         "KHR_texture_transform is not finite"},
+        {"nul_uri",
+         "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[" + quad +
+             "],\"images\":[{\"uri\":\"t.png%00.jpg\"}]",
+         "NUL"},
+    };
+    for (const Case& c : cases) {
+        std::string e = load_error(g.write(dir, c.name, c.body));
+        EXPECT_NE(e.find(c.name + ".gltf"), std::string::npos) << c.name << ": " << e;
+        EXPECT_NE(e.find(c.expect), std::string::npos) << c.name << ": " << e;
+    }
+    // Zero-area triangles only: skipped with a warning, so nothing is left to render.
+    std::vector<std::string> warnings;
+    Scene flat = load_gltf(g.write(dir, "collinear", one_node_scene(plain(line))), &warnings);
+    EXPECT_TRUE(flat.instances.empty());
+    EXPECT_NE(std::string(warnings.empty() ? "" : warnings[0]).find("zero area"), std::string::npos);
+    // Another glTF version.
+    std::string text = read_text(g.write(dir, "v3", one_node_scene(quad)));
+    text.replace(text.find("\"2.0\""), 5, "\"3.0\"");
+    write_bytes(dir + "/v3.gltf", text);
+    EXPECT_NE(load_error(dir + "/v3.gltf").find("only glTF 2.x"), std::string::npos);
+    fs::remove_all(dir);
+}
+
 TEST(GltfLoader, HostileInputIsRefusedAtItsRoot) {
     std::string root = test::temp_dir("gltf");
     std::string dir = root + "/asset";

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <OpenImageIO/imageio.h>
+
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -172,6 +174,83 @@ TEST(SkyImage, ResampledUpOrDownKeepsTheRimAndTheMetadata) {
                 EXPECT_NEAR(c[2], 2.0f, 1e-5) << n << ": " << i << ", " << j;
             }
     }
+}
+
+}  // namespace
+}  // namespace dynsky
+
+namespace dynsky {
+namespace {
+
+// An EXR of a uniform 8 x 8 sky written directly (channel names, attributes and windows as given).
+void write_test_exr(const std::string& path, const std::vector<std::string>& channels,
+                    const std::vector<std::pair<std::string, std::string>>& text_attributes,
+                    const std::vector<std::pair<std::string, float>>& number_attributes, int full = 8) {
+    auto out = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(8, 8, int(channels.size()), OIIO::TypeDesc::FLOAT);
+    spec.channelnames = channels;
+    spec.full_width = spec.full_height = full;
+    for (const auto& [k, v] : text_attributes) spec.attribute(k, v);
+    for (const auto& [k, v] : number_attributes) spec.attribute(k, v);
+    std::vector<float> px(size_t(64) * channels.size());
+    for (size_t i = 0; i < px.size(); ++i) px[i] = float(1 + i % channels.size());  // channel k holds k + 1
+    ASSERT_TRUE(out->open(path, spec));
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
+    out->close();
+}
+
+std::string load_sky_error(const std::string& path) {
+    try {
+        load_sky(path);
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "";
+}
+
+// A bad-input audit's finds: a NaN sun attribute made NaN skies (exit 0), non-colour channels were
+// read as R, G, B, a cropped data window was taken for the whole sky.
+TEST(SkyImage, ChannelsAreFoundByNameAndBadAttributesOrWindowsAreRefused) {
+    const std::string dir = test::temp_dir("sky_attrs");
+    // Colour channels by name, wherever the file keeps them, also in one layer.
+    write_test_exr(dir + "/bgr.exr", {"B", "G", "R"}, {}, {});
+    SkyImage bgr = load_sky(dir + "/bgr.exr");
+    const Color c = bgr.pixel(4, 4);
+    EXPECT_FLOAT_EQ(c[0], 3.0f);  // R is the third channel
+    EXPECT_FLOAT_EQ(c[2], 1.0f);
+    write_test_exr(dir + "/layer.exr", {"A", "sky.B", "sky.G", "sky.R"}, {}, {});
+    EXPECT_FLOAT_EQ(load_sky(dir + "/layer.exr").pixel(4, 4)[0], 4.0f);
+    struct Case {
+        std::string name;
+        std::vector<std::string> channels;
+        std::vector<std::pair<std::string, std::string>> text;
+        std::vector<std::pair<std::string, float>> numbers;
+        int full;
+        std::string expect;
+    };
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const std::vector<Case> cases = {
+        {"xyz", {"X", "Y", "Z"}, {}, {}, 8, "has no R channel (its channels: X, Y, Z)"},
+        {"sun_nan", {"R", "G", "B"}, {}, {{"dynsky:sun_x", 0.f}, {"dynsky:sun_y", nan}, {"dynsky:sun_z", 0.f}}, 8,
+         "dynsky:sun_y is nan"},
+        {"sun_zero", {"R", "G", "B"}, {}, {{"dynsky:sun_x", 0.f}, {"dynsky:sun_y", 0.f}, {"dynsky:sun_z", 0.f}}, 8,
+         "not a direction"},
+        {"sun_part", {"R", "G", "B"}, {}, {{"dynsky:sun_x", 1.f}}, 8, "only part of the sun"},
+        {"sun_text", {"R", "G", "B"}, {{"dynsky:sun_x", "east"}}, {{"dynsky:sun_y", 1.f}, {"dynsky:sun_z", 0.f}}, 8,
+         "dynsky:sun_x is text"},
+        {"time_inf", {"R", "G", "B"}, {}, {{"dynsky:time", std::numeric_limits<float>::infinity()}}, 8,
+         "dynsky:time is inf"},
+        {"cropped", {"R", "G", "B"}, {}, {}, 16, "data window 8x8"},
+    };
+    for (const Case& k : cases) {
+        const std::string path = dir + "/" + k.name + ".exr";
+        write_test_exr(path, k.channels, k.text, k.numbers, k.full);
+        const std::string e = load_sky_error(path);
+        EXPECT_NE(e.find(path), std::string::npos) << k.name << ": " << e;
+        EXPECT_NE(e.find(k.expect), std::string::npos) << k.name << ": " << e;
+    }
+    std::filesystem::remove_all(dir);
 }
 
 }  // namespace
