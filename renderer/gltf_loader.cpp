@@ -790,9 +790,32 @@ class GltfLoader {
             std::string file = img.uri;
             std::string dir = std::filesystem::path(path_).parent_path().string();
             if (!dir.empty()) file = (std::filesystem::path(dir) / img.uri).string();
+            std::error_code ec;
+            if (std::filesystem::is_regular_file(file, ec) && std::filesystem::file_size(file, ec) == 0 && !ec)
+                fail("texture file " + in_quotes(file) + " (image " + std::to_string(index) + ") is empty (0 bytes)");
             fail("missing texture file " + in_quotes(file) + " (image " + std::to_string(index) + ")");
         }
         return {img.image.data(), img.image.size()};
+    }
+
+    // Why encoded bytes did not decode, in words: stb says "Unknown image format" also for a PNG
+    // that is corrupt, cut short or larger than it accepts.
+    static std::string encoded_image_problem(const unsigned char* b, size_t n, const std::string& decoder) {
+        static const unsigned char png[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+        if (n >= 8 && std::memcmp(b, png, 8) == 0) {
+            if (n >= 24) {
+                const auto be32 = [&](size_t at) {
+                    return (uint32_t(b[at]) << 24) | (uint32_t(b[at + 1]) << 16) | (uint32_t(b[at + 2]) << 8) | b[at + 3];
+                };
+                const std::string size = image_size_problem(be32(16), be32(20), 4);
+                if (!size.empty()) return size;
+            }
+            return "a PNG that cannot be decoded (corrupt or cut short: " + decoder + ")";
+        }
+        if (n >= 3 && b[0] == 0xff && b[1] == 0xd8 && b[2] == 0xff)
+            return "a JPEG that cannot be decoded (corrupt or cut short: " + decoder + ")";
+        if (n == 0) return "empty";
+        return decoder + " (glTF textures are PNG or JPEG)";
     }
 
     static TextureWrap wrap_mode(int gl) {
@@ -834,7 +857,7 @@ class GltfLoader {
             if (encoded[k].second > size_t(std::numeric_limits<int>::max()) ||
                 !tg::LoadImageData(&img, images[k], &err, &warn_text, 0, 0, encoded[k].first, int(encoded[k].second),
                                    nullptr)) {
-                decoded[k].error = join(split_lines(err), "; ");
+                decoded[k].error = encoded_image_problem(encoded[k].first, encoded[k].second, join(split_lines(err), "; "));
                 return;
             }
             size_t n = size_t(img.width) * size_t(img.height) * 4;
@@ -1169,7 +1192,7 @@ class GltfLoader {
             cam.orthographic = true;
             if (!(c.orthographic.ymag > 0 && std::isfinite(c.orthographic.ymag))) {
                 warn("camera " + in_quotes(name) + ": invalid orthographic ymag " +
-                     std::to_string(c.orthographic.ymag) + ", skipped");
+                     number_text(c.orthographic.ymag) + ", skipped");
                 return;
             }
             cam.ymag = float(c.orthographic.ymag);
@@ -1177,7 +1200,7 @@ class GltfLoader {
         } else {
             if (c.perspective.yfov > 0 && c.perspective.yfov < kPiD) cam.yfov = float(c.perspective.yfov);
             else
-                warn("camera " + in_quotes(name) + ": invalid yfov " + std::to_string(c.perspective.yfov) +
+                warn("camera " + in_quotes(name) + ": invalid yfov " + number_text(c.perspective.yfov) +
                      ", using the default");
             cam.aspect_ratio = c.perspective.aspectRatio > 0 ? float(c.perspective.aspectRatio) : 0.0f;
         }

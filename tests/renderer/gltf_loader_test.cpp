@@ -636,6 +636,13 @@ TEST(GltfLoader, MissingBinAndTextureFilesAreNamed) {
     std::string e = load_error(path);
     EXPECT_NE(e.find("notex.gltf"), std::string::npos) << e;
     EXPECT_NE(e.find("gone.png"), std::string::npos) << e;
+    // An empty file and a PNG cut short are said to be so (not "missing", not "unknown format").
+    write_bytes(dir + "/gone.png", "");
+    e = load_error(path);
+    EXPECT_NE(e.find("is empty (0 bytes)"), std::string::npos) << e;
+    write_bytes(dir + "/gone.png", std::string("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0\0\x10\0\0\0\x10", 24));
+    e = load_error(path);
+    EXPECT_NE(e.find("a PNG that cannot be decoded (corrupt or cut short"), std::string::npos) << e;
 
     path = g.write(dir, "nobin", one_node_scene(mesh, "\"materials\":[{}]"));
     fs::remove(dir + "/nobin.bin");
