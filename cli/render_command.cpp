@@ -94,7 +94,7 @@ int run_render(const RenderOptions& o) {
     int width, height;
     parse_frame_size(o.resolution, &width, &height);
     std::string ext = file_extension(o.out);
-    if (ext != ".exr" && ext != ".png") throw Error(o.out + ": output must end in .exr or .png");
+    if (ext != ".exr" && ext != ".png") throw Error("--out " + o.out + ": must end in .exr or .png");
     if (o.spp < 1) throw Error("--spp must be at least 1");
     const SkySamplerOptions sampler = parse_sky_sampler(o.sampler);
     RenderSettings settings;

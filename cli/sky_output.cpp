@@ -11,7 +11,8 @@
 namespace dynsky::cli {
 
 void check_extension(const std::string& option, const std::string& path, const std::string& ext) {
-    if (file_extension(path) != ext) throw_file_error(path, option + " must name a " + ext + " file");
+    // A usage error (exit 2): the message starts with the option (docs/exit-codes.md).
+    if (file_extension(path) != ext) throw Error(option + " " + path + ": must name a " + ext + " file");
 }
 
 void write_preview(const std::string& path, const Image& linear) {
