@@ -1,5 +1,7 @@
 #include "util/chart.h"
 
+#include <cctype>
+
 #include <sys/wait.h>
 
 #include <cstdio>
@@ -49,11 +51,29 @@ void make_line_chart(const std::string& csv, const std::string& png, const std::
     std::string cmd = "/usr/bin/python3 -c " + shell_quote(kChartScript) + " " + shell_quote(csv) + " " +
                       shell_quote(tmp.path()) + " " + shell_quote(title) + " " + shell_quote(xlabel) + " " +
                       shell_quote(ylabel) + (logy ? " 1" : " 0");
-    int status = std::system(cmd.c_str());
+    // Its messages are kept: on failure the last line says why (a full disk, no matplotlib), not a
+    // traceback on the terminal.
+    std::string said;
+    int status = -1;
+    if (FILE* pipe = popen((cmd + " 2>&1").c_str(), "r")) {
+        char buffer[4096];
+        size_t got;
+        while ((got = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) said.append(buffer, got);
+        status = pclose(pipe);
+    }
     if (status != 0) {
         int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+        std::string last;
+        for (size_t end = said.size(); end > 0 && last.empty();) {
+            const size_t start = said.rfind('\n', end - 1);
+            last = said.substr(start == std::string::npos ? 0 : start + 1,
+                               end - (start == std::string::npos ? 0 : start + 1));
+            end = start == std::string::npos ? 0 : start;
+            while (!last.empty() && std::isspace(static_cast<unsigned char>(last.back()))) last.pop_back();
+        }
         throw_file_error(png, "could not write the chart: python3 with matplotlib failed (exit " +
-                                  std::to_string(code) + "); the data is in " + csv);
+                                  std::to_string(code) + (last.empty() ? "" : ": " + last) + "); the data is in " +
+                                  csv);
     }
     tmp.commit("matplotlib");
 }
