@@ -1113,6 +1113,17 @@ class GltfLoader {
     // ---- Nodes ------------------------------------------------------------------------------
 
     Eigen::Matrix4d local_matrix(const tg::Node& node) const {
+        // Arrays of the wrong length were silently read as identity, putting the node elsewhere.
+        auto check_length = [&](const std::vector<double>& v, size_t n, const char* name) {
+            if (!v.empty() && v.size() != n)
+                fail((node.name.empty() ? std::string("a node") : "node " + in_quotes(node.name)) + ": " + name +
+                     " has " + std::to_string(v.size()) +
+                     " numbers, not " + std::to_string(n));
+        };
+        check_length(node.matrix, 16, "matrix");
+        check_length(node.translation, 3, "translation");
+        check_length(node.rotation, 4, "rotation");
+        check_length(node.scale, 3, "scale");
         if (node.matrix.size() == 16) {
             Eigen::Matrix4d m;
             for (int i = 0; i < 16; ++i) m(i % 4, i / 4) = node.matrix[size_t(i)];  // column-major

@@ -719,6 +719,10 @@ TEST(GltfLoader, ScenesThatWouldRenderNothingOrTheWrongThingAreRefused) {
          "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[{\"primitives\":[{"
          "\"attributes\":{\"POSITION\":0},\"indices\":1,\"material\":0}]}]," + textured,
          "KHR_texture_transform is not finite"},
+        {"matrix_15",
+         "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0,\"matrix\":[1,0,0,0,0,1,0,0,0,0,1,0,0,0,0]}],"
+         "\"meshes\":[" + quad + "]",
+         "matrix has 15 numbers, not 16"},
         {"nul_uri",
          "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[" + quad +
              "],\"images\":[{\"uri\":\"t.png%00.jpg\"}]",
