@@ -140,9 +140,7 @@ AnimationReport render_animation(const AnimationSettings& o) {
     // The scene is read only by stages that render (encode checks the frames' files and settings).
     std::optional<LoadedScene> scene;
     if (stage != "encode") scene = load_scene(o.scene, float(width) / height);
-    std::error_code ec;
-    fs::create_directories(o.out, ec);
-    if (ec) throw_file_error(o.out, "cannot create the output folder: " + ec.message());
+    const OutputFolder folder(o.out);  // removed again if this run fails before writing anything
     const FrameStore store(o.out);
     // A farm task writes only its own frames and timings, so it removes only their temporaries:
     // the folder's others may be another task's, live on another machine.

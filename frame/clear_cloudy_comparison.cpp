@@ -134,7 +134,7 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
                     "so the clear sky knows where the sun is");
     LoadedScene scene = load_scene(o.scene, float(w) / h);
     check_outputs_are_not_inputs(outputs, scene.scene.source_files);  // a texture beside the scene
-    fs::create_directories(o.out);
+    const OutputFolder folder(o.out);  // removed again if this run fails before writing anything
     const int sky_n = cloudy.step(0)->resolution;
     auto clear_at = [&](double t) {
         ClearSkyParams p;

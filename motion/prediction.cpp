@@ -67,7 +67,7 @@ void write_prediction(const PredictionOptions& o) {
         });
     };
     const cv::Mat disc = sky_disc_mask(n);
-    fs::create_directories(o.out);
+    const OutputFolder out_folder(o.out);  // removed again if this run fails before writing anything
     std::ostringstream csv;
     csv << "step,time_s,mean_luminance,mean_unit,min_unit,max_unit,cloud_coverage,hf_energy,"
            "mean_luminance_without_sun,nonfinite\n";

@@ -77,9 +77,7 @@ std::optional<Vec3> vec_from(const json& j) {
 
 void SkyTimeline::save(const std::string& folder, int last_step, const std::string& settings) {
     if (last_step < 1) throw Error("sky timeline: a stored timeline holds at least steps 0 and 1");
-    std::error_code ec;
-    fs::create_directories(folder, ec);
-    if (ec) throw_file_error(folder, "cannot create the timeline folder: " + ec.message());
+    const OutputFolder made(folder);  // removed again if this fails before writing anything
     json steps = json::array(), flows = json::array();
     step(last_step);  // every step first: the input's cloud opacity comes with step 1
     for (int i = 0; i <= last_step; ++i) {

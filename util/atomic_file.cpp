@@ -108,6 +108,26 @@ std::string temporary_path(const std::string& path) {
         .string();
 }
 
+OutputFolder::OutputFolder(const std::string& path) {
+    std::vector<fs::path> missing;
+    std::error_code ec;
+    for (fs::path p = fs::absolute(path, ec).lexically_normal(); !p.empty() && !fs::exists(p, ec);
+         p = p.parent_path()) {
+        missing.push_back(p);
+        if (p == p.parent_path()) break;
+    }
+    fs::create_directories(path, ec);
+    if (ec) throw_file_error(path, "cannot create the output folder: " + ec.message());
+    for (auto it = missing.rbegin(); it != missing.rend(); ++it) created_.push_back(it->string());
+}
+
+OutputFolder::~OutputFolder() {
+    std::error_code ec;
+    for (auto it = created_.rbegin(); it != created_.rend(); ++it)
+        if (fs::is_directory(*it, ec) && fs::is_empty(*it, ec) && !ec) fs::remove(*it, ec);
+        else break;
+}
+
 void write_file_atomic(const std::string& path, const std::string& bytes) {
     TemporaryFile tmp(path);
     int fd = ::open(tmp.path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);

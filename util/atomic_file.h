@@ -39,6 +39,21 @@ class TemporaryFile {
     bool committed_ = false, registered_ = false;
 };
 
+// An output folder made for a command's files: created (with its missing parents) on
+// construction, and removed again at destruction when this made it and it is still empty (the
+// command failed before writing anything: a full disk, a bad input found late), so a failure
+// leaves no empty folders behind. Folders that hold finished work are never touched.
+class OutputFolder {
+  public:
+    explicit OutputFolder(const std::string& path);
+    ~OutputFolder();
+    OutputFolder(const OutputFolder&) = delete;
+    OutputFolder& operator=(const OutputFolder&) = delete;
+
+  private:
+    std::vector<std::string> created_;  // deepest last
+};
+
 // For the interrupt handler (cli/main.cpp): unlinks the temporary being written now, if any.
 // Async-signal-safe.
 void remove_active_temporary() noexcept;

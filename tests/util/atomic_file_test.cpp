@@ -162,3 +162,28 @@ TEST(Suggest, ClosestNames) {
 
 }  // namespace
 }  // namespace dynsky
+
+namespace dynsky {
+namespace {
+
+// A failed command leaves no empty output folders; one with any file in it stays, and so does a
+// folder that was there before.
+TEST(OutputFolder, RemovesOnlyTheEmptyFoldersItMade) {
+    namespace fs = std::filesystem;
+    const std::string dir = test::temp_dir("output_folder");
+    { const OutputFolder f(dir + "/a/b/c"); EXPECT_TRUE(fs::is_directory(dir + "/a/b/c")); }
+    EXPECT_FALSE(fs::exists(dir + "/a"));
+    EXPECT_TRUE(fs::is_directory(dir));
+    {
+        const OutputFolder f(dir + "/a/b");
+        std::ofstream(dir + "/a/b/frame.exr") << "x";
+    }
+    EXPECT_TRUE(fs::exists(dir + "/a/b/frame.exr"));
+    fs::create_directories(dir + "/kept");
+    { const OutputFolder f(dir + "/kept"); }
+    EXPECT_TRUE(fs::is_directory(dir + "/kept"));
+    fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace dynsky
