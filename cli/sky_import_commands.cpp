@@ -124,9 +124,10 @@ void run_import(const ImportOptions& o) {
         const PhotoTime found = photo_time(o.photo, utc_offset);
         time = found.iso;
         if (!time.empty() && !found.zone_in_file && o.preset.empty() && !o.offset_opt->count()) {
-            std::printf("note: %s: its %s gives a time without a zone (%s): give --utc-offset HOURS (or --time) "
-                        "to use it\n",
-                        o.photo.c_str(), found.source.c_str(), time.substr(0, 19).c_str());
+            std::printf(
+                "note: %s: its %s gives a time without a zone (%s): give --utc-offset HOURS (or --time) "
+                "to use it\n",
+                o.photo.c_str(), found.source.c_str(), time.substr(0, 19).c_str());
             time.clear();
         }
     }

@@ -105,11 +105,12 @@ PhotoSequence photo_sequence_from_folder(const std::string& folder, const std::s
         }
         if (!seconds)
             throw_file_error(e.path().string(),
-                             skies ? "carries no time (none in its name, as ..._YYYYMMDDhhmmssZ.exr, nor the "
-                                     "photograph's time that 'dynsky sky import' records)"
-                                   : "carries no time: none in its file name (as ..._YYYYMMDDhhmmssZ.jpg, "
-                                     "YYYY-MM-DD_hh_mm.jpg, YYYY-MM-DDThh:mm:ss.jpg or YYYYMMDD_hhmmss.jpg) and no EXIF "
-                                     "DateTimeOriginal");
+                             skies
+                                 ? "carries no time (none in its name, as ..._YYYYMMDDhhmmssZ.exr, nor the "
+                                   "photograph's time that 'dynsky sky import' records)"
+                                 : "carries no time: none in its file name (as ..._YYYYMMDDhhmmssZ.jpg, "
+                                   "YYYY-MM-DD_hh_mm.jpg, YYYY-MM-DDThh:mm:ss.jpg or YYYYMMDD_hhmmss.jpg) and no EXIF "
+                                   "DateTimeOriginal");
         timed.emplace_back(*seconds, e.path().string());
     }
     if (timed.empty())

@@ -689,7 +689,8 @@ class GltfLoader {
             float rotation = float(number_or(member(*tt, "rotation"), 0.0));
             slot->uv_transform = texture_transform_matrix(offset, rotation, sc);
             if (!slot->uv_transform.allFinite())
-                fail(what + ": KHR_texture_transform is not finite (offset, scale or rotation beyond single precision)");
+                fail(what +
+                     ": KHR_texture_transform is not finite (offset, scale or rotation beyond single precision)");
             if (const tg::Value* tc = member(*tt, "texCoord"); tc && tc->IsNumber())
                 slot->texcoord = tc->GetNumberAsInt();
         }
@@ -805,7 +806,8 @@ class GltfLoader {
         if (n >= 8 && std::memcmp(b, png, 8) == 0) {
             if (n >= 24) {
                 const auto be32 = [&](size_t at) {
-                    return (uint32_t(b[at]) << 24) | (uint32_t(b[at + 1]) << 16) | (uint32_t(b[at + 2]) << 8) | b[at + 3];
+                    return (uint32_t(b[at]) << 24) | (uint32_t(b[at + 1]) << 16) | (uint32_t(b[at + 2]) << 8) |
+                           b[at + 3];
                 };
                 const std::string size = image_size_problem(be32(16), be32(20), 4);
                 if (!size.empty()) return size;
@@ -857,7 +859,8 @@ class GltfLoader {
             if (encoded[k].second > size_t(std::numeric_limits<int>::max()) ||
                 !tg::LoadImageData(&img, images[k], &err, &warn_text, 0, 0, encoded[k].first, int(encoded[k].second),
                                    nullptr)) {
-                decoded[k].error = encoded_image_problem(encoded[k].first, encoded[k].second, join(split_lines(err), "; "));
+                decoded[k].error = encoded_image_problem(encoded[k].first, encoded[k].second,
+                                                         join(split_lines(err), "; "));
                 return;
             }
             size_t n = size_t(img.width) * size_t(img.height) * 4;
@@ -1117,8 +1120,7 @@ class GltfLoader {
         auto check_length = [&](const std::vector<double>& v, size_t n, const char* name) {
             if (!v.empty() && v.size() != n)
                 fail((node.name.empty() ? std::string("a node") : "node " + in_quotes(node.name)) + ": " + name +
-                     " has " + std::to_string(v.size()) +
-                     " numbers, not " + std::to_string(n));
+                     " has " + std::to_string(v.size()) + " numbers, not " + std::to_string(n));
         };
         check_length(node.matrix, 16, "matrix");
         check_length(node.translation, 3, "translation");
@@ -1202,8 +1204,8 @@ class GltfLoader {
         if (c.type == "orthographic") {
             cam.orthographic = true;
             if (!(c.orthographic.ymag > 0 && std::isfinite(c.orthographic.ymag))) {
-                warn("camera " + in_quotes(name) + ": invalid orthographic ymag " +
-                     number_text(c.orthographic.ymag) + ", skipped");
+                warn("camera " + in_quotes(name) + ": invalid orthographic ymag " + number_text(c.orthographic.ymag) +
+                     ", skipped");
                 return;
             }
             cam.ymag = float(c.orthographic.ymag);

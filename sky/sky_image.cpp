@@ -86,8 +86,8 @@ SkyImage sky_from_image(const Image& image, const std::string& name) {
                 if (n == want || (n.size() > 2 && n.compare(n.size() - 2, 2, "." + want) == 0)) {
                     const std::string l = n.substr(0, n.size() - 1);
                     if (rgb[c] >= 0 && l != layer)
-                        throw_file_error(name, "has colour channels in more than one layer (" + layer + want + ", " + n +
-                                                   "): write the one that is the sky to its own file");
+                        throw_file_error(name, "has colour channels in more than one layer (" + layer + want + ", " +
+                                                   n + "): write the one that is the sky to its own file");
                     if (rgb[c] < 0) rgb[c] = k, layer = l;
                 }
             }

@@ -47,7 +47,8 @@ TEST(SkyImportCli, ImportsATsiFrameWithItsPreset) {
 TEST(SkyImportCli, TimeFromTheExifWhenTheNameHasNone) {
     DYNSKY_REQUIRE_SHARED();
     std::string dir = test::temp_dir("sky-import-exif");
-    const Image photo = read_image(test::shared_path("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg"));
+    const Image photo =
+        read_image(test::shared_path("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg"));
     auto write_jpeg = [&](const std::string& path, const char* offset) {
         auto out = OIIO::ImageOutput::create(path);
         ASSERT_TRUE(out);
@@ -69,12 +70,14 @@ TEST(SkyImportCli, TimeFromTheExifWhenTheNameHasNone) {
     EXPECT_GT(sky.sun_direction->y(), 0.8f);  // 65 degrees up at 17:00 UTC
 
     write_jpeg(dir + "/local.jpg", nullptr);
-    r = test::run_command(exe() + " sky import " + dir + "/local.jpg --lat 36.605 --lon -97.485 --mirror --res 64 --out " +
-                          dir + "/local.exr");
+    r = test::run_command(exe() + " sky import " + dir +
+                          "/local.jpg --lat 36.605 --lon -97.485 --mirror --res 64 --out " + dir + "/local.exr");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("its EXIF gives a time without a zone"), std::string::npos) << r.output;
-    r = test::run_command(exe() + " sky import " + dir + "/local.jpg --lat 36.605 --lon -97.485 --mirror --utc-offset -6 "
-                          "--res 64 --out " + dir + "/local2.exr");
+    r = test::run_command(exe() + " sky import " + dir +
+                          "/local.jpg --lat 36.605 --lon -97.485 --mirror --utc-offset -6 "
+                          "--res 64 --out " +
+                          dir + "/local2.exr");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("time 2017-05-24T17:00:00Z"), std::string::npos) << r.output;
     fs::remove_all(dir);

@@ -179,8 +179,8 @@ TEST(SkyModelCli, EvaluateScoresAFolderOfImportedSkiesAsItsPhotographs) {
         // Sequences fill non-sky pixels smoothly (the same from frame to frame); `sky import`
         // does so with --fill smooth.
         auto r = test::run_command(dynsky("sky import --quiet --fill smooth --preset arm-tsi --sky-res 256 " +
-                                          list[k].string() +
-                                          " -o " + stem + ".exr --filled-mask " + stem + ".filled.png"));
+                                          list[k].string() + " -o " + stem + ".exr --filled-mask " + stem +
+                                          ".filled.png"));
         ASSERT_EQ(r.exit_code, 0) << r.output;
     }
     const std::string common = " --quiet --model advect --no-paper --horizons 1,2 --res 64,256 --report ";
@@ -279,7 +279,8 @@ TEST(SkyModelCli, TrainingDataImportsExactlyAsSkyImport) {
     DYNSKY_REQUIRE_SHARED();
     const std::string dir = test::temp_dir("import_same");
     const std::string photo = test::shared_path("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg");
-    auto r = test::run_command(dynsky("sky import --preset arm-tsi --fill smooth --res 64 " + photo + " --out " + dir + "/cli.exr"));
+    auto r = test::run_command(dynsky("sky import --preset arm-tsi --fill smooth --res 64 " + photo + " --out " + dir +
+                                      "/cli.exr"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     SkyImage cli = load_sky(dir + "/cli.exr");
     SkyImage lib = import_preset_photo(photo, "arm-tsi", 64);

@@ -693,8 +693,8 @@ TEST(GltfLoader, ScenesThatWouldRenderNothingOrTheWrongThingAreRefused) {
     const int line = g.accessor(g.view(std::vector<float>{0, 0, 0, 1, 0, 0, 2, 0, 0}), kFloat, 3, "VEC3");
     const int ushort_pos = g.accessor(g.view(std::vector<uint16_t>{0, 0, 0, 1, 0, 0, 0, 1, 0, 0}), kUShort, 3, "VEC3");
     auto mesh = [&](int p) {
-        return "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(p) + "},\"indices\":" +
-               std::to_string(p == pos ? idx : -1) + "}]}";
+        return "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(p) +
+               "},\"indices\":" + std::to_string(p == pos ? idx : -1) + "}]}";
     };
     auto plain = [&](int p) { return "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(p) + "}}]}"; };
     const std::string quad = mesh(pos);
@@ -710,18 +710,21 @@ TEST(GltfLoader, ScenesThatWouldRenderNothingOrTheWrongThingAreRefused) {
         {"far_away", one_node_scene(plain(huge)), "from the origin"},
         {"camera_scale0",
          "\"scene\":0,\"scenes\":[{\"nodes\":[0,1]}],\"nodes\":[{\"mesh\":0},{\"camera\":0,\"scale\":[0,0,0]}],"
-         "\"meshes\":[" + quad + "]," + camera,
+         "\"meshes\":[" +
+             quad + "]," + camera,
          "singular"},
         {"scene_index", "\"scene\":5,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[" + quad + "]",
          "scene to show is 5"},
         {"integer_positions", one_node_scene(plain(ushort_pos)), "KHR_mesh_quantization"},
         {"transform_inf",
          "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[{\"primitives\":[{"
-         "\"attributes\":{\"POSITION\":0},\"indices\":1,\"material\":0}]}]," + textured,
+         "\"attributes\":{\"POSITION\":0},\"indices\":1,\"material\":0}]}]," +
+             textured,
          "KHR_texture_transform is not finite"},
         {"matrix_15",
          "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0,\"matrix\":[1,0,0,0,0,1,0,0,0,0,1,0,0,0,0]}],"
-         "\"meshes\":[" + quad + "]",
+         "\"meshes\":[" +
+             quad + "]",
          "matrix has 15 numbers, not 16"},
         {"nul_uri",
          "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[" + quad +

@@ -268,7 +268,8 @@ TEST(PhotoImport, TextureFillPutsCloudsInAWideBandNotAGlareStreak) {
             const Color c = inside ? sky_at(x, y) : Color(0.05f, 0.05f, 0.05f);
             for (int k = 0; k < 3; ++k) photo.at(x, y, k) = c[k];
             // 30 px wide, from just beside the glare to the horizon (down-left).
-            const double along = ((200.0 - x) + (y - 200.0)) / std::sqrt(2.0), across = ((x - 200.0) + (y - 200.0)) / std::sqrt(2.0);
+            const double along = ((200.0 - x) + (y - 200.0)) / std::sqrt(2.0),
+                         across = ((x - 200.0) + (y - 200.0)) / std::sqrt(2.0);
             if (along > 10 && std::abs(across) < 15) band.at(x, y, 0) = 1.0f;
             if (y > 60 && y < 140 && std::abs(x - 260) <= 1) band.at(x, y, 0) = 1.0f;  // a thin mast, far off
         }
@@ -287,7 +288,8 @@ TEST(PhotoImport, TextureFillPutsCloudsInAWideBandNotAGlareStreak) {
             const size_t q = size_t(j) * 128 + i;
             if (!texture.not_sky[q]) continue;
             ++mast;
-            same += texture.sky.rgb[q * 3] == smooth.sky.rgb[q * 3] && texture.sky.rgb[q * 3 + 2] == smooth.sky.rgb[q * 3 + 2];
+            same += texture.sky.rgb[q * 3] == smooth.sky.rgb[q * 3] &&
+                    texture.sky.rgb[q * 3 + 2] == smooth.sky.rgb[q * 3 + 2];
         }
     EXPECT_GT(mast, 20);
     EXPECT_EQ(same, mast);
@@ -310,8 +312,7 @@ TEST(PhotoImport, TextureFillPutsCloudsInAWideBandNotAGlareStreak) {
                 const double hf = std::abs(lum.at<float>(j, i) - blur.at<float>(j, i));
                 if (im.not_sky[size_t(j) * n + i])
                     d_band += hf, m_band += lum.at<float>(j, i), m_truth += truth.sky.pixel(i, j).mean(), ++c_band;
-                else
-                    d_seen += hf, ++c_seen;
+                else d_seen += hf, ++c_seen;
             }
         ASSERT_GT(c_band, 100);
         *detail_ratio = (d_band / c_band) / (d_seen / c_seen);
@@ -324,8 +325,9 @@ TEST(PhotoImport, TextureFillPutsCloudsInAWideBandNotAGlareStreak) {
     EXPECT_GT(texture_detail, 0.75);
     EXPECT_LT(texture_detail, 1.5);
     EXPECT_NEAR(texture_mean, 1.0, 0.15);
-    std::printf("band detail / seen sky's: smooth %.2f texture %.2f; band mean / hidden sky's: smooth %.2f texture %.2f\n",
-                smooth_detail, texture_detail, smooth_mean, texture_mean);
+    std::printf(
+        "band detail / seen sky's: smooth %.2f texture %.2f; band mean / hidden sky's: smooth %.2f texture %.2f\n",
+        smooth_detail, texture_detail, smooth_mean, texture_mean);
 }
 
 TEST(PhotoImport, StrongDownsamplingAveragesInsteadOfAliasing) {

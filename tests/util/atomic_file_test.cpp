@@ -171,7 +171,10 @@ namespace {
 TEST(OutputFolder, RemovesOnlyTheEmptyFoldersItMade) {
     namespace fs = std::filesystem;
     const std::string dir = test::temp_dir("output_folder");
-    { const OutputFolder f(dir + "/a/b/c"); EXPECT_TRUE(fs::is_directory(dir + "/a/b/c")); }
+    {
+        const OutputFolder f(dir + "/a/b/c");
+        EXPECT_TRUE(fs::is_directory(dir + "/a/b/c"));
+    }
     EXPECT_FALSE(fs::exists(dir + "/a"));
     EXPECT_TRUE(fs::is_directory(dir));
     {
