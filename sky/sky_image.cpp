@@ -1,6 +1,7 @@
 #include "sky/sky_image.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
@@ -73,25 +74,43 @@ SkyImage sky_from_image(const Image& image, const std::string& name) {
                                    ", but a canonical fisheye sky must be square");
     if (image.channels < 3)
         throw_file_error(name, "sky image needs 3 colour channels, has " + std::to_string(image.channels));
-    // The colour channels by name (R, G, B, or one layer's LAYER.R, .G, .B), wherever the file
-    // keeps them; a file without names gives its first three.
+    // The colour channels by name, any case: R, G, B; else one layer's LAYER.R, .G, .B (a render's
+    // AOV layers beside its RGB are ignored); a file without names gives its first three.
     int rgb[3] = {0, 1, 2};
     if (!image.channel_names.empty()) {
-        std::string layer, listed;
+        auto upper = [](std::string n) {
+            for (char& ch : n) ch = char(std::toupper(static_cast<unsigned char>(ch)));
+            return n;
+        };
+        auto find = [&](const std::string& want, bool layered, std::string* layer) {
+            int found = -1;
+            for (int k = 0; k < int(image.channel_names.size()); ++k) {
+                const std::string n = upper(image.channel_names[size_t(k)]);
+                const bool match = layered ? n.size() > 2 && n.compare(n.size() - 2, 2, "." + want) == 0 : n == want;
+                if (!match) continue;
+                const std::string l = layered ? n.substr(0, n.size() - 2) : "";
+                if (found >= 0 && l != *layer)
+                    throw_file_error(name, "has colour channels in more than one layer (" + *layer + "." + want + ", " +
+                                               image.channel_names[size_t(k)] +
+                                               ") and none without one: write the one that is the sky to its own file");
+                if (found < 0) found = k, *layer = l;
+            }
+            return found;
+        };
+        std::string layer;
+        bool plain = true;
+        for (int c = 0; c < 3 && plain; ++c) plain = find(std::string(1, "RGB"[c]), false, &layer) >= 0;
         for (int c = 0; c < 3; ++c) {
             const std::string want(1, "RGB"[c]);
-            rgb[c] = -1;
-            for (int k = 0; k < int(image.channel_names.size()); ++k) {
-                const std::string& n = image.channel_names[size_t(k)];
-                if (n == want || (n.size() > 2 && n.compare(n.size() - 2, 2, "." + want) == 0)) {
-                    const std::string l = n.substr(0, n.size() - 1);
-                    if (rgb[c] >= 0 && l != layer)
-                        throw_file_error(name, "has colour channels in more than one layer (" + layer + want + ", " +
-                                                   n + "): write the one that is the sky to its own file");
-                    if (rgb[c] < 0) rgb[c] = k, layer = l;
-                }
+            if (!plain && c > 0) {  // the same layer for all three
+                std::string l;
+                rgb[c] = find(want, true, &l);
+                if (rgb[c] >= 0 && l != layer) rgb[c] = -1;
+            } else {
+                rgb[c] = find(want, !plain, &layer);
             }
             if (rgb[c] < 0) {
+                std::string listed;
                 for (const std::string& n : image.channel_names) listed += (listed.empty() ? "" : ", ") + n;
                 throw_file_error(name, "has no " + want + " channel (its channels: " + listed +
                                            "): a sky needs R, G and B radiance");

@@ -221,6 +221,11 @@ TEST(SkyImage, ChannelsAreFoundByNameAndBadAttributesOrWindowsAreRefused) {
     EXPECT_FLOAT_EQ(c[2], 1.0f);
     write_test_exr(dir + "/layer.exr", {"A", "sky.B", "sky.G", "sky.R"}, {}, {});
     EXPECT_FLOAT_EQ(load_sky(dir + "/layer.exr").pixel(4, 4)[0], 4.0f);
+    write_test_exr(dir + "/lower.exr", {"r", "g", "b"}, {}, {});
+    EXPECT_FLOAT_EQ(load_sky(dir + "/lower.exr").pixel(4, 4)[2], 3.0f);
+    // A render's AOV layers beside its RGB: the RGB.
+    write_test_exr(dir + "/aovs.exr", {"diffuse.R", "diffuse.G", "diffuse.B", "R", "G", "B"}, {}, {});
+    EXPECT_FLOAT_EQ(load_sky(dir + "/aovs.exr").pixel(4, 4)[0], 4.0f);
     struct Case {
         std::string name;
         std::vector<std::string> channels;
@@ -232,6 +237,7 @@ TEST(SkyImage, ChannelsAreFoundByNameAndBadAttributesOrWindowsAreRefused) {
     const float nan = std::numeric_limits<float>::quiet_NaN();
     const std::vector<Case> cases = {
         {"xyz", {"X", "Y", "Z"}, {}, {}, 8, "has no R channel (its channels: X, Y, Z)"},
+        {"two_layers", {"a.R", "a.G", "a.B", "b.R", "b.G", "b.B"}, {}, {}, 8, "more than one layer"},
         {"sun_nan",
          {"R", "G", "B"},
          {},
