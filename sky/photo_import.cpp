@@ -134,13 +134,14 @@ double find_clip_level(const cv::Mat& rgb_encoded, const SkyCircle& circle, cons
     return 1.0;
 }
 
-// Telea's fast-marching inpainting of a 3-channel float image where fill != 0, in place.
+void inpaint_texture(cv::Mat& rgb, const cv::Mat& fill);  // below
+
+// Telea's fast-marching inpainting of a 3-channel float image where fill != 0, in place
+// (FillMethod::Texture: inpaint_texture instead).
 // cv::inpaint takes float only one channel at a time, and its Telea path misbehaves on small
 // values (OpenCV 4.6 fills a 0.2-0.4 ramp with 1.0 and -0.3): each channel is scaled so its 99th
 // percentile is 255 first. Above 512 px the fill is computed at 512 and upsampled: inpainting is
 // smooth anyway, and its cost grows with the filled area (seconds at 2048^2).
-void inpaint_texture(cv::Mat& rgb, const cv::Mat& fill);
-
 void inpaint_float(cv::Mat& rgb, const cv::Mat& fill, PhotoImportParams::FillMethod method) {
     if (method == PhotoImportParams::FillMethod::Texture) return inpaint_texture(rgb, fill);
     const int work = 512;
