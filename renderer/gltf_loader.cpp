@@ -982,14 +982,16 @@ class GltfLoader {
         }
         if (!p.targets.empty()) warn("morph targets ignored: meshes are drawn with their base shape");
 
-        if (size_t(attr("POSITION")) < model_.accessors.size() &&
-            model_.accessors[size_t(attr("POSITION"))].componentType != TINYGLTF_COMPONENT_TYPE_FLOAT &&
-            std::find(model_.extensionsUsed.begin(), model_.extensionsUsed.end(), "KHR_mesh_quantization") ==
-                model_.extensionsUsed.end())
-            fail(what + " POSITION has integer components (componentType " +
-                 std::to_string(model_.accessors[size_t(attr("POSITION"))].componentType) +
-                 ") but the file does not use KHR_mesh_quantization: glTF 2.0 positions are floats");
-        FloatArray pos = read_floats(attr("POSITION"), what + " POSITION", {TINYGLTF_TYPE_VEC3});
+        const int position = attr("POSITION");
+        if (size_t(position) < model_.accessors.size()) {
+            const int type = model_.accessors[size_t(position)].componentType;
+            const auto& used = model_.extensionsUsed;
+            if (type != TINYGLTF_COMPONENT_TYPE_FLOAT &&
+                std::find(used.begin(), used.end(), "KHR_mesh_quantization") == used.end())
+                fail(what + " POSITION has integer components (componentType " + std::to_string(type) +
+                     ") but the file does not use KHR_mesh_quantization: glTF 2.0 positions are floats");
+        }
+        FloatArray pos = read_floats(position, what + " POSITION", {TINYGLTF_TYPE_VEC3});
         const size_t n = pos.count;
         if (n > size_t(std::numeric_limits<uint32_t>::max())) fail(what + ": too many vertices");
         mesh->positions = to_vectors<3>(pos);

@@ -136,6 +136,31 @@ double find_clip_level(const cv::Mat& rgb_encoded, const SkyCircle& circle, cons
 
 void inpaint_texture(cv::Mat& rgb, const cv::Mat& fill);  // below
 
+// The image and its fill mask at `work` px when they are larger (area-averaged: a pixel any of
+// whose area is filled counts as filled); false, and the two as they are, otherwise.
+bool reduce_for_fill(const cv::Mat& rgb, const cv::Mat& fill, int work, cv::Mat* src, cv::Mat* mask) {
+    *src = rgb, *mask = fill;
+    if (rgb.cols <= work) return false;
+    cv::resize(rgb, *src, cv::Size(work, work), 0, 0, cv::INTER_AREA);
+    cv::Mat m;
+    fill.convertTo(m, CV_32F);
+    cv::resize(m, m, cv::Size(work, work), 0, 0, cv::INTER_AREA);
+    *mask = m > 0.01f;
+    return true;
+}
+
+// The 99th percentile of a one-channel float image over its known pixels (mask 0); 0 when none.
+float known_percentile99(const cv::Mat& channel, const cv::Mat& mask) {
+    std::vector<float> known;
+    for (int y = 0; y < channel.rows; ++y)
+        for (int x = 0; x < channel.cols; ++x)
+            if (!mask.at<unsigned char>(y, x)) known.push_back(channel.at<float>(y, x));
+    if (known.empty()) return 0.0f;
+    const size_t q = size_t(0.99 * (known.size() - 1));
+    std::nth_element(known.begin(), known.begin() + q, known.end());
+    return known[q];
+}
+
 // Telea's fast-marching inpainting of a 3-channel float image where fill != 0, in place
 // (FillMethod::Texture: inpaint_texture instead).
 // cv::inpaint takes float only one channel at a time, and its Telea path misbehaves on small
@@ -144,29 +169,12 @@ void inpaint_texture(cv::Mat& rgb, const cv::Mat& fill);  // below
 // smooth anyway, and its cost grows with the filled area (seconds at 2048^2).
 void inpaint_float(cv::Mat& rgb, const cv::Mat& fill, PhotoImportParams::FillMethod method) {
     if (method == PhotoImportParams::FillMethod::Texture) return inpaint_texture(rgb, fill);
-    const int work = 512;
-    cv::Mat src = rgb, mask = fill;
-    bool reduced = rgb.cols > work;
-    if (reduced) {
-        cv::resize(rgb, src, cv::Size(work, work), 0, 0, cv::INTER_AREA);
-        cv::Mat m;
-        fill.convertTo(m, CV_32F);
-        cv::resize(m, m, cv::Size(work, work), 0, 0, cv::INTER_AREA);
-        mask = m > 0.01f;
-    }
+    cv::Mat src, mask;
+    const bool reduced = reduce_for_fill(rgb, fill, 512, &src, &mask);
     std::vector<cv::Mat> ch(3);
     cv::split(src, ch);
     tbb::parallel_for(0, 3, [&](int k) {
-        std::vector<float> known;
-        for (int y = 0; y < ch[k].rows; ++y)
-            for (int x = 0; x < ch[k].cols; ++x)
-                if (!mask.at<unsigned char>(y, x)) known.push_back(ch[k].at<float>(y, x));
-        float scale = 1.0f;
-        if (!known.empty()) {
-            size_t q = size_t(0.99 * (known.size() - 1));
-            std::nth_element(known.begin(), known.begin() + q, known.end());
-            if (known[q] > 0) scale = 255.0f / known[q];
-        }
+        const float top = known_percentile99(ch[k], mask), scale = top > 0 ? 255.0f / top : 1.0f;
         cv::Mat filled;
         cv::inpaint(ch[k] * scale, mask, filled, 3.0, cv::INPAINT_TELEA);
         ch[k] = cv::max(filled / scale, 0.0f);
@@ -192,15 +200,10 @@ constexpr double kTextureFillMinWidth = 0.02;  // x the radius, half the width o
 
 void inpaint_texture(cv::Mat& rgb, const cv::Mat& fill) {
     inpaint_float(rgb, fill, PhotoImportParams::FillMethod::Smooth);  // the horizon's, and the sources' start
-    const int n = rgb.cols, work = std::min(n, kTextureFillWork);
-    cv::Mat interior = cv::Mat::zeros(work, work, CV_8U), src = rgb, f = fill;
-    if (work != n) {
-        cv::resize(rgb, src, cv::Size(work, work), 0, 0, cv::INTER_AREA);
-        cv::Mat m;
-        fill.convertTo(m, CV_32F);
-        cv::resize(m, m, cv::Size(work, work), 0, 0, cv::INTER_AREA);
-        f = m > 0.01f;
-    }
+    cv::Mat src, f;
+    const bool reduced = reduce_for_fill(rgb, fill, kTextureFillWork, &src, &f);
+    const int work = src.cols;
+    cv::Mat interior = cv::Mat::zeros(work, work, CV_8U);
     const double c = (work - 1) / 2.0, r_max = kTextureFillRadius * work / 2.0;
     for (int y = 0; y < work; ++y)
         for (int x = 0; x < work; ++x)
@@ -215,19 +218,9 @@ void inpaint_texture(cv::Mat& rgb, const cv::Mat& fill) {
     cv::dilate(wide, wide, round);
     interior &= wide;
     if (cv::countNonZero(interior) == 0) return;
-    std::vector<float> known;
-    for (int y = 0; y < work; ++y)
-        for (int x = 0; x < work; ++x)
-            if (!f.at<unsigned char>(y, x)) {
-                const cv::Vec3f& p = src.at<cv::Vec3f>(y, x);
-                known.push_back(std::max({p[0], p[1], p[2]}));
-            }
-    float scale = 1.0f;
-    if (!known.empty()) {
-        const size_t q = size_t(0.99 * (known.size() - 1));
-        std::nth_element(known.begin(), known.begin() + q, known.end());
-        if (known[q] > 0) scale = 1.0f / known[q];
-    }
+    std::vector<cv::Mat> ch;
+    cv::split(src, ch);
+    const float top = known_percentile99(cv::max(cv::max(ch[0], ch[1]), ch[2]), f), scale = top > 0 ? 1.0f / top : 1.0f;
     cv::Mat lab, filled;
     cv::min(src * scale, 4.0f, lab);
     cv::cvtColor(lab, lab, cv::COLOR_LRGB2Lab);
@@ -235,7 +228,7 @@ void inpaint_texture(cv::Mat& rgb, const cv::Mat& fill) {
     cv::cvtColor(filled, filled, cv::COLOR_Lab2LRGB);
     filled = cv::max(filled / scale, 0.0f);
     cv::Mat where = interior;
-    if (work != n) {
+    if (reduced) {
         cv::resize(filled, filled, rgb.size(), 0, 0, cv::INTER_LINEAR);
         cv::resize(interior, where, rgb.size(), 0, 0, cv::INTER_NEAREST);
         where &= fill;
@@ -779,9 +772,11 @@ ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, 
     cv::Mat fill = (sky_not_sky > 0.01f) | (unseen > 0);
     {
         // A sky that is nearly all filled in is invented, not imported (a circle given off the
-        // photograph, a mask that hides everything).
-        const cv::Mat disc = sky_disc_mask(n);
-        const double seen = 1.0 - double(cv::countNonZero(fill & disc)) / std::max(1, cv::countNonZero(disc));
+        // photograph, a mask that hides everything); one whose seen pixels are all black holds
+        // no sky (a lens cap, a night frame, a black file): nothing a fill, a calibration or a
+        // restored sun could make light from.
+        const cv::Mat disc = sky_disc_mask(n), seen_sky = ~fill & disc;
+        const double seen = double(cv::countNonZero(seen_sky)) / std::max(1, cv::countNonZero(disc));
         if (seen < kMinSeenSkyShare) {
             char text[160];
             std::snprintf(text, sizeof text,
@@ -790,18 +785,10 @@ ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, 
                           100.0 * seen, circle.center_x, circle.center_y, circle.radius);
             throw_file_error(name, text);
         }
-    }
-    {
-        // A photograph whose seen sky is black holds no sky (a lens cap, a night frame, a black
-        // file): nothing a fill, a calibration or a restored sun could make light from.
-        const cv::Mat seen_sky = ~fill & sky_disc_mask(n);
-        float brightest = 0;
-        for (int j = 0; j < n; ++j)
-            for (int i = 0; i < n; ++i)
-                if (seen_sky.at<unsigned char>(j, i)) {
-                    const cv::Vec3f& p = sky.at<cv::Vec3f>(j, i);
-                    brightest = std::max({brightest, p[0], p[1], p[2]});
-                }
+        std::vector<cv::Mat> ch;
+        cv::split(sky, ch);
+        double brightest = 0;
+        cv::minMaxLoc(cv::max(cv::max(ch[0], ch[1]), ch[2]), nullptr, &brightest, nullptr, nullptr, seen_sky);
         if (!(brightest > 0)) throw_file_error(name, "the sky it shows is black everywhere: nothing to import");
     }
     out.not_sky.assign(size_t(n) * n, 0);
@@ -1005,12 +992,13 @@ PhotoTime photo_time(const std::string& path, double utc_offset_hours) {
         return t;
     }
     // EXIF: "YYYY:MM:DD hh:mm:ss", its zone (EXIF 2.31) "+hh:mm".
-    std::string when = image_header_string(path, "Exif:DateTimeOriginal");
-    if (when.empty()) when = image_header_string(path, "DateTime");
+    const std::vector<std::string> exif_values = image_header_strings(path, {"Exif:DateTimeOriginal", "DateTime",
+                                                                             "Exif:OffsetTimeOriginal"});
+    const std::string& when = exif_values[0].empty() ? exif_values[1] : exif_values[0];
     std::smatch m;
     static const std::regex exif("^\\s*(\\d{4}):(\\d{2}):(\\d{2})[ T](\\d{2}):(\\d{2}):(\\d{2})");
     if (!std::regex_search(when, m, exif)) return t;
-    std::string given = image_header_string(path, "Exif:OffsetTimeOriginal");
+    std::string given = exif_values[2];
     static const std::regex offset("^\\s*([+\\-]\\d{2}:\\d{2})\\s*$");
     std::smatch z;
     given = std::regex_search(given, z, offset) ? zone_text(z[1].str()) : "";

@@ -78,37 +78,28 @@ SkyImage sky_from_image(const Image& image, const std::string& name) {
     // AOV layers beside its RGB are ignored); a file without names gives its first three.
     int rgb[3] = {0, 1, 2};
     if (!image.channel_names.empty()) {
-        auto upper = [](std::string n) {
+        std::vector<std::string> upper = image.channel_names;
+        for (std::string& n : upper)
             for (char& ch : n) ch = char(std::toupper(static_cast<unsigned char>(ch)));
-            return n;
+        auto index = [&](const std::string& wanted) {
+            const auto it = std::find(upper.begin(), upper.end(), wanted);
+            return it == upper.end() ? -1 : int(it - upper.begin());
         };
-        auto find = [&](const std::string& want, bool layered, std::string* layer) {
-            int found = -1;
-            for (int k = 0; k < int(image.channel_names.size()); ++k) {
-                const std::string n = upper(image.channel_names[size_t(k)]);
-                const bool match = layered ? n.size() > 2 && n.compare(n.size() - 2, 2, "." + want) == 0 : n == want;
-                if (!match) continue;
-                const std::string l = layered ? n.substr(0, n.size() - 2) : "";
-                if (found >= 0 && l != *layer)
-                    throw_file_error(name, "has colour channels in more than one layer (" + *layer + "." + want + ", " +
-                                               image.channel_names[size_t(k)] +
-                                               ") and none without one: write the one that is the sky to its own file");
-                if (found < 0) found = k, *layer = l;
-            }
-            return found;
-        };
-        std::string layer;
-        bool plain = true;
-        for (int c = 0; c < 3 && plain; ++c) plain = find(std::string(1, "RGB"[c]), false, &layer) >= 0;
+        std::string layer;  // "" or "LAYER."
+        if (index("R") < 0 || index("G") < 0 || index("B") < 0) {
+            std::vector<size_t> layered_r;  // the channels named LAYER.R
+            for (size_t k = 0; k < upper.size(); ++k)
+                if (upper[k].size() > 2 && upper[k].compare(upper[k].size() - 2, 2, ".R") == 0) layered_r.push_back(k);
+            if (layered_r.size() > 1)
+                throw_file_error(name, "has colour channels in more than one layer (" +
+                                           image.channel_names[layered_r[0]] + ", " +
+                                           image.channel_names[layered_r[1]] +
+                                           ") and none without one: write the one that is the sky to its own file");
+            if (!layered_r.empty()) layer = upper[layered_r[0]].substr(0, upper[layered_r[0]].size() - 1);
+        }
         for (int c = 0; c < 3; ++c) {
             const std::string want(1, "RGB"[c]);
-            if (!plain && c > 0) {  // the same layer for all three
-                std::string l;
-                rgb[c] = find(want, true, &l);
-                if (rgb[c] >= 0 && l != layer) rgb[c] = -1;
-            } else {
-                rgb[c] = find(want, !plain, &layer);
-            }
+            rgb[c] = index(layer + want);
             if (rgb[c] < 0) {
                 std::string listed;
                 for (const std::string& n : image.channel_names) listed += (listed.empty() ? "" : ", ") + n;

@@ -63,14 +63,10 @@ void make_line_chart(const std::string& csv, const std::string& png, const std::
     }
     if (status != 0) {
         int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-        std::string last;
-        for (size_t end = said.size(); end > 0 && last.empty();) {
-            const size_t start = said.rfind('\n', end - 1);
-            last = said.substr(start == std::string::npos ? 0 : start + 1,
-                               end - (start == std::string::npos ? 0 : start + 1));
-            end = start == std::string::npos ? 0 : start;
-            while (!last.empty() && std::isspace(static_cast<unsigned char>(last.back()))) last.pop_back();
-        }
+        // The last line that says something: trailing blank lines and spaces dropped first.
+        while (!said.empty() && std::isspace(static_cast<unsigned char>(said.back()))) said.pop_back();
+        const size_t newline = said.rfind('\n');
+        const std::string last = newline == std::string::npos ? said : said.substr(newline + 1);
         throw_file_error(png, "could not write the chart: python3 with matplotlib failed (exit " +
                                   std::to_string(code) + (last.empty() ? "" : ": " + last) + "); the data is in " +
                                   csv);

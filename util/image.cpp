@@ -129,14 +129,16 @@ long first_non_finite(const Image& image) {
     return -1;
 }
 
-std::string image_header_string(const std::string& path, const std::string& name) {
-    if (!image_file_problem(path).empty()) return "";
+std::vector<std::string> image_header_strings(const std::string& path, const std::vector<std::string>& names) {
+    std::vector<std::string> values(names.size());
+    if (!image_file_problem(path).empty()) return values;
     auto in = OIIO::ImageInput::open(path);
     if (!in) {
         (void)OIIO::geterror();
-        return "";
+        return values;
     }
-    return in->spec().get_string_attribute(name);
+    for (size_t k = 0; k < names.size(); ++k) values[k] = in->spec().get_string_attribute(names[k]);
+    return values;
 }
 
 Image read_image(const std::string& path) {

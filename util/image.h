@@ -57,9 +57,10 @@ std::string image_file_problem(const std::string& path);
 // corrupt file (including a JPEG cut short, which its decoder would silently fill with grey).
 Image read_image(const std::string& path);
 
-// A string attribute of an image file's header (OpenImageIO's name: "Exif:DateTimeOriginal",
-// "DateTime", ...), read without decoding pixels; "" when the file cannot be opened or has none.
-std::string image_header_string(const std::string& path, const std::string& name);
+// String attributes of an image file's header (OpenImageIO's names: "Exif:DateTimeOriginal",
+// "DateTime", ...), read in one opening without decoding pixels; "" for each the file lacks, all ""
+// when it cannot be opened.
+std::vector<std::string> image_header_strings(const std::string& path, const std::vector<std::string>& names);
 
 // The index (in Image::pixels) of the first value that is NaN or infinite, or -1 when there is
 // none: what a renderer wrote is finite everywhere, so such a frame was damaged since.
