@@ -353,7 +353,7 @@ void register_sky_import_commands(CLI::App& sky) {
     io->offset_opt =
         imp->add_option(
                "--utc-offset", io->utc_offset,
-               "Hours the file name's clock is ahead of UTC, for names without a zone (default 0; presets know theirs)")
+               "Hours the camera's clock is ahead of UTC, for times (in the file name or the EXIF) without a zone (default 0; presets know theirs)")
             ->check(finite_in(-24, 24));
     io->lat_opt = imp->add_option("--lat", io->lat, "Latitude of the camera, degrees north")->check(finite_in(-90, 90));
     io->lon_opt = imp->add_option("--lon", io->lon, "Longitude of the camera, degrees EAST (write --lon=-97.485)")
