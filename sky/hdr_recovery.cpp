@@ -4,6 +4,7 @@
 #include <map>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <iomanip>
 #include <sstream>
 
 #include "sky/clear_sky.h"
@@ -27,7 +28,10 @@ double median_of(std::vector<double> v) { return v.empty() ? 0.0 : median(std::m
 std::string HdrCalibrationReport::summary() const {
     std::ostringstream s;
     s.precision(4);
-    s << "HDR calibration: " << method << ", scale " << scale << " W m^-2 sr^-1 per unit";
+    s << "HDR calibration: " << method;
+    if (clear_weight > 0 && clear_weight < 1)
+        s << " (clear pixels' weight " << std::setprecision(2) << clear_weight << ")";
+    s << std::setprecision(4) << ", scale " << scale << " W m^-2 sr^-1 per unit";
     s.precision(3);
     s << ", clear pixels " << clear_fraction * 100 << "% of the disc (ratio spread " << ratio_spread * 100 << "%)";
     s << ", colour: " << white_balance_method;
@@ -195,7 +199,20 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
             add_chroma(s.photo, &photo_rg, &photo_bg);
             add_chroma(s.model, &model_rg, &model_bg);
         }
+    // The fit is trusted fully from full_white_balance_fraction of the disc clear, and blended with
+    // what stands in for it (the camera's typical colour, grey clouds, or nothing) from
+    // min_white_balance_fraction up, so that a sky clouding over does not change colour at once
+    // (the Mobotix 12:34 -> 12:35 CEST: R/G x1.15, B/G x0.78 between frames a minute apart).
     const bool fit = rep.clear_fraction >= params.min_white_balance_fraction && photo_rg.size() >= 20;
+    const double fit_weight = fit ? smoothstep01((rep.clear_fraction - params.min_white_balance_fraction) /
+                                                 std::max(1e-9, params.full_white_balance_fraction -
+                                                                    params.min_white_balance_fraction))
+                                  : 0.0;
+    auto weight_text = [](double w) {
+        std::ostringstream t;
+        t << std::setprecision(2) << w;
+        return t.str();
+    };
     const auto& cam = params.camera_colour;
     if (!params.white_balance) {
         rep.white_balance_method = "none (the camera's colours kept)";
@@ -214,36 +231,52 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
             return true;
         };
         double krg = 0, kbg = 0;
-        if (fit && stretch(median_of(photo_rg), rep.grey_rg, median_of(model_rg), &krg) &&
+        if (fit_weight > 0 && stretch(median_of(photo_rg), rep.grey_rg, median_of(model_rg), &krg) &&
             stretch(median_of(photo_bg), rep.grey_bg, median_of(model_bg), &kbg)) {
-            rep.chroma_rg = krg, rep.chroma_bg = kbg;
+            rep.chroma_rg = fit_weight * krg + (1 - fit_weight) * cam->chroma_rg;
+            rep.chroma_bg = fit_weight * kbg + (1 - fit_weight) * cam->chroma_bg;
             rep.white_balance_method = "clear-sky pixels, from the camera's grey";
+            if (fit_weight < 1)
+                rep.white_balance_method += ", blended with its typical colour (fit's weight " +
+                                            weight_text(fit_weight) + ")";
         } else {
-            rep.white_balance_method = fit ? "the camera's typical colour (the clear pixels' colour is implausible)"
+            rep.white_balance_method = fit_weight > 0
+                                           ? "the camera's typical colour (the clear pixels' colour is implausible)"
                                            : "the camera's typical colour (too few clear pixels to fit it)";
         }
-    } else if (fit) {
-        rep.grey_rg = median_of(photo_rg) - median_of(model_rg);
-        rep.grey_bg = median_of(photo_bg) - median_of(model_bg);
-        rep.white_balance_method = "clear-sky pixels (per-channel gains)";
     } else {
-        // An overcast photo from a camera of unknown colour, the sun well up: its clouds are made
-        // grey by per-channel gains (their median colour), as clouds come out where the clear sky
-        // sets the colour (the TSI's, R/G and B/G within 3 % of grey; the Mobotix's 12:00Z frame
-        // within 10 %). The camera's white balance drifts from frame to frame (the Mobotix's clouds
-        // run green in dark frames, pink at midday), so no fixed colour fits it. At dusk the light
-        // itself is coloured: the camera's colours are kept.
-        std::vector<double> cloud_rg, cloud_bg;
-        for (const Sample& s : samples)
-            if (!s.clear && s.photo.minCoeff() > floor) add_chroma(s.photo, &cloud_rg, &cloud_bg);
-        const double cloud_fraction = double(cloud_rg.size()) / double(std::max<size_t>(1, samples.size()));
-        if (cloud_rg.size() >= 20 && cloud_fraction >= kMinCloudFractionForGrey &&
-            rep.sun_elevation_deg >= kMinSunElevationForGreyDeg) {
-            rep.grey_rg = median_of(cloud_rg);
-            rep.grey_bg = median_of(cloud_bg);
-            rep.white_balance_method = "cloud pixels made grey (per-channel gains; too few clear pixels)";
+        double grey_rg = 0, grey_bg = 0;
+        std::string stand_in;
+        if (fit_weight < 1) {
+            // An overcast photo from a camera of unknown colour, the sun well up: its clouds are made
+            // grey by per-channel gains (their median colour), as clouds come out where the clear sky
+            // sets the colour (the TSI's, R/G and B/G within 3 % of grey; the Mobotix's 12:00Z frame
+            // within 10 %). The camera's white balance drifts from frame to frame (the Mobotix's clouds
+            // run green in dark frames, pink at midday), so no fixed colour fits it. At dusk the light
+            // itself is coloured: the camera's colours are kept.
+            std::vector<double> cloud_rg, cloud_bg;
+            for (const Sample& s : samples)
+                if (!s.clear && s.photo.minCoeff() > floor) add_chroma(s.photo, &cloud_rg, &cloud_bg);
+            const double cloud_fraction = double(cloud_rg.size()) / double(std::max<size_t>(1, samples.size()));
+            if (cloud_rg.size() >= 20 && cloud_fraction >= kMinCloudFractionForGrey &&
+                rep.sun_elevation_deg >= kMinSunElevationForGreyDeg) {
+                grey_rg = median_of(cloud_rg);
+                grey_bg = median_of(cloud_bg);
+                stand_in = "cloud pixels made grey (per-channel gains; too few clear pixels)";
+            } else {
+                stand_in = "none (too few clear pixels to fit it, and the camera's colour is unknown)";
+            }
+        }
+        if (fit_weight > 0) {
+            rep.grey_rg = fit_weight * (median_of(photo_rg) - median_of(model_rg)) + (1 - fit_weight) * grey_rg;
+            rep.grey_bg = fit_weight * (median_of(photo_bg) - median_of(model_bg)) + (1 - fit_weight) * grey_bg;
+            rep.white_balance_method = "clear-sky pixels (per-channel gains)";
+            if (fit_weight < 1)
+                rep.white_balance_method += ", blended with " + stand_in.substr(0, stand_in.find(" (")) +
+                                            " (fit's weight " + weight_text(fit_weight) + ")";
         } else {
-            rep.white_balance_method = "none (too few clear pixels to fit it, and the camera's colour is unknown)";
+            rep.grey_rg = grey_rg, rep.grey_bg = grey_bg;
+            rep.white_balance_method = stand_in;
         }
     }
     const bool recolour = params.white_balance && rep.white_balance_method.rfind("none", 0) != 0;
@@ -270,16 +303,35 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
         sum_photo += y_photo;
         if (s.clear && y_photo > 1e-4) ratios.push_back(y_model / y_photo);
     }
-    if (rep.clear_fraction >= params.min_clear_fraction && ratios.size() >= 20) {
-        rep.method = "clear-sky pixels";
-        rep.scale = median_of(ratios);
+    // The clear pixels' scale is trusted fully from full_clear_fraction of the disc, not at all
+    // under min_clear_fraction, and blended (in log) with the fallback's between: a sky clouding
+    // over frame by frame then changes its scale smoothly. The hard switch made a frame a minute
+    // after the last one 1.9x darker (Mobotix 12:38 -> 12:39 CEST, the photographs within 3 %).
+    const double clear_weight = ratios.size() >= 20 ? smoothstep01((rep.clear_fraction - params.min_clear_fraction) /
+                                                                   std::max(1e-9, params.full_clear_fraction -
+                                                                                      params.min_clear_fraction))
+                                                    : 0.0;
+    rep.clear_weight = clear_weight;
+    double clear_scale = 0, fallback_scale = 0;
+    if (clear_weight > 0) {
+        clear_scale = median_of(ratios);
         std::vector<double> dev;
-        for (double r : ratios) dev.push_back(std::abs(r - rep.scale));
-        rep.ratio_spread = median_of(dev) / rep.scale;
-    } else {
-        rep.method = "mean-luminance fallback";
+        for (double r : ratios) dev.push_back(std::abs(r - clear_scale));
+        rep.ratio_spread = median_of(dev) / clear_scale;
+    }
+    if (clear_weight < 1) {
         if (!(sum_photo > 0)) throw_file_error(photo.photo_path, "the photograph's sky is black: nothing to calibrate");
-        rep.scale = sum_model / sum_photo;
+        fallback_scale = sum_model / sum_photo;
+    }
+    if (clear_weight >= 1) {
+        rep.method = "clear-sky pixels";
+        rep.scale = clear_scale;
+    } else if (clear_weight <= 0) {
+        rep.method = "mean-luminance fallback";
+        rep.scale = fallback_scale;
+    } else {
+        rep.method = "clear-sky pixels and mean-luminance fallback blended";
+        rep.scale = std::exp(clear_weight * std::log(clear_scale) + (1 - clear_weight) * std::log(fallback_scale));
     }
 
     SkyImage out = in;

@@ -14,7 +14,8 @@
 //     typical colour, or none;
 //     then the ratio model luminance / photo luminance on the clear pixels is taken, and its median
 //     is the scale applied to the whole photo; with too few clear pixels (overcast) the scale instead
-//     matches the photo's mean luminance to the clear model's: a weak, documented fallback;
+//     matches the photo's mean luminance to the clear model's: a weak, documented fallback; between
+//     1 % and 10 % of the disc clear the two are blended (in log), so the scale never jumps;
 //  4. the sun: clipped pixels near the sun (the sun seen, saturated) get max(scaled photo, model
 //     sky + disc), which restores the disc's true radiance and the aureole's clipped core. A sun
 //     hidden by a shadow band counts as seen if the sky around the band near it is clear or clipped.
@@ -42,23 +43,30 @@ struct HdrCalibrationParams {
     // Which pixels are clear sky for the calibration; the paper's 0.46 is too strict for most
     // cameras (docs/sky-import.md), WSISEG's best threshold is the default here.
     CloudMaskParams clear_rule{CloudRule::RedBlueRatio, kWsisegBestRedBlueThreshold};
-    double exclude_sun_deg = 15;       // skip the aureole: its clipping and forward scattering
-    double max_zenith_deg = 78;        // skip the haze and obstructions near the horizon
-    double min_clear_fraction = 0.01;  // of the disc, to trust the clear-pixel calibration
+    double exclude_sun_deg = 15;  // skip the aureole: its clipping and forward scattering
+    double max_zenith_deg = 78;   // skip the haze and obstructions near the horizon
+    // Clear pixels (fractions of the disc) to trust the clear-pixel calibration at all and fully;
+    // between, its scale is blended in log with the fallback's (step 3).
+    double min_clear_fraction = 0.01;
+    double full_clear_fraction = 0.10;
     bool restore_sun = true;
     double sun_search_deg = 3;     // a clipped blob this close to the computed sun is the sun
     bool use_observed_sun = true;  // place the sun where the photo shows it (if seen)
     // Colour against the model (step 3); false keeps the camera's colours (one scale for all three
     // channels).
     bool white_balance = true;
-    // Clear pixels needed to fit the colour, as a fraction of the disc.
+    // Clear pixels (fractions of the disc) to fit the colour at all and to trust the fit fully;
+    // between, the fit is blended with what stands in for it without one.
     double min_white_balance_fraction = 0.03;
+    double full_white_balance_fraction = 0.10;
     // The camera's colour rendering (CameraPreset::colour); none: per-channel gains.
     std::optional<CameraColour> camera_colour;
 };
 
 struct HdrCalibrationReport {
-    std::string method;          // "clear-sky pixels" or "mean-luminance fallback"
+    // "clear-sky pixels", "mean-luminance fallback", or both blended (clear_weight between 0 and 1)
+    std::string method;
+    double clear_weight = 0;     // the clear-pixel scale's weight in log (1 - the fallback's)
     double scale = 0;            // radiance (W m^-2 sr^-1) per linear photo unit
     long long clear_pixels = 0;  // pixels used (before subsampling)
     double clear_fraction = 0;   // of the disc

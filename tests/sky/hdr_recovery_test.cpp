@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <opencv2/imgcodecs.hpp>
 
 #include "sky/clear_sky.h"
@@ -372,6 +373,65 @@ TEST(HdrRecovery, OvercastCloudsOfACameraOfUnknownColourAreMadeGrey) {
     const Calibrated dawn = calibrate(
         test::shared_path("skies/mobotix_sophia_20200812_morning/images/2020-08-12_06_30.jpg"), true, 64, "mobotix");
     EXPECT_EQ(dawn.report.white_balance_method.rfind("none", 0), 0u) << dawn.report.white_balance_method;
+}
+
+// A sky clouding over, imported frame by frame, keeps its brightness and colour from one frame to
+// the next as the photographs do: the calibration's switches from the clear pixels to the fallback
+// (scale) and to grey clouds (colour) made the Mobotix 1.9x darker between 12:38 and 12:39 CEST and
+// changed its colour by 15-22 % between 12:34 and 12:35, and the ARM dusk jumped 0.68x and 1.34x
+// at 00:10 and 00:32Z, while the photographs changed by under 5 %.
+TEST(HdrRecovery, ASkyCloudingOverChangesBrightnessAndColourSmoothly) {
+    DYNSKY_REQUIRE_SHARED();
+    struct Run {
+        const char* folder;
+        const char* preset;
+        std::vector<const char*> files;
+    };
+    const std::vector<Run> runs = {
+        {"skies/mobotix_sophia_20200812_morning/images/", "mobotix",
+         {"2020-08-12_12_31.jpg", "2020-08-12_12_32.jpg", "2020-08-12_12_33.jpg", "2020-08-12_12_34.jpg",
+          "2020-08-12_12_35.jpg", "2020-08-12_12_36.jpg", "2020-08-12_12_37.jpg", "2020-08-12_12_38.jpg",
+          "2020-08-12_12_39.jpg", "2020-08-12_12_40.jpg"}},
+        {"skies/arm_tsi_sgp_20170524_overcast_dusk/images/", "arm-tsi",
+         {"tsi_sgpC1_20170524000830Z.jpg", "tsi_sgpC1_20170524000900Z.jpg", "tsi_sgpC1_20170524000930Z.jpg",
+          "tsi_sgpC1_20170524001000Z.jpg", "tsi_sgpC1_20170524001030Z.jpg"}},
+        {"skies/arm_tsi_sgp_20170524_overcast_dusk/images/", "arm-tsi",
+         {"tsi_sgpC1_20170524003100Z.jpg", "tsi_sgpC1_20170524003130Z.jpg", "tsi_sgpC1_20170524003200Z.jpg",
+          "tsi_sgpC1_20170524003230Z.jpg", "tsi_sgpC1_20170524003300Z.jpg"}},
+    };
+    // Mean RGB of the sky within 70 % of the radius (the filled band and housing are smooth there).
+    auto mean_colour = [](const SkyImage& sky) {
+        Eigen::Array3d sum = Eigen::Array3d::Zero();
+        for (int j = 0; j < sky.resolution; ++j)
+            for (int i = 0; i < sky.resolution; ++i)
+                if (fisheye::pixel_center_uv(i, j, sky.resolution).norm() < 0.7f)
+                    sum += sky.pixel(i, j).cast<double>().array();
+        return sum;
+    };
+    for (const Run& run : runs) {
+        std::optional<Eigen::Array3d> last;
+        std::string last_name;
+        int blended = 0;
+        for (const char* file : run.files) {
+            const std::string path = test::shared_path(std::string(run.folder) + file);
+            Calibrated c = calibrate(path, true, 128, run.preset);
+            if (c.report.clear_weight > 0 && c.report.clear_weight < 1) ++blended;
+            const Eigen::Array3d m = mean_colour(c.sky);
+            if (last) {
+                const double y = luminance(Color(m.cast<float>())) / luminance(Color(last->cast<float>()));
+                const double rg = (m[0] / m[1]) / ((*last)[0] / (*last)[1]);
+                const double bg = (m[2] / m[1]) / ((*last)[2] / (*last)[1]);
+                std::printf("%s -> %s: brightness x%.3f, R/G x%.3f, B/G x%.3f (%s; %s)\n", last_name.c_str(), file, y,
+                            rg, bg, c.report.method.c_str(), c.report.white_balance_method.c_str());
+                EXPECT_GT(y, 0.8) << last_name << " -> " << file;
+                EXPECT_LT(y, 1.25) << last_name << " -> " << file;
+                EXPECT_NEAR(rg, 1.0, 0.10) << last_name << " -> " << file;
+                EXPECT_NEAR(bg, 1.0, 0.10) << last_name << " -> " << file;
+            }
+            last = m, last_name = file;
+        }
+        EXPECT_GT(blended, 0) << run.folder << ": no frame between the clear-pixel and fallback scales";
+    }
 }
 
 }  // namespace
