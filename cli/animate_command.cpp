@@ -6,6 +6,7 @@
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "frame/animation.h"
+#include "util/error.h"
 #include "util/parse.h"
 
 namespace dynsky::cli {
@@ -86,7 +87,12 @@ void register_animate_command(CLI::App& app) {
         ->capture_default_str();
     cmd->add_flag("--count-frames", o->count_frames,
                   "Print the animation's number of frames (round(duration x fps)) and exit (for farm scripts)");
-    cmd->callback([o] {
+    CLI::Option* look_at = cmd->get_option("--look-at");
+    cmd->callback([o, look_at] {
+        // Each --look-at gives 6 numbers; the last one given counts (TakeLast keeps 6 of 7 otherwise).
+        if (look_at->count() && look_at->results().size() % 6 != 0)
+            throw Error("--look-at takes 6 numbers, eye_x,eye_y,eye_z,target_x,target_y,target_z (got " +
+                        std::to_string(look_at->results().size()) + ")");
         parse_frame_size(o->resolution, &o->settings.width, &o->settings.height);
         if (o->count_frames) {
             std::printf("%d\n", animation_frame_count(o->settings));

@@ -52,7 +52,7 @@ void register_compare_command(CLI::App& app) {
         ->capture_default_str();
     cmd->callback([o] {
         parse_frame_size(o->resolution, &o->settings.width, &o->settings.height);
-        parse_frame_size(o->chart_resolution, &o->settings.chart_width, &o->settings.chart_height);
+        parse_frame_size(o->chart_resolution, &o->settings.chart_width, &o->settings.chart_height, "--chart-res");
         render_clear_cloudy_comparison(o->settings);
     });
 

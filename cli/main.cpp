@@ -7,6 +7,7 @@
 #include <exception>
 #include <functional>
 #include <new>
+#include <string>
 
 #include "cli/commands.h"
 #include "cli/exit_codes.h"
@@ -68,6 +69,21 @@ int main(int argc, char** argv) {
     };
     add_quiet(&app);
 
+    // An empty value ("--time-limit ''", "--spp=") is never meant, and CLI11 reads one as 0 or the
+    // default for the options without a range check: refused for every option alike.
+    for (int i = 1; i < argc; ++i) {
+        const std::string word = argv[i], before = i > 1 ? argv[i - 1] : "";
+        if (word == "--") break;
+        std::string option;
+        if (word.size() > 3 && word.rfind("--", 0) == 0 && word.back() == '=') option = word.substr(0, word.size() - 1);
+        else if (word.empty() && before.size() > 2 && before.rfind("--", 0) == 0 &&
+                 before.find('=') == std::string::npos)
+            option = before;
+        if (option.empty()) continue;
+        std::fprintf(stderr, "dynsky: usage error: %s: an empty value (give one, or leave the option out)\n",
+                     option.c_str());
+        return dynsky::cli::kUsageError;
+    }
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -117,7 +117,7 @@ void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {
            "--cloud-height", o->cloud_height_m,
            "Height of the cloud layer the wind moves, metres (1500: fair-weather cumulus; only speed / height\n"
            "matters for the motion seen from the ground)")
-        ->check(finite_above(0, 1e5))
+        ->check(finite_in(10, 1e5))
         ->capture_default_str();
     cmd->add_option(
         "--prev", o->previous,

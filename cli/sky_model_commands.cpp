@@ -29,14 +29,18 @@ void register_sky_model_commands(CLI::App& sky) {
             ->capture_default_str();
         o->model = "auto";
         auto wind = std::make_shared<Wind>();
+        // The same ranges as animate, compare and timeline (cli/options.cpp).
         auto from = cmd->add_option("--wind-from", wind->from_deg,
-                                    "Where the wind blows from, degrees clockwise from north (default 270)");
-        auto speed = cmd->add_option("--wind-speed", wind->speed_mps, "Wind speed at the clouds, m/s (default 12)");
+                                    "Where the wind blows from, degrees clockwise from north (default 270)")
+                        ->check(finite_in(-360, 360));
+        auto speed = cmd->add_option("--wind-speed", wind->speed_mps, "Wind speed at the clouds, m/s (default 12)")
+                         ->check(finite_in(0, 300));
         auto height = cmd->add_option("--cloud-height", wind->cloud_height_m,
-                                      "Height of the cloud layer the wind moves, metres (default 1500: cumulus)");
+                                      "Height of the cloud layer the wind moves, metres (default 1500: cumulus)")
+                          ->check(finite_in(10, 1e5));
         cmd->add_option("--prev", o->previous,
                         "A previous frame of the same sky (EXR): the motion is measured from it (previous -> --sky)");
-        cmd->add_option("--prev-dt", o->previous_dt, kPrevDtHelp);
+        cmd->add_option("--prev-dt", o->previous_dt, kPrevDtHelp)->check(finite_in(0, 86400));
         cmd->parse_complete_callback([o, wind, from, speed, height] {
             if (from->count() || speed->count() || height->count()) o->wind = *wind;
         });

@@ -1,12 +1,16 @@
 // dynsky sky procedural: a sequence of procedural cloudy skies with their exact flow fields
 // (sky/procedural_sequence.h).
+#include <cmath>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "sky/procedural_sequence.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
+#include "util/parse.h"
 
 namespace dynsky::cli {
 
@@ -52,13 +56,16 @@ void register_sky_procedural_command(CLI::App& sky) {
         ->check(finite_above(0, 1e5))
         ->capture_default_str();
     cmd->add_option("--evolution", o->evolution,
-                    "Seconds for the cumulus shapes to change completely; 0 freezes them (pure advection)")
+                    "Seconds for the cumulus shapes to change completely (0, or 1..1e7); 0 freezes them (pure\n"
+                    "advection)")
+        ->check(finite_in(0, 1e7))
         ->capture_default_str();
     cmd->add_option("--mask-image", o->mask_image,
                     "Grey or alpha image (PNG, EXR, ...) of cloud density for the first layer, seen from below\n"
                     "(north up, east left), centred overhead at t = 0 and drifting with the wind");
     cmd->add_option("--mask-extent", o->mask_extent,
                     "Width in metres of the square the mask covers on its layer (0: out to 60 deg from the zenith)")
+        ->check(finite_in(0, 1e7))
         ->capture_default_str();
     cmd->add_option("--mask-detail", o->mask_detail, "How much noise erodes the mask's soft edges, in [0, 1)")
         ->check(finite_in(0, 1))
@@ -91,6 +98,17 @@ void register_sky_procedural_command(CLI::App& sky) {
     cmd->callback([o, lat, lon, time]() {
         int given = int(lat->count() > 0) + int(lon->count() > 0) + int(time->count() > 0);
         if (given != 0 && given != 3) throw Error("--lat, --lon and --time go together: give all three or none");
+        // The same ranges as animate's --wind-speed and --wind-from.
+        auto check_wind = [](const char* name, const std::vector<double>& w) {
+            if (w.size() == 2 && w[0] >= 0 && w[0] <= 300 && std::abs(w[1]) <= 360) return;
+            throw Error(std::string(name) + ": SPEED,DIR takes a speed of 0..300 m/s and a direction of -360..360 " +
+                        "degrees" +
+                        (w.size() == 2 ? " (got " + number_text(w[0]) + "," + number_text(w[1]) + ")" : ""));
+        };
+        if (!o->wind.empty()) check_wind("--wind", o->wind);
+        if (!o->cirrus_wind.empty()) check_wind("--cirrus-wind", o->cirrus_wind);
+        if (o->evolution > 0 && o->evolution < 1)
+            throw Error("--evolution: " + number_text(o->evolution) + " s: give 0 (frozen shapes) or at least 1 s");
         check_outputs_are_not_inputs({o->out}, {o->mask_image});
         remove_stale_temporaries(o->out);  // of a killed run into the same folder
         write_procedural_sequence(*o, given == 3);

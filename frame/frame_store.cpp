@@ -37,7 +37,7 @@ FrameCheck FrameStore::check(int k, int width, int height, const std::string& se
         // A frame the renderer wrote is finite everywhere: a NaN or infinite pixel means the file
         // was damaged (or replaced) since.
         if (const long i = first_non_finite(frame); i >= 0)
-            return {FrameCheck::Damaged, name(exr) + ": a pixel is not finite (value " + std::to_string(i) + ")"};
+            return {FrameCheck::Damaged, name(exr) + ": " + non_finite_pixel_text(frame, i)};
     } catch (const Error& e) {
         std::string why = e.what();
         size_t colon = why.find(": ");  // "PATH: problem" -> the file's name and the problem
@@ -49,6 +49,10 @@ FrameCheck FrameStore::check(int k, int width, int height, const std::string& se
     auto hash = frame.metadata.strings.find("dynsky:settings_hash");
     if (hash == frame.metadata.strings.end() || hash->second != settings_hash(recorded->second))
         return {FrameCheck::Damaged, name(exr) + ": its recorded settings do not match their hash"};
+    // A frame file copied or renamed onto another's number holds another moment.
+    auto number = frame.metadata.numbers.find("dynsky:frame");
+    if (number != frame.metadata.numbers.end() && number->second != double(k))
+        return {FrameCheck::Damaged, name(exr) + " holds frame " + number_text(number->second)};
     if (recorded->second != settings) {
         std::string change = describe_settings_change(parse_settings(recorded->second), parse_settings(settings));
         return {FrameCheck::OtherSettings, change.empty() ? "other settings" : change};

@@ -10,6 +10,7 @@
 #include "motion/flow.h"
 #include "motion/procedural_step_model.h"
 #include "sky/clear_sky.h"
+#include "sky/latlong.h"
 #include "util/data_path.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
@@ -100,8 +101,20 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
         sky_file = exrs.back();
         if (exrs.size() >= 2 && previous_file.empty()) previous_file = exrs[exrs.size() - 2];
     }
+    // A 2:1 lat-long HDRI's upper half, as `render` and `sky predict` take one; the moving sky has no
+    // ground of its own, so below the horizon is the ground model.
+    auto load_input_sky = [](const std::string& file) {
+        std::shared_ptr<SkyImage> ground;
+        SkyImage s = load_sky_or_latlong(file, &ground);
+        if (ground)
+            std::fprintf(stderr,
+                         "dynsky: note: %s is a lat-long sky: its upper half moves, as a fisheye; below the horizon "
+                         "is the ground model (--ground-albedo)\n",
+                         file.c_str());
+        return s;
+    };
     if (!previous_file.empty()) {
-        motion.previous = std::make_shared<const SkyImage>(load_sky(previous_file));
+        motion.previous = std::make_shared<const SkyImage>(load_input_sky(previous_file));
         motion.previous_dt = o.previous_dt;
         if (!(o.previous_dt >= 0)) throw Error("--prev-dt must be positive");
     } else {
@@ -139,7 +152,7 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
             throw Error(o.sky +
                         ": not a sky EXR ('procedural', 'clear' or a canonical fisheye .exr; import photographs first "
                         "with 'dynsky sky import')");
-        input = load_sky(sky_file);
+        input = load_input_sky(sky_file);
         if (motion.previous)  // their own clocks, unless --prev-dt says
             motion.previous_dt = previous_frame_gap(input, *motion.previous, motion.previous_dt, sky_file,
                                                     previous_file);
@@ -200,13 +213,17 @@ int write_sky_timeline(const SkySourceSpec& sky, const StepModelSpec& model, dou
             std::string stored;
             SkyTimeline old = SkyTimeline::load(folder, &stored);
             if (stored == settings && old.stored_last_step() >= old.last_step_for(duration)) {
+                old.verify_stored();
                 if (!quiet)
                     std::fprintf(stderr, "%s: the stored timeline (steps 0-%d) covers %g s: kept\n", folder.c_str(),
                                  old.stored_last_step(), duration);
                 return old.stored_last_step();
             }
-        } catch (const Error&) {
+        } catch (const Error& e) {
             // Damaged or of another version: made again below.
+            if (!quiet)
+                std::fprintf(stderr, "%s: the stored timeline is not usable (%s): made again\n", folder.c_str(),
+                             e.what());
         }
     }
     SkyTimeline timeline = make_sky_timeline(sky, model);

@@ -13,6 +13,7 @@
 #include "util/error.h"
 #include "util/image.h"
 #include "util/math.h"
+#include "util/parse.h"
 
 namespace dynsky {
 
@@ -39,6 +40,15 @@ void analyse_temporal_quality(const std::string& folder) {
         throw_file_error(o.folder, "not a folder (give the --out folder of 'dynsky animate')");
     auto files = frame_files(o.folder);
     if (files.size() < 3) throw_file_error(o.folder, "needs at least 3 frame_NNNN.exr files");
+    // Pairs of neighbouring frames only: a gap would be scored as one frame's change.
+    auto number = [](const std::string& file) { return std::stoi(fs::path(file).stem().string().substr(6)); };
+    for (size_t k = 1; k < files.size(); ++k)
+        if (number(files[k]) != number(files[k - 1]) + 1) {
+            const int a = number(files[k - 1]) + 1, b = number(files[k]) - 1;
+            throw_file_error(o.folder, (a == b ? "frame " + std::to_string(a) + " is"
+                                               : "frames " + std::to_string(a) + "-" + std::to_string(b) + " are") +
+                                           " missing: render them first (dynsky animate resumes)");
+        }
     std::string csv = (fs::path(o.folder) / "temporal.csv").string();
     std::ostringstream f;  // written whole once every frame is read: a bad frame leaves no table
     f << "time_s,relative change (%),boundary\n";
@@ -46,9 +56,12 @@ void analyse_temporal_quality(const std::string& folder) {
     // make the whole table NaN).
     auto read_frame = [](const std::string& file) {
         Image image = read_image(file);
+        for (const char* key : {"dynsky:time", "dynsky:medium_step_seconds"})
+            if (!image.metadata.numbers.count(key))
+                throw_file_error(file, std::string("has no ") + key + ": not a frame of 'dynsky animate'");
         if (const long i = first_non_finite(image); i >= 0)
-            throw_file_error(file, "a pixel is not finite (value " + std::to_string(i) +
-                                       "): a damaged frame; render it again (dynsky animate resumes)");
+            throw_file_error(file, non_finite_pixel_text(image, i) +
+                                       ": a damaged frame; render it again (dynsky animate resumes)");
         return image;
     };
     Image prev = read_frame(files[0]);
@@ -60,13 +73,18 @@ void analyse_temporal_quality(const std::string& folder) {
             throw_file_error(files[k], "size differs from the previous frame");
         double t0 = prev.metadata.numbers["dynsky:time"], t1 = cur.metadata.numbers["dynsky:time"];
         double dt = cur.metadata.numbers["dynsky:medium_step_seconds"];
+        if (!(t1 > t0))
+            throw_file_error(files[k], "its time (" + number_text(t1) + " s) does not follow the previous frame's (" +
+                                           number_text(t0) + " s): a copied or foreign frame");
         double num = 0, den = 0;
         for (size_t p = 0; p < cur.pixels.size(); p += size_t(cur.channels)) {
             double la = luminance(Color(prev.pixels[p], prev.pixels[p + 1], prev.pixels[p + 2]));
             double lb = luminance(Color(cur.pixels[p], cur.pixels[p + 1], cur.pixels[p + 2]));
             num += std::abs(lb - la), den += 0.5 * (la + lb);
         }
-        double change = 100.0 * num / std::max(den, 1e-12);
+        if (!(den > 0))
+            throw_file_error(files[k], "it and the frame before it are black everywhere: no change to measure");
+        double change = 100.0 * num / den;
         // The pair straddles (or ends on) a medium-step boundary i * Delta t.
         bool boundary = dt > 0 && std::floor(t1 / dt + 1e-9) > std::floor(t0 / dt + 1e-9);
         (boundary ? sum_b : sum_w) += change;

@@ -17,6 +17,7 @@
 #include "sky/fisheye.h"
 #include "util/allocation.h"
 #include "util/error.h"
+#include "util/parse.h"
 #include "util/math.h"
 
 namespace dynsky {
@@ -86,7 +87,8 @@ AdvectResidualNetwork AdvectResidualNetwork::load(const std::string& folder) {
     }
     if (info.resolution < 8 || info.resolution > 4096)
         throw_file_error(json_path, "resolution " + std::to_string(info.resolution) + " is not in 8..4096");
-    if (!(info.dt > 0)) throw_file_error(json_path, "dt_s must be a positive number of seconds");
+    if (!(info.dt >= 0.01 && info.dt <= 86400))
+        throw_file_error(json_path, "dt_s " + number_text(info.dt) + " is not a step of 0.01 s .. 1 day");
     if (!(info.flow_scale > 0)) throw_file_error(json_path, "flow_scale must be positive");
     try {
         validate_unit_map(info.form.unit_map);

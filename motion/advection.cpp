@@ -139,7 +139,10 @@ cv::Mat remap_exact(const cv::Mat& src, const cv::Mat& map) {
         const cv::Vec2f* m = map.ptr<cv::Vec2f>(y);
         float* o = out.ptr<float>(y);
         for (int x = 0; x < map.cols; ++x) {
-            const float fx = std::clamp(m[x][0], 0.0f, float(w - 1)), fy = std::clamp(m[x][1], 0.0f, float(h - 1));
+            // A non-finite source (never made by a finite flow) reads the corner rather than memory
+            // outside the image: std::clamp passes NaN through, and int(NaN) is undefined.
+            const float sx = std::isfinite(m[x][0]) ? m[x][0] : 0.0f, sy = std::isfinite(m[x][1]) ? m[x][1] : 0.0f;
+            const float fx = std::clamp(sx, 0.0f, float(w - 1)), fy = std::clamp(sy, 0.0f, float(h - 1));
             const int x0 = std::min(int(fx), w - 2 < 0 ? 0 : w - 2), y0 = std::min(int(fy), h - 2 < 0 ? 0 : h - 2);
             const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
             const float tx = fx - x0, ty = fy - y0;
@@ -180,7 +183,8 @@ cv::Mat make_rim_map(int n) {
 }  // namespace
 
 cv::Mat warp_sources(const cv::Mat& flow, bool recycle) {
-    if (flow.type() != CV_32FC2 || flow.rows != flow.cols) throw Error("warp_sources: the flow must be square CV_32FC2");
+    if (flow.type() != CV_32FC2 || flow.rows != flow.cols)
+        throw Error("warp_sources: the flow must be square CV_32FC2");
     const int n = flow.rows;
     const double c = (n - 1) / 2.0, r_in = (1.0 - 1.5 / n) * n / 2.0;
     cv::Scalar mean = cv::mean(flow, sky_disc_mask(n));

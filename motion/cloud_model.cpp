@@ -47,7 +47,8 @@ CloudModel CloudModel::load(const std::string& folder) {
     try {
         // This reader knows version 1 only.
         if (j.value("kind", std::string("flownet-cloudnet")) != "flownet-cloudnet")
-            throw Error("kind '" + j.value("kind", std::string()) + "' is not a FlowNet + CloudNet model");
+            throw Error("kind '" + j.value("kind", std::string()) +
+                        "' is not a model kind this dynsky knows (advect-residual, flownet-cloudnet)");
         if (j.at("version").get<int>() != 1)
             throw Error("version " + j.at("version").dump() + " (this dynsky reads version 1)");
         info.name = j.value("name", fs::path(folder).filename().string());

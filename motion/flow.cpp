@@ -8,6 +8,7 @@
 
 #include "sky/fisheye.h"
 #include "util/error.h"
+#include "util/parse.h"
 
 namespace dynsky {
 
@@ -74,9 +75,12 @@ cv::Mat fill_flow_holes(const cv::Mat& flow, const cv::Mat& confidence, double s
 }
 
 cv::Mat estimate_sky_flow(const SkyImage& from, const SkyImage& to, const SkyFlowParams& params) {
-    if (from.resolution != to.resolution || from.resolution < 8)
+    if (from.resolution != to.resolution)
         throw Error("estimate_sky_flow: the two skies must have the same resolution (got " +
                     std::to_string(from.resolution) + " and " + std::to_string(to.resolution) + ")");
+    if (from.resolution < 8)
+        throw Error("the skies are " + std::to_string(from.resolution) + " x " + std::to_string(from.resolution) +
+                    " pixels: too small to measure the clouds' motion (at least 8 x 8)");
     const int n = from.resolution, w = std::min(params.work_resolution, n);
     // Log luminance at the working size, one mapping for both images so brightness is comparable.
     auto log_lum = [&](const SkyImage& s) {
@@ -265,6 +269,12 @@ cv::Mat wind_flow(int n, const Wind& wind, double dt) {
         throw Error("wind: the cloud height must be positive and the speed and direction finite");
     double wx, wy;
     layer_displacement(wind, dt, &wx, &wy);
+    // A layer moved more than a thousand times its height in one step (speed x dt / height) is no
+    // motion a sky shows, and an infinite one (1e308 m/s, a height of 1e-308 m) has no flow at all.
+    if (!(std::hypot(wx, wy) <= 1e3))
+        throw Error("wind: " + number_text(wind.speed_mps) + " m/s at " + number_text(wind.cloud_height_m) +
+                    " m moves the clouds " + number_text(std::hypot(wx, wy)) + " times their height in one " +
+                    number_text(dt) + " s step: give a speed of at most 300 m/s and a height of at least 10 m");
     return layer_flow(n, wx, wy);
 }
 

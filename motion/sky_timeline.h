@@ -107,6 +107,9 @@ class SkyTimeline {
     static SkyTimeline load(const std::string& folder, std::string* settings = nullptr);
     // The last step a loaded timeline holds (-1: computes its steps); asking beyond it throws.
     int stored_last_step() const { return stored_last_step_; }
+    // Reads every stored step and flow once (a loaded timeline): throws dynsky::Error naming the
+    // first file missing or damaged, so that a rerun keeping the folder keeps only a whole one.
+    void verify_stored();
     // The last step sky_at needs for times up to t (t > 0: the step after the interval holding t).
     int last_step_for(double t) const;
     // The most medium steps one timeline may span (as many as an animation may have frames).

@@ -209,6 +209,13 @@ SkyTimeline SkyTimeline::load(const std::string& folder, std::string* settings) 
     }
 }
 
+void SkyTimeline::verify_stored() {
+    for (int i = 0; i <= stored_last_step_; ++i) {
+        stored_step(i);
+        if (i < stored_last_step_) stored_flow(i);
+    }
+}
+
 std::shared_ptr<const SkyImage> SkyTimeline::stored_step(int i) {
     if (i > stored_last_step_)
         throw_file_error(stored_folder_, "the stored sky timeline ends at step " + std::to_string(stored_last_step_) +

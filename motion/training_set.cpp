@@ -40,9 +40,10 @@ std::vector<unsigned char> stack_mask(const std::vector<cv::Mat>& mats) {
 void build_training_sequence(const TrainingSetOptions& o) {
     if (o.out.empty()) throw Error("--out: an output folder is required");
     if (o.sequence.empty() == o.procedural.empty())
-        throw Error("--sequence, --procedural: give exactly one of --sequence (real photographs) and --procedural (a `sky procedural` folder)");
+        throw Error(
+            "--sequence, --procedural: give exactly one of --sequence (real photographs) and --procedural (a `sky procedural` folder)");
     if (o.resolution < 8 || o.import_resolution < o.resolution || o.import_resolution % o.resolution != 0)
-        throw Error("--res must be >= 8 and divide --import-res");
+        throw Error("--sky-res must be >= 8 and divide --import-res");
     if (fs::exists(o.out) && !fs::is_directory(o.out)) throw_file_error(o.out, "exists and is not a folder");
     NetworkFormParams form = o.form;
     form.cloud_rule.rule = parse_cloud_rule(o.cloud_rule);

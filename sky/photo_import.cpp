@@ -627,6 +627,14 @@ ImportedPhoto import_photo_image(const Image& photo, const std::string& name, co
                                    " pixels: too small for an all-sky photograph (each "
                                    "side at least " +
                                    std::to_string(kMinPhotoSide) + ")");
+    if (const auto& s = params.circle_photo_size;
+        s && !photo.empty() && (photo.width != (*s)[0] || photo.height != (*s)[1]))
+        throw_file_error(name, "the photograph is " + std::to_string(photo.width) + " x " +
+                                   std::to_string(photo.height) + " pixels, but " +
+                                   (params.circle_source.empty() ? std::string("the given sky circle")
+                                                                 : params.circle_source + "'s sky circle") +
+                                   " was measured on " + std::to_string((*s)[0]) + " x " + std::to_string((*s)[1]) +
+                                   " photographs: another camera? Import it without a preset (the circle is found)");
     try {
         return import_checked_photo(photo, name, params, extra_not_sky);
     } catch (const cv::Exception& e) {
@@ -827,6 +835,7 @@ ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, 
 CameraPreset camera_preset(const std::string& name) {
     CameraPreset p;
     p.name = name;
+    p.params.circle_source = "the " + name + " preset";
     if (name == "arm-tsi") {
         // ARM SGP C1 Total Sky Imager (TSI-880): a camera looking down at a hemispherical mirror.
         // Geometry fitted to the TSI's own sun marker in tsi_cloudmask/ (212 frames, 0.07 px rms):
@@ -836,6 +845,7 @@ CameraPreset camera_preset(const std::string& name) {
         p.params.mirrored = true;
         p.params.north_deg = 0.0;
         p.params.circle = SkyCircle{243.1, 317.5, 230.8};
+        p.params.circle_photo_size = std::array<int, 2>{480, 640};
         p.params.mask_layout = MaskLayout::TsiCloudMask;
         p.params.mask_dilate_px = 4;  // the band's blurred edge lies just outside the TSI's polygon
         p.params.min_radius_fraction = 0.45;
@@ -872,6 +882,7 @@ CameraPreset camera_preset(const std::string& name) {
         p.params.mirrored = false;
         p.params.north_deg = 190.0;
         p.params.circle = SkyCircle{654.7, 479.4, 485.8};
+        p.params.circle_photo_size = std::array<int, 2>{1280, 960};
         p.params.mask_layout = MaskLayout::AlonsoPlanarGreenIsNotSky;
         p.params.mask_dilate_px = 3;
         // The shipped mask stops near 82 deg: the rooftops beyond it are found as dark objects.

@@ -98,8 +98,13 @@ struct HorizonObstruction {
 };
 
 struct PhotoImportParams {
-    int resolution = 512;               // N of the N x N canonical output
-    std::optional<SkyCircle> circle;    // none: found automatically (find_sky_circle)
+    int resolution = 512;             // N of the N x N canonical output
+    std::optional<SkyCircle> circle;  // none: found automatically (find_sky_circle)
+    // The width and height of the photographs `circle` was measured on (a camera preset's), and
+    // whose (e.g. "the arm-tsi preset"): a photograph of another size is refused, as another
+    // camera's (its sky would be cut from the wrong circle). None: any size.
+    std::optional<std::array<int, 2>> circle_photo_size;
+    std::string circle_source;
     double min_radius_fraction = 0.30;  // automatic search range for the radius, as fractions of
     double max_radius_fraction = 0.55;  //   the photo's shorter side
     LensLaw lens = LensLaw::Equidistant;

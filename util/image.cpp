@@ -129,6 +129,12 @@ long first_non_finite(const Image& image) {
     return -1;
 }
 
+std::string non_finite_pixel_text(const Image& image, long i) {
+    const long c = std::max(1, image.channels), w = std::max(1, image.width), p = i / c;
+    return "pixel (" + std::to_string(p % w) + ", " + std::to_string(p / w) + ") is " +
+           (std::isnan(image.pixels[size_t(i)]) ? "NaN" : "infinite");
+}
+
 std::vector<std::string> image_header_strings(const std::string& path, const std::vector<std::string>& names) {
     std::vector<std::string> values(names.size());
     if (!image_file_problem(path).empty()) return values;

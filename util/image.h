@@ -65,6 +65,8 @@ std::vector<std::string> image_header_strings(const std::string& path, const std
 // The index (in Image::pixels) of the first value that is NaN or infinite, or -1 when there is
 // none: what a renderer wrote is finite everywhere, so such a frame was damaged since.
 long first_non_finite(const Image& image);
+// "pixel (x, y) is NaN" (or "is infinite") for the value first_non_finite found at index i.
+std::string non_finite_pixel_text(const Image& image, long i);
 
 // Writes by extension: .exr (linear float, metadata as header attributes), .png/.jpg (8-bit,
 // values taken as already display-encoded in [0, 1]). Atomic (temporary name, then rename).

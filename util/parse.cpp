@@ -47,13 +47,13 @@ std::vector<int> parse_int_list(const std::string& text, const std::string& opti
     return out;
 }
 
-void parse_frame_size(const std::string& text, int* w, int* h) {
+void parse_frame_size(const std::string& text, int* w, int* h, const std::string& option) {
     std::smatch m;
     if (!std::regex_match(text, m, std::regex("^([0-9]+)x([0-9]+)$")))
-        throw Error("--res '" + text + "': expected WIDTHxHEIGHT, e.g. 1280x720");
+        throw Error(option + " '" + text + "': expected WIDTHxHEIGHT, e.g. 1280x720");
     auto side = [&](const std::string& digits) {
         if (digits.size() > 5 || std::stoi(digits) < 1 || std::stoi(digits) > 16384)
-            throw Error("--res '" + text + "': each side must be 1..16384");
+            throw Error(option + " '" + text + "': each side must be 1..16384");
         return std::stoi(digits);
     };
     *w = side(m[1]), *h = side(m[2]);

@@ -15,8 +15,8 @@ long long parse_whole_number(const std::string& text, const std::string& what, l
 // `option` and the bad item.
 std::vector<int> parse_int_list(const std::string& text, const std::string& option);
 
-// "1280x720" -> 1280, 720 (each 1..16384). Throws dynsky::Error naming --res.
-void parse_frame_size(const std::string& text, int* w, int* h);
+// "1280x720" -> 1280, 720 (each 1..16384). Throws dynsky::Error naming `option`.
+void parse_frame_size(const std::string& text, int* w, int* h, const std::string& option = "--res");
 
 // A number for a message, printf's %g with `significant` digits: 1e+35, 0.5, 128.
 std::string number_text(double v, int significant = 6);

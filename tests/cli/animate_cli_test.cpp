@@ -219,13 +219,33 @@ TEST(AnimateCli, ResumeRerendersDamagedFramesAndFramesOfOtherSettings) {
     }
     r = test::run_command(std::string(DYNSKY_EXE) + " temporal " + a);
     EXPECT_EQ(r.exit_code, 1) << r.output;
-    EXPECT_NE(r.output.find("frame_0003.exr: a pixel is not finite"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("frame_0003.exr: pixel (2, 0) is NaN"), std::string::npos) << r.output;
     r = test::run_command(animate(a));
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    EXPECT_NE(r.output.find("rendering again frame(s) 3 of " + a + " (damaged: frame_0003.exr: a pixel is not finite"),
+    EXPECT_NE(r.output.find("rendering again frame(s) 3 of " + a + " (damaged: frame_0003.exr: pixel (2, 0) is NaN"),
               std::string::npos)
         << r.output;
     for (float v : read_image(frame(a, 3)).pixels) ASSERT_TRUE(std::isfinite(v));
+
+    // A frame file copied onto another's number (its settings intact, another moment): rendered
+    // again; `temporal` refuses the copy's time, and a gap in the frames.
+    fs::copy_file(frame(a, 6), frame(a, 4), fs::copy_options::overwrite_existing);
+    r = test::run_command(std::string(DYNSKY_EXE) + " temporal " + a);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("frame_0005.exr: its time"), std::string::npos) << r.output;
+    r = test::run_command(animate(a));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("rendering again frame(s) 4 of " + a + " (damaged: frame_0004.exr holds frame 6)"),
+              std::string::npos)
+        << r.output;
+    EXPECT_EQ(read_image(frame(a, 4)).metadata.numbers["dynsky:frame"], 4);
+    const std::string gap = dir + "/gap";
+    fs::create_directories(gap);
+    for (int k : {0, 1, 3, 4}) fs::copy_file(frame(a, k), numbered(gap, "frame", k, ".exr"));
+    r = test::run_command(std::string(DYNSKY_EXE) + " temporal " + gap);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("frame 2 is missing"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(gap + "/temporal.csv"));
 
     // --force: every frame written anew.
     r = test::run_command(animate(a, "--force"));
@@ -265,6 +285,25 @@ TEST(AnimateCli, FramesFromSkyTimelineEqualOneRunByteForByte) {
                                " --quiet --out " +
                                timeline);
     ASSERT_EQ(r.exit_code, 0) << r.output;
+    // A requeued keys job keeps a whole timeline, and makes a damaged one again (a step deleted,
+    // a flow cut short) before any frame reads it.
+    {
+        const std::string keys = std::string(DYNSKY_EXE) +
+                                 " sky timeline --sky procedural:3 --model procedural --sky-res 96 --dt 0.5 "
+                                 "--duration 1 --out " +
+                                 timeline;
+        const std::string step1 = bytes_of(timeline + "/step_0001.exr"), flow0 = bytes_of(timeline + "/flow_0000.npy");
+        r = test::run_command(keys);
+        EXPECT_NE(r.output.find("covers 1 s: kept"), std::string::npos) << r.output;
+        fs::remove(timeline + "/step_0001.exr");
+        std::ofstream(timeline + "/flow_0000.npy", std::ios::binary | std::ios::trunc) << flow0.substr(0, 100);
+        r = test::run_command(keys);
+        ASSERT_EQ(r.exit_code, 0) << r.output;
+        EXPECT_NE(r.output.find("flow_0000.npy: truncated"), std::string::npos) << r.output;
+        EXPECT_NE(r.output.find("made again"), std::string::npos) << r.output;
+        EXPECT_EQ(bytes_of(timeline + "/step_0001.exr"), step1);
+        EXPECT_EQ(bytes_of(timeline + "/flow_0000.npy"), flow0);
+    }
     r = test::run_command(animate(farm, "--count-frames"));
     EXPECT_EQ(r.exit_code, 0);
     EXPECT_EQ(r.output, "8\n");

@@ -752,5 +752,55 @@ TEST(BadInputCli, OutOfRangeNumericOptionsAreRefusedNamingTheOption) {
     bad.check();
 }
 
+// The third audit (2026-12-03): a wind that moves the clouds infinitely far per step crashed the
+// warp (sky predict took any wind; animate any cloud height above 0; a model's dt_s of 1e308), a
+// procedural wind or evolution beyond range wrote NaN flows, an empty value read as 0, a 7-number
+// --look-at lost its first number, another camera's photographs imported with a preset's circle.
+TEST(BadInputCli, ThirdAuditsWindsEmptyValuesAndOtherCamerasAreRefused) {
+    const std::string dir = test::temp_dir("bad_third");
+    const std::string sky = sky_exr(dir + "/sky.exr", 64);
+    const std::string model = dir + "/model_dt";
+    fs::create_directories(model);
+    {
+        std::ifstream in(data_path("networks/models/advect_residual/model.json"));
+        std::string json((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        const size_t at = json.find("\"dt_s\": 30.0");
+        ASSERT_NE(at, std::string::npos);
+        json.replace(at, std::string("\"dt_s\": 30.0").size(), "\"dt_s\": 1e308");
+        std::ofstream(model + "/model.json") << json;
+        fs::copy_file(data_path("networks/models/advect_residual/model.onnx"), model + "/model.onnx");
+    }
+    const std::string photo = ldr_image(dir + "/photo.jpg", 640, 480);  // the TSI's are 480 x 640
+    Refusals bad(dir);
+    const std::string p = "sky predict --sky " + sky + " --steps 2 -q -o " + dir + "/p ";
+    for (const char* o :
+         {"--wind-speed 1e308", "--wind-from 1e308", "--cloud-height 1e-308", "--wind-speed -12", "--prev-dt nan"})
+        bad.add(p + "--model advect " + o, {std::string(o).substr(0, std::string(o).find(' '))}, false);
+    bad.add(p + "--model " + model, {"model.json", "dt_s"});
+    bad.add(
+        "animate builtin --sky clear --sky-res 16 --res 8x6 --spp 1 --no-video -q --model advect --duration 0.2 "
+        "--fps 10 -o " +
+            dir + "/a --cloud-height 1e-308",
+        {"--cloud-height"}, false);
+    bad.add("animate builtin --sky clear --sky-res 16 --res 8x6 --spp 1 --no-video -q --duration 0.1 --fps 10 -o " +
+                dir + "/a --look-at 5,5,5,0,0,0,1",
+            {"--look-at takes 6 numbers", "(got 7)"}, false);
+    const std::string proc = "sky procedural --sky-res 32 --duration 10 --dt 10 -q -o " + dir + "/proc ";
+    bad.add(proc + "--wind 1e308,270", {"--wind"}, false);
+    bad.add(proc + "--cirrus-wind nan,270", {"--cirrus-wind"}, false);
+    bad.add(proc + "--evolution 1e-308", {"--evolution"}, false);
+    bad.add("render builtin --res 8x6 --spp 1 -q -o " + dir + "/r.exr --time-limit ''",
+            {"--time-limit: an empty value"}, false);
+    bad.add("render builtin --res 8x6 -q -o " + dir + "/r.exr --spp=", {"--spp: an empty value"}, false);
+    bad.add("compare builtin --sky clear -q -o " + dir + "/cmp --chart-res 0x0", {"--chart-res"}, false);
+    bad.add("sky import " + photo + " --preset arm-tsi -q -o " + dir + "/s.exr",
+            {"photo.jpg", "640 x 480", "the arm-tsi preset's sky circle was measured on 480 x 640"});
+    bad.check();
+    // Their good neighbours still run.
+    expect_accepted(p + "--model advect --wind-speed 300 --cloud-height 10");
+    expect_accepted(proc + "--wind 20,90 --evolution 1");
+    fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace dynsky

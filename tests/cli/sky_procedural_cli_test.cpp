@@ -65,7 +65,7 @@ TEST(SkyProceduralCli, BadArgumentsLeaveNoOutput) {
         {"--coverage 1.5", "coverage"},
         {"--dt -1", "--dt"},
         {"--mask-image " + base + "/missing.png", base + "/missing.png: no such file"},
-        {"--wind -3,270", "wind speed"},
+        {"--wind -3,270", "--wind: SPEED,DIR takes a speed of 0..300 m/s"},
         {"--lat 40 --lon 5", "--time"},
     };
     int k = 0;

@@ -388,14 +388,17 @@ TEST(HdrRecovery, ASkyCloudingOverChangesBrightnessAndColourSmoothly) {
         std::vector<const char*> files;
     };
     const std::vector<Run> runs = {
-        {"skies/mobotix_sophia_20200812_morning/images/", "mobotix",
+        {"skies/mobotix_sophia_20200812_morning/images/",
+         "mobotix",
          {"2020-08-12_12_31.jpg", "2020-08-12_12_32.jpg", "2020-08-12_12_33.jpg", "2020-08-12_12_34.jpg",
           "2020-08-12_12_35.jpg", "2020-08-12_12_36.jpg", "2020-08-12_12_37.jpg", "2020-08-12_12_38.jpg",
           "2020-08-12_12_39.jpg", "2020-08-12_12_40.jpg"}},
-        {"skies/arm_tsi_sgp_20170524_overcast_dusk/images/", "arm-tsi",
+        {"skies/arm_tsi_sgp_20170524_overcast_dusk/images/",
+         "arm-tsi",
          {"tsi_sgpC1_20170524000830Z.jpg", "tsi_sgpC1_20170524000900Z.jpg", "tsi_sgpC1_20170524000930Z.jpg",
           "tsi_sgpC1_20170524001000Z.jpg", "tsi_sgpC1_20170524001030Z.jpg"}},
-        {"skies/arm_tsi_sgp_20170524_overcast_dusk/images/", "arm-tsi",
+        {"skies/arm_tsi_sgp_20170524_overcast_dusk/images/",
+         "arm-tsi",
          {"tsi_sgpC1_20170524003100Z.jpg", "tsi_sgpC1_20170524003130Z.jpg", "tsi_sgpC1_20170524003200Z.jpg",
           "tsi_sgpC1_20170524003230Z.jpg", "tsi_sgpC1_20170524003300Z.jpg"}},
     };
