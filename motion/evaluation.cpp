@@ -67,9 +67,9 @@ std::string fmt(const char* f, double v) {
 }  // namespace
 
 EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
-    const std::vector<int> horizons = parse_int_list(o.horizons, "--horizons");
+    std::vector<int> horizons = parse_int_list(o.horizons, "--horizons");
     const std::vector<int> resolutions = parse_int_list(o.resolutions, "--res");
-    const int hmax = horizons.back();
+    int hmax = horizons.back();
     if (o.limit < 0) throw Error("--limit: must be >= 0");
     if (o.import_resolution < 16 || o.import_resolution > 2048) throw Error("--import-res: must be 16..2048");
     for (int r : resolutions)
@@ -114,6 +114,23 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
 
     // Which start frames: the held-out part of a sequence the model was trained on, else all.
     const int count = int(seq.photos.size());
+    // A short folder (the default 1,2,6 on five photographs) scores the horizons it can hold.
+    if (o.frames.empty() && count - 2 - hmax < 0) {
+        std::vector<int> fit;
+        for (int h : horizons)
+            if (count - 2 - h >= 0) fit.push_back(h);
+        if (!fit.empty()) {
+            std::string dropped, kept;
+            auto append = [](std::string& list, int h) { list += (list.empty() ? "" : ", ") + std::to_string(h); };
+            for (int h : horizons) append(h > fit.back() ? dropped : kept, h);
+            if (!o.quiet)
+                std::fprintf(stderr,
+                             "dynsky: note: %s holds %d frames, too few for horizon(s) %s (h + 2 frames each): "
+                             "scoring %s\n",
+                             seq.folder.c_str(), count, dropped.c_str(), kept.c_str());
+            horizons = fit, hmax = fit.back();
+        }
+    }
     int first = 1, last = count - 1 - hmax;
     std::string part = "every frame (the model was not trained on this sequence)";
     if (!o.frames.empty()) {

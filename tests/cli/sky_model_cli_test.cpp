@@ -239,6 +239,20 @@ TEST(SkyModelCli, EvaluateRejectsFoldersWithoutOneRegularSequence) {
         EXPECT_NE(r.output.find(c.message), std::string::npos) << c.folder << ": " << r.output;
         EXPECT_FALSE(fs::exists(dir + "/eval.md")) << c.folder;
     }
+    // Five photographs: the default horizons 1, 2, 6 do not fit; 1 and 2 are scored, with a note.
+    {
+        auto r = test::run_command(dynsky("sky evaluate --model advect --no-paper --res 64 --import-res 64 --photos " +
+                                          photo_folder(dir + "/five", 5) + " --preset arm-tsi --report " + dir +
+                                          "/five.md 2>&1"));
+        EXPECT_EQ(r.exit_code, 0) << r.output;
+        EXPECT_NE(r.output.find("holds 5 frames, too few for horizon(s) 6 (h + 2 frames each): scoring 1, 2"),
+                  std::string::npos)
+            << r.output;
+        std::ifstream in(dir + "/five.md");
+        const std::string report((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        EXPECT_NE(report.find("| 2 |"), std::string::npos) << report;
+        EXPECT_EQ(report.find("| 6 |"), std::string::npos) << report;
+    }
     // A file whose name carries no time.
     fs::create_directories(dir + "/untimed");
     fs::copy_file(test::shared_path("skies/wsiseg/images/ASC100-1006_001.png"), dir + "/untimed/sky.png");
