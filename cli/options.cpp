@@ -42,7 +42,12 @@ CLI::Validator utc_time() {
     return CLI::Validator(
         [](std::string& text) -> std::string {
             try {
-                parse_utc_time(text);
+                const UtcTime t = parse_utc_time(text);
+                // A year of 0201 or 9999 is a typo, not a sky: the sun's position (Meeus, ~0.001 deg
+                // over 1950-2050) and the clock's Delta T are not modelled that far out.
+                if (t.year < 1800 || t.year > 2200)
+                    return "'" + text + "': the year " + std::to_string(t.year) +
+                           " is outside 1800-2200, where the sun's position is computed";
             } catch (const Error& e) {
                 return e.what();
             }

@@ -145,6 +145,9 @@ SkyImage load_sky_or_latlong(const std::string& path, std::shared_ptr<SkyImage>*
     *ground = nullptr;
     Image image = read_radiance_image(path);
     if (!is_latlong_shape(image.width, image.height)) return load_sky(path);
+    if (image.height < 4)
+        throw_file_error(path, "lat-long sky is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                                   " pixels: too small to hold a sky (at least 8 x 4)");
     LatlongEnvironment env = latlong_environment(image, path);
     *ground = std::make_shared<SkyImage>(std::move(env.ground));
     return std::move(env.sky);

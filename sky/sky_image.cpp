@@ -71,7 +71,11 @@ Image sky_to_image(const SkyImage& sky) {
 SkyImage sky_from_image(const Image& image, const std::string& name) {
     if (image.width != image.height)
         throw_file_error(name, "sky image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
-                                   ", but a canonical fisheye sky must be square");
+                                   ", but a canonical fisheye sky must be square (render, animate, compare and sky "
+                                   "predict also take a 2:1 lat-long)");
+    if (image.width < 4)
+        throw_file_error(name, "sky image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                                   " pixels: too small to hold a sky (at least 4 x 4)");
     if (image.channels < 3)
         throw_file_error(name, "sky image needs 3 colour channels, has " + std::to_string(image.channels));
     // The colour channels by name, any case: R, G, B; else one layer's LAYER.R, .G, .B (a render's

@@ -795,6 +795,9 @@ TEST(BadInputCli, ThirdAuditsWindsEmptyValuesAndOtherCamerasAreRefused) {
     bad.add("compare builtin --sky clear -q -o " + dir + "/cmp --chart-res 0x0", {"--chart-res"}, false);
     bad.add("sky import " + photo + " --preset arm-tsi -q -o " + dir + "/s.exr",
             {"photo.jpg", "640 x 480", "the arm-tsi preset's sky circle was measured on 480 x 640"});
+    bad.add("sky sun --lat 48 --lon 2 --time 0201-06-21T12:00:00Z", {"--time", "year 201 is outside 1800-2200"}, false);
+    bad.add("render builtin --res 8x6 --spp 1 -q -o " + dir + "/r.exr --sky " + sky_exr(dir + "/tiny.exr", 2),
+            {"tiny.exr", "too small to hold a sky"});
     bad.check();
     // Their good neighbours still run.
     expect_accepted(p + "--model advect --wind-speed 300 --cloud-height 10");
