@@ -1,6 +1,8 @@
 #include "cli/exit_codes.h"
 
 #include <cstdio>
+#include <regex>
+#include <string>
 #include <vector>
 
 #include "util/suggest.h"
@@ -77,10 +79,24 @@ std::string suggestion(CLI::App& app, int argc, char** argv) {
 
 }  // namespace
 
+std::string plain_parse_message(const std::string& message) {
+    std::smatch m;
+    // CLI11: "Could not convert: --steps = 1e308" (a value its type cannot hold or read).
+    if (std::regex_match(message, m, std::regex("Could not convert: (-[^ ]+) = (.*)")))
+        return m[1].str() + ": '" + m[2].str() + "' is not a value of this option (a number in its range)";
+    // CLI11: "--res: At Most 1 required but received 2" (an option given twice).
+    if (std::regex_match(message, m, std::regex("(-[^:]+): At Most 1 required but received ([0-9]+)")))
+        return m[1].str() + ": given " + m[2].str() + " times; give it once";
+    // CLI11: "--threads: Value abc not in range 0 to 4096" (a Range check on a word).
+    if (std::regex_match(message, m, std::regex("(-[^:]+): Value (.*) not in range (.*) to (.*)")))
+        return m[1].str() + ": '" + m[2].str() + "' is not a number in " + m[3].str() + " .. " + m[4].str();
+    return message;
+}
+
 int report_parse_error(CLI::App& app, const CLI::ParseError& e, int argc, char** argv) {
     if (e.get_exit_code() == int(CLI::ExitCodes::Success)) return app.exit(e);  // --help, --help-all
     std::string hint = suggestion(app, argc, argv);
-    std::fprintf(stderr, "dynsky: usage error: %s\n", e.what());
+    std::fprintf(stderr, "dynsky: usage error: %s\n", plain_parse_message(e.what()).c_str());
     if (!hint.empty()) std::fprintf(stderr, "dynsky: %s\n", hint.c_str());
     std::fprintf(stderr, "Run with --help for more information.\n");
     return kUsageError;

@@ -21,6 +21,10 @@ std::string exit_codes_help();
 // util/error.h), kRuntimeError for the rest.
 int exit_code_of(const Error& e);
 
+// CLI11's wording of a bad value or a repeated option in dynsky's ("--steps: '1e308' is not a value
+// of this option ..."); other messages unchanged.
+std::string plain_parse_message(const std::string& message);
+
 // Prints a CLI11 parse error with a "did you mean" for a misspelt command or option, and returns
 // kUsageError (kSuccess for --help).
 int report_parse_error(CLI::App& app, const CLI::ParseError& e, int argc, char** argv);

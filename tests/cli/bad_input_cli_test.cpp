@@ -53,7 +53,7 @@ void write_bytes(const std::string& path, const std::string& bytes) { std::ofstr
 class Refusals {
   public:
     explicit Refusals(std::string dir) : dir_(std::move(dir)) {}
-    // Option errors come from CLI11's parser ("--threads: Value -1 not in range ..."): `error_line`
+    // Option errors come from CLI11's parser ("--threads: '-1' is not a number in 0 .. 4096"): `error_line`
     // false skips the "dynsky: error:" check for them.
     void add(const std::string& args, const std::vector<std::string>& says, bool error_line = true) {
         cases_.push_back({args, says, error_line});
@@ -795,6 +795,9 @@ TEST(BadInputCli, ThirdAuditsWindsEmptyValuesAndOtherCamerasAreRefused) {
     bad.add("compare builtin --sky clear -q -o " + dir + "/cmp --chart-res 0x0", {"--chart-res"}, false);
     bad.add("sky import " + photo + " --preset arm-tsi -q -o " + dir + "/s.exr",
             {"photo.jpg", "640 x 480", "the arm-tsi preset's sky circle was measured on 480 x 640"});
+    bad.add("sky predict --sky " + sky + " -q -o " + dir + "/p --model advect --steps 1e308",
+            {"--steps: '1e308' is not a value of this option"}, false);
+    bad.add("render builtin --spp 1 -q -o " + dir + "/r.exr --res 8x6 --res 9x6", {"--res: given 2 times"}, false);
     bad.add("sky sun --lat 48 --lon 2 --time 0201-06-21T12:00:00Z", {"--time", "year 201 is outside 1800-2200"}, false);
     bad.add("render builtin --res 8x6 --spp 1 -q -o " + dir + "/r.exr --sky " + sky_exr(dir + "/tiny.exr", 2),
             {"tiny.exr", "too small to hold a sky"});

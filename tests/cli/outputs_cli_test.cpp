@@ -262,7 +262,7 @@ TEST(OutputsCli, ExitCodesAndDidYouMean) {
              {"render --spp abc", 2, "--spp"},                   // CLI11's 104
              {"sky clear --lat 1", 2, "is required"},            // CLI11's 106
              {"render builtin extra words", 2, "not expected"},  // CLI11's 109
-             {"render builtin --spp 0", 2, "--spp: Value 0 not in range"},
+             {"render builtin --spp 0", 2, "--spp: '0' is not a number in 1 .. "},
              {"render builtin --sky " + dir + "/missing.exr", 1, dir + "/missing.exr"},
          }) {
         auto r = test::run_command(kExe + " " + c.args);
