@@ -77,7 +77,14 @@ AdvectResidualNetwork AdvectResidualNetwork::load(const std::string& folder) {
         info.import_resolution = j.value("import_resolution", 4 * info.resolution);
         info.dt = j.at("dt_s").get<double>();
         info.flow_scale = j.value("flow_scale", 0.08);
-        info.compensated = j.value("base", std::string("warp")) == "compensated";
+        const std::string base = j.value("base", std::string("warp"));
+        if (base != "warp" && base != "compensated")
+            throw_file_error(json_path, "base '" + base + "' is neither 'warp' nor 'compensated'");
+        info.compensated = base == "compensated";
+        // The network is always the folder's model.onnx: a file named otherwise is not what would run.
+        if (j.contains("onnx_file") && j["onnx_file"] != "model.onnx")
+            throw_file_error(json_path, "onnx_file " + j["onnx_file"].dump() +
+                                            ": the network must be the folder's model.onnx");
         info.form.unit_map.scale = j.value("unit_scale", info.form.unit_map.scale);
         info.form.unit_map.max_radiance = j.value("unit_max", info.form.unit_map.max_radiance);
         info.form.cloud_rule.rule = parse_cloud_rule(j.value("cloud_rule", std::string("rb")));
@@ -90,6 +97,10 @@ AdvectResidualNetwork AdvectResidualNetwork::load(const std::string& folder) {
     if (!(info.dt >= 0.01 && info.dt <= 86400))
         throw_file_error(json_path, "dt_s " + number_text(info.dt) + " is not a step of 0.01 s .. 1 day");
     if (!(info.flow_scale > 0)) throw_file_error(json_path, "flow_scale must be positive");
+    if (info.import_resolution < info.resolution || info.import_resolution > 16384 ||
+        info.import_resolution % info.resolution != 0)
+        throw_file_error(json_path, "import_resolution " + std::to_string(info.import_resolution) +
+                                        " is not a multiple of the resolution " + std::to_string(info.resolution));
     try {
         validate_unit_map(info.form.unit_map);
     } catch (const Error& e) {

@@ -610,10 +610,10 @@ TEST(BadInputCli, ModelDescriptionsWithoutTheirFormatOrVersionAreRefused) {
         std::string json = read_bytes(data_path("networks/models/" + shipped + "/model.json"));
         size_t at = json.find("\"resolution\": 64");
         ASSERT_NE(at, std::string::npos);
-        json.replace(at, 16, "\"resolution\": 48");
+        json.replace(at, 16, "\"resolution\": 32");
         write_bytes(folder + "/model.json", json);
         bad.add("sky predict --model " + folder + " --sky " + sky + " --steps 1 -q -o " + dir + "/pred",
-                {"resized_" + shipped, ".onnx: does not run at model.json's resolution 48 x 48"});
+                {"resized_" + shipped, ".onnx: does not run at model.json's resolution 32 x 32"});
     }
     bad.check();
 }
@@ -759,17 +759,22 @@ TEST(BadInputCli, OutOfRangeNumericOptionsAreRefusedNamingTheOption) {
 TEST(BadInputCli, ThirdAuditsWindsEmptyValuesAndOtherCamerasAreRefused) {
     const std::string dir = test::temp_dir("bad_third");
     const std::string sky = sky_exr(dir + "/sky.exr", 64);
-    const std::string model = dir + "/model_dt";
-    fs::create_directories(model);
-    {
-        std::ifstream in(data_path("networks/models/advect_residual/model.json"));
-        std::string json((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-        const size_t at = json.find("\"dt_s\": 30.0");
-        ASSERT_NE(at, std::string::npos);
-        json.replace(at, std::string("\"dt_s\": 30.0").size(), "\"dt_s\": 1e308");
-        std::ofstream(model + "/model.json") << json;
-        fs::copy_file(data_path("networks/models/advect_residual/model.onnx"), model + "/model.onnx");
-    }
+    // The shipped advect-residual model with one field of its model.json replaced.
+    auto model_with = [&](const std::string& name, const std::string& field, const std::string& value) {
+        const std::string folder = dir + "/" + name;
+        fs::create_directories(folder);
+        std::string json = read_bytes(data_path("networks/models/advect_residual/model.json"));
+        const size_t at = json.find(field);
+        EXPECT_NE(at, std::string::npos) << field;
+        json.replace(at, field.size(), value);
+        write_bytes(folder + "/model.json", json);
+        fs::copy_file(data_path("networks/models/advect_residual/model.onnx"), folder + "/model.onnx");
+        return folder;
+    };
+    const std::string model = model_with("model_dt", "\"dt_s\": 30.0", "\"dt_s\": 1e308");
+    const std::string model_base = model_with("model_base", "\"base\": \"compensated\"", "\"base\": \"weird\"");
+    const std::string model_onnx = model_with("model_onnx", "\"onnx_file\": \"model.onnx\"",
+                                              "\"onnx_file\": \"../../etc/passwd\"");
     const std::string photo = ldr_image(dir + "/photo.jpg", 640, 480);  // the TSI's are 480 x 640
     Refusals bad(dir);
     const std::string p = "sky predict --sky " + sky + " --steps 2 -q -o " + dir + "/p ";
@@ -777,6 +782,8 @@ TEST(BadInputCli, ThirdAuditsWindsEmptyValuesAndOtherCamerasAreRefused) {
          {"--wind-speed 1e308", "--wind-from 1e308", "--cloud-height 1e-308", "--wind-speed -12", "--prev-dt nan"})
         bad.add(p + "--model advect " + o, {std::string(o).substr(0, std::string(o).find(' '))}, false);
     bad.add(p + "--model " + model, {"model.json", "dt_s"});
+    bad.add(p + "--model " + model_base, {"model_base/model.json", "base 'weird'"});
+    bad.add(p + "--model " + model_onnx, {"model_onnx/model.json", "onnx_file"});
     bad.add(
         "animate builtin --sky clear --sky-res 16 --res 8x6 --spp 1 --no-video -q --model advect --duration 0.2 "
         "--fps 10 -o " +
