@@ -17,8 +17,8 @@ CLI::Validator finite_range(double min, double max, bool open_min) {
         [=](std::string& text) -> std::string {
             double v = 0;
             if (!CLI::detail::lexical_cast(text, v)) return "'" + text + "' is not a number";
-            if (!std::isfinite(v) || v < min || v > max || (open_min && v == min))
-                return "'" + text + "' is not a finite number in " + range;
+            if (!std::isfinite(v)) return "'" + text + "' is not a finite number in " + range;
+            if (v < min || v > max || (open_min && v == min)) return "'" + text + "' is outside " + range;
             return "";
         },
         "in " + range);

@@ -8,6 +8,7 @@
 #include "motion/photo_sequence.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
+#include "util/parse.h"
 #include "util/image.h"
 #include "util/json_file.h"
 #include "util/npy.h"
@@ -42,11 +43,17 @@ void build_training_sequence(const TrainingSetOptions& o) {
     if (o.sequence.empty() == o.procedural.empty())
         throw Error(
             "--sequence, --procedural: give exactly one of --sequence (real photographs) and --procedural (a `sky procedural` folder)");
+    if (o.import_resolution < 8 || o.import_resolution > 4096)
+        throw Error("--import-res " + std::to_string(o.import_resolution) + ": must be 8..4096");
     if (o.resolution < 8 || o.import_resolution < o.resolution || o.import_resolution % o.resolution != 0)
-        throw Error("--sky-res must be >= 8 and divide --import-res");
+        throw Error("--sky-res " + std::to_string(o.resolution) + ": must be >= 8 and divide --import-res " +
+                    std::to_string(o.import_resolution));
     if (fs::exists(o.out) && !fs::is_directory(o.out)) throw_file_error(o.out, "exists and is not a folder");
     NetworkFormParams form = o.form;
     form.cloud_rule.rule = parse_cloud_rule(o.cloud_rule);
+    if (!(form.unit_map.max_radiance > form.unit_map.scale))
+        throw Error("--unit-max " + number_text(form.unit_map.max_radiance) + ": must exceed --unit-scale " +
+                    number_text(form.unit_map.scale));
     validate_unit_map(form.unit_map);
 
     const int n = o.resolution, big = o.import_resolution;

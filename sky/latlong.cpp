@@ -149,6 +149,7 @@ SkyImage load_sky_or_latlong(const std::string& path, std::shared_ptr<SkyImage>*
         throw_file_error(path, "lat-long sky is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
                                    " pixels: too small to hold a sky (at least 8 x 4)");
     LatlongEnvironment env = latlong_environment(image, path);
+    read_sky_metadata(image.metadata, path, &env.sky);  // `sky latlong` keeps the sky's time and sun
     *ground = std::make_shared<SkyImage>(std::move(env.ground));
     return std::move(env.sky);
 }

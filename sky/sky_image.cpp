@@ -68,6 +68,30 @@ Image sky_to_image(const SkyImage& sky) {
     return image;
 }
 
+void read_sky_metadata(const ImageMetadata& metadata, const std::string& name, SkyImage* out) {
+    SkyImage& sky = *out;
+    const auto& num = metadata.numbers;
+    const auto& str = metadata.strings;
+    for (const char* key : {"dynsky:time", "dynsky:sun_x", "dynsky:sun_y", "dynsky:sun_z"}) {
+        if (str.count(key)) throw_file_error(name, std::string(key) + " is text ('" + str.at(key) + "'), not a number");
+        if (num.count(key) && !std::isfinite(num.at(key)))
+            throw_file_error(name, std::string(key) + " is " + number_text(num.at(key)) + ", not a finite number");
+    }
+    if (auto it = num.find("dynsky:time"); it != num.end()) sky.time_seconds = it->second;
+    const int sun_parts = int(num.count("dynsky:sun_x") + num.count("dynsky:sun_y") + num.count("dynsky:sun_z"));
+    if (sun_parts != 0 && sun_parts != 3)
+        throw_file_error(name, "has only part of the sun's direction (dynsky:sun_x, _y, _z: all three or none)");
+    if (sun_parts == 3) {
+        const Vec3d d(num.at("dynsky:sun_x"), num.at("dynsky:sun_y"), num.at("dynsky:sun_z"));
+        if (!(d.norm() > 1e-6) || !std::isfinite(d.norm()))
+            throw_file_error(name, "its sun direction (dynsky:sun_x, _y, _z) is (" + number_text(d.x()) + ", " +
+                                       number_text(d.y()) + ", " + number_text(d.z()) +
+                                       "), not a direction: fix or remove those attributes");
+        sky.sun_direction = d.normalized().cast<float>();
+    }
+    if (auto it = metadata.strings.find("dynsky:source"); it != metadata.strings.end()) sky.source = it->second;
+}
+
 SkyImage sky_from_image(const Image& image, const std::string& name) {
     if (image.width != image.height)
         throw_file_error(name, "sky image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
@@ -115,27 +139,7 @@ SkyImage sky_from_image(const Image& image, const std::string& name) {
     SkyImage sky(image.width);
     for (size_t p = 0; p < size_t(image.width) * image.height; ++p)
         for (int c = 0; c < 3; ++c) sky.rgb[p * 3 + c] = image.pixels[p * image.channels + size_t(rgb[c])];
-    const auto& num = image.metadata.numbers;
-    const auto& str = image.metadata.strings;
-    for (const char* key : {"dynsky:time", "dynsky:sun_x", "dynsky:sun_y", "dynsky:sun_z"}) {
-        if (str.count(key)) throw_file_error(name, std::string(key) + " is text ('" + str.at(key) + "'), not a number");
-        if (num.count(key) && !std::isfinite(num.at(key)))
-            throw_file_error(name, std::string(key) + " is " + number_text(num.at(key)) + ", not a finite number");
-    }
-    if (auto it = num.find("dynsky:time"); it != num.end()) sky.time_seconds = it->second;
-    const int sun_parts = int(num.count("dynsky:sun_x") + num.count("dynsky:sun_y") + num.count("dynsky:sun_z"));
-    if (sun_parts != 0 && sun_parts != 3)
-        throw_file_error(name, "has only part of the sun's direction (dynsky:sun_x, _y, _z: all three or none)");
-    if (sun_parts == 3) {
-        const Vec3d d(num.at("dynsky:sun_x"), num.at("dynsky:sun_y"), num.at("dynsky:sun_z"));
-        if (!(d.norm() > 1e-6) || !std::isfinite(d.norm()))
-            throw_file_error(name, "its sun direction (dynsky:sun_x, _y, _z) is (" + number_text(d.x()) + ", " +
-                                       number_text(d.y()) + ", " + number_text(d.z()) +
-                                       "), not a direction: fix or remove those attributes");
-        sky.sun_direction = d.normalized().cast<float>();
-    }
-    if (auto it = image.metadata.strings.find("dynsky:source"); it != image.metadata.strings.end())
-        sky.source = it->second;
+    read_sky_metadata(image.metadata, name, &sky);
     return sky;
 }
 

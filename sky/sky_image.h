@@ -61,6 +61,10 @@ std::optional<double> sky_recorded_utc_seconds(const SkyImage& sky);
 // A sky's own metadata in an image header: dynsky:time, dynsky:sun_x/y/z (when known) and
 // dynsky:source (when set). Every sky file writer uses it; load_sky reads it back.
 void write_sky_metadata(const SkyImage& sky, ImageMetadata* m);
+// The sky's time, sun direction and source from an image's dynsky:* attributes (the inverse of
+// write_sky_metadata); throws dynsky::Error naming `name` when one is text, not finite, or the sun
+// direction is partial or zero.
+void read_sky_metadata(const ImageMetadata& metadata, const std::string& name, SkyImage* sky);
 
 // read_image for a file of radiance (a sky, a lat-long environment, an HDR photograph): lossily
 // compressed EXRs (DWAA, DWAB, B44) ring slightly below zero next to bright pixels (-5e-6 beside a

@@ -812,6 +812,11 @@ TEST(BadInputCli, ThirdAuditsWindsEmptyValuesAndOtherCamerasAreRefused) {
     // Their good neighbours still run.
     expect_accepted(p + "--model advect --wind-speed 300 --cloud-height 10");
     expect_accepted(proc + "--wind 20,90 --evolution 1");
+    // A lat-long made by `sky latlong` keeps its sky's sun: compare (which needs one) takes it.
+    expect_accepted("sky clear --lat 48 --lon 2 --time 2026-06-21T12:00:00Z --sky-res 64 -q -o " + dir + "/c.exr");
+    expect_accepted("sky latlong " + dir + "/c.exr --width 128 -q -o " + dir + "/ll.exr");
+    expect_accepted("compare builtin --sky " + dir +
+                    "/ll.exr --res 32x18 --spp 1 --chart-frames 2 --chart-res 16x9 -q -o " + dir + "/cmp_ll");
     fs::remove_all(dir);
 }
 
