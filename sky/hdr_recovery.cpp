@@ -25,6 +25,16 @@ double median_of(std::vector<double> v) { return v.empty() ? 0.0 : median(std::m
 
 }  // namespace
 
+namespace {
+
+// How far a fit on the clear pixels is trusted: 0 under `none_below` of the disc clear, 1 from
+// `full_from`, a smoothstep between (so neighbouring frames of a sky clouding over agree).
+double trust_ramp(double clear_fraction, double none_below, double full_from) {
+    return smoothstep01((clear_fraction - none_below) / std::max(1e-9, full_from - none_below));
+}
+
+}  // namespace
+
 std::string HdrCalibrationReport::summary() const {
     std::ostringstream s;
     s.precision(4);
@@ -204,9 +214,8 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     // min_white_balance_fraction up, so that a sky clouding over does not change colour at once
     // (the Mobotix 12:34 -> 12:35 CEST: R/G x1.15, B/G x0.78 between frames a minute apart).
     const bool fit = rep.clear_fraction >= params.min_white_balance_fraction && photo_rg.size() >= 20;
-    const double fit_weight = fit ? smoothstep01((rep.clear_fraction - params.min_white_balance_fraction) /
-                                                 std::max(1e-9, params.full_white_balance_fraction -
-                                                                    params.min_white_balance_fraction))
+    const double fit_weight = fit ? trust_ramp(rep.clear_fraction, params.min_white_balance_fraction,
+                                               params.full_white_balance_fraction)
                                   : 0.0;
     auto weight_text = [](double w) {
         std::ostringstream t;
@@ -307,9 +316,8 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     // under min_clear_fraction, and blended (in log) with the fallback's between: a sky clouding
     // over frame by frame then changes its scale smoothly. The hard switch made a frame a minute
     // after the last one 1.9x darker (Mobotix 12:38 -> 12:39 CEST, the photographs within 3 %).
-    const double clear_weight = ratios.size() >= 20 ? smoothstep01((rep.clear_fraction - params.min_clear_fraction) /
-                                                                   std::max(1e-9, params.full_clear_fraction -
-                                                                                      params.min_clear_fraction))
+    const double clear_weight = ratios.size() >= 20 ? trust_ramp(rep.clear_fraction, params.min_clear_fraction,
+                                                                 params.full_clear_fraction)
                                                     : 0.0;
     rep.clear_weight = clear_weight;
     double clear_scale = 0, fallback_scale = 0;
