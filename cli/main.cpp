@@ -89,8 +89,10 @@ int main(int argc, char** argv) {
     } catch (const CLI::ParseError& e) {
         return dynsky::cli::report_parse_error(app, e, argc, argv);
     } catch (const dynsky::Error& e) {
-        std::fprintf(stderr, "dynsky: error: %s\n", e.what());
-        return dynsky::cli::exit_code_of(e);
+        // An option's error ("--wind: ...") is a usage error, said as CLI11's own are.
+        const int code = dynsky::cli::exit_code_of(e);
+        std::fprintf(stderr, "dynsky: %s: %s\n", code == dynsky::cli::kUsageError ? "usage error" : "error", e.what());
+        return code;
     } catch (const std::bad_alloc&) {
         std::fprintf(stderr,
                      "dynsky: error: out of memory: the images asked for (--res, --sky-res, --width, the scene's "

@@ -70,8 +70,8 @@ void add_scene_options(CLI::App* cmd, SceneSpec* o) {
                     "Camera override: eye_x,eye_y,eye_z,target_x,target_y,target_z (world metres, +Y up)")
         ->delimiter(',')
         ->expected(6);
-    cmd->add_option("--fov", o->fov_deg, "Vertical field of view in degrees (overrides the camera's)")
-        ->check(finite_above(0, 179.9));
+    cmd->add_option("--fov", o->fov_deg, "Vertical field of view in degrees, 0.01..179.9 (overrides the camera's)")
+        ->check(finite_in(0.01, 179.9));
     cmd->add_option("--ground-albedo", o->ground_albedo, "Albedo of the ground model below the horizon")
         ->check(finite_in(0, 1))
         ->capture_default_str();

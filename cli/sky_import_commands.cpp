@@ -306,7 +306,7 @@ void register_sky_import_commands(CLI::App& sky) {
     imp->add_option("--center", io->center,
                     "Sky circle centre X,Y in photo pixels (pixel centres at integers); default: found automatically");
     imp->add_option("--radius", io->radius, "Sky circle radius in pixels: distance from the centre to 90 deg off-axis")
-        ->check(finite_above(0, 1e6));
+        ->check(finite_in(4, 1e6));
     imp->add_flag("--auto-circle", io->auto_circle, "Find the circle automatically even if the preset gives one");
     io->lens_opt = imp->add_option("--lens", io->lens,
                                    "Lens law: equidistant (default), equisolid, orthographic, stereographic");
@@ -394,8 +394,7 @@ void register_sky_import_commands(CLI::App& sky) {
                      "rb: cloud if r/b > threshold (default); nbr: cloud if (b-r)/(b+r) < threshold");
     mask->add_option("--preset", mo->preset, "Camera preset for the sky circle and non-sky mask (" + presets + ")");
     mask->add_option("--center", mo->center, "Sky circle centre X,Y in pixels (photos only; default: preset or found)");
-    mask->add_option("--radius", mo->radius, "Sky circle radius in pixels (with --center)")
-        ->check(finite_above(0, 1e6));
+    mask->add_option("--radius", mo->radius, "Sky circle radius in pixels (with --center)")->check(finite_in(4, 1e6));
     mask->add_option("--mask", mo->mask, "Photo-sized non-sky mask (black = not sky)");
     mask->add_flag("--whole-image", mo->whole_image, "Photos: classify every pixel (no sky circle)");
     mask->callback([mo] { run_mask(*mo); });

@@ -72,8 +72,9 @@ class Refusals {
                 SCOPED_TRACE("dynsky " + c.args);
                 EXPECT_NE(r.exit_code, 0) << r.output;
                 EXPECT_LT(r.exit_code, 124) << "crashed or timed out:\n" << r.output;
-                if (c.error_line) {
-                    EXPECT_NE(r.output.find("dynsky: error: "), std::string::npos) << r.output;
+                if (c.error_line) {  // a runtime error (exit 1) or an option's (exit 2), said as such
+                    const char* label = r.exit_code == 2 ? "dynsky: usage error: " : "dynsky: error: ";
+                    EXPECT_NE(r.output.find(label), std::string::npos) << r.output;
                 }
                 for (const std::string& s : c.says)
                     EXPECT_NE(r.output.find(s), std::string::npos) << "should say '" << s << "':\n" << r.output;
