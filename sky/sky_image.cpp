@@ -154,8 +154,9 @@ Image read_radiance_image(const std::string& path) {
     return image;
 }
 
-SkyImage load_sky(const std::string& path) {
-    Image image = read_radiance_image(path);
+SkyImage load_sky(const std::string& path) { return sky_from_radiance_file(read_radiance_image(path), path); }
+
+SkyImage sky_from_radiance_file(const Image& image, const std::string& path) {
     const std::string& type = image.file_pixel_type;
     if (type != "half" && type != "float" && type != "double")
         throw_file_error(path, "is a " + (image.file_format.empty() ? std::string("non-EXR") : image.file_format) +

@@ -47,6 +47,9 @@ void validate_sky(const SkyImage& sky, const std::string& name);
 // EXR in, validated. A file of integer pixels (8-bit JPEG/PNG, 16-bit PNG: display-encoded values,
 // whatever its name) is refused: photographs are made skies by `dynsky sky import`. Reads the "dynsky:time" and "dynsky:sun_*" attributes when present.
 SkyImage load_sky(const std::string& path);
+// The same for an image already read from `path` (read_radiance_image): one read where the caller
+// looked at the image first (sky/latlong.h load_sky_or_latlong).
+SkyImage sky_from_radiance_file(const Image& image, const std::string& path);
 
 // EXR out (atomic), with time, sun direction and source as attributes. If preview_png is
 // non-empty, also writes a tone-mapped PNG there.
