@@ -58,8 +58,9 @@ CLI::Validator utc_time() {
 CLI::Validator finite_above(double min, double max) { return finite_range(min, max, true); }
 
 void add_scene_options(CLI::App* cmd, SceneSpec* o) {
-    cmd->add_option("scene", o->scene,
-                    "Scene: a .gltf/.glb file (scenes/tower/tower.gltf, scenes/house/house.gltf) or 'builtin'")
+    cmd->add_option(
+           "scene", o->scene,
+           "Scene: a .gltf/.glb file (scenes/tower/tower.gltf, scenes/house/house.gltf) or 'builtin' (the built-in plaza)")
         ->capture_default_str();
     cmd->add_option(
            "--camera", o->camera,
@@ -72,7 +73,9 @@ void add_scene_options(CLI::App* cmd, SceneSpec* o) {
         ->expected(6);
     cmd->add_option("--fov", o->fov_deg, "Vertical field of view in degrees, 0.01..179.9 (overrides the camera's)")
         ->check(finite_in(0.01, 179.9));
-    cmd->add_option("--ground-albedo", o->ground_albedo, "Albedo of the ground model below the horizon")
+    cmd->add_option(
+           "--ground-albedo", o->ground_albedo,
+           "Albedo of the ground model below the horizon: a Lambertian plane lit by the sky, radiance albedo * E_sky / pi")
         ->check(finite_in(0, 1))
         ->capture_default_str();
 }

@@ -8,7 +8,6 @@
 #include <filesystem>
 #include <memory>
 
-#include "cli/options.h"
 #include "frame/scene_spec.h"
 #include "frame/sky_source.h"
 #include "util/atomic_file.h"
@@ -29,22 +28,18 @@ namespace dynsky::cli {
 namespace {
 
 struct RenderOptions {
-    std::string scene = "builtin";
+    SceneSpec scene{"builtin"};  // the scene and camera options every command shares (cli/options.h)
     std::string sky;
     std::string out = "render.exr";
     std::string resolution = "960x540";
     int spp = 64;
-    int camera = 0;
     uint64_t seed = 0;
     int threads = 0;
-    float ground_albedo = 0.3f;
     int max_depth = 8;
     float exposure = std::numeric_limits<float>::quiet_NaN();  // NaN: automatic
     bool quiet = false;
     std::string sampler = sky_sampler_name(recommended_sky_sampler()) + "+mis";
     std::string aovs, region;
-    std::vector<double> look_at;
-    double fov = 0;
     float noise_threshold = 0, clamp_indirect = 0, filter_glossy = 0;
     double time_limit = 0;
     std::string sampler_pattern = "random";
@@ -109,14 +104,13 @@ int run_render(const RenderOptions& o) {
     if (!(o.filter_glossy >= 0)) throw Error("--filter-glossy must be 0 (off) or positive");
     const std::string png_beside = ext == ".exr" ? std::filesystem::path(o.out).replace_extension(".png").string()
                                                  : std::string();
-    check_outputs_are_not_inputs({o.out, png_beside}, {o.scene, o.sky});
+    check_outputs_are_not_inputs({o.out, png_beside}, {o.scene.scene, o.sky});
 
     std::unique_ptr<tbb::global_control> threads;
     if (o.threads > 0)
         threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
 
-    LoadedScene loaded = load_scene(SceneSpec{o.scene, o.camera, o.ground_albedo, o.look_at, o.fov},
-                                    float(width) / height);
+    LoadedScene loaded = load_scene(o.scene, float(width) / height);
     Scene& scene = loaded.scene;
     // Nor may it replace one of the files the scene was read from (a texture beside it).
     check_outputs_are_not_inputs({o.out, png_beside}, scene.source_files);
@@ -138,12 +132,12 @@ int run_render(const RenderOptions& o) {
     }
 
     Accel accel(scene);
-    EnvLight light(sky, o.ground_albedo, sampler);
+    EnvLight light(sky, o.scene.ground_albedo, sampler);
     if (ground) light.set_ground_image(ground);
     if (!o.quiet)
         std::fprintf(stderr,
                      "scene: %s, %zu triangles, %zu instances; sky: %s (%dx%d), distribution built in %.2f ms\n",
-                     o.scene.c_str(), scene.triangle_count(), scene.instances.size(), sky->source.c_str(),
+                     o.scene.scene.c_str(), scene.triangle_count(), scene.instances.size(), sky->source.c_str(),
                      sky->resolution, sky->resolution, light.last_build_seconds() * 1e3);
 
     settings.width = width, settings.height = height, settings.spp = o.spp, settings.seed = o.seed;
@@ -162,10 +156,10 @@ int run_render(const RenderOptions& o) {
     // CPU time of all threads: comparable across runs on a shared machine (bench/cycles_equal_error.sh).
     image.metadata.numbers["dynsky:render_cpu_seconds"] = render_cpu_seconds;
     image.metadata.numbers["dynsky:sky_distribution_seconds"] = light.last_build_seconds();
-    image.metadata.numbers["dynsky:ground_albedo"] = o.ground_albedo;
+    image.metadata.numbers["dynsky:ground_albedo"] = o.scene.ground_albedo;
     image.metadata.numbers["dynsky:time"] = sky->time_seconds;  // frame time (glossary)
     image.metadata.strings["dynsky:sky"] = sky->source;
-    image.metadata.strings["dynsky:scene"] = o.scene;
+    image.metadata.strings["dynsky:scene"] = o.scene.scene;
     image.metadata.strings["dynsky:camera"] = camera.name;
     if (!settings.region.empty())
         image.metadata.strings["dynsky:region"] = o.region;  // x0,y0,x1,y1 of the full --res image
@@ -206,8 +200,7 @@ int run_render(const RenderOptions& o) {
 void register_render_command(CLI::App& app) {
     auto o = std::make_shared<RenderOptions>();
     CLI::App* cmd = app.add_subcommand("render", "Render a glTF 2.0 scene under a fisheye sky (path traced, CPU)");
-    cmd->add_option("scene", o->scene, "Scene: a .gltf or .glb file, or 'builtin' for the built-in plaza")
-        ->capture_default_str();
+    add_scene_options(cmd, &o->scene);  // scene, --camera, --look-at, --fov, --ground-albedo
     cmd->add_option(
         "--sky", o->sky,
         "Sky: a canonical fisheye EXR (square, equidistant, north up, east left; see 'dynsky sky'); a lat-long\n"
@@ -221,21 +214,11 @@ void register_render_command(CLI::App& app) {
         ->capture_default_str();
     cmd->add_option("--res", o->resolution, "Image size WIDTHxHEIGHT")->capture_default_str();
     cmd->add_option("--spp", o->spp, "Samples per pixel")->check(CLI::Range(1, kMaxSpp))->capture_default_str();
-    cmd->add_option(
-           "--camera", o->camera,
-           "Index of the glTF camera (perspective or orthographic) to use (the scene's bounds are framed when it has none)")
-        ->check(CLI::Range(0, 1 << 20))
-        ->capture_default_str();
     cmd->add_option("--seed", o->seed, "Random seed: the same seed gives the same image on any thread count")
         ->check(non_negative_whole())
         ->capture_default_str();
     cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")
         ->check(CLI::Range(0, kMaxThreads))
-        ->capture_default_str();
-    cmd->add_option(
-           "--ground-albedo", o->ground_albedo,
-           "Albedo of the ground model below the horizon: a Lambertian plane lit by the sky, radiance albedo * E_sky / pi")
-        ->check(finite_in(0, 1))
         ->capture_default_str();
     cmd->add_option("--max-depth", o->max_depth, "Maximum path length (bounces)")
         ->check(CLI::Range(0, kMaxDepth))
@@ -257,14 +240,6 @@ void register_render_command(CLI::App& app) {
         "--region", o->region,
         "Render only pixels [x0, x1) x [y0, y1) of the --res image, 'x0,y0,x1,y1' (the output is cropped to\n"
         "them; they equal the same pixels of a full render with the same seed)");
-    cmd->add_option(
-           "--look-at", o->look_at,
-           "Camera override: eye_x,eye_y,eye_z,target_x,target_y,target_z (world metres, +Y up): a perspective\n"
-           "camera at the eye looking at the target")
-        ->delimiter(',')
-        ->expected(6);
-    cmd->add_option("--fov", o->fov, "Vertical field of view in degrees (overrides the camera's)")
-        ->check(finite_above(0, 179.9));
     cmd->add_option(
            "--noise-threshold", o->noise_threshold,
            "Adaptive sampling (0: off): a pixel stops taking samples, in rounds of 16, once the relative error\n"

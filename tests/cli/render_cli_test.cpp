@@ -190,6 +190,8 @@ TEST(RenderCli, AovsRegionAndCameraOptions) {
     expect_clean_failure(render("builtin --region 0,0,33,10", dir + "/b.exr"), "--region");
     expect_clean_failure(render("builtin --look-at 1,2,3,1,2,3", dir + "/c.exr"), "same point");
     expect_clean_failure(render("builtin --fov 200", dir + "/d.exr"), "--fov");
+    // The same range as animate and compare (one registration): a vanishing field of view is refused.
+    expect_clean_failure(render("builtin --fov 1e-308", dir + "/d.exr"), "0.01");
     expect_clean_failure(render("builtin --aovs depth", dir + "/e.png"), "--aovs");
     expect_clean_failure(render("builtin --noise-threshold -1", dir + "/f.exr"), "--noise-threshold");
     expect_clean_failure(render("builtin --sampler-pattern halton", dir + "/h.exr"), "halton");
