@@ -138,13 +138,16 @@ SkyImage latlong_to_fisheye(const Image& latlong, int resolution, bool lower) {
 }
 
 LatlongEnvironment load_latlong_environment(const std::string& path, int resolution) {
-    return latlong_environment(read_radiance_image(path), path, resolution);
+    Image image = read_radiance_image(path);
+    require_radiance_pixels(image, path);
+    return latlong_environment(image, path, resolution);
 }
 
 SkyImage load_sky_or_latlong(const std::string& path, std::shared_ptr<SkyImage>* ground) {
     *ground = nullptr;
     Image image = read_radiance_image(path);
     if (!is_latlong_shape(image.width, image.height)) return sky_from_radiance_file(image, path);  // read once
+    require_radiance_pixels(image, path);
     if (image.height < 4)
         throw_file_error(path, "lat-long sky is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
                                    " pixels: too small to hold a sky (at least 8 x 4)");

@@ -156,13 +156,17 @@ Image read_radiance_image(const std::string& path) {
 
 SkyImage load_sky(const std::string& path) { return sky_from_radiance_file(read_radiance_image(path), path); }
 
-SkyImage sky_from_radiance_file(const Image& image, const std::string& path) {
+void require_radiance_pixels(const Image& image, const std::string& path) {
     const std::string& type = image.file_pixel_type;
     if (type != "half" && type != "float" && type != "double")
         throw_file_error(path, "is a " + (image.file_format.empty() ? std::string("non-EXR") : image.file_format) +
                                    " file of " + type +
                                    " pixels: integer pixels are display-encoded values, not linear radiance. A sky "
-                                   "is a float EXR; make one from a photograph with 'dynsky sky import'");
+                                   "is a float EXR (or .hdr); make one from a photograph with 'dynsky sky import'");
+}
+
+SkyImage sky_from_radiance_file(const Image& image, const std::string& path) {
+    require_radiance_pixels(image, path);
     SkyImage sky = sky_from_image(image, path);
     validate_sky(sky, path);
     if (sky.source.empty()) sky.source = path;

@@ -44,6 +44,10 @@ constexpr double kMinSkyRadiance = 1e-20;
 // all black. Throws dynsky::Error starting with `name` (usually the file path).
 void validate_sky(const SkyImage& sky, const std::string& name);
 
+// Refuses, naming `path`, an image whose file held integer pixels (8-bit JPEG/PNG, 16-bit PNG:
+// display-encoded values, whatever the file's name) where linear radiance is wanted.
+void require_radiance_pixels(const Image& image, const std::string& path);
+
 // EXR in, validated. A file of integer pixels (8-bit JPEG/PNG, 16-bit PNG: display-encoded values,
 // whatever its name) is refused: photographs are made skies by `dynsky sky import`. Reads the "dynsky:time" and "dynsky:sun_*" attributes when present.
 SkyImage load_sky(const std::string& path);

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 
+#include "sky/latlong.h"
 #include "sky/noise.h"
 #include "tests/test_support.h"
 #include "util/error.h"
@@ -120,6 +121,21 @@ TEST(SkyImage, RadianceAboveTheLimitOrIntegerFilesAreNotSkies) {
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("renamed.exr: is a png file of uint8 pixels"), std::string::npos)
             << e.what();
+    }
+    // Twice as wide as high, it would be taken as a lat-long HDRI: refused the same way, by both readers.
+    Image wide(16, 8, 3);
+    for (float& v : wide.pixels) v = 0.5f;
+    write_image(dir + "/hdri.png", wide);
+    std::shared_ptr<SkyImage> ground;
+    for (int reader = 0; reader < 2; ++reader) {
+        try {
+            if (reader == 0) load_sky_or_latlong(dir + "/hdri.png", &ground);
+            else load_latlong_environment(dir + "/hdri.png");
+            ADD_FAILURE() << "an 8-bit 2:1 PNG loaded as a lat-long sky (reader " << reader << ")";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("hdri.png: is a png file of uint8 pixels"), std::string::npos)
+                << e.what();
+        }
     }
     fs::remove_all(dir);
 }
