@@ -55,6 +55,7 @@ class Accel {
     // Closest hit distance only (for benchmarks of raw traversal).
     bool intersect_raw(const Ray& ray, float* t) const;
     bool occluded(const Ray& ray) const;
+    // Any material with alpha (MASK, BLEND) or transmission: shadow rays may pass its surfaces.
     bool has_non_opaque_materials() const { return has_non_opaque_; }
     const Scene& scene() const { return scene_; }
     Bounds3 bounds() const { return bounds_; }

@@ -79,13 +79,21 @@ class SpecularAlbedoTable {
 }  // namespace
 
 
-MetalRoughBsdf::MetalRoughBsdf(const Color& base_color, float metallic, float roughness, float specular)
+MetalRoughBsdf::MetalRoughBsdf(const Color& base_color, float metallic, float roughness, float specular,
+                               float transmission)
     : base_(base_color.max(0.0f).min(1.0f)),
       metallic_(clamp(metallic, 0.0f, 1.0f)),
-      specular_(clamp(specular, 0.0f, 1.0f)) {
+      specular_(clamp(specular, 0.0f, 1.0f)),
+      transmission_(clamp(transmission, 0.0f, 1.0f)) {
     roughness_ = clamp(roughness, 0.0f, 1.0f);
     alpha_ = std::max(roughness_ * roughness_, kMinAlpha);
     if (specular_ > 0) e_avg_ = specular_ * SpecularAlbedoTable::get().average(roughness_);
+}
+
+Color MetalRoughBsdf::transmitted(const Vec3& wo) const {
+    if (transmission_ <= 0 || metallic_ >= 1 || !(wo.z() > 0)) return Color::Zero();
+    const float e_o = specular_ <= 0 ? 0.0f : wo.z() == cached_wo_z_ ? cached_e_o_ : specular_albedo(wo.z());
+    return base_ * ((1 - metallic_) * transmission_ * (1 - e_o));
 }
 
 float MetalRoughBsdf::specular_albedo(float mu) const {
@@ -155,6 +163,7 @@ Color MetalRoughBsdf::eval(const Vec3& wo, const Vec3& wi) const {
         float e_o = wo.z() == cached_wo_z_ ? cached_e_o_ : specular_albedo(wo.z());
         diffuse_weight = (1 - e_o) * (1 - specular_albedo(wi.z())) / std::max(1 - e_avg_, 1e-4f);
     }
+    diffuse_weight *= 1 - transmission_;  // the rest passes through (transmitted())
     Color dielectric = diffuse_weight * base_ * kInvPi + Color::Constant(f_dielectric * spec);
     Color metal = (base_ + (1 - base_) * w) * spec;
     return (1 - metallic_) * dielectric + metallic_ * metal;
@@ -169,7 +178,7 @@ float MetalRoughBsdf::specular_probability_for(const Vec3& wo, float e_spec) con
     if (metallic_ >= 1) return 1.0f;
     float w = schlick_weight(std::max(0.0f, wo.z()));
     float spec = (1 - metallic_) * e_spec + metallic_ * luminance(base_ + (1 - base_) * w);
-    float diff = (1 - metallic_) * (1 - e_spec) * luminance(base_);
+    float diff = (1 - metallic_) * (1 - e_spec) * (1 - transmission_) * luminance(base_);
     if (spec <= 0) return 0.0f;  // pure Lambertian
     float p = spec / std::max(spec + diff, 1e-6f);
     return clamp(p, 0.1f, 0.9f);  // both lobes stay reachable

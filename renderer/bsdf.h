@@ -20,7 +20,16 @@ class MetalRoughBsdf {
   public:
     // roughness is the glTF perceptual roughness (alpha = roughness^2).
     // specular scales the dielectric Fresnel (KHR_materials_specular); 0 leaves a pure Lambertian.
-    MetalRoughBsdf(const Color& base_color, float metallic, float roughness, float specular = 1.0f);
+    // transmission (KHR_materials_transmission) is the share of the dielectric's base that passes
+    // through instead of scattering diffusely: the diffuse lobe keeps 1 - transmission of it.
+    MetalRoughBsdf(const Color& base_color, float metallic, float roughness, float specular = 1.0f,
+                   float transmission = 0.0f);
+
+    // Thin-walled transmission: the light arriving along -wo that passes straight through the
+    // surface (a null-scattering event for the integrator, not part of eval): the dielectric's
+    // share, what its specular lobe does not reflect towards wo (1 - E(wo)), times transmission,
+    // tinted by the base colour. A white glass reflects E(wo) and passes 1 - E(wo): nothing lost.
+    Color transmitted(const Vec3& wo) const;
 
     Color eval(const Vec3& wo, const Vec3& wi) const;
     float pdf(const Vec3& wo, const Vec3& wi) const;
@@ -48,7 +57,7 @@ class MetalRoughBsdf {
     float specular_probability_for(const Vec3& wo, float e_spec) const;
 
     Color base_;
-    float metallic_, roughness_, alpha_, specular_;
+    float metallic_, roughness_, alpha_, specular_, transmission_;
     float e_avg_ = 0;  // specular_ x the lobe's cosine-weighted mean albedo
     // set_wo's cache: wo.z(), specular_albedo(wo.z()) and the lobe probability (valid: cached_wo_z_ > 0).
     float cached_wo_z_ = -1, cached_e_o_ = 0, cached_ps_ = 0;

@@ -55,7 +55,8 @@ constexpr size_t kZeroAccessorSlack = size_t(1) << 20;
 // accessor types allowed for attributes, which the accessor reader handles anyway).
 const std::set<std::string>& supported_extensions() {
     static const std::set<std::string> s = {"KHR_texture_transform", "KHR_materials_emissive_strength",
-                                            "EXT_mesh_gpu_instancing", "KHR_mesh_quantization"};
+                                            "KHR_materials_transmission", "EXT_mesh_gpu_instancing",
+                                            "KHR_mesh_quantization"};
     return s;
 }
 
@@ -766,6 +767,8 @@ class GltfLoader {
             out.base_alpha = std::clamp(out.base_alpha, 0.0f, 1.0f);
             if (const tg::Value* sp = extension(m.extensions, "KHR_materials_specular"))
                 out.specular = clamp(float(number_or(member(*sp, "specularFactor"), 1.0)), 0.0f, 1.0f);
+            if (const tg::Value* tr = extension(m.extensions, "KHR_materials_transmission"))
+                read_transmission(*tr, &out, what);
             if (m.alphaMode == "MASK") out.alpha_mode = AlphaMode::Mask;
             else if (m.alphaMode == "BLEND") out.alpha_mode = AlphaMode::Blend;
             else if (m.alphaMode != "OPAQUE" && !m.alphaMode.empty())
@@ -774,6 +777,31 @@ class GltfLoader {
             out.double_sided = m.doubleSided;
             scene_.materials.push_back(std::move(out));
         }
+    }
+
+    // KHR_materials_transmission: transmissionFactor in [0, 1] and transmissionTexture (R, linear).
+    // Rendered thin-walled and sharp (bsdf.h): a rough glass is seen through as a clear one.
+    void read_transmission(const tg::Value& ext, Material* out, const std::string& what) {
+        const tg::Value* factor = member(ext, "transmissionFactor");
+        const double t = factor ? (factor->IsNumber() ? factor->GetNumberAsDouble() : std::nan("")) : 0.0;
+        if (!(t >= 0 && t <= 1))
+            fail(what + ": KHR_materials_transmission transmissionFactor " +
+                 (factor->IsNumber() ? number_text(t) : std::string("is not a number")) + " is outside [0, 1]");
+        out->transmission = float(t);
+        if (const tg::Value* info = member(ext, "transmissionTexture"); info && info->IsObject()) {
+            const tg::Value* index = member(*info, "index");
+            if (!index || !index->IsNumber())
+                fail(what + ": KHR_materials_transmission transmissionTexture has no texture index");
+            tg::ExtensionMap extensions;
+            if (const tg::Value* e = member(*info, "extensions"); e && e->IsObject())
+                for (const std::string& key : e->Keys()) extensions[key] = e->Get(key);
+            const tg::Value* texcoord = member(*info, "texCoord");
+            read_slot(index->GetNumberAsInt(), texcoord && texcoord->IsNumber() ? texcoord->GetNumberAsInt() : 0,
+                      extensions, false, 1.0f, &out->transmission_texture, what + " transmissionTexture");
+        }
+        if (out->transmission > 0 && out->roughness > 0.2f)
+            warn(what + ": rough transmission (roughness " + number_text(out->roughness) +
+                 ") is rendered as clear glass: what lies behind is seen sharp, not blurred");
     }
 
     // The encoded bytes of an image: from its file or data URI (kept by keep_encoded_image), or

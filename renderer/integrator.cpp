@@ -161,28 +161,40 @@ bool PathIntegrator::passes_through(const SurfaceHit& hit, float u) const {
     return u >= alpha;  // Blend: stochastic transparency
 }
 
-float PathIntegrator::transmittance(const Ray& shadow_ray, RenderStats* stats) const {
+Color PathIntegrator::transmittance(const Ray& shadow_ray, RenderStats* stats) const {
     if (observer_) observer_(shadow_ray, true);
     ++stats->shadow_rays;
     // Most shadow rays reach the sky unblocked: one any-hit query settles those, also in scenes
-    // with alpha; only blocked rays walk the surfaces to see whether alpha lets them through.
-    if (!accel_.occluded(shadow_ray)) return 1.0f;
-    if (!accel_.has_non_opaque_materials()) return 0.0f;
-    // Walk through the surfaces along the ray; blended ones attenuate by (1 - alpha).
+    // with alpha or glass; only blocked rays walk the surfaces to see what lets them through.
+    if (!accel_.occluded(shadow_ray)) return Color::Ones();
+    if (!accel_.has_non_opaque_materials()) return Color::Zero();
+    // Walk through the surfaces along the ray: blended ones pass 1 - alpha, transmissive ones what
+    // their BSDF transmits (the same share trace_path's paths pass through them).
     Ray ray = shadow_ray;
-    float tr = 1.0f;
+    Color tr = Color::Ones();
     for (int layer = 0; layer < 64; ++layer) {
         SurfaceHit hit;
         if (!accel_.intersect(ray, &hit, false)) return tr;
         const Material& m = *hit.material;
-        if (m.alpha_mode == AlphaMode::Opaque) return 0.0f;
-        float alpha = surface_alpha(hit);
-        if (m.alpha_mode == AlphaMode::Mask) {
-            if (alpha >= m.alpha_cutoff) return 0.0f;
-        } else {
-            tr *= 1 - clamp(alpha, 0.0f, 1.0f);
-            if (tr <= 0) return 0.0f;
+        // Of the light that meets the surface (alpha), what passes through it.
+        Color through = Color::Zero();
+        if (m.transmission > 0) {
+            const ShadingPoint sp = evaluate_material(accel_.scene(), hit, -ray.direction.normalized());
+            MetalRoughBsdf bsdf(sp.base_color, sp.metallic, sp.roughness, sp.specular, sp.transmission);
+            through = bsdf.transmitted(sp.to_local(-ray.direction.normalized()));
         }
+        if (m.alpha_mode == AlphaMode::Opaque) {
+            tr *= through;
+        } else {
+            float alpha = surface_alpha(hit);
+            if (m.alpha_mode == AlphaMode::Mask) {
+                if (alpha >= m.alpha_cutoff) tr *= through;
+            } else {
+                alpha = clamp(alpha, 0.0f, 1.0f);
+                tr *= (1 - alpha) + alpha * through;
+            }
+        }
+        if (!(tr.maxCoeff() > 0)) return Color::Zero();
         ray.tmin = hit.t * (1 + 1e-5f) + 1e-5f;
         ++stats->shadow_rays;
     }
@@ -220,13 +232,14 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
         L += c;
     };
 
+    int passes = 0;  // surfaces passed straight through (alpha, glass) on the whole path
     for (int depth = 0;; ++depth) {
         SurfaceHit hit;
         bool found = false;
         for (int layer = 0; layer < 64; ++layer) {
             if (observer_) observer_(ray, false);
-            found = depth == 0 && layer == 0 && primary ? accel_.surface_hit(ray, *primary, &hit, false)
-                                                        : accel_.intersect(ray, &hit, false);
+            found = primary ? accel_.surface_hit(ray, *primary, &hit, false) : accel_.intersect(ray, &hit, false);
+            primary = nullptr;  // the camera ray's first intersection only
             if (!found || !passes_through(hit, rng.uniform())) break;
             ray.tmin = hit.t * (1 + 1e-5f) + 1e-5f;  // continue through the transparent surface
             ++stats->extension_rays;
@@ -264,10 +277,28 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
             float blur_pdf = min_pdf / settings_.filter_glossy;
             if (blur_pdf < 1) roughness = std::max(roughness, std::sqrt(0.5f * std::sqrt(1 - blur_pdf)));
         }
-        MetalRoughBsdf bsdf(sp.base_color, sp.metallic, roughness, sp.specular);
+        MetalRoughBsdf bsdf(sp.base_color, sp.metallic, roughness, sp.specular, sp.transmission);
         Vec3 wo = sp.to_local(-ray.direction.normalized());
         if (wo.z() <= 0) break;
         bsdf.set_wo(wo);
+
+        // Thin-walled glass (KHR_materials_transmission): with the probability of what it transmits
+        // (its largest channel), the path passes straight through, as through a blended surface: a
+        // null scattering that keeps the last scattering's pdf for MIS, as shadow rays (transmittance)
+        // pass the same share. Otherwise it scatters by the rest of the BSDF.
+        if (sp.transmission > 0 && passes < 64) {
+            const Color through = bsdf.transmitted(wo);
+            const float p = std::min(1.0f, through.maxCoeff());
+            if (p > 0 && rng.uniform() < p) {
+                beta *= through / p;
+                ray.tmin = hit.t * (1 + 1e-5f) + 1e-5f;
+                ++passes, ++stats->extension_rays;
+                --depth;  // not a bounce
+                continue;
+            }
+            if (p >= 1) break;  // nothing else left to scatter
+            beta /= 1 - p;
+        }
 
         // Next-event estimation of the sky (and ground).
         if (use_light) {
@@ -281,8 +312,8 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
                     Ray shadow;
                     shadow.origin = offset_ray_origin(hit.position, sp.geometric_normal, ls.wi);
                     shadow.direction = ls.wi;
-                    float tr = transmittance(shadow, stats);
-                    if (tr > 0) {
+                    Color tr = transmittance(shadow, stats);
+                    if (tr.maxCoeff() > 0) {
                         float weight = settings_.strategy == LightStrategy::Mis
                                            ? power_heuristic(ls.pdf, bsdf.pdf(wo, wi))
                                            : 1.0f;

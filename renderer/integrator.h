@@ -144,8 +144,9 @@ class PathIntegrator {
     void sample_tile(const Camera& camera, float tan_half, float aspect, const TilePixel* pixels, int n, int count,
                      RenderStats* stats) const;
     void store_pixel(const Camera& camera, const PixelState& state, int x, int y, RenderResult* result) const;
-    // Visibility along a shadow ray through alpha-tested and blended surfaces (transmittance).
-    float transmittance(const Ray& ray, RenderStats* stats) const;
+    // Visibility along a shadow ray through alpha-tested, blended and transmissive surfaces (per channel:
+    // glass tints what passes).
+    Color transmittance(const Ray& ray, RenderStats* stats) const;
     // Whether a hit is skipped by alpha (MASK below cutoff, or BLEND chosen as transparent).
     bool passes_through(const SurfaceHit& hit, float u) const;
     float surface_alpha(const SurfaceHit& hit) const;

@@ -16,6 +16,8 @@ ShadingPoint evaluate_material(const Scene& scene, const SurfaceHit& hit, const 
         Vec4 t = tex(m.metallic_roughness_texture);
         sp.roughness *= t.y(), sp.metallic *= t.z();
     }
+    sp.transmission = m.transmission;
+    if (m.transmission > 0 && m.transmission_texture.present()) sp.transmission *= tex(m.transmission_texture).x();
     sp.emission = m.emissive;
     if (m.emissive_texture.present() && (m.emissive > 0).any())
         sp.emission *= tex(m.emissive_texture).head<3>().array();

@@ -24,7 +24,8 @@ struct TextureSlot {
 
 enum class AlphaMode { Opaque, Mask, Blend };
 
-// glTF 2.0 metallic-roughness material (core spec, plus KHR_materials_emissive_strength).
+// glTF 2.0 metallic-roughness material (core spec, plus KHR_materials_emissive_strength, _specular
+// (its factor) and _transmission).
 struct Material {
     std::string name;
     Color base_color = Color::Ones();
@@ -33,6 +34,11 @@ struct Material {
     float metallic = 1.0f, roughness = 1.0f;
     TextureSlot metallic_roughness_texture;  // linear: G roughness, B metallic
     float specular = 1.0f;                   // KHR_materials_specular specularFactor (0: pure Lambert base)
+    // KHR_materials_transmission, thin-walled (no KHR_materials_volume): the share of the dielectric
+    // base that passes straight through the surface, tinted by the base colour, instead of
+    // scattering diffusely (bsdf.h MetalRoughBsdf::transmitted).
+    float transmission = 0.0f;
+    TextureSlot transmission_texture;  // linear R
     TextureSlot normal_texture;              // linear, tangent space, scale in slot.scale
     TextureSlot occlusion_texture;           // linear R, strength in slot.scale
     Color emissive = Color::Zero();          // already multiplied by emissive_strength

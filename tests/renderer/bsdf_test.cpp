@@ -55,6 +55,37 @@ TEST(MetalRoughBsdf, NeverReflectsMoreThanItReceives) {
             }
 }
 
+// Thin-walled transmission takes its share from the diffuse base alone: a white glass reflects what
+// its specular lobe does and passes the rest (reflected + transmitted = 1), a tinted one passes the
+// base colour's share of it, and a glass of transmission t keeps (1 - t) of the base's diffuse light.
+TEST(MetalRoughBsdf, TransmissionPassesWhatTheSpecularLobeDoesNotReflect) {
+    for (float roughness : {0.3f, 0.6f, 1.0f})
+        for (float theta : {0.0f, 0.8f, 1.3f}) {
+            const Vec3 wo = dir_from_theta(theta);
+            MetalRoughBsdf glass(Color::Ones(), 0.0f, roughness, 1.0f, 1.0f);
+            const Color reflected = albedo_quadrature(glass, wo, 500), through = glass.transmitted(wo);
+            EXPECT_NEAR(reflected[0] + through[0], 1.0f, 1e-2f) << "roughness " << roughness << " theta " << theta;
+            EXPECT_GT(through[0], 0.3f);
+            // Tinted: the base colour tints what passes, not what the specular lobe reflects.
+            MetalRoughBsdf tinted(Color(1.0f, 0.5f, 0.25f), 0.0f, roughness, 1.0f, 1.0f);
+            const Color t = tinted.transmitted(wo);
+            EXPECT_NEAR(t[1], 0.5f * through[0], 1e-5f);
+            EXPECT_NEAR(t[2], 0.25f * through[0], 1e-5f);
+            EXPECT_NEAR(albedo_quadrature(tinted, wo, 500)[2], reflected[0], 1e-3f);
+            // Half transmission: half of the base's diffuse light stays, half passes.
+            MetalRoughBsdf half(Color::Ones(), 0.0f, roughness, 1.0f, 0.5f), none(Color::Ones(), 0.0f, roughness);
+            const float diffuse = albedo_quadrature(none, wo, 500)[0] - reflected[0];
+            EXPECT_NEAR(albedo_quadrature(half, wo, 500)[0], reflected[0] + 0.5f * diffuse, 2e-3f);
+            EXPECT_NEAR(half.transmitted(wo)[0], 0.5f * through[0], 1e-5f);
+        }
+    // Metals and opaque dielectrics pass nothing; a half-metal passes its dielectric half's share.
+    const Vec3 wo = dir_from_theta(0.5f);
+    EXPECT_EQ(MetalRoughBsdf(Color::Ones(), 1.0f, 0.2f, 1.0f, 1.0f).transmitted(wo).maxCoeff(), 0.0f);
+    EXPECT_EQ(MetalRoughBsdf(Color::Ones(), 0.0f, 0.2f).transmitted(wo).maxCoeff(), 0.0f);
+    EXPECT_NEAR(MetalRoughBsdf(Color::Ones(), 0.5f, 0.2f, 1.0f, 1.0f).transmitted(wo)[0],
+                0.5f * MetalRoughBsdf(Color::Ones(), 0.0f, 0.2f, 1.0f, 1.0f).transmitted(wo)[0], 1e-6f);
+}
+
 TEST(MetalRoughBsdf, PdfIntegratesToAtMostOne) {
     for (float metallic : {0.0f, 1.0f})
         for (float roughness : {0.3f, 0.8f})

@@ -278,13 +278,15 @@ TEST(GltfLoader, ClearCoatTestSharesTexturesAndWarnsAboutClearcoat) {
     EXPECT_TRUE(material_named(s, "LabelMaterial")->emissive_texture.present());
 }
 
-TEST(GltfLoader, GlassBrokenWindowWarnsAboutTransmissionAndKeepsAlphaMask) {
+TEST(GltfLoader, GlassBrokenWindowReadsTransmissionAndKeepsAlphaMask) {
     DYNSKY_REQUIRE_SHARED();
     const Scene& s = inspected_scene("GlassBrokenWindow/GlassBrokenWindow.glb");
-    EXPECT_TRUE(has_warning_containing(s, "KHR_materials_transmission"));
-    bool mask = false;
-    for (const Material& m : s.materials) mask |= m.alpha_mode == AlphaMode::Mask;
-    EXPECT_TRUE(mask);
+    EXPECT_FALSE(has_warning_containing(s, "KHR_materials_transmission")) << "read, not ignored";
+    const Material* glass = material_named(s, "WindowGlass");
+    ASSERT_NE(glass, nullptr);
+    EXPECT_FLOAT_EQ(glass->transmission, 1.0f);
+    EXPECT_EQ(glass->alpha_mode, AlphaMode::Mask);
+    EXPECT_FLOAT_EQ(material_named(s, "WindowFrame")->transmission, 0.0f);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -593,6 +595,43 @@ TEST(GltfLoader, UnsupportedExtensionsRequiredFailAndUsedWarn) {
     EXPECT_TRUE(has_warning_containing(s, "KHR_materials_sheen"));
     EXPECT_EQ(s.triangle_count(), 1u);  // 4 vertices, not indexed: one triangle, one vertex left over
     EXPECT_TRUE(has_warning_containing(s, "not a multiple of 3"));
+}
+
+// KHR_materials_transmission: its factor and texture are read; a factor outside [0, 1] is refused;
+// rough glass is rendered clear, and the loader says so.
+TEST(GltfLoader, TransmissionFactorAndTextureAreReadAndBadFactorsRefused) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+    int uv = g.accessor(g.view(std::vector<float>{0, 0, 1, 0, 1, 1, 0, 1}), kFloat, 4, "VEC2");
+    std::string png = write_png(dir, "t.png");
+    auto file = [&](const std::string& name, const std::string& extension, double roughness) {
+        std::string mesh = "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) +
+                           ",\"TEXCOORD_0\":" + std::to_string(uv) + "},\"material\":0}]}";
+        std::string extra = "\"extensionsUsed\":[\"KHR_materials_transmission\"],\"materials\":[{\"name\":\"glass\","
+                            "\"pbrMetallicRoughness\":{\"metallicFactor\":0,\"roughnessFactor\":" +
+                            std::to_string(roughness) + "},\"extensions\":{\"KHR_materials_transmission\":" +
+                            extension + "}}],\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"" + png + "\"}]";
+        return g.write(dir, name, one_node_scene(mesh, extra));
+    };
+    Scene s = load_gltf(file("glass", "{\"transmissionFactor\":0.8,\"transmissionTexture\":{\"index\":0}}", 0.05));
+    const Material* m = material_named(s, "glass");
+    ASSERT_NE(m, nullptr);
+    EXPECT_FLOAT_EQ(m->transmission, 0.8f);
+    EXPECT_TRUE(m->transmission_texture.present());
+    EXPECT_FALSE(has_warning_containing(s, "transmission"));
+    Scene rough = load_gltf(file("rough", "{\"transmissionFactor\":1}", 0.6));
+    EXPECT_TRUE(has_warning_containing(rough, "rendered as clear glass"));
+    EXPECT_FLOAT_EQ(load_gltf(file("none", "{}", 0.0)).materials[0].transmission, 0.0f);  // the default factor
+    for (const char* bad : {"{\"transmissionFactor\":1.5}", "{\"transmissionFactor\":-0.1}",
+                            "{\"transmissionFactor\":\"half\"}"}) {
+        std::string e = load_error(file("bad", bad, 0.0));
+        EXPECT_NE(e.find("bad.gltf"), std::string::npos) << e;
+        EXPECT_NE(e.find("transmissionFactor"), std::string::npos) << e;
+    }
+    EXPECT_NE(load_error(file("badtex", "{\"transmissionFactor\":1,\"transmissionTexture\":{\"index\":7}}", 0.0))
+                  .find("texture 7"),
+              std::string::npos);
 }
 
 // ---------------------------------------------------------------------------------------------
