@@ -1231,21 +1231,35 @@ class GltfLoader {
         // The rotation part only: a camera frame must stay orthonormal even under scaled parents.
         Eigen::Affine3f w = to_affine(world);
         cam.camera_to_world = Eigen::Translation3f(w.translation()) * w.rotation();
+        const double far = world.col(3).head<3>().cwiseAbs().maxCoeff();
+        if (!(far <= kMaxCoordinate))
+            fail("camera " + in_quotes(name) + " is " + number_text(far, 3) + " m from the origin, beyond " +
+                 number_text(kMaxCoordinate, 3) + " m: single precision cannot resolve the scene from there");
+        // An aspect ratio far from any image's (1e-30, 1e30) makes rays that see one pixel's worth.
+        auto aspect_or_image = [&](double aspect, const char* what) {
+            if (aspect == 0) return 0.0f;
+            if (aspect >= 1e-3 && aspect <= 1e3) return float(aspect);
+            warn("camera " + in_quotes(name) + ": " + what + " " + number_text(aspect) +
+                 " is not a plausible aspect ratio, using the image's");
+            return 0.0f;
+        };
         if (c.type == "orthographic") {
             cam.orthographic = true;
-            if (!(c.orthographic.ymag > 0 && std::isfinite(c.orthographic.ymag))) {
-                warn("camera " + in_quotes(name) + ": invalid orthographic ymag " + number_text(c.orthographic.ymag) +
-                     ", skipped");
+            const double ymag = c.orthographic.ymag;
+            if (!(ymag >= 1e-6 && ymag <= kMaxCoordinate)) {
+                warn("camera " + in_quotes(name) + ": orthographic ymag " + number_text(ymag) + " is outside [1e-06, " +
+                     number_text(kMaxCoordinate, 3) + "] m, skipped");
                 return;
             }
-            cam.ymag = float(c.orthographic.ymag);
-            if (c.orthographic.xmag > 0) cam.aspect_ratio = float(c.orthographic.xmag / c.orthographic.ymag);
+            cam.ymag = float(ymag);
+            if (c.orthographic.xmag > 0) cam.aspect_ratio = aspect_or_image(c.orthographic.xmag / ymag, "xmag / ymag");
         } else {
             if (c.perspective.yfov > 0 && c.perspective.yfov < kPiD) cam.yfov = float(c.perspective.yfov);
             else
                 warn("camera " + in_quotes(name) + ": invalid yfov " + number_text(c.perspective.yfov) +
                      ", using the default");
-            cam.aspect_ratio = c.perspective.aspectRatio > 0 ? float(c.perspective.aspectRatio) : 0.0f;
+            cam.aspect_ratio = c.perspective.aspectRatio > 0 ? aspect_or_image(c.perspective.aspectRatio, "aspectRatio")
+                                                             : 0.0f;
         }
         cameras_.push_back({node.camera, node_index, std::move(cam)});
     }
@@ -1328,9 +1342,7 @@ class GltfLoader {
         for (NodeCamera& c : cameras_) scene_.cameras.push_back(std::move(c.camera));
     }
 
-    // Single-precision ray tracing resolves nothing of a scene placed this far out (the ray
-    // offsets, the BVH): 1e10 m already rendered differently, 1e20 as sky alone.
-    static constexpr double kMaxCoordinate = 1e8;  // metres from the origin
+    static constexpr double kMaxCoordinate = kMaxSceneCoordinate;  // metres from the origin (scene.h)
     void check_extent() const {
         const Bounds3 b = scene_.world_bounds();
         if (b.empty()) return;

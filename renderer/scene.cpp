@@ -52,6 +52,10 @@ Camera frame_bounds_camera(const Bounds3& bounds, float aspect_ratio) {
 
 Camera look_at_camera(const Vec3& eye, const Vec3& target, float yfov) {
     if (!eye.allFinite() || !target.allFinite()) throw Error("--look-at: eye and target must be finite");
+    if (!(eye.cwiseAbs().maxCoeff() <= kMaxSceneCoordinate && target.cwiseAbs().maxCoeff() <= kMaxSceneCoordinate))
+        throw Error(
+            "--look-at: eye and target must lie within 1e+08 m of the origin (single precision cannot "
+            "resolve a scene from farther out)");
     if (!((target - eye).norm() > 1e-6f * std::max(1.0f, eye.norm())))
         throw Error("--look-at: eye and target are the same point");
     if (!(yfov > 0 && yfov < kPi)) throw Error("--look-at: field of view must be in (0, 180) degrees");

@@ -24,6 +24,11 @@ struct TextureSlot {
 
 enum class AlphaMode { Opaque, Mask, Blend };
 
+// Single-precision ray tracing resolves nothing of a scene or camera placed farther out (the ray
+// offsets, the BVH): 1e10 m already rendered differently, 1e20 as sky alone, and a camera at 1e20 m
+// made rays Embree rejects. Geometry, cameras and --look-at points must lie within this of the origin.
+inline constexpr double kMaxSceneCoordinate = 1e8;  // metres
+
 // glTF 2.0 metallic-roughness material (core spec, plus KHR_materials_emissive_strength, _specular
 // (its factor) and _transmission).
 struct Material {
@@ -39,10 +44,10 @@ struct Material {
     // scattering diffusely (bsdf.h MetalRoughBsdf::transmitted).
     float transmission = 0.0f;
     TextureSlot transmission_texture;  // linear R
-    TextureSlot normal_texture;              // linear, tangent space, scale in slot.scale
-    TextureSlot occlusion_texture;           // linear R, strength in slot.scale
-    Color emissive = Color::Zero();          // already multiplied by emissive_strength
-    TextureSlot emissive_texture;            // sRGB
+    TextureSlot normal_texture;        // linear, tangent space, scale in slot.scale
+    TextureSlot occlusion_texture;     // linear R, strength in slot.scale
+    Color emissive = Color::Zero();    // already multiplied by emissive_strength
+    TextureSlot emissive_texture;      // sRGB
     AlphaMode alpha_mode = AlphaMode::Opaque;
     float alpha_cutoff = 0.5f;
     bool double_sided = false;

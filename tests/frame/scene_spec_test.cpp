@@ -85,6 +85,15 @@ TEST(RenderCamera, LookAtOverrideEqualsTheEquivalentGltfCamera) {
     EXPECT_NEAR(load_scene(fov_only, 1.0f).camera.yfov, 30 * kPi / 180, 1e-6f);
     EXPECT_THROW(load_scene(SceneSpec{path, 0, 0.3f, {0, 2, 4}, 0}, 1.0f), Error);
     EXPECT_THROW(load_scene(SceneSpec{path, 0, 0.3f, {1, 1, 1, 1, 1, 1}, 0}, 1.0f), Error);
+    // An eye 1e19 m out made rays Embree aborted on (exit 134); 1e20 apart read as "the same point".
+    for (const std::vector<double>& far : {std::vector<double>{0, 0, 1e19, 0, 0, 0}, {1e20, 0, 0, 0, 0, 0}}) {
+        try {
+            load_scene(SceneSpec{path, 0, 0.3f, far, 0}, 1.0f);
+            ADD_FAILURE() << "a look-at eye at " << far[0] + far[2] << " m was accepted";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("within 1e+08 m"), std::string::npos) << e.what();
+        }
+    }
     EXPECT_THROW(load_scene(SceneSpec{path, 0, 0.3f, {}, 180}, 1.0f), Error);
     EXPECT_THROW(load_scene(SceneSpec{path, 1, 0.3f, {}, 40}, 1.0f), Error);  // --fov on an orthographic camera
 }

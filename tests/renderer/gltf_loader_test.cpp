@@ -608,10 +608,11 @@ TEST(GltfLoader, TransmissionFactorAndTextureAreReadAndBadFactorsRefused) {
     auto file = [&](const std::string& name, const std::string& extension, double roughness) {
         std::string mesh = "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) +
                            ",\"TEXCOORD_0\":" + std::to_string(uv) + "},\"material\":0}]}";
-        std::string extra = "\"extensionsUsed\":[\"KHR_materials_transmission\"],\"materials\":[{\"name\":\"glass\","
-                            "\"pbrMetallicRoughness\":{\"metallicFactor\":0,\"roughnessFactor\":" +
-                            std::to_string(roughness) + "},\"extensions\":{\"KHR_materials_transmission\":" +
-                            extension + "}}],\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"" + png + "\"}]";
+        std::string extra =
+            "\"extensionsUsed\":[\"KHR_materials_transmission\"],\"materials\":[{\"name\":\"glass\","
+            "\"pbrMetallicRoughness\":{\"metallicFactor\":0,\"roughnessFactor\":" +
+            std::to_string(roughness) + "},\"extensions\":{\"KHR_materials_transmission\":" + extension +
+            "}}],\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"" + png + "\"}]";
         return g.write(dir, name, one_node_scene(mesh, extra));
     };
     Scene s = load_gltf(file("glass", "{\"transmissionFactor\":0.8,\"transmissionTexture\":{\"index\":0}}", 0.05));
@@ -623,8 +624,8 @@ TEST(GltfLoader, TransmissionFactorAndTextureAreReadAndBadFactorsRefused) {
     Scene rough = load_gltf(file("rough", "{\"transmissionFactor\":1}", 0.6));
     EXPECT_TRUE(has_warning_containing(rough, "rendered as clear glass"));
     EXPECT_FLOAT_EQ(load_gltf(file("none", "{}", 0.0)).materials[0].transmission, 0.0f);  // the default factor
-    for (const char* bad : {"{\"transmissionFactor\":1.5}", "{\"transmissionFactor\":-0.1}",
-                            "{\"transmissionFactor\":\"half\"}"}) {
+    for (const char* bad :
+         {"{\"transmissionFactor\":1.5}", "{\"transmissionFactor\":-0.1}", "{\"transmissionFactor\":\"half\"}"}) {
         std::string e = load_error(file("bad", bad, 0.0));
         EXPECT_NE(e.find("bad.gltf"), std::string::npos) << e;
         EXPECT_NE(e.find("transmissionFactor"), std::string::npos) << e;
@@ -752,6 +753,12 @@ TEST(GltfLoader, ScenesThatWouldRenderNothingOrTheWrongThingAreRefused) {
          "\"meshes\":[" +
              quad + "]," + camera,
          "singular"},
+        // A camera at 1e20 m made rays Embree aborts on (an assertion, exit 134).
+        {"camera_far",
+         "\"scene\":0,\"scenes\":[{\"nodes\":[0,1]}],\"nodes\":[{\"mesh\":0},{\"camera\":0,\"translation\":[1e20,0,0]}],"
+         "\"meshes\":[" +
+             quad + "]," + camera,
+         "camera 'camera 0' is 1e+20 m from the origin"},
         {"scene_index", "\"scene\":5,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[" + quad + "]",
          "scene to show is 5"},
         {"integer_positions", one_node_scene(plain(ushort_pos)), "KHR_mesh_quantization"},
@@ -775,6 +782,32 @@ TEST(GltfLoader, ScenesThatWouldRenderNothingOrTheWrongThingAreRefused) {
         EXPECT_NE(e.find(c.name + ".gltf"), std::string::npos) << c.name << ": " << e;
         EXPECT_NE(e.find(c.expect), std::string::npos) << c.name << ": " << e;
     }
+    // Orthographic views of absurd size and absurd aspect ratios: the camera skipped or its aspect
+    // taken from the image, with a warning (an ymag of 1e20 aborted in Embree, 1e-30 drew one colour).
+    for (const char* ortho : {"{\"xmag\":1,\"ymag\":1e20,\"znear\":0.1,\"zfar\":10}",
+                              "{\"xmag\":1,\"ymag\":1e-30,\"znear\":0.1,\"zfar\":10}"}) {
+        std::vector<std::string> notes;
+        Scene skipped = load_gltf(g.write(dir, "ortho",
+                                          "\"scene\":0,\"scenes\":[{\"nodes\":[0,1]}],\"nodes\":[{\"mesh\":0},"
+                                          "{\"camera\":0}],\"meshes\":[" +
+                                              quad + "],\"cameras\":[{\"type\":\"orthographic\",\"orthographic\":" +
+                                              ortho + "}]"),
+                                  &notes);
+        EXPECT_TRUE(skipped.cameras.empty()) << ortho;
+        EXPECT_NE(std::string(notes.empty() ? "" : notes[0]).find("ymag"), std::string::npos) << ortho;
+    }
+    std::vector<std::string> notes;
+    Scene squashed = load_gltf(
+        g.write(dir, "aspect",
+                "\"scene\":0,\"scenes\":[{\"nodes\":[0,1]}],\"nodes\":[{\"mesh\":0},{\"camera\":0}],\"meshes\":[" +
+                    quad +
+                    "],\"cameras\":[{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.8,\"znear\":0.1,"
+                    "\"aspectRatio\":1e-30}}]"),
+        &notes);
+    ASSERT_EQ(squashed.cameras.size(), 1u);
+    EXPECT_EQ(squashed.cameras[0].aspect_ratio, 0.0f);  // the image's
+    EXPECT_NE(std::string(notes.empty() ? "" : notes[0]).find("aspect ratio"), std::string::npos);
+
     // Zero-area triangles only: skipped with a warning, so nothing is left to render.
     std::vector<std::string> warnings;
     Scene flat = load_gltf(g.write(dir, "collinear", one_node_scene(plain(line))), &warnings);
