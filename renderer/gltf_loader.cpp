@@ -137,8 +137,16 @@ std::string uri_problem(const std::string& uri) {
     const std::string path = percent_decoded(uri);
     static const std::regex scheme("^[A-Za-z][A-Za-z0-9+.-]*:.*");
     if (path.empty()) return "is empty";
+    // tinygltf decodes a '%' without two hex digits after it into arbitrary bytes (%zz became a NUL
+    // that cut the name short: "scene%zz.bin" opened the file "scene").
+    for (size_t i = 0; i < uri.size(); ++i)
+        if (uri[i] == '%' && !(i + 2 < uri.size() && std::isxdigit((unsigned char)uri[i + 1]) &&
+                               std::isxdigit((unsigned char)uri[i + 2])))
+            return "has a '%' not followed by two hex digits (an invalid percent escape): write it as %25";
     if (path.find('\0') != std::string::npos)
         return "contains a NUL byte (%00): it would name another file than it says";
+    for (char c : path)
+        if ((unsigned char)c < 0x20 || c == 0x7f) return "contains a control character: not a file name";
     if (path[0] == '/' || path[0] == '\\' || std::regex_match(path, scheme))
         return "is an absolute path or URL: glTF files may only refer to files inside their own folder";
     std::filesystem::path normal = std::filesystem::path(path).lexically_normal();

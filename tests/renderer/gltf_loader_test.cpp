@@ -776,6 +776,11 @@ TEST(GltfLoader, ScenesThatWouldRenderNothingOrTheWrongThingAreRefused) {
          "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[" + quad +
              "],\"images\":[{\"uri\":\"t.png%00.jpg\"}]",
          "NUL"},
+        // tinygltf decodes "%zz" to a NUL: "scene%zz.bin" opened the file "scene".
+        {"bad_escape",
+         "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[" + quad +
+             "],\"images\":[{\"uri\":\"t%zz.png\"}]",
+         "invalid percent escape"},
     };
     for (const Case& c : cases) {
         std::string e = load_error(g.write(dir, c.name, c.body));
