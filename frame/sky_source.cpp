@@ -106,6 +106,12 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     auto load_input_sky = [](const std::string& file) {
         std::shared_ptr<SkyImage> ground;
         SkyImage s = load_sky_or_latlong(file, &ground);
+        // Checked before anything is rendered: the flow between steps is measured on the sky itself
+        // (a 4 x 4 sky failed after animate and compare had written their first outputs).
+        if (s.resolution < 8)
+            throw_file_error(file, "is a " + std::to_string(s.resolution) + " x " + std::to_string(s.resolution) +
+                                       " sky: a moving sky needs at least 8 x 8 pixels (its clouds' motion is "
+                                       "measured on it)");
         if (ground)
             std::fprintf(stderr,
                          "dynsky: note: %s is a lat-long sky: its upper half moves, as a fisheye; below the horizon "

@@ -200,14 +200,13 @@ Image read_image(const std::string& path) {
     for (const auto& p : spec.extra_attribs) {
         std::string name = p.name().string();
         if (p.type() == OIIO::TypeDesc::STRING) image.metadata.strings[name] = p.get_string();
-        else if (p.type() == OIIO::TypeDesc::FLOAT || p.type() == OIIO::TypeDesc::DOUBLE ||
-                 p.type() == OIIO::TypeDesc::INT)
-            image.metadata.numbers[name] = p.get_float();
-    }
-    // Double attributes lose precision through get_float(); re-read them exactly.
-    for (auto& [name, value] : image.metadata.numbers) {
-        double d;
-        if (spec.getattribute(name, OIIO::TypeDesc::DOUBLE, &d)) value = d;
+        else if (p.type() == OIIO::TypeDesc::FLOAT) image.metadata.numbers[name] = p.get_float();
+        // An int (as `oiiotool --attrib NAME 10` writes a whole number) read as 0 through get_float().
+        else if (p.type() == OIIO::TypeDesc::INT) image.metadata.numbers[name] = p.get_int();
+        else if (p.type() == OIIO::TypeDesc::DOUBLE) {
+            double d;  // exactly: get_float() would round it
+            if (spec.getattribute(name, OIIO::TypeDesc::DOUBLE, &d)) image.metadata.numbers[name] = d;
+        }
     }
     in->close();
     return image;

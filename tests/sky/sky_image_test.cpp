@@ -291,5 +291,31 @@ TEST(SkyImage, ChannelsAreFoundByNameAndBadAttributesOrWindowsAreRefused) {
     std::filesystem::remove_all(dir);
 }
 
+// Whole numbers written as int attributes (`oiiotool --attrib dynsky:time 10`, the natural way to fix
+// a sky's metadata) were read as 0: a sun of (0, 1, 0) was refused as (0, 0, 0), and a --prev frame's
+// int time gave the wrong gap between frames with exit 0. Ints and doubles are numbers as floats are.
+TEST(SkyImage, IntegerAndDoubleAttributesAreReadAsTheirValues) {
+    const std::string dir = test::temp_dir("sky_int_attrs");
+    const std::string path = dir + "/int.exr";
+    auto out = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(8, 8, 3, OIIO::TypeDesc::FLOAT);
+    spec.attribute("dynsky:time", 10);  // int
+    spec.attribute("dynsky:sun_x", 0);
+    spec.attribute("dynsky:sun_y", 1);
+    spec.attribute("dynsky:sun_z", 0);
+    spec.attribute("dynsky:extra", OIIO::TypeDesc::DOUBLE, &kPiD);
+    std::vector<float> px(8 * 8 * 3, 1.0f);
+    ASSERT_TRUE(out->open(path, spec));
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
+    out->close();
+    const SkyImage sky = load_sky(path);
+    EXPECT_DOUBLE_EQ(sky.time_seconds, 10.0);
+    ASSERT_TRUE(sky.sun_direction.has_value());
+    EXPECT_FLOAT_EQ((*sky.sun_direction).y(), 1.0f);
+    EXPECT_DOUBLE_EQ(read_image(path).metadata.numbers.at("dynsky:extra"), kPiD);  // exactly, not as a float
+    std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace dynsky
