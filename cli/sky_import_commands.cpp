@@ -253,6 +253,7 @@ void run_mask(const MaskOptions& o) {
             SkyCircle c;
             PhotoImportParams pp;
             if (!o.preset.empty()) pp = camera_preset(o.preset).params;
+            if (o.center.empty()) check_photo_fits(photo, o.input, pp);  // as `sky import` refuses it
             if (!o.center.empty()) c = parse_center(o.center, o.radius);
             else if (pp.circle) c = *pp.circle;
             else c = find_sky_circle(photo, o.input, pp.min_radius_fraction, pp.max_radius_fraction);
@@ -271,6 +272,12 @@ void run_mask(const MaskOptions& o) {
                 }
         }
     }
+    // A black photograph has no colour to judge (0 / 0 in the rule called half of it cloud).
+    bool lit = false;
+    for (size_t p = 0; p < sky.size() && !lit; ++p)
+        if (sky[p])
+            for (int c = 0; c < 3 && !lit; ++c) lit = encoded.pixels[p * size_t(encoded.channels) + size_t(c)] > 0;
+    if (!lit) throw_file_error(o.input, "the sky it shows is black everywhere: no cloud to find");
     mask = cloud_mask(encoded, mp, &sky);
     long long cloud = 0, total = 0;
     for (size_t p = 0; p < sky.size(); ++p)

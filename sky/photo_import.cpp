@@ -617,8 +617,7 @@ ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, 
 
 }  // namespace
 
-ImportedPhoto import_photo_image(const Image& photo, const std::string& name, const PhotoImportParams& params,
-                                 const Image* extra_not_sky) {
+void check_photo_fits(const Image& photo, const std::string& name, const PhotoImportParams& params) {
     // A sky circle needs room: a photo a few pixels wide (or one row) is not an all-sky photograph,
     // and OpenCV's resizing and circle search would assert on it.
     if (!photo.empty() && (photo.width < kMinPhotoSide || photo.height < kMinPhotoSide))
@@ -635,6 +634,11 @@ ImportedPhoto import_photo_image(const Image& photo, const std::string& name, co
                                                                  : params.circle_source + "'s sky circle") +
                                    " was measured on " + std::to_string((*s)[0]) + " x " + std::to_string((*s)[1]) +
                                    " photographs: another camera? Import it without a preset (the circle is found)");
+}
+
+ImportedPhoto import_photo_image(const Image& photo, const std::string& name, const PhotoImportParams& params,
+                                 const Image* extra_not_sky) {
+    check_photo_fits(photo, name, params);
     try {
         return import_checked_photo(photo, name, params, extra_not_sky);
     } catch (const cv::Exception& e) {

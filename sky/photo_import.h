@@ -156,6 +156,11 @@ ImportedPhoto import_photo(const std::string& path, const PhotoImportParams& par
 // The smallest photograph side import_photo_image and find_sky_circle accept, pixels.
 constexpr int kMinPhotoSide = 16;
 
+// Throws dynsky::Error naming `name` when a photograph cannot be one of `params`' camera: a side under
+// kMinPhotoSide, or another size than the one the preset's sky circle was measured on. Run by
+// import_photo_image and by `sky mask`, so both refuse the same photographs.
+void check_photo_fits(const Image& photo, const std::string& name, const PhotoImportParams& params);
+
 // Same on an image already in memory (`name` is used in messages and as the sky's source).
 // `extra_not_sky`, if given, is a photo-sized 1-channel image, > 0.5 = not sky (added to the mask file).
 

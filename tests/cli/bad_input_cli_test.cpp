@@ -821,5 +821,32 @@ TEST(BadInputCli, ThirdAuditsWindsEmptyValuesAndOtherCamerasAreRefused) {
     fs::remove_all(dir);
 }
 
+// A fourth audit (file contents): compare and animate with a 4 x 4 sky wrote their first outputs
+// and then failed without naming the sky; `sky mask --preset` took photographs `sky import` refuses
+// (another camera's size, 8 x 8, all black: half of a black photo was called cloud).
+TEST(BadInputCli, FourthAuditsTinyMovingSkiesAndMaskPhotosAreRefusedFirst) {
+    const std::string dir = test::temp_dir("bad_fourth");
+    const std::string tiny = sky_exr(dir + "/tiny.exr", 4);
+    const std::string other_camera = ldr_image(dir + "/other.jpg", 640, 480);  // the TSI's are 480 x 640
+    const std::string small = ldr_image(dir + "/small.jpg", 8, 8);
+    Image black(480, 640, 3);
+    write_image(dir + "/black.png", black);
+    Refusals bad(dir);
+    bad.add("compare builtin --sky " + tiny +
+                " --model advect --duration 2 --chart-frames 2 --res 16x9 --spp 1 "
+                "--chart-res 16x9 -q -o " +
+                dir + "/cmp",
+            {"tiny.exr", "at least 8 x 8"});
+    bad.add("animate builtin --sky " + tiny + " --duration 20 --fps 0.5 --res 16x9 --spp 1 --no-video -q -o " + dir +
+                "/anim",
+            {"tiny.exr", "at least 8 x 8"});
+    bad.add("sky mask " + other_camera + " --preset arm-tsi -o " + dir + "/m1.png",
+            {"other.jpg", "was measured on 480 x 640"});
+    bad.add("sky mask " + small + " --preset arm-tsi -o " + dir + "/m2.png", {"small.jpg", "too small"});
+    bad.add("sky mask " + dir + "/black.png --preset arm-tsi -o " + dir + "/m3.png", {"black.png", "black everywhere"});
+    bad.check();
+    fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace dynsky
