@@ -9,6 +9,7 @@
 #include "motion/network_step_model.h"
 #include "motion/flow.h"
 #include "motion/procedural_step_model.h"
+#include "motion/radiance_scale.h"
 #include "sky/clear_sky.h"
 #include "sky/latlong.h"
 #include "util/data_path.h"
@@ -127,6 +128,36 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
         motion.wind = Wind{o.wind_from_deg, o.wind_speed_mps, o.cloud_height_m};
         wind_flow(8, *motion.wind, 1.0);  // validates
     }
+    // A sky file is read before the model is made: the model takes the gap to the previous frame
+    // (their own clocks, unless --prev-dt says) and both skies at the models' radiance scale.
+    const bool generated = o.sky.rfind("procedural", 0) == 0 || o.sky == "clear";
+    SkyImage input;
+    RadianceScale scale;
+    if (!generated) {
+        if (file_extension(sky_file) != ".exr")
+            throw Error(o.sky +
+                        ": not a sky EXR ('procedural', 'clear' or a canonical fisheye .exr; import photographs first "
+                        "with 'dynsky sky import')");
+        input = load_input_sky(sky_file);
+        if (motion.previous)
+            motion.previous_dt = previous_frame_gap(input, *motion.previous, motion.previous_dt, sky_file,
+                                                    previous_file);
+        input.time_seconds = 0;
+        if (input.source.empty()) input.source = sky_file;
+        scale = measure_radiance_scale(input);
+        if (scale.apply) {
+            std::fprintf(stderr,
+                         "dynsky: note: %s is %s: its clouds are moved at the model's scale and its frames given "
+                         "back in its own units\n",
+                         sky_file.c_str(), scale.describe().c_str());
+            scale_radiance(&input, 1 / scale.factor);
+            if (motion.previous) {
+                SkyImage previous = *motion.previous;
+                scale_radiance(&previous, 1 / scale.factor);
+                motion.previous = std::make_shared<const SkyImage>(std::move(previous));
+            }
+        }
+    }
     std::string model_name = m.model;
     if (model_name != "auto" && model_name != "flow" && model_name != "procedural" && model_name != "advect" &&
         model_name != "paper" && model_name.rfind("network:", 0) != 0)
@@ -142,7 +173,6 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     }
     if (model_name.rfind("network:", 0) == 0 && !model)
         model = make_network_step_model(resolve_user_path(model_name.substr(8)), motion);  // fails early
-    SkyImage input;
     if (o.sky.rfind("procedural", 0) == 0) {
         input = make_generated_sky(o);
         if (!model && (model_name == "auto" || model_name == "procedural")) {
@@ -152,18 +182,6 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
         }
     } else if (o.sky == "clear") {
         input = make_generated_sky(o);
-    } else {
-        std::string ext = file_extension(sky_file);
-        if (ext != ".exr")
-            throw Error(o.sky +
-                        ": not a sky EXR ('procedural', 'clear' or a canonical fisheye .exr; import photographs first "
-                        "with 'dynsky sky import')");
-        input = load_input_sky(sky_file);
-        if (motion.previous)  // their own clocks, unless --prev-dt says
-            motion.previous_dt = previous_frame_gap(input, *motion.previous, motion.previous_dt, sky_file,
-                                                    previous_file);
-        input.time_seconds = 0;
-        if (input.source.empty()) input.source = sky_file;
     }
     if (!model) {
         if (model_name == "auto" || model_name == "flow") {
@@ -181,6 +199,7 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
                      model->native_dt());
     SkyTimeline timeline(std::move(input), std::move(model), dt, clock);
     timeline.set_gamma(gamma);
+    if (scale.apply) timeline.set_radiance_scale(scale.factor);
     return timeline;
 }
 

@@ -10,6 +10,7 @@
 #include "motion/advect_residual.h"
 #include "motion/cloud_model.h"
 #include "motion/network_step_model.h"
+#include "motion/radiance_scale.h"
 #include "sky/latlong.h"
 #include "motion/sun_patch.h"
 #include "util/data_path.h"
@@ -50,6 +51,22 @@ void write_prediction(const PredictionOptions& o) {
         if (o.wind) throw Error("--prev and --wind-*: give one source of motion, not both");
         motion.previous = std::make_shared<const SkyImage>(load_sky_or_latlong(o.previous, &unused_ground));
         motion.previous_dt = previous_frame_gap(sky, *motion.previous, o.previous_dt, o.in, o.previous);
+    }
+    // A sky in other units than the models' (motion/radiance_scale.h) moves divided by its scale; every
+    // step is written multiplied back.
+    const RadianceScale scale = measure_radiance_scale(sky);
+    if (scale.apply) {
+        if (!o.quiet)
+            std::fprintf(stderr,
+                         "dynsky: note: %s is %s: its clouds are moved at the model's scale and the steps written "
+                         "in its own units\n",
+                         o.in.c_str(), scale.describe().c_str());
+        scale_radiance(&sky, 1 / scale.factor);
+        if (motion.previous) {
+            SkyImage previous = *motion.previous;
+            scale_radiance(&previous, 1 / scale.factor);
+            motion.previous = std::make_shared<const SkyImage>(std::move(previous));
+        }
     }
     const NetworkFormParams form = advect ? advect->info().form : paper->info().form;
     const int n = advect ? advect->info().resolution : paper->info().resolution;
@@ -115,7 +132,10 @@ void write_prediction(const PredictionOptions& o) {
     rollout([&](int k, const SkyImage& s) {
         if (k % o.every == 0 || k == o.steps) {
             std::string base = numbered_path(o.out, "step", k, "");
-            save_sky(base + ".exr", s);
+            // In the input's units (the statistics stay at the models' scale, where the form is defined).
+            SkyImage given = s;
+            if (scale.apply) scale_radiance(&given, scale.factor);
+            save_sky(base + ".exr", given);
             if (o.preview) write_image(base + ".png", tonemap_to_display(sky_to_image(s), preview_ev));
             ++written;
         }

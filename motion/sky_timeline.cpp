@@ -1,5 +1,7 @@
 #include "motion/sky_timeline.h"
 
+#include "motion/radiance_scale.h"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -11,6 +13,7 @@
 #include <opencv2/photo.hpp>
 
 #include "motion/advection.h"
+#include "motion/radiance_scale.h"
 #include "sky/fisheye.h"
 #include "util/error.h"
 
@@ -275,6 +278,7 @@ void SkyTimeline::sky_at(double t, SkyImage* out) {
             if (s > 0) insert_sun(out, suns_[size_t(i) + 1], *sun, s * last_sun_weight_);
         }
     }
+    if (radiance_scale_ != 1.0) scale_radiance(out, radiance_scale_);  // back to the input's units
     timings_.gamma_seconds += seconds_since(t0);
 }
 

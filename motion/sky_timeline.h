@@ -74,6 +74,11 @@ class SkyTimeline {
     SkyTimeline(SkyImage input, std::unique_ptr<MediumStepModel> model, double dt,
                 std::optional<SunClock> clock = std::nullopt, SkyFlowParams flow_params = {});
 
+    // The input's radiance scale when it was divided out before the steps (motion/radiance_scale.h):
+    // every frame sky_at gives is multiplied back by it, so the frames keep the input's units. 1: none.
+    void set_radiance_scale(double factor) { radiance_scale_ = factor; }
+    double radiance_scale() const { return radiance_scale_; }
+
     // Which in-between (default constant); changing it drops the cached in-betweens, not the steps.
     void set_gamma(GammaKind kind);
     GammaKind gamma() const { return gamma_; }
@@ -132,6 +137,7 @@ class SkyTimeline {
 
     std::unique_ptr<MediumStepModel> model_;
     double dt_ = 0;
+    double radiance_scale_ = 1.0;
     GammaKind gamma_ = GammaKind::constant;
     std::optional<SunClock> clock_;
     SkyFlowParams flow_params_;

@@ -25,15 +25,9 @@ double median_of(std::vector<double> v) { return v.empty() ? 0.0 : median(std::m
 
 }  // namespace
 
-namespace {
-
-// How far a fit on the clear pixels is trusted: 0 under `none_below` of the disc clear, 1 from
-// `full_from`, a smoothstep between (so neighbouring frames of a sky clouding over agree).
 double trust_ramp(double clear_fraction, double none_below, double full_from) {
     return smoothstep01((clear_fraction - none_below) / std::max(1e-9, full_from - none_below));
 }
-
-}  // namespace
 
 std::string HdrCalibrationReport::summary() const {
     std::ostringstream s;

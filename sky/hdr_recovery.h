@@ -35,6 +35,10 @@
 
 namespace dynsky {
 
+// How far a fit on the clear pixels is trusted: 0 under `none_below` of the disc clear, 1 from
+// `full_from`, a smoothstep between (so neighbouring frames of a sky clouding over agree).
+double trust_ramp(double clear_fraction, double none_below, double full_from);
+
 struct HdrCalibrationParams {
     UtcTime time;            // when the photo was taken (UTC)
     GeoLocation location;    // where

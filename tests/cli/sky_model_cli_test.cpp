@@ -16,6 +16,7 @@
 #include "sky/sky_image.h"
 #include "tests/test_support.h"
 #include "util/data_path.h"
+#include "util/image.h"
 
 namespace dynsky {
 namespace {
@@ -80,6 +81,51 @@ TEST(SkyModelCli, PredictTakesALatLongHdriAsRenderDoes) {
     const SkyImage a = load_sky(dir + "/ll_out/step_0002.exr"), b = load_sky(dir + "/upper_out/step_0002.exr");
     ASSERT_EQ(a.resolution, b.resolution);
     EXPECT_EQ(a.rgb, b.rgb);
+    fs::remove_all(dir);
+}
+
+// A sky in other units than the models' (an EXR scaled by hand, a relative HDRI) moves as the same
+// sky at scale does and keeps its units: a clear sky x 3 lost its sun in one step and x 1e-6 came out
+// 1400 times too bright (motion/radiance_scale.h). Also through animate's timeline.
+TEST(SkyModelCli, SkiesInOtherUnitsMoveAsAtScaleAndKeepTheirUnits) {
+    const std::string dir = test::temp_dir("predict_units");
+    auto r = test::run_command(
+        dynsky("sky clear --lat 48.85 --lon 2.35 --time 2026-06-21T12:00:00Z --sky-res 64 -q -o " + dir + "/x1.exr"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const SkyImage at_scale = load_sky(dir + "/x1.exr");
+    const std::vector<std::pair<std::string, float>> units = {{"x1", 1.0f}, {"x3", 3.0f}, {"tiny", 1e-6f}};
+    for (const auto& [name, factor] : units) {
+        SkyImage s = at_scale;
+        for (float& v : s.rgb) v *= factor;
+        save_sky(dir + "/" + name + ".exr", s);
+        r = test::run_command(dynsky("sky predict --in " + dir + "/" + name +
+                                     ".exr --wind-from 250 --wind-speed 8 "
+                                     "--steps 2 --out " +
+                                     dir + "/" + name + "_out"));
+        ASSERT_EQ(r.exit_code, 0) << r.output;
+        if (factor != 1.0f) EXPECT_NE(r.output.find("clear-sky model's radiance"), std::string::npos) << r.output;
+        r = test::run_command(dynsky("animate builtin --sky " + dir + "/" + name +
+                                     ".exr --model advect --duration 40 "
+                                     "--fps 0.05 --res 16x9 --spp 2 --no-video -q --out " +
+                                     dir + "/" + name + "_anim"));
+        ASSERT_EQ(r.exit_code, 0) << r.output;
+    }
+    const SkyImage one = load_sky(dir + "/x1_out/step_0002.exr");
+    const Image frame = read_image(dir + "/x1_anim/frame_0001.exr");
+    for (const auto& [name, factor] : units) {
+        const SkyImage step = load_sky(dir + "/" + name + "_out/step_0002.exr");
+        ASSERT_EQ(step.rgb.size(), one.rgb.size());
+        double worst = 0;
+        for (size_t k = 0; k < one.rgb.size(); ++k)
+            worst = std::max(worst, std::abs(double(step.rgb[k]) / factor - one.rgb[k]) / (1e-3 + one.rgb[k]));
+        EXPECT_LT(worst, 1e-4) << name;  // the same sky, sun and all, in its own units
+        const Image f = read_image(dir + "/" + name + "_anim/frame_0001.exr");
+        double frame_worst = 0;
+        for (size_t k = 0; k < frame.pixels.size(); ++k)
+            frame_worst = std::max(frame_worst,
+                                   std::abs(double(f.pixels[k]) / factor - frame.pixels[k]) / (1e-3 + frame.pixels[k]));
+        EXPECT_LT(frame_worst, 1e-3) << name;  // animate's frame 20 s in (between the first two medium steps)
+    }
     fs::remove_all(dir);
 }
 

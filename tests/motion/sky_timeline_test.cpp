@@ -294,6 +294,7 @@ TEST(SkyTimeline, SavedAndLoadedGivesTheSameSkiesBitForBit) {
     for (GammaKind gamma : {GammaKind::constant, GammaKind::paper}) {
         SkyTimeline computed(input, std::make_unique<FlowExtrapolationStepModel>(250.0, 0.4), 5.0, clock);
         computed.set_gamma(gamma);
+        computed.set_radiance_scale(2.5);  // a sky in other units than the models' (kept through the store)
         if (gamma == GammaKind::constant) computed.save(dir, 3, "settings-a");
         std::string settings;
         SkyTimeline loaded = SkyTimeline::load(dir, &settings);
@@ -313,6 +314,12 @@ TEST(SkyTimeline, SavedAndLoadedGivesTheSameSkiesBitForBit) {
         }
         EXPECT_EQ(loaded.last_step_for(15.0), 3);
         EXPECT_THROW(loaded.sky_at(15.5), Error);  // needs step 4: beyond what was stored
+        EXPECT_EQ(loaded.radiance_scale(), 2.5);
+        // Frames in the input's units: 2.5 x the same timeline's at the models' scale.
+        SkyTimeline at_scale(input, std::make_unique<FlowExtrapolationStepModel>(250.0, 0.4), 5.0, clock);
+        at_scale.set_gamma(gamma);
+        const SkyImage scaled = computed.sky_at(7.25), plain = at_scale.sky_at(7.25);
+        for (size_t k = 0; k < plain.rgb.size(); k += 97) EXPECT_FLOAT_EQ(scaled.rgb[k], 2.5f * plain.rgb[k]);
     }
     std::filesystem::remove(dir + "/timeline.json");
     EXPECT_THROW(SkyTimeline::load(dir), Error);

@@ -1,0 +1,63 @@
+#include "motion/radiance_scale.h"
+
+#include <gtest/gtest.h>
+
+#include "sky/clear_sky.h"
+#include "sky/fisheye.h"
+#include "sky/procedural_clouds.h"
+
+namespace dynsky {
+namespace {
+
+SkyImage clear_sky(double elevation_deg, int n = 128) {
+    ClearSkyParams p;
+    p.sun_direction = fisheye::direction_from_angles((90 - elevation_deg) * kPiD / 180, 2.0);
+    SkyImage sky = make_clear_sky(p, n);
+    return sky;
+}
+
+SkyImage scaled(SkyImage sky, double factor) {
+    scale_radiance(&sky, factor);
+    return sky;
+}
+
+// Skies at the models' scale (a clear sky, a procedural cumulus) measure about 1 and are left alone;
+// the same skies in other units measure their factor, from the clear pixels or, overcast, the mean.
+TEST(RadianceScale, SkiesAtScaleMeasureOneOthersTheirFactor) {
+    for (double elevation : {10.0, 35.0, 70.0}) {
+        const SkyImage sky = clear_sky(elevation);
+        const RadianceScale at = measure_radiance_scale(sky);
+        ASSERT_TRUE(at.measured) << elevation;
+        EXPECT_NEAR(at.factor, 1.0, 0.02) << elevation;
+        EXPECT_EQ(at.clear_weight, 1.0);
+        EXPECT_FALSE(at.apply);
+        for (double f : {3.0, 1e-3, 1e-6, 1000.0}) {
+            const RadianceScale s = measure_radiance_scale(scaled(sky, f));
+            EXPECT_NEAR(s.factor / f, 1.0, 0.02) << elevation << " x " << f;
+            EXPECT_TRUE(s.apply) << elevation << " x " << f;
+        }
+        EXPECT_FALSE(measure_radiance_scale(scaled(sky, 1.3)).apply);  // within the band: moved as it is
+    }
+    ProceduralSkyParams p;
+    p.coverage = 0.5;
+    p.layers = {cumulus_layer()};
+    p.clear_sky.sun_direction = fisheye::direction_from_angles(0.8, 1.2);
+    const SkyImage cumulus = ProceduralSky(p).render(0, 128);
+    const RadianceScale c = measure_radiance_scale(cumulus);
+    EXPECT_NEAR(c.factor, 1.0, 0.1);
+    EXPECT_FALSE(c.apply);
+    EXPECT_NEAR(measure_radiance_scale(scaled(cumulus, 20)).factor / 20, c.factor, 1e-3 * c.factor);
+    // Overcast (no clear pixel): the mean's ratio, the same for any units.
+    p.coverage = 1.0;
+    const SkyImage overcast = ProceduralSky(p).render(0, 128);
+    const RadianceScale o = measure_radiance_scale(overcast);
+    EXPECT_LT(o.clear_weight, 1.0);
+    EXPECT_NEAR(measure_radiance_scale(scaled(overcast, 1e-4)).factor / 1e-4, o.factor, 1e-3 * o.factor);
+    // No sun to compare with (below the horizon, or unknown and not visible): not measured.
+    SkyImage night = clear_sky(10);
+    night.sun_direction = Vec3(0.0f, -0.5f, 0.866f);
+    EXPECT_FALSE(measure_radiance_scale(night).measured);
+}
+
+}  // namespace
+}  // namespace dynsky
