@@ -1,6 +1,7 @@
 #include "renderer/gltf_loader.h"
 
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <stb/stb_image.h>
 #include <tbb/parallel_for.h>
 #include <tiny_gltf.h>
@@ -128,6 +129,45 @@ std::string percent_decoded(const std::string& uri) {
         }
     }
     return out;
+}
+
+// A PNG decoded to RGBA in [0, 1] (8- or 16-bit; grey, grey + alpha, palette, RGB, RGBA): "" or why not.
+std::string decode_png(const unsigned char* bytes, size_t size, int* width, int* height, std::vector<float>* rgba) {
+    if (size > size_t(std::numeric_limits<int>::max())) return "a PNG too large to decode";
+    cv::Mat image;
+    try {
+        image = cv::imdecode(cv::Mat(1, int(size), CV_8U, const_cast<unsigned char*>(bytes)), cv::IMREAD_UNCHANGED);
+    } catch (const cv::Exception& e) {
+        return std::string("a PNG that cannot be decoded (") + e.err + ")";
+    }
+    if (image.empty())
+        return "a PNG that cannot be decoded (corrupt or cut short: a chunk's CRC or the compressed data is wrong)";
+    const int c = image.channels();
+    if ((image.depth() != CV_8U && image.depth() != CV_16U) || c < 1 || c > 4) return "unexpected decoded layout";
+    *width = image.cols, *height = image.rows;
+    rgba->resize(size_t(image.cols) * size_t(image.rows) * 4);
+    // The same values stb's path gives: v x (1 / 255) or v x (1 / 65535) in float.
+    auto convert = [&](auto max_value, auto* row_type) {
+        using T = std::remove_pointer_t<decltype(row_type)>;
+        const float unit = 1.0f / float(max_value);
+        float* out = rgba->data();
+        for (int y = 0; y < image.rows; ++y) {
+            const T* row = image.ptr<T>(y);
+            for (int x = 0; x < image.cols; ++x, out += 4) {
+                const T* px = row + size_t(x) * size_t(c);
+                if (c <= 2) {  // grey (and alpha)
+                    out[0] = out[1] = out[2] = float(px[0]) * unit;
+                    out[3] = float(c == 2 ? px[1] : max_value) * unit;
+                } else {  // OpenCV's BGR(A)
+                    out[0] = float(px[2]) * unit, out[1] = float(px[1]) * unit, out[2] = float(px[0]) * unit;
+                    out[3] = float(c == 4 ? px[3] : max_value) * unit;
+                }
+            }
+        }
+    };
+    if (image.depth() == CV_8U) convert(255, static_cast<const uint8_t*>(nullptr));
+    else convert(65535, static_cast<const uint16_t*>(nullptr));
+    return "";
 }
 
 // Why a buffer or image URI may not be opened ("" when it may): it must name a file inside the
@@ -889,6 +929,14 @@ class GltfLoader {
                     decoded[k].error = problem;
                     return;
                 }
+            }
+            // PNGs through libpng (OpenCV), which checks every chunk's CRC and the zlib stream: stb
+            // decoded a PNG with a changed byte into garbage texels (exit 0). Lossless either way.
+            static const unsigned char kPngSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+            if (encoded[k].second >= 8 && std::memcmp(encoded[k].first, kPngSignature, 8) == 0) {
+                decoded[k].error = decode_png(encoded[k].first, encoded[k].second, &decoded[k].width,
+                                              &decoded[k].height, &decoded[k].rgba);
+                return;
             }
             tg::Image img;
             std::string err, warn_text;

@@ -683,6 +683,20 @@ TEST(GltfLoader, MissingBinAndTextureFilesAreNamed) {
     write_bytes(dir + "/gone.png", std::string("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0\0\x10\0\0\0\x10", 24));
     e = load_error(path);
     EXPECT_NE(e.find("a PNG that cannot be decoded (corrupt or cut short"), std::string::npos) << e;
+    // One byte of the compressed pixels changed: libpng's CRC check refuses it (stb decoded garbage).
+    {
+        Image img(16, 16, 3);
+        for (size_t i = 0; i < img.pixels.size(); ++i) img.pixels[i] = float(i % 7) / 7.0f;
+        write_image(dir + "/gone.png", img);
+        std::string png = read_text(dir + "/gone.png");
+        const size_t idat = png.find("IDAT");
+        ASSERT_NE(idat, std::string::npos);
+        png[idat + 8] = char(png[idat + 8] ^ 0x5a);
+        write_bytes(dir + "/gone.png", png);
+        e = load_error(path);
+        EXPECT_NE(e.find("gone.png"), std::string::npos) << e;
+        EXPECT_NE(e.find("a PNG that cannot be decoded"), std::string::npos) << e;
+    }
 
     path = g.write(dir, "nobin", one_node_scene(mesh, "\"materials\":[{}]"));
     fs::remove(dir + "/nobin.bin");
