@@ -1,6 +1,7 @@
 // dynsky render: one image of a glTF scene (or the built-in plaza) under a fisheye sky.
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -150,6 +151,11 @@ int run_render(const RenderOptions& o) {
     const double render_cpu_seconds = process_cpu_seconds() - cpu_before;
 
     Image& image = result.color;
+    // Nothing lit reached the camera: written (it is what the scene shows), but said.
+    if (std::all_of(image.pixels.begin(), image.pixels.end(), [](float v) { return v == 0.0f; }))
+        std::fprintf(stderr,
+                     "dynsky: warning: the image is black everywhere: is the camera inside closed geometry or "
+                     "looking at nothing lit? (--look-at, --camera)\n");
     image.metadata.numbers["dynsky:spp"] = o.spp;
     image.metadata.numbers["dynsky:seed"] = double(o.seed);
     image.metadata.numbers["dynsky:render_seconds"] = result.stats.seconds;

@@ -93,10 +93,22 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     // previous frame.
     std::string sky_file = o.sky, previous_file = o.previous;
     if (fs::is_directory(o.sky)) {
-        std::vector<std::string> exrs;
-        for (const auto& e : fs::directory_iterator(o.sky))
-            if (e.is_regular_file() && file_extension(e.path().string()) == ".exr") exrs.push_back(e.path().string());
+        std::vector<std::string> exrs, others;
+        for (const auto& e : fs::directory_iterator(o.sky)) {
+            if (!e.is_regular_file()) continue;
+            const std::string ext = file_extension(e.path().string());
+            if (ext == ".exr") exrs.push_back(e.path().string());
+            else if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".hdr" || ext == ".tif")
+                others.push_back(e.path().filename().string());
+        }
         std::sort(exrs.begin(), exrs.end());
+        if (!others.empty()) {  // a photograph among the skies, not imported: said, not silently skipped
+            std::sort(others.begin(), others.end());
+            std::fprintf(stderr,
+                         "dynsky: warning: %s: %zu image(s) that are not sky EXRs ignored (%s%s); the sequence is its "
+                         ".exr files (import photographs with 'dynsky sky import')\n",
+                         o.sky.c_str(), others.size(), others[0].c_str(), others.size() > 1 ? ", ..." : "");
+        }
         if (exrs.empty())
             throw_file_error(o.sky, "a folder without sky EXRs (give a captured sequence of canonical fisheyes)");
         sky_file = exrs.back();
@@ -134,10 +146,12 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     SkyImage input;
     RadianceScale scale;
     if (!generated) {
-        if (file_extension(sky_file) != ".exr")
+        // Any float radiance file, as render takes it (an EXR, a .hdr; integer images are refused by
+        // the loader with a pointer to `sky import`); a name that is no file gets the choices.
+        if (!fs::exists(sky_file))
             throw Error(o.sky +
-                        ": not a sky EXR ('procedural', 'clear' or a canonical fisheye .exr; import photographs first "
-                        "with 'dynsky sky import')");
+                        ": no such sky file (give 'procedural[:SEED]', 'clear', a canonical fisheye .exr or a "
+                        "folder of them; import photographs first with 'dynsky sky import')");
         input = load_input_sky(sky_file);
         if (motion.previous)
             motion.previous_dt = previous_frame_gap(input, *motion.previous, motion.previous_dt, sky_file,

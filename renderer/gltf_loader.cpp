@@ -509,6 +509,10 @@ class GltfLoader {
         scene_.source_files.insert(scene_.source_files.end(), asset.read.begin(), asset.read.end());
         if (!ok) {
             std::vector<std::string> lines = split_lines(err);
+            // tinygltf quotes a data: URI it could not decode whole (megabytes for a real buffer).
+            for (std::string& l : lines)
+                if (size_t at = l.find("data:"); at != std::string::npos && l.size() > at + 80)
+                    l = l.substr(0, at + 80) + "... (" + std::to_string(l.size() - at) + " characters)";
             std::string text = join(lines, "; ");
             if (text.find("parse_error") != std::string::npos || text.find("Failed to parse JSON") != std::string::npos)
                 fail("invalid JSON: " + text);
@@ -764,11 +768,16 @@ class GltfLoader {
             out.name = m.name.empty() ? "material " + std::to_string(i) : m.name;
             std::string what = m.name.empty() ? out.name : "material " + in_quotes(out.name);
             const tg::PbrMetallicRoughness& pbr = m.pbrMetallicRoughness;
-            if (pbr.baseColorFactor.size() == 4) {
-                out.base_color = Color(float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]),
-                                       float(pbr.baseColorFactor[2]));
-                out.base_alpha = float(pbr.baseColorFactor[3]);
-            }
+            if (pbr.baseColorFactor.size() != 4)
+                fail(what + ": baseColorFactor has " + std::to_string(pbr.baseColorFactor.size()) +
+                     " numbers, not 4 (RGBA)");
+            out.base_color = Color(float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]),
+                                   float(pbr.baseColorFactor[2]));
+            out.base_alpha = float(pbr.baseColorFactor[3]);
+            for (auto [name, value] : {std::pair<const char*, double>{"metallicFactor", pbr.metallicFactor},
+                                       std::pair<const char*, double>{"roughnessFactor", pbr.roughnessFactor}})
+                if (!(value >= -1e-4 && value <= 1 + 1e-4))
+                    warn(what + ": " + name + " " + number_text(value) + " is outside [0, 1], clamped");
             out.metallic = clamp(float(pbr.metallicFactor), 0.0f, 1.0f);
             out.roughness = clamp(float(pbr.roughnessFactor), 0.0f, 1.0f);
             read_slot(pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, pbr.baseColorTexture.extensions, true,

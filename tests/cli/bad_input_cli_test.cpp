@@ -844,7 +844,39 @@ TEST(BadInputCli, FourthAuditsTinyMovingSkiesAndMaskPhotosAreRefusedFirst) {
             {"other.jpg", "was measured on 480 x 640"});
     bad.add("sky mask " + small + " --preset arm-tsi -o " + dir + "/m2.png", {"small.jpg", "too small"});
     bad.add("sky mask " + dir + "/black.png --preset arm-tsi -o " + dir + "/m3.png", {"black.png", "black everywhere"});
+    bad.add("animate builtin --sky " + dir +
+                "/nowhere.exr --duration 10 --fps 0.2 --res 16x9 --spp 1 --no-video -q "
+                "-o " +
+                dir + "/a2",
+            {"nowhere.exr", "no such sky file", "'procedural[:SEED]'"});
+    bad.add("animate builtin --sky " + small + " --duration 10 --fps 0.2 --res 16x9 --spp 1 --no-video -q -o " + dir +
+                "/a3",
+            {"small.jpg", "integer pixels", "sky import"});
     bad.check();
+    // A float sky in another file format is taken by animate as render takes it (it was refused as
+    // "not a sky EXR"); images that are not sky EXRs in a captured sequence's folder are named.
+    {
+        auto out = OIIO::ImageOutput::create(dir + "/sky.hdr");  // Radiance RGBE: float pixels
+        ASSERT_TRUE(out);
+        const OIIO::ImageSpec spec(32, 32, 3, OIIO::TypeDesc::FLOAT);
+        const std::vector<float> px(32 * 32 * 3, 0.5f);
+        ASSERT_TRUE(out->open(dir + "/sky.hdr", spec));
+        ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
+        out->close();
+    }
+    expect_accepted("animate builtin --sky " + dir +
+                    "/sky.hdr --duration 10 --fps 0.2 --res 16x9 --spp 1 --no-video "
+                    "-q -o " +
+                    dir + "/a4");
+    fs::create_directories(dir + "/seq");
+    sky_exr(dir + "/seq/a.exr", 32);
+    ldr_image(dir + "/seq/b.png", 32, 32);
+    test::CommandResult r = dynsky("animate builtin --sky " + dir +
+                                   "/seq --duration 10 --fps 0.2 --res 16x9 --spp 1 "
+                                   "--no-video -q -o " +
+                                   dir + "/a5");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("1 image(s) that are not sky EXRs ignored (b.png)"), std::string::npos) << r.output;
     fs::remove_all(dir);
 }
 

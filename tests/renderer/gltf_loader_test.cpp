@@ -635,6 +635,32 @@ TEST(GltfLoader, TransmissionFactorAndTextureAreReadAndBadFactorsRefused) {
               std::string::npos);
 }
 
+// Factors outside their range are said (clamped, as before, but no longer silently), and a broken
+// data: URI is not echoed whole into the message (megabytes for a real buffer).
+TEST(GltfLoader, ClampedFactorsWarnAndBrokenDataUrisAreQuotedShort) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+    std::string mesh = "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) + "},\"material\":0}]}";
+    std::vector<std::string> notes;
+    load_gltf(g.write(dir, "factors",
+                      one_node_scene(mesh,
+                                     "\"materials\":[{\"pbrMetallicRoughness\":{\"metallicFactor\":-3,"
+                                     "\"roughnessFactor\":7}}]")),
+              &notes);
+    std::string all;
+    for (const std::string& n : notes) all += n + "\n";
+    EXPECT_NE(all.find("metallicFactor -3 is outside [0, 1], clamped"), std::string::npos) << all;
+    EXPECT_NE(all.find("roughnessFactor 7 is outside [0, 1], clamped"), std::string::npos) << all;
+    const std::string uri = "data:application/octet-stream;base64," + std::string(3000, 'A') + "!!";
+    write_bytes(dir + "/datauri.gltf",
+                "{\"asset\":{\"version\":\"2.0\"},\"buffers\":[{\"byteLength\":4000,\"uri\":\"" + uri + "\"}]}");
+    const std::string e = load_error(dir + "/datauri.gltf");
+    EXPECT_NE(e.find("datauri.gltf"), std::string::npos) << e;
+    EXPECT_LT(e.size(), 600u) << e;
+    fs::remove_all(dir);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Bad input: every case throws dynsky::Error naming the file
 
