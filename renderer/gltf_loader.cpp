@@ -20,6 +20,7 @@
 #include <sstream>
 #include <tuple>
 #include <type_traits>
+#include <unistd.h>
 
 #include "renderer/mesh_attributes.h"
 #include "util/error.h"
@@ -921,6 +922,28 @@ class GltfLoader {
         images.erase(std::unique(images.begin(), images.end()), images.end());
         std::vector<std::pair<const unsigned char*, size_t>> encoded;
         for (int i : images) encoded.push_back(encoded_image(i));  // fails here for missing files
+
+        // What decoding them all costs, from their headers, against this machine's memory: 18 PNGs of
+        // 8192^2 zeros (5 MB of files) would take 20 GB and end in an out-of-memory kill, not an error.
+        {
+            double texels = 0, largest = 0;
+            int largest_image = -1;
+            for (size_t k = 0; k < images.size(); ++k) {
+                int w = 0, h = 0, c = 0;
+                if (encoded[k].second <= size_t(std::numeric_limits<int>::max()) &&
+                    stbi_info_from_memory(encoded[k].first, int(encoded[k].second), &w, &h, &c)) {
+                    texels += double(w) * h;
+                    if (double(w) * h > largest) largest = double(w) * h, largest_image = images[k];
+                }
+            }
+            // Decoded as float RGBA, kept as 8-bit or float RGBA: 18-21 bytes a texel measured at the peak.
+            const double need = texels * 20, have = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+            if (have > 0 && need > 0.9 * have)
+                fail("its " + std::to_string(images.size()) + " texture image(s) hold " + number_text(texels, 3) +
+                     " texels (image " + std::to_string(largest_image) + " alone " + number_text(largest, 3) +
+                     "): about " + number_text(need / 1073741824.0, 3) + " GiB to decode, more than this machine's " +
+                     number_text(have / 1073741824.0, 3) + " GiB of memory allows (reduce the textures)");
+        }
 
         struct Decoded {
             int width = 0, height = 0;

@@ -661,6 +661,38 @@ TEST(GltfLoader, ClampedFactorsWarnAndBrokenDataUrisAreQuotedShort) {
     fs::remove_all(dir);
 }
 
+// Textures that together would not fit in memory are refused from their headers, before decoding:
+// 18 PNGs of 8192^2 zeros (5 MB of files) would have ended in an out-of-memory kill. Here 1024
+// headers of 8192^2 each (a few bytes apiece; 1.4 TB to decode).
+TEST(GltfLoader, TexturesBeyondTheMachinesMemoryAreRefusedBeforeDecoding) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+    int uv = g.accessor(g.view(std::vector<float>{0, 0, 1, 0, 1, 1, 0, 1}), kFloat, 4, "VEC2");
+    // A PNG signature and IHDR of 8192 x 8192 RGBA: all the header reader looks at.
+    const std::string header("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0\x20\0\0\0\x20\0\x08\x06\0\0\0\0\0\0\0", 33);
+    const int count = 1024;
+    std::string images, textures, materials, primitives;
+    for (int i = 0; i < count; ++i) {
+        write_bytes(dir + "/t" + std::to_string(i) + ".png", header);
+        const std::string sep = i ? "," : "";
+        images += sep + "{\"uri\":\"t" + std::to_string(i) + ".png\"}";
+        textures += sep + "{\"source\":" + std::to_string(i) + "}";
+        materials += sep + "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":" + std::to_string(i) + "}}}";
+        primitives += sep + "{\"attributes\":{\"POSITION\":" + std::to_string(pos) +
+                      ",\"TEXCOORD_0\":" + std::to_string(uv) + "},\"material\":" + std::to_string(i) + "}";
+    }
+    const std::string path = g.write(dir, "huge",
+                                     one_node_scene("{\"primitives\":[" + primitives + "]}",
+                                                    "\"images\":[" + images + "],\"textures\":[" + textures +
+                                                        "],\"materials\":[" + materials + "]"));
+    const std::string e = load_error(path);
+    EXPECT_NE(e.find("huge.gltf"), std::string::npos) << e;
+    EXPECT_NE(e.find("1024 texture image(s) hold 6.87e+10 texels"), std::string::npos) << e;
+    EXPECT_NE(e.find("of memory allows"), std::string::npos) << e;
+    fs::remove_all(dir);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Bad input: every case throws dynsky::Error naming the file
 
