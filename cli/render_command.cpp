@@ -81,7 +81,9 @@ void override_lambert(Scene* scene) {
                 }
                 mesh.material = white;
             }
-    for (Material& m : scene->materials) m.metallic = 0, m.specular = 0, m.emissive = Color::Zero();
+    for (Material& m : scene->materials)
+        m.metallic = 0, m.specular = 0, m.transmission = 0,
+        m.emissive = Color::Zero();  // glass too: as Cycles' diffuse
 }
 
 int run_render(const RenderOptions& o) {
