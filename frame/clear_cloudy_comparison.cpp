@@ -13,6 +13,7 @@
 #include "renderer/accel.h"
 #include "renderer/env_light.h"
 #include "renderer/integrator.h"
+#include "motion/radiance_scale.h"
 #include "sky/clear_sky.h"
 #include "util/atomic_file.h"
 #include "util/chart.h"
@@ -141,6 +142,9 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
         p.sun_direction = *cloudy.sun_direction_at(t);
         p.turbidity = 3;
         auto s = std::make_shared<SkyImage>(make_clear_sky(p, sky_n));
+        // In the cloudy sky's units (a sky in other units than the models' comes back in its own:
+        // motion/radiance_scale.h), so the two are compared like for like.
+        if (cloudy.radiance_scale() != 1.0) scale_radiance(s.get(), cloudy.radiance_scale());
         s->time_seconds = t;
         return s;
     };

@@ -93,7 +93,8 @@ MetalRoughBsdf::MetalRoughBsdf(const Color& base_color, float metallic, float ro
 Color MetalRoughBsdf::transmitted(const Vec3& wo) const {
     if (transmission_ <= 0 || metallic_ >= 1 || !(wo.z() > 0)) return Color::Zero();
     const float e_o = specular_ <= 0 ? 0.0f : wo.z() == cached_wo_z_ ? cached_e_o_ : specular_albedo(wo.z());
-    return base_ * ((1 - metallic_) * transmission_ * (1 - e_o));
+    const float under_coat = coat_ > 0 ? 1 - (wo.z() == cached_wo_z_ ? cached_e_coat_ : coat_albedo(wo.z())) : 1.0f;
+    return base_ * ((1 - metallic_) * transmission_ * (1 - e_o) * under_coat);
 }
 
 float MetalRoughBsdf::specular_albedo(float mu) const {
@@ -105,6 +106,10 @@ void MetalRoughBsdf::set_wo(const Vec3& wo) {
     if (!(wo.z() > 0)) return;
     cached_e_o_ = specular_albedo(wo.z());
     cached_ps_ = specular_probability_for(wo, cached_e_o_);
+    if (coat_ > 0) {
+        cached_e_coat_ = coat_albedo(wo.z());
+        cached_pc_ = coat_probability_for(wo, cached_e_coat_);
+    }
     cached_wo_z_ = wo.z();
 }
 
@@ -149,7 +154,7 @@ float MetalRoughBsdf::ggx_vndf_pdf_wi(const Vec3& wo, const Vec3& wi, float alph
 }
 
 
-Color MetalRoughBsdf::eval(const Vec3& wo, const Vec3& wi) const {
+Color MetalRoughBsdf::base_eval(const Vec3& wo, const Vec3& wi) const {
     if (wo.z() <= 0 || wi.z() <= 0) return Color::Zero();
     Vec3 wm = (wo + wi).normalized();
     float v_dot_h = clamp(wo.dot(wm), 0.0f, 1.0f);
@@ -184,7 +189,7 @@ float MetalRoughBsdf::specular_probability_for(const Vec3& wo, float e_spec) con
     return clamp(p, 0.1f, 0.9f);  // both lobes stay reachable
 }
 
-float MetalRoughBsdf::pdf(const Vec3& wo, const Vec3& wi) const {
+float MetalRoughBsdf::base_pdf(const Vec3& wo, const Vec3& wi) const {
     if (wo.z() <= 0 || wi.z() <= 0) return 0;
     float ps = specular_probability(wo);
     return ps * ggx_vndf_pdf_wi(wo, wi, alpha_) + (1 - ps) * wi.z() * kInvPi;
@@ -192,19 +197,77 @@ float MetalRoughBsdf::pdf(const Vec3& wo, const Vec3& wi) const {
 
 bool MetalRoughBsdf::sample(const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* out) const {
     if (wo.z() <= 0) return false;
-    float ps = specular_probability(wo);
     Vec3 wi;
-    if (u_lobe < ps) {
-        Vec3 wm = sample_ggx_vndf(wo, alpha_, u);
+    const float pc = coat_ > 0 ? coat_probability(wo) : 0.0f;
+    if (u_lobe < pc) {  // the clearcoat's lobe
+        Vec3 wm = sample_ggx_vndf(wo, coat_alpha_, u);
         wi = 2 * wo.dot(wm) * wm - wo;
     } else {
-        wi = sample_cosine_hemisphere(u);
+        if (pc > 0) u_lobe = std::min((u_lobe - pc) / (1 - pc), 0.99999994f);
+        float ps = specular_probability(wo);
+        if (u_lobe < ps) {
+            Vec3 wm = sample_ggx_vndf(wo, alpha_, u);
+            wi = 2 * wo.dot(wm) * wm - wo;
+        } else {
+            wi = sample_cosine_hemisphere(u);
+        }
     }
     if (wi.z() <= 0) return false;
     out->wi = wi;
     out->pdf = pdf(wo, wi);
     out->f = eval(wo, wi);
     return out->pdf > 0;
+}
+
+void MetalRoughBsdf::set_clearcoat(float factor, float roughness) {
+    coat_ = clamp(factor, 0.0f, 1.0f);
+    if (!(coat_ > 0)) {
+        coat_ = 0;
+        return;
+    }
+    coat_roughness_ = clamp(roughness, 0.0f, 1.0f);
+    coat_alpha_ = std::max(coat_roughness_ * coat_roughness_, kMinAlpha);
+    cached_wo_z_ = -1;  // set_wo again
+}
+
+float MetalRoughBsdf::coat_albedo(float mu) const {
+    return coat_ * SpecularAlbedoTable::get().albedo(mu, coat_roughness_);
+}
+
+float MetalRoughBsdf::coat_probability(const Vec3& wo) const {
+    if (wo.z() == cached_wo_z_) return cached_pc_;
+    return coat_probability_for(wo, coat_albedo(wo.z()));
+}
+
+float MetalRoughBsdf::coat_probability_for(const Vec3& wo, float e_coat) const {
+    // The base's albedo towards wo, roughly (its lobes' weights), under what the coat lets through.
+    const float e_spec = metallic_ >= 1 ? 0.0f : specular_albedo(wo.z());
+    const float w = schlick_weight(std::max(0.0f, wo.z()));
+    const float base = (1 - metallic_) * (e_spec + (1 - e_spec) * (1 - transmission_) * luminance(base_)) +
+                       metallic_ * luminance(base_ + (1 - base_) * w);
+    const float p = e_coat / std::max(e_coat + (1 - e_coat) * base, 1e-6f);
+    return clamp(p, 0.05f, 0.95f);
+}
+
+Color MetalRoughBsdf::eval(const Vec3& wo, const Vec3& wi) const {
+    if (coat_ <= 0) return base_eval(wo, wi);
+    if (wo.z() <= 0 || wi.z() <= 0) return Color::Zero();
+    // The base under the coat receives and returns what the coat's lobe does not reflect (its
+    // albedo E_c each way): energy never grows, and the layer stays reciprocal.
+    const float e_o = wo.z() == cached_wo_z_ ? cached_e_coat_ : coat_albedo(wo.z());
+    const Color base = base_eval(wo, wi) * ((1 - e_o) * (1 - coat_albedo(wi.z())));
+    const Vec3 wm = (wo + wi).normalized();
+    const float f = 0.04f + 0.96f * schlick_weight(clamp(wo.dot(wm), 0.0f, 1.0f));
+    const float coat = coat_ * f * ggx_d(wm, coat_alpha_) * smith_g1(wo, coat_alpha_) * smith_g1(wi, coat_alpha_) /
+                       (4 * wo.z() * wi.z());
+    return base + Color::Constant(coat);
+}
+
+float MetalRoughBsdf::pdf(const Vec3& wo, const Vec3& wi) const {
+    if (coat_ <= 0) return base_pdf(wo, wi);
+    if (wo.z() <= 0 || wi.z() <= 0) return 0;
+    const float pc = coat_probability(wo);
+    return pc * ggx_vndf_pdf_wi(wo, wi, coat_alpha_) + (1 - pc) * base_pdf(wo, wi);
 }
 
 }  // namespace dynsky

@@ -25,6 +25,11 @@ class MetalRoughBsdf {
     MetalRoughBsdf(const Color& base_color, float metallic, float roughness, float specular = 1.0f,
                    float transmission = 0.0f);
 
+    // KHR_materials_clearcoat: a dielectric layer (F0 0.04, GGX of its own roughness) over the whole
+    // BSDF above, of strength `factor`; the layer below receives and returns 1 - the coat's albedo
+    // each way. 0 (the default): no coat, and every result bitwise as without it. Before set_wo.
+    void set_clearcoat(float factor, float roughness);
+
     // Thin-walled transmission: the light arriving along -wo that passes straight through the
     // surface (a null-scattering event for the integrator, not part of eval): the dielectric's
     // share, what its specular lobe does not reflect towards wo (1 - E(wo)), times transmission,
@@ -53,6 +58,12 @@ class MetalRoughBsdf {
     static float ggx_vndf_pdf_wi(const Vec3& wo, const Vec3& wi, float alpha);
 
   private:
+    // The BSDF without the clearcoat.
+    Color base_eval(const Vec3& wo, const Vec3& wi) const;
+    float base_pdf(const Vec3& wo, const Vec3& wi) const;
+    float coat_albedo(float mu) const;  // coat_ x E_c(mu): what the clearcoat's lobe reflects
+    float coat_probability(const Vec3& wo) const;
+    float coat_probability_for(const Vec3& wo, float e_coat) const;
     float specular_albedo(float mu) const;  // specular_ x E(mu): what the specular lobe reflects
     float specular_probability_for(const Vec3& wo, float e_spec) const;
 
@@ -61,6 +72,8 @@ class MetalRoughBsdf {
     float e_avg_ = 0;  // specular_ x the lobe's cosine-weighted mean albedo
     // set_wo's cache: wo.z(), specular_albedo(wo.z()) and the lobe probability (valid: cached_wo_z_ > 0).
     float cached_wo_z_ = -1, cached_e_o_ = 0, cached_ps_ = 0;
+    float coat_ = 0, coat_roughness_ = 0, coat_alpha_ = 1;  // set_clearcoat
+    float cached_e_coat_ = 0, cached_pc_ = 0;
 };
 
 }  // namespace dynsky

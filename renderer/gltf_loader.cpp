@@ -56,9 +56,9 @@ constexpr size_t kZeroAccessorSlack = size_t(1) << 20;
 // Extensions whose meaning the loader fully implements (KHR_mesh_quantization only widens the
 // accessor types allowed for attributes, which the accessor reader handles anyway).
 const std::set<std::string>& supported_extensions() {
-    static const std::set<std::string> s = {"KHR_texture_transform", "KHR_materials_emissive_strength",
-                                            "KHR_materials_transmission", "EXT_mesh_gpu_instancing",
-                                            "KHR_mesh_quantization"};
+    static const std::set<std::string> s = {"KHR_texture_transform",      "KHR_materials_emissive_strength",
+                                            "KHR_materials_transmission", "KHR_materials_clearcoat",
+                                            "EXT_mesh_gpu_instancing",    "KHR_mesh_quantization"};
     return s;
 }
 
@@ -130,6 +130,24 @@ std::string percent_decoded(const std::string& uri) {
         }
     }
     return out;
+}
+
+// The size an encoded image's header declares: a PNG's IHDR read directly (stb gives up on
+// headers beyond its own limit, which then went unchecked to libpng: a 16385^2 PNG of zeros took
+// 5.4 GB), anything else through stb. False when it cannot tell.
+bool image_header_size(const unsigned char* b, size_t n, long long* width, long long* height) {
+    static const unsigned char png[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    if (n >= 24 && std::memcmp(b, png, 8) == 0) {
+        const auto be32 = [&](size_t at) {
+            return (uint32_t(b[at]) << 24) | (uint32_t(b[at + 1]) << 16) | (uint32_t(b[at + 2]) << 8) | b[at + 3];
+        };
+        *width = be32(16), *height = be32(20);
+        return true;
+    }
+    int w = 0, h = 0, c = 0;
+    if (n > size_t(std::numeric_limits<int>::max()) || !stbi_info_from_memory(b, int(n), &w, &h, &c)) return false;
+    *width = w, *height = h;
+    return true;
 }
 
 // A PNG decoded to RGBA in [0, 1] (8- or 16-bit; grey, grey + alpha, palette, RGB, RGBA): "" or why not.
@@ -827,6 +845,8 @@ class GltfLoader {
                 out.specular = clamp(float(number_or(member(*sp, "specularFactor"), 1.0)), 0.0f, 1.0f);
             if (const tg::Value* tr = extension(m.extensions, "KHR_materials_transmission"))
                 read_transmission(*tr, &out, what);
+            if (const tg::Value* cc = extension(m.extensions, "KHR_materials_clearcoat"))
+                read_clearcoat(*cc, &out, what);
             if (m.alphaMode == "MASK") out.alpha_mode = AlphaMode::Mask;
             else if (m.alphaMode == "BLEND") out.alpha_mode = AlphaMode::Blend;
             else if (m.alphaMode != "OPAQUE" && !m.alphaMode.empty())
@@ -837,26 +857,51 @@ class GltfLoader {
         }
     }
 
+    // A factor of an extension in [0, 1] (absent: `fallback`), refused naming it otherwise.
+    double extension_factor(const tg::Value& ext, const char* key, double fallback, const std::string& what,
+                            const char* extension_name) {
+        const tg::Value* v = member(ext, key);
+        if (!v) return fallback;
+        const double x = v->IsNumber() ? v->GetNumberAsDouble() : std::nan("");
+        if (!(x >= 0 && x <= 1))
+            fail(what + ": " + extension_name + " " + key + " " +
+                 (v->IsNumber() ? number_text(x) : std::string("is not a number")) + " is outside [0, 1]");
+        return x;
+    }
+
+    // A textureInfo object inside an extension ({"index", "texCoord", "extensions"}) into a slot.
+    void read_extension_slot(const tg::Value& ext, const char* key, TextureSlot* slot, const std::string& what) {
+        const tg::Value* info = member(ext, key);
+        if (!info || !info->IsObject()) return;
+        const tg::Value* index = member(*info, "index");
+        if (!index || !index->IsNumber()) fail(what + ": " + key + " has no texture index");
+        tg::ExtensionMap extensions;
+        if (const tg::Value* e = member(*info, "extensions"); e && e->IsObject())
+            for (const std::string& k : e->Keys()) extensions[k] = e->Get(k);
+        const tg::Value* texcoord = member(*info, "texCoord");
+        read_slot(index->GetNumberAsInt(), texcoord && texcoord->IsNumber() ? texcoord->GetNumberAsInt() : 0,
+                  extensions, false, 1.0f, slot, what + " " + key);
+    }
+
+    // KHR_materials_clearcoat: clearcoatFactor and clearcoatRoughnessFactor in [0, 1], their textures
+    // (R and G). clearcoatNormalTexture is not read: the coat takes the surface's own normal.
+    void read_clearcoat(const tg::Value& ext, Material* out, const std::string& what) {
+        const char* name = "KHR_materials_clearcoat";
+        out->clearcoat = float(extension_factor(ext, "clearcoatFactor", 0.0, what, name));
+        out->clearcoat_roughness = float(extension_factor(ext, "clearcoatRoughnessFactor", 0.0, what, name));
+        read_extension_slot(ext, "clearcoatTexture", &out->clearcoat_texture, what);
+        read_extension_slot(ext, "clearcoatRoughnessTexture", &out->clearcoat_roughness_texture, what);
+        if (out->clearcoat > 0 && member(ext, "clearcoatNormalTexture"))
+            warn(what +
+                 ": KHR_materials_clearcoat clearcoatNormalTexture is not read: the coat follows the "
+                 "surface's own normal");
+    }
+
     // KHR_materials_transmission: transmissionFactor in [0, 1] and transmissionTexture (R, linear).
     // Rendered thin-walled and sharp (bsdf.h): a rough glass is seen through as a clear one.
     void read_transmission(const tg::Value& ext, Material* out, const std::string& what) {
-        const tg::Value* factor = member(ext, "transmissionFactor");
-        const double t = factor ? (factor->IsNumber() ? factor->GetNumberAsDouble() : std::nan("")) : 0.0;
-        if (!(t >= 0 && t <= 1))
-            fail(what + ": KHR_materials_transmission transmissionFactor " +
-                 (factor->IsNumber() ? number_text(t) : std::string("is not a number")) + " is outside [0, 1]");
-        out->transmission = float(t);
-        if (const tg::Value* info = member(ext, "transmissionTexture"); info && info->IsObject()) {
-            const tg::Value* index = member(*info, "index");
-            if (!index || !index->IsNumber())
-                fail(what + ": KHR_materials_transmission transmissionTexture has no texture index");
-            tg::ExtensionMap extensions;
-            if (const tg::Value* e = member(*info, "extensions"); e && e->IsObject())
-                for (const std::string& key : e->Keys()) extensions[key] = e->Get(key);
-            const tg::Value* texcoord = member(*info, "texCoord");
-            read_slot(index->GetNumberAsInt(), texcoord && texcoord->IsNumber() ? texcoord->GetNumberAsInt() : 0,
-                      extensions, false, 1.0f, &out->transmission_texture, what + " transmissionTexture");
-        }
+        out->transmission = float(extension_factor(ext, "transmissionFactor", 0.0, what, "KHR_materials_transmission"));
+        read_extension_slot(ext, "transmissionTexture", &out->transmission_texture, what);
         if (out->transmission > 0 && out->roughness > 0.2f)
             warn(what + ": rough transmission (roughness " + number_text(out->roughness) +
                  ") is rendered as clear glass: what lies behind is seen sharp, not blurred");
@@ -929,9 +974,10 @@ class GltfLoader {
             double texels = 0, largest = 0;
             int largest_image = -1;
             for (size_t k = 0; k < images.size(); ++k) {
-                int w = 0, h = 0, c = 0;
-                if (encoded[k].second <= size_t(std::numeric_limits<int>::max()) &&
-                    stbi_info_from_memory(encoded[k].first, int(encoded[k].second), &w, &h, &c)) {
+                long long w = 0, h = 0;
+                // One beyond the per-image limits is refused with its own message when it is decoded.
+                if (image_header_size(encoded[k].first, encoded[k].second, &w, &h) &&
+                    image_size_problem(w, h, 4).empty()) {
                     texels += double(w) * h;
                     if (double(w) * h > largest) largest = double(w) * h, largest_image = images[k];
                 }
@@ -953,9 +999,8 @@ class GltfLoader {
         std::vector<Decoded> decoded(images.size());
         tbb::parallel_for(size_t(0), images.size(), [&](size_t k) {
             // The size in the header decides the allocation: check it before stb decodes.
-            int header_w = 0, header_h = 0, header_c = 0;
-            if (encoded[k].second <= size_t(std::numeric_limits<int>::max()) &&
-                stbi_info_from_memory(encoded[k].first, int(encoded[k].second), &header_w, &header_h, &header_c)) {
+            long long header_w = 0, header_h = 0;
+            if (image_header_size(encoded[k].first, encoded[k].second, &header_w, &header_h)) {
                 std::string problem = image_size_problem(header_w, header_h, 4);
                 if (!problem.empty()) {
                     decoded[k].error = problem;

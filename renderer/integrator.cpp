@@ -181,6 +181,7 @@ Color PathIntegrator::transmittance(const Ray& shadow_ray, RenderStats* stats) c
         if (m.transmission > 0) {
             const ShadingPoint sp = evaluate_material(accel_.scene(), hit, -ray.direction.normalized());
             MetalRoughBsdf bsdf(sp.base_color, sp.metallic, sp.roughness, sp.specular, sp.transmission);
+            bsdf.set_clearcoat(sp.clearcoat, sp.clearcoat_roughness);
             through = bsdf.transmitted(sp.to_local(-ray.direction.normalized()));
         }
         if (m.alpha_mode == AlphaMode::Opaque) {
@@ -272,12 +273,16 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
 
         // Filter Glossy (Cycles): after a bounce of pdf p, roughen to GGX alpha >= sqrt(1 - p / R) / 2,
         // so a sharp reflection seen through a rough one does not carry the sun as a firefly.
-        float roughness = sp.roughness;
+        float roughness = sp.roughness, coat_roughness = sp.clearcoat_roughness;
         if (settings_.filter_glossy > 0) {
             float blur_pdf = min_pdf / settings_.filter_glossy;
-            if (blur_pdf < 1) roughness = std::max(roughness, std::sqrt(0.5f * std::sqrt(1 - blur_pdf)));
+            if (blur_pdf < 1) {
+                const float floor = std::sqrt(0.5f * std::sqrt(1 - blur_pdf));
+                roughness = std::max(roughness, floor), coat_roughness = std::max(coat_roughness, floor);
+            }
         }
         MetalRoughBsdf bsdf(sp.base_color, sp.metallic, roughness, sp.specular, sp.transmission);
+        if (sp.clearcoat > 0) bsdf.set_clearcoat(sp.clearcoat, coat_roughness);
         Vec3 wo = sp.to_local(-ray.direction.normalized());
         if (wo.z() <= 0) break;
         bsdf.set_wo(wo);

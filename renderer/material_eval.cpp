@@ -18,6 +18,11 @@ ShadingPoint evaluate_material(const Scene& scene, const SurfaceHit& hit, const 
     }
     sp.transmission = m.transmission;
     if (m.transmission > 0 && m.transmission_texture.present()) sp.transmission *= tex(m.transmission_texture).x();
+    if (m.clearcoat > 0) {
+        sp.clearcoat = m.clearcoat, sp.clearcoat_roughness = m.clearcoat_roughness;
+        if (m.clearcoat_texture.present()) sp.clearcoat *= tex(m.clearcoat_texture).x();
+        if (m.clearcoat_roughness_texture.present()) sp.clearcoat_roughness *= tex(m.clearcoat_roughness_texture).y();
+    }
     sp.emission = m.emissive;
     if (m.emissive_texture.present() && (m.emissive > 0).any())
         sp.emission *= tex(m.emissive_texture).head<3>().array();

@@ -30,7 +30,7 @@ enum class AlphaMode { Opaque, Mask, Blend };
 inline constexpr double kMaxSceneCoordinate = 1e8;  // metres
 
 // glTF 2.0 metallic-roughness material (core spec, plus KHR_materials_emissive_strength, _specular
-// (its factor) and _transmission).
+// (its factor), _transmission and _clearcoat).
 struct Material {
     std::string name;
     Color base_color = Color::Ones();
@@ -44,10 +44,14 @@ struct Material {
     // scattering diffusely (bsdf.h MetalRoughBsdf::transmitted).
     float transmission = 0.0f;
     TextureSlot transmission_texture;  // linear R
-    TextureSlot normal_texture;        // linear, tangent space, scale in slot.scale
-    TextureSlot occlusion_texture;     // linear R, strength in slot.scale
-    Color emissive = Color::Zero();    // already multiplied by emissive_strength
-    TextureSlot emissive_texture;      // sRGB
+    // KHR_materials_clearcoat: a clear dielectric layer over the material (bsdf.h set_clearcoat).
+    float clearcoat = 0.0f, clearcoat_roughness = 0.0f;
+    TextureSlot clearcoat_texture;            // linear R x clearcoat
+    TextureSlot clearcoat_roughness_texture;  // linear G x clearcoat_roughness
+    TextureSlot normal_texture;               // linear, tangent space, scale in slot.scale
+    TextureSlot occlusion_texture;            // linear R, strength in slot.scale
+    Color emissive = Color::Zero();           // already multiplied by emissive_strength
+    TextureSlot emissive_texture;             // sRGB
     AlphaMode alpha_mode = AlphaMode::Opaque;
     float alpha_cutoff = 0.5f;
     bool double_sided = false;

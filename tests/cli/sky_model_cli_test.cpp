@@ -36,6 +36,13 @@ std::string small_sky(const std::string& dir, int n) {
     return path;
 }
 
+std::string read_text(const std::string& path) {
+    std::ifstream f(path);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+}
+
 TEST(SkyModelCli, PredictWritesStepsAndStats) {
     const std::string dir = test::temp_dir("predict");
     const std::string in = small_sky(dir, 48);
@@ -103,7 +110,9 @@ TEST(SkyModelCli, SkiesInOtherUnitsMoveAsAtScaleAndKeepTheirUnits) {
                                      "--steps 2 --out " +
                                      dir + "/" + name + "_out"));
         ASSERT_EQ(r.exit_code, 0) << r.output;
-        if (factor != 1.0f) EXPECT_NE(r.output.find("clear-sky model's radiance"), std::string::npos) << r.output;
+        if (factor != 1.0f) {
+            EXPECT_NE(r.output.find("clear-sky model's radiance"), std::string::npos) << r.output;
+        }
         r = test::run_command(dynsky("animate builtin --sky " + dir + "/" + name +
                                      ".exr --model advect --duration 40 "
                                      "--fps 0.05 --res 16x9 --spp 2 --no-video -q --out " +
@@ -126,6 +135,25 @@ TEST(SkyModelCli, SkiesInOtherUnitsMoveAsAtScaleAndKeepTheirUnits) {
                                    std::abs(double(f.pixels[k]) / factor - frame.pixels[k]) / (1e-3 + frame.pixels[k]));
         EXPECT_LT(frame_worst, 1e-3) << name;  // animate's frame 20 s in (between the first two medium steps)
     }
+    // compare's clear reference is in the sky's units too (it was in the models' own: clear 914 against
+    // cloudy 0.914 lx/100 for a sky x 1e-3).
+    auto clear_illuminance = [&](const std::string& name) {
+        auto r = test::run_command(dynsky("compare builtin --sky " + dir + "/" + name +
+                                          ".exr --model advect "
+                                          "--duration 20 --chart-frames 2 --res 16x9 --spp 1 --chart-res 16x9 "
+                                          "--chart-spp 1 -q -o " +
+                                          dir + "/" + name + "_cmp"));
+        EXPECT_EQ(r.exit_code, 0) << r.output;
+        std::istringstream csv(read_text(dir + "/" + name + "_cmp/illuminance.csv"));
+        std::string header, row;
+        std::getline(csv, header), std::getline(csv, row);
+        const size_t a = row.find(','), b = row.find(',', a + 1);
+        return std::make_pair(std::stod(row.substr(a + 1, b - a - 1)), std::stod(row.substr(b + 1)));
+    };
+    const auto [clear1, cloudy1] = clear_illuminance("x1");
+    const auto [clear_tiny, cloudy_tiny] = clear_illuminance("tiny");
+    EXPECT_NEAR(cloudy_tiny / cloudy1, 1e-6, 1e-9);
+    EXPECT_NEAR(clear_tiny / cloudy_tiny, clear1 / cloudy1, 0.02 * clear1 / cloudy1);
     fs::remove_all(dir);
 }
 
@@ -162,12 +190,6 @@ std::string photo_folder(const std::string& dir, int count, std::vector<int> ski
     return dir;
 }
 
-std::string read_text(const std::string& path) {
-    std::ifstream f(path);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
-}
 
 // The PSNR of each (resolution, horizon, method) in an evaluation's CSV.
 std::map<std::string, double> evaluation_psnr(const std::string& csv_path) {

@@ -86,6 +86,56 @@ TEST(MetalRoughBsdf, TransmissionPassesWhatTheSpecularLobeDoesNotReflect) {
                 0.5f * MetalRoughBsdf(Color::Ones(), 0.0f, 0.2f, 1.0f, 1.0f).transmitted(wo)[0], 1e-6f);
 }
 
+// KHR_materials_clearcoat: over a black Lambertian the coat alone reflects what a bare dielectric of
+// its roughness reflects with its specular lobe (the same F0 0.04 GGX); over any base the layer never
+// reflects more than it receives, a full coat over white at least its own albedo; sampling draws the
+// pdf it reports and the layered BSDF stays reciprocal. A coat of 0 changes nothing, bit for bit.
+TEST(MetalRoughBsdf, ClearcoatLayersEnergySafelyOverTheBase) {
+    for (float coat_roughness : {0.1f, 0.4f})
+        for (float theta : {0.0f, 0.8f, 1.3f}) {
+            const Vec3 wo = dir_from_theta(theta);
+            MetalRoughBsdf coated_black(Color::Zero(), 0.0f, 1.0f, 0.0f);
+            coated_black.set_clearcoat(1.0f, coat_roughness);
+            const MetalRoughBsdf bare(Color::Zero(), 0.0f, coat_roughness);
+            const float coat = albedo_quadrature(coated_black, wo, 800)[0];
+            EXPECT_NEAR(coat, albedo_quadrature(bare, wo, 800)[0], 2e-3f) << coat_roughness << " " << theta;
+            for (float metallic : {0.0f, 1.0f}) {
+                MetalRoughBsdf white(Color::Ones(), metallic, 0.6f);
+                white.set_clearcoat(1.0f, coat_roughness);
+                const Color a = albedo_quadrature(white, wo, 800);
+                EXPECT_LE(a.maxCoeff(), 1.0f + 5e-3f);
+                EXPECT_GE(a.minCoeff(), coat);
+            }
+        }
+    MetalRoughBsdf layered(Color(0.8f, 0.3f, 0.1f), 0.2f, 0.7f);
+    layered.set_clearcoat(0.8f, 0.15f);
+    Rng rng(5, 9);
+    for (int k = 0; k < 1000; ++k) {
+        Vec3 a = sample_cosine_hemisphere(rng.uniform2()), b = sample_cosine_hemisphere(rng.uniform2());
+        Color f1 = layered.eval(a, b), f2 = layered.eval(b, a);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(f1[c], f2[c], 1e-4f * std::max(1.0f, f1[c]));
+    }
+    const Vec3 wo = dir_from_theta(0.7f);
+    EXPECT_LE(pdf_integral(layered, wo), 1.0 + 5e-3);
+    const Color exact = albedo_quadrature(layered, wo, 1000);
+    const int n = 400000;
+    Eigen::Array3d sum = Eigen::Array3d::Zero(), sum2 = Eigen::Array3d::Zero();
+    for (int k = 0; k < n; ++k) {
+        BsdfSample s;
+        float ul = rng.uniform();
+        Vec2 u = rng.uniform2();
+        if (!layered.sample(wo, ul, u, &s)) continue;
+        EXPECT_NEAR(s.pdf, layered.pdf(wo, s.wi), 1e-3f * s.pdf);
+        Eigen::Array3d v = (s.f * (s.wi.z() / s.pdf)).cast<double>();
+        sum += v, sum2 += v * v;
+    }
+    Eigen::Array3d mean = sum / n, se = ((sum2 / n - mean * mean) / n).sqrt();
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(mean[c], exact[c], 4 * se[c] + 2e-3);
+    MetalRoughBsdf none(Color(0.8f, 0.3f, 0.1f), 0.2f, 0.7f), zero(Color(0.8f, 0.3f, 0.1f), 0.2f, 0.7f);
+    zero.set_clearcoat(0.0f, 0.5f);
+    EXPECT_TRUE(none.eval(wo, dir_from_theta(-0.3f)).isApprox(zero.eval(wo, dir_from_theta(-0.3f)), 0.0f));
+}
+
 TEST(MetalRoughBsdf, PdfIntegratesToAtMostOne) {
     for (float metallic : {0.0f, 1.0f})
         for (float roughness : {0.3f, 0.8f})

@@ -261,14 +261,22 @@ TEST(GltfLoader, EmissiveStrengthMultipliesTheEmissiveFactor) {
     }
 }
 
-TEST(GltfLoader, ClearCoatTestSharesTexturesAndWarnsAboutClearcoat) {
+TEST(GltfLoader, ClearCoatTestReadsItsCoatsAndSharesTextures) {
     DYNSKY_REQUIRE_SHARED();
     const Scene& s = inspected_scene("ClearCoatTest/ClearCoatTest.glb");
-    EXPECT_TRUE(has_warning_containing(s, "KHR_materials_clearcoat"));
+    // The coats are read; only the coat's own normal map is not (said once per material).
+    EXPECT_FALSE(has_warning_containing(s, "'KHR_materials_clearcoat' is not supported"));
+    EXPECT_TRUE(has_warning_containing(s, "clearcoatNormalTexture is not read"));
+    EXPECT_FLOAT_EQ(material_named(s, "Simple_Coated")->clearcoat, 1.0f);
+    EXPECT_FLOAT_EQ(material_named(s, "Simple_Coated")->clearcoat_roughness, 0.03f);
+    EXPECT_FLOAT_EQ(material_named(s, "Simple_Base")->clearcoat, 0.0f);
+    EXPECT_TRUE(material_named(s, "Partial_Coated")->clearcoat_texture.present());
+    EXPECT_TRUE(material_named(s, "RoughVariations_Coated")->clearcoat_roughness_texture.present());
     // 10 glTF textures over 6 images; the core slots use images 1 (base colour), 2 (metal-rough),
-    // 3 and 4 (normal maps, image 3 through four different glTF textures) and 5 (emissive):
-    // 5 distinct (image, sampler, colour space) combinations.
-    EXPECT_EQ(s.textures.size(), 5u);
+    // 3 and 4 (normal maps, image 3 through four different glTF textures) and 5 (emissive), the
+    // coats image 0 (linear) and the metal-rough image again: 6 distinct (image, sampler, colour
+    // space) combinations.
+    EXPECT_EQ(s.textures.size(), 6u);
     int shared = material_named(s, "BaseNorm_Base")->normal_texture.texture;
     EXPECT_GE(shared, 0);
     for (const char* name : {"BaseNorm_Coated", "SharedNorm_Base", "SharedNorm_Coating"})
@@ -484,9 +492,9 @@ TEST(GltfLoader, TexturesAreSharedPerImageSamplerAndColourSpace) {
         "\"metallicRoughnessTexture\":{\"index\":1," +
         transform +
         "}},\"alphaMode\":\"BLEND\"}],"
-        "\"extensionsUsed\":[\"KHR_texture_transform\",\"KHR_materials_clearcoat\"]";
+        "\"extensionsUsed\":[\"KHR_texture_transform\",\"KHR_materials_sheen\"]";
     Scene s = load_gltf(g.write(dir, "textures", body));
-    EXPECT_TRUE(has_warning_containing(s, "KHR_materials_clearcoat"));
+    EXPECT_TRUE(has_warning_containing(s, "KHR_materials_sheen"));
     ASSERT_EQ(s.materials.size(), 2u);
     const Material &a = s.materials[0], &b = s.materials[1];
     // (image 0, sampler 0, sRGB): a.baseColor and a.emissive (textures 0 and 1 are identical);
@@ -690,6 +698,17 @@ TEST(GltfLoader, TexturesBeyondTheMachinesMemoryAreRefusedBeforeDecoding) {
     EXPECT_NE(e.find("huge.gltf"), std::string::npos) << e;
     EXPECT_NE(e.find("1024 texture image(s) hold 6.87e+10 texels"), std::string::npos) << e;
     EXPECT_NE(e.find("of memory allows"), std::string::npos) << e;
+    // One PNG of 16385^2: beyond stb's header reader, it went unchecked to libpng (5.4 GB for zeros).
+    write_bytes(dir + "/t0.png",
+                std::string("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0\x40\x01\0\0\x40\x01\x08\x06\0\0\0\0\0\0\0", 33));
+    const std::string one = load_error(
+        g.write(dir, "one",
+                one_node_scene("{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) +
+                                   ",\"TEXCOORD_0\":" + std::to_string(uv) + "},\"material\":0}]}",
+                               "\"images\":[{\"uri\":\"t0.png\"}],\"textures\":[{\"source\":0}],\"materials\":[{"
+                               "\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}]")));
+    EXPECT_NE(one.find("16385 x 16385"), std::string::npos) << one;
+    EXPECT_NE(one.find("each side at most 16384"), std::string::npos) << one;
     fs::remove_all(dir);
 }
 
