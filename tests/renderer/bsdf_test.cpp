@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
+
 #include "renderer/sampling.h"
 
 namespace dynsky {
@@ -29,6 +31,26 @@ double pdf_integral(const MetalRoughBsdf& bsdf, const Vec3& wo, int n = 400) {
             sum += bsdf.pdf(wo, Vec3(r * std::cos(phi), r * std::sin(phi), z));
         }
     return sum * 2 * kPiD / (double(n) * 2 * n);
+}
+
+// E[f cos / pdf] over sampled directions equals the quadrature albedo iff the sampler draws from
+// the pdf it reports.
+void expect_sampled_estimate_matches_quadrature(const MetalRoughBsdf& bsdf, const Vec3& wo, Rng* rng,
+                                                const std::string& what) {
+    const Color exact = albedo_quadrature(bsdf, wo, 1000);
+    const int n = 400000;
+    Eigen::Array3d sum = Eigen::Array3d::Zero(), sum2 = Eigen::Array3d::Zero();
+    for (int k = 0; k < n; ++k) {
+        BsdfSample s;
+        float ul = rng->uniform();
+        Vec2 u = rng->uniform2();
+        if (!bsdf.sample(wo, ul, u, &s)) continue;
+        EXPECT_NEAR(s.pdf, bsdf.pdf(wo, s.wi), 1e-3f * s.pdf) << what;
+        Eigen::Array3d v = (s.f * (s.wi.z() / s.pdf)).cast<double>();
+        sum += v, sum2 += v * v;
+    }
+    Eigen::Array3d mean = sum / n, se = ((sum2 / n - mean * mean) / n).sqrt();
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(mean[c], exact[c], 4 * se[c] + 2e-3) << what;
 }
 
 TEST(MetalRoughBsdf, WhiteLambertianHasAlbedoOne) {
@@ -117,20 +139,7 @@ TEST(MetalRoughBsdf, ClearcoatLayersEnergySafelyOverTheBase) {
     }
     const Vec3 wo = dir_from_theta(0.7f);
     EXPECT_LE(pdf_integral(layered, wo), 1.0 + 5e-3);
-    const Color exact = albedo_quadrature(layered, wo, 1000);
-    const int n = 400000;
-    Eigen::Array3d sum = Eigen::Array3d::Zero(), sum2 = Eigen::Array3d::Zero();
-    for (int k = 0; k < n; ++k) {
-        BsdfSample s;
-        float ul = rng.uniform();
-        Vec2 u = rng.uniform2();
-        if (!layered.sample(wo, ul, u, &s)) continue;
-        EXPECT_NEAR(s.pdf, layered.pdf(wo, s.wi), 1e-3f * s.pdf);
-        Eigen::Array3d v = (s.f * (s.wi.z() / s.pdf)).cast<double>();
-        sum += v, sum2 += v * v;
-    }
-    Eigen::Array3d mean = sum / n, se = ((sum2 / n - mean * mean) / n).sqrt();
-    for (int c = 0; c < 3; ++c) EXPECT_NEAR(mean[c], exact[c], 4 * se[c] + 2e-3);
+    expect_sampled_estimate_matches_quadrature(layered, wo, &rng, "clearcoat");
     MetalRoughBsdf none(Color(0.8f, 0.3f, 0.1f), 0.2f, 0.7f), zero(Color(0.8f, 0.3f, 0.1f), 0.2f, 0.7f);
     zero.set_clearcoat(0.0f, 0.5f);
     EXPECT_TRUE(none.eval(wo, dir_from_theta(-0.3f)).isApprox(zero.eval(wo, dir_from_theta(-0.3f)), 0.0f));
@@ -149,29 +158,13 @@ TEST(MetalRoughBsdf, PdfIntegratesToAtMostOne) {
 }
 
 TEST(MetalRoughBsdf, SampledEstimateMatchesQuadrature) {
-    // E[f cos / pdf] over sampled directions equals the quadrature albedo iff the sampler draws
-    // from the pdf it reports.
     for (float metallic : {0.0f, 1.0f})
         for (float roughness : {0.2f, 0.6f}) {
             MetalRoughBsdf bsdf(Color(0.9f, 0.6f, 0.3f), metallic, roughness);
-            Vec3 wo = dir_from_theta(0.9f);
-            Color exact = albedo_quadrature(bsdf, wo, 1000);
             Rng rng(17, 3);
-            const int n = 400000;
-            Eigen::Array3d sum = Eigen::Array3d::Zero(), sum2 = Eigen::Array3d::Zero();
-            for (int k = 0; k < n; ++k) {
-                BsdfSample s;
-                float ul = rng.uniform();
-                Vec2 u = rng.uniform2();
-                if (!bsdf.sample(wo, ul, u, &s)) continue;
-                EXPECT_NEAR(s.pdf, bsdf.pdf(wo, s.wi), 1e-3f * s.pdf);
-                Eigen::Array3d v = (s.f * (s.wi.z() / s.pdf)).cast<double>();
-                sum += v, sum2 += v * v;
-            }
-            Eigen::Array3d mean = sum / n, se = ((sum2 / n - mean * mean) / n).sqrt();
-            for (int c = 0; c < 3; ++c)
-                EXPECT_NEAR(mean[c], exact[c], 4 * se[c] + 2e-3)
-                    << "metallic " << metallic << " roughness " << roughness;
+            expect_sampled_estimate_matches_quadrature(bsdf, dir_from_theta(0.9f), &rng,
+                                                       "metallic " + std::to_string(metallic) + " roughness " +
+                                                           std::to_string(roughness));
         }
 }
 
