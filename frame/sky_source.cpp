@@ -158,19 +158,12 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
                                                     previous_file);
         input.time_seconds = 0;
         if (input.source.empty()) input.source = sky_file;
-        scale = measure_radiance_scale(input);
-        if (scale.apply) {
+        scale = bring_to_model_scale(&input, &motion.previous);
+        if (scale.apply)
             std::fprintf(stderr,
                          "dynsky: note: %s is %s: its clouds are moved at the model's scale and its frames given "
                          "back in its own units\n",
                          sky_file.c_str(), scale.describe().c_str());
-            scale_radiance(&input, 1 / scale.factor);
-            if (motion.previous) {
-                SkyImage previous = *motion.previous;
-                scale_radiance(&previous, 1 / scale.factor);
-                motion.previous = std::make_shared<const SkyImage>(std::move(previous));
-            }
-        }
     }
     std::string model_name = m.model;
     if (model_name != "auto" && model_name != "flow" && model_name != "procedural" && model_name != "advect" &&

@@ -54,20 +54,12 @@ void write_prediction(const PredictionOptions& o) {
     }
     // A sky in other units than the models' (motion/radiance_scale.h) moves divided by its scale; every
     // step is written multiplied back.
-    const RadianceScale scale = measure_radiance_scale(sky);
-    if (scale.apply) {
-        if (!o.quiet)
-            std::fprintf(stderr,
-                         "dynsky: note: %s is %s: its clouds are moved at the model's scale and the steps written "
-                         "in its own units\n",
-                         o.in.c_str(), scale.describe().c_str());
-        scale_radiance(&sky, 1 / scale.factor);
-        if (motion.previous) {
-            SkyImage previous = *motion.previous;
-            scale_radiance(&previous, 1 / scale.factor);
-            motion.previous = std::make_shared<const SkyImage>(std::move(previous));
-        }
-    }
+    const RadianceScale scale = bring_to_model_scale(&sky, &motion.previous);
+    if (scale.apply && !o.quiet)
+        std::fprintf(stderr,
+                     "dynsky: note: %s is %s: its clouds are moved at the model's scale and the steps written "
+                     "in its own units\n",
+                     o.in.c_str(), scale.describe().c_str());
     const NetworkFormParams form = advect ? advect->info().form : paper->info().form;
     const int n = advect ? advect->info().resolution : paper->info().resolution;
     const double dt = advect ? advect->info().dt : paper->info().dt;

@@ -82,4 +82,16 @@ void scale_radiance(SkyImage* sky, double factor) {
     for (float& v : sky->rgb) v *= f;
 }
 
+RadianceScale bring_to_model_scale(SkyImage* sky, std::shared_ptr<const SkyImage>* previous) {
+    const RadianceScale scale = measure_radiance_scale(*sky);
+    if (!scale.apply) return scale;
+    scale_radiance(sky, 1 / scale.factor);
+    if (*previous) {  // the same units as the sky: one factor for both
+        SkyImage p = **previous;
+        scale_radiance(&p, 1 / scale.factor);
+        *previous = std::make_shared<const SkyImage>(std::move(p));
+    }
+    return scale;
+}
+
 }  // namespace dynsky

@@ -19,6 +19,7 @@
 // 0.85-1.15: they move as before.
 #pragma once
 
+#include <memory>
 #include <string>
 
 #include "sky/hdr_recovery.h"
@@ -47,5 +48,10 @@ RadianceScale measure_radiance_scale(const SkyImage& sky, const RadianceScalePar
 
 // Every pixel times `factor` (the sun and time kept).
 void scale_radiance(SkyImage* sky, double factor);
+
+// What `sky predict` and the timeline do with the sky they move and its previous frame (if any):
+// measures the sky's scale and, when it is to be applied, divides both by it. The caller gives the
+// results back multiplied by the returned factor.
+RadianceScale bring_to_model_scale(SkyImage* sky, std::shared_ptr<const SkyImage>* previous);
 
 }  // namespace dynsky
