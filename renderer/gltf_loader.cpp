@@ -22,6 +22,7 @@
 #include <type_traits>
 #include <unistd.h>
 
+#include "renderer/gltf_json_check.h"
 #include "renderer/mesh_attributes.h"
 #include "util/error.h"
 #include "util/image.h"
@@ -504,7 +505,13 @@ class GltfLoader {
         if (size_t depth = json_depth(json, json_size); depth > kMaxJsonDepth)
             fail("JSON nested " + std::to_string(depth) + " levels deep, more than the " +
                  std::to_string(kMaxJsonDepth) + " dynsky reads (a corrupt or hostile file?)");
-        check_uris(json, json_size);
+        {
+            const nlohmann::json document = nlohmann::json::parse(json, json + json_size, nullptr, false);
+            check_uris(document);
+            GltfJsonReport report = check_gltf_json(document);
+            for (const std::string& w : report.warnings) warn(w);
+            if (!report.error.empty()) fail(report.error);
+        }
 
         namespace fs = std::filesystem;
         std::string base_dir = fs::path(path_).parent_path().string();
@@ -554,8 +561,7 @@ class GltfLoader {
     }
 
     // Every buffer and image URI, before tinygltf opens any: relative and inside the asset's folder.
-    void check_uris(const char* json, size_t size) const {
-        nlohmann::json j = nlohmann::json::parse(json, json + size, nullptr, false);
+    void check_uris(const nlohmann::json& j) const {
         if (!j.is_object()) return;  // tinygltf reports the syntax error
         for (const char* kind : {"buffers", "images"}) {
             auto list = j.find(kind);
@@ -1198,6 +1204,19 @@ class GltfLoader {
                      std::to_string(n));
             return f;
         };
+        // Core glTF UVs are floats or normalised integers; plain integers (texel-sized UVs that
+        // wrap thousands of times) need KHR_mesh_quantization, as for positions.
+        for (const char* uv_name : {"TEXCOORD_0", "TEXCOORD_1"}) {
+            const int a = attr(uv_name);
+            if (a < 0 || size_t(a) >= model_.accessors.size()) continue;
+            const tg::Accessor& acc = model_.accessors[size_t(a)];
+            const auto& used = model_.extensionsUsed;
+            if (acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT && !acc.normalized &&
+                std::find(used.begin(), used.end(), "KHR_mesh_quantization") == used.end())
+                fail(what + " " + uv_name + " has integer components that are not normalized (componentType " +
+                     std::to_string(acc.componentType) +
+                     ") but the file does not use KHR_mesh_quantization: glTF 2.0 UVs are floats or normalized");
+        }
         if (attr("TEXCOORD_0") >= 0)
             mesh->texcoords[0] = to_vectors<2>(read_matching("TEXCOORD_0", {TINYGLTF_TYPE_VEC2}));
         if (attr("TEXCOORD_1") >= 0)
@@ -1214,6 +1233,7 @@ class GltfLoader {
             if (size_t(p.material) >= scene_.materials.size())
                 fail(what + " refers to material " + std::to_string(p.material) + ", which does not exist");
             mesh->material = p.material;
+            warn_missing_uv_sets(*mesh, what);
         }
 
         if (attr("NORMAL") < 0) {
@@ -1387,14 +1407,30 @@ class GltfLoader {
             cam.ymag = float(ymag);
             if (c.orthographic.xmag > 0) cam.aspect_ratio = aspect_or_image(c.orthographic.xmag / ymag, "xmag / ymag");
         } else {
-            if (c.perspective.yfov > 0 && c.perspective.yfov < kPiD) cam.yfov = float(c.perspective.yfov);
+            // The range --fov allows (0.01 to 179.9 degrees): 1e-30 rad saw one texel's worth.
+            if (c.perspective.yfov >= 0.01 * kPiD / 180 && c.perspective.yfov <= 179.9 * kPiD / 180)
+                cam.yfov = float(c.perspective.yfov);
             else
-                warn("camera " + in_quotes(name) + ": invalid yfov " + number_text(c.perspective.yfov) +
-                     ", using the default");
+                warn("camera " + in_quotes(name) + ": yfov " + number_text(c.perspective.yfov) +
+                     " rad is outside 0.01 to 179.9 degrees, using the default");
             cam.aspect_ratio = c.perspective.aspectRatio > 0 ? aspect_or_image(c.perspective.aspectRatio, "aspectRatio")
                                                              : 0.0f;
         }
         cameras_.push_back({node.camera, node_index, std::move(cam)});
+    }
+
+    // A texture on a UV set the primitive lacks is read at UV (0, 0): one texel over the surface.
+    void warn_missing_uv_sets(const TriangleMesh& mesh, const std::string& what) {
+        const Material& m = scene_.materials[size_t(mesh.material)];
+        for (const TextureSlot* slot :
+             {&m.base_color_texture, &m.metallic_roughness_texture, &m.transmission_texture, &m.clearcoat_texture,
+              &m.clearcoat_roughness_texture, &m.normal_texture, &m.occlusion_texture, &m.emissive_texture}) {
+            if (!slot->present() || !mesh.texcoords[slot->texcoord].empty()) continue;
+            if (!missing_uv_warned_.insert({mesh.material, slot->texcoord}).second) continue;
+            warn(what + ": material " + in_quotes(m.name.empty() ? std::to_string(mesh.material) : m.name) +
+                 " maps a texture with TEXCOORD_" + std::to_string(slot->texcoord) +
+                 ", which the primitive does not have: the texture is read at UV (0, 0), one texel");
+        }
     }
 
     void traverse_nodes() {
@@ -1498,6 +1534,7 @@ class GltfLoader {
     std::vector<std::string> warnings_;
     std::vector<int> group_of_mesh_;
     std::map<TextureRequest, int> texture_of_request_;
+    std::set<std::pair<int, int>> missing_uv_warned_;  // (material, UV set) already said
     std::vector<TextureRequest> requests_;
     std::vector<NodeCamera> cameras_;
 };

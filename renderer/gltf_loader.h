@@ -8,10 +8,11 @@
 // perspective and orthographic cameras on nodes. Each glTF mesh becomes one MeshGroup, instanced by every node
 // that uses it (and by every EXT_mesh_gpu_instancing instance).
 // Supported extensions: KHR_texture_transform, KHR_materials_emissive_strength,
-// EXT_mesh_gpu_instancing, KHR_mesh_quantization.
-// Ignored with a warning: points and lines, orthographic cameras, skins, morph targets,
-// animations, and any other extension listed in extensionsUsed. One listed in
-// extensionsRequired that is not supported is an error.
+// KHR_materials_transmission (thin-walled), KHR_materials_clearcoat, KHR_materials_specular (its
+// factor), EXT_mesh_gpu_instancing, KHR_mesh_quantization.
+// Ignored with a warning: points and lines, skins, morph targets, animations, and any other
+// extension listed in extensionsUsed. One listed in extensionsRequired that is not supported is
+// an error. Values of the wrong JSON type are refused by their path (gltf_json_check.h).
 #pragma once
 
 #include <string>

@@ -303,12 +303,12 @@ TEST(GltfLoader, GlassBrokenWindowReadsTransmissionAndKeepsAlphaMask) {
 class MiniGltf {
   public:
     template <typename T>
-    int view(const std::vector<T>& data) {
+    int view(const std::vector<T>& data, const std::string& extra = "") {
         while (bin_.size() % 4) bin_.push_back('\0');
         size_t offset = bin_.size();
         bin_.append(reinterpret_cast<const char*>(data.data()), data.size() * sizeof(T));
         views_.push_back("{\"buffer\":0,\"byteOffset\":" + std::to_string(offset) +
-                         ",\"byteLength\":" + std::to_string(data.size() * sizeof(T)) + "}");
+                         ",\"byteLength\":" + std::to_string(data.size() * sizeof(T)) + extra + "}");
         return int(views_.size()) - 1;
     }
     int accessor(int view, int component_type, size_t count, const std::string& type, const std::string& extra = "") {
@@ -914,6 +914,119 @@ TEST(GltfLoader, ScenesThatWouldRenderNothingOrTheWrongThingAreRefused) {
     text.replace(text.find("\"2.0\""), 5, "\"3.0\"");
     write_bytes(dir + "/v3.gltf", text);
     EXPECT_NE(load_error(dir + "/v3.gltf").find("only glTF 2.x"), std::string::npos);
+    fs::remove_all(dir);
+}
+
+// tinygltf reads a value of the wrong JSON type as absent: a matrix of strings was identity, a
+// mesh index "0" gave "no triangles", a byteOffset of -12 was 0. Each is named by its path.
+TEST(GltfLoader, ValuesOfTheWrongTypeOrOutsideTheSpecAreNamedByTheirPath) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    const int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+    MiniGltf shifted_file = g, strided_file = g, packed_file = g;  // each bad accessor in its own file
+    const int shifted = shifted_file.accessor(shifted_file.view(quad_positions()), kFloat, 4, "VEC3",
+                                              ",\"byteOffset\":-12");
+    const int strided = strided_file.accessor(strided_file.view(quad_positions(), ",\"byteStride\":-12"), kFloat, 4,
+                                              "VEC3");
+    const int packed = packed_file.accessor(packed_file.view(quad_positions(), ",\"byteStride\":0"), kFloat, 4, "VEC3");
+    const int uv_int = g.accessor(g.view(std::vector<uint16_t>{0, 0, 1, 0, 1, 1, 0, 1}), kUShort, 4, "VEC2");
+    const int uv = g.accessor(g.view(std::vector<float>{0, 0, 1, 0, 1, 1, 0, 1}), kFloat, 4, "VEC2");
+    auto mesh = [](int p, const std::string& more = "") {
+        return "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(p) + more + "}}]}";
+    };
+    auto with_node = [&](const std::string& node) {
+        return "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0," + node + "}],\"meshes\":[" +
+               mesh(pos) + "]";
+    };
+    struct Case {
+        std::string name, body, expect;
+    };
+    const std::vector<Case> errors = {
+        {"matrix_strings", with_node("\"matrix\":[\"a\",0,0,0,0,1,0,0,0,0,1,0,0,0,0,1]"),
+         "nodes[0].matrix[0] is the string \"a\", not a number"},
+        {"matrix_projective", with_node("\"matrix\":[1,0,0,0.5,0,1,0,0,0,0,1,0,0,0,0,1]"),
+         "nodes[0].matrix has the bottom row (0.5, 0, 0, 1), not (0, 0, 0, 1)"},
+        {"rotation_zero", with_node("\"rotation\":[0,0,0,0]"), "nodes[0].rotation is (0, 0, 0, 0), not a rotation"},
+        {"mesh_string",
+         "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":\"0\"}],\"meshes\":[" + mesh(pos) + "]",
+         "nodes[0].mesh is the string \"0\", not an index"},
+        {"scene_negative",
+         "\"scene\":-1,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[" + mesh(pos) + "]",
+         "scene is -1; it must be at least 0"},
+
+        {"base_colour_short",
+         one_node_scene(mesh(pos),
+                        "\"materials\":[{\"pbrMetallicRoughness\":{"
+                        "\"baseColorFactor\":[1,1]}}]"),
+         "materials[0].pbrMetallicRoughness.baseColorFactor has 2 numbers, not 4"},
+        {"integer_uv", one_node_scene(mesh(pos, ",\"TEXCOORD_0\":" + std::to_string(uv_int))),
+         "TEXCOORD_0 has integer components that are not normalized"},
+    };
+    for (const Case& c : errors) {
+        std::string e = load_error(g.write(dir, c.name, c.body));
+        EXPECT_NE(e.find(c.name + ".gltf"), std::string::npos) << c.name << ": " << e;
+        EXPECT_NE(e.find(c.expect), std::string::npos) << c.name << ": " << e;
+    }
+    std::string e = load_error(shifted_file.write(dir, "offset_negative", one_node_scene(mesh(shifted))));
+    EXPECT_NE(e.find("accessors[1].byteOffset is -12; it must be at least 0"), std::string::npos) << e;
+    e = load_error(strided_file.write(dir, "stride_negative", one_node_scene(mesh(strided))));
+    EXPECT_NE(e.find("bufferViews[1].byteStride is -12"), std::string::npos) << e;
+    // asset.version as a number said "asset object not found".
+    std::string text = read_text(g.write(dir, "version", with_node("\"name\":\"n\"")));
+    text.replace(text.find("\"2.0\""), 5, "2.0");
+    write_bytes(dir + "/version.gltf", text);
+    EXPECT_NE(load_error(dir + "/version.gltf").find("asset.version is 2, not a string"), std::string::npos);
+
+    // What dynsky does not use, or reads leniently: a warning, and the value not used.
+    auto warned = [&](const std::string& name, const std::string& body, const std::string& expect) {
+        std::vector<std::string> notes;
+        Scene s = load_gltf(g.write(dir, name, body), &notes);
+        bool found = false;
+        for (const std::string& n : notes) found = found || n.find(expect) != std::string::npos;
+        EXPECT_TRUE(found) << name << ": no warning containing '" << expect << "'";
+        return s;
+    };
+    auto camera_scene = [&](const std::string& camera) {
+        return "\"scene\":0,\"scenes\":[{\"nodes\":[0,1]}],\"nodes\":[{\"mesh\":0},{\"camera\":0}],\"meshes\":[" +
+               mesh(pos) + "],\"cameras\":[" + camera + "]";
+    };
+    Scene a = warned("aspect0",
+                     camera_scene("{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.8,\"znear\":0.1,"
+                                  "\"aspectRatio\":0}}"),
+                     "cameras[0].perspective.aspectRatio 0 is not positive");
+    ASSERT_EQ(a.cameras.size(), 1u);
+    EXPECT_EQ(a.cameras[0].aspect_ratio, 0.0f);
+    warned("znear0", camera_scene("{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.8,\"znear\":0}}"),
+           "cameras[0].perspective.znear 0 is not positive");
+    warned("zfar_near",
+           camera_scene("{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.8,\"znear\":50,\"zfar\":1}}"),
+           "cameras[0].perspective.zfar 1 is not beyond znear 50");
+    Scene o = warned("xmag0",
+                     camera_scene("{\"type\":\"orthographic\",\"orthographic\":{\"xmag\":0,\"ymag\":1,\"znear\":0,"
+                                  "\"zfar\":10}}"),
+                     "cameras[0].orthographic.xmag is 0");
+    ASSERT_EQ(o.cameras.size(), 1u);
+    EXPECT_EQ(o.cameras[0].aspect_ratio, 0.0f);
+    Scene f = warned("yfov_tiny",
+                     camera_scene("{\"type\":\"perspective\",\"perspective\":{\"yfov\":1e-30,\"znear\":0.1}}"),
+                     "yfov 1e-30 rad is outside 0.01 to 179.9 degrees");
+    ASSERT_EQ(f.cameras.size(), 1u);
+    EXPECT_GT(f.cameras[0].yfov, 0.1f);  // the default
+    std::vector<std::string> notes;
+    Scene p = load_gltf(packed_file.write(dir, "stride0", one_node_scene(mesh(packed))), &notes);
+    ASSERT_FALSE(notes.empty());
+    EXPECT_NE(notes[0].find("bufferViews[1].byteStride is 0"), std::string::npos) << notes[0];
+    ASSERT_EQ(p.meshes.size(), 1u);
+    EXPECT_EQ(p.meshes[0].primitives[0].positions[2], Vec3(1, 1, 0));  // read as tightly packed
+    // A texture on a UV set the primitive lacks.
+    write_png(dir, "t.png");
+    warned("uv1_missing",
+           one_node_scene("{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) +
+                              ",\"TEXCOORD_0\":" + std::to_string(uv) + "},\"material\":0}]}",
+                          "\"materials\":[{\"name\":\"m\",\"pbrMetallicRoughness\":{\"baseColorTexture\":{"
+                          "\"index\":0,\"texCoord\":1}}}],\"textures\":[{\"source\":0}],\"images\":[{\"uri\":"
+                          "\"t.png\"}]"),
+           "material 'm' maps a texture with TEXCOORD_1, which the primitive does not have");
     fs::remove_all(dir);
 }
 

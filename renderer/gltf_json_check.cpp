@@ -1,0 +1,287 @@
+#include "renderer/gltf_json_check.h"
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "util/parse.h"
+
+namespace dynsky {
+namespace {
+
+using Json = nlohmann::json;
+
+std::string describe(const Json& v) {
+    switch (v.type()) {
+        case Json::value_t::string: {
+            std::string s = v.get<std::string>();
+            return "the string \"" + (s.size() > 40 ? s.substr(0, 40) + "..." : s) + "\"";
+        }
+        case Json::value_t::object: return "an object";
+        case Json::value_t::array: return "an array";
+        case Json::value_t::null: return "null";
+        case Json::value_t::boolean: return v.get<bool>() ? "true" : "false";
+        default: return number_text(v.get<double>());
+    }
+}
+
+class Checker {
+  public:
+    GltfJsonReport report;
+
+    void run(const Json& root) {
+        if (const Json* asset = object_member(root, "asset", "asset"))
+            if (asset->contains("version") && !(*asset)["version"].is_string())
+                error("asset.version is " + describe((*asset)["version"]) + ", not a string such as \"2.0\"");
+        index(root, "scene", "scene");
+        for_each_object(root, "scenes", [&](const Json& s, const std::string& at) { indices(s, "nodes", at); });
+        for_each_object(root, "nodes", [&](const Json& n, const std::string& at) { node(n, at); });
+        for_each_object(root, "meshes", [&](const Json& m, const std::string& at) {
+            for_each_object(
+                m, "primitives",
+                [&](const Json& p, const std::string& pat) {
+                    index(p, "indices", pat + ".indices");
+                    index(p, "material", pat + ".material");
+                    integer(p, "mode", pat + ".mode", 0, 6);
+                    if (const Json* attributes = object_member(p, "attributes", pat + ".attributes"))
+                        for (auto it = attributes->begin(); it != attributes->end(); ++it)
+                            index(*attributes, it.key(), pat + ".attributes." + it.key());
+                },
+                at);
+        });
+        for_each_object(root, "accessors", [&](const Json& a, const std::string& at) {
+            index(a, "bufferView", at + ".bufferView");
+            integer(a, "byteOffset", at + ".byteOffset", 0);
+            integer(a, "count", at + ".count", 1);
+            integer(a, "componentType", at + ".componentType", 0);
+            boolean(a, "normalized", at + ".normalized");
+            numbers(a, "min", at + ".min", 0);
+            numbers(a, "max", at + ".max", 0);
+        });
+        for_each_object(root, "bufferViews", [&](const Json& v, const std::string& at) {
+            index(v, "buffer", at + ".buffer");
+            integer(v, "byteOffset", at + ".byteOffset", 0);
+            integer(v, "byteLength", at + ".byteLength", 1);
+            // glTF's minimum is 4; 0 is what some writers put for "tightly packed", and is read so.
+            if (integer(v, "byteStride", at + ".byteStride", 0) && v["byteStride"].get<double>() == 0)
+                warn(at + ".byteStride is 0, not valid glTF (4 to 252, or left out): read as tightly packed");
+        });
+        for_each_object(root, "buffers",
+                        [&](const Json& b, const std::string& at) { integer(b, "byteLength", at + ".byteLength", 1); });
+        for_each_object(root, "images",
+                        [&](const Json& im, const std::string& at) { index(im, "bufferView", at + ".bufferView"); });
+        for_each_object(root, "textures", [&](const Json& t, const std::string& at) {
+            index(t, "source", at + ".source");
+            index(t, "sampler", at + ".sampler");
+        });
+        for_each_object(root, "samplers", [&](const Json& s, const std::string& at) {
+            for (const char* key : {"magFilter", "minFilter", "wrapS", "wrapT"}) integer(s, key, at + "." + key, 0);
+        });
+        for_each_object(root, "materials", [&](const Json& m, const std::string& at) { material(m, at); });
+        for_each_object(root, "cameras", [&](const Json& c, const std::string& at) { camera(c, at); });
+    }
+
+  private:
+    void error(const std::string& message) {
+        if (report.error.empty()) report.error = message;
+    }
+    void warn(const std::string& message) { report.warnings.push_back(message); }
+
+    const Json* object_member(const Json& parent, const char* key, const std::string& at) {
+        auto it = parent.find(key);
+        if (it == parent.end()) return nullptr;
+        if (!it->is_object()) {
+            error(at + " is " + describe(*it) + ", not an object");
+            return nullptr;
+        }
+        return &*it;
+    }
+
+    template <class F>
+    void for_each_object(const Json& parent, const char* key, F&& visit, const std::string& prefix = "") {
+        auto it = parent.find(key);
+        const std::string at = prefix.empty() ? std::string(key) : prefix + "." + key;
+        if (it == parent.end()) return;
+        if (!it->is_array()) {
+            error(at + " is " + describe(*it) + ", not an array");
+            return;
+        }
+        for (size_t i = 0; i < it->size(); ++i) {
+            const std::string item = at + "[" + std::to_string(i) + "]";
+            if (!(*it)[i].is_object()) error(item + " is " + describe((*it)[i]) + ", not an object");
+            else visit((*it)[i], item);
+        }
+    }
+
+    // A whole number in [lo, hi] (JSON writes 2.0 for 2 in some writers: accepted). True if present and valid.
+    bool integer(const Json& parent, const std::string& key, const std::string& at, double lo,
+                 double hi = 9007199254740992.0) {
+        auto it = parent.find(key);
+        if (it == parent.end()) return false;
+        if (!it->is_number()) {
+            error(at + " is " + describe(*it) + ", not a number");
+            return false;
+        }
+        const double v = it->get<double>();
+        if (!(v == std::floor(v))) {
+            error(at + " is " + describe(*it) + ", not a whole number");
+            return false;
+        }
+        if (v < lo || v > hi) {
+            error(at + " is " + describe(*it) +
+                  (hi < 9007199254740992.0 ? ", outside [" + number_text(lo) + ", " + number_text(hi) + "]"
+                                           : "; it must be at least " + number_text(lo)));
+            return false;
+        }
+        return true;
+    }
+    void index(const Json& parent, const std::string& key, const std::string& at) {
+        auto it = parent.find(key);
+        if (it != parent.end() && !it->is_number()) error(at + " is " + describe(*it) + ", not an index (a number)");
+        else integer(parent, key, at, 0);
+    }
+    void indices(const Json& parent, const char* key, const std::string& at) {
+        auto it = parent.find(key);
+        if (it == parent.end()) return;
+        if (!it->is_array()) return error(at + "." + key + " is " + describe(*it) + ", not an array of indices");
+        for (size_t i = 0; i < it->size(); ++i) {
+            const Json& v = (*it)[i];
+            const std::string item = at + "." + key + "[" + std::to_string(i) + "]";
+            if (!v.is_number()) error(item + " is " + describe(v) + ", not an index (a number)");
+            else if (v.get<double>() < 0 || v.get<double>() != std::floor(v.get<double>()))
+                error(item + " is " + describe(v) + ", not an index");
+        }
+    }
+    void boolean(const Json& parent, const char* key, const std::string& at) {
+        auto it = parent.find(key);
+        if (it != parent.end() && !it->is_boolean()) error(at + " is " + describe(*it) + ", not true or false");
+    }
+    // A number; true if present and a number.
+    bool number(const Json& parent, const char* key, const std::string& at) {
+        auto it = parent.find(key);
+        if (it == parent.end()) return false;
+        if (!it->is_number()) {
+            error(at + " is " + describe(*it) + ", not a number");
+            return false;
+        }
+        return true;
+    }
+    // An array of numbers, of exactly `length` when length > 0. Returns them (empty if absent or wrong).
+    std::vector<double> numbers(const Json& parent, const char* key, const std::string& at, size_t length) {
+        auto it = parent.find(key);
+        if (it == parent.end()) return {};
+        if (!it->is_array()) {
+            error(at + " is " + describe(*it) + ", not an array of numbers");
+            return {};
+        }
+        std::vector<double> out;
+        for (size_t i = 0; i < it->size(); ++i) {
+            if (!(*it)[i].is_number()) {
+                error(at + "[" + std::to_string(i) + "] is " + describe((*it)[i]) + ", not a number");
+                return {};
+            }
+            out.push_back((*it)[i].get<double>());
+        }
+        if (length > 0 && out.size() != length) {
+            error(at + " has " + std::to_string(out.size()) + " numbers, not " + std::to_string(length));
+            return {};
+        }
+        return out;
+    }
+
+    void node(const Json& n, const std::string& at) {
+        index(n, "camera", at + ".camera");
+        index(n, "mesh", at + ".mesh");
+        index(n, "skin", at + ".skin");
+        indices(n, "children", at);
+        numbers(n, "translation", at + ".translation", 3);
+        numbers(n, "scale", at + ".scale", 3);
+        numbers(n, "weights", at + ".weights", 0);
+        const std::vector<double> r = numbers(n, "rotation", at + ".rotation", 4);
+        if (r.size() == 4) {
+            const double norm = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3]);
+            if (!(norm > 1e-6))
+                error(at + ".rotation is (" + number_text(r[0]) + ", " + number_text(r[1]) + ", " + number_text(r[2]) +
+                      ", " + number_text(r[3]) + "), not a rotation (glTF wants a unit quaternion x, y, z, w)");
+            else if (std::abs(norm - 1) > 0.01)
+                warn(at + ".rotation has length " + number_text(norm, 4) +
+                     ", not 1 (glTF wants a unit quaternion): normalised");
+        }
+        const std::vector<double> m = numbers(n, "matrix", at + ".matrix", 16);
+        // Column-major: the bottom row is elements 3, 7, 11, 15. glTF node matrices are affine
+        // (decomposable into translation, rotation and scale); a projective row would be dropped.
+        if (m.size() == 16 && !(m[3] == 0 && m[7] == 0 && m[11] == 0 && m[15] == 1))
+            error(at + ".matrix has the bottom row (" + number_text(m[3]) + ", " + number_text(m[7]) + ", " +
+                  number_text(m[11]) + ", " + number_text(m[15]) +
+                  "), not (0, 0, 0, 1): glTF node matrices are affine (translation, rotation, scale)");
+    }
+
+    void texture_info(const Json& parent, const char* key, const std::string& at) {
+        const Json* info = object_member(parent, key, at + "." + key);
+        if (!info) return;
+        const std::string here = at + "." + key;
+        if (!info->contains("index")) error(here + " has no index (which texture)");
+        index(*info, "index", here + ".index");
+        index(*info, "texCoord", here + ".texCoord");
+        number(*info, "scale", here + ".scale");
+        number(*info, "strength", here + ".strength");
+    }
+
+    void material(const Json& m, const std::string& at) {
+        if (const Json* pbr = object_member(m, "pbrMetallicRoughness", at + ".pbrMetallicRoughness")) {
+            const std::string p = at + ".pbrMetallicRoughness";
+            numbers(*pbr, "baseColorFactor", p + ".baseColorFactor", 4);
+            number(*pbr, "metallicFactor", p + ".metallicFactor");
+            number(*pbr, "roughnessFactor", p + ".roughnessFactor");
+            texture_info(*pbr, "baseColorTexture", p);
+            texture_info(*pbr, "metallicRoughnessTexture", p);
+        }
+        numbers(m, "emissiveFactor", at + ".emissiveFactor", 3);
+        texture_info(m, "normalTexture", at);
+        texture_info(m, "occlusionTexture", at);
+        texture_info(m, "emissiveTexture", at);
+        number(m, "alphaCutoff", at + ".alphaCutoff");
+        boolean(m, "doubleSided", at + ".doubleSided");
+        auto mode = m.find("alphaMode");
+        if (mode != m.end() && !mode->is_string())
+            error(at + ".alphaMode is " + describe(*mode) + ", not \"OPAQUE\", \"MASK\" or \"BLEND\"");
+    }
+
+    void camera(const Json& c, const std::string& at) {
+        if (const Json* p = object_member(c, "perspective", at + ".perspective")) {
+            const std::string here = at + ".perspective";
+            number(*p, "yfov", here + ".yfov");
+            if (number(*p, "aspectRatio", here + ".aspectRatio") && !((*p)["aspectRatio"].get<double>() > 0))
+                warn(here + ".aspectRatio " + describe((*p)["aspectRatio"]) +
+                     " is not positive (not valid glTF): ignored, the image's width / height is used");
+            clip_planes(*p, here, true);
+        }
+        if (const Json* o = object_member(c, "orthographic", at + ".orthographic")) {
+            const std::string here = at + ".orthographic";
+            number(*o, "ymag", here + ".ymag");
+            if (number(*o, "xmag", here + ".xmag") && (*o)["xmag"].get<double>() == 0)
+                warn(here + ".xmag is 0 (not valid glTF): ignored, the image's width / height is used");
+            clip_planes(*o, here, false);
+        }
+    }
+    // dynsky traces rays without clip planes: invalid ones are said, not used.
+    void clip_planes(const Json& c, const std::string& at, bool perspective) {
+        const bool has_near = number(c, "znear", at + ".znear"), has_far = number(c, "zfar", at + ".zfar");
+        const double znear = has_near ? c["znear"].get<double>() : 0, zfar = has_far ? c["zfar"].get<double>() : 0;
+        if (has_near && (perspective ? !(znear > 0) : !(znear >= 0)))
+            warn(at + ".znear " + number_text(znear) + (perspective ? " is not positive" : " is negative") +
+                 " (not valid glTF): ignored, dynsky renders without clip planes");
+        if (has_far && !(zfar > znear))
+            warn(at + ".zfar " + number_text(zfar) + " is not beyond znear " + number_text(znear) +
+                 " (not valid glTF): ignored, dynsky renders without clip planes");
+    }
+};
+
+}  // namespace
+
+GltfJsonReport check_gltf_json(const Json& root) {
+    Checker checker;
+    if (root.is_object()) checker.run(root);
+    return checker.report;
+}
+
+}  // namespace dynsky
