@@ -154,10 +154,7 @@ int run_render(const RenderOptions& o) {
 
     Image& image = result.color;
     // Nothing lit reached the camera: written (it is what the scene shows), but said.
-    if (std::all_of(image.pixels.begin(), image.pixels.end(), [](float v) { return v == 0.0f; }))
-        std::fprintf(stderr,
-                     "dynsky: warning: the image is black everywhere: is the camera inside closed geometry or "
-                     "looking at nothing lit? (--look-at, --camera)\n");
+    if (is_black_everywhere(image)) std::fprintf(stderr, "dynsky: warning: the image %s\n", kBlackRenderHint);
     image.metadata.numbers["dynsky:spp"] = o.spp;
     image.metadata.numbers["dynsky:seed"] = double(o.seed);
     image.metadata.numbers["dynsky:render_seconds"] = result.stats.seconds;

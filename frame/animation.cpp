@@ -23,6 +23,7 @@
 #include "util/atomic_file.h"
 #include "util/error.h"
 #include "util/exposure.h"
+#include "util/image.h"
 
 namespace dynsky {
 
@@ -227,6 +228,7 @@ AnimationReport render_animation(const AnimationSettings& o) {
     double sum_sky = 0, sum_build = 0, sum_render = 0;
     int rendered = 0, skipped = 0;
     std::shared_ptr<SkyImage> sky_buffers[2];
+    bool warned_black = false;
     for (int k = first; k <= last; ++k) {
         if (keep[size_t(k)]) {
             ++skipped;
@@ -253,6 +255,10 @@ AnimationReport render_animation(const AnimationSettings& o) {
         RenderResult result = integrator.render(scene->camera);
 
         Image& image = result.color;
+        if (!warned_black && is_black_everywhere(image)) {
+            std::fprintf(stderr, "dynsky: warning: frame %d %s\n", k, kBlackRenderHint);
+            warned_black = true;  // once: every frame of such a camera is black
+        }
         FrameMetadata meta;
         meta.frame = k, meta.time_seconds = t, meta.fps = o.fps, meta.spp = o.spp, meta.seed = render.seed;
         meta.medium_step_seconds = timeline.dt(), meta.png_exposure_ev = ev;

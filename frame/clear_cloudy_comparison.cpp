@@ -13,6 +13,7 @@
 #include "renderer/accel.h"
 #include "renderer/env_light.h"
 #include "renderer/integrator.h"
+#include "util/image.h"
 #include "motion/radiance_scale.h"
 #include "sky/clear_sky.h"
 #include "util/atomic_file.h"
@@ -158,6 +159,8 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
     Color e_clear = light.sky_irradiance();
     Image b = render_frame(accel, light, scene.camera, cloudy0, w, h, o.spp, o.seed);
     Color e_cloudy = light.sky_irradiance();
+    if (is_black_everywhere(a) && is_black_everywhere(b))
+        std::fprintf(stderr, "dynsky: warning: the clear and the cloudy image are black: each %s\n", kBlackRenderHint);
     write_image((fs::path(o.out) / "clear.exr").string(), a);
     write_image((fs::path(o.out) / "cloudy.exr").string(), b);
     Image da = tonemap_to_display(a, ev), db = tonemap_to_display(b, ev);

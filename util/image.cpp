@@ -123,6 +123,10 @@ std::string image_file_problem(const std::string& path) {
     return "";
 }
 
+bool is_black_everywhere(const Image& image) {
+    return std::all_of(image.pixels.begin(), image.pixels.end(), [](float v) { return v == 0.0f; });
+}
+
 long first_non_finite(const Image& image) {
     for (size_t i = 0; i < image.pixels.size(); ++i)
         if (!std::isfinite(image.pixels[i])) return long(i);

@@ -67,6 +67,12 @@ std::vector<std::string> image_header_strings(const std::string& path, const std
 long first_non_finite(const Image& image);
 // "pixel (x, y) is NaN" (or "is infinite") for the value first_non_finite found at index i.
 std::string non_finite_pixel_text(const Image& image, long i);
+// True when every value is zero: a render that saw nothing lit (the camera inside closed
+// geometry, looking away from everything): written, but worth a warning.
+bool is_black_everywhere(const Image& image);
+// The warning render, animate and compare give for such an image.
+inline constexpr const char* kBlackRenderHint =
+    "is black everywhere: is the camera inside closed geometry or looking at nothing lit? (--look-at, --camera)";
 
 // Writes by extension: .exr (linear float, metadata as header attributes), .png/.jpg (8-bit,
 // values taken as already display-encoded in [0, 1]). Atomic (temporary name, then rename).

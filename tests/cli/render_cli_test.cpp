@@ -203,6 +203,33 @@ TEST(RenderCli, AovsRegionAndCameraOptions) {
     EXPECT_FALSE(fs::exists(dir + "/g.exr"));
 }
 
+// A camera inside a closed box sees nothing lit: render, animate and compare all write their
+// outputs (that is what the scene shows) and say so (animate and compare were silent).
+TEST(RenderCli, ACameraInsideClosedGeometryIsToldInEveryCommand) {
+    DYNSKY_REQUIRE_SHARED();
+    std::string dir = test::temp_dir("render");
+    const std::string inside = " '" + box_glb() + "' --look-at 0,0,0,1,0,0 --sky-res 64 -q ";
+    auto r = test::run_command(exe() + " render" + inside + "--res 16x12 --spp 1 -o " + dir + "/r.exr");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("the image is black everywhere: is the camera inside closed geometry"), std::string::npos)
+        << r.output;
+    r = test::run_command(exe() + " animate" + inside + "--res 16x12 --spp 1 --duration 1 --fps 2 --no-video -o " +
+                          dir + "/a");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("frame 0 is black everywhere"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("frame 1 is black"), std::string::npos) << "said once: " << r.output;
+    r = test::run_command(exe() + " compare" + inside + "--res 16x12 --spp 1 --chart-frames 2 --chart-res 8x6 -o " +
+                          dir + "/c");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("the clear and the cloudy image are black"), std::string::npos) << r.output;
+    // Outside the box it is lit, and nothing is said.
+    r = test::run_command(exe() + " render '" + box_glb() + "' --sky-res 64 -q --res 16x12 --spp 1 -o " + dir +
+                          "/lit.exr");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(r.output.find("black"), std::string::npos) << r.output;
+    fs::remove_all(dir);
+}
+
 // Every scene in ../shared/scenes renders to a finite, non-black image.
 TEST(RenderCli, EverySharedSceneRendersFiniteAndNotBlack) {
     DYNSKY_REQUIRE_SHARED();
