@@ -139,9 +139,10 @@ int run_render(const RenderOptions& o) {
     if (ground) light.set_ground_image(ground);
     if (!o.quiet)
         std::fprintf(stderr,
-                     "scene: %s, %zu triangles, %zu instances; sky: %s (%dx%d), distribution built in %.2f ms\n",
-                     o.scene.scene.c_str(), scene.triangle_count(), scene.instances.size(), sky->source.c_str(),
-                     sky->resolution, sky->resolution, light.last_build_seconds() * 1e3);
+                     "scene: %s, %zu triangles, %zu instances, %zu punctual light(s); sky: %s (%dx%d), distribution "
+                     "built in %.2f ms\n",
+                     o.scene.scene.c_str(), scene.triangle_count(), scene.instances.size(), scene.lights.size(),
+                     sky->source.c_str(), sky->resolution, sky->resolution, light.last_build_seconds() * 1e3);
 
     settings.width = width, settings.height = height, settings.spp = o.spp, settings.seed = o.seed;
     settings.max_depth = o.max_depth, settings.quiet = o.quiet;

@@ -59,7 +59,8 @@ constexpr size_t kZeroAccessorSlack = size_t(1) << 20;
 const std::set<std::string>& supported_extensions() {
     static const std::set<std::string> s = {"KHR_texture_transform",      "KHR_materials_emissive_strength",
                                             "KHR_materials_transmission", "KHR_materials_clearcoat",
-                                            "EXT_mesh_gpu_instancing",    "KHR_mesh_quantization"};
+                                            "EXT_mesh_gpu_instancing",    "KHR_mesh_quantization",
+                                            "KHR_lights_punctual"};
     return s;
 }
 
@@ -1419,6 +1420,61 @@ class GltfLoader {
         cameras_.push_back({node.camera, node_index, std::move(cam)});
     }
 
+    // KHR_lights_punctual: the light a node holds, placed by its world transform (position, -Z).
+    void add_light(const tg::Node& node, const std::string& what, const Eigen::Matrix4d& world) {
+        const tg::Value* ext = extension(node.extensions, "KHR_lights_punctual");
+        if (!ext) return;
+        const tg::Value* index = member(*ext, "light");
+        if (!index || !index->IsNumber() || index->GetNumberAsInt() < 0 ||
+            size_t(index->GetNumberAsInt()) >= model_.lights.size())
+            fail(what + ": KHR_lights_punctual light " +
+                 (index && index->IsNumber() ? std::to_string(index->GetNumberAsInt())
+                                             : std::string("(not a number)")) +
+                 " does not exist (the file has " + std::to_string(model_.lights.size()) + ")");
+        const int li = index->GetNumberAsInt();
+        const tg::Light& l = model_.lights[size_t(li)];
+        const std::string name = "light " + (l.name.empty() ? std::to_string(li) : in_quotes(l.name));
+        PunctualLight light;
+        light.name = l.name.empty() ? "light " + std::to_string(li) : l.name;
+        if (l.type == "point") light.type = PunctualLight::Type::Point;
+        else if (l.type == "spot") light.type = PunctualLight::Type::Spot;
+        else if (l.type == "directional") light.type = PunctualLight::Type::Directional;
+        else fail(name + ": type " + in_quotes(l.type) + " is not point, spot or directional");
+        Color colour = Color::Ones();
+        if (!l.color.empty()) {
+            if (l.color.size() != 3) fail(name + ": color has " + std::to_string(l.color.size()) + " numbers, not 3");
+            colour = Color(float(l.color[0]), float(l.color[1]), float(l.color[2]));
+            if (!(colour.minCoeff() >= 0) || !colour.allFinite())
+                fail(name + ": color (" + number_text(l.color[0]) + ", " + number_text(l.color[1]) + ", " +
+                     number_text(l.color[2]) + ") is not a colour (finite, non-negative)");
+        }
+        // 1e9 cd or lux: past any lamp and the sun (about 1.2e5 lux); more is a corrupt file.
+        if (!(l.intensity >= 0 && l.intensity <= 1e9))
+            fail(name + ": intensity " + number_text(l.intensity) + " is outside [0, 1e9] " +
+                 (light.type == PunctualLight::Type::Directional ? "lux" : "candela"));
+        if (!(l.range >= 0) || !std::isfinite(l.range))
+            fail(name + ": range " + number_text(l.range) + " is not positive");
+        light.intensity = colour * float(l.intensity / kLumensPerWatt);
+        light.range = float(l.range);
+        if (light.type == PunctualLight::Type::Spot) {
+            const double inner = l.spot.innerConeAngle, outer = l.spot.outerConeAngle;
+            if (!(inner >= 0 && inner < outer && outer <= kPiD / 2 + 1e-6))
+                fail(name + ": spot cone angles inner " + number_text(inner) + " and outer " + number_text(outer) +
+                     " rad must satisfy 0 <= inner < outer <= pi / 2");
+            light.cos_inner = float(std::cos(inner)), light.cos_outer = float(std::cos(std::min(outer, kPiD / 2)));
+        }
+        const Eigen::Vector3d position = world.col(3).head<3>();
+        if (!(position.cwiseAbs().maxCoeff() <= kMaxCoordinate))
+            fail(what + ": " + name + " is " + number_text(position.cwiseAbs().maxCoeff(), 3) +
+                 " m from the origin, beyond " + number_text(kMaxCoordinate, 3) + " m");
+        const Eigen::Vector3d forward = -world.col(2).head<3>();
+        if (!(forward.norm() > 0) || !forward.allFinite())
+            fail(what + ": " + name + "'s world transform has no -Z axis (a zero scale?): it shines nowhere");
+        light.position = position.cast<float>();
+        light.direction = forward.normalized().cast<float>();
+        if (light.intensity.maxCoeff() > 0) scene_.lights.push_back(light);
+    }
+
     // A texture on a UV set the primitive lacks is read at UV (0, 0): one texel over the surface.
     void warn_missing_uv_sets(const TriangleMesh& mesh, const std::string& what) {
         const Material& m = scene_.materials[size_t(mesh.material)];
@@ -1502,6 +1558,7 @@ class GltfLoader {
             if (node.camera >= 0 && !(std::abs(world.topLeftCorner<3, 3>().determinant()) > 1e-30))
                 fail(what + ": the camera's world transform is singular (a zero scale?): it has no view direction");
             add_camera(node, index, world);
+            add_light(node, what, world);
             for (auto c = node.children.rbegin(); c != node.children.rend(); ++c) stack.emplace_back(*c, world);
         }
         // Cameras in the order of the file's cameras array (then of the nodes that use them).

@@ -202,6 +202,51 @@ Color PathIntegrator::transmittance(const Ray& shadow_ray, RenderStats* stats) c
     return tr;
 }
 
+Color PathIntegrator::punctual_light(const ShadingPoint& sp, const MetalRoughBsdf& bsdf, const Vec3& wo,
+                                     const Vec3& position, RenderStats* stats) const {
+    Color sum = Color::Zero();
+    for (const PunctualLight& light : accel_.scene().lights) {
+        Vec3 wi_world;
+        float distance = std::numeric_limits<float>::infinity();
+        Color incident = light.intensity;  // W/m^2 arriving at normal incidence
+        if (light.type == PunctualLight::Type::Directional) {
+            wi_world = -light.direction;
+        } else {
+            const Vec3 to_light = light.position - position;
+            const float d2 = to_light.squaredNorm();
+            if (!(d2 > 0)) continue;
+            distance = std::sqrt(d2);
+            wi_world = to_light / distance;
+            float falloff = 1 / d2;
+            // The extension's recommended window: smooth to zero at range, inverse square inside.
+            if (light.range > 0) {
+                const float x = distance / light.range, x2 = x * x;
+                falloff *= std::clamp(1 - x2 * x2, 0.0f, 1.0f);
+            }
+            if (light.type == PunctualLight::Type::Spot) {
+                const float cd = light.direction.dot(-wi_world);
+                const float scale = 1 / std::max(1e-3f, light.cos_inner - light.cos_outer);
+                const float a = std::clamp((cd - light.cos_outer) * scale, 0.0f, 1.0f);
+                falloff *= a * a;
+            }
+            incident *= falloff;
+        }
+        if (!(incident.maxCoeff() > 0) || sp.geometric_normal.dot(wi_world) <= 0) continue;
+        const Vec3 wi = sp.to_local(wi_world);
+        if (wi.z() <= 0) continue;
+        const Color f = bsdf.eval(wo, wi);
+        if (!(f > 0).any()) continue;
+        Ray shadow;
+        shadow.origin = offset_ray_origin(position, sp.geometric_normal, wi_world);
+        shadow.direction = wi_world;
+        // Up to the light, not past it.
+        if (std::isfinite(distance)) shadow.tmax = distance * (1 - 1e-4f);
+        const Color tr = transmittance(shadow, stats);
+        sum += f * tr * incident * wi.z();
+    }
+    return sum;
+}
+
 SamplePattern parse_sample_pattern(const std::string& name) {
     if (name == "random") return SamplePattern::Random;
     if (name == "sobol") return SamplePattern::ZSobol;
@@ -329,6 +374,9 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
         } else {
             rng.uniform(), rng.uniform(), rng.uniform();  // keep streams aligned across strategies
         }
+        // Punctual lights (KHR_lights_punctual): delta lights no BSDF sample can hit, each one
+        // sampled every bounce, whatever the strategy (no random numbers: streams unchanged).
+        if (!accel_.scene().lights.empty()) add(beta * punctual_light(sp, bsdf, wo, hit.position, stats), depth + 1);
 
         // Continue the path by sampling the BSDF.
         float ulobe = rng.uniform();

@@ -18,7 +18,9 @@
 #include <string>
 
 #include "renderer/accel.h"
+#include "renderer/bsdf.h"
 #include "renderer/env_light.h"
+#include "renderer/material_eval.h"
 #include "renderer/zsobol_sampler.h"
 #include "util/error.h"
 #include "util/image.h"
@@ -147,6 +149,10 @@ class PathIntegrator {
     // Visibility along a shadow ray through alpha-tested, blended and transmissive surfaces (per channel:
     // glass tints what passes).
     Color transmittance(const Ray& ray, RenderStats* stats) const;
+    // Light reflected towards wo (local) from the scene's punctual lights at a shading point,
+    // each light's shadow ray traced (Scene::lights; radiance, not yet times the path's weight).
+    Color punctual_light(const ShadingPoint& sp, const MetalRoughBsdf& bsdf, const Vec3& wo, const Vec3& position,
+                         RenderStats* stats) const;
     // Whether a hit is skipped by alpha (MASK below cutoff, or BLEND chosen as transparent).
     bool passes_through(const SurfaceHit& hit, float u) const;
     float surface_alpha(const SurfaceHit& hit) const;

@@ -105,6 +105,23 @@ struct Bounds3 {
     Vec3 diagonal() const { return hi - lo; }
 };
 
+// Luminous efficacy of the sky's units: luminance in cd m^-2 is 683 x Y of its radiance (glossary).
+inline constexpr double kLumensPerWatt = 683.0;
+
+// A KHR_lights_punctual light, in world space and radiometric units (the sky's: W, m, sr). glTF
+// gives candela (point, spot) and lux (directional) for its linear RGB colour, so radiometric =
+// colour x photometric / kLumensPerWatt (Blender's glTF exporter converts with the same 683).
+struct PunctualLight {
+    enum class Type { Point, Spot, Directional };
+    Type type = Type::Point;
+    std::string name;
+    Vec3 position = Vec3::Zero();        // point and spot
+    Vec3 direction = Vec3(0, 0, -1);     // where the light shines (the node's -Z), unit; spot, directional
+    Color intensity = Color::Zero();     // W/sr (point, spot) or W/m^2 at normal incidence (directional)
+    float range = 0;                     // > 0: the spec's smooth cut-off at this distance; 0: none
+    float cos_inner = 1, cos_outer = 0;  // spot cone: full inside inner, none outside outer
+};
+
 struct Scene {
     std::string source;  // file it came from
     std::vector<MeshGroup> meshes;
@@ -112,6 +129,7 @@ struct Scene {
     std::vector<Material> materials;
     std::vector<std::shared_ptr<Texture>> textures;
     std::vector<Camera> cameras;            // glTF cameras (perspective and orthographic), in file order
+    std::vector<PunctualLight> lights;      // KHR_lights_punctual, one per node that holds one
     std::vector<std::string> warnings;      // e.g. extensions used but not supported
     std::vector<std::string> source_files;  // the files it was read from (glTF, buffers, images): never outputs
 

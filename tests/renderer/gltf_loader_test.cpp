@@ -1030,6 +1030,68 @@ TEST(GltfLoader, ValuesOfTheWrongTypeOrOutsideTheSpecAreNamedByTheirPath) {
     fs::remove_all(dir);
 }
 
+// KHR_lights_punctual: each node's light placed by its world transform, shining along its -Z, in
+// the sky's radiometric units (candela and lux / 683); impossible lights are refused by name.
+TEST(GltfLoader, PunctualLightsArePlacedAndConvertedToTheSkysUnits) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    const int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+    auto scene_with = [&](const std::string& lights) {
+        return "\"scene\":0,\"scenes\":[{\"nodes\":[0,1,2,3]}],\"nodes\":[{\"mesh\":0},"
+               "{\"translation\":[1,2,3],\"extensions\":{\"KHR_lights_punctual\":{\"light\":0}}},"
+               "{\"translation\":[0,5,0],\"rotation\":[-0.70710678,0,0,0.70710678],\"extensions\":{"
+               "\"KHR_lights_punctual\":{\"light\":1}}},{\"extensions\":{\"KHR_lights_punctual\":{\"light\":2}}}],"
+               "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":" +
+               std::to_string(pos) +
+               "}}]}],\"extensionsUsed\":[\"KHR_lights_punctual\"],\"extensions\":{"
+               "\"KHR_lights_punctual\":{\"lights\":[" +
+               lights + "]}}";
+    };
+    const std::string point =
+        "{\"type\":\"point\",\"name\":\"lamp\",\"color\":[1,0.5,0.25],\"intensity\":683,\"range\":10}";
+    const std::string directional = "{\"type\":\"directional\",\"intensity\":1366}";
+    std::vector<std::string> notes;
+    Scene s = load_gltf(g.write(dir, "lights",
+                                scene_with(point +
+                                           ",{\"type\":\"spot\",\"intensity\":6830,\"spot\":{"
+                                           "\"innerConeAngle\":0.2,\"outerConeAngle\":0.4}}," +
+                                           directional)),
+                        &notes);
+    for (const std::string& n : notes) EXPECT_EQ(n.find("KHR_lights_punctual"), std::string::npos) << n;
+    ASSERT_EQ(s.lights.size(), 3u);
+    const PunctualLight &lamp = s.lights[0], &spot = s.lights[1], &sun = s.lights[2];
+    EXPECT_EQ(lamp.type, PunctualLight::Type::Point);
+    EXPECT_EQ(lamp.name, "lamp");
+    EXPECT_TRUE(lamp.position.isApprox(Vec3(1, 2, 3)));
+    EXPECT_TRUE(lamp.intensity.isApprox(Color(1, 0.5f, 0.25f), 1e-6f));  // 683 cd -> 1 W/sr
+    EXPECT_EQ(lamp.range, 10.0f);
+    EXPECT_EQ(spot.type, PunctualLight::Type::Spot);
+    EXPECT_TRUE(spot.direction.isApprox(Vec3(0, -1, 0), 1e-5f)) << spot.direction.transpose();
+    EXPECT_NEAR(spot.cos_inner, std::cos(0.2), 1e-6);
+    EXPECT_NEAR(spot.cos_outer, std::cos(0.4), 1e-6);
+    EXPECT_TRUE(spot.intensity.isApprox(Color::Constant(10), 1e-6f));
+    EXPECT_EQ(sun.type, PunctualLight::Type::Directional);
+    EXPECT_TRUE(sun.direction.isApprox(Vec3(0, 0, -1)));
+    EXPECT_TRUE(sun.intensity.isApprox(Color::Constant(2), 1e-6f));  // 1366 lux -> 2 W/m^2
+    struct Case {
+        std::string name, lights, expect;
+    };
+    const std::vector<Case> bad = {
+        {"cone", point + ",{\"type\":\"spot\",\"spot\":{\"innerConeAngle\":0.5,\"outerConeAngle\":0.4}}," + directional,
+         "light 1: spot cone angles inner 0.5 and outer 0.4 rad must satisfy 0 <= inner < outer <= pi / 2"},
+        {"intensity", point + ",{\"type\":\"point\",\"intensity\":-1}," + directional,
+         "light 1: intensity -1 is outside [0, 1e9] candela"},
+        {"missing", point + "," + directional, "KHR_lights_punctual light 2 does not exist (the file has 2)"},
+        {"kind", point + ",{\"type\":\"area\"}," + directional, "type 'area' is not point, spot or directional"},
+    };
+    for (const Case& c : bad) {
+        std::string e = load_error(g.write(dir, c.name, scene_with(c.lights)));
+        EXPECT_NE(e.find(c.name + ".gltf"), std::string::npos) << c.name << ": " << e;
+        EXPECT_NE(e.find(c.expect), std::string::npos) << c.name << ": " << e;
+    }
+    fs::remove_all(dir);
+}
+
 TEST(GltfLoader, HostileInputIsRefusedAtItsRoot) {
     std::string root = test::temp_dir("gltf");
     std::string dir = root + "/asset";

@@ -193,6 +193,82 @@ TEST(PathIntegrator, ThinGlassPaneOverAFloorMatchesTheAnalyticRadiance) {
     }
 }
 
+// KHR_lights_punctual over a Lambert floor under a uniform sky of radiance 1: the floor shows a
+// (the sky) plus a / pi x E from the light, E = I cos / d^2 (point, spot with its cone) or E cos
+// (directional), in the sky's units (candela and lux / 683). Looked at from straight above.
+TEST(PathIntegrator, PunctualLightsAddTheirAnalyticIrradiance) {
+    const float albedo = 0.5f;
+    Material floor;
+    floor.base_color = Color::Constant(albedo), floor.metallic = 0, floor.roughness = 1, floor.specular = 0;
+    auto radiance_at = [&](const PunctualLight& lamp, float x, LightStrategy strategy, bool with_wall = false) {
+        Scene scene;
+        scene.materials = {floor};
+        add_mesh_instance(&scene, make_ground_quad_mesh(400, 0), Eigen::Affine3f::Identity(), "floor");
+        // A small roof halfway between the light and the floor point, beside the camera's rays.
+        if (with_wall)
+            add_mesh_instance(&scene, make_ground_quad_mesh(0.2f, 0),
+                              Eigen::Affine3f(Eigen::Translation3f(0.5f * (lamp.position.x() + x),
+                                                                   0.5f * lamp.position.y(), 0) *
+                                              Eigen::AngleAxisf(kPi, Vec3::UnitX())),
+                              "roof");
+        scene.lights = {lamp};
+        Accel accel(scene);
+        EnvLight light(uniform_sky(64, 1.0f), 1.0f);
+        Camera cam;
+        cam.yfov = 0.002f;
+        cam.camera_to_world = Eigen::Translation3f(x, 10, 0) * Eigen::AngleAxisf(-kPi / 2, Vec3::UnitX());
+        RenderSettings s;
+        s.width = 4, s.height = 4, s.spp = 1024, s.max_depth = 4, s.quiet = true, s.strategy = strategy;
+        RenderResult r = PathIntegrator(accel, light, s).render(cam);
+        return Vec3(float(mean_of(r.color, 0, 0, 4, 4, 0)), float(mean_of(r.color, 0, 0, 4, 4, 1)),
+                    float(mean_of(r.color, 0, 0, 4, 4, 2)));
+    };
+    const float h = 2;
+    PunctualLight point;
+    point.position = Vec3(0, h, 0);
+    point.intensity = Color(1.0f, 0.5f, 0.25f) * float(4 * kPi);  // W/sr: 683 x 4 pi cd of white
+    for (LightStrategy strategy : {LightStrategy::Mis, LightStrategy::BsdfOnly, LightStrategy::LightOnly}) {
+        const Vec3 l = radiance_at(point, 0, strategy);
+        for (int c = 0; c < 3; ++c) {
+            const double expected = albedo + albedo / kPi * point.intensity[c] / (h * h);
+            EXPECT_NEAR(l[c], expected, 0.01 * expected) << "point, channel " << c;
+        }
+    }
+    // Off-axis, within the range's window: E = I cos^3 / h^2 (1 - (d / range)^4).
+    PunctualLight ranged = point;
+    ranged.range = 5;
+    const float x = 1.5f, d = std::hypot(x, h), cos_t = h / d;
+    const double window = 1 - std::pow(d / 5.0, 4);
+    EXPECT_NEAR(radiance_at(ranged, x, LightStrategy::Mis)[0],
+                albedo + albedo / kPi * point.intensity[0] * cos_t / (d * d) * window,
+                0.01 * (albedo + albedo / kPi * point.intensity[0] * cos_t / (d * d) * window));
+    // A spot pointing down, the point seen between its inner (0.5 rad) and outer (0.8 rad) cones.
+    PunctualLight spot = point;
+    spot.type = PunctualLight::Type::Spot, spot.direction = Vec3(0, -1, 0);
+    spot.cos_inner = std::cos(0.5f), spot.cos_outer = std::cos(0.8f);
+    const float xs = h * std::tan(0.65f), ds = std::hypot(xs, h), cs = h / ds;
+    const double cone = std::pow((cs - spot.cos_outer) / (spot.cos_inner - spot.cos_outer), 2);
+    const double spot_expected = albedo + albedo / kPi * spot.intensity[0] * cone * cs / (ds * ds);
+    EXPECT_NEAR(radiance_at(spot, xs, LightStrategy::Mis)[0], spot_expected, 0.01 * spot_expected);
+    // Outside its cone a spot adds nothing.
+    EXPECT_NEAR(radiance_at(spot, h * std::tan(0.9f), LightStrategy::Mis)[0], albedo, 0.01 * albedo);
+    // The sun as a directional light, 60 degrees from the zenith: E cos 60.
+    PunctualLight sun;
+    sun.type = PunctualLight::Type::Directional;
+    sun.direction = Vec3(std::sin(kPi / 3), -std::cos(kPi / 3), 0);
+    sun.intensity = Color::Constant(100000.0f / 683);  // 1e5 lux
+    const double sun_expected = albedo + albedo / kPi * sun.intensity[0] * 0.5;
+    EXPECT_NEAR(radiance_at(sun, 0, LightStrategy::Mis)[1], sun_expected, 0.01 * sun_expected);
+    // A roof between a point light and the floor shadows it: the sky's share is left (the roof
+    // hides a little of the sky too).
+    PunctualLight beside = point;
+    beside.position = Vec3(1, h, 0);
+    const Vec3 lit = radiance_at(beside, 0, LightStrategy::Mis),
+               shadowed = radiance_at(beside, 0, LightStrategy::Mis, true);
+    EXPECT_GT(lit[0], 1.5 * albedo);
+    EXPECT_NEAR(shadowed[0], albedo, 0.05 * albedo) << "the light must not pass the roof";
+}
+
 TEST(PathIntegrator, SameSeedSameImageOnAnyThreadCount) {
     Material m;
     m.base_color = Color(0.8f, 0.3f, 0.2f), m.metallic = 0.5f, m.roughness = 0.4f;
