@@ -6,6 +6,8 @@ namespace dynsky {
 
 // Below this GGX alpha the lobe is so sharp that float pdfs overflow; 1e-3 still looks mirror-like.
 constexpr float kMinAlpha = 1e-3f;
+// The clear coat's Fresnel at normal incidence: KHR_materials_clearcoat's fixed IOR 1.5.
+constexpr float kCoatF0 = 0.04f;
 
 static float schlick_weight(float cos_theta) {
     float m = clamp(1.0f - cos_theta, 0.0f, 1.0f);
@@ -15,11 +17,13 @@ static float schlick_weight(float cos_theta) {
 
 namespace {
 
-// Directional albedo E(mu, roughness) of the dielectric specular lobe (F0 = 0.04, Schlick), and
-// its cosine-weighted average. The Lambert base is scaled by (1 - E(mu_o)) (1 - E(mu_i)) /
+// Directional albedo E(mu, roughness, F0) of the dielectric specular lobe (Schlick), and its
+// cosine-weighted average. The Lambert base is scaled by (1 - E(mu_o)) (1 - E(mu_i)) /
 // (1 - E_avg) (Kelemen and Szirmay-Kalos 2001; Kulla and Conty 2017): reciprocal, and a white
 // dielectric then reflects exactly what its specular lobe does not, so energy is conserved,
-// where glTF's reference fresnel_mix reflects up to 1.2 at grazing angles.
+// where glTF's reference fresnel_mix reflects up to 1.2 at grazing angles. Schlick's Fresnel is
+// linear in F0 (F0 + (1 - F0) w), so the table holds E[G1] and E[w G1] and any F0 (any IOR,
+// KHR_materials_ior) is their mix: E = F0 E[G1] + (1 - F0) E[w G1].
 class SpecularAlbedoTable {
   public:
     static constexpr int kSize = 32;
@@ -27,53 +31,63 @@ class SpecularAlbedoTable {
         static const SpecularAlbedoTable table;
         return table;
     }
-    float albedo(float mu, float roughness) const {
+    float albedo(float mu, float roughness, float f0) const {
         float x = clamp(mu, 0.0f, 1.0f) * (kSize - 1), y = clamp(roughness, 0.0f, 1.0f) * (kSize - 1);
         int x0 = std::min(int(x), kSize - 2), y0 = std::min(int(y), kSize - 2);
         float fx = x - x0, fy = y - y0;
-        auto e = [&](int i, int j) { return albedo_[j * kSize + i]; };
+        auto e = [&](int i, int j) {
+            const Moments& m = albedo_[j * kSize + i];
+            return f0 * m.g + (1 - f0) * m.wg;
+        };
         return (1 - fy) * ((1 - fx) * e(x0, y0) + fx * e(x0 + 1, y0)) +
                fy * ((1 - fx) * e(x0, y0 + 1) + fx * e(x0 + 1, y0 + 1));
     }
-    float average(float roughness) const {
+    float average(float roughness, float f0) const {
         float y = clamp(roughness, 0.0f, 1.0f) * (kSize - 1);
         int y0 = std::min(int(y), kSize - 2);
         float fy = y - y0;
-        return (1 - fy) * average_[y0] + fy * average_[y0 + 1];
+        auto e = [&](int j) { return f0 * average_[j].g + (1 - f0) * average_[j].wg; };
+        return (1 - fy) * e(y0) + fy * e(y0 + 1);
     }
 
   private:
+    struct Moments {
+        float g = 0, wg = 0;  // E[G1(wi)] and E[w G1(wi)] under the VNDF, w = (1 - wo.m)^5
+    };
     SpecularAlbedoTable() {
         // Stratified visible-normal sampling: E = E[F(wo.m) G1(wi)] under the VNDF.
         const int strata = 24;
         for (int j = 0; j < kSize; ++j) {
             float roughness = float(j) / (kSize - 1);
             float alpha = std::max(roughness * roughness, kMinAlpha);
-            double avg = 0;
+            double avg_g = 0, avg_wg = 0;
             for (int i = 0; i < kSize; ++i) {
                 float mu = std::max(float(i) / (kSize - 1), 1e-3f);
                 Vec3 wo(safe_sqrt(1 - mu * mu), 0, mu);
-                double sum = 0;
+                double sum_g = 0, sum_wg = 0;
                 for (int a = 0; a < strata; ++a)
                     for (int b = 0; b < strata; ++b) {
                         Vec2 u((a + 0.5f) / strata, (b + 0.5f) / strata);
                         Vec3 wm = MetalRoughBsdf::sample_ggx_vndf(wo, alpha, u);
                         Vec3 wi = 2 * wo.dot(wm) * wm - wo;
                         if (wi.z() <= 0) continue;
-                        sum += (0.04f + 0.96f * schlick_weight(wo.dot(wm))) * MetalRoughBsdf::smith_g1(wi, alpha);
+                        const double g1 = MetalRoughBsdf::smith_g1(wi, alpha);
+                        sum_g += g1, sum_wg += schlick_weight(wo.dot(wm)) * g1;
                     }
-                albedo_[j * kSize + i] = float(sum / (strata * strata));
+                albedo_[j * kSize + i] = {float(sum_g / (strata * strata)), float(sum_wg / (strata * strata))};
             }
             // E_avg = 2 * integral of E(mu) mu dmu (trapezoid over the table's mu nodes).
             for (int i = 0; i + 1 < kSize; ++i) {
                 float m0 = float(i) / (kSize - 1), m1 = float(i + 1) / (kSize - 1);
-                avg += 0.5 * (albedo_[j * kSize + i] * m0 + albedo_[j * kSize + i + 1] * m1) * (m1 - m0);
+                const Moments &e0 = albedo_[j * kSize + i], &e1 = albedo_[j * kSize + i + 1];
+                avg_g += 0.5 * (e0.g * m0 + e1.g * m1) * (m1 - m0);
+                avg_wg += 0.5 * (e0.wg * m0 + e1.wg * m1) * (m1 - m0);
             }
-            average_[j] = float(2 * avg);
+            average_[j] = {float(2 * avg_g), float(2 * avg_wg)};
         }
     }
-    float albedo_[kSize * kSize];
-    float average_[kSize];
+    Moments albedo_[kSize * kSize];
+    Moments average_[kSize];
 };
 
 }  // namespace
@@ -87,7 +101,16 @@ MetalRoughBsdf::MetalRoughBsdf(const Color& base_color, float metallic, float ro
       transmission_(clamp(transmission, 0.0f, 1.0f)) {
     roughness_ = clamp(roughness, 0.0f, 1.0f);
     alpha_ = std::max(roughness_ * roughness_, kMinAlpha);
-    if (specular_ > 0) e_avg_ = specular_ * SpecularAlbedoTable::get().average(roughness_);
+    if (specular_ > 0) e_avg_ = specular_ * SpecularAlbedoTable::get().average(roughness_, f0_);
+}
+
+void MetalRoughBsdf::set_ior(float ior) {
+    // glTF's 1.5 is the default; the extension allows 1 and above (0 for "ignore", read as 1.5).
+    if (!(ior >= 1) || !std::isfinite(ior)) ior = 1.5f;
+    const float r = (ior - 1) / (ior + 1);
+    f0_ = r * r;
+    if (specular_ > 0) e_avg_ = specular_ * SpecularAlbedoTable::get().average(roughness_, f0_);
+    cached_wo_z_ = -1;  // set_wo again
 }
 
 Color MetalRoughBsdf::transmitted(const Vec3& wo) const {
@@ -98,7 +121,7 @@ Color MetalRoughBsdf::transmitted(const Vec3& wo) const {
 }
 
 float MetalRoughBsdf::specular_albedo(float mu) const {
-    return specular_ * SpecularAlbedoTable::get().albedo(mu, roughness_);
+    return specular_ * SpecularAlbedoTable::get().albedo(mu, roughness_, f0_);
 }
 
 void MetalRoughBsdf::set_wo(const Vec3& wo) {
@@ -162,7 +185,7 @@ Color MetalRoughBsdf::base_eval(const Vec3& wo, const Vec3& wi) const {
     // Specular microfacet term without Fresnel: D G / (4 cos_o cos_i), separable Smith G.
     float spec = ggx_d(wm, alpha_) * smith_g1(wo, alpha_) * smith_g1(wi, alpha_) / (4 * wo.z() * wi.z());
     // Dielectric: fresnel_mix(ior 1.5) of Lambert base and specular; metal: conductor Fresnel.
-    float f_dielectric = specular_ * (0.04f + 0.96f * w);
+    float f_dielectric = specular_ * (f0_ + (1 - f0_) * w);
     float diffuse_weight = 1.0f;
     if (specular_ > 0) {
         float e_o = wo.z() == cached_wo_z_ ? cached_e_o_ : specular_albedo(wo.z());
@@ -231,7 +254,7 @@ void MetalRoughBsdf::set_clearcoat(float factor, float roughness) {
 }
 
 float MetalRoughBsdf::coat_albedo(float mu) const {
-    return coat_ * SpecularAlbedoTable::get().albedo(mu, coat_roughness_);
+    return coat_ * SpecularAlbedoTable::get().albedo(mu, coat_roughness_, kCoatF0);
 }
 
 float MetalRoughBsdf::coat_probability(const Vec3& wo) const {
@@ -257,7 +280,7 @@ Color MetalRoughBsdf::eval(const Vec3& wo, const Vec3& wi) const {
     const float e_o = wo.z() == cached_wo_z_ ? cached_e_coat_ : coat_albedo(wo.z());
     const Color base = base_eval(wo, wi) * ((1 - e_o) * (1 - coat_albedo(wi.z())));
     const Vec3 wm = (wo + wi).normalized();
-    const float f = 0.04f + 0.96f * schlick_weight(clamp(wo.dot(wm), 0.0f, 1.0f));
+    const float f = kCoatF0 + (1 - kCoatF0) * schlick_weight(clamp(wo.dot(wm), 0.0f, 1.0f));
     const float coat = coat_ * f * ggx_d(wm, coat_alpha_) * smith_g1(wo, coat_alpha_) * smith_g1(wi, coat_alpha_) /
                        (4 * wo.z() * wi.z());
     return base + Color::Constant(coat);

@@ -30,6 +30,11 @@ class MetalRoughBsdf {
     // each way. 0 (the default): no coat, and every result bitwise as without it. Before set_wo.
     void set_clearcoat(float factor, float roughness);
 
+    // KHR_materials_ior: the dielectric's index of refraction (default glTF's 1.5, F0 = 0.04);
+    // F0 = ((ior - 1) / (ior + 1))^2 for its specular lobe, its energy compensation and what glass
+    // passes. Values below 1 (the extension's 0) read as 1.5. Before set_wo.
+    void set_ior(float ior);
+
     // Thin-walled transmission: the light arriving along -wo that passes straight through the
     // surface (a null-scattering event for the integrator, not part of eval): the dielectric's
     // share, what its specular lobe does not reflect towards wo (1 - E(wo)), times transmission,
@@ -69,7 +74,8 @@ class MetalRoughBsdf {
 
     Color base_;
     float metallic_, roughness_, alpha_, specular_, transmission_;
-    float e_avg_ = 0;  // specular_ x the lobe's cosine-weighted mean albedo
+    float f0_ = 0.04f;  // the dielectric's Fresnel at normal incidence (set_ior)
+    float e_avg_ = 0;   // specular_ x the lobe's cosine-weighted mean albedo
     // set_wo's cache: wo.z(), specular_albedo(wo.z()) and the lobe probability (valid: cached_wo_z_ > 0).
     float cached_wo_z_ = -1, cached_e_o_ = 0, cached_ps_ = 0;
     float coat_ = 0, coat_roughness_ = 0, coat_alpha_ = 1;  // set_clearcoat

@@ -60,7 +60,7 @@ const std::set<std::string>& supported_extensions() {
     static const std::set<std::string> s = {"KHR_texture_transform",      "KHR_materials_emissive_strength",
                                             "KHR_materials_transmission", "KHR_materials_clearcoat",
                                             "EXT_mesh_gpu_instancing",    "KHR_mesh_quantization",
-                                            "KHR_lights_punctual"};
+                                            "KHR_lights_punctual",        "KHR_materials_ior"};
     return s;
 }
 
@@ -854,6 +854,7 @@ class GltfLoader {
                 read_transmission(*tr, &out, what);
             if (const tg::Value* cc = extension(m.extensions, "KHR_materials_clearcoat"))
                 read_clearcoat(*cc, &out, what);
+            if (const tg::Value* ior = extension(m.extensions, "KHR_materials_ior")) read_ior(*ior, &out, what);
             if (m.alphaMode == "MASK") out.alpha_mode = AlphaMode::Mask;
             else if (m.alphaMode == "BLEND") out.alpha_mode = AlphaMode::Blend;
             else if (m.alphaMode != "OPAQUE" && !m.alphaMode.empty())
@@ -902,6 +903,22 @@ class GltfLoader {
             warn(what +
                  ": KHR_materials_clearcoat clearcoatNormalTexture is not read: the coat follows the "
                  "surface's own normal");
+    }
+
+    // KHR_materials_ior: 1 (no reflection at normal incidence) and above; water 1.33, glass 1.5,
+    // diamond 2.42. The extension's 0 (and values below 1) fall back to glTF's 1.5, said.
+    void read_ior(const tg::Value& ext, Material* out, const std::string& what) {
+        const tg::Value* v = member(ext, "ior");
+        if (!v) return;
+        const double ior = v->IsNumber() ? v->GetNumberAsDouble() : std::nan("");
+        if (!(ior >= 0 && ior <= 100))
+            fail(what + ": KHR_materials_ior ior " +
+                 (v->IsNumber() ? number_text(ior) : std::string("is not a number")) + " is outside [1, 100]");
+        if (ior < 1) {
+            warn(what + ": KHR_materials_ior ior " + number_text(ior) + " is below 1: glTF's 1.5 used");
+            return;
+        }
+        out->ior = float(ior);
     }
 
     // KHR_materials_transmission: transmissionFactor in [0, 1] and transmissionTexture (R, linear).

@@ -181,6 +181,7 @@ Color PathIntegrator::transmittance(const Ray& shadow_ray, RenderStats* stats) c
         if (m.transmission > 0) {
             const ShadingPoint sp = evaluate_material(accel_.scene(), hit, -ray.direction.normalized());
             MetalRoughBsdf bsdf(sp.base_color, sp.metallic, sp.roughness, sp.specular, sp.transmission);
+            if (sp.ior != 1.5f) bsdf.set_ior(sp.ior);
             bsdf.set_clearcoat(sp.clearcoat, sp.clearcoat_roughness);
             through = bsdf.transmitted(sp.to_local(-ray.direction.normalized()));
         }
@@ -327,6 +328,7 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
             }
         }
         MetalRoughBsdf bsdf(sp.base_color, sp.metallic, roughness, sp.specular, sp.transmission);
+        if (sp.ior != 1.5f) bsdf.set_ior(sp.ior);  // glTF's default IOR is the BSDF's own
         if (sp.clearcoat > 0) bsdf.set_clearcoat(sp.clearcoat, coat_roughness);
         Vec3 wo = sp.to_local(-ray.direction.normalized());
         if (wo.z() <= 0) break;

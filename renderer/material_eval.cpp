@@ -17,6 +17,7 @@ ShadingPoint evaluate_material(const Scene& scene, const SurfaceHit& hit, const 
         sp.roughness *= t.y(), sp.metallic *= t.z();
     }
     sp.transmission = m.transmission;
+    sp.ior = m.ior;
     if (m.transmission > 0 && m.transmission_texture.present()) sp.transmission *= tex(m.transmission_texture).x();
     if (m.clearcoat > 0) {
         sp.clearcoat = m.clearcoat, sp.clearcoat_roughness = m.clearcoat_roughness;

@@ -8,8 +8,9 @@ namespace dynsky {
 struct ShadingPoint {
     Color base_color = Color::Ones();
     float metallic = 1, roughness = 1, specular = 1;
-    float transmission = 0;  // KHR_materials_transmission (thin-walled)
+    float transmission = 0;                        // KHR_materials_transmission (thin-walled)
     float clearcoat = 0, clearcoat_roughness = 0;  // KHR_materials_clearcoat
+    float ior = 1.5f;                              // KHR_materials_ior
     Color emission = Color::Zero();
     Vec3 geometric_normal;            // flipped to the side of wo
     Vec3 normal, tangent, bitangent;  // shading frame (normal-mapped), on the side of wo

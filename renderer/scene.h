@@ -39,6 +39,7 @@ struct Material {
     float metallic = 1.0f, roughness = 1.0f;
     TextureSlot metallic_roughness_texture;  // linear: G roughness, B metallic
     float specular = 1.0f;                   // KHR_materials_specular specularFactor (0: pure Lambert base)
+    float ior = 1.5f;                        // KHR_materials_ior: the dielectric's F0 = ((ior - 1) / (ior + 1))^2
     // KHR_materials_transmission, thin-walled (no KHR_materials_volume): the share of the dielectric
     // base that passes straight through the surface, tinted by the base colour, instead of
     // scattering diffusely (bsdf.h MetalRoughBsdf::transmitted).

@@ -1092,6 +1092,34 @@ TEST(GltfLoader, PunctualLightsArePlacedAndConvertedToTheSkysUnits) {
     fs::remove_all(dir);
 }
 
+// KHR_materials_ior: read into the material (water 1.33); the extension's 0 falls back to 1.5 with
+// a warning; a negative IOR is refused by name.
+TEST(GltfLoader, IorIsReadAndImpossibleValuesAreSaid) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    const int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+    const int idx = g.accessor(g.view(std::vector<uint16_t>{0, 1, 2, 0, 2, 3}), kUShort, 6, "SCALAR");
+    auto with_ior = [&](const std::string& ior) {
+        return one_node_scene("{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) +
+                                  "},\"indices\":" + std::to_string(idx) + ",\"material\":0}]}",
+                              "\"materials\":[{\"name\":\"water\",\"extensions\":{\"KHR_materials_ior\":{\"ior\":" +
+                                  ior + "}}}],\"extensionsUsed\":[\"KHR_materials_ior\"]");
+    };
+    std::vector<std::string> notes;
+    Scene water = load_gltf(g.write(dir, "water", with_ior("1.33")), &notes);
+    ASSERT_EQ(water.materials.size(), 1u);
+    EXPECT_FLOAT_EQ(water.materials[0].ior, 1.33f);
+    EXPECT_TRUE(notes.empty()) << notes[0];
+    Scene zero = load_gltf(g.write(dir, "zero", with_ior("0")), &notes);
+    EXPECT_FLOAT_EQ(zero.materials[0].ior, 1.5f);
+    ASSERT_FALSE(notes.empty());
+    EXPECT_NE(notes.back().find("KHR_materials_ior ior 0 is below 1"), std::string::npos) << notes.back();
+    std::string e = load_error(g.write(dir, "negative", with_ior("-2")));
+    EXPECT_NE(e.find("negative.gltf"), std::string::npos) << e;
+    EXPECT_NE(e.find("material 'water': KHR_materials_ior ior -2 is outside [1, 100]"), std::string::npos) << e;
+    fs::remove_all(dir);
+}
+
 TEST(GltfLoader, HostileInputIsRefusedAtItsRoot) {
     std::string root = test::temp_dir("gltf");
     std::string dir = root + "/asset";
