@@ -161,14 +161,109 @@ float known_percentile99(const cv::Mat& channel, const cv::Mat& mask) {
     return known[q];
 }
 
+// Obstructions along the horizon (rooftops, railings, trees: a fifth of a Mobotix disc) filled by
+// inpainting came out as radial streaks of whatever lay at their inner edge, green-grey spokes
+// around every imported sky (looked at). Beyond the outermost seen sky of each azimuth, and below
+// kBandMinElevation's radius, the fill is instead the mean colour of the seen sky just inside that
+// edge, smoothed over azimuth (sigma kBandSmoothingDeg; azimuths with no seen sky near the horizon
+// take their neighbours'): a haze band, no streaks. Holes inside the seen sky (masts, an arm, a
+// shadow band's inner part) are inpainted as before, these pixels now known around them. Returns
+// the mask of what is left to inpaint.
+constexpr double kBandMinRadius = 0.75;  // zenith 67.5 degrees: the band fill stays near the horizon
+constexpr double kBandEdgeWidth = 0.06;  // x the radius: the seen ring whose mean colour fills
+constexpr double kBandSmoothingDeg = 6.0;
+constexpr double kBandSeamWidth = 0.015;  // x the radius: inpainted between the seen sky and the band
+constexpr int kBandBins = 360;
+constexpr double kRingMaxSeenRadius = 0.97;  // the median azimuth's seen sky ends below this: a ring
+
+cv::Mat fill_horizon_band(cv::Mat& rgb, const cv::Mat& fill) {
+    const int n = rgb.cols;
+    const double c = (n - 1) / 2.0, half = n / 2.0;
+    auto radius = [&](int x, int y) { return std::hypot(x - c, y - c) / half; };
+    auto bin_of = [&](int x, int y) {
+        const double a = std::atan2(double(y) - c, double(x) - c);  // any fixed origin: bins only
+        return std::min(kBandBins - 1, int((a + kPiD) / (2 * kPiD) * kBandBins));
+    };
+    // The outermost seen sky of each azimuth.
+    std::vector<double> r_seen(kBandBins, 0.0);
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            const double r = radius(x, y);
+            if (r <= 1 && !fill.at<unsigned char>(y, x))
+                r_seen[size_t(bin_of(x, y))] = std::max(r_seen[size_t(bin_of(x, y))], r);
+        }
+    // Only a ring (the seen sky stops short of the horizon at most azimuths, as behind a rooftop
+    // railing): an obstruction at a few azimuths (a TSI's arm and band) is inpainted as before.
+    {
+        std::vector<double> sorted = r_seen;
+        std::nth_element(sorted.begin(), sorted.begin() + kBandBins / 2, sorted.end());
+        if (sorted[kBandBins / 2] > kRingMaxSeenRadius) return fill.clone();
+    }
+    // The mean colour of the seen ring just inside it (near the horizon only).
+    std::vector<cv::Vec3d> sum(kBandBins, cv::Vec3d(0, 0, 0));
+    std::vector<double> count(kBandBins, 0.0);
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            const double r = radius(x, y);
+            const int b = bin_of(x, y);
+            if (r > 1 || fill.at<unsigned char>(y, x) || r < r_seen[size_t(b)] - kBandEdgeWidth ||
+                r < kBandMinRadius - 2 * kBandEdgeWidth)
+                continue;
+            const cv::Vec3f& v = rgb.at<cv::Vec3f>(y, x);
+            sum[size_t(b)] += cv::Vec3d(v[0], v[1], v[2]), count[size_t(b)] += 1;
+        }
+    // Smoothed over azimuth by normalised convolution: empty bins take their neighbours'; wider
+    // until every bin has some (a hidden half horizon), else nothing is band-filled.
+    std::vector<cv::Vec3f> edge(kBandBins);
+    for (double sigma_deg = kBandSmoothingDeg;; sigma_deg *= 3) {
+        const double sigma = sigma_deg / 360.0 * kBandBins;
+        const int reach = std::min(kBandBins / 2, int(std::ceil(3 * sigma)));
+        bool all = true;
+        for (int b = 0; b < kBandBins; ++b) {
+            cv::Vec3d s(0, 0, 0);
+            double w_sum = 0;
+            for (int k = -reach; k <= reach; ++k) {
+                const size_t i = size_t(((b + k) % kBandBins + kBandBins) % kBandBins);
+                const double w = std::exp(-0.5 * k * k / (sigma * sigma));
+                s += w * sum[i], w_sum += w * count[i];
+            }
+            if (!(w_sum > 0)) {
+                all = false;
+                break;
+            }
+            edge[size_t(b)] = cv::Vec3f(float(s[0] / w_sum), float(s[1] / w_sum), float(s[2] / w_sum));
+        }
+        if (all) break;
+        if (reach >= kBandBins / 2) return fill.clone();  // no seen sky near the horizon at all
+    }
+    cv::Mat rest = fill.clone();
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            if (!fill.at<unsigned char>(y, x)) continue;
+            const double r = radius(x, y);
+            const int b = bin_of(x, y);
+            if (r < kBandMinRadius || r < r_seen[size_t(b)]) continue;
+            rgb.at<cv::Vec3f>(y, x) = edge[size_t(b)];
+            rest.at<unsigned char>(y, x) = 0;
+        }
+    // A seam of a few pixels along the seen sky is left to the inpainting, which blends the two.
+    const int seam = std::max(1, int(std::lround(kBandSeamWidth * half)));
+    cv::Mat seen_near;
+    cv::dilate(~fill, seen_near, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * seam + 1, 2 * seam + 1)));
+    rest |= fill & seen_near;
+    return rest;
+}
+
 // Telea's fast-marching inpainting of a 3-channel float image where fill != 0, in place
 // (FillMethod::Texture: inpaint_texture instead).
 // cv::inpaint takes float only one channel at a time, and its Telea path misbehaves on small
 // values (OpenCV 4.6 fills a 0.2-0.4 ramp with 1.0 and -0.3): each channel is scaled so its 99th
 // percentile is 255 first. Above 512 px the fill is computed at 512 and upsampled: inpainting is
 // smooth anyway, and its cost grows with the filled area (seconds at 2048^2).
-void inpaint_float(cv::Mat& rgb, const cv::Mat& fill, PhotoImportParams::FillMethod method) {
-    if (method == PhotoImportParams::FillMethod::Texture) return inpaint_texture(rgb, fill);
+void inpaint_float(cv::Mat& rgb, const cv::Mat& fill_in, PhotoImportParams::FillMethod method) {
+    if (method == PhotoImportParams::FillMethod::Texture) return inpaint_texture(rgb, fill_in);
+    const cv::Mat fill = fill_horizon_band(rgb, fill_in);
+    if (cv::countNonZero(fill) == 0) return;
     cv::Mat src, mask;
     const bool reduced = reduce_for_fill(rgb, fill, 512, &src, &mask);
     std::vector<cv::Mat> ch(3);

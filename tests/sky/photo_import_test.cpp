@@ -250,6 +250,70 @@ TEST(PhotoImport, MaskedObstructionIsInpaintedPlausibly) {
         }
 }
 
+// A rooftop ring hides the lowest 13.5 degrees all round (a Mobotix camera's railings and roofs).
+// Inpainted, it came out as radial streaks: the texture at its inner edge (here stripes 9 degrees
+// apart) drawn out to the horizon. Now the ring holds the seen edge's colour smoothed over azimuth:
+// no stripes, the east-bright sky still brighter in the east, and the same mean as the seen edge.
+TEST(PhotoImport, AHorizonRingIsFilledAsAHazeBandNotStreaks) {
+    TestCamera cam{200.0, 150.0, 140.0, 0.0, LensLaw::Equidistant, false};
+    Image photo = render_photo(cam, 400, 300, false);
+    Image ring(400, 300, 1);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
+    for (int y = 0; y < 300; ++y)
+        for (int x = 0; x < 400; ++x) {
+            Vec3d w;
+            if (!cam.direction(x, y, &w)) continue;
+            const double theta = std::acos(w.y()) / kDeg, phi = std::atan2(w.x(), -w.z());
+            if (theta > 76.5) {
+                ring.at(x, y, 0) = 1.0f;
+                const float roof = 0.02f + 0.3f * uniform(rng);  // roofs, railings: anything
+                for (int k = 0; k < 3; ++k) photo.at(x, y, k) = roof;
+            } else if (theta > 60) {
+                for (int k = 0; k < 3; ++k) photo.at(x, y, k) *= float(1 + 0.3 * std::sin(40 * phi));
+            }
+        }
+    const int n = 256;
+    ImportedPhoto imported = import_photo_image(photo, "ring", params_for(cam, n, false), &ring);
+    // The profile around the ring at zenith 84 degrees (r = 0.93) and around the seen edge (70).
+    auto profile = [&](double r, int channel) {
+        std::vector<double> v(360);
+        for (int a = 0; a < 360; ++a) {
+            const double phi = a * kDeg;
+            const int i = std::clamp(int((-r * std::sin(phi) + 1) * n / 2), 0, n - 1);
+            const int j = std::clamp(int((-r * std::cos(phi) + 1) * n / 2), 0, n - 1);
+            v[size_t(a)] = imported.sky.pixel(i, j)[channel];
+        }
+        return v;
+    };
+    // Stripes: the profile minus its own 10-degree running mean.
+    auto stripes = [](const std::vector<double>& v) {
+        double sum2 = 0;
+        for (int a = 0; a < 360; ++a) {
+            double m = 0;
+            for (int k = -5; k <= 5; ++k) m += v[size_t((a + k + 360) % 360)] / 11;
+            sum2 += (v[size_t(a)] - m) * (v[size_t(a)] - m);
+        }
+        return std::sqrt(sum2 / 360);
+    };
+    const std::vector<double> band = profile(0.93, 1), edge = profile(70.0 / 90, 1);
+    EXPECT_GT(stripes(edge), 0.05) << "the seen edge must carry the stripes";
+    EXPECT_LT(stripes(band), 0.1 * stripes(edge)) << "the ring must not carry them out to the horizon";
+    double band_mean = 0, edge_mean = 0;
+    for (int a = 0; a < 360; ++a) band_mean += band[size_t(a)] / 360, edge_mean += edge[size_t(a)] / 360;
+    EXPECT_NEAR(band_mean, edge_mean, 0.1 * edge_mean);
+    const std::vector<double> red = profile(0.93, 0);
+    EXPECT_GT(red[90], red[270] + 0.2) << "east (90 degrees) is the bright side";
+    // Every ring pixel is marked as filled, for evaluations and training to leave out.
+    int marked = 0, ring_pixels = 0;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const double r = fisheye::pixel_center_uv(i, j, n).norm();
+            if (r > 0.88 && r < 0.98) ++ring_pixels, marked += imported.not_sky[size_t(j) * n + i];
+        }
+    EXPECT_EQ(marked, ring_pixels);
+}
+
 // A wide band across broken cloud with the sun's glare at its inner end (the TSI's shadow band):
 // the smooth fill drags the glare along the band as a bright, featureless streak; the texture fill
 // puts the sky's own clouds and blue there, and is the same on every run.
