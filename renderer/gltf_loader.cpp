@@ -1027,6 +1027,11 @@ class GltfLoader {
             if (image_header_size(encoded[k].first, encoded[k].second, &header_w, &header_h)) {
                 std::string problem = image_size_problem(header_w, header_h, 4);
                 if (!problem.empty()) {
+                    // A few bytes whose first ones look like a header ("GIF89a garbage") are not a
+                    // large image: say so beside the size.
+                    if (encoded[k].second < 1024)
+                        problem = "not an image, or a corrupt one (a file of " + std::to_string(encoded[k].second) +
+                                  " bytes whose header says: " + problem + ")";
                     decoded[k].error = problem;
                     return;
                 }

@@ -1027,6 +1027,18 @@ TEST(GltfLoader, ValuesOfTheWrongTypeOrOutsideTheSpecAreNamedByTheirPath) {
                           "\"index\":0,\"texCoord\":1}}}],\"textures\":[{\"source\":0}],\"images\":[{\"uri\":"
                           "\"t.png\"}]"),
            "material 'm' maps a texture with TEXCOORD_1, which the primitive does not have");
+    // Fourteen bytes that start like a GIF header said "26400 x 29281 pixels, beyond what dynsky
+    // reads": they are no image at all.
+    write_bytes(dir + "/em.png", "GIF89a garbage");
+    e = load_error(
+        g.write(dir, "gif_text",
+                one_node_scene("{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) +
+                                   ",\"TEXCOORD_0\":" + std::to_string(uv) + "},\"material\":0}]}",
+                               "\"materials\":[{\"emissiveFactor\":[1,1,1],\"emissiveTexture\":{\"index\":0}}],"
+                               "\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"em.png\"}]")));
+    EXPECT_NE(e.find("not an image, or a corrupt one (a file of 14 bytes whose header says: image is 26400 x 29281"),
+              std::string::npos)
+        << e;
     fs::remove_all(dir);
 }
 
