@@ -117,7 +117,7 @@ Color MetalRoughBsdf::transmitted(const Vec3& wo) const {
     if (transmission_ <= 0 || metallic_ >= 1 || !(wo.z() > 0)) return Color::Zero();
     const float e_o = specular_ <= 0 ? 0.0f : wo.z() == cached_wo_z_ ? cached_e_o_ : specular_albedo(wo.z());
     const float under_coat = coat_ > 0 ? 1 - (wo.z() == cached_wo_z_ ? cached_e_coat_ : coat_albedo(wo.z())) : 1.0f;
-    return base_ * ((1 - metallic_) * transmission_ * (1 - e_o) * under_coat);
+    return base_ * tint_ * ((1 - metallic_) * transmission_ * (1 - e_o) * under_coat);
 }
 
 float MetalRoughBsdf::specular_albedo(float mu) const {

@@ -35,6 +35,9 @@ class MetalRoughBsdf {
     // passes. Values below 1 (the extension's 0) read as 1.5. Before set_wo.
     void set_ior(float ior);
 
+    // KHR_materials_volume, thin: what transmitted() passes is also multiplied by this (per channel).
+    void set_transmission_tint(const Color& tint) { tint_ = tint.max(0.0f).min(1.0f); }
+
     // Thin-walled transmission: the light arriving along -wo that passes straight through the
     // surface (a null-scattering event for the integrator, not part of eval): the dielectric's
     // share, what its specular lobe does not reflect towards wo (1 - E(wo)), times transmission,
@@ -74,8 +77,9 @@ class MetalRoughBsdf {
 
     Color base_;
     float metallic_, roughness_, alpha_, specular_, transmission_;
-    float f0_ = 0.04f;  // the dielectric's Fresnel at normal incidence (set_ior)
-    float e_avg_ = 0;   // specular_ x the lobe's cosine-weighted mean albedo
+    float f0_ = 0.04f;            // the dielectric's Fresnel at normal incidence (set_ior)
+    Color tint_ = Color::Ones();  // set_transmission_tint
+    float e_avg_ = 0;             // specular_ x the lobe's cosine-weighted mean albedo
     // set_wo's cache: wo.z(), specular_albedo(wo.z()) and the lobe probability (valid: cached_wo_z_ > 0).
     float cached_wo_z_ = -1, cached_e_o_ = 0, cached_ps_ = 0;
     float coat_ = 0, coat_roughness_ = 0, coat_alpha_ = 1;  // set_clearcoat

@@ -60,7 +60,8 @@ const std::set<std::string>& supported_extensions() {
     static const std::set<std::string> s = {"KHR_texture_transform",      "KHR_materials_emissive_strength",
                                             "KHR_materials_transmission", "KHR_materials_clearcoat",
                                             "EXT_mesh_gpu_instancing",    "KHR_mesh_quantization",
-                                            "KHR_lights_punctual",        "KHR_materials_ior"};
+                                            "KHR_lights_punctual",        "KHR_materials_ior",
+                                            "KHR_materials_volume"};
     return s;
 }
 
@@ -855,6 +856,8 @@ class GltfLoader {
             if (const tg::Value* cc = extension(m.extensions, "KHR_materials_clearcoat"))
                 read_clearcoat(*cc, &out, what);
             if (const tg::Value* ior = extension(m.extensions, "KHR_materials_ior")) read_ior(*ior, &out, what);
+            if (const tg::Value* volume = extension(m.extensions, "KHR_materials_volume"))
+                read_volume(*volume, &out, what);
             if (m.alphaMode == "MASK") out.alpha_mode = AlphaMode::Mask;
             else if (m.alphaMode == "BLEND") out.alpha_mode = AlphaMode::Blend;
             else if (m.alphaMode != "OPAQUE" && !m.alphaMode.empty())
@@ -919,6 +922,43 @@ class GltfLoader {
             return;
         }
         out->ior = float(ior);
+    }
+
+    // KHR_materials_volume, rendered thin-walled (no refraction): the slab's absorption tints what
+    // passes once, attenuationColor^(thicknessFactor / attenuationDistance), so a bottle of white base
+    // and green attenuation is green glass rather than clear. The thickness is taken as it is (the
+    // node's scale and the path's slant are not), its texture not read.
+    void read_volume(const tg::Value& ext, Material* out, const std::string& what) {
+        const char* name = "KHR_materials_volume";
+        auto number = [&](const char* key, double fallback) {
+            const tg::Value* v = member(ext, key);
+            if (!v) return fallback;
+            if (!v->IsNumber()) fail(what + ": " + name + " " + key + " is not a number");
+            return v->GetNumberAsDouble();
+        };
+        const double thickness = number("thicknessFactor", 0.0);
+        const double distance = number("attenuationDistance", std::numeric_limits<double>::infinity());
+        if (!(thickness >= 0 && thickness <= kMaxCoordinate))
+            fail(what + ": " + name + " thicknessFactor " + number_text(thickness) + " is not a thickness (>= 0)");
+        if (!(distance > 0))
+            fail(what + ": " + name + " attenuationDistance " + number_text(distance) + " is not positive");
+        Color colour = Color::Ones();
+        if (const tg::Value* c = member(ext, "attenuationColor")) {
+            if (!c->IsArray() || c->ArrayLen() != 3) fail(what + ": " + name + " attenuationColor is not 3 numbers");
+            for (int k = 0; k < 3; ++k) {
+                const tg::Value& e = c->Get(k);
+                const double v = e.IsNumber() ? e.GetNumberAsDouble() : std::nan("");
+                if (!(v >= 0 && v <= 1))
+                    fail(what + ": " + name + " attenuationColor " +
+                         (e.IsNumber() ? number_text(v) : std::string("holds a non-number")) + " is outside [0, 1]");
+                colour[k] = float(v);
+            }
+        }
+        if (out->transmission > 0 && thickness > 0 && std::isfinite(distance))
+            out->volume_tint = colour.pow(float(thickness / distance));
+        if (out->transmission > 0)
+            warn(what + ": " + name +
+                 " is rendered thin: its absorption tints what passes, without refraction through the thickness");
     }
 
     // KHR_materials_transmission: transmissionFactor in [0, 1] and transmissionTexture (R, linear).

@@ -182,6 +182,7 @@ Color PathIntegrator::transmittance(const Ray& shadow_ray, RenderStats* stats) c
             const ShadingPoint sp = evaluate_material(accel_.scene(), hit, -ray.direction.normalized());
             MetalRoughBsdf bsdf(sp.base_color, sp.metallic, sp.roughness, sp.specular, sp.transmission);
             if (sp.ior != 1.5f) bsdf.set_ior(sp.ior);
+            bsdf.set_transmission_tint(sp.transmission_tint);
             bsdf.set_clearcoat(sp.clearcoat, sp.clearcoat_roughness);
             through = bsdf.transmitted(sp.to_local(-ray.direction.normalized()));
         }
@@ -329,6 +330,7 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
         }
         MetalRoughBsdf bsdf(sp.base_color, sp.metallic, roughness, sp.specular, sp.transmission);
         if (sp.ior != 1.5f) bsdf.set_ior(sp.ior);  // glTF's default IOR is the BSDF's own
+        if (sp.transmission > 0) bsdf.set_transmission_tint(sp.transmission_tint);
         if (sp.clearcoat > 0) bsdf.set_clearcoat(sp.clearcoat, coat_roughness);
         Vec3 wo = sp.to_local(-ray.direction.normalized());
         if (wo.z() <= 0) break;

@@ -18,6 +18,7 @@ ShadingPoint evaluate_material(const Scene& scene, const SurfaceHit& hit, const 
     }
     sp.transmission = m.transmission;
     sp.ior = m.ior;
+    sp.transmission_tint = m.volume_tint;
     if (m.transmission > 0 && m.transmission_texture.present()) sp.transmission *= tex(m.transmission_texture).x();
     if (m.clearcoat > 0) {
         sp.clearcoat = m.clearcoat, sp.clearcoat_roughness = m.clearcoat_roughness;

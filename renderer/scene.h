@@ -45,6 +45,9 @@ struct Material {
     // scattering diffusely (bsdf.h MetalRoughBsdf::transmitted).
     float transmission = 0.0f;
     TextureSlot transmission_texture;  // linear R
+    // KHR_materials_volume, rendered thin: what passes is tinted once by the slab's absorption,
+    // attenuationColor^(thicknessFactor / attenuationDistance) (no refraction, no node scale).
+    Color volume_tint = Color::Ones();
     // KHR_materials_clearcoat: a clear dielectric layer over the material (bsdf.h set_clearcoat).
     float clearcoat = 0.0f, clearcoat_roughness = 0.0f;
     TextureSlot clearcoat_texture;            // linear R x clearcoat

@@ -100,6 +100,14 @@ TEST(MetalRoughBsdf, TransmissionPassesWhatTheSpecularLobeDoesNotReflect) {
             EXPECT_NEAR(albedo_quadrature(half, wo, 500)[0], reflected[0] + 0.5f * diffuse, 2e-3f);
             EXPECT_NEAR(half.transmitted(wo)[0], 0.5f * through[0], 1e-5f);
         }
+    // KHR_materials_volume's absorption tints what passes, and only that.
+    {
+        const Vec3 wo = dir_from_theta(0.3f);
+        MetalRoughBsdf clear(Color::Ones(), 0.0f, 0.4f, 1.0f, 1.0f), bottle(Color::Ones(), 0.0f, 0.4f, 1.0f, 1.0f);
+        bottle.set_transmission_tint(Color(0.25f, 1.0f, 0.0625f));
+        EXPECT_TRUE(bottle.transmitted(wo).isApprox(clear.transmitted(wo) * Color(0.25f, 1.0f, 0.0625f), 1e-6f));
+        EXPECT_TRUE(bottle.eval(wo, dir_from_theta(-0.5f)).isApprox(clear.eval(wo, dir_from_theta(-0.5f)), 1e-6f));
+    }
     // Metals and opaque dielectrics pass nothing; a half-metal passes its dielectric half's share.
     const Vec3 wo = dir_from_theta(0.5f);
     EXPECT_EQ(MetalRoughBsdf(Color::Ones(), 1.0f, 0.2f, 1.0f, 1.0f).transmitted(wo).maxCoeff(), 0.0f);

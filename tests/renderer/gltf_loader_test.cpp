@@ -1132,6 +1132,47 @@ TEST(GltfLoader, IorIsReadAndImpossibleValuesAreSaid) {
     fs::remove_all(dir);
 }
 
+// KHR_materials_volume on thin glass: attenuationColor^(thickness / attenuationDistance) tints what
+// passes (green bottle glass of a white base is green), said as rendered thin; bad values refused.
+TEST(GltfLoader, VolumeAbsorptionTintsThinGlass) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    const int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+    const int idx = g.accessor(g.view(std::vector<uint16_t>{0, 1, 2, 0, 2, 3}), kUShort, 6, "SCALAR");
+    auto with_volume = [&](const std::string& volume) {
+        return one_node_scene("{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) +
+                                  "},\"indices\":" + std::to_string(idx) + ",\"material\":0}]}",
+                              "\"materials\":[{\"name\":\"bottle\",\"extensions\":{\"KHR_materials_transmission\":{"
+                              "\"transmissionFactor\":1},\"KHR_materials_volume\":" +
+                                  volume +
+                                  "}}],\"extensionsUsed\":[\"KHR_materials_transmission\",\"KHR_materials_volume\"]");
+    };
+    std::vector<std::string> notes;
+    Scene s = load_gltf(g.write(dir, "bottle",
+                                with_volume("{\"thicknessFactor\":0.01,\"attenuationDistance\":0.005,"
+                                            "\"attenuationColor\":[0.5,1,0.25]}")),
+                        &notes);
+    ASSERT_EQ(s.materials.size(), 1u);
+    EXPECT_TRUE(s.materials[0].volume_tint.isApprox(Color(0.25f, 1, 0.0625f), 1e-6f))
+        << s.materials[0].volume_tint.transpose();
+    bool said = false;
+    for (const std::string& n : notes)
+        said = said || n.find("KHR_materials_volume is rendered thin") != std::string::npos;
+    EXPECT_TRUE(said);
+    // No thickness, or no attenuation: clear.
+    EXPECT_TRUE(
+        (load_gltf(g.write(dir, "thin", with_volume("{\"attenuationColor\":[0.5,1,0.25]}"))).materials[0].volume_tint ==
+         1.0f)
+            .all());
+    std::string e = load_error(g.write(dir, "bad", with_volume("{\"thicknessFactor\":1,\"attenuationDistance\":0}")));
+    EXPECT_NE(e.find("material 'bottle': KHR_materials_volume attenuationDistance 0 is not positive"),
+              std::string::npos)
+        << e;
+    e = load_error(g.write(dir, "colour", with_volume("{\"thicknessFactor\":1,\"attenuationColor\":[2,1,1]}")));
+    EXPECT_NE(e.find("attenuationColor 2 is outside [0, 1]"), std::string::npos) << e;
+    fs::remove_all(dir);
+}
+
 TEST(GltfLoader, HostileInputIsRefusedAtItsRoot) {
     std::string root = test::temp_dir("gltf");
     std::string dir = root + "/asset";
