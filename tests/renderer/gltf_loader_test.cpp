@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -990,23 +991,22 @@ TEST(GltfLoader, ValuesOfTheWrongTypeOrOutsideTheSpecAreNamedByTheirPath) {
         return "\"scene\":0,\"scenes\":[{\"nodes\":[0,1]}],\"nodes\":[{\"mesh\":0},{\"camera\":0}],\"meshes\":[" +
                mesh(pos) + "],\"cameras\":[" + camera + "]";
     };
-    Scene a = warned("aspect0",
-                     camera_scene("{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.8,\"znear\":0.1,"
-                                  "\"aspectRatio\":0}}"),
-                     "cameras[0].perspective.aspectRatio 0 is not positive");
-    ASSERT_EQ(a.cameras.size(), 1u);
-    EXPECT_EQ(a.cameras[0].aspect_ratio, 0.0f);
-    warned("znear0", camera_scene("{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.8,\"znear\":0}}"),
-           "cameras[0].perspective.znear 0 is not positive");
-    warned("zfar_near",
-           camera_scene("{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.8,\"znear\":50,\"zfar\":1}}"),
-           "cameras[0].perspective.zfar 1 is not beyond znear 50");
-    Scene o = warned("xmag0",
-                     camera_scene("{\"type\":\"orthographic\",\"orthographic\":{\"xmag\":0,\"ymag\":1,\"znear\":0,"
-                                  "\"zfar\":10}}"),
-                     "cameras[0].orthographic.xmag is 0");
-    ASSERT_EQ(o.cameras.size(), 1u);
-    EXPECT_EQ(o.cameras[0].aspect_ratio, 0.0f);
+    // Each camera kept, its value said and not used (the aspect left to the image).
+    const std::vector<std::array<std::string, 3>> cameras = {
+        {"aspect0", "{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.8,\"znear\":0.1,\"aspectRatio\":0}}",
+         "cameras[0].perspective.aspectRatio 0 is not positive"},
+        {"znear0", "{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.8,\"znear\":0}}",
+         "cameras[0].perspective.znear 0 is not positive"},
+        {"zfar_near", "{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.8,\"znear\":50,\"zfar\":1}}",
+         "cameras[0].perspective.zfar 1 is not beyond znear 50"},
+        {"xmag0", "{\"type\":\"orthographic\",\"orthographic\":{\"xmag\":0,\"ymag\":1,\"znear\":0,\"zfar\":10}}",
+         "cameras[0].orthographic.xmag is 0"},
+    };
+    for (const auto& [name, camera, expect] : cameras) {
+        Scene c = warned(name, camera_scene(camera), expect);
+        ASSERT_EQ(c.cameras.size(), 1u) << name;
+        EXPECT_EQ(c.cameras[0].aspect_ratio, 0.0f) << name;
+    }
     Scene f = warned("yfov_tiny",
                      camera_scene("{\"type\":\"perspective\",\"perspective\":{\"yfov\":1e-30,\"znear\":0.1}}"),
                      "yfov 1e-30 rad is outside 0.01 to 179.9 degrees");
@@ -1104,29 +1104,40 @@ TEST(GltfLoader, PunctualLightsArePlacedAndConvertedToTheSkysUnits) {
     fs::remove_all(dir);
 }
 
+// A quad with one material: `material` is its JSON object, `used` the extensionsUsed list's items.
+struct OneMaterialQuad {
+    MiniGltf g;
+    int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+    int idx = g.accessor(g.view(std::vector<uint16_t>{0, 1, 2, 0, 2, 3}), kUShort, 6, "SCALAR");
+    std::string write(const std::string& dir, const std::string& name, const std::string& material,
+                      const std::string& used) const {
+        return g.write(dir, name,
+                       one_node_scene("{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) +
+                                          "},\"indices\":" + std::to_string(idx) + ",\"material\":0}]}",
+                                      "\"materials\":[" + material + "],\"extensionsUsed\":[" + used + "]"));
+    }
+};
+
 // KHR_materials_ior: read into the material (water 1.33); the extension's 0 falls back to 1.5 with
 // a warning; a negative IOR is refused by name.
 TEST(GltfLoader, IorIsReadAndImpossibleValuesAreSaid) {
     std::string dir = test::temp_dir("gltf");
-    MiniGltf g;
-    const int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
-    const int idx = g.accessor(g.view(std::vector<uint16_t>{0, 1, 2, 0, 2, 3}), kUShort, 6, "SCALAR");
-    auto with_ior = [&](const std::string& ior) {
-        return one_node_scene("{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) +
-                                  "},\"indices\":" + std::to_string(idx) + ",\"material\":0}]}",
-                              "\"materials\":[{\"name\":\"water\",\"extensions\":{\"KHR_materials_ior\":{\"ior\":" +
-                                  ior + "}}}],\"extensionsUsed\":[\"KHR_materials_ior\"]");
+    const OneMaterialQuad quad;
+    auto write = [&](const std::string& name, const std::string& ior) {
+        return quad.write(dir, name,
+                          "{\"name\":\"water\",\"extensions\":{\"KHR_materials_ior\":{\"ior\":" + ior + "}}}",
+                          "\"KHR_materials_ior\"");
     };
     std::vector<std::string> notes;
-    Scene water = load_gltf(g.write(dir, "water", with_ior("1.33")), &notes);
+    Scene water = load_gltf(write("water", "1.33"), &notes);
     ASSERT_EQ(water.materials.size(), 1u);
     EXPECT_FLOAT_EQ(water.materials[0].ior, 1.33f);
     EXPECT_TRUE(notes.empty()) << notes[0];
-    Scene zero = load_gltf(g.write(dir, "zero", with_ior("0")), &notes);
+    Scene zero = load_gltf(write("zero", "0"), &notes);
     EXPECT_FLOAT_EQ(zero.materials[0].ior, 1.5f);
     ASSERT_FALSE(notes.empty());
     EXPECT_NE(notes.back().find("KHR_materials_ior ior 0 is below 1"), std::string::npos) << notes.back();
-    std::string e = load_error(g.write(dir, "negative", with_ior("-2")));
+    std::string e = load_error(write("negative", "-2"));
     EXPECT_NE(e.find("negative.gltf"), std::string::npos) << e;
     EXPECT_NE(e.find("material 'water': KHR_materials_ior ior -2 is outside [1, 100]"), std::string::npos) << e;
     fs::remove_all(dir);
@@ -1136,21 +1147,19 @@ TEST(GltfLoader, IorIsReadAndImpossibleValuesAreSaid) {
 // passes (green bottle glass of a white base is green), said as rendered thin; bad values refused.
 TEST(GltfLoader, VolumeAbsorptionTintsThinGlass) {
     std::string dir = test::temp_dir("gltf");
-    MiniGltf g;
-    const int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
-    const int idx = g.accessor(g.view(std::vector<uint16_t>{0, 1, 2, 0, 2, 3}), kUShort, 6, "SCALAR");
-    auto with_volume = [&](const std::string& volume) {
-        return one_node_scene("{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) +
-                                  "},\"indices\":" + std::to_string(idx) + ",\"material\":0}]}",
-                              "\"materials\":[{\"name\":\"bottle\",\"extensions\":{\"KHR_materials_transmission\":{"
-                              "\"transmissionFactor\":1},\"KHR_materials_volume\":" +
-                                  volume +
-                                  "}}],\"extensionsUsed\":[\"KHR_materials_transmission\",\"KHR_materials_volume\"]");
+    const OneMaterialQuad quad;
+    auto write = [&](const std::string& name, const std::string& volume) {
+        return quad.write(
+            dir, name,
+            "{\"name\":\"bottle\",\"extensions\":{\"KHR_materials_transmission\":{\"transmissionFactor\":1},"
+            "\"KHR_materials_volume\":" +
+                volume + "}}",
+            "\"KHR_materials_transmission\",\"KHR_materials_volume\"");
     };
     std::vector<std::string> notes;
-    Scene s = load_gltf(g.write(dir, "bottle",
-                                with_volume("{\"thicknessFactor\":0.01,\"attenuationDistance\":0.005,"
-                                            "\"attenuationColor\":[0.5,1,0.25]}")),
+    Scene s = load_gltf(write("bottle",
+                              "{\"thicknessFactor\":0.01,\"attenuationDistance\":0.005,"
+                              "\"attenuationColor\":[0.5,1,0.25]}"),
                         &notes);
     ASSERT_EQ(s.materials.size(), 1u);
     EXPECT_TRUE(s.materials[0].volume_tint.isApprox(Color(0.25f, 1, 0.0625f), 1e-6f))
@@ -1161,14 +1170,12 @@ TEST(GltfLoader, VolumeAbsorptionTintsThinGlass) {
     EXPECT_TRUE(said);
     // No thickness, or no attenuation: clear.
     EXPECT_TRUE(
-        (load_gltf(g.write(dir, "thin", with_volume("{\"attenuationColor\":[0.5,1,0.25]}"))).materials[0].volume_tint ==
-         1.0f)
-            .all());
-    std::string e = load_error(g.write(dir, "bad", with_volume("{\"thicknessFactor\":1,\"attenuationDistance\":0}")));
+        (load_gltf(write("thin", "{\"attenuationColor\":[0.5,1,0.25]}")).materials[0].volume_tint == 1.0f).all());
+    std::string e = load_error(write("bad", "{\"thicknessFactor\":1,\"attenuationDistance\":0}"));
     EXPECT_NE(e.find("material 'bottle': KHR_materials_volume attenuationDistance 0 is not positive"),
               std::string::npos)
         << e;
-    e = load_error(g.write(dir, "colour", with_volume("{\"thicknessFactor\":1,\"attenuationColor\":[2,1,1]}")));
+    e = load_error(write("colour", "{\"thicknessFactor\":1,\"attenuationColor\":[2,1,1]}"));
     EXPECT_NE(e.find("attenuationColor 2 is outside [0, 1]"), std::string::npos) << e;
     fs::remove_all(dir);
 }
