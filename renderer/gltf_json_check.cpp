@@ -112,7 +112,7 @@ class Checker {
         }
     }
 
-    // A whole number in [lo, hi] (JSON writes 2.0 for 2 in some writers: accepted). True if present and valid.
+    // A whole number in [lo, hi], written as a JSON integer. True if present and valid.
     bool integer(const Json& parent, const std::string& key, const std::string& at, double lo,
                  double hi = 9007199254740992.0) {
         auto it = parent.find(key);
@@ -124,6 +124,11 @@ class Checker {
         const double v = it->get<double>();
         if (!(v == std::floor(v))) {
             error(at + " is " + describe(*it) + ", not a whole number");
+            return false;
+        }
+        // tinygltf reads 0.0 as no value at all ("mesh": 0.0 drew no mesh).
+        if (!it->is_number_integer()) {
+            error(at + " is written " + it->dump() + ": glTF integers have no decimal point or exponent");
             return false;
         }
         if (v < lo || v > hi) {
@@ -147,8 +152,7 @@ class Checker {
             const Json& v = (*it)[i];
             const std::string item = at + "." + key + "[" + std::to_string(i) + "]";
             if (!v.is_number()) error(item + " is " + describe(v) + ", not an index (a number)");
-            else if (v.get<double>() < 0 || v.get<double>() != std::floor(v.get<double>()))
-                error(item + " is " + describe(v) + ", not an index");
+            else if (!v.is_number_integer() || v.get<double>() < 0) error(item + " is " + v.dump() + ", not an index");
         }
     }
     void boolean(const Json& parent, const char* key, const std::string& at) {
