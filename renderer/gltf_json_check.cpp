@@ -10,6 +10,8 @@ namespace {
 
 using Json = nlohmann::json;
 
+constexpr double kMaxInteger = 9007199254740992.0;  // 2^53: every JSON integer a double holds exactly
+
 std::string describe(const Json& v) {
     switch (v.type()) {
         case Json::value_t::string: {
@@ -114,46 +116,46 @@ class Checker {
 
     // A whole number in [lo, hi], written as a JSON integer. True if present and valid.
     bool integer(const Json& parent, const std::string& key, const std::string& at, double lo,
-                 double hi = 9007199254740992.0) {
+                 double hi = kMaxInteger) {
         auto it = parent.find(key);
-        if (it == parent.end()) return false;
-        if (!it->is_number()) {
-            error(at + " is " + describe(*it) + ", not a number");
+        return it != parent.end() && integer_value(*it, at, lo, hi);
+    }
+    bool integer_value(const Json& v, const std::string& at, double lo, double hi = kMaxInteger) {
+        if (!v.is_number()) {
+            error(at + " is " + describe(v) + ", not a number");
             return false;
         }
-        const double v = it->get<double>();
-        if (!(v == std::floor(v))) {
-            error(at + " is " + describe(*it) + ", not a whole number");
+        const double x = v.get<double>();
+        if (!(x == std::floor(x))) {
+            error(at + " is " + describe(v) + ", not a whole number");
             return false;
         }
         // tinygltf reads 0.0 as no value at all ("mesh": 0.0 drew no mesh).
-        if (!it->is_number_integer()) {
-            error(at + " is written " + it->dump() + ": glTF integers have no decimal point or exponent");
+        if (!v.is_number_integer()) {
+            error(at + " is written " + v.dump() + ": glTF integers have no decimal point or exponent");
             return false;
         }
-        if (v < lo || v > hi) {
-            error(at + " is " + describe(*it) +
-                  (hi < 9007199254740992.0 ? ", outside [" + number_text(lo) + ", " + number_text(hi) + "]"
-                                           : "; it must be at least " + number_text(lo)));
+        if (x < lo || x > hi) {
+            error(at + " is " + describe(v) +
+                  (hi < kMaxInteger ? ", outside [" + number_text(lo) + ", " + number_text(hi) + "]"
+                                    : "; it must be at least " + number_text(lo)));
             return false;
         }
         return true;
     }
+    // An index into one of the document's arrays: a JSON integer >= 0.
+    void index_value(const Json& v, const std::string& at) {
+        if (!v.is_number()) error(at + " is " + describe(v) + ", not an index (a number)");
+        else integer_value(v, at, 0);
+    }
     void index(const Json& parent, const std::string& key, const std::string& at) {
-        auto it = parent.find(key);
-        if (it != parent.end() && !it->is_number()) error(at + " is " + describe(*it) + ", not an index (a number)");
-        else integer(parent, key, at, 0);
+        if (auto it = parent.find(key); it != parent.end()) index_value(*it, at);
     }
     void indices(const Json& parent, const char* key, const std::string& at) {
         auto it = parent.find(key);
         if (it == parent.end()) return;
         if (!it->is_array()) return error(at + "." + key + " is " + describe(*it) + ", not an array of indices");
-        for (size_t i = 0; i < it->size(); ++i) {
-            const Json& v = (*it)[i];
-            const std::string item = at + "." + key + "[" + std::to_string(i) + "]";
-            if (!v.is_number()) error(item + " is " + describe(v) + ", not an index (a number)");
-            else if (!v.is_number_integer() || v.get<double>() < 0) error(item + " is " + v.dump() + ", not an index");
-        }
+        for (size_t i = 0; i < it->size(); ++i) index_value((*it)[i], at + "." + key + "[" + std::to_string(i) + "]");
     }
     void boolean(const Json& parent, const char* key, const std::string& at) {
         auto it = parent.find(key);

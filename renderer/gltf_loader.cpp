@@ -138,9 +138,13 @@ std::string percent_decoded(const std::string& uri) {
 // The size an encoded image's header declares: a PNG's IHDR read directly (stb gives up on
 // headers beyond its own limit, which then went unchecked to libpng: a 16385^2 PNG of zeros took
 // 5.4 GB), anything else through stb. False when it cannot tell.
+bool is_png(const unsigned char* b, size_t n) {
+    static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    return n >= 8 && std::memcmp(b, signature, 8) == 0;
+}
+
 bool image_header_size(const unsigned char* b, size_t n, long long* width, long long* height) {
-    static const unsigned char png[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-    if (n >= 24 && std::memcmp(b, png, 8) == 0) {
+    if (n >= 24 && is_png(b, n)) {
         const auto be32 = [&](size_t at) {
             return (uint32_t(b[at]) << 24) | (uint32_t(b[at + 1]) << 16) | (uint32_t(b[at + 2]) << 8) | b[at + 3];
         };
@@ -592,6 +596,11 @@ class GltfLoader {
                  std::to_string(model_.scenes.size()) + " scene(s)");
     }
 
+    bool uses_extension(const char* name) const {
+        const auto& used = model_.extensionsUsed;
+        return std::find(used.begin(), used.end(), name) != used.end();
+    }
+
     void check_extensions() {
         for (const std::string& e : model_.extensionsRequired)
             if (!supported_extensions().count(e))
@@ -997,16 +1006,10 @@ class GltfLoader {
     // Why encoded bytes did not decode, in words: stb says "Unknown image format" also for a PNG
     // that is corrupt, cut short or larger than it accepts.
     static std::string encoded_image_problem(const unsigned char* b, size_t n, const std::string& decoder) {
-        static const unsigned char png[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-        if (n >= 8 && std::memcmp(b, png, 8) == 0) {
-            if (n >= 24) {
-                const auto be32 = [&](size_t at) {
-                    return (uint32_t(b[at]) << 24) | (uint32_t(b[at + 1]) << 16) | (uint32_t(b[at + 2]) << 8) |
-                           b[at + 3];
-                };
-                const std::string size = image_size_problem(be32(16), be32(20), 4);
-                if (!size.empty()) return size;
-            }
+        if (is_png(b, n)) {
+            long long w = 0, h = 0;
+            if (image_header_size(b, n, &w, &h))
+                if (const std::string size = image_size_problem(w, h, 4); !size.empty()) return size;
             return "a PNG that cannot be decoded (corrupt or cut short: " + decoder + ")";
         }
         if (n >= 3 && b[0] == 0xff && b[1] == 0xd8 && b[2] == 0xff)
@@ -1078,8 +1081,7 @@ class GltfLoader {
             }
             // PNGs through libpng (OpenCV), which checks every chunk's CRC and the zlib stream: stb
             // decoded a PNG with a changed byte into garbage texels (exit 0). Lossless either way.
-            static const unsigned char kPngSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-            if (encoded[k].second >= 8 && std::memcmp(encoded[k].first, kPngSignature, 8) == 0) {
+            if (is_png(encoded[k].first, encoded[k].second)) {
                 decoded[k].error = decode_png(encoded[k].first, encoded[k].second, &decoded[k].width,
                                               &decoded[k].height, &decoded[k].rgba);
                 return;
@@ -1215,9 +1217,7 @@ class GltfLoader {
         const int position = attr("POSITION");
         if (size_t(position) < model_.accessors.size()) {
             const int type = model_.accessors[size_t(position)].componentType;
-            const auto& used = model_.extensionsUsed;
-            if (type != TINYGLTF_COMPONENT_TYPE_FLOAT &&
-                std::find(used.begin(), used.end(), "KHR_mesh_quantization") == used.end())
+            if (type != TINYGLTF_COMPONENT_TYPE_FLOAT && !uses_extension("KHR_mesh_quantization"))
                 fail(what + " POSITION has integer components (componentType " + std::to_string(type) +
                      ") but the file does not use KHR_mesh_quantization: glTF 2.0 positions are floats");
         }
@@ -1273,9 +1273,8 @@ class GltfLoader {
             const int a = attr(uv_name);
             if (a < 0 || size_t(a) >= model_.accessors.size()) continue;
             const tg::Accessor& acc = model_.accessors[size_t(a)];
-            const auto& used = model_.extensionsUsed;
             if (acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT && !acc.normalized &&
-                std::find(used.begin(), used.end(), "KHR_mesh_quantization") == used.end())
+                !uses_extension("KHR_mesh_quantization"))
                 fail(what + " " + uv_name + " has integer components that are not normalized (componentType " +
                      std::to_string(acc.componentType) +
                      ") but the file does not use KHR_mesh_quantization: glTF 2.0 UVs are floats or normalized");
@@ -1362,16 +1361,8 @@ class GltfLoader {
     // ---- Nodes ------------------------------------------------------------------------------
 
     Eigen::Matrix4d local_matrix(const tg::Node& node) const {
-        // Arrays of the wrong length were silently read as identity, putting the node elsewhere.
-        auto check_length = [&](const std::vector<double>& v, size_t n, const char* name) {
-            if (!v.empty() && v.size() != n)
-                fail((node.name.empty() ? std::string("a node") : "node " + in_quotes(node.name)) + ": " + name +
-                     " has " + std::to_string(v.size()) + " numbers, not " + std::to_string(n));
-        };
-        check_length(node.matrix, 16, "matrix");
-        check_length(node.translation, 3, "translation");
-        check_length(node.rotation, 4, "rotation");
-        check_length(node.scale, 3, "scale");
+        // Lengths, types, affine matrices and non-zero rotations were checked on the JSON
+        // (check_gltf_json): arrays of the wrong length had been read as identity.
         if (node.matrix.size() == 16) {
             Eigen::Matrix4d m;
             for (int i = 0; i < 16; ++i) m(i % 4, i / 4) = node.matrix[size_t(i)];  // column-major
@@ -1385,8 +1376,7 @@ class GltfLoader {
         if (node.rotation.size() == 4) {
             // glTF stores (x, y, z, w); Eigen's constructor takes (w, x, y, z).
             r = Eigen::Quaterniond(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2]);
-            if (r.norm() > 0) r.normalize();
-            else r = Eigen::Quaterniond::Identity();
+            r.normalize();
         }
         return trs_matrix(t, r, s);
     }

@@ -163,8 +163,8 @@ float known_percentile99(const cv::Mat& channel, const cv::Mat& mask) {
 
 // Obstructions along the horizon (rooftops, railings, trees: a fifth of a Mobotix disc) filled by
 // inpainting came out as radial streaks of whatever lay at their inner edge, green-grey spokes
-// around every imported sky (looked at). Beyond the outermost seen sky of each azimuth, and below
-// kBandMinElevation's radius, the fill is instead the mean colour of the seen sky just inside that
+// around every imported sky (looked at). Beyond the outermost seen sky of each azimuth, and beyond
+// kBandMinRadius, the fill is instead the mean colour of the seen sky just inside that
 // edge, smoothed over azimuth (sigma kBandSmoothingDeg; azimuths with no seen sky near the horizon
 // take their neighbours'): a haze band, no streaks. Holes inside the seen sky (masts, an arm, a
 // shadow band's inner part) are inpainted as before, these pixels now known around them. Returns
@@ -180,17 +180,25 @@ cv::Mat fill_horizon_band(cv::Mat& rgb, const cv::Mat& fill) {
     const int n = rgb.cols;
     const double c = (n - 1) / 2.0, half = n / 2.0;
     auto radius = [&](int x, int y) { return std::hypot(x - c, y - c) / half; };
-    auto bin_of = [&](int x, int y) {
-        const double a = std::atan2(double(y) - c, double(x) - c);  // any fixed origin: bins only
-        return std::min(kBandBins - 1, int((a + kPiD) / (2 * kPiD) * kBandBins));
-    };
-    // The outermost seen sky of each azimuth.
+    // Each pixel's azimuth bin, once (the atan2 is most of the passes' cost); -1 nearer the zenith
+    // than any pass below looks (a bin's outermost seen sky only matters beyond kInner).
+    const double kInner = kBandMinRadius - 2 * kBandEdgeWidth;
+    cv::Mat bins(n, n, CV_16S);
+    tbb::parallel_for(0, n, [&](int y) {
+        for (int x = 0; x < n; ++x) {
+            const double a = std::atan2(double(y) - c, double(x) - c);  // any fixed origin: bins only
+            bins.at<short>(y, x) = radius(x, y) < kInner
+                                       ? short(-1)
+                                       : short(std::min(kBandBins - 1, int((a + kPiD) / (2 * kPiD) * kBandBins)));
+        }
+    });
+    // The outermost seen sky of each azimuth (beyond kInner; 0 where none).
     std::vector<double> r_seen(kBandBins, 0.0);
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x) {
+            const int b = bins.at<short>(y, x);
             const double r = radius(x, y);
-            if (r <= 1 && !fill.at<unsigned char>(y, x))
-                r_seen[size_t(bin_of(x, y))] = std::max(r_seen[size_t(bin_of(x, y))], r);
+            if (b >= 0 && r <= 1 && !fill.at<unsigned char>(y, x)) r_seen[size_t(b)] = std::max(r_seen[size_t(b)], r);
         }
     // Only a ring (the seen sky stops short of the horizon at most azimuths, as behind a rooftop
     // railing): an obstruction at a few azimuths (a TSI's arm and band) is inpainted as before.
@@ -204,11 +212,10 @@ cv::Mat fill_horizon_band(cv::Mat& rgb, const cv::Mat& fill) {
     std::vector<double> count(kBandBins, 0.0);
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x) {
+            const int b = bins.at<short>(y, x);
+            if (b < 0 || fill.at<unsigned char>(y, x)) continue;
             const double r = radius(x, y);
-            const int b = bin_of(x, y);
-            if (r > 1 || fill.at<unsigned char>(y, x) || r < r_seen[size_t(b)] - kBandEdgeWidth ||
-                r < kBandMinRadius - 2 * kBandEdgeWidth)
-                continue;
+            if (r > 1 || r < r_seen[size_t(b)] - kBandEdgeWidth) continue;
             const cv::Vec3f& v = rgb.at<cv::Vec3f>(y, x);
             sum[size_t(b)] += cv::Vec3d(v[0], v[1], v[2]), count[size_t(b)] += 1;
         }
@@ -239,9 +246,9 @@ cv::Mat fill_horizon_band(cv::Mat& rgb, const cv::Mat& fill) {
     cv::Mat rest = fill.clone();
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x) {
-            if (!fill.at<unsigned char>(y, x)) continue;
+            const int b = bins.at<short>(y, x);
+            if (b < 0 || !fill.at<unsigned char>(y, x)) continue;
             const double r = radius(x, y);
-            const int b = bin_of(x, y);
             if (r < kBandMinRadius || r < r_seen[size_t(b)]) continue;
             rgb.at<cv::Vec3f>(y, x) = edge[size_t(b)];
             rest.at<unsigned char>(y, x) = 0;
