@@ -138,7 +138,8 @@ class Checker {
         if (x < lo || x > hi) {
             error(at + " is " + describe(v) +
                   (hi < kMaxInteger ? ", outside [" + number_text(lo) + ", " + number_text(hi) + "]"
-                                    : "; it must be at least " + number_text(lo)));
+                   : x < lo         ? "; it must be at least " + number_text(lo)
+                                    : ", beyond 2^53, the largest integer a glTF number holds exactly"));
             return false;
         }
         return true;

@@ -954,6 +954,11 @@ TEST(GltfLoader, ValuesOfTheWrongTypeOrOutsideTheSpecAreNamedByTheirPath) {
         {"mesh_decimal",
          "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0.0}],\"meshes\":[" + mesh(pos) + "]",
          "nodes[0].mesh is written 0.0: glTF integers have no decimal point or exponent"},
+        {"scene_huge",
+         "\"scene\":18446744073709551615,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+         "\"meshes\":[" +
+             mesh(pos) + "]",
+         "scene is 1.84467e+19, beyond 2^53"},
         {"scene_negative",
          "\"scene\":-1,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[" + mesh(pos) + "]",
          "scene is -1; it must be at least 0"},
