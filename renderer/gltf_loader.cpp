@@ -7,6 +7,7 @@
 #include <tiny_gltf.h>
 
 #include <algorithm>
+#include <functional>
 #include <cctype>
 #include <cerrno>
 #include <cstring>
@@ -405,6 +406,13 @@ const tg::Value* extension(const tg::ExtensionMap& map, const char* name) {
 }
 
 // Vertex attribute and instancing arrays as floats: count elements of `components` each.
+// How a node poses its mesh's vertices: morph weights (empty: none) and skin joint matrices (a
+// joint's world transform x its inverse bind matrix; empty: not skinned).
+struct VertexPose {
+    std::vector<double> morph_weights;
+    std::vector<Eigen::Matrix4d> joints;
+};
+
 struct FloatArray {
     std::vector<float> values;
     size_t count = 0;
@@ -1191,8 +1199,91 @@ class GltfLoader {
         return out;
     }
 
+    // Adds the morph targets' `attribute` displacements, weighted (glTF: base + sum w_i target_i).
+    void add_morph_deltas(const tg::Primitive& p, const std::vector<double>& weights, const char* attribute,
+                          const std::string& what, std::vector<Vec3>* values) const {
+        for (size_t t = 0; t < p.targets.size() && t < weights.size(); ++t) {
+            if (weights[t] == 0) continue;
+            auto it = p.targets[t].find(attribute);
+            if (it == p.targets[t].end()) continue;
+            const std::string name = what + " morph target " + std::to_string(t) + " " + attribute;
+            FloatArray d = read_floats(it->second, name, {TINYGLTF_TYPE_VEC3});
+            if (d.count != values->size())
+                fail(name + " has " + std::to_string(d.count) + " elements but the primitive has " +
+                     std::to_string(values->size()) + " vertices");
+            const float w = float(weights[t]);
+            for (size_t i = 0; i < d.count; ++i)
+                (*values)[i] += w * Vec3(d.values[3 * i], d.values[3 * i + 1], d.values[3 * i + 2]);
+        }
+    }
+
+    // Linear blend skinning at the pose the nodes' own transforms give (no animation played): each
+    // vertex moves by sum_k w_k joint[j_k] (joint = the joint's world transform x its inverse bind
+    // matrix), into world space. Writes each vertex's normal matrix (the inverse transpose).
+    void skin_positions(const tg::Primitive& p, const VertexPose& pose, const std::string& what, TriangleMesh* mesh,
+                        std::vector<Eigen::Matrix3f>* normal_matrices) {
+        const size_t n = mesh->positions.size();
+        std::vector<Eigen::Matrix4d> blended(n, Eigen::Matrix4d::Zero());
+        std::vector<double> total(n, 0.0);
+        bool any_set = false;
+        for (int set = 0; set < 4; ++set) {
+            auto j = p.attributes.find("JOINTS_" + std::to_string(set));
+            auto w = p.attributes.find("WEIGHTS_" + std::to_string(set));
+            if (j == p.attributes.end() && w == p.attributes.end()) break;
+            const std::string jn = what + " JOINTS_" + std::to_string(set),
+                              wn = what + " WEIGHTS_" + std::to_string(set);
+            if (j == p.attributes.end() || w == p.attributes.end())
+                fail(what + ": " + (j == p.attributes.end() ? wn + " has no JOINTS_" : jn + " has no WEIGHTS_") +
+                     std::to_string(set) + " beside it (skinning needs both)");
+            FloatArray joints = read_floats(j->second, jn, {TINYGLTF_TYPE_VEC4});
+            FloatArray weights = read_floats(w->second, wn, {TINYGLTF_TYPE_VEC4});
+            if (joints.count != n || weights.count != n)
+                fail(what + ": " + jn + " and " + wn + " have " + std::to_string(joints.count) + " and " +
+                     std::to_string(weights.count) + " elements but POSITION has " + std::to_string(n));
+            for (size_t i = 0; i < n; ++i)
+                for (int k = 0; k < 4; ++k) {
+                    const double wk = weights.values[4 * i + size_t(k)];
+                    if (!(wk >= 0) || !std::isfinite(wk))
+                        fail(wn + " " + std::to_string(i) + " has weight " + number_text(wk) +
+                             ": skin weights are finite and not negative");
+                    if (wk == 0) continue;
+                    const float jk = joints.values[4 * i + size_t(k)];
+                    if (!(jk >= 0 && jk < float(pose.joints.size())))
+                        fail(jn + " " + std::to_string(i) + " names joint " + number_text(jk) + ", but the skin has " +
+                             std::to_string(pose.joints.size()) + " joints");
+                    blended[i] += wk * pose.joints[size_t(jk)];
+                    total[i] += wk;
+                }
+            any_set = true;
+        }
+        if (!any_set) {
+            // A skinned node whose primitive has no joints: the spec leaves it to the node's own
+            // transform, which the instance no longer applies; the skeleton's root stands in.
+            warn(
+                what +
+                ": the node has a skin but the primitive has no JOINTS_0 and WEIGHTS_0: drawn at the skin's first joint");
+            for (size_t i = 0; i < n; ++i) blended[i] = pose.joints.front(), total[i] = 1;
+        }
+        size_t unweighted = 0;
+        normal_matrices->resize(n);
+        for (size_t i = 0; i < n; ++i) {
+            Eigen::Matrix4d m = total[i] > 0 ? Eigen::Matrix4d(blended[i] / total[i]) : pose.joints.front();
+            unweighted += !(total[i] > 0);
+            const Eigen::Vector4d q = m * mesh->positions[i].cast<double>().homogeneous();
+            mesh->positions[i] = q.head<3>().cast<float>();
+            const Eigen::Matrix3d linear = m.topLeftCorner<3, 3>();
+            const double det = linear.determinant();
+            (*normal_matrices)[i] = std::abs(det) > 1e-30 ? Eigen::Matrix3f(linear.inverse().transpose().cast<float>())
+                                                          : Eigen::Matrix3f::Identity();
+        }
+        if (unweighted)
+            warn(what + ": " + std::to_string(unweighted) +
+                 " vertices have skin weights that are all zero: drawn at the skin's first joint");
+    }
+
     // Builds one primitive, or returns false (with a warning) when it has nothing to draw.
-    bool build_primitive(const tg::Primitive& p, const std::string& what, TriangleMesh* mesh) {
+    bool build_primitive(const tg::Primitive& p, const std::string& what, TriangleMesh* mesh,
+                         const VertexPose* pose = nullptr) {
         int mode = p.mode < 0 ? TINYGLTF_MODE_TRIANGLES : p.mode;
         if (mode == TINYGLTF_MODE_POINTS || mode == TINYGLTF_MODE_LINE || mode == TINYGLTF_MODE_LINE_LOOP ||
             mode == TINYGLTF_MODE_LINE_STRIP) {
@@ -1212,7 +1303,6 @@ class GltfLoader {
             warn(what + ": no POSITION attribute, skipped");
             return false;
         }
-        if (!p.targets.empty()) warn("morph targets ignored: meshes are drawn with their base shape");
 
         const int position = attr("POSITION");
         if (size_t(position) < model_.accessors.size()) {
@@ -1225,6 +1315,11 @@ class GltfLoader {
         const size_t n = pos.count;
         if (n > size_t(std::numeric_limits<uint32_t>::max())) fail(what + ": too many vertices");
         mesh->positions = to_vectors<3>(pos);
+        const std::vector<double> no_weights;
+        const std::vector<double>& weights = pose ? pose->morph_weights : no_weights;
+        add_morph_deltas(p, weights, "POSITION", what, &mesh->positions);
+        std::vector<Eigen::Matrix3f> normal_matrices;  // per vertex, when skinned
+        if (pose && !pose->joints.empty()) skin_positions(p, *pose, what, mesh, &normal_matrices);
         // Embree's bounds and every intersection with a NaN or infinite vertex are meaningless (a
         // NaN poisons the whole BVH node): refused, as a corrupt file, with the first such vertex.
         for (size_t i = 0; i < n; ++i)
@@ -1303,6 +1398,9 @@ class GltfLoader {
             generate_flat_normals(*mesh);
         } else {
             mesh->normals = to_vectors<3>(read_matching("NORMAL", {TINYGLTF_TYPE_VEC3}));
+            add_morph_deltas(p, weights, "NORMAL", what, &mesh->normals);
+            for (size_t i = 0; i < normal_matrices.size(); ++i)
+                mesh->normals[i] = normal_matrices[i] * mesh->normals[i];
             bool all_valid = true;
             for (Vec3& nrm : mesh->normals) {
                 float len = nrm.norm();
@@ -1321,6 +1419,16 @@ class GltfLoader {
             }
             if (attr("TANGENT") >= 0) {
                 mesh->tangents = to_vectors<4>(read_matching("TANGENT", {TINYGLTF_TYPE_VEC4}));
+                if (!weights.empty() || !normal_matrices.empty()) {
+                    std::vector<Vec3> xyz(n);
+                    for (size_t i = 0; i < n; ++i) xyz[i] = mesh->tangents[i].head<3>();
+                    add_morph_deltas(p, weights, "TANGENT", what, &xyz);
+                    // Tangents are directions in the surface: the skin's linear part (the inverse
+                    // transpose's inverse transpose) carries them.
+                    for (size_t i = 0; i < normal_matrices.size(); ++i)
+                        xyz[i] = normal_matrices[i].inverse().transpose() * xyz[i];
+                    for (size_t i = 0; i < n; ++i) mesh->tangents[i].head<3>() = xyz[i];
+                }
                 bool tangents_valid = true;
                 for (Vec4& t : mesh->tangents) {
                     float len = t.head<3>().norm();
@@ -1339,23 +1447,74 @@ class GltfLoader {
     }
 
     // The MeshGroup of a glTF mesh, built on first use; -1 when it has nothing to draw.
-    int mesh_group(int mesh_index) {
+    // A posed mesh (skinned, or morphed by non-zero weights) is built for its node alone.
+    int mesh_group(int mesh_index, const VertexPose* pose = nullptr) {
         if (mesh_index < 0 || size_t(mesh_index) >= model_.meshes.size())
             fail("a node refers to mesh " + std::to_string(mesh_index) + ", which does not exist");
         if (group_of_mesh_.empty()) group_of_mesh_.assign(model_.meshes.size(), kNotBuilt);
-        int& group = group_of_mesh_[size_t(mesh_index)];
+        int unshared = kNotBuilt;
+        int& group = pose ? unshared : group_of_mesh_[size_t(mesh_index)];
         if (group != kNotBuilt) return group;
         const tg::Mesh& m = model_.meshes[size_t(mesh_index)];
         MeshGroup g;
         g.name = m.name.empty() ? "mesh " + std::to_string(mesh_index) : m.name;
         for (size_t k = 0; k < m.primitives.size(); ++k) {
             TriangleMesh tm;
-            if (build_primitive(m.primitives[k], "mesh " + in_quotes(g.name) + " primitive " + std::to_string(k), &tm))
+            if (build_primitive(m.primitives[k], "mesh " + in_quotes(g.name) + " primitive " + std::to_string(k), &tm,
+                                pose))
                 g.primitives.push_back(std::move(tm));
         }
         if (g.primitives.empty()) return group = -1;
         scene_.meshes.push_back(std::move(g));
         return group = int(scene_.meshes.size()) - 1;
+    }
+
+    // The morph weights a node draws its mesh with (the node's, else the mesh's defaults); empty
+    // when all are zero or the mesh has no targets.
+    std::vector<double> morph_weights(const tg::Node& node, const std::string& what) {
+        const tg::Mesh& m = model_.meshes[size_t(node.mesh)];
+        size_t targets = 0;
+        for (const tg::Primitive& p : m.primitives) targets = std::max(targets, p.targets.size());
+        std::vector<double> w = node.weights.empty() ? m.weights : node.weights;
+        if (targets == 0) return {};
+        for (double x : w)
+            if (!std::isfinite(x)) fail(what + ": a morph weight is not finite");
+        if (!w.empty() && w.size() != targets)
+            warn(what + ": " + std::to_string(w.size()) + " morph weights for " + std::to_string(targets) +
+                 " morph targets: the missing ones are 0");
+        if (std::all_of(w.begin(), w.end(), [](double x) { return x == 0; })) return {};
+        return w;
+    }
+
+    // The joint matrices of skin `index`: each joint's world transform x its inverse bind matrix.
+    std::vector<Eigen::Matrix4d> skin_joints(int index, const std::function<Eigen::Matrix4d(int)>& world_of,
+                                             const std::string& what) const {
+        if (index < 0 || size_t(index) >= model_.skins.size())
+            fail(what + " refers to skin " + std::to_string(index) + ", which does not exist (the file has " +
+                 std::to_string(model_.skins.size()) + ")");
+        const tg::Skin& skin = model_.skins[size_t(index)];
+        const std::string name = "skin " + std::to_string(index);
+        if (skin.joints.empty()) fail(name + " has no joints");
+        std::vector<float> ibm;
+        if (skin.inverseBindMatrices >= 0) {
+            ibm = read_accessor<float>(skin.inverseBindMatrices, name + " inverseBindMatrices", {TINYGLTF_TYPE_MAT4});
+            if (ibm.size() != 16 * skin.joints.size())
+                fail(name + " has " + std::to_string(ibm.size() / 16) + " inverse bind matrices for " +
+                     std::to_string(skin.joints.size()) + " joints");
+        }
+        std::vector<Eigen::Matrix4d> joints;
+        for (size_t j = 0; j < skin.joints.size(); ++j) {
+            const int node = skin.joints[j];
+            if (node < 0 || size_t(node) >= model_.nodes.size())
+                fail(name + " joint " + std::to_string(j) + " is node " + std::to_string(node) +
+                     ", which does not exist");
+            Eigen::Matrix4d inverse_bind = Eigen::Matrix4d::Identity();
+            if (!ibm.empty())
+                for (int i = 0; i < 16; ++i) inverse_bind(i % 4, i / 4) = ibm[16 * j + size_t(i)];  // column-major
+            if (!inverse_bind.allFinite()) fail(name + " inverse bind matrix " + std::to_string(j) + " is not finite");
+            joints.push_back(world_of(node) * inverse_bind);
+        }
+        return joints;
     }
 
     // ---- Nodes ------------------------------------------------------------------------------
@@ -1554,6 +1713,24 @@ class GltfLoader {
                 parent[size_t(c)] = int(i);
             }
 
+        // World transforms by the parent chain, for skins' joints wherever they lie.
+        std::vector<Eigen::Matrix4d> world_cache(count);
+        std::vector<char> world_known(count, 0);
+        std::function<Eigen::Matrix4d(int)> world_of = [&](int index) -> Eigen::Matrix4d {
+            std::vector<int> chain;
+            for (int i = index; i >= 0 && !world_known[size_t(i)]; i = parent[size_t(i)]) {
+                if (chain.size() > count) fail("node " + std::to_string(index) + " is its own ancestor (a cycle)");
+                chain.push_back(i);
+            }
+            for (auto it = chain.rbegin(); it != chain.rend(); ++it) {
+                const int p = parent[size_t(*it)];
+                world_cache[size_t(*it)] = (p >= 0 ? world_cache[size_t(p)] : Eigen::Matrix4d::Identity()) *
+                                           local_matrix(model_.nodes[size_t(*it)]);
+                world_known[size_t(*it)] = 1;
+            }
+            return world_cache[size_t(index)];
+        };
+
         std::vector<int> roots;
         if (!model_.scenes.empty()) {
             int s = model_.defaultScene;
@@ -1590,9 +1767,17 @@ class GltfLoader {
                     fail(which + ": its world transform " + problem);
             };
             if (node.mesh >= 0) {
-                if (node.skin >= 0) warn("skins ignored: skinned meshes are drawn in their bind pose");
-                int group = mesh_group(node.mesh);
-                if (group >= 0) {
+                if (node.mesh >= int(model_.meshes.size()))
+                    fail(what + " refers to mesh " + std::to_string(node.mesh) + ", which does not exist");
+                VertexPose pose;
+                pose.morph_weights = morph_weights(node, what);
+                if (node.skin >= 0) pose.joints = skin_joints(node.skin, world_of, what);
+                const bool posed = !pose.morph_weights.empty() || !pose.joints.empty();
+                int group = mesh_group(node.mesh, posed ? &pose : nullptr);
+                if (group >= 0 && !pose.joints.empty()) {
+                    // Skinned vertices are in world space: the spec ignores the mesh node's transform.
+                    scene_.instances.push_back({group, Eigen::Affine3f::Identity()});
+                } else if (group >= 0) {
                     std::vector<Eigen::Matrix4d> instances = gpu_instances(node, what);
                     if (instances.empty()) {
                         check_transform(world, what);

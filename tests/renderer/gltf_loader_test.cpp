@@ -1052,6 +1052,83 @@ TEST(GltfLoader, ValuesOfTheWrongTypeOrOutsideTheSpecAreNamedByTheirPath) {
 
 // KHR_lights_punctual: each node's light placed by its world transform, shining along its -Z, in
 // the sky's radiometric units (candela and lux / 683); impossible lights are refused by name.
+// Skins are posed at the nodes' own transforms (linear blend skinning, joint = world x inverse
+// bind matrix) into world space, ignoring the skinned node's transform as the spec says; bad joint
+// indices and missing skins are refused by name.
+TEST(GltfLoader, SkinnedMeshesArePosedByTheirJoints) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+    int idx = g.accessor(g.view(std::vector<uint16_t>{0, 1, 2, 0, 2, 3}), kUShort, 6, "SCALAR");
+    int joints = g.accessor(g.view(std::vector<uint8_t>{0, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0}), kUByte, 4,
+                            "VEC4");
+    int bad_joints = g.accessor(g.view(std::vector<uint8_t>{0, 0, 0, 0, 0, 0, 0, 0, 7, 0, 0, 0, 0, 1, 0, 0}), kUByte, 4,
+                                "VEC4");
+    int weights = g.accessor(g.view(std::vector<float>{1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 0.5f, 0.5f, 0, 0}), kFloat,
+                             4, "VEC4");
+    // Joint 1's inverse bind matrix lowers by 1 before its node turns 90 degrees about z and lifts by 2.
+    std::vector<float> ibm = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0,  1,
+                              1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, -1, 1};
+    int inverse_bind = g.accessor(g.view(ibm), kFloat, 2, "MAT4");
+    auto write = [&](const std::string& name, int joint_accessor, const std::string& skin) {
+        const std::string prim = "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) +
+                                 ",\"JOINTS_0\":" + std::to_string(joint_accessor) +
+                                 ",\"WEIGHTS_0\":" + std::to_string(weights) + "},\"indices\":" + std::to_string(idx) +
+                                 "}]}";
+        return g.write(dir, name,
+                       "\"scene\":0,\"scenes\":[{\"nodes\":[0,1]}],\"nodes\":[{\"mesh\":0,\"skin\":" + skin +
+                           ",\"translation\":[5,0,0]},{\"children\":[2]},{\"translation\":[0,0,2],\"rotation\":[0,0," +
+                           "0.70710678,0.70710678]}],\"meshes\":[" + prim + "],\"skins\":[{\"joints\":[1,2]," +
+                           "\"inverseBindMatrices\":" + std::to_string(inverse_bind) + "}]");
+    };
+    Scene s = load_gltf(write("skinned", joints, "0"));
+    ASSERT_EQ(s.instances.size(), 1u);
+    EXPECT_TRUE(s.instances[0].transform.matrix().isIdentity(1e-6f)) << "the skinned node's own transform is ignored";
+    // Corners in triangle order (flat normals split the vertices): 0 1 2, 0 2 3.
+    const TriangleMesh& m = s.meshes[size_t(s.instances[0].mesh_group)].primitives[0];
+    const std::vector<Vec3> corner = {{0, 0, 0}, {1, 0, 0}, {-1, 1, 1}, {-0.5f, 0.5f, 0.5f}};
+    const int order[6] = {0, 1, 2, 0, 2, 3};
+    ASSERT_EQ(m.indices.size(), 6u);
+    for (size_t k = 0; k < 6; ++k) {
+        const Vec3& p = m.positions[m.indices[k]];
+        EXPECT_LT((p - corner[size_t(order[k])]).norm(), 1e-5f) << k << ": " << p.transpose();
+    }
+    EXPECT_FALSE(has_warning_containing(s, "skin")) << "posed, not ignored";
+
+    std::string e = load_error(write("bad_joint", bad_joints, "0"));
+    EXPECT_NE(e.find("JOINTS_0 2 names joint 7, but the skin has 2 joints"), std::string::npos) << e;
+    e = load_error(write("no_skin", joints, "3"));
+    EXPECT_NE(e.find("refers to skin 3, which does not exist"), std::string::npos) << e;
+    fs::remove_all(dir);
+}
+
+// Morph targets are applied with the node's weights, else the mesh's defaults; nodes with other
+// weights get their own geometry.
+TEST(GltfLoader, MorphTargetsAreAppliedWithTheirWeights) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+    int idx = g.accessor(g.view(std::vector<uint16_t>{0, 1, 2, 0, 2, 3}), kUShort, 6, "SCALAR");
+    int up = g.accessor(g.view(std::vector<float>{0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1}), kFloat, 4, "VEC3");
+    const std::string mesh = "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) +
+                             "},\"indices\":" + std::to_string(idx) +
+                             ",\"targets\":[{\"POSITION\":" + std::to_string(up) + "}]}],\"weights\":[0.5]}";
+    Scene s = load_gltf(g.write(dir, "morph",
+                                "\"scene\":0,\"scenes\":[{\"nodes\":[0,1]}],\"nodes\":[{\"mesh\":0},{\"mesh\":0," +
+                                    std::string("\"weights\":[1],\"translation\":[10,0,0]}],\"meshes\":[") + mesh +
+                                    "]"));
+    ASSERT_EQ(s.instances.size(), 2u);
+    for (int k = 0; k < 2; ++k) {
+        const Instance& in = s.instances[size_t(k)];
+        const TriangleMesh& m = s.meshes[size_t(in.mesh_group)].primitives[0];
+        Vec3 corner = in.transform * m.positions[m.indices[2]];
+        const Vec3 expected = k == 0 ? Vec3(1, 1, 0.5f) : Vec3(11, 1, 1);
+        EXPECT_LT((corner - expected).norm(), 1e-5f) << k << ": " << corner.transpose();
+    }
+    EXPECT_FALSE(has_warning_containing(s, "morph")) << "applied, not ignored";
+    fs::remove_all(dir);
+}
+
 TEST(GltfLoader, PunctualLightsArePlacedAndConvertedToTheSkysUnits) {
     std::string dir = test::temp_dir("gltf");
     MiniGltf g;
