@@ -62,7 +62,7 @@ const std::set<std::string>& supported_extensions() {
                                             "KHR_materials_transmission", "KHR_materials_clearcoat",
                                             "EXT_mesh_gpu_instancing",    "KHR_mesh_quantization",
                                             "KHR_lights_punctual",        "KHR_materials_ior",
-                                            "KHR_materials_volume"};
+                                            "KHR_materials_volume",       "EXT_texture_webp"};
     return s;
 }
 
@@ -159,16 +159,24 @@ bool image_header_size(const unsigned char* b, size_t n, long long* width, long 
 }
 
 // A PNG decoded to RGBA in [0, 1] (8- or 16-bit; grey, grey + alpha, palette, RGB, RGBA): "" or why not.
-std::string decode_png(const unsigned char* bytes, size_t size, int* width, int* height, std::vector<float>* rgba) {
-    if (size > size_t(std::numeric_limits<int>::max())) return "a PNG too large to decode";
+// RIFF....WEBP: a WebP image (EXT_texture_webp).
+bool is_webp(const unsigned char* b, size_t n) {
+    return n >= 12 && std::memcmp(b, "RIFF", 4) == 0 && std::memcmp(b + 8, "WEBP", 4) == 0;
+}
+
+// Decodes a PNG or WebP (`format` names it in messages) through OpenCV into float RGBA.
+std::string decode_with_opencv(const unsigned char* bytes, size_t size, const std::string& format, int* width,
+                               int* height, std::vector<float>* rgba) {
+    if (size > size_t(std::numeric_limits<int>::max())) return "a " + format + " too large to decode";
     cv::Mat image;
     try {
         image = cv::imdecode(cv::Mat(1, int(size), CV_8U, const_cast<unsigned char*>(bytes)), cv::IMREAD_UNCHANGED);
     } catch (const cv::Exception& e) {
-        return std::string("a PNG that cannot be decoded (") + e.err + ")";
+        return "a " + format + " that cannot be decoded (" + e.err + ")";
     }
     if (image.empty())
-        return "a PNG that cannot be decoded (corrupt or cut short: a chunk's CRC or the compressed data is wrong)";
+        return "a " + format + " that cannot be decoded (corrupt or cut short" +
+               (format == "PNG" ? std::string(": a chunk's CRC or the compressed data is wrong)") : std::string(")"));
     const int c = image.channels();
     if ((image.depth() != CV_8U && image.depth() != CV_16U) || c < 1 || c > 4) return "unexpected decoded layout";
     *width = image.cols, *height = image.rows;
@@ -767,13 +775,27 @@ class GltfLoader {
         if (size_t(texture) >= model_.textures.size())
             fail(what + " refers to texture " + std::to_string(texture) + ", which does not exist");
         const tg::Texture& t = model_.textures[size_t(texture)];
-        if (t.source < 0) {
+        int source = t.source;
+        // EXT_texture_webp: its WebP image is preferred; the core source, when given, is the fallback
+        // for viewers without WebP.
+        if (const tg::Value* webp = extension(t.extensions, "EXT_texture_webp")) {
+            const tg::Value* src = member(*webp, "source");
+            if (!src || !src->IsNumber() || src->GetNumberAsInt() < 0 ||
+                size_t(src->GetNumberAsInt()) >= model_.images.size())
+                fail("texture " + std::to_string(texture) + ": EXT_texture_webp's source " +
+                     (src && src->IsNumber()
+                          ? std::to_string(src->GetNumberAsInt()) + " does not exist (the file has " +
+                                std::to_string(model_.images.size()) + " images)"
+                          : std::string("is missing or not an image index")));
+            source = src->GetNumberAsInt();
+        }
+        if (source < 0) {
             warn(what + ": texture " + std::to_string(texture) + " has no core image source (an image-format " +
                  "extension?): slot ignored");
             return;
         }
-        if (size_t(t.source) >= model_.images.size())
-            fail("texture " + std::to_string(texture) + " refers to image " + std::to_string(t.source) +
+        if (size_t(source) >= model_.images.size())
+            fail("texture " + std::to_string(texture) + " refers to image " + std::to_string(source) +
                  ", which does not exist");
         if (t.sampler >= 0 && size_t(t.sampler) >= model_.samplers.size())
             fail("texture " + std::to_string(texture) + " refers to sampler " + std::to_string(t.sampler) +
@@ -796,7 +818,7 @@ class GltfLoader {
                  ": only TEXCOORD_0 and TEXCOORD_1 are read, using 0");
             slot->texcoord = 0;
         }
-        TextureRequest key{t.source, t.sampler, srgb};
+        TextureRequest key{source, t.sampler, srgb};
         auto it = texture_of_request_.find(key);
         if (it == texture_of_request_.end()) {
             it = texture_of_request_.emplace(key, int(requests_.size())).first;
@@ -1023,7 +1045,7 @@ class GltfLoader {
         if (n >= 3 && b[0] == 0xff && b[1] == 0xd8 && b[2] == 0xff)
             return "a JPEG that cannot be decoded (corrupt or cut short: " + decoder + ")";
         if (n == 0) return "empty";
-        return decoder + " (glTF textures are PNG or JPEG)";
+        return decoder + " (glTF textures are PNG or JPEG, or WebP with EXT_texture_webp)";
     }
 
     static TextureWrap wrap_mode(int gl) {
@@ -1089,9 +1111,11 @@ class GltfLoader {
             }
             // PNGs through libpng (OpenCV), which checks every chunk's CRC and the zlib stream: stb
             // decoded a PNG with a changed byte into garbage texels (exit 0). Lossless either way.
-            if (is_png(encoded[k].first, encoded[k].second)) {
-                decoded[k].error = decode_png(encoded[k].first, encoded[k].second, &decoded[k].width,
-                                              &decoded[k].height, &decoded[k].rgba);
+            // WebP (EXT_texture_webp), which stb does not read, through OpenCV's libwebp as well.
+            const bool png = is_png(encoded[k].first, encoded[k].second);
+            if (png || is_webp(encoded[k].first, encoded[k].second)) {
+                decoded[k].error = decode_with_opencv(encoded[k].first, encoded[k].second, png ? "PNG" : "WebP",
+                                                      &decoded[k].width, &decoded[k].height, &decoded[k].rgba);
                 return;
             }
             tg::Image img;

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <opencv2/imgcodecs.hpp>
+
 #include <array>
 #include <cstring>
 #include <filesystem>
@@ -1202,6 +1204,37 @@ struct OneMaterialQuad {
                                       "\"materials\":[" + material + "],\"extensionsUsed\":[" + used + "]"));
     }
 };
+
+// EXT_texture_webp: the WebP image is used in preference to the core source (the fallback for
+// viewers without WebP), decoded through OpenCV; a WebP source that does not exist is named.
+TEST(GltfLoader, WebpTexturesAreReadWithTheirFallbackIgnored) {
+    std::string dir = test::temp_dir("gltf");
+    std::vector<uchar> webp, png;
+    cv::Mat red(2, 2, CV_8UC3, cv::Scalar(0, 0, 255)), green(2, 2, CV_8UC3, cv::Scalar(0, 255, 0));  // BGR
+    ASSERT_TRUE(cv::imencode(".webp", red, webp, {cv::IMWRITE_WEBP_QUALITY, 101}));                  // > 100: lossless
+    ASSERT_TRUE(cv::imencode(".png", green, png));
+    write_bytes(dir + "/red.webp", std::string(webp.begin(), webp.end()));
+    write_bytes(dir + "/green.png", std::string(png.begin(), png.end()));
+    const OneMaterialQuad quad;
+    auto write = [&](const std::string& name, int webp_source) {
+        return quad.write(
+            dir, name,
+            "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}],\"textures\":[{\"source\":0,"
+            "\"extensions\":{\"EXT_texture_webp\":{\"source\":" +
+                std::to_string(webp_source) + "}}}],\"images\":[{\"uri\":\"green.png\"},{\"uri\":\"red.webp\"}",
+            "\"EXT_texture_webp\"");
+    };
+    Scene s = load_gltf(write("webp", 1));
+    const Material* m = &s.materials.at(0);
+    ASSERT_TRUE(m->base_color_texture.present());
+    const Vec4 c = s.textures[size_t(m->base_color_texture.texture)]->evaluate(Vec2(0.5f, 0.5f));
+    EXPECT_NEAR(c[0], 1.0f, 1e-3f) << "the WebP (red), not the PNG fallback (green)";
+    EXPECT_NEAR(c[1], 0.0f, 1e-3f);
+    EXPECT_FALSE(has_warning_containing(s, "EXT_texture_webp"));
+    const std::string e = load_error(write("webp_missing", 5));
+    EXPECT_NE(e.find("EXT_texture_webp's source 5 does not exist (the file has 2 images)"), std::string::npos) << e;
+    fs::remove_all(dir);
+}
 
 // KHR_materials_ior: read into the material (water 1.33); the extension's 0 falls back to 1.5 with
 // a warning; a negative IOR is refused by name.
