@@ -90,8 +90,82 @@ class SpecularAlbedoTable {
     Moments average_[kSize];
 };
 
+// The sheen's Charlie distribution (Conty and Kulla 2017) with alpha = roughness (the extension's
+// convention), and the visibility of the same paper through its fitted Lambda.
+float charlie_d(float cos_h, float alpha) {
+    const float inv = 1 / alpha, sin2 = std::max(0.0f, 1 - cos_h * cos_h);
+    return (2 + inv) * std::pow(sin2, 0.5f * inv) / (2 * kPi);
+}
+float charlie_l(float x, float alpha) {
+    const float t = (1 - alpha) * (1 - alpha);
+    auto mix = [t](float a, float b) { return a + (b - a) * t; };
+    const float a = mix(21.5473f, 25.3245f), b = mix(3.82987f, 3.32435f), c = mix(0.19823f, 0.16801f),
+                d = mix(-1.97760f, -1.27393f), e = mix(-4.32054f, -4.85967f);
+    return a / (1 + b * std::pow(x, c)) + d * x + e;
+}
+float charlie_lambda(float cos_theta, float alpha) {
+    const float c = std::abs(cos_theta);
+    return c < 0.5f ? std::exp(charlie_l(c, alpha)) : std::exp(2 * charlie_l(0.5f, alpha) - charlie_l(1 - c, alpha));
+}
+constexpr float kMinSheenRoughness = 0.07f;  // below, the lobe is a sliver at grazing
+
+// Directional albedo of the sheen lobe (colour 1) over mu and roughness, by stratified quadrature
+// of the hemisphere; bilinear lookup.
+class SheenAlbedoTable {
+  public:
+    static constexpr int kSize = 32;
+    static const SheenAlbedoTable& get() {
+        static const SheenAlbedoTable table;
+        return table;
+    }
+    float albedo(float mu, float roughness) const {
+        float x = clamp(mu, 0.0f, 1.0f) * (kSize - 1), y = clamp(roughness, 0.0f, 1.0f) * (kSize - 1);
+        int x0 = std::min(int(x), kSize - 2), y0 = std::min(int(y), kSize - 2);
+        float fx = x - x0, fy = y - y0;
+        auto e = [&](int i, int j) { return albedo_[j * kSize + i]; };
+        return (1 - fy) * ((1 - fx) * e(x0, y0) + fx * e(x0 + 1, y0)) +
+               fy * ((1 - fx) * e(x0, y0 + 1) + fx * e(x0 + 1, y0 + 1));
+    }
+
+  private:
+    SheenAlbedoTable() {
+        const int n = 64;  // n x 2n cells over (cos theta_i, phi)
+        for (int j = 0; j < kSize; ++j) {
+            const float roughness = float(j) / (kSize - 1);
+            for (int i = 0; i < kSize; ++i) {
+                const float mu = std::max(float(i) / (kSize - 1), 1e-3f);
+                const Vec3 wo(safe_sqrt(1 - mu * mu), 0, mu);
+                double sum = 0;
+                for (int a = 0; a < n; ++a)
+                    for (int b = 0; b < 2 * n; ++b) {
+                        const float z = (a + 0.5f) / n, phi = kPi * (b + 0.5f) / n, r = safe_sqrt(1 - z * z);
+                        const Vec3 wi(r * std::cos(phi), r * std::sin(phi), z);
+                        sum += MetalRoughBsdf::sheen_lobe(wo, wi, roughness) * z;
+                    }
+                albedo_[j * kSize + i] = float(sum * 2 * kPiD / (double(n) * 2 * n));
+            }
+        }
+    }
+    float albedo_[kSize * kSize];
+};
+
 }  // namespace
 
+float MetalRoughBsdf::sheen_lobe(const Vec3& wo, const Vec3& wi, float roughness) {
+    if (wo.z() <= 0 || wi.z() <= 0) return 0;
+    const float alpha = std::max(roughness, kMinSheenRoughness);
+    const Vec3 wm = (wo + wi).normalized();
+    const float v = 1 / ((1 + charlie_lambda(wo.z(), alpha) + charlie_lambda(wi.z(), alpha)) * 4 * wo.z() * wi.z());
+    return charlie_d(wm.z(), alpha) * v;
+}
+
+float MetalRoughBsdf::sheen_distribution(float cos_h, float roughness) {
+    return charlie_d(cos_h, std::max(roughness, kMinSheenRoughness));
+}
+
+float MetalRoughBsdf::sheen_albedo_table(float mu, float roughness) {
+    return SheenAlbedoTable::get().albedo(mu, roughness);
+}
 
 MetalRoughBsdf::MetalRoughBsdf(const Color& base_color, float metallic, float roughness, float specular,
                                float transmission)
@@ -117,7 +191,8 @@ Color MetalRoughBsdf::transmitted(const Vec3& wo) const {
     if (transmission_ <= 0 || metallic_ >= 1 || !(wo.z() > 0)) return Color::Zero();
     const float e_o = specular_ <= 0 ? 0.0f : wo.z() == cached_wo_z_ ? cached_e_o_ : specular_albedo(wo.z());
     const float under_coat = coat_ > 0 ? 1 - (wo.z() == cached_wo_z_ ? cached_e_coat_ : coat_albedo(wo.z())) : 1.0f;
-    return base_ * tint_ * ((1 - metallic_) * transmission_ * (1 - e_o) * under_coat);
+    const float under_sheen = sheen_max_ > 0 ? sheen_scaling(wo.z()) : 1.0f;
+    return base_ * tint_ * ((1 - metallic_) * transmission_ * (1 - e_o) * under_coat * under_sheen);
 }
 
 float MetalRoughBsdf::specular_albedo(float mu) const {
@@ -177,7 +252,7 @@ float MetalRoughBsdf::ggx_vndf_pdf_wi(const Vec3& wo, const Vec3& wi, float alph
 }
 
 
-Color MetalRoughBsdf::base_eval(const Vec3& wo, const Vec3& wi) const {
+Color MetalRoughBsdf::metal_rough_eval(const Vec3& wo, const Vec3& wi) const {
     if (wo.z() <= 0 || wi.z() <= 0) return Color::Zero();
     Vec3 wm = (wo + wi).normalized();
     float v_dot_h = clamp(wo.dot(wm), 0.0f, 1.0f);
@@ -212,10 +287,54 @@ float MetalRoughBsdf::specular_probability_for(const Vec3& wo, float e_spec) con
     return clamp(p, 0.1f, 0.9f);  // both lobes stay reachable
 }
 
-float MetalRoughBsdf::base_pdf(const Vec3& wo, const Vec3& wi) const {
+float MetalRoughBsdf::metal_rough_pdf(const Vec3& wo, const Vec3& wi) const {
     if (wo.z() <= 0 || wi.z() <= 0) return 0;
     float ps = specular_probability(wo);
     return ps * ggx_vndf_pdf_wi(wo, wi, alpha_) + (1 - ps) * wi.z() * kInvPi;
+}
+
+void MetalRoughBsdf::set_sheen(const Color& colour, float roughness) {
+    sheen_ = colour.max(0.0f).min(1.0f);
+    sheen_max_ = sheen_.maxCoeff();
+    if (!(sheen_max_ > 0)) {
+        sheen_ = Color::Zero(), sheen_max_ = 0;
+        return;
+    }
+    sheen_roughness_ = clamp(roughness, kMinSheenRoughness, 1.0f);
+    cached_wo_z_ = -1;  // set_wo again
+}
+
+float MetalRoughBsdf::sheen_scaling(float mu) const {
+    return 1 - sheen_max_ * SheenAlbedoTable::get().albedo(mu, sheen_roughness_);
+}
+
+float MetalRoughBsdf::base_albedo_estimate(const Vec3& wo) const {
+    const float e_spec = metallic_ >= 1 ? 0.0f : specular_albedo(wo.z());
+    const float w = schlick_weight(std::max(0.0f, wo.z()));
+    return (1 - metallic_) * (e_spec + (1 - e_spec) * (1 - transmission_) * luminance(base_)) +
+           metallic_ * luminance(base_ + (1 - base_) * w);
+}
+
+float MetalRoughBsdf::sheen_probability(const Vec3& wo) const {
+    // The sheen's albedo against what the base under it returns. Its samples are uniform over the
+    // hemisphere: the fibres shine at grazing angles, where cosine sampling is thin.
+    const float scaling = sheen_scaling(wo.z()), e = 1 - scaling;
+    const float p = e / std::max(e + scaling * base_albedo_estimate(wo), 1e-6f);
+    return clamp(p, 0.05f, 0.5f);
+}
+
+Color MetalRoughBsdf::base_eval(const Vec3& wo, const Vec3& wi) const {
+    if (sheen_max_ <= 0) return metal_rough_eval(wo, wi);
+    if (wo.z() <= 0 || wi.z() <= 0) return Color::Zero();
+    const float scaling = std::min(sheen_scaling(wo.z()), sheen_scaling(wi.z()));
+    return sheen_ * sheen_lobe(wo, wi, sheen_roughness_) + metal_rough_eval(wo, wi) * scaling;
+}
+
+float MetalRoughBsdf::base_pdf(const Vec3& wo, const Vec3& wi) const {
+    if (sheen_max_ <= 0) return metal_rough_pdf(wo, wi);
+    if (wo.z() <= 0 || wi.z() <= 0) return 0;
+    const float p = sheen_probability(wo);
+    return p * (0.5f * kInvPi) + (1 - p) * metal_rough_pdf(wo, wi);
 }
 
 bool MetalRoughBsdf::sample(const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* out) const {
@@ -227,12 +346,18 @@ bool MetalRoughBsdf::sample(const Vec3& wo, float u_lobe, const Vec2& u, BsdfSam
         wi = 2 * wo.dot(wm) * wm - wo;
     } else {
         if (pc > 0) u_lobe = std::min((u_lobe - pc) / (1 - pc), 0.99999994f);
-        float ps = specular_probability(wo);
-        if (u_lobe < ps) {
-            Vec3 wm = sample_ggx_vndf(wo, alpha_, u);
-            wi = 2 * wo.dot(wm) * wm - wo;
+        const float psh = sheen_max_ > 0 ? sheen_probability(wo) : 0.0f;
+        if (u_lobe < psh) {  // the sheen's
+            wi = sample_uniform_hemisphere(u);
         } else {
-            wi = sample_cosine_hemisphere(u);
+            if (psh > 0) u_lobe = std::min((u_lobe - psh) / (1 - psh), 0.99999994f);
+            float ps = specular_probability(wo);
+            if (u_lobe < ps) {
+                Vec3 wm = sample_ggx_vndf(wo, alpha_, u);
+                wi = 2 * wo.dot(wm) * wm - wo;
+            } else {
+                wi = sample_cosine_hemisphere(u);
+            }
         }
     }
     if (wi.z() <= 0) return false;
@@ -263,11 +388,8 @@ float MetalRoughBsdf::coat_probability(const Vec3& wo) const {
 }
 
 float MetalRoughBsdf::coat_probability_for(const Vec3& wo, float e_coat) const {
-    // The base's albedo towards wo, roughly (its lobes' weights), under what the coat lets through.
-    const float e_spec = metallic_ >= 1 ? 0.0f : specular_albedo(wo.z());
-    const float w = schlick_weight(std::max(0.0f, wo.z()));
-    const float base = (1 - metallic_) * (e_spec + (1 - e_spec) * (1 - transmission_) * luminance(base_)) +
-                       metallic_ * luminance(base_ + (1 - base_) * w);
+    // The base's albedo towards wo, roughly, under what the coat lets through.
+    const float base = base_albedo_estimate(wo);
     const float p = e_coat / std::max(e_coat + (1 - e_coat) * base, 1e-6f);
     return clamp(p, 0.05f, 0.95f);
 }

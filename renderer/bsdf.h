@@ -30,6 +30,14 @@ class MetalRoughBsdf {
     // each way. 0 (the default): no coat, and every result bitwise as without it. Before set_wo.
     void set_clearcoat(float factor, float roughness);
 
+    // KHR_materials_sheen: a layer of micro-fibres over the metal-rough BSDF, under any clearcoat:
+    // f = sheen + base x min(1 - max(colour) E_s(mu_o), 1 - max(colour) E_s(mu_i)) (the
+    // extension's albedo scaling; Conty and Kulla 2017's "Charlie" distribution and visibility, E_s
+    // its directional albedo, tabulated). roughness is the extension's (alpha, not squared), at
+    // least 0.07. A black colour (the default): no sheen, every result bitwise as without it.
+    // Before set_wo.
+    void set_sheen(const Color& colour, float roughness);
+
     // KHR_materials_ior: the dielectric's index of refraction (default glTF's 1.5, F0 = 0.04);
     // F0 = ((ior - 1) / (ior + 1))^2 for its specular lobe, its energy compensation and what glass
     // passes. Values below 1 (the extension's 0) read as 1.5. Before set_wo.
@@ -65,10 +73,23 @@ class MetalRoughBsdf {
     static Vec3 sample_ggx_vndf(const Vec3& wo, float alpha, const Vec2& u);
     static float ggx_vndf_pdf_wi(const Vec3& wo, const Vec3& wi, float alpha);
 
+    // The sheen lobe alone (Charlie D and V, colour 1) and its directional albedo, for tests.
+    static float sheen_lobe(const Vec3& wo, const Vec3& wi, float roughness);
+    static float sheen_distribution(float cos_h, float roughness);
+    static float sheen_albedo_table(float mu, float roughness);
+
   private:
-    // The BSDF without the clearcoat.
+    // The BSDF without the clearcoat: the sheen over the metal-rough BSDF.
     Color base_eval(const Vec3& wo, const Vec3& wi) const;
     float base_pdf(const Vec3& wo, const Vec3& wi) const;
+    // The metal-rough BSDF alone (glTF's core model).
+    Color metal_rough_eval(const Vec3& wo, const Vec3& wi) const;
+    float metal_rough_pdf(const Vec3& wo, const Vec3& wi) const;
+    // What the base under the sheen keeps of light arriving along mu (1 - max(colour) E_s(mu)).
+    float sheen_scaling(float mu) const;
+    float sheen_probability(const Vec3& wo) const;
+    // The base's albedo towards wo, roughly (its lobes' weights): for lobe probabilities.
+    float base_albedo_estimate(const Vec3& wo) const;
     float coat_albedo(float mu) const;  // coat_ x E_c(mu): what the clearcoat's lobe reflects
     float coat_probability(const Vec3& wo) const;
     float coat_probability_for(const Vec3& wo, float e_coat) const;
@@ -84,6 +105,8 @@ class MetalRoughBsdf {
     float cached_wo_z_ = -1, cached_e_o_ = 0, cached_ps_ = 0;
     float coat_ = 0, coat_roughness_ = 0, coat_alpha_ = 1;  // set_clearcoat
     float cached_e_coat_ = 0, cached_pc_ = 0;
+    Color sheen_ = Color::Zero();  // set_sheen
+    float sheen_max_ = 0, sheen_roughness_ = 0.07f;
 };
 
 }  // namespace dynsky

@@ -62,7 +62,8 @@ const std::set<std::string>& supported_extensions() {
                                             "KHR_materials_transmission", "KHR_materials_clearcoat",
                                             "EXT_mesh_gpu_instancing",    "KHR_mesh_quantization",
                                             "KHR_lights_punctual",        "KHR_materials_ior",
-                                            "KHR_materials_volume",       "EXT_texture_webp"};
+                                            "KHR_materials_volume",       "EXT_texture_webp",
+                                            "KHR_materials_sheen"};
     return s;
 }
 
@@ -895,6 +896,7 @@ class GltfLoader {
             if (const tg::Value* cc = extension(m.extensions, "KHR_materials_clearcoat"))
                 read_clearcoat(*cc, &out, what);
             if (const tg::Value* ior = extension(m.extensions, "KHR_materials_ior")) read_ior(*ior, &out, what);
+            if (const tg::Value* sheen = extension(m.extensions, "KHR_materials_sheen")) read_sheen(*sheen, &out, what);
             if (const tg::Value* volume = extension(m.extensions, "KHR_materials_volume"))
                 read_volume(*volume, &out, what);
             if (m.alphaMode == "MASK") out.alpha_mode = AlphaMode::Mask;
@@ -919,8 +921,27 @@ class GltfLoader {
         return x;
     }
 
+    // An extension's RGB factor: 3 numbers in [0, 1], or `fallback` when absent.
+    Color extension_colour(const tg::Value& ext, const char* key, const Color& fallback, const std::string& what,
+                           const char* extension_name) {
+        const tg::Value* c = member(ext, key);
+        if (!c) return fallback;
+        if (!c->IsArray() || c->ArrayLen() != 3) fail(what + ": " + extension_name + " " + key + " is not 3 numbers");
+        Color colour;
+        for (int k = 0; k < 3; ++k) {
+            const tg::Value& e = c->Get(k);
+            const double v = e.IsNumber() ? e.GetNumberAsDouble() : std::nan("");
+            if (!(v >= 0 && v <= 1))
+                fail(what + ": " + extension_name + " " + key + " " +
+                     (e.IsNumber() ? number_text(v) : std::string("holds a non-number")) + " is outside [0, 1]");
+            colour[k] = float(v);
+        }
+        return colour;
+    }
+
     // A textureInfo object inside an extension ({"index", "texCoord", "extensions"}) into a slot.
-    void read_extension_slot(const tg::Value& ext, const char* key, TextureSlot* slot, const std::string& what) {
+    void read_extension_slot(const tg::Value& ext, const char* key, TextureSlot* slot, const std::string& what,
+                             bool srgb = false) {
         const tg::Value* info = member(ext, key);
         if (!info || !info->IsObject()) return;
         const tg::Value* index = member(*info, "index");
@@ -930,7 +951,17 @@ class GltfLoader {
             for (const std::string& k : e->Keys()) extensions[k] = e->Get(k);
         const tg::Value* texcoord = member(*info, "texCoord");
         read_slot(index->GetNumberAsInt(), texcoord && texcoord->IsNumber() ? texcoord->GetNumberAsInt() : 0,
-                  extensions, false, 1.0f, slot, what + " " + key);
+                  extensions, srgb, 1.0f, slot, what + " " + key);
+    }
+
+    // KHR_materials_sheen: sheenColorFactor (3 numbers in [0, 1], default black: no sheen) and
+    // sheenRoughnessFactor in [0, 1]; sheenColorTexture (sRGB RGB) and sheenRoughnessTexture (its A).
+    void read_sheen(const tg::Value& ext, Material* out, const std::string& what) {
+        const char* name = "KHR_materials_sheen";
+        out->sheen_roughness = float(extension_factor(ext, "sheenRoughnessFactor", 0.0, what, name));
+        out->sheen_color = extension_colour(ext, "sheenColorFactor", Color::Zero(), what, name);
+        read_extension_slot(ext, "sheenColorTexture", &out->sheen_color_texture, what, true);
+        read_extension_slot(ext, "sheenRoughnessTexture", &out->sheen_roughness_texture, what);
     }
 
     // KHR_materials_clearcoat: clearcoatFactor and clearcoatRoughnessFactor in [0, 1], their textures
@@ -981,18 +1012,7 @@ class GltfLoader {
             fail(what + ": " + name + " thicknessFactor " + number_text(thickness) + " is not a thickness (>= 0)");
         if (!(distance > 0))
             fail(what + ": " + name + " attenuationDistance " + number_text(distance) + " is not positive");
-        Color colour = Color::Ones();
-        if (const tg::Value* c = member(ext, "attenuationColor")) {
-            if (!c->IsArray() || c->ArrayLen() != 3) fail(what + ": " + name + " attenuationColor is not 3 numbers");
-            for (int k = 0; k < 3; ++k) {
-                const tg::Value& e = c->Get(k);
-                const double v = e.IsNumber() ? e.GetNumberAsDouble() : std::nan("");
-                if (!(v >= 0 && v <= 1))
-                    fail(what + ": " + name + " attenuationColor " +
-                         (e.IsNumber() ? number_text(v) : std::string("holds a non-number")) + " is outside [0, 1]");
-                colour[k] = float(v);
-            }
-        }
+        const Color colour = extension_colour(ext, "attenuationColor", Color::Ones(), what, name);
         if (out->transmission > 0 && thickness > 0 && std::isfinite(distance))
             out->volume_tint = colour.pow(float(thickness / distance));
         if (out->transmission > 0)
@@ -1715,7 +1735,8 @@ class GltfLoader {
         const Material& m = scene_.materials[size_t(mesh.material)];
         for (const TextureSlot* slot :
              {&m.base_color_texture, &m.metallic_roughness_texture, &m.transmission_texture, &m.clearcoat_texture,
-              &m.clearcoat_roughness_texture, &m.normal_texture, &m.occlusion_texture, &m.emissive_texture}) {
+              &m.clearcoat_roughness_texture, &m.sheen_color_texture, &m.sheen_roughness_texture, &m.normal_texture,
+              &m.occlusion_texture, &m.emissive_texture}) {
             if (!slot->present() || !mesh.texcoords[slot->texcoord].empty()) continue;
             if (!missing_uv_warned_.insert({mesh.material, slot->texcoord}).second) continue;
             warn(what + ": material " + in_quotes(m.name.empty() ? std::to_string(mesh.material) : m.name) +

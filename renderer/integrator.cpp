@@ -184,6 +184,7 @@ Color PathIntegrator::transmittance(const Ray& shadow_ray, RenderStats* stats) c
             if (sp.ior != 1.5f) bsdf.set_ior(sp.ior);
             bsdf.set_transmission_tint(sp.transmission_tint);
             bsdf.set_clearcoat(sp.clearcoat, sp.clearcoat_roughness);
+            if ((sp.sheen_color > 0).any()) bsdf.set_sheen(sp.sheen_color, sp.sheen_roughness);
             through = bsdf.transmitted(sp.to_local(-ray.direction.normalized()));
         }
         if (m.alpha_mode == AlphaMode::Opaque) {
@@ -332,6 +333,7 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
         if (sp.ior != 1.5f) bsdf.set_ior(sp.ior);  // glTF's default IOR is the BSDF's own
         if (sp.transmission > 0) bsdf.set_transmission_tint(sp.transmission_tint);
         if (sp.clearcoat > 0) bsdf.set_clearcoat(sp.clearcoat, coat_roughness);
+        if ((sp.sheen_color > 0).any()) bsdf.set_sheen(sp.sheen_color, sp.sheen_roughness);
         Vec3 wo = sp.to_local(-ray.direction.normalized());
         if (wo.z() <= 0) break;
         bsdf.set_wo(wo);

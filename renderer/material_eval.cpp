@@ -25,6 +25,11 @@ ShadingPoint evaluate_material(const Scene& scene, const SurfaceHit& hit, const 
         if (m.clearcoat_texture.present()) sp.clearcoat *= tex(m.clearcoat_texture).x();
         if (m.clearcoat_roughness_texture.present()) sp.clearcoat_roughness *= tex(m.clearcoat_roughness_texture).y();
     }
+    if ((m.sheen_color > 0).any()) {
+        sp.sheen_color = m.sheen_color, sp.sheen_roughness = m.sheen_roughness;
+        if (m.sheen_color_texture.present()) sp.sheen_color *= tex(m.sheen_color_texture).head<3>().array();
+        if (m.sheen_roughness_texture.present()) sp.sheen_roughness *= tex(m.sheen_roughness_texture).w();
+    }
     sp.emission = m.emissive;
     if (m.emissive_texture.present() && (m.emissive > 0).any())
         sp.emission *= tex(m.emissive_texture).head<3>().array();

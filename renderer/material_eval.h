@@ -10,8 +10,10 @@ struct ShadingPoint {
     float metallic = 1, roughness = 1, specular = 1;
     float transmission = 0;                        // KHR_materials_transmission (thin-walled)
     float clearcoat = 0, clearcoat_roughness = 0;  // KHR_materials_clearcoat
-    float ior = 1.5f;                              // KHR_materials_ior
-    Color transmission_tint = Color::Ones();       // KHR_materials_volume's absorption (Material::volume_tint)
+    Color sheen_color = Color::Zero();             // KHR_materials_sheen (black: none)
+    float sheen_roughness = 0;
+    float ior = 1.5f;                         // KHR_materials_ior
+    Color transmission_tint = Color::Ones();  // KHR_materials_volume's absorption (Material::volume_tint)
     Color emission = Color::Zero();
     Vec3 geometric_normal;            // flipped to the side of wo
     Vec3 normal, tangent, bitangent;  // shading frame (normal-mapped), on the side of wo

@@ -52,10 +52,16 @@ struct Material {
     float clearcoat = 0.0f, clearcoat_roughness = 0.0f;
     TextureSlot clearcoat_texture;            // linear R x clearcoat
     TextureSlot clearcoat_roughness_texture;  // linear G x clearcoat_roughness
-    TextureSlot normal_texture;               // linear, tangent space, scale in slot.scale
-    TextureSlot occlusion_texture;            // linear R, strength in slot.scale
-    Color emissive = Color::Zero();           // already multiplied by emissive_strength
-    TextureSlot emissive_texture;             // sRGB
+    // KHR_materials_sheen: a layer of micro-fibres (velvet, cloth) over the base, under the coat
+    // (bsdf.h set_sheen). Black: none.
+    Color sheen_color = Color::Zero();
+    float sheen_roughness = 0.0f;
+    TextureSlot sheen_color_texture;      // sRGB RGB x sheen_color
+    TextureSlot sheen_roughness_texture;  // linear A x sheen_roughness
+    TextureSlot normal_texture;           // linear, tangent space, scale in slot.scale
+    TextureSlot occlusion_texture;        // linear R, strength in slot.scale
+    Color emissive = Color::Zero();       // already multiplied by emissive_strength
+    TextureSlot emissive_texture;         // sRGB
     AlphaMode alpha_mode = AlphaMode::Opaque;
     float alpha_cutoff = 0.5f;
     bool double_sided = false;

@@ -192,6 +192,60 @@ TEST(MetalRoughBsdf, ClearcoatLayersEnergySafelyOverTheBase) {
     EXPECT_TRUE(none.eval(wo, dir_from_theta(-0.3f)).isApprox(zero.eval(wo, dir_from_theta(-0.3f)), 0.0f));
 }
 
+// KHR_materials_sheen: the Charlie distribution is normalised (integral of D cos over the
+// hemisphere is 1); the sheen alone reflects its tabulated albedo, never more than it receives;
+// over a white base the layered sum stays within energy; reciprocal; sampled as its pdf says (also
+// over a metal, as SheenChair's fabric is); a black sheen changes nothing.
+TEST(MetalRoughBsdf, SheenLayersEnergySafelyOverTheBase) {
+    for (float r : {0.1f, 0.5f, 1.0f}) {
+        double d = 0;
+        const int n = 4000;
+        for (int a = 0; a < n; ++a) {
+            const double z = (a + 0.5) / n;  // cos theta_h, d omega = 2 pi dz
+            d += MetalRoughBsdf::sheen_distribution(float(z), r) * z * 2 * kPiD / n;
+        }
+        EXPECT_NEAR(d, 1.0, 2e-3) << r;
+    }
+    for (float r : {0.2f, 0.6f})
+        for (float theta : {0.0f, 0.9f, 1.4f}) {
+            const Vec3 wo = dir_from_theta(theta);
+            MetalRoughBsdf sheen_only(Color::Zero(), 0.0f, 1.0f, 0.0f);
+            sheen_only.set_sheen(Color(1.0f, 0.5f, 0.25f), r);
+            const Color a = albedo_quadrature(sheen_only, wo, 800);
+            const float table = MetalRoughBsdf::sheen_albedo_table(wo.z(), r);
+            EXPECT_GT(table, 0.01f) << r << " " << theta;
+            EXPECT_LE(table, 1.0f);
+            EXPECT_NEAR(a[0], table, 0.02f * table + 2e-3f) << r << " " << theta;
+            EXPECT_NEAR(a[1], 0.5f * a[0], 1e-4f);
+            MetalRoughBsdf white(Color::Ones(), 0.0f, 0.8f, 0.0f);  // a white Lambertian under it
+            white.set_sheen(Color::Ones(), r);
+            const Color w = albedo_quadrature(white, wo, 800);
+            EXPECT_LE(w.maxCoeff(), 1.0f + 5e-3f) << r << " " << theta;
+            EXPECT_GE(w.minCoeff(), table) << r << " " << theta;
+        }
+    Rng rng(7, 3);
+    for (float metallic : {0.0f, 1.0f}) {
+        MetalRoughBsdf fabric(Color(0.6f, 0.2f, 0.3f), metallic, 0.7f);
+        fabric.set_sheen(Color(0.9f, 0.8f, 1.0f), 0.3f);
+        for (int k = 0; k < 1000; ++k) {
+            Vec3 a = sample_cosine_hemisphere(rng.uniform2()), b = sample_cosine_hemisphere(rng.uniform2());
+            Color f1 = fabric.eval(a, b), f2 = fabric.eval(b, a);
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(f1[c], f2[c], 1e-4f * std::max(1.0f, f1[c]));
+        }
+        for (float theta : {0.3f, 1.3f}) {
+            const Vec3 wo = dir_from_theta(theta);
+            fabric.set_wo(wo);
+            EXPECT_LE(pdf_integral(fabric, wo), 1.0 + 5e-3);
+            expect_sampled_estimate_matches_quadrature(fabric, wo, &rng, "sheen");
+        }
+    }
+    MetalRoughBsdf none(Color(0.8f, 0.3f, 0.1f), 0.2f, 0.7f), black(Color(0.8f, 0.3f, 0.1f), 0.2f, 0.7f);
+    black.set_sheen(Color::Zero(), 0.5f);
+    const Vec3 wo = dir_from_theta(0.7f), wi = dir_from_theta(-0.3f);
+    EXPECT_TRUE(none.eval(wo, wi).isApprox(black.eval(wo, wi), 0.0f));
+    EXPECT_EQ(none.pdf(wo, wi), black.pdf(wo, wi));
+}
+
 TEST(MetalRoughBsdf, PdfIntegratesToAtMostOne) {
     for (float metallic : {0.0f, 1.0f})
         for (float roughness : {0.3f, 0.8f})

@@ -495,9 +495,9 @@ TEST(GltfLoader, TexturesAreSharedPerImageSamplerAndColourSpace) {
         "\"metallicRoughnessTexture\":{\"index\":1," +
         transform +
         "}},\"alphaMode\":\"BLEND\"}],"
-        "\"extensionsUsed\":[\"KHR_texture_transform\",\"KHR_materials_sheen\"]";
+        "\"extensionsUsed\":[\"KHR_texture_transform\",\"KHR_materials_iridescence\"]";
     Scene s = load_gltf(g.write(dir, "textures", body));
-    EXPECT_TRUE(has_warning_containing(s, "KHR_materials_sheen"));
+    EXPECT_TRUE(has_warning_containing(s, "KHR_materials_iridescence"));
     ASSERT_EQ(s.materials.size(), 2u);
     const Material &a = s.materials[0], &b = s.materials[1];
     // (image 0, sampler 0, sRGB): a.baseColor and a.emissive (textures 0 and 1 are identical);
@@ -602,8 +602,8 @@ TEST(GltfLoader, UnsupportedExtensionsRequiredFailAndUsedWarn) {
     std::string e = load_error(path);
     EXPECT_NE(e.find("required.gltf"), std::string::npos) << e;
     EXPECT_NE(e.find("KHR_draco_mesh_compression"), std::string::npos) << e;
-    Scene s = load_gltf(g.write(dir, "used", one_node_scene(mesh, "\"extensionsUsed\":[\"KHR_materials_sheen\"]")));
-    EXPECT_TRUE(has_warning_containing(s, "KHR_materials_sheen"));
+    Scene s = load_gltf(g.write(dir, "used", one_node_scene(mesh, "\"extensionsUsed\":[\"KHR_materials_iridescence\"]")));
+    EXPECT_TRUE(has_warning_containing(s, "KHR_materials_iridescence"));
     EXPECT_EQ(s.triangle_count(), 1u);  // 4 vertices, not indexed: one triangle, one vertex left over
     EXPECT_TRUE(has_warning_containing(s, "not a multiple of 3"));
 }
@@ -1233,6 +1233,36 @@ TEST(GltfLoader, WebpTexturesAreReadWithTheirFallbackIgnored) {
     EXPECT_FALSE(has_warning_containing(s, "EXT_texture_webp"));
     const std::string e = load_error(write("webp_missing", 5));
     EXPECT_NE(e.find("EXT_texture_webp's source 5 does not exist (the file has 2 images)"), std::string::npos) << e;
+    fs::remove_all(dir);
+}
+
+// KHR_materials_sheen: colour and roughness factors and both textures are read (the colour's as
+// sRGB); a colour outside [0, 1] is refused by name.
+TEST(GltfLoader, SheenIsReadAndBadColoursRefused) {
+    std::string dir = test::temp_dir("gltf");
+    const OneMaterialQuad quad;
+    auto write = [&](const std::string& name, const std::string& sheen) {
+        return quad.write(dir, name,
+                          "{\"name\":\"velvet\",\"extensions\":{\"KHR_materials_sheen\":" + sheen +
+                              "}}],\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"t.png\"}",
+                          "\"KHR_materials_sheen\"");
+    };
+    cv::Mat texel(1, 1, CV_8UC4, cv::Scalar(188, 188, 188, 128));  // sRGB 188 = linear 0.5; alpha 0.5
+    ASSERT_TRUE(cv::imwrite(dir + "/t.png", texel));
+    Scene s = load_gltf(write("sheen",
+                              "{\"sheenColorFactor\":[1,0.5,0.25],\"sheenRoughnessFactor\":0.4,"
+                              "\"sheenColorTexture\":{\"index\":0},\"sheenRoughnessTexture\":{\"index\":0}}"));
+    const Material* m = material_named(s, "velvet");
+    ASSERT_NE(m, nullptr);
+    EXPECT_TRUE(m->sheen_color.isApprox(Color(1, 0.5f, 0.25f)));
+    EXPECT_FLOAT_EQ(m->sheen_roughness, 0.4f);
+    ASSERT_TRUE(m->sheen_color_texture.present() && m->sheen_roughness_texture.present());
+    EXPECT_NEAR(s.textures[size_t(m->sheen_color_texture.texture)]->evaluate(Vec2(0.5f, 0.5f))[0], 0.5f, 0.01f)
+        << "sRGB";
+    EXPECT_NEAR(s.textures[size_t(m->sheen_roughness_texture.texture)]->evaluate(Vec2(0.5f, 0.5f))[3], 0.5f, 0.01f);
+    EXPECT_FALSE(has_warning_containing(s, "KHR_materials_sheen"));
+    const std::string e = load_error(write("sheen_bad", "{\"sheenColorFactor\":[1,2,0]}"));
+    EXPECT_NE(e.find("KHR_materials_sheen sheenColorFactor 2 is outside [0, 1]"), std::string::npos) << e;
     fs::remove_all(dir);
 }
 
