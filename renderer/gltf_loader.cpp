@@ -145,7 +145,38 @@ bool is_png(const unsigned char* b, size_t n) {
     return n >= 8 && std::memcmp(b, signature, 8) == 0;
 }
 
+// RIFF....WEBP: a WebP image (EXT_texture_webp).
+bool is_webp(const unsigned char* b, size_t n) {
+    return n >= 12 && std::memcmp(b, "RIFF", 4) == 0 && std::memcmp(b + 8, "WEBP", 4) == 0;
+}
+
+// A WebP's canvas from its first chunk (VP8X: 24-bit sizes minus one; VP8L: 14-bit sizes minus one
+// after the 0x2f signature; VP8: 14-bit sizes after the key frame's start code).
+bool webp_header_size(const unsigned char* b, size_t n, long long* width, long long* height) {
+    if (n < 30) return false;
+    const auto le = [&](size_t at, int bytes) {
+        uint32_t v = 0;
+        for (int k = bytes - 1; k >= 0; --k) v = (v << 8) | b[at + size_t(k)];
+        return v;
+    };
+    if (std::memcmp(b + 12, "VP8X", 4) == 0) {
+        *width = le(24, 3) + 1LL, *height = le(27, 3) + 1LL;
+        return true;
+    }
+    if (std::memcmp(b + 12, "VP8L", 4) == 0 && b[20] == 0x2f) {
+        const uint32_t bits = le(21, 4);
+        *width = (bits & 0x3fff) + 1LL, *height = ((bits >> 14) & 0x3fff) + 1LL;
+        return true;
+    }
+    if (std::memcmp(b + 12, "VP8 ", 4) == 0 && b[23] == 0x9d && b[24] == 0x01 && b[25] == 0x2a) {
+        *width = le(26, 2) & 0x3fff, *height = le(28, 2) & 0x3fff;
+        return true;
+    }
+    return false;
+}
+
 bool image_header_size(const unsigned char* b, size_t n, long long* width, long long* height) {
+    if (is_webp(b, n)) return webp_header_size(b, n, width, height);
     if (n >= 24 && is_png(b, n)) {
         const auto be32 = [&](size_t at) {
             return (uint32_t(b[at]) << 24) | (uint32_t(b[at + 1]) << 16) | (uint32_t(b[at + 2]) << 8) | b[at + 3];
@@ -160,11 +191,6 @@ bool image_header_size(const unsigned char* b, size_t n, long long* width, long 
 }
 
 // A PNG decoded to RGBA in [0, 1] (8- or 16-bit; grey, grey + alpha, palette, RGB, RGBA): "" or why not.
-// RIFF....WEBP: a WebP image (EXT_texture_webp).
-bool is_webp(const unsigned char* b, size_t n) {
-    return n >= 12 && std::memcmp(b, "RIFF", 4) == 0 && std::memcmp(b + 8, "WEBP", 4) == 0;
-}
-
 // Decodes a PNG or WebP (`format` names it in messages) through OpenCV into float RGBA.
 std::string decode_with_opencv(const unsigned char* bytes, size_t size, const std::string& format, int* width,
                                int* height, std::vector<float>* rgba) {

@@ -602,7 +602,8 @@ TEST(GltfLoader, UnsupportedExtensionsRequiredFailAndUsedWarn) {
     std::string e = load_error(path);
     EXPECT_NE(e.find("required.gltf"), std::string::npos) << e;
     EXPECT_NE(e.find("KHR_draco_mesh_compression"), std::string::npos) << e;
-    Scene s = load_gltf(g.write(dir, "used", one_node_scene(mesh, "\"extensionsUsed\":[\"KHR_materials_iridescence\"]")));
+    Scene s = load_gltf(g.write(dir, "used",
+                                one_node_scene(mesh, "\"extensionsUsed\":[\"KHR_materials_iridescence\"]")));
     EXPECT_TRUE(has_warning_containing(s, "KHR_materials_iridescence"));
     EXPECT_EQ(s.triangle_count(), 1u);  // 4 vertices, not indexed: one triangle, one vertex left over
     EXPECT_TRUE(has_warning_containing(s, "not a multiple of 3"));
@@ -1231,8 +1232,24 @@ TEST(GltfLoader, WebpTexturesAreReadWithTheirFallbackIgnored) {
     EXPECT_NEAR(c[0], 1.0f, 1e-3f) << "the WebP (red), not the PNG fallback (green)";
     EXPECT_NEAR(c[1], 0.0f, 1e-3f);
     EXPECT_FALSE(has_warning_containing(s, "EXT_texture_webp"));
-    const std::string e = load_error(write("webp_missing", 5));
+    std::string e = load_error(write("webp_missing", 5));
     EXPECT_NE(e.find("EXT_texture_webp's source 5 does not exist (the file has 2 images)"), std::string::npos) << e;
+    // The canvas each kind of WebP header declares is checked before decoding: VP8X (24-bit sizes),
+    // VP8L (lossless, 14-bit) and VP8 (lossy, 14-bit).
+    auto riff = [](const std::string& chunk, const std::string& data) {
+        std::string body = "WEBP" + chunk + std::string("\x20\0\0\0", 4) + data + std::string(32, '\0');
+        const uint32_t size = uint32_t(body.size());
+        return "RIFF" + std::string(reinterpret_cast<const char*>(&size), 4) + body;
+    };
+    const std::vector<std::pair<std::string, std::string>> huge = {
+        {riff("VP8X", std::string("\0\0\0\0\x1f\x4e\0\x1f\x4e\0", 10)), "20000 x 20000"},
+        {riff("VP8L", std::string("\x2f\xff\xff\xff\x0f", 5)), "16384 x 16384"},
+        {riff("VP8 ", std::string("\0\0\0\x9d\x01\x2a\xff\x3f\xff\x3f", 10)), "16383 x 16383"}};
+    for (const auto& [bytes, size] : huge) {
+        write_bytes(dir + "/red.webp", bytes);
+        e = load_error(write("webp_huge", 1));
+        EXPECT_NE(e.find("image is " + size), std::string::npos) << e;
+    }
     fs::remove_all(dir);
 }
 
