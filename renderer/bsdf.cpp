@@ -182,7 +182,23 @@ void MetalRoughBsdf::set_ior(float ior) {
     // glTF's 1.5 is the default; the extension allows 1 and above (0 for "ignore", read as 1.5).
     if (!(ior >= 1) || !std::isfinite(ior)) ior = 1.5f;
     const float r = (ior - 1) / (ior + 1);
-    f0_ = r * r;
+    f0_ior_ = r * r;
+    update_f0();
+}
+
+void MetalRoughBsdf::set_specular_color(const Color& colour) {
+    specular_color_ = colour.max(0.0f);
+    if (!specular_color_.allFinite()) specular_color_ = Color::Ones();
+    coloured_ = (specular_color_ != 1.0f).any();
+    update_f0();
+}
+
+void MetalRoughBsdf::update_f0() {
+    // The albedo tables take one F0: the largest channel's. E grows with F0 at every angle, so that
+    // channel's E is the largest at every angle, and the Lambert base weighted by it keeps every
+    // channel within energy.
+    f0_colour_ = (f0_ior_ * specular_color_).min(1.0f);
+    f0_ = coloured_ ? f0_colour_.maxCoeff() : f0_ior_;
     if (specular_ > 0) e_avg_ = specular_ * SpecularAlbedoTable::get().average(roughness_, f0_);
     cached_wo_z_ = -1;  // set_wo again
 }
@@ -267,7 +283,9 @@ Color MetalRoughBsdf::metal_rough_eval(const Vec3& wo, const Vec3& wi) const {
         diffuse_weight = (1 - e_o) * (1 - specular_albedo(wi.z())) / std::max(1 - e_avg_, 1e-4f);
     }
     diffuse_weight *= 1 - transmission_;  // the rest passes through (transmitted())
-    Color dielectric = diffuse_weight * base_ * kInvPi + Color::Constant(f_dielectric * spec);
+    Color dielectric = diffuse_weight * base_ * kInvPi;
+    if (coloured_) dielectric += specular_ * (f0_colour_ + (1 - f0_colour_) * w) * spec;
+    else dielectric += Color::Constant(f_dielectric * spec);
     Color metal = (base_ + (1 - base_) * w) * spec;
     return (1 - metallic_) * dielectric + metallic_ * metal;
 }

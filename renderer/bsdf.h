@@ -43,6 +43,10 @@ class MetalRoughBsdf {
     // passes. Values below 1 (the extension's 0) read as 1.5. Before set_wo.
     void set_ior(float ior);
 
+    // KHR_materials_specular's colour: the dielectric's F0 per channel, min(F0 x colour, 1) (F90
+    // stays the specular factor). Default white: every result bitwise as without it. Before set_wo.
+    void set_specular_color(const Color& colour);
+
     // KHR_materials_volume, thin: what transmitted() passes is also multiplied by this (per channel).
     void set_transmission_tint(const Color& tint) { tint_ = tint.max(0.0f).min(1.0f); }
 
@@ -98,7 +102,11 @@ class MetalRoughBsdf {
 
     Color base_;
     float metallic_, roughness_, alpha_, specular_, transmission_;
-    float f0_ = 0.04f;            // the dielectric's Fresnel at normal incidence (set_ior)
+    void update_f0();       // f0_, f0_colour_ and e_avg_ from f0_ior_ and specular_color_
+    float f0_ior_ = 0.04f;  // the dielectric's Fresnel at normal incidence (set_ior)
+    float f0_ = 0.04f;      // the albedo tables' F0: f0_ior_, or the largest channel of f0_colour_
+    Color specular_color_ = Color::Ones(), f0_colour_ = Color::Constant(0.04f);
+    bool coloured_ = false;       // specular_color_ is not white
     Color tint_ = Color::Ones();  // set_transmission_tint
     float e_avg_ = 0;             // specular_ x the lobe's cosine-weighted mean albedo
     // set_wo's cache: wo.z(), specular_albedo(wo.z()) and the lobe probability (valid: cached_wo_z_ > 0).

@@ -63,7 +63,7 @@ const std::set<std::string>& supported_extensions() {
                                             "EXT_mesh_gpu_instancing",    "KHR_mesh_quantization",
                                             "KHR_lights_punctual",        "KHR_materials_ior",
                                             "KHR_materials_volume",       "EXT_texture_webp",
-                                            "KHR_materials_sheen"};
+                                            "KHR_materials_sheen",        "KHR_materials_specular"};
     return s;
 }
 
@@ -650,11 +650,7 @@ class GltfLoader {
                 fail("requires glTF extension " + in_quotes(e) + ", which dynsky does not support");
         for (const std::string& e : model_.extensionsUsed)
             if (!supported_extensions().count(e)) {
-                if (e == "KHR_materials_specular")
-                    warn(
-                        "extension 'KHR_materials_specular' is only partly supported: specularFactor is used, "
-                        "specularColorFactor and the textures are ignored");
-                else warn("extension " + in_quotes(e) + " is not supported: ignored");
+                warn("extension " + in_quotes(e) + " is not supported: ignored");
             }
     }
 
@@ -915,8 +911,7 @@ class GltfLoader {
             out.emissive = out.emissive.max(0.0f) * float(strength);
             out.base_color = out.base_color.max(0.0f).min(1.0f);
             out.base_alpha = std::clamp(out.base_alpha, 0.0f, 1.0f);
-            if (const tg::Value* sp = extension(m.extensions, "KHR_materials_specular"))
-                out.specular = clamp(float(number_or(member(*sp, "specularFactor"), 1.0)), 0.0f, 1.0f);
+            if (const tg::Value* sp = extension(m.extensions, "KHR_materials_specular")) read_specular(*sp, &out, what);
             if (const tg::Value* tr = extension(m.extensions, "KHR_materials_transmission"))
                 read_transmission(*tr, &out, what);
             if (const tg::Value* cc = extension(m.extensions, "KHR_materials_clearcoat"))
@@ -947,9 +942,9 @@ class GltfLoader {
         return x;
     }
 
-    // An extension's RGB factor: 3 numbers in [0, 1], or `fallback` when absent.
+    // An extension's RGB factor: 3 numbers in [0, upper], or `fallback` when absent.
     Color extension_colour(const tg::Value& ext, const char* key, const Color& fallback, const std::string& what,
-                           const char* extension_name) {
+                           const char* extension_name, double upper = 1) {
         const tg::Value* c = member(ext, key);
         if (!c) return fallback;
         if (!c->IsArray() || c->ArrayLen() != 3) fail(what + ": " + extension_name + " " + key + " is not 3 numbers");
@@ -957,9 +952,10 @@ class GltfLoader {
         for (int k = 0; k < 3; ++k) {
             const tg::Value& e = c->Get(k);
             const double v = e.IsNumber() ? e.GetNumberAsDouble() : std::nan("");
-            if (!(v >= 0 && v <= 1))
+            if (!(v >= 0 && v <= upper))
                 fail(what + ": " + extension_name + " " + key + " " +
-                     (e.IsNumber() ? number_text(v) : std::string("holds a non-number")) + " is outside [0, 1]");
+                     (e.IsNumber() ? number_text(v) : std::string("holds a non-number")) + " is outside [0, " +
+                     number_text(upper) + "]");
             colour[k] = float(v);
         }
         return colour;
@@ -978,6 +974,17 @@ class GltfLoader {
         const tg::Value* texcoord = member(*info, "texCoord");
         read_slot(index->GetNumberAsInt(), texcoord && texcoord->IsNumber() ? texcoord->GetNumberAsInt() : 0,
                   extensions, srgb, 1.0f, slot, what + " " + key);
+    }
+
+    // KHR_materials_specular: specularFactor in [0, 1] (scales the dielectric's Fresnel, F90
+    // included) and its texture's A; specularColorFactor (F0 tint, finite and not negative: above 1
+    // raises F0, capped at 1) and its texture's RGB (sRGB).
+    void read_specular(const tg::Value& ext, Material* out, const std::string& what) {
+        const char* name = "KHR_materials_specular";
+        out->specular = float(extension_factor(ext, "specularFactor", 1.0, what, name));
+        read_extension_slot(ext, "specularTexture", &out->specular_texture, what);
+        out->specular_color = extension_colour(ext, "specularColorFactor", Color::Ones(), what, name, 1e6);
+        read_extension_slot(ext, "specularColorTexture", &out->specular_color_texture, what, true);
     }
 
     // KHR_materials_sheen: sheenColorFactor (3 numbers in [0, 1], default black: no sheen) and
@@ -1761,8 +1768,8 @@ class GltfLoader {
         const Material& m = scene_.materials[size_t(mesh.material)];
         for (const TextureSlot* slot :
              {&m.base_color_texture, &m.metallic_roughness_texture, &m.transmission_texture, &m.clearcoat_texture,
-              &m.clearcoat_roughness_texture, &m.sheen_color_texture, &m.sheen_roughness_texture, &m.normal_texture,
-              &m.occlusion_texture, &m.emissive_texture}) {
+              &m.clearcoat_roughness_texture, &m.specular_texture, &m.specular_color_texture, &m.sheen_color_texture,
+              &m.sheen_roughness_texture, &m.normal_texture, &m.occlusion_texture, &m.emissive_texture}) {
             if (!slot->present() || !mesh.texcoords[slot->texcoord].empty()) continue;
             if (!missing_uv_warned_.insert({mesh.material, slot->texcoord}).second) continue;
             warn(what + ": material " + in_quotes(m.name.empty() ? std::to_string(mesh.material) : m.name) +

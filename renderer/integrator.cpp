@@ -182,6 +182,7 @@ Color PathIntegrator::transmittance(const Ray& shadow_ray, RenderStats* stats) c
             const ShadingPoint sp = evaluate_material(accel_.scene(), hit, -ray.direction.normalized());
             MetalRoughBsdf bsdf(sp.base_color, sp.metallic, sp.roughness, sp.specular, sp.transmission);
             if (sp.ior != 1.5f) bsdf.set_ior(sp.ior);
+            if ((sp.specular_color != 1.0f).any()) bsdf.set_specular_color(sp.specular_color);
             bsdf.set_transmission_tint(sp.transmission_tint);
             bsdf.set_clearcoat(sp.clearcoat, sp.clearcoat_roughness);
             if ((sp.sheen_color > 0).any()) bsdf.set_sheen(sp.sheen_color, sp.sheen_roughness);
@@ -331,6 +332,7 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
         }
         MetalRoughBsdf bsdf(sp.base_color, sp.metallic, roughness, sp.specular, sp.transmission);
         if (sp.ior != 1.5f) bsdf.set_ior(sp.ior);  // glTF's default IOR is the BSDF's own
+        if ((sp.specular_color != 1.0f).any()) bsdf.set_specular_color(sp.specular_color);
         if (sp.transmission > 0) bsdf.set_transmission_tint(sp.transmission_tint);
         if (sp.clearcoat > 0) bsdf.set_clearcoat(sp.clearcoat, coat_roughness);
         if ((sp.sheen_color > 0).any()) bsdf.set_sheen(sp.sheen_color, sp.sheen_roughness);

@@ -8,6 +8,7 @@ namespace dynsky {
 struct ShadingPoint {
     Color base_color = Color::Ones();
     float metallic = 1, roughness = 1, specular = 1;
+    Color specular_color = Color::Ones();          // KHR_materials_specular's F0 tint
     float transmission = 0;                        // KHR_materials_transmission (thin-walled)
     float clearcoat = 0, clearcoat_roughness = 0;  // KHR_materials_clearcoat
     Color sheen_color = Color::Zero();             // KHR_materials_sheen (black: none)

@@ -39,6 +39,9 @@ struct Material {
     float metallic = 1.0f, roughness = 1.0f;
     TextureSlot metallic_roughness_texture;  // linear: G roughness, B metallic
     float specular = 1.0f;                   // KHR_materials_specular specularFactor (0: pure Lambert base)
+    TextureSlot specular_texture;            // linear A x specular
+    Color specular_color = Color::Ones();    // KHR_materials_specular specularColorFactor (F0 tint)
+    TextureSlot specular_color_texture;      // sRGB RGB x specular_color
     float ior = 1.5f;                        // KHR_materials_ior: the dielectric's F0 = ((ior - 1) / (ior + 1))^2
     // KHR_materials_transmission, thin-walled (no KHR_materials_volume): the share of the dielectric
     // base that passes straight through the surface, tinted by the base colour, instead of

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <string>
 
 #include "renderer/sampling.h"
@@ -244,6 +245,47 @@ TEST(MetalRoughBsdf, SheenLayersEnergySafelyOverTheBase) {
     const Vec3 wo = dir_from_theta(0.7f), wi = dir_from_theta(-0.3f);
     EXPECT_TRUE(none.eval(wo, wi).isApprox(black.eval(wo, wi), 0.0f));
     EXPECT_EQ(none.pdf(wo, wi), black.pdf(wo, wi));
+}
+
+// KHR_materials_specular's colour: each channel's specular lobe is the uncoloured one of F0 x
+// colour (black base: only the lobe reflects); over a white base the largest channel reflects
+// exactly what it receives and none more; F0 above 1 is capped; white changes nothing.
+TEST(MetalRoughBsdf, SpecularColourTintsTheDielectricsFresnelAndKeepsEnergy) {
+    auto ior_for = [](float f0) { return (1 + std::sqrt(f0)) / (1 - std::sqrt(f0)); };
+    for (float roughness : {0.3f, 0.7f})
+        for (float theta : {0.2f, 1.2f}) {
+            const Vec3 wo = dir_from_theta(theta);
+            MetalRoughBsdf tinted(Color::Zero(), 0.0f, roughness);
+            tinted.set_specular_color(Color(1.0f, 0.5f, 4.0f));  // F0 0.04, 0.02, 0.16
+            const Color a = albedo_quadrature(tinted, wo, 600);
+            for (int c = 0; c < 3; ++c) {
+                MetalRoughBsdf plain(Color::Zero(), 0.0f, roughness);
+                plain.set_ior(ior_for(0.04f * std::array<float, 3>{1.0f, 0.5f, 4.0f}[size_t(c)]));
+                EXPECT_NEAR(a[c], albedo_quadrature(plain, wo, 600)[c], 1e-3f) << c << " " << theta;
+            }
+            MetalRoughBsdf white(Color::Ones(), 0.0f, roughness);
+            white.set_specular_color(Color(0.2f, 1.0f, 3.0f));
+            const Color w = albedo_quadrature(white, wo, 600);
+            EXPECT_NEAR(w[2], 1.0f, 5e-3f) << theta;  // the largest F0's channel: exactly 1
+            EXPECT_LE(w.maxCoeff(), 1.0f + 5e-3f);
+            EXPECT_GT(w.minCoeff(), 0.8f);
+            MetalRoughBsdf capped(Color::Ones(), 0.0f, roughness);
+            capped.set_specular_color(Color::Constant(1e6f));  // F0 1: a perfect (rough) mirror lobe
+            const Color m = albedo_quadrature(capped, wo, 600);
+            EXPECT_TRUE(m.allFinite());
+            EXPECT_LE(m.maxCoeff(), 1.0f + 5e-3f);
+        }
+    Rng rng(11, 2);
+    MetalRoughBsdf tinted(Color(0.5f, 0.4f, 0.3f), 0.0f, 0.4f);
+    tinted.set_specular_color(Color(1.5f, 0.2f, 1.0f));
+    const Vec3 wo = dir_from_theta(0.9f);
+    tinted.set_wo(wo);
+    expect_sampled_estimate_matches_quadrature(tinted, wo, &rng, "specular colour");
+    MetalRoughBsdf none(Color(0.8f, 0.3f, 0.1f), 0.2f, 0.7f), white(Color(0.8f, 0.3f, 0.1f), 0.2f, 0.7f);
+    white.set_specular_color(Color::Ones());
+    const Vec3 wi = dir_from_theta(-0.3f);
+    EXPECT_TRUE(none.eval(wo, wi).isApprox(white.eval(wo, wi), 0.0f));
+    EXPECT_EQ(none.pdf(wo, wi), white.pdf(wo, wi));
 }
 
 TEST(MetalRoughBsdf, PdfIntegratesToAtMostOne) {

@@ -1283,6 +1283,35 @@ TEST(GltfLoader, SheenIsReadAndBadColoursRefused) {
     fs::remove_all(dir);
 }
 
+// KHR_materials_specular: factor, colour (above 1 allowed) and both textures are read, the
+// colour texture as sRGB; a negative colour is refused by name and nothing is said to be ignored.
+TEST(GltfLoader, SpecularColourAndTexturesAreRead) {
+    std::string dir = test::temp_dir("gltf");
+    const OneMaterialQuad quad;
+    auto write = [&](const std::string& name, const std::string& specular) {
+        return quad.write(dir, name,
+                          "{\"name\":\"tinted\",\"extensions\":{\"KHR_materials_specular\":" + specular +
+                              "}}],\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"t.png\"}",
+                          "\"KHR_materials_specular\"");
+    };
+    cv::Mat texel(1, 1, CV_8UC4, cv::Scalar(188, 188, 188, 128));  // sRGB 188 = linear 0.5; alpha 0.5
+    ASSERT_TRUE(cv::imwrite(dir + "/t.png", texel));
+    Scene s = load_gltf(write("specular",
+                              "{\"specularFactor\":0.8,\"specularColorFactor\":[2,1,0.5],"
+                              "\"specularTexture\":{\"index\":0},\"specularColorTexture\":{\"index\":0}}"));
+    const Material* m = material_named(s, "tinted");
+    ASSERT_NE(m, nullptr);
+    EXPECT_FLOAT_EQ(m->specular, 0.8f);
+    EXPECT_TRUE(m->specular_color.isApprox(Color(2, 1, 0.5f)));
+    ASSERT_TRUE(m->specular_texture.present() && m->specular_color_texture.present());
+    EXPECT_NEAR(s.textures[size_t(m->specular_color_texture.texture)]->evaluate(Vec2(0.5f, 0.5f))[0], 0.5f, 0.01f);
+    EXPECT_NEAR(s.textures[size_t(m->specular_texture.texture)]->evaluate(Vec2(0.5f, 0.5f))[3], 0.5f, 0.01f);
+    EXPECT_FALSE(has_warning_containing(s, "KHR_materials_specular"));
+    const std::string e = load_error(write("specular_bad", "{\"specularColorFactor\":[1,-1,0]}"));
+    EXPECT_NE(e.find("KHR_materials_specular specularColorFactor -1 is outside [0, "), std::string::npos) << e;
+    fs::remove_all(dir);
+}
+
 // KHR_materials_ior: read into the material (water 1.33); the extension's 0 falls back to 1.5 with
 // a warning; a negative IOR is refused by name.
 TEST(GltfLoader, IorIsReadAndImpossibleValuesAreSaid) {
