@@ -23,6 +23,7 @@
 #include <type_traits>
 #include <unistd.h>
 
+#include "renderer/draco_mesh.h"
 #include "renderer/gltf_json_check.h"
 #include "renderer/mesh_attributes.h"
 #include "util/error.h"
@@ -63,7 +64,8 @@ const std::set<std::string>& supported_extensions() {
                                             "EXT_mesh_gpu_instancing",    "KHR_mesh_quantization",
                                             "KHR_lights_punctual",        "KHR_materials_ior",
                                             "KHR_materials_volume",       "EXT_texture_webp",
-                                            "KHR_materials_sheen",        "KHR_materials_specular"};
+                                            "KHR_materials_sheen",        "KHR_materials_specular",
+                                            "KHR_draco_mesh_compression"};
     return s;
 }
 
@@ -440,7 +442,6 @@ const tg::Value* extension(const tg::ExtensionMap& map, const char* name) {
     return it != map.end() && it->second.IsObject() ? &it->second : nullptr;
 }
 
-// Vertex attribute and instancing arrays as floats: count elements of `components` each.
 // How a node poses its mesh's vertices: morph weights (empty: none) and skin joint matrices (a
 // joint's world transform x its inverse bind matrix; empty: not skinned).
 struct VertexPose {
@@ -448,6 +449,7 @@ struct VertexPose {
     std::vector<Eigen::Matrix4d> joints;
 };
 
+// Vertex attribute and instancing arrays as floats: count elements of `components` each.
 struct FloatArray {
     std::vector<float> values;
     size_t count = 0;
@@ -477,6 +479,7 @@ class GltfLoader {
         check_version();
         check_extensions();
         validate_buffer_views();
+        decode_draco_primitives();
         build_materials();
         build_textures();
         traverse_nodes();
@@ -555,11 +558,16 @@ class GltfLoader {
             fail("JSON nested " + std::to_string(depth) + " levels deep, more than the " +
                  std::to_string(kMaxJsonDepth) + " dynsky reads (a corrupt or hostile file?)");
         {
-            const nlohmann::json document = nlohmann::json::parse(json, json + json_size, nullptr, false);
+            nlohmann::json document = nlohmann::json::parse(json, json + json_size, nullptr, false);
             check_uris(document);
             GltfJsonReport report = check_gltf_json(document);
             for (const std::string& w : report.warnings) warn(w);
             if (!report.error.empty()) fail(report.error);
+            // Draco primitives' indices accessors have no bufferView (the indices are in the
+            // compressed data), which Debian's tinygltf, built without draco, refuses: the
+            // primitive's "indices" is dropped before tinygltf reads the file, and the decoded
+            // indices take its place (decode_draco).
+            if (drop_draco_indices(&document)) bytes = with_json(bytes, binary, document.dump());
         }
 
         namespace fs = std::filesystem;
@@ -654,7 +662,121 @@ class GltfLoader {
             }
     }
 
+    // Removes "indices" from primitives compressed by KHR_draco_mesh_compression; true if any.
+    static bool drop_draco_indices(nlohmann::json* document) {
+        bool dropped = false;
+        auto meshes = document->find("meshes");
+        if (meshes == document->end() || !meshes->is_array()) return false;
+        for (nlohmann::json& mesh : *meshes) {
+            auto primitives = mesh.is_object() ? mesh.find("primitives") : mesh.end();
+            if (!mesh.is_object() || primitives == mesh.end() || !primitives->is_array()) continue;
+            for (nlohmann::json& p : *primitives) {
+                if (!p.is_object() || !p.contains("indices")) continue;
+                auto ext = p.find("extensions");
+                if (ext != p.end() && ext->is_object() && ext->contains("KHR_draco_mesh_compression"))
+                    p.erase("indices"), dropped = true;
+            }
+        }
+        return dropped;
+    }
+
+    // The file's bytes with its JSON replaced (a GLB keeps its binary chunk, the header's lengths
+    // updated).
+    static std::vector<unsigned char> with_json(const std::vector<unsigned char>& bytes, bool binary,
+                                                std::string json) {
+        if (!binary) return std::vector<unsigned char>(json.begin(), json.end());
+        while (json.size() % 4) json.push_back(' ');
+        const size_t old_json = read_u32(&bytes[12]), rest = 20 + old_json;
+        std::vector<unsigned char> out(bytes.begin(), bytes.begin() + 20);
+        out.insert(out.end(), json.begin(), json.end());
+        if (rest < bytes.size()) out.insert(out.end(), bytes.begin() + std::ptrdiff_t(rest), bytes.end());
+        auto put_u32 = [&](size_t at, size_t v) {
+            for (int k = 0; k < 4; ++k) out[at + size_t(k)] = static_cast<unsigned char>((v >> (8 * k)) & 0xff);
+        };
+        put_u32(8, out.size());
+        put_u32(12, json.size());
+        return out;
+    }
+
     // ---- Buffers and accessors ----------------------------------------------------------------
+
+    // KHR_draco_mesh_compression: each compressed primitive is decoded (Google's draco library) into
+    // a buffer of its own, float attributes and 32-bit indices, and the primitive points at new
+    // accessors over it; the rest of the loader then reads it as any other primitive.
+    void decode_draco_primitives() {
+        for (size_t mi = 0; mi < model_.meshes.size(); ++mi)
+            for (size_t pi = 0; pi < model_.meshes[mi].primitives.size(); ++pi) {
+                tg::Primitive& p = model_.meshes[mi].primitives[pi];
+                const tg::Value* ext = extension(p.extensions, "KHR_draco_mesh_compression");
+                if (ext) decode_draco(p, *ext, "mesh " + std::to_string(mi) + " primitive " + std::to_string(pi));
+            }
+    }
+
+    void decode_draco(tg::Primitive& p, const tg::Value& ext, const std::string& what) {
+        const std::string name = what + " KHR_draco_mesh_compression";
+        const tg::Value* view = member(ext, "bufferView");
+        const tg::Value* attributes = member(ext, "attributes");
+        if (!view || !view->IsNumber() || view->GetNumberAsInt() < 0 ||
+            size_t(view->GetNumberAsInt()) >= model_.bufferViews.size())
+            fail(name + ": bufferView is missing or not one of the file's " +
+                 std::to_string(model_.bufferViews.size()));
+        if (!attributes || !attributes->IsObject()) fail(name + ": attributes is missing or not an object");
+        const tg::BufferView& bv = model_.bufferViews[size_t(view->GetNumberAsInt())];
+        const std::vector<unsigned char>& bytes = model_.buffers[size_t(bv.buffer)].data;  // bounds validated
+        std::unique_ptr<DracoMesh> mesh;
+        try {
+            mesh = std::make_unique<DracoMesh>(bytes.data() + bv.byteOffset, bv.byteLength);
+        } catch (const Error& e) {
+            fail(name + ": the compressed mesh does not decode (" + e.what() + ")");
+        }
+        const size_t points = mesh->points();
+
+        tg::Buffer out;
+        auto add_view = [&](const void* data, size_t size) {
+            while (out.data.size() % 4) out.data.push_back(0);
+            tg::BufferView v;
+            v.buffer = int(model_.buffers.size());
+            v.byteOffset = out.data.size();
+            v.byteLength = size;
+            const auto* b = static_cast<const unsigned char*>(data);
+            out.data.insert(out.data.end(), b, b + size);
+            model_.bufferViews.push_back(v);
+            return int(model_.bufferViews.size()) - 1;
+        };
+        auto add_accessor = [&](int view_index, int component_type, size_t count, int type) {
+            tg::Accessor a;
+            a.bufferView = view_index, a.byteOffset = 0, a.componentType = component_type;
+            a.count = count, a.type = type, a.normalized = false;
+            model_.accessors.push_back(a);
+            return int(model_.accessors.size()) - 1;
+        };
+        const std::vector<uint32_t> indices = mesh->indices();
+        p.indices = add_accessor(add_view(indices.data(), indices.size() * 4), TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT,
+                                 indices.size(), TINYGLTF_TYPE_SCALAR);
+        if (p.mode < 0) p.mode = TINYGLTF_MODE_TRIANGLES;
+        for (const std::string& key : attributes->Keys()) {
+            const tg::Value& id_value = attributes->Get(key);
+            const int id = id_value.IsNumber() ? id_value.GetNumberAsInt() : -1;
+            if (id < 0 || mesh->components(uint32_t(id)) == 0)
+                fail(name + ": attribute " + in_quotes(key) + " is not in the compressed mesh");
+            auto it = p.attributes.find(key);
+            const int components = it != p.attributes.end() && size_t(it->second) < model_.accessors.size()
+                                       ? tg::GetNumComponentsInType(uint32_t(model_.accessors[size_t(it->second)].type))
+                                       : mesh->components(uint32_t(id));
+            std::vector<float> values;
+            if (!mesh->attribute(uint32_t(id), components, &values))
+                fail(name + ": attribute " + in_quotes(key) + " does not convert to " + std::to_string(components) +
+                     " numbers a vertex");
+            const int type = components == 1   ? TINYGLTF_TYPE_SCALAR
+                             : components == 2 ? TINYGLTF_TYPE_VEC2
+                             : components == 3 ? TINYGLTF_TYPE_VEC3
+                                               : TINYGLTF_TYPE_VEC4;
+            p.attributes[key] = add_accessor(add_view(values.data(), values.size() * 4), TINYGLTF_COMPONENT_TYPE_FLOAT,
+                                             points, type);
+        }
+        out.uri = "(decoded " + name + ")";
+        model_.buffers.push_back(std::move(out));
+    }
 
     void validate_buffer_views() {
         for (size_t i = 0; i < model_.bufferViews.size(); ++i) {

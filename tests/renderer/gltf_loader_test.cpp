@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <draco/compression/encode.h>
+#include <draco/mesh/triangle_soup_mesh_builder.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include <array>
@@ -597,11 +599,11 @@ TEST(GltfLoader, UnsupportedExtensionsRequiredFailAndUsedWarn) {
     std::string mesh = "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) + "}}]}";
     std::string path = g.write(dir, "required",
                                one_node_scene(mesh,
-                                              "\"extensionsUsed\":[\"KHR_draco_mesh_compression\"],"
-                                              "\"extensionsRequired\":[\"KHR_draco_mesh_compression\"]"));
+                                              "\"extensionsUsed\":[\"KHR_texture_basisu\"],"
+                                              "\"extensionsRequired\":[\"KHR_texture_basisu\"]"));
     std::string e = load_error(path);
     EXPECT_NE(e.find("required.gltf"), std::string::npos) << e;
-    EXPECT_NE(e.find("KHR_draco_mesh_compression"), std::string::npos) << e;
+    EXPECT_NE(e.find("KHR_texture_basisu"), std::string::npos) << e;
     Scene s = load_gltf(g.write(dir, "used",
                                 one_node_scene(mesh, "\"extensionsUsed\":[\"KHR_materials_iridescence\"]")));
     EXPECT_TRUE(has_warning_containing(s, "KHR_materials_iridescence"));
@@ -1055,6 +1057,78 @@ TEST(GltfLoader, ValuesOfTheWrongTypeOrOutsideTheSpecAreNamedByTheirPath) {
 
 // KHR_lights_punctual: each node's light placed by its world transform, shining along its -Z, in
 // the sky's radiometric units (candela and lux / 683); impossible lights are refused by name.
+// KHR_draco_mesh_compression: a quad compressed by draco (positions quantised to 14 bits) loads
+// as its two triangles with their positions and UVs; a compressed buffer that is not draco is
+// refused by name, and so is an attribute id the compressed mesh lacks.
+TEST(GltfLoader, DracoCompressedMeshesAreDecoded) {
+    std::string dir = test::temp_dir("gltf");
+    const float corner[4][3] = {{0, 0, 0}, {2, 0, 0}, {2, 1, 0}, {0, 1, 0}};
+    const float uv[4][2] = {{0, 1}, {1, 1}, {1, 0}, {0, 0}};
+    const int tri[2][3] = {{0, 1, 2}, {0, 2, 3}};
+    draco::TriangleSoupMeshBuilder builder;
+    builder.Start(2);
+    const int pos_att = builder.AddAttribute(draco::GeometryAttribute::POSITION, 3, draco::DT_FLOAT32);
+    const int uv_att = builder.AddAttribute(draco::GeometryAttribute::TEX_COORD, 2, draco::DT_FLOAT32);
+    for (int f = 0; f < 2; ++f) {
+        builder.SetAttributeValuesForFace(pos_att, draco::FaceIndex(f), corner[tri[f][0]], corner[tri[f][1]],
+                                          corner[tri[f][2]]);
+        builder.SetAttributeValuesForFace(uv_att, draco::FaceIndex(f), uv[tri[f][0]], uv[tri[f][1]], uv[tri[f][2]]);
+    }
+    std::unique_ptr<draco::Mesh> mesh = builder.Finalize();
+    ASSERT_TRUE(mesh);
+    draco::Encoder encoder;
+    encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, 14);
+    draco::EncoderBuffer encoded;
+    ASSERT_TRUE(encoder.EncodeMeshToBuffer(*mesh, &encoded).ok());
+    const std::string bytes(encoded.data(), encoded.size());
+    const int pos_id = int(mesh->attribute(pos_att)->unique_id()), uv_id = int(mesh->attribute(uv_att)->unique_id());
+
+    auto write = [&](const std::string& name, const std::string& buffer, int position_id) {
+        write_bytes(dir + "/" + name + ".bin", buffer);
+        const std::string json =
+            "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+            "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"indices\":2,"
+            "\"extensions\":{\"KHR_draco_mesh_compression\":{\"bufferView\":0,\"attributes\":{\"POSITION\":" +
+            std::to_string(position_id) + ",\"TEXCOORD_0\":" + std::to_string(uv_id) +
+            "}}}}]}],\"accessors\":[{\"componentType\":5126,\"count\":4,\"type\":\"VEC3\",\"min\":[0,0,0],"
+            "\"max\":[2,1,0]},{\"componentType\":5126,\"count\":4,\"type\":\"VEC2\"},{\"componentType\":5125,"
+            "\"count\":6,\"type\":\"SCALAR\"}],\"bufferViews\":[{\"buffer\":0,\"byteLength\":" +
+            std::to_string(buffer.size()) + "}],\"buffers\":[{\"uri\":\"" + name +
+            ".bin\",\"byteLength\":" + std::to_string(buffer.size()) +
+            "}],\"extensionsUsed\":[\"KHR_draco_mesh_compression\"],\"extensionsRequired\":[\"KHR_draco_mesh_"
+            "compression\"]}";
+        write_bytes(dir + "/" + name + ".gltf", json);
+        return dir + "/" + name + ".gltf";
+    };
+    Scene s = load_gltf(write("draco", bytes, pos_id));
+    ASSERT_EQ(s.triangle_count(), 2u);
+    // draco may reorder faces and rotate their corners: each corner is one of the quad's, with its
+    // UV, and the two triangles cover the quad (area 2) facing +z as given.
+    const TriangleMesh& m = s.meshes.at(0).primitives.at(0);
+    for (size_t k = 0; k < m.indices.size(); ++k) {
+        const Vec3& p = m.positions[m.indices[k]];
+        int c = -1;
+        for (int j = 0; j < 4; ++j)
+            if ((p - Vec3(corner[j][0], corner[j][1], corner[j][2])).norm() < 1e-3f) c = j;
+        ASSERT_GE(c, 0) << k << ": " << p.transpose();
+        EXPECT_LT((m.texcoords[0][m.indices[k]] - Vec2(uv[c][0], uv[c][1])).norm(), 1e-5f) << k;
+    }
+    float area = 0;
+    for (size_t k = 0; k < 6; k += 3) {
+        const Vec3 &a = m.positions[m.indices[k]], &b = m.positions[m.indices[k + 1]],
+                   &c = m.positions[m.indices[k + 2]];
+        area += 0.5f * (b - a).cross(c - a).z();
+    }
+    EXPECT_NEAR(area, 2.0f, 1e-3f);
+    EXPECT_FALSE(has_warning_containing(s, "draco"));
+
+    std::string e = load_error(write("not_draco", std::string(64, 'x'), pos_id));
+    EXPECT_NE(e.find("KHR_draco_mesh_compression: the compressed mesh does not decode"), std::string::npos) << e;
+    e = load_error(write("bad_id", bytes, 7));
+    EXPECT_NE(e.find("attribute 'POSITION' is not in the compressed mesh"), std::string::npos) << e;
+    fs::remove_all(dir);
+}
+
 // Skins are posed at the nodes' own transforms (linear blend skinning, joint = world x inverse
 // bind matrix) into world space, ignoring the skinned node's transform as the spec says; bad joint
 // indices and missing skins are refused by name.
