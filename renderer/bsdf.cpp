@@ -17,6 +17,17 @@ static float schlick_weight(float cos_theta) {
 
 namespace {
 
+// Bilinear interpolation in a table over (mu, roughness) in [0, 1]^2 with kSize nodes each way;
+// e(i, j) is the value at mu node i and roughness node j.
+template <int kSize, class Value>
+float bilinear_over_mu_and_roughness(float mu, float roughness, const Value& e) {
+    float x = clamp(mu, 0.0f, 1.0f) * (kSize - 1), y = clamp(roughness, 0.0f, 1.0f) * (kSize - 1);
+    int x0 = std::min(int(x), kSize - 2), y0 = std::min(int(y), kSize - 2);
+    float fx = x - x0, fy = y - y0;
+    return (1 - fy) * ((1 - fx) * e(x0, y0) + fx * e(x0 + 1, y0)) +
+           fy * ((1 - fx) * e(x0, y0 + 1) + fx * e(x0 + 1, y0 + 1));
+}
+
 // Directional albedo E(mu, roughness, F0) of the dielectric specular lobe (Schlick), and its
 // cosine-weighted average. The Lambert base is scaled by (1 - E(mu_o)) (1 - E(mu_i)) /
 // (1 - E_avg) (Kelemen and Szirmay-Kalos 2001; Kulla and Conty 2017): reciprocal, and a white
@@ -32,15 +43,10 @@ class SpecularAlbedoTable {
         return table;
     }
     float albedo(float mu, float roughness, float f0) const {
-        float x = clamp(mu, 0.0f, 1.0f) * (kSize - 1), y = clamp(roughness, 0.0f, 1.0f) * (kSize - 1);
-        int x0 = std::min(int(x), kSize - 2), y0 = std::min(int(y), kSize - 2);
-        float fx = x - x0, fy = y - y0;
-        auto e = [&](int i, int j) {
+        return bilinear_over_mu_and_roughness<kSize>(mu, roughness, [&](int i, int j) {
             const Moments& m = albedo_[j * kSize + i];
             return f0 * m.g + (1 - f0) * m.wg;
-        };
-        return (1 - fy) * ((1 - fx) * e(x0, y0) + fx * e(x0 + 1, y0)) +
-               fy * ((1 - fx) * e(x0, y0 + 1) + fx * e(x0 + 1, y0 + 1));
+        });
     }
     float average(float roughness, float f0) const {
         float y = clamp(roughness, 0.0f, 1.0f) * (kSize - 1);
@@ -119,12 +125,8 @@ class SheenAlbedoTable {
         return table;
     }
     float albedo(float mu, float roughness) const {
-        float x = clamp(mu, 0.0f, 1.0f) * (kSize - 1), y = clamp(roughness, 0.0f, 1.0f) * (kSize - 1);
-        int x0 = std::min(int(x), kSize - 2), y0 = std::min(int(y), kSize - 2);
-        float fx = x - x0, fy = y - y0;
-        auto e = [&](int i, int j) { return albedo_[j * kSize + i]; };
-        return (1 - fy) * ((1 - fx) * e(x0, y0) + fx * e(x0 + 1, y0)) +
-               fy * ((1 - fx) * e(x0, y0 + 1) + fx * e(x0 + 1, y0 + 1));
+        return bilinear_over_mu_and_roughness<kSize>(mu, roughness,
+                                                     [&](int i, int j) { return albedo_[j * kSize + i]; });
     }
 
   private:

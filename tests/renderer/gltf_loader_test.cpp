@@ -1327,19 +1327,34 @@ TEST(GltfLoader, WebpTexturesAreReadWithTheirFallbackIgnored) {
     fs::remove_all(dir);
 }
 
+// A quad whose material `name` carries one extension object and one texture, t.png: sRGB 188
+// (linear 0.5) with alpha 128 (0.5), for the extension's texture slots.
+struct ExtensionMaterialQuad {
+    ExtensionMaterialQuad(std::string dir_, std::string extension_, std::string name_)
+        : dir(std::move(dir_)), extension(std::move(extension_)), name(std::move(name_)) {
+        cv::Mat texel(1, 1, CV_8UC4, cv::Scalar(188, 188, 188, 128));
+        EXPECT_TRUE(cv::imwrite(dir + "/t.png", texel));
+    }
+    std::string write(const std::string& file, const std::string& extension_json) const {
+        return quad.write(dir, file,
+                          "{\"name\":\"" + name + "\",\"extensions\":{\"" + extension + "\":" + extension_json +
+                              "}}],\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"t.png\"}",
+                          "\"" + extension + "\"");
+    }
+    std::string dir, extension, name;
+    OneMaterialQuad quad;
+};
+
+Vec4 texel_of(const Scene& s, const TextureSlot& slot) {
+    return s.textures[size_t(slot.texture)]->evaluate(Vec2(0.5f, 0.5f));
+}
+
 // KHR_materials_sheen: colour and roughness factors and both textures are read (the colour's as
 // sRGB); a colour outside [0, 1] is refused by name.
 TEST(GltfLoader, SheenIsReadAndBadColoursRefused) {
     std::string dir = test::temp_dir("gltf");
-    const OneMaterialQuad quad;
-    auto write = [&](const std::string& name, const std::string& sheen) {
-        return quad.write(dir, name,
-                          "{\"name\":\"velvet\",\"extensions\":{\"KHR_materials_sheen\":" + sheen +
-                              "}}],\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"t.png\"}",
-                          "\"KHR_materials_sheen\"");
-    };
-    cv::Mat texel(1, 1, CV_8UC4, cv::Scalar(188, 188, 188, 128));  // sRGB 188 = linear 0.5; alpha 0.5
-    ASSERT_TRUE(cv::imwrite(dir + "/t.png", texel));
+    const ExtensionMaterialQuad quad(dir, "KHR_materials_sheen", "velvet");
+    auto write = [&](const std::string& name, const std::string& sheen) { return quad.write(name, sheen); };
     Scene s = load_gltf(write("sheen",
                               "{\"sheenColorFactor\":[1,0.5,0.25],\"sheenRoughnessFactor\":0.4,"
                               "\"sheenColorTexture\":{\"index\":0},\"sheenRoughnessTexture\":{\"index\":0}}"));
@@ -1348,9 +1363,8 @@ TEST(GltfLoader, SheenIsReadAndBadColoursRefused) {
     EXPECT_TRUE(m->sheen_color.isApprox(Color(1, 0.5f, 0.25f)));
     EXPECT_FLOAT_EQ(m->sheen_roughness, 0.4f);
     ASSERT_TRUE(m->sheen_color_texture.present() && m->sheen_roughness_texture.present());
-    EXPECT_NEAR(s.textures[size_t(m->sheen_color_texture.texture)]->evaluate(Vec2(0.5f, 0.5f))[0], 0.5f, 0.01f)
-        << "sRGB";
-    EXPECT_NEAR(s.textures[size_t(m->sheen_roughness_texture.texture)]->evaluate(Vec2(0.5f, 0.5f))[3], 0.5f, 0.01f);
+    EXPECT_NEAR(texel_of(s, m->sheen_color_texture)[0], 0.5f, 0.01f) << "sRGB";
+    EXPECT_NEAR(texel_of(s, m->sheen_roughness_texture)[3], 0.5f, 0.01f);
     EXPECT_FALSE(has_warning_containing(s, "KHR_materials_sheen"));
     const std::string e = load_error(write("sheen_bad", "{\"sheenColorFactor\":[1,2,0]}"));
     EXPECT_NE(e.find("KHR_materials_sheen sheenColorFactor 2 is outside [0, 1]"), std::string::npos) << e;
@@ -1361,15 +1375,8 @@ TEST(GltfLoader, SheenIsReadAndBadColoursRefused) {
 // colour texture as sRGB; a negative colour is refused by name and nothing is said to be ignored.
 TEST(GltfLoader, SpecularColourAndTexturesAreRead) {
     std::string dir = test::temp_dir("gltf");
-    const OneMaterialQuad quad;
-    auto write = [&](const std::string& name, const std::string& specular) {
-        return quad.write(dir, name,
-                          "{\"name\":\"tinted\",\"extensions\":{\"KHR_materials_specular\":" + specular +
-                              "}}],\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"t.png\"}",
-                          "\"KHR_materials_specular\"");
-    };
-    cv::Mat texel(1, 1, CV_8UC4, cv::Scalar(188, 188, 188, 128));  // sRGB 188 = linear 0.5; alpha 0.5
-    ASSERT_TRUE(cv::imwrite(dir + "/t.png", texel));
+    const ExtensionMaterialQuad quad(dir, "KHR_materials_specular", "tinted");
+    auto write = [&](const std::string& name, const std::string& specular) { return quad.write(name, specular); };
     Scene s = load_gltf(write("specular",
                               "{\"specularFactor\":0.8,\"specularColorFactor\":[2,1,0.5],"
                               "\"specularTexture\":{\"index\":0},\"specularColorTexture\":{\"index\":0}}"));
@@ -1378,8 +1385,8 @@ TEST(GltfLoader, SpecularColourAndTexturesAreRead) {
     EXPECT_FLOAT_EQ(m->specular, 0.8f);
     EXPECT_TRUE(m->specular_color.isApprox(Color(2, 1, 0.5f)));
     ASSERT_TRUE(m->specular_texture.present() && m->specular_color_texture.present());
-    EXPECT_NEAR(s.textures[size_t(m->specular_color_texture.texture)]->evaluate(Vec2(0.5f, 0.5f))[0], 0.5f, 0.01f);
-    EXPECT_NEAR(s.textures[size_t(m->specular_texture.texture)]->evaluate(Vec2(0.5f, 0.5f))[3], 0.5f, 0.01f);
+    EXPECT_NEAR(texel_of(s, m->specular_color_texture)[0], 0.5f, 0.01f) << "sRGB";
+    EXPECT_NEAR(texel_of(s, m->specular_texture)[3], 0.5f, 0.01f);
     EXPECT_FALSE(has_warning_containing(s, "KHR_materials_specular"));
     const std::string e = load_error(write("specular_bad", "{\"specularColorFactor\":[1,-1,0]}"));
     EXPECT_NE(e.find("KHR_materials_specular specularColorFactor -1 is outside [0, "), std::string::npos) << e;
