@@ -26,6 +26,7 @@
 #include "renderer/draco_mesh.h"
 #include "renderer/gltf_json_check.h"
 #include "renderer/mesh_attributes.h"
+#include "renderer/meshopt_buffer.h"
 #include "util/error.h"
 #include "util/image.h"
 #include "util/parse.h"
@@ -65,7 +66,7 @@ const std::set<std::string>& supported_extensions() {
                                             "KHR_lights_punctual",        "KHR_materials_ior",
                                             "KHR_materials_volume",       "EXT_texture_webp",
                                             "KHR_materials_sheen",        "KHR_materials_specular",
-                                            "KHR_draco_mesh_compression"};
+                                            "KHR_draco_mesh_compression", "EXT_meshopt_compression"};
     return s;
 }
 
@@ -478,6 +479,7 @@ class GltfLoader {
         parse_file();
         check_version();
         check_extensions();
+        decode_meshopt_views();
         validate_buffer_views();
         decode_draco_primitives();
         build_materials();
@@ -566,8 +568,10 @@ class GltfLoader {
             // Draco primitives' indices accessors have no bufferView (the indices are in the
             // compressed data), which Debian's tinygltf, built without draco, refuses: the
             // primitive's "indices" is dropped before tinygltf reads the file, and the decoded
-            // indices take its place (decode_draco).
-            if (drop_draco_indices(&document)) bytes = with_json(bytes, binary, document.dump());
+            // indices take its place (decode_draco). meshopt's fallback buffers have no data
+            // (tinygltf refuses or misreads them): a 4-byte stand-in, replaced by the decoded views.
+            const bool draco = drop_draco_indices(&document), meshopt = stand_in_meshopt_fallbacks(&document);
+            if (draco || meshopt) bytes = with_json(bytes, binary, document.dump());
         }
 
         namespace fs = std::filesystem;
@@ -680,6 +684,25 @@ class GltfLoader {
         return dropped;
     }
 
+    // Gives EXT_meshopt_compression's fallback buffers (no uri, no data: every view of them is
+    // compressed elsewhere) a 4-byte data URI; true if any.
+    static bool stand_in_meshopt_fallbacks(nlohmann::json* document) {
+        bool changed = false;
+        auto buffers = document->find("buffers");
+        if (buffers == document->end() || !buffers->is_array()) return false;
+        for (nlohmann::json& b : *buffers) {
+            if (!b.is_object() || b.contains("uri")) continue;
+            auto ext = b.find("extensions");
+            if (ext == b.end() || !ext->is_object()) continue;
+            auto m = ext->find("EXT_meshopt_compression");
+            if (m == ext->end() || !m->is_object() || !m->value("fallback", false)) continue;
+            b["uri"] = "data:application/octet-stream;base64,AAAAAA==";
+            b["byteLength"] = 4;
+            changed = true;
+        }
+        return changed;
+    }
+
     // The file's bytes with its JSON replaced (a GLB keeps its binary chunk, the header's lengths
     // updated).
     static std::vector<unsigned char> with_json(const std::vector<unsigned char>& bytes, bool binary,
@@ -699,6 +722,50 @@ class GltfLoader {
     }
 
     // ---- Buffers and accessors ----------------------------------------------------------------
+
+    // EXT_meshopt_compression: each compressed buffer view is decoded (meshoptimizer) into a buffer
+    // of its own, which the view then points at; nothing else changes.
+    void decode_meshopt_views() {
+        for (size_t i = 0; i < model_.bufferViews.size(); ++i) {
+            const tg::Value* ext = extension(model_.bufferViews[i].extensions, "EXT_meshopt_compression");
+            if (!ext) continue;
+            const std::string name = "bufferView " + std::to_string(i) + " EXT_meshopt_compression";
+            auto number = [&](const char* key, bool required) -> size_t {
+                const tg::Value* v = member(*ext, key);
+                if (!v) {
+                    if (required) fail(name + ": " + key + " is missing");
+                    return 0;
+                }
+                const double x = v->IsNumber() ? v->GetNumberAsDouble() : -1;
+                if (!(x >= 0 && x <= 9007199254740992.0 && x == std::floor(x)))
+                    fail(name + ": " + key + " is not a non-negative integer");
+                return size_t(x);
+            };
+            auto text = [&](const char* key, const char* fallback) {
+                const tg::Value* v = member(*ext, key);
+                return v && v->IsString() ? v->Get<std::string>() : std::string(fallback);
+            };
+            const size_t buffer = number("buffer", true), offset = number("byteOffset", false),
+                         length = number("byteLength", true), stride = number("byteStride", true),
+                         count = number("count", true);
+            if (buffer >= model_.buffers.size()) fail(name + ": buffer " + std::to_string(buffer) + " does not exist");
+            const std::vector<unsigned char>& data = model_.buffers[buffer].data;
+            if (offset > data.size() || length > data.size() - offset)
+                fail(name + ": bytes " + std::to_string(offset) + " + " + std::to_string(length) +
+                     " are beyond buffer " + std::to_string(buffer) + "'s " + std::to_string(data.size()));
+            tg::Buffer decoded;
+            const std::string problem = decode_meshopt_buffer(text("mode", ""), text("filter", "NONE"), count, stride,
+                                                              data.data() + offset, length, &decoded.data);
+            if (!problem.empty()) fail(name + ": " + problem);
+            tg::BufferView& view = model_.bufferViews[i];
+            if (view.byteLength != decoded.data.size())
+                fail(name + ": count x byteStride is " + std::to_string(decoded.data.size()) +
+                     " bytes but the view holds " + std::to_string(view.byteLength));
+            decoded.uri = "(decoded " + name + ")";
+            view.buffer = int(model_.buffers.size()), view.byteOffset = 0;
+            model_.buffers.push_back(std::move(decoded));
+        }
+    }
 
     // KHR_draco_mesh_compression: each compressed primitive is decoded (Google's draco library) into
     // a buffer of its own, float attributes and 32-bit indices, and the primitive points at new

@@ -11,7 +11,7 @@
 // KHR_materials_transmission (thin-walled), KHR_materials_clearcoat, KHR_materials_specular,
 // KHR_materials_ior, KHR_materials_volume (thin), KHR_materials_sheen, KHR_lights_punctual,
 // EXT_texture_webp, EXT_mesh_gpu_instancing, KHR_mesh_quantization, KHR_draco_mesh_compression
-// (renderer/draco_mesh.h). Skins and morph targets are
+// (renderer/draco_mesh.h), EXT_meshopt_compression (renderer/meshopt_buffer.h). Skins and morph targets are
 // posed as the file stands (the nodes' transforms, the weights given).
 // Ignored with a warning: points and lines, animations, and any other extension listed in
 // extensionsUsed. One listed in extensionsRequired that is not supported is

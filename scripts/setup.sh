@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build ccache pkg-config
-  libembree-dev libtinygltf-dev libdraco-dev nlohmann-json3-dev libstb-dev
+  libembree-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev nlohmann-json3-dev libstb-dev
   libopenimageio-dev openimageio-tools libopenexr-dev
   libopencv-dev libeigen3-dev libtbb-dev
   libgtest-dev libbenchmark-dev libcli11-dev zlib1g-dev

@@ -4,6 +4,7 @@
 
 #include <draco/compression/encode.h>
 #include <draco/mesh/triangle_soup_mesh_builder.h>
+#include <meshoptimizer.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include <array>
@@ -1126,6 +1127,93 @@ TEST(GltfLoader, DracoCompressedMeshesAreDecoded) {
     EXPECT_NE(e.find("KHR_draco_mesh_compression: the compressed mesh does not decode"), std::string::npos) << e;
     e = load_error(write("bad_id", bytes, 7));
     EXPECT_NE(e.find("attribute 'POSITION' is not in the compressed mesh"), std::string::npos) << e;
+    fs::remove_all(dir);
+}
+
+// EXT_meshopt_compression (gltfpack's output): a quad whose positions (a vertex stream), normals
+// (octahedral filter) and triangle indices are meshopt-compressed in buffer 0 behind views of an
+// empty fallback buffer loads as the quad; a stream that does not decode, a view whose size
+// disagrees and a count far beyond the compressed bytes are refused by name.
+TEST(GltfLoader, MeshoptCompressedViewsAreDecoded) {
+    std::string dir = test::temp_dir("gltf");
+    const std::vector<float> positions = {0, 0, 0, 2, 0, 0, 2, 1, 0, 0, 1, 0};
+    const std::vector<unsigned> indices = {0, 1, 2, 0, 2, 3};
+    auto encode_vertices = [](const void* v, size_t count, size_t stride) {
+        std::vector<unsigned char> out(meshopt_encodeVertexBufferBound(count, stride));
+        out.resize(meshopt_encodeVertexBuffer(out.data(), out.size(), v, count, stride));
+        return std::string(out.begin(), out.end());
+    };
+    std::vector<unsigned char> idx(meshopt_encodeIndexBufferBound(6, 4));
+    idx.resize(meshopt_encodeIndexBuffer(idx.data(), idx.size(), indices.data(), 6));
+    std::vector<int8_t> octa(16);  // 4 x (x, y, z = 127 as 1.0, pad), 8-bit octahedral normals
+    // Tilted normals (0.6, 0, 0.8): their octahedral code read raw would be (0.39, 0, 0.92).
+    const std::vector<float> tilted = {0.6f, 0, 0.8f, 0, 0.6f, 0, 0.8f, 0, 0.6f, 0, 0.8f, 0, 0.6f, 0, 0.8f, 0};
+    meshopt_encodeFilterOct(octa.data(), 4, 4, 8, tilted.data());
+    const std::string pos_bytes = encode_vertices(positions.data(), 4, 12), idx_bytes(idx.begin(), idx.end()),
+                      nrm_bytes = encode_vertices(octa.data(), 4, 4);
+    std::string bin = pos_bytes;
+    while (bin.size() % 4) bin.push_back('\0');
+    const size_t idx_at = bin.size();
+    bin += idx_bytes;
+    while (bin.size() % 4) bin.push_back('\0');
+    const size_t nrm_at = bin.size();
+    bin += nrm_bytes;
+    auto write = [&](const std::string& name, const std::string& compressed, size_t index_view_length,
+                     size_t index_count) {
+        write_bytes(dir + "/" + name + ".bin", compressed);
+        auto view = [&](size_t fallback_at, size_t length, size_t stride, size_t at, size_t size, size_t count,
+                        const std::string& mode, const std::string& filter) {
+            return "{\"buffer\":1,\"byteOffset\":" + std::to_string(fallback_at) +
+                   ",\"byteLength\":" + std::to_string(length) +
+                   (mode == "ATTRIBUTES" ? ",\"byteStride\":" + std::to_string(stride) : "") +
+                   ",\"extensions\":{\"EXT_meshopt_compression\":{\"buffer\":0,\"byteOffset\":" + std::to_string(at) +
+                   ",\"byteLength\":" + std::to_string(size) + ",\"byteStride\":" + std::to_string(stride) +
+                   ",\"count\":" + std::to_string(count) + ",\"mode\":\"" + mode + "\",\"filter\":\"" + filter +
+                   "\"}}}";
+        };
+        const std::string json =
+            "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+            "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"NORMAL\":2},\"indices\":1}]}],"
+            "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\",\"min\":[0,0,0],"
+            "\"max\":[2,1,0]},{\"bufferView\":1,\"componentType\":5125,\"count\":" +
+            std::to_string(index_count) +
+            ",\"type\":\"SCALAR\"},{\"bufferView\":2,\"componentType\":5120,\"normalized\":true,\"count\":4,\"type\":"
+            "\"VEC3\"}],\"bufferViews\":[" +
+            view(0, 48, 12, 0, pos_bytes.size(), 4, "ATTRIBUTES", "NONE") + "," +
+            view(48, index_view_length, 4, idx_at, idx_bytes.size(), index_count, "TRIANGLES", "NONE") + "," +
+            view(72, 16, 4, nrm_at, nrm_bytes.size(), 4, "ATTRIBUTES", "OCTAHEDRAL") + "],\"buffers\":[{\"uri\":\"" +
+            name + ".bin\",\"byteLength\":" + std::to_string(compressed.size()) +
+            "},{\"byteLength\":88,\"extensions\":{\"EXT_meshopt_compression\":{\"fallback\":true}}}],"
+            "\"extensionsUsed\":[\"EXT_meshopt_compression\",\"KHR_mesh_quantization\"],\"extensionsRequired\":["
+            "\"EXT_meshopt_compression\",\"KHR_mesh_quantization\"]}";
+        write_bytes(dir + "/" + name + ".gltf", json);
+        return dir + "/" + name + ".gltf";
+    };
+    Scene s = load_gltf(write("meshopt", bin, 24, 6));
+    ASSERT_EQ(s.triangle_count(), 2u);
+    const TriangleMesh& m = s.meshes.at(0).primitives.at(0);
+    for (size_t k = 0; k < 6; ++k) {
+        const Vec3& p = m.positions[m.indices[k]];
+        EXPECT_LT(
+            (p - Vec3(positions[3 * indices[k]], positions[3 * indices[k] + 1], positions[3 * indices[k] + 2])).norm(),
+            1e-6f)
+            << k;
+        EXPECT_LT((m.normals[m.indices[k]] - Vec3(0.6f, 0, 0.8f)).norm(), 0.02f)
+            << k << ": " << m.normals[m.indices[k]].transpose();
+    }
+    EXPECT_FALSE(has_warning_containing(s, "meshopt"));
+
+    std::string broken = bin;
+    for (size_t k = 0; k < pos_bytes.size(); ++k) broken[k] = char(0xff);
+    std::string e = load_error(write("meshopt_broken", broken, 24, 6));
+    EXPECT_NE(e.find("bufferView 0 EXT_meshopt_compression: the compressed data does not decode"), std::string::npos)
+        << e;
+    e = load_error(write("meshopt_length", bin, 20, 6));
+    EXPECT_NE(e.find("bufferView 1 EXT_meshopt_compression: count x byteStride is 24 bytes but the view holds 20"),
+              std::string::npos)
+        << e;
+    e = load_error(write("meshopt_huge", bin, 24, 300000000));
+    EXPECT_NE(e.find("is beyond what"), std::string::npos) << e;
     fs::remove_all(dir);
 }
 
