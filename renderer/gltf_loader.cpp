@@ -783,10 +783,10 @@ class GltfLoader {
         const std::string name = what + " KHR_draco_mesh_compression";
         const tg::Value* view = member(ext, "bufferView");
         const tg::Value* attributes = member(ext, "attributes");
-        if (!view || !view->IsNumber() || view->GetNumberAsInt() < 0 ||
-            size_t(view->GetNumberAsInt()) >= model_.bufferViews.size())
-            fail(name + ": bufferView is missing or not one of the file's " +
-                 std::to_string(model_.bufferViews.size()));
+        if (!view || !view->IsNumber()) fail(name + ": bufferView is missing or not a number");
+        if (view->GetNumberAsInt() < 0 || size_t(view->GetNumberAsInt()) >= model_.bufferViews.size())
+            fail(name + ": bufferView " + std::to_string(view->GetNumberAsInt()) + " does not exist (the file has " +
+                 std::to_string(model_.bufferViews.size()) + ")");
         if (!attributes || !attributes->IsObject()) fail(name + ": attributes is missing or not an object");
         const tg::BufferView& bv = model_.bufferViews[size_t(view->GetNumberAsInt())];
         const std::vector<unsigned char>& bytes = model_.buffers[size_t(bv.buffer)].data;  // bounds validated
@@ -1125,9 +1125,9 @@ class GltfLoader {
         const tg::Value* v = member(ext, key);
         if (!v) return fallback;
         const double x = v->IsNumber() ? v->GetNumberAsDouble() : std::nan("");
+        if (!v->IsNumber()) fail(what + ": " + extension_name + " " + key + " is not a number");
         if (!(x >= 0 && x <= 1))
-            fail(what + ": " + extension_name + " " + key + " " +
-                 (v->IsNumber() ? number_text(x) : std::string("is not a number")) + " is outside [0, 1]");
+            fail(what + ": " + extension_name + " " + key + " " + number_text(x) + " is outside [0, 1]");
         return x;
     }
 
@@ -1499,7 +1499,7 @@ class GltfLoader {
             const std::string jn = what + " JOINTS_" + std::to_string(set),
                               wn = what + " WEIGHTS_" + std::to_string(set);
             if (j == p.attributes.end() || w == p.attributes.end())
-                fail(what + ": " + (j == p.attributes.end() ? wn + " has no JOINTS_" : jn + " has no WEIGHTS_") +
+                fail((j == p.attributes.end() ? wn + " has no JOINTS_" : jn + " has no WEIGHTS_") +
                      std::to_string(set) + " beside it (skinning needs both)");
             FloatArray joints = read_floats(j->second, jn, {TINYGLTF_TYPE_VEC4});
             FloatArray weights = read_floats(w->second, wn, {TINYGLTF_TYPE_VEC4});
