@@ -73,6 +73,10 @@ void add_scene_options(CLI::App* cmd, SceneSpec* o) {
         ->expected(6);
     cmd->add_option("--fov", o->fov_deg, "Vertical field of view in degrees, 0.01..179.9 (overrides the camera's)")
         ->check(finite_in(0.01, 179.9));
+    cmd->add_option("--anim-time", o->animation_time,
+                    "Pose the glTF's animations (nodes, skins, morph targets) at this time in seconds, held at their "
+                    "ends (default: the rest pose)")
+        ->check(finite_in(0, 1e9));
     cmd->add_option(
            "--ground-albedo", o->ground_albedo,
            "Albedo of the ground model below the horizon: a Lambertian plane lit by the sky, radiance albedo * E_sky / pi")

@@ -17,7 +17,7 @@ LoadedScene load_scene(const SceneSpec& o, float aspect_ratio) {
         out.path = o.scene;
     } else {
         out.path = resolve_user_path(o.scene);  // shipped scenes work from any folder
-        out.scene = load_gltf(out.path);
+        out.scene = load_gltf(out.path, nullptr, o.animation_time);
         for (const std::string& w : out.scene.warnings) std::fprintf(stderr, "dynsky: warning: %s\n", w.c_str());
     }
     if (out.scene.instances.empty()) throw Error(o.scene + ": the scene has no triangles to render");

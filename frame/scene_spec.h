@@ -18,6 +18,9 @@ struct SceneSpec {
     // field of view of the camera in use (the chosen, framing or look-at one; perspective only).
     std::vector<double> look_at;
     double fov_deg = 0;
+    // The glTF's animations sampled at this time in seconds (held at their ends), posing nodes,
+    // skins and morph targets; negative: the rest pose.
+    double animation_time = -1;
 };
 
 struct LoadedScene {

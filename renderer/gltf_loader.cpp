@@ -472,7 +472,7 @@ Eigen::Affine3f to_affine(const Eigen::Matrix4d& m) {
 
 class GltfLoader {
   public:
-    explicit GltfLoader(std::string path) : path_(std::move(path)) {}
+    GltfLoader(std::string path, double animation_time) : path_(std::move(path)), animation_time_(animation_time) {}
 
     Scene load() {
         scene_.source = path_;
@@ -482,13 +482,14 @@ class GltfLoader {
         decode_meshopt_views();
         validate_buffer_views();
         decode_draco_primitives();
+        if (animation_time_ >= 0) pose_animations(animation_time_);
         build_materials();
         build_textures();
         traverse_nodes();
         check_extent();
-        if (!model_.animations.empty())
+        if (!model_.animations.empty() && animation_time_ < 0)
             warn(std::to_string(model_.animations.size()) +
-                 " animation(s) ignored: the scene is rendered in its rest pose");
+                 " animation(s) not played: the scene is rendered in its rest pose (--anim-time T poses it at T s)");
         scene_.warnings = warnings_;
         return std::move(scene_);
     }
@@ -765,6 +766,110 @@ class GltfLoader {
             view.buffer = int(model_.buffers.size()), view.byteOffset = 0;
             model_.buffers.push_back(std::move(decoded));
         }
+    }
+
+    // ---- Animations -------------------------------------------------------------------------
+
+    // Samples every channel of every animation at time t (held at the ends) into the targeted
+    // nodes' translation, rotation, scale and morph weights, which the node traversal then uses.
+    void pose_animations(double t) {
+        for (size_t ai = 0; ai < model_.animations.size(); ++ai) {
+            const tg::Animation& a = model_.animations[ai];
+            for (size_t ci = 0; ci < a.channels.size(); ++ci) {
+                const tg::AnimationChannel& ch = a.channels[ci];
+                const std::string what = "animation " + std::to_string(ai) + " channel " + std::to_string(ci);
+                if (ch.target_node < 0) continue;  // no target node: an extension's target, ignored
+                if (size_t(ch.target_node) >= model_.nodes.size())
+                    fail(what + " targets node " + std::to_string(ch.target_node) + ", which does not exist");
+                if (ch.sampler < 0 || size_t(ch.sampler) >= a.samplers.size())
+                    fail(what + " uses sampler " + std::to_string(ch.sampler) + ", which does not exist");
+                const tg::AnimationSampler& s = a.samplers[size_t(ch.sampler)];
+                tg::Node& node = model_.nodes[size_t(ch.target_node)];
+                const bool weights = ch.target_path == "weights";
+                int width = ch.target_path == "translation" || ch.target_path == "scale" ? 3
+                            : ch.target_path == "rotation"                               ? 4
+                                                                                         : 0;
+                if (weights) {
+                    if (node.mesh < 0 || size_t(node.mesh) >= model_.meshes.size()) continue;
+                    for (const tg::Primitive& p : model_.meshes[size_t(node.mesh)].primitives)
+                        width = std::max(width, int(p.targets.size()));
+                    if (width == 0) continue;
+                } else if (width == 0) {
+                    warn(what + ": path " + in_quotes(ch.target_path) + " is not animated (not a transform)");
+                    continue;
+                }
+                if (!weights && node.matrix.size() == 16) {
+                    warn(what + ": node " + std::to_string(ch.target_node) +
+                         " has a matrix, which glTF forbids animating: the animation is not applied");
+                    continue;
+                }
+                const std::vector<double> v = sample_channel(s, t, width, ch.target_path == "rotation", what);
+                if (ch.target_path == "translation") node.translation = v;
+                else if (ch.target_path == "scale") node.scale = v;
+                else if (ch.target_path == "rotation") node.rotation = v;
+                else node.weights = v;
+            }
+        }
+    }
+
+    // One sampler's value (`width` numbers) at time t.
+    std::vector<double> sample_channel(const tg::AnimationSampler& s, double t, int width, bool rotation,
+                                       const std::string& what) {
+        const FloatArray times = read_floats(s.input, what + " input", {TINYGLTF_TYPE_SCALAR});
+        const FloatArray out = read_floats(s.output, what + " output",
+                                           {TINYGLTF_TYPE_SCALAR, TINYGLTF_TYPE_VEC3, TINYGLTF_TYPE_VEC4});
+        const std::string mode = s.interpolation.empty() ? "LINEAR" : s.interpolation;
+        const bool cubic = mode == "CUBICSPLINE";
+        if (mode != "LINEAR" && mode != "STEP" && !cubic)
+            fail(what + ": interpolation " + in_quotes(mode) + " is not LINEAR, STEP or CUBICSPLINE");
+        const size_t keys = times.count, per_key = size_t(width) * (cubic ? 3 : 1);
+        if (keys == 0) fail(what + ": the sampler has no keyframes");
+        if (out.values.size() != keys * per_key)
+            fail(what + ": " + std::to_string(out.values.size()) + " output numbers for " + std::to_string(keys) +
+                 " keyframes of " + std::to_string(per_key));
+        for (size_t k = 0; k < keys; ++k)
+            if (!std::isfinite(times.values[k]) || (k > 0 && times.values[k] < times.values[k - 1]))
+                fail(what + ": keyframe times must be finite and increasing (key " + std::to_string(k) + ")");
+        for (float x : out.values)
+            if (!std::isfinite(x)) fail(what + ": an output value is not finite");
+        // The value (offset 1 of 3 for cubic splines) of key k.
+        auto value = [&](size_t k, int c) {
+            return double(out.values[k * per_key + (cubic ? size_t(width) : 0) + size_t(c)]);
+        };
+        std::vector<double> v(static_cast<size_t>(width));
+        const std::vector<float>& tk = times.values;
+        if (t <= tk.front() || keys == 1 || t >= tk.back()) {
+            const size_t k = t <= tk.front() ? 0 : keys - 1;
+            for (int c = 0; c < width; ++c) v[size_t(c)] = value(k, c);
+        } else {
+            const size_t k = size_t(std::upper_bound(tk.begin(), tk.end(), float(t)) - tk.begin()) - 1;
+            const double d = double(tk[k + 1]) - tk[k], u = d > 0 ? (t - tk[k]) / d : 0;
+            if (mode == "STEP") {
+                for (int c = 0; c < width; ++c) v[size_t(c)] = value(k, c);
+            } else if (cubic) {
+                // Hermite: the out-tangent of k (offset 2) and the in-tangent of k + 1 (offset 0), times d.
+                const double u2 = u * u, u3 = u2 * u;
+                for (int c = 0; c < width; ++c) {
+                    const double b = out.values[k * per_key + 2 * size_t(width) + size_t(c)];
+                    const double a = out.values[(k + 1) * per_key + size_t(c)];
+                    v[size_t(c)] = (2 * u3 - 3 * u2 + 1) * value(k, c) + (u3 - 2 * u2 + u) * d * b +
+                                   (-2 * u3 + 3 * u2) * value(k + 1, c) + (u3 - u2) * d * a;
+                }
+            } else if (rotation) {  // LINEAR rotations: slerp (glTF quaternions are x, y, z, w)
+                const Eigen::Quaterniond q0(value(k, 3), value(k, 0), value(k, 1), value(k, 2));
+                const Eigen::Quaterniond q1(value(k + 1, 3), value(k + 1, 0), value(k + 1, 1), value(k + 1, 2));
+                const Eigen::Quaterniond q = q0.normalized().slerp(u, q1.normalized());
+                v = {q.x(), q.y(), q.z(), q.w()};
+            } else {
+                for (int c = 0; c < width; ++c) v[size_t(c)] = (1 - u) * value(k, c) + u * value(k + 1, c);
+            }
+        }
+        if (rotation) {
+            const double n = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3]);
+            if (!(n > 1e-12)) fail(what + ": the rotation at " + number_text(t) + " s is zero");
+            for (double& x : v) x /= n;
+        }
+        return v;
     }
 
     // KHR_draco_mesh_compression: each compressed primitive is decoded (Google's draco library) into
@@ -2090,6 +2195,7 @@ class GltfLoader {
     };
 
     const std::string path_;
+    const double animation_time_;
     tg::Model model_;
     Scene scene_;
     std::vector<std::string> warnings_;
@@ -2102,8 +2208,9 @@ class GltfLoader {
 
 }  // namespace
 
-Scene load_gltf(const std::string& path, std::vector<std::string>* warnings) {
-    Scene scene = GltfLoader(path).load();
+Scene load_gltf(const std::string& path, std::vector<std::string>* warnings, double animation_time) {
+    if (!std::isfinite(animation_time)) throw Error("the animation time must be a finite number of seconds");
+    Scene scene = GltfLoader(path, animation_time).load();
     if (warnings) warnings->insert(warnings->end(), scene.warnings.begin(), scene.warnings.end());
     return scene;
 }

@@ -13,7 +13,8 @@
 // EXT_texture_webp, EXT_mesh_gpu_instancing, KHR_mesh_quantization, KHR_draco_mesh_compression
 // (renderer/draco_mesh.h), EXT_meshopt_compression (renderer/meshopt_buffer.h). Skins and morph targets are
 // posed as the file stands (the nodes' transforms, the weights given).
-// Ignored with a warning: points and lines, animations, and any other extension listed in
+// Animations are sampled at a time given to load_gltf, else ignored with a warning.
+// Ignored with a warning: points and lines, and any other extension listed in
 // extensionsUsed. One listed in extensionsRequired that is not supported is
 // an error. Values of the wrong JSON type are refused by their path (gltf_json_check.h).
 #pragma once
@@ -29,7 +30,11 @@ namespace dynsky {
 // appended to *warnings. Throws dynsky::Error "PATH: problem" for a missing, truncated or
 // malformed file, a missing buffer or texture file (named), out-of-range accessors or indices,
 // or an unsupported required extension (named).
-Scene load_gltf(const std::string& path, std::vector<std::string>* warnings = nullptr);
+// animation_time (seconds, >= 0): the file's animations (all of them, in file order) are sampled
+// at that time, held at their ends (STEP, LINEAR with slerped rotations, CUBICSPLINE), and drive
+// the nodes' transforms and morph weights, skins included; negative (the default): the rest pose,
+// with a warning that animations were not played.
+Scene load_gltf(const std::string& path, std::vector<std::string>* warnings = nullptr, double animation_time = -1);
 
 // KHR_texture_transform as a matrix on (u, v, 1): T(offset) * R(rotation) * S(scale), with R
 // rotating the UVs counter-clockwise by `rotation` radians as the extension text and its worked

@@ -1058,6 +1058,65 @@ TEST(GltfLoader, ValuesOfTheWrongTypeOrOutsideTheSpecAreNamedByTheirPath) {
 
 // KHR_lights_punctual: each node's light placed by its world transform, shining along its -Z, in
 // the sky's radiometric units (candela and lux / 683); impossible lights are refused by name.
+// Animations sampled at a time: a LINEAR translation, a LINEAR rotation (slerped), a STEP
+// translation, a CUBICSPLINE scale (Hermite with its tangents) and LINEAR morph weights, held at
+// their ends; without a time the rest pose, with a warning.
+TEST(GltfLoader, AnimationsArePosedAtTheTimeAsked) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+    int idx = g.accessor(g.view(std::vector<uint16_t>{0, 1, 2, 0, 2, 3}), kUShort, 6, "SCALAR");
+    int up = g.accessor(g.view(std::vector<float>{0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1}), kFloat, 4, "VEC3");
+    int times = g.accessor(g.view(std::vector<float>{0, 2}), kFloat, 2, "SCALAR");
+    int moves = g.accessor(g.view(std::vector<float>{0, 0, 0, 4, 0, 0}), kFloat, 2, "VEC3");
+    const float h = 0.70710678f;  // 0 and 90 degrees about z
+    int turns = g.accessor(g.view(std::vector<float>{0, 0, 0, 1, 0, 0, h, h}), kFloat, 2, "VEC4");
+    int steps = g.accessor(g.view(std::vector<float>{0, 0, 0, 0, 5, 0}), kFloat, 2, "VEC3");
+    // Cubic spline keys: in-tangent, value, out-tangent; scale 1 -> 3 with tangents 0 and 0.
+    int spline = g.accessor(g.view(std::vector<float>{0, 0, 0, 1, 1, 1, 0, 0, 0, 0, 0, 0, 3, 3, 3, 0, 0, 0}), kFloat, 6,
+                            "VEC3");
+    int weights = g.accessor(g.view(std::vector<float>{0, 1}), kFloat, 2, "SCALAR");
+    const std::string mesh = "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) +
+                             "},\"indices\":" + std::to_string(idx) +
+                             ",\"targets\":[{\"POSITION\":" + std::to_string(up) + "}]}]}";
+    auto sampler = [](int in, int out, const char* mode) {
+        return "{\"input\":" + std::to_string(in) + ",\"output\":" + std::to_string(out) + ",\"interpolation\":\"" +
+               mode + "\"}";
+    };
+    auto channel = [](int sampler_index, int node, const char* path) {
+        return "{\"sampler\":" + std::to_string(sampler_index) + ",\"target\":{\"node\":" + std::to_string(node) +
+               ",\"path\":\"" + path + "\"}}";
+    };
+    const std::string path = g.write(
+        dir, "animated",
+        "\"scene\":0,\"scenes\":[{\"nodes\":[0,1]}],\"nodes\":[{\"mesh\":0},{\"mesh\":0,\"translation\":[0,0,9]}],"
+        "\"meshes\":[" +
+            mesh + "],\"animations\":[{\"samplers\":[" + sampler(times, moves, "LINEAR") + "," +
+            sampler(times, turns, "LINEAR") + "," + sampler(times, steps, "STEP") + "," +
+            sampler(times, spline, "CUBICSPLINE") + "," + sampler(times, weights, "LINEAR") + "],\"channels\":[" +
+            channel(0, 0, "translation") + "," + channel(1, 0, "rotation") + "," + channel(2, 1, "translation") + "," +
+            channel(3, 1, "scale") + "," + channel(4, 1, "weights") + "]}]");
+    auto corner = [](const Scene& s, int node) {  // where the quad's corner (1, 0, 0) lands
+        const Instance& in = s.instances.at(size_t(node));
+        const TriangleMesh& m = s.meshes[size_t(in.mesh_group)].primitives[0];
+        return Vec3(in.transform * m.positions[m.indices[1]]);
+    };
+    Scene rest = load_gltf(path);
+    EXPECT_TRUE(has_warning_containing(rest, "1 animation(s) not played"));
+    EXPECT_LT((corner(rest, 1) - Vec3(1, 0, 9)).norm(), 1e-5f);
+    Scene mid = load_gltf(path, nullptr, 1.0);
+    EXPECT_FALSE(has_warning_containing(mid, "animation"));
+    // Node 0 at 1 s: moved to (2, 0, 0), turned 45 degrees: (1, 0, 0) -> (2 + cos 45, sin 45, 0).
+    EXPECT_LT((corner(mid, 0) - Vec3(2 + h, h, 0)).norm(), 1e-4f) << corner(mid, 0).transpose();
+    // Node 1 at 1 s: STEP holds (0, 0, 0); the spline's midpoint with flat tangents is 2; the morph
+    // weight 0.5 lifts the corner by 0.5 before the scale: (2, 0, 1).
+    EXPECT_LT((corner(mid, 1) - Vec3(2, 0, 1)).norm(), 1e-4f) << corner(mid, 1).transpose();
+    Scene late = load_gltf(path, nullptr, 50.0);  // held at the last keys
+    EXPECT_LT((corner(late, 0) - Vec3(4, 1, 0)).norm(), 1e-4f) << corner(late, 0).transpose();
+    EXPECT_LT((corner(late, 1) - Vec3(3, 5, 3)).norm(), 1e-4f) << corner(late, 1).transpose();
+    fs::remove_all(dir);
+}
+
 // KHR_draco_mesh_compression: a quad compressed by draco (positions quantised to 14 bits) loads
 // as its two triangles with their positions and UVs; a compressed buffer that is not draco is
 // refused by name, and so is an attribute id the compressed mesh lacks.
