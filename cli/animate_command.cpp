@@ -53,6 +53,9 @@ void register_animate_command(CLI::App& app) {
         "--seed-per-frame", a->seed_per_frame,
         "A different seed every frame (independent noise; default: the same seed every frame, i.e. correlated\n"
         "sampling, which keeps Monte Carlo noise from flickering between frames)");
+    cmd->add_flag("--play-anim", a->play_scene_animation,
+                  "Play the glTF's animations along the frames: the frame at t s poses the scene at --anim-time + t "
+                  "(the scene is loaded per frame)");
     cmd->add_option("--threads", a->threads, "Worker threads (0: all cores)")
         ->check(CLI::Range(0, kMaxThreads))
         ->capture_default_str();

@@ -78,6 +78,9 @@ FrameSettings animation_frame_settings(const AnimationSettings& o, const std::st
     s["max_depth"] = std::to_string(o.max_depth);
     s["seed"] = std::to_string(o.seed);
     s["seed_per_frame"] = o.seed_per_frame ? "1" : "0";
+    // Only when used: frames of runs before these options keep their settings.
+    if (o.scene.animation_time >= 0) s["anim_time"] = number(o.scene.animation_time);
+    if (o.play_scene_animation) s["play_anim"] = "1";
     s["exposure"] = number(png_exposure_ev);
     std::string look_at;
     for (double v : o.scene.look_at) look_at += (look_at.empty() ? "" : ",") + number(v);
@@ -140,7 +143,11 @@ AnimationReport render_animation(const AnimationSettings& o) {
                              " s): make it with this --duration");
     // The scene is read only by stages that render (encode checks the frames' files and settings).
     std::optional<LoadedScene> scene;
-    if (stage != "encode") scene = load_scene(o.scene, float(width) / height);
+    if (stage != "encode") {
+        SceneSpec spec = o.scene;  // played: posed from the start (and no "not played" warning)
+        if (o.play_scene_animation) spec.animation_time = std::max(0.0, spec.animation_time);
+        scene = load_scene(spec, float(width) / height);
+    }
     const OutputFolder folder(o.out);  // removed again if this run fails before writing anything
     const FrameStore store(o.out);
     // A farm task writes only its own frames and timings, so it removes only their temporaries:
@@ -223,6 +230,10 @@ AnimationReport render_animation(const AnimationSettings& o) {
     if (o.force && !o.quiet) std::fprintf(stderr, "--force: rendering every frame of %d-%d\n", first, last);
 
     Accel accel(scene->scene);
+    // Playing the scene's animation: each frame's pose loaded apart (frames rendered on a farm
+    // pose the same as in one run).
+    const double animation_start = std::max(0.0, o.scene.animation_time);
+    const float aspect = float(width) / height;
     const std::string timings = store.file(timings_name);
     bool timings_start_over = o.force;
     double sum_sky = 0, sum_build = 0, sum_render = 0;
@@ -251,8 +262,16 @@ AnimationReport render_animation(const AnimationSettings& o) {
         render.aovs = aovs;
         render.clamp_indirect = o.clamp_indirect, render.filter_glossy = o.filter_glossy;
         render.pattern = pattern;
-        PathIntegrator integrator(accel, light, render);
-        RenderResult result = integrator.render(scene->camera);
+        std::optional<LoadedScene> posed;
+        std::unique_ptr<Accel> posed_accel;
+        if (o.play_scene_animation) {
+            SceneSpec spec = o.scene;
+            spec.animation_time = animation_start + t;
+            posed = load_scene(spec, aspect, false);
+            posed_accel = std::make_unique<Accel>(posed->scene);
+        }
+        PathIntegrator integrator(posed_accel ? *posed_accel : accel, light, render);
+        RenderResult result = integrator.render(posed ? posed->camera : scene->camera);
 
         Image& image = result.color;
         if (!warned_black && is_black_everywhere(image)) {

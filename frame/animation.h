@@ -62,6 +62,9 @@ struct AnimationSettings {
     std::string frames;
     uint64_t seed = 0;
     bool seed_per_frame = false;
+    // Play the glTF's animations along the frames: the frame at t seconds poses the scene at
+    // scene.animation_time (0 when unset) + t; the scene is loaded and its BVH built per frame.
+    bool play_scene_animation = false;
     int threads = 0;
     int max_depth = 8;
     std::string aovs;                             // extra EXR passes (renderer/integrator.h parse_aovs)

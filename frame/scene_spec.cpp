@@ -9,7 +9,7 @@
 
 namespace dynsky {
 
-LoadedScene load_scene(const SceneSpec& o, float aspect_ratio) {
+LoadedScene load_scene(const SceneSpec& o, float aspect_ratio, bool print_warnings) {
     if (!(o.ground_albedo >= 0 && o.ground_albedo <= 1)) throw Error("--ground-albedo must be in [0, 1]");
     LoadedScene out;
     if (o.scene == "builtin") {
@@ -18,7 +18,8 @@ LoadedScene load_scene(const SceneSpec& o, float aspect_ratio) {
     } else {
         out.path = resolve_user_path(o.scene);  // shipped scenes work from any folder
         out.scene = load_gltf(out.path, nullptr, o.animation_time);
-        for (const std::string& w : out.scene.warnings) std::fprintf(stderr, "dynsky: warning: %s\n", w.c_str());
+        if (print_warnings)
+            for (const std::string& w : out.scene.warnings) std::fprintf(stderr, "dynsky: warning: %s\n", w.c_str());
     }
     if (out.scene.instances.empty()) throw Error(o.scene + ": the scene has no triangles to render");
     if (out.scene.cameras.empty()) {

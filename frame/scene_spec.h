@@ -32,6 +32,6 @@ struct LoadedScene {
 // Validates the spec, loads the scene (a relative path not found from the working folder is
 // looked up among the shipped data, util/data_path.h resolve_user_path) (warnings to stderr) and picks the camera; a file without
 // cameras gets one framing its bounds at aspect_ratio. Throws dynsky::Error naming the file.
-LoadedScene load_scene(const SceneSpec& spec, float aspect_ratio);
+LoadedScene load_scene(const SceneSpec& spec, float aspect_ratio, bool print_warnings = true);
 
 }  // namespace dynsky

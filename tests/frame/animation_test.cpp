@@ -245,5 +245,56 @@ TEST(FrameStore, FrameRanges) {
     EXPECT_THROW(parse_frame_range("-1", 10, &first, &last), Error);
 }
 
+// --play-anim: a quad in front of a fixed glTF camera slides out of view over one second (its
+// node's translation animated, LINEAR); played, frame 3 (t = 0.75 s) sees the sky where frame 0 saw
+// the quad; not played, both see the quad; rendering frame 3 alone poses it the same.
+TEST(Animation, PlayedSceneAnimationMovesTheScenePerFrame) {
+    const std::string dir = test::temp_dir("play_anim");
+    // Buffer: the quad (4 x VEC3, 48 bytes), its indices (6 x uint16, 12), key times (2 floats, 8),
+    // translations (2 x VEC3, 24).
+    const float data[] = {-2, -2, 0, 2, -2, 0, 2, 2, 0, -2, 2, 0};
+    const uint16_t idx[] = {0, 1, 2, 0, 2, 3};
+    const float times[] = {0, 1}, moves[] = {0, 0, 0, 10, 0, 0};
+    std::string bin(reinterpret_cast<const char*>(data), sizeof data);
+    bin.append(reinterpret_cast<const char*>(idx), sizeof idx);
+    bin.append(reinterpret_cast<const char*>(times), sizeof times);
+    bin.append(reinterpret_cast<const char*>(moves), sizeof moves);
+    std::ofstream(dir + "/slide.bin", std::ios::binary) << bin;
+    std::ofstream(dir + "/slide.gltf") << R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0,1]}],
+"nodes":[{"mesh":0},{"camera":0,"translation":[0,0,4]}],
+"cameras":[{"type":"perspective","perspective":{"yfov":0.6,"znear":0.1}}],
+"meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"material":0}]}],
+"materials":[{"pbrMetallicRoughness":{"baseColorFactor":[0.05,0.05,0.05,1],"metallicFactor":0}}],
+"animations":[{"samplers":[{"input":2,"output":3}],"channels":[{"sampler":0,"target":{"node":0,"path":"translation"}}]}],
+"buffers":[{"uri":"slide.bin","byteLength":92}],
+"bufferViews":[{"buffer":0,"byteLength":48},{"buffer":0,"byteOffset":48,"byteLength":12},
+{"buffer":0,"byteOffset":60,"byteLength":8},{"buffer":0,"byteOffset":68,"byteLength":24}],
+"accessors":[{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[-2,-2,0],"max":[2,2,0]},
+{"bufferView":1,"componentType":5123,"count":6,"type":"SCALAR"},
+{"bufferView":2,"componentType":5126,"count":2,"type":"SCALAR","min":[0],"max":[1]},
+{"bufferView":3,"componentType":5126,"count":2,"type":"VEC3"}]})";
+    auto centre = [](const std::string& exr) {
+        const Image im = read_image(exr);
+        return im.at(im.width / 2, im.height / 2, 1);
+    };
+    AnimationSettings played = small_animation(dir + "/played");
+    played.scene.scene = dir + "/slide.gltf";
+    played.play_scene_animation = true;
+    ASSERT_TRUE(render_animation(played).complete);
+    AnimationSettings still = played;
+    still.out = dir + "/still", still.play_scene_animation = false;
+    ASSERT_TRUE(render_animation(still).complete);
+    const FrameStore p(played.out), q(still.out);
+    const float quad = centre(q.frame_exr(0)), sky = centre(p.frame_exr(3));
+    EXPECT_NEAR(centre(p.frame_exr(0)), quad, 1e-6f) << "frame 0: the quad where it rests";
+    EXPECT_GT(sky, 3 * quad) << "played: the quad has slid away, the sky shows";
+    EXPECT_NEAR(centre(q.frame_exr(3)), quad, 0.2f * quad) << "not played: the quad stays";
+    AnimationSettings alone = played;
+    alone.out = dir + "/alone", alone.frames = "3";
+    ASSERT_EQ(render_animation(alone).rendered, 1);
+    EXPECT_TRUE(read_image(FrameStore(alone.out).frame_exr(3)).pixels == read_image(p.frame_exr(3)).pixels);
+    fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace dynsky
