@@ -143,6 +143,16 @@ SkyImage sky_from_image(const Image& image, const std::string& name) {
     return sky;
 }
 
+void refuse_jpeg_as_radiance(const std::string& path) {
+    // A JPEG is 8-bit display values whatever its name: refused before any decoder reads it (which
+    // also keeps OpenImageIO 2.4's EXIF reader, which reads past a corrupt APP1 segment, away).
+    if (has_jpeg_signature(path))
+        throw_file_error(path,
+                         "is a JPEG file of 8-bit pixels: integer pixels are display-encoded values, not linear "
+                         "radiance. A sky is a float EXR (or .hdr); make one from a photograph with 'dynsky sky "
+                         "import'");
+}
+
 Image read_radiance_image(const std::string& path) {
     Image image = read_image(path);
     float top = 0;
@@ -154,7 +164,10 @@ Image read_radiance_image(const std::string& path) {
     return image;
 }
 
-SkyImage load_sky(const std::string& path) { return sky_from_radiance_file(read_radiance_image(path), path); }
+SkyImage load_sky(const std::string& path) {
+    refuse_jpeg_as_radiance(path);
+    return sky_from_radiance_file(read_radiance_image(path), path);
+}
 
 void require_radiance_pixels(const Image& image, const std::string& path) {
     const std::string& type = image.file_pixel_type;

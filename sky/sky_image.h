@@ -78,6 +78,9 @@ void read_sky_metadata(const ImageMetadata& metadata, const std::string& name, S
 // clear sky's 0.1, more beside the sun), so values below zero by at most 1e-3 of the image's
 // largest finite value read as 0. Larger negatives stay (validation refuses them).
 Image read_radiance_image(const std::string& path);
+// Throws naming the file when it is a JPEG (by its first bytes, whatever its name): 8-bit display
+// values, never radiance. Called before any decoder reads a file that must hold radiance.
+void refuse_jpeg_as_radiance(const std::string& path);
 
 // Conversions between SkyImage and the generic Image (3 channels).
 Image sky_to_image(const SkyImage& sky);

@@ -113,6 +113,14 @@ bool has_png_signature(const std::string& path) {
 
 }  // namespace
 
+bool has_jpeg_signature(const std::string& path) {
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) return false;  // a FIFO would block: the reader says what it is
+    unsigned char head[3] = {};
+    std::ifstream in(path, std::ios::binary);
+    return in.read(reinterpret_cast<char*>(head), 3) && head[0] == 0xFF && head[1] == 0xD8 && head[2] == 0xFF;
+}
+
 std::string image_file_problem(const std::string& path) {
     std::error_code ec;
     if (!fs::exists(path, ec)) return "no such file";

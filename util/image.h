@@ -50,6 +50,9 @@ void check_image_size(const std::string& name, long long width, long long height
 // none): missing, a directory, not a regular file, a PNG cut short (its chunks end before IEND).
 std::string image_file_problem(const std::string& path);
 
+// Whether the file starts as a JPEG does (FF D8 FF), whatever its name.
+bool has_jpeg_signature(const std::string& path);
+
 // Reads any format OpenImageIO knows, as float. 8-bit files come back as their encoded values
 // in [0, 1] (no sRGB decode here: callers decide). Throws dynsky::Error naming the file for a
 // missing file, one that is not a regular file, a header beyond the limits above, a file of
