@@ -1588,7 +1588,7 @@ class GltfLoader {
         }
     }
 
-    // Linear blend skinning at the pose the nodes' own transforms give (no animation played): each
+    // Linear blend skinning at the pose the nodes' transforms give (animated ones as sampled): each
     // vertex moves by sum_k w_k joint[j_k] (joint = the joint's world transform x its inverse bind
     // matrix), into world space. Writes each vertex's normal matrix (the inverse transpose).
     void skin_positions(const tg::Primitive& p, const VertexPose& pose, const std::string& what, TriangleMesh* mesh,

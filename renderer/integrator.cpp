@@ -161,6 +161,22 @@ bool PathIntegrator::passes_through(const SurfaceHit& hit, float u) const {
     return u >= alpha;  // Blend: stochastic transparency
 }
 
+namespace {
+
+// The BSDF of a shading point, its roughnesses given (Filter Glossy may raise them); each layer
+// set only when present, so a plain material runs the plain model bit for bit.
+MetalRoughBsdf shading_bsdf(const ShadingPoint& sp, float roughness, float coat_roughness) {
+    MetalRoughBsdf bsdf(sp.base_color, sp.metallic, roughness, sp.specular, sp.transmission);
+    if (sp.ior != 1.5f) bsdf.set_ior(sp.ior);  // glTF's default IOR is the BSDF's own
+    if ((sp.specular_color != 1.0f).any()) bsdf.set_specular_color(sp.specular_color);
+    if (sp.transmission > 0) bsdf.set_transmission_tint(sp.transmission_tint);
+    if (sp.clearcoat > 0) bsdf.set_clearcoat(sp.clearcoat, coat_roughness);
+    if ((sp.sheen_color > 0).any()) bsdf.set_sheen(sp.sheen_color, sp.sheen_roughness);
+    return bsdf;
+}
+
+}  // namespace
+
 Color PathIntegrator::transmittance(const Ray& shadow_ray, RenderStats* stats) const {
     if (observer_) observer_(shadow_ray, true);
     ++stats->shadow_rays;
@@ -180,12 +196,7 @@ Color PathIntegrator::transmittance(const Ray& shadow_ray, RenderStats* stats) c
         Color through = Color::Zero();
         if (m.transmission > 0) {
             const ShadingPoint sp = evaluate_material(accel_.scene(), hit, -ray.direction.normalized());
-            MetalRoughBsdf bsdf(sp.base_color, sp.metallic, sp.roughness, sp.specular, sp.transmission);
-            if (sp.ior != 1.5f) bsdf.set_ior(sp.ior);
-            if ((sp.specular_color != 1.0f).any()) bsdf.set_specular_color(sp.specular_color);
-            bsdf.set_transmission_tint(sp.transmission_tint);
-            bsdf.set_clearcoat(sp.clearcoat, sp.clearcoat_roughness);
-            if ((sp.sheen_color > 0).any()) bsdf.set_sheen(sp.sheen_color, sp.sheen_roughness);
+            const MetalRoughBsdf bsdf = shading_bsdf(sp, sp.roughness, sp.clearcoat_roughness);
             through = bsdf.transmitted(sp.to_local(-ray.direction.normalized()));
         }
         if (m.alpha_mode == AlphaMode::Opaque) {
@@ -330,12 +341,7 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
                 roughness = std::max(roughness, floor), coat_roughness = std::max(coat_roughness, floor);
             }
         }
-        MetalRoughBsdf bsdf(sp.base_color, sp.metallic, roughness, sp.specular, sp.transmission);
-        if (sp.ior != 1.5f) bsdf.set_ior(sp.ior);  // glTF's default IOR is the BSDF's own
-        if ((sp.specular_color != 1.0f).any()) bsdf.set_specular_color(sp.specular_color);
-        if (sp.transmission > 0) bsdf.set_transmission_tint(sp.transmission_tint);
-        if (sp.clearcoat > 0) bsdf.set_clearcoat(sp.clearcoat, coat_roughness);
-        if ((sp.sheen_color > 0).any()) bsdf.set_sheen(sp.sheen_color, sp.sheen_roughness);
+        MetalRoughBsdf bsdf = shading_bsdf(sp, roughness, coat_roughness);
         Vec3 wo = sp.to_local(-ray.direction.normalized());
         if (wo.z() <= 0) break;
         bsdf.set_wo(wo);
