@@ -11,6 +11,7 @@
 #include <typeinfo>
 
 #include "util/image.h"
+#include "util/image_input.h"
 
 namespace dynsky::fuzz {
 
@@ -62,11 +63,8 @@ std::string write_input(const uint8_t* data, size_t size, const std::string& nam
 long long header_values(const std::string& path) {
     // Only files dynsky's reader would hand to a decoder (util/image.h): the others it refuses first.
     if (!image_file_problem(path).empty()) return -1;
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) {
-        (void)OIIO::geterror();
-        return -1;
-    }
+    ImageFileInput in(path);  // as read_image opens it
+    if (!in) return -1;
     const OIIO::ImageSpec& spec = in->spec();
     return (long long)spec.width * spec.height * spec.nchannels * std::max(spec.depth, 1);
 }

@@ -16,6 +16,7 @@
 #include "util/atomic_file.h"
 #include "util/color.h"
 #include "util/error.h"
+#include "util/image_input.h"
 
 namespace dynsky {
 
@@ -150,20 +151,17 @@ std::string non_finite_pixel_text(const Image& image, long i) {
 std::vector<std::string> image_header_strings(const std::string& path, const std::vector<std::string>& names) {
     std::vector<std::string> values(names.size());
     if (!image_file_problem(path).empty()) return values;
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) {
-        (void)OIIO::geterror();
-        return values;
-    }
+    ImageFileInput in(path);
+    if (!in) return values;
     for (size_t k = 0; k < names.size(); ++k) values[k] = in->spec().get_string_attribute(names[k]);
     return values;
 }
 
 Image read_image(const std::string& path) {
     if (std::string why = image_file_problem(path); !why.empty()) throw_file_error(path, why);
-    auto in = OIIO::ImageInput::open(path);
+    ImageFileInput in(path);
     if (!in) {
-        std::string why = OIIO::geterror();
+        const std::string& why = in.error();
         throw_file_error(path, "not a readable image" + (why.empty() ? std::string() : " (" + why + ")"));
     }
     const OIIO::ImageSpec spec = in->spec();
@@ -197,12 +195,12 @@ Image read_image(const std::string& path) {
         // Some readers (WebP) cannot go back to the first image once asked for a second: read it
         // from a fresh open before calling the file broken.
         (void)in->geterror();
-        in = OIIO::ImageInput::open(path);
+        in.reopen();
         read = in && in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()) &&
                !in->has_error();
     }
     if (!read) {
-        std::string why = in ? in->geterror() : OIIO::geterror();
+        std::string why = in ? in->geterror() : in.error();
         throw_file_error(path, "could not decode pixels (truncated or corrupt?)" +
                                    (why.empty() ? std::string() : ": " + why));
     }
