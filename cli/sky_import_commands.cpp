@@ -143,6 +143,11 @@ void run_import(const ImportOptions& o) {
     }
 
     ImportedPhoto imported = import_photo(o.photo, params);
+    if (imported.exif_orientation != 1)
+        std::printf(
+            "EXIF orientation %d: the photograph is turned as viewers show it before anything else "
+            "(--center, --north and masks refer to that view)\n",
+            imported.exif_orientation);
     const SkyCircle& c = imported.geometry.circle;
     std::printf("sky circle: centre (%.1f, %.1f) px, radius %.1f px (%s); lens %s, north %.1f deg, %s%s\n", c.center_x,
                 c.center_y, c.radius, imported.circle_detected ? "found" : "given",
@@ -244,6 +249,7 @@ void run_mask(const MaskOptions& o) {
             for (int i = 0; i < s.resolution; ++i) sky[size_t(j) * s.resolution + i] = s.in_disc(i, j);
     } else {
         Image photo = read_image(o.input);
+        apply_orientation(photo);  // as `sky import` turns it
         if (photo.channels < 3) throw_file_error(o.input, "the cloud rule needs an RGB photograph");
         for (float v : photo.pixels)
             if (!std::isfinite(v)) throw_file_error(o.input, "has NaN or infinite pixels");

@@ -707,8 +707,10 @@ std::vector<unsigned char> detect_thin_dark_structures(const Image& encoded_phot
 
 ImportedPhoto import_photo(const std::string& path, const PhotoImportParams& params) {
     Image photo = read_radiance_image(path);  // (a lossy HDR photograph's small negatives read as 0)
+    const int orientation = apply_orientation(photo);
     ImportedPhoto result = import_photo_image(photo, path, params);
     result.photo_path = path;
+    result.exif_orientation = orientation;
     return result;
 }
 

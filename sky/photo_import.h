@@ -146,10 +146,12 @@ struct ImportedPhoto {
     std::vector<unsigned char> not_sky;  // N*N: 1 where the sky was hidden and has been filled
     std::vector<unsigned char> clipped;  // N*N: 1 where the photo was saturated (LDR input only)
     double clip_level = 1.0;             // encoded level treated as saturation (1: none found)
+    int exif_orientation = 1;            // the file's EXIF orientation, applied before anything else
     std::string photo_path;
 };
 
-// Whole pipeline from a file. Throws dynsky::Error naming the file on unreadable input, NaN/Inf
+// Whole pipeline from a file, the photograph first turned as its EXIF orientation says viewers show
+// it (util/image.h apply_orientation: --center, --north and masks refer to that view). Throws dynsky::Error naming the file on unreadable input, NaN/Inf
 // pixels, no detectable sky circle, a mask of the wrong size, ...
 ImportedPhoto import_photo(const std::string& path, const PhotoImportParams& params);
 

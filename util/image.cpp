@@ -1,6 +1,7 @@
 #include "util/image.h"
 
 #include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
@@ -213,6 +214,10 @@ Image read_image(const std::string& path) {
         else if (p.type() == OIIO::TypeDesc::FLOAT) image.metadata.numbers[name] = p.get_float();
         // An int (as `oiiotool --attrib NAME 10` writes a whole number) read as 0 through get_float().
         else if (p.type() == OIIO::TypeDesc::INT) image.metadata.numbers[name] = p.get_int();
+        // EXIF's short and long integers (Orientation, ...) come as unsigned and 16-bit types.
+        else if (p.type() == OIIO::TypeDesc::UINT || p.type() == OIIO::TypeDesc::UINT16 ||
+                 p.type() == OIIO::TypeDesc::INT16)
+            image.metadata.numbers[name] = p.get_int();
         else if (p.type() == OIIO::TypeDesc::DOUBLE) {
             double d;  // exactly: get_float() would round it
             if (spec.getattribute(name, OIIO::TypeDesc::DOUBLE, &d)) image.metadata.numbers[name] = d;
@@ -220,6 +225,27 @@ Image read_image(const std::string& path) {
     }
     in->close();
     return image;
+}
+
+int apply_orientation(Image& image) {
+    const auto it = image.metadata.numbers.find("Orientation");
+    if (it == image.metadata.numbers.end()) return 1;
+    const int orientation = int(it->second);
+    if (orientation < 2 || orientation > 8 || double(orientation) != it->second || image.empty()) return 1;
+    OIIO::ImageSpec spec(image.width, image.height, image.channels, OIIO::TypeDesc::FLOAT);
+    // OpenImageIO 2.4's reorient transposes for 7 and transverses for 5; EXIF (and jpegtran,
+    // Pillow's exif_transpose) define 5 as the transpose, 7 as the transverse: ask for the other.
+    spec.attribute("Orientation", orientation == 5 ? 7 : orientation == 7 ? 5 : orientation);
+    const OIIO::ImageBuf source(spec, image.pixels.data());
+    const OIIO::ImageBuf turned = OIIO::ImageBufAlgo::reorient(source);
+    if (turned.has_error()) throw Error("cannot turn the image by its EXIF orientation: " + turned.geterror());
+    const OIIO::ImageSpec& t = turned.spec();
+    std::vector<float> pixels(image.pixels.size());
+    if (!turned.get_pixels(OIIO::ROI::All(), OIIO::TypeDesc::FLOAT, pixels.data()))
+        throw Error("cannot turn the image by its EXIF orientation: " + turned.geterror());
+    image.width = t.width, image.height = t.height, image.pixels = std::move(pixels);
+    it->second = 1;
+    return orientation;
 }
 
 void write_image(const std::string& path, const Image& image) {

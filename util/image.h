@@ -60,6 +60,12 @@ bool has_jpeg_signature(const std::string& path);
 // corrupt file (including a JPEG cut short, which its decoder would silently fill with grey).
 Image read_image(const std::string& path);
 
+// Turns and mirrors an image as its EXIF orientation (metadata "Orientation", 1-8) says viewers
+// show it (OpenImageIO's reorient), so a photograph's pixel positions and "up" are the ones its
+// user sees; the tag is then 1. Returns the orientation found: 1 (or absent, or not 1-8) changes
+// nothing.
+int apply_orientation(Image& image);
+
 // String attributes of an image file's header (OpenImageIO's names: "Exif:DateTimeOriginal",
 // "DateTime", ...), read in one opening without decoding pixels; "" for each the file lacks, all ""
 // when it cannot be opened.

@@ -5,6 +5,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include <filesystem>
+#include <functional>
 #include <fstream>
 
 #include "tests/test_support.h"
@@ -151,6 +152,61 @@ TEST(ImageIo, WebpPhotographsAreRead) {
     ASSERT_EQ(image.height, 30);
     EXPECT_NEAR(image.at(20, 15, 2), 200.0f / 255.0f, 0.05f);
     EXPECT_NEAR(image.at(20, 15, 0), 60.0f / 255.0f, 0.05f);
+    fs::remove_all(dir);
+}
+
+// Every EXIF orientation turns the stored pixels into the view a photo viewer shows: the displayed
+// pixel (x, y) of a W x H stored image is the stored one the EXIF specification names.
+TEST(ImageIo, ExifOrientationTurnsThePixelsAsViewersShowThem) {
+    const int W = 3, H = 2;
+    Image stored(W, H, 1);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) stored.at(x, y, 0) = float(10 * y + x);
+    // Stored position shown at displayed (x, y), for orientations 1-8.
+    const std::function<std::pair<int, int>(int, int)> source[9] = {
+        nullptr,
+        [](int x, int y) { return std::make_pair(x, y); },
+        [](int x, int y) { return std::make_pair(W - 1 - x, y); },          // mirrored left-right
+        [](int x, int y) { return std::make_pair(W - 1 - x, H - 1 - y); },  // 180 degrees
+        [](int x, int y) { return std::make_pair(x, H - 1 - y); },          // mirrored top-bottom
+        [](int x, int y) { return std::make_pair(y, x); },                  // transposed
+        [](int x, int y) { return std::make_pair(y, H - 1 - x); },          // 90 degrees clockwise
+        [](int x, int y) { return std::make_pair(W - 1 - y, H - 1 - x); },  // transversed
+        [](int x, int y) { return std::make_pair(W - 1 - y, x); },          // 90 degrees anticlockwise
+    };
+    for (int o = 1; o <= 8; ++o) {
+        Image image = stored;
+        image.metadata.numbers["Orientation"] = o;
+        EXPECT_EQ(apply_orientation(image), o);
+        const bool swapped = o >= 5;
+        ASSERT_EQ(image.width, swapped ? H : W) << o;
+        ASSERT_EQ(image.height, swapped ? W : H) << o;
+        EXPECT_EQ(image.metadata.numbers["Orientation"], 1);
+        for (int y = 0; y < image.height; ++y)
+            for (int x = 0; x < image.width; ++x) {
+                const auto [sx, sy] = source[o](x, y);
+                EXPECT_EQ(image.at(x, y, 0), stored.at(sx, sy, 0)) << "orientation " << o << " at " << x << "," << y;
+            }
+    }
+    // No tag, or one outside 1-8: nothing changes.
+    Image plain = stored;
+    EXPECT_EQ(apply_orientation(plain), 1);
+    plain.metadata.numbers["Orientation"] = 9;
+    EXPECT_EQ(apply_orientation(plain), 1);
+    EXPECT_EQ(plain.pixels, stored.pixels);
+
+    // Read from a camera's JPEG: the tag arrives (EXIF's unsigned short) and turns the photograph.
+    const std::string dir = test::temp_dir("orientation");
+    auto out = OIIO::ImageOutput::create(dir + "/turned.jpg");
+    OIIO::ImageSpec spec(40, 24, 3, OIIO::TypeDesc::UINT8);
+    spec.attribute("Orientation", 6);
+    std::vector<unsigned char> bytes(size_t(40) * 24 * 3, 128);
+    ASSERT_TRUE(out->open(dir + "/turned.jpg", spec) && out->write_image(OIIO::TypeDesc::UINT8, bytes.data()));
+    out->close();
+    Image photo = read_image(dir + "/turned.jpg");
+    EXPECT_EQ(apply_orientation(photo), 6);
+    EXPECT_EQ(photo.width, 24);
+    EXPECT_EQ(photo.height, 40);
     fs::remove_all(dir);
 }
 
