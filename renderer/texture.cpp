@@ -74,8 +74,18 @@ Texture::Texture(std::string name, int width, int height, std::vector<float> rgb
         }
     }
     if (eight_bit) {
-        bytes_.resize(rgba_.size());
-        for (size_t i = 0; i < rgba_.size(); ++i) bytes_[i] = uint8_t(int(rgba_[i] * 255.0f + 0.5f));
+        tiles_x_ = (width_ + 3) / 4;
+        const size_t tiled = size_t(tiles_x_) * size_t((height_ + 3) / 4) * 64;
+        bytes_.assign(tiled + 63, 0);
+        const size_t misalign = reinterpret_cast<uintptr_t>(bytes_.data()) & 63;
+        tiles_at_ = misalign ? 64 - misalign : 0;
+        uint8_t* tiles = bytes_.data() + tiles_at_;
+        for (int y = 0; y < height_; ++y)
+            for (int x = 0; x < width_; ++x) {
+                const size_t i = (size_t(y) * size_t(width_) + size_t(x)) * 4;
+                for (size_t c = 0; c < 4; ++c)
+                    tiles[tiled_offset(x, y) + c] = uint8_t(int(rgba_[i + c] * 255.0f + 0.5f));
+            }
         decode_rgb_ = srgb ? srgb_table.data() : linear_table.data();
         std::vector<float>().swap(rgba_);
     } else if (srgb) {
@@ -86,8 +96,8 @@ Texture::Texture(std::string name, int width, int height, std::vector<float> rgb
 }
 
 Vec4 Texture::texel(int x, int y) const {
+    if (tiles_x_) return decoded(tiles() + tiled_offset(x, y));
     size_t i = (size_t(y) * size_t(width_) + size_t(x)) * 4;
-    if (!bytes_.empty()) return decoded(&bytes_[i]);
     const float* p = &rgba_[i];
     return Vec4(p[0], p[1], p[2], p[3]);
 }
@@ -109,12 +119,11 @@ Vec4 Texture::evaluate(const Vec2& uv) const {
     int xa = x0, xb = x0 + 1, ya = y0, yb = y0 + 1;
     if (x0 < 0 || xb >= width_) xa = wrap_index(x0, width_, wrap_s_), xb = wrap_index(x0 + 1, width_, wrap_s_);
     if (y0 < 0 || yb >= height_) ya = wrap_index(y0, height_, wrap_t_), yb = wrap_index(y0 + 1, height_, wrap_t_);
-    if (!bytes_.empty()) {
-        // The four texels of 8-bit storage decoded in place (texel(), without its index and branch).
-        const uint8_t* row_a = &bytes_[size_t(ya) * size_t(width_) * 4];
-        const uint8_t* row_b = &bytes_[size_t(yb) * size_t(width_) * 4];
-        return (1 - ty) * ((1 - tx) * decoded(row_a + size_t(xa) * 4) + tx * decoded(row_a + size_t(xb) * 4)) +
-               ty * ((1 - tx) * decoded(row_b + size_t(xa) * 4) + tx * decoded(row_b + size_t(xb) * 4));
+    if (tiles_x_) {
+        // The four texels of 8-bit storage decoded in place (texel(), without its branch).
+        const uint8_t* t = tiles();
+        return (1 - ty) * ((1 - tx) * decoded(t + tiled_offset(xa, ya)) + tx * decoded(t + tiled_offset(xb, ya))) +
+               ty * ((1 - tx) * decoded(t + tiled_offset(xa, yb)) + tx * decoded(t + tiled_offset(xb, yb)));
     }
     return (1 - ty) * ((1 - tx) * texel(xa, ya) + tx * texel(xb, ya)) +
            ty * ((1 - tx) * texel(xa, yb) + tx * texel(xb, yb));
