@@ -356,8 +356,9 @@ void register_sky_import_commands(CLI::App& sky) {
                     "so a moved sky carries no smooth streak; ~4 s at 512 px) or smooth (Telea inpainting: fast, "
                     "the same from frame to frame, as sequences are imported)")
         ->check(CLI::IsMember({"texture", "smooth"}));
-    imp->add_option("--encoding", io->encoding,
-                    "Input values: auto (default: 8-bit formats are sRGB, .exr/.hdr/.pfm/.tif linear), srgb, linear");
+    imp->add_option(
+        "--encoding", io->encoding,
+        "Input values: auto (default: by the file's pixels: 8- and 16-bit files are sRGB unless their header says linear, float files (EXR, HDR, PFM, float TIFF) linear), srgb, linear");
     imp->add_option(
            "--time", io->time,
            "When the photo was taken, ISO 8601 with a zone (2017-05-24T17:00:00Z); default: from the file name, "

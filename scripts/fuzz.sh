@@ -56,6 +56,10 @@ for p in "${photos[@]}"; do
     -d half --compression piz -o "$s-half-piz.exr" -d uint8 -o "$s.png" -o "$s.jpg"
   oiiotool "$p" --fit 160x160 -o "$work/photo_import/photo$i-small.jpg"
   oiiotool "$p" --fit 320x320 --cut 200x200+40+40 -o "$work/photo_import/photo$i-crop.jpg"
+  # EXIF orientation (turned before import) and an IPTC caption (a Photoshop APP13 segment, which
+  # the reader strips: util/image_input.h), so mutations reach both.
+  oiiotool "$p" --fit 160x160 --attrib:type=int Orientation 6 --attrib IPTC:Caption "dynsky fuzz seed" \
+    -o "$work/photo_import/photo$i-tagged.jpg"
 done
 
 status=0

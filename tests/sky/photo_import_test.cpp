@@ -191,6 +191,43 @@ TEST(PhotoImport, EightBitSrgbPhotoIsDecodedToLinear) {
     EXPECT_GT(rms_error(import_photo_image(photo, "synthetic.png", p).sky), 0.1);
 }
 
+// auto decides by the file's pixels, not its name: 8- and 16-bit TIFFs (as cameras and editors write
+// them) are sRGB (a .tif was taken as linear), a JPEG named .exr is still a JPEG, a float TIFF is
+// linear, and an integer file whose header says linear (a PNG with gamma 1) is linear.
+TEST(PhotoImport, AutoEncodingGoesByTheFilesPixelsNotItsName) {
+    TestCamera cam{200.0, 150.0, 140.0, 0.0, LensLaw::Equidistant, false};
+    const std::string dir = test::temp_dir("photo_encoding");
+    auto write = [&](const std::string& name, const Image& photo, OIIO::TypeDesc type, const char* format,
+                     const char* space) {
+        const std::string path = dir + "/" + name;
+        auto out = OIIO::ImageOutput::create(format);
+        OIIO::ImageSpec spec(photo.width, photo.height, photo.channels, type);
+        if (space) spec.attribute("oiio:ColorSpace", space);
+        EXPECT_TRUE(out->open(path, spec) && out->write_image(OIIO::TypeDesc::FLOAT, photo.pixels.data()));
+        out->close();
+        return path;
+    };
+    const Image encoded = render_photo(cam, 400, 300, true), linear = render_photo(cam, 400, 300, false);
+    PhotoImportParams p = params_for(cam, 96, true);
+    p.encoding = "auto";
+    struct Case {
+        std::string path;
+        bool display;
+    };
+    const Case cases[] = {
+        {write("camera8.tif", encoded, OIIO::TypeDesc::UINT8, "tiff", nullptr), true},
+        {write("editor16.tif", encoded, OIIO::TypeDesc::UINT16, "tiff", nullptr), true},
+        {write("misnamed.exr", encoded, OIIO::TypeDesc::UINT8, "jpeg", nullptr), true},
+        {write("radiance.tif", linear, OIIO::TypeDesc::FLOAT, "tiff", "sRGB"), false},
+        {write("linear16.png", linear, OIIO::TypeDesc::UINT16, "png", "Linear"), false},
+    };
+    for (const Case& c : cases) {
+        const ImportedPhoto imp = import_photo(c.path, p);
+        EXPECT_EQ(imp.display_referred, c.display) << c.path;
+        EXPECT_LT(rms_error(imp.sky), 0.02) << c.path;
+    }
+}
+
 TEST(PhotoImport, TiltedCameraIsUndone) {
     TestCamera cam{210.0, 160.0, 150.0, 20.0, LensLaw::Equidistant, false, 25.0, 140.0};
     Image photo = render_photo(cam, 420, 320, false);
