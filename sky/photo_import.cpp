@@ -724,6 +724,7 @@ ImportedPhoto import_photo(const std::string& path, const PhotoImportParams& par
     ImportedPhoto result = import_photo_image(photo, path, params);
     result.photo_path = path;
     result.exif_orientation = orientation;
+    result.pixel_type = photo.file_pixel_type;
     return result;
 }
 

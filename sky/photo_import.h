@@ -147,6 +147,7 @@ struct ImportedPhoto {
     std::vector<unsigned char> clipped;  // N*N: 1 where the photo was saturated (LDR input only)
     double clip_level = 1.0;             // encoded level treated as saturation (1: none found)
     int exif_orientation = 1;            // the file's EXIF orientation, applied before anything else
+    std::string pixel_type;              // the file's stored pixels ("uint8", "half", ...; "" in memory)
     std::string photo_path;
 };
 

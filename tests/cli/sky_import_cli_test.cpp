@@ -3,6 +3,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
@@ -39,6 +40,42 @@ TEST(SkyImportCli, ImportsATsiFrameWithItsPreset) {
     ASSERT_TRUE(sky.sun_direction.has_value());
     EXPECT_GT(sky.sun_direction->y(), 0.8f);  // 65 degrees up at 17:00 UTC
     EXPECT_TRUE(fs::exists(dir + "/tsi.png"));
+    fs::remove_all(dir);
+}
+
+// A photograph as an editor or phone leaves it: a 16-bit TIFF tagged to be shown turned 90 degrees.
+// The import turns it as a viewer shows it and decodes it as sRGB, and says both; the sky circle is
+// found where the turned photograph has it.
+TEST(SkyImportCli, TurnedSixteenBitTiffSaysHowItWasRead) {
+    DYNSKY_REQUIRE_SHARED();
+    std::string dir = test::temp_dir("sky-import-tiff");
+    const Image photo =
+        read_image(test::shared_path("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg"));
+    auto out = OIIO::ImageOutput::create(dir + "/edited.tif");
+    OIIO::ImageSpec spec(photo.width, photo.height, photo.channels, OIIO::TypeDesc::UINT16);
+    spec.attribute("Orientation", 6);
+    ASSERT_TRUE(out->open(dir + "/edited.tif", spec) && out->write_image(OIIO::TypeDesc::FLOAT, photo.pixels.data()));
+    out->close();
+    auto r = test::run_command(exe() + " sky import " + dir + "/edited.tif --res 64 --out " + dir + "/sky.exr");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("EXIF orientation 6"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("values: sRGB-encoded, decoded to linear (uint16 pixels"), std::string::npos) << r.output;
+    // The stored photo is 640 x 480 with the circle left of centre; turned, it is 480 x 640 and the
+    // circle's centre moves from (x, y) to (479 - y, x).
+    auto plain = test::run_command(
+        exe() + " sky import " + test::shared_path("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg") +
+        " --res 64 --out " + dir + "/plain.exr");
+    ASSERT_EQ(plain.exit_code, 0) << plain.output;
+    auto centre = [](const std::string& text) {
+        double x = 0, y = 0;
+        const size_t at = text.find("centre (");
+        if (at != std::string::npos) std::sscanf(text.c_str() + at, "centre (%lf, %lf)", &x, &y);
+        return std::make_pair(x, y);
+    };
+    const auto [px, py] = centre(plain.output);
+    const auto [tx, ty] = centre(r.output);
+    EXPECT_NEAR(tx, photo.height - 1 - py, 2.0) << r.output << plain.output;
+    EXPECT_NEAR(ty, px, 2.0) << r.output << plain.output;
     fs::remove_all(dir);
 }
 
