@@ -24,7 +24,7 @@ Accel::Accel(const Scene& scene) : scene_(scene) {
     rtcSetDeviceErrorFunction(device_, embree_error, nullptr);
 
     for (const Material& m : scene.materials)
-        if (m.alpha_mode != AlphaMode::Opaque || m.transmission > 0) has_non_opaque_ = true;
+        if (m.alpha_mode != AlphaMode::Opaque || m.transmission > 0 || m.unlit) has_non_opaque_ = true;
 
     mesh_scenes_.resize(scene.meshes.size(), nullptr);
     for (size_t g = 0; g < scene.meshes.size(); ++g) {

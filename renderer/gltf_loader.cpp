@@ -66,7 +66,8 @@ const std::set<std::string>& supported_extensions() {
                                             "KHR_lights_punctual",        "KHR_materials_ior",
                                             "KHR_materials_volume",       "EXT_texture_webp",
                                             "KHR_materials_sheen",        "KHR_materials_specular",
-                                            "KHR_draco_mesh_compression", "EXT_meshopt_compression"};
+                                            "KHR_draco_mesh_compression", "EXT_meshopt_compression",
+                                            "KHR_materials_unlit"};
     return s;
 }
 
@@ -1177,6 +1178,7 @@ class GltfLoader {
             if (m.emissiveFactor.size() == 3)
                 out.emissive = Color(float(m.emissiveFactor[0]), float(m.emissiveFactor[1]),
                                      float(m.emissiveFactor[2]));
+            out.unlit = extension(m.extensions, "KHR_materials_unlit") != nullptr;
             double strength = 1.0;
             if (const tg::Value* es = extension(m.extensions, "KHR_materials_emissive_strength"))
                 strength = number_or(member(*es, "emissiveStrength"), 1.0);

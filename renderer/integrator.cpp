@@ -153,8 +153,9 @@ float PathIntegrator::surface_alpha(const SurfaceHit& hit) const {
     return alpha;
 }
 
-bool PathIntegrator::passes_through(const SurfaceHit& hit, float u) const {
+bool PathIntegrator::passes_through(const SurfaceHit& hit, float u, bool camera_path) const {
     const Material& m = *hit.material;
+    if (m.unlit && !camera_path) return true;  // unlit surfaces are seen by the camera only
     if (m.alpha_mode == AlphaMode::Opaque) return false;
     float alpha = surface_alpha(hit);
     if (m.alpha_mode == AlphaMode::Mask) return alpha < m.alpha_cutoff;
@@ -192,6 +193,11 @@ Color PathIntegrator::transmittance(const Ray& shadow_ray, RenderStats* stats) c
         SurfaceHit hit;
         if (!accel_.intersect(ray, &hit, false)) return tr;
         const Material& m = *hit.material;
+        if (m.unlit) {  // seen by the camera only: light passes as if it were not there
+            ray.tmin = hit.t * (1 + 1e-5f) + 1e-5f;
+            ++stats->shadow_rays;
+            continue;
+        }
         // Of the light that meets the surface (alpha), what passes through it.
         Color through = Color::Zero();
         if (m.transmission > 0) {
@@ -293,7 +299,8 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
         L += c;
     };
 
-    int passes = 0;  // surfaces passed straight through (alpha, glass) on the whole path
+    int passes = 0;           // surfaces passed straight through (alpha, glass) on the whole path
+    bool camera_path = true;  // no scattering, and no glass passed, since the camera (unlit surfaces)
     for (int depth = 0;; ++depth) {
         SurfaceHit hit;
         bool found = false;
@@ -301,7 +308,7 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
             if (observer_) observer_(ray, false);
             found = primary ? accel_.surface_hit(ray, *primary, &hit, false) : accel_.intersect(ray, &hit, false);
             primary = nullptr;  // the camera ray's first intersection only
-            if (!found || !passes_through(hit, rng.uniform())) break;
+            if (!found || !passes_through(hit, rng.uniform(), camera_path)) break;
             ray.tmin = hit.t * (1 + 1e-5f) + 1e-5f;  // continue through the transparent surface
             ++stats->extension_rays;
         }
@@ -327,6 +334,12 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
             first_hit->albedo = sp.base_color;
             first_hit->normal = sp.normal;
             first_hit->position = hit.position;
+        }
+        if (hit.material->unlit) {  // reached by a camera path only (passes_through): its colour, no more
+            // As the ground is shown (albedo x E_sky / pi): baked lighting looks as bright as a
+            // surface of that albedo in the open under this sky, and follows the sky's brightness.
+            L += beta * sp.base_color * light_.sky_irradiance() * float(1 / kPi);
+            break;
         }
         add(beta * sp.emission, depth);  // emitters are reached by BSDF sampling only
         if (depth >= settings_.max_depth) break;
@@ -357,6 +370,7 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
                 beta *= through / p;
                 ray.tmin = hit.t * (1 + 1e-5f) + 1e-5f;
                 ++passes, ++stats->extension_rays;
+                camera_path = false;
                 --depth;  // not a bounce
                 continue;
             }
@@ -400,6 +414,7 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
         Vec3 wi_world = sp.to_world(bs.wi);
         if (sp.geometric_normal.dot(wi_world) <= 0) break;  // below the true surface: no light leaks
         beta *= bs.f * (bs.wi.z() / bs.pdf);
+        camera_path = false;
         prev_bsdf_pdf = bs.pdf;
         min_pdf = std::min(min_pdf, bs.pdf);
 

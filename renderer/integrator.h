@@ -153,8 +153,9 @@ class PathIntegrator {
     // each light's shadow ray traced (Scene::lights; radiance, not yet times the path's weight).
     Color punctual_light(const ShadingPoint& sp, const MetalRoughBsdf& bsdf, const Vec3& wo, const Vec3& position,
                          RenderStats* stats) const;
-    // Whether a hit is skipped by alpha (MASK below cutoff, or BLEND chosen as transparent).
-    bool passes_through(const SurfaceHit& hit, float u) const;
+    // Whether a hit is skipped: by alpha (MASK below cutoff, or BLEND chosen as transparent), or an
+    // unlit surface met by a path that has scattered since the camera (camera_path false).
+    bool passes_through(const SurfaceHit& hit, float u, bool camera_path) const;
     float surface_alpha(const SurfaceHit& hit) const;
 
     const Accel& accel_;

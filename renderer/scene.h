@@ -68,6 +68,11 @@ struct Material {
     AlphaMode alpha_mode = AlphaMode::Opaque;
     float alpha_cutoff = 0.5f;
     bool double_sided = false;
+    // KHR_materials_unlit (lighting baked into the base colour): the camera sees the base colour as
+    // a surface of that albedo in the open under the sky (base x E_sky / pi, as the ground is
+    // shown), and every other ray passes through: it neither reflects, lights nor shadows the scene
+    // (as Blender's glTF importer makes it, which emits the base colour at strength 1 instead).
+    bool unlit = false;
 };
 
 // One triangle primitive (glTF mesh primitive), in its mesh's local frame. Triangles only:

@@ -1518,6 +1518,23 @@ TEST(GltfLoader, SheenIsReadAndBadColoursRefused) {
     fs::remove_all(dir);
 }
 
+// KHR_materials_unlit (an empty object) marks the material unlit, and nothing is said to be ignored;
+// a material without it is not.
+TEST(GltfLoader, UnlitMaterialsAreRead) {
+    std::string dir = test::temp_dir("gltf");
+    const ExtensionMaterialQuad quad(dir, "KHR_materials_unlit", "baked");
+    Scene s = load_gltf(quad.write("unlit", "{}"));
+    const Material* m = material_named(s, "baked");
+    ASSERT_NE(m, nullptr);
+    EXPECT_TRUE(m->unlit);
+    EXPECT_FALSE(has_warning_containing(s, "KHR_materials_unlit"));
+    const ExtensionMaterialQuad plain(dir, "KHR_materials_sheen", "lit");
+    Scene lit = load_gltf(plain.write("lit", "{\"sheenColorFactor\":[0,0,0]}"));
+    ASSERT_NE(material_named(lit, "lit"), nullptr);
+    EXPECT_FALSE(material_named(lit, "lit")->unlit);
+    fs::remove_all(dir);
+}
+
 // KHR_materials_specular: factor, colour (above 1 allowed) and both textures are read, the
 // colour texture as sRGB; a negative colour is refused by name and nothing is said to be ignored.
 TEST(GltfLoader, SpecularColourAndTexturesAreRead) {

@@ -193,6 +193,55 @@ TEST(PathIntegrator, ThinGlassPaneOverAFloorMatchesTheAnalyticRadiance) {
     }
 }
 
+// KHR_materials_unlit: the camera sees the base colour as a surface of that albedo in the open, base x
+// E_sky / pi (under a uniform sky of radiance 1, E_sky = pi: the base colour itself, exactly); every
+// other ray passes through, so an unlit roof over a Lambert floor leaves the floor at its albedo (an
+// opaque roof darkens it), with each light strategy.
+TEST(PathIntegrator, UnlitSurfacesAreSeenByTheCameraOnlyAsTheirBaseColour) {
+    const float albedo = 0.5f;
+    Material floor;
+    floor.base_color = Color::Constant(albedo), floor.metallic = 0, floor.roughness = 1, floor.specular = 0;
+    Material baked;
+    baked.base_color = Color(0.2f, 0.4f, 0.6f), baked.unlit = true;
+    Material opaque = floor;
+    auto render = [&](const Material& roof, float roof_x, float roof_height, LightStrategy strategy,
+                      float sky_radiance = 1.0f) {
+        Scene scene;
+        scene.materials = {floor, roof};
+        add_mesh_instance(&scene, make_ground_quad_mesh(400, 0), Eigen::Affine3f::Identity(), "floor");
+        TriangleMesh top = make_ground_quad_mesh(4, 1);
+        add_mesh_instance(&scene, top,
+                          Eigen::Affine3f(Eigen::Translation3f(roof_x, roof_height, 0) *
+                                          Eigen::AngleAxisf(kPi, Vec3::UnitX())),
+                          "roof");
+        Accel accel(scene);
+        EnvLight light(uniform_sky(64, sky_radiance), 1.0f);
+        Camera cam;
+        cam.yfov = 0.002f;
+        cam.camera_to_world = Eigen::Translation3f(0, 10, 0) * Eigen::AngleAxisf(-kPi / 2, Vec3::UnitX());
+        RenderSettings s;
+        s.width = 4, s.height = 4, s.spp = 1024, s.max_depth = 4, s.quiet = true, s.strategy = strategy;
+        return PathIntegrator(accel, light, s).render(cam);
+    };
+    // Seen: the roof under the camera shows its colour in every pixel, with no noise.
+    const RenderResult seen = render(baked, 0, 5, LightStrategy::Mis);
+    for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 4; ++x)
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(seen.color.at(x, y, c), baked.base_color[c], 1e-3f);
+    // A sky three times as bright shows it three times as bright.
+    const RenderResult brighter = render(baked, 0, 5, LightStrategy::Mis, 3.0f);
+    EXPECT_NEAR(mean_of(brighter.color, 0, 0, 4, 4, 2), 3 * baked.base_color[2], 3e-3);
+    // Not seen: a roof 1 high beside the camera's view hides a large part of the floor point's sky.
+    for (LightStrategy strategy : {LightStrategy::Mis, LightStrategy::BsdfOnly, LightStrategy::LightOnly}) {
+        const RenderResult through = render(baked, 2.5f, 1, strategy);
+        // Light sampling alone is the noisiest of the three (+-2 % over seeds at this count).
+        const double tolerance = strategy == LightStrategy::LightOnly ? 0.03 : 0.01;
+        EXPECT_NEAR(mean_of(through.color, 0, 0, 4, 4, 0), albedo, tolerance * albedo) << int(strategy);
+        const RenderResult shadowed = render(opaque, 2.5f, 1, strategy);
+        EXPECT_LT(mean_of(shadowed.color, 0, 0, 4, 4, 0), 0.9 * albedo);
+    }
+}
+
 // KHR_lights_punctual over a Lambert floor under a uniform sky of radiance 1: the floor shows a
 // (the sky) plus a / pi x E from the light, E = I cos / d^2 (point, spot with its cone) or E cos
 // (directional), in the sky's units (candela and lux / 683). Looked at from straight above.
