@@ -67,7 +67,7 @@ const std::set<std::string>& supported_extensions() {
                                             "KHR_materials_volume",       "EXT_texture_webp",
                                             "KHR_materials_sheen",        "KHR_materials_specular",
                                             "KHR_draco_mesh_compression", "EXT_meshopt_compression",
-                                            "KHR_materials_unlit"};
+                                            "KHR_materials_unlit",        "KHR_materials_pbrSpecularGlossiness"};
     return s;
 }
 
@@ -1207,6 +1207,8 @@ class GltfLoader {
             out.emissive = out.emissive.max(0.0f) * float(strength);
             out.base_color = out.base_color.max(0.0f).min(1.0f);
             out.base_alpha = std::clamp(out.base_alpha, 0.0f, 1.0f);
+            if (const tg::Value* sg = extension(m.extensions, "KHR_materials_pbrSpecularGlossiness"))
+                read_specular_glossiness(*sg, &out, what);
             if (const tg::Value* sp = extension(m.extensions, "KHR_materials_specular")) read_specular(*sp, &out, what);
             if (const tg::Value* tr = extension(m.extensions, "KHR_materials_transmission"))
                 read_transmission(*tr, &out, what);
@@ -1281,6 +1283,42 @@ class GltfLoader {
         read_extension_slot(ext, "specularTexture", &out->specular_texture, what);
         out->specular_color = extension_colour(ext, "specularColorFactor", Color::Ones(), what, name, 1e6);
         read_extension_slot(ext, "specularColorTexture", &out->specular_color_texture, what, true);
+    }
+
+    // KHR_materials_pbrSpecularGlossiness (archived by Khronos, common in files exported before
+    // 2020): replaces pbrMetallicRoughness (the fallback for clients without it). Mapped onto the
+    // metal-rough model as gltf-transform's conversion does: a dielectric (metallic 0) whose base is
+    // the diffuse colour (diffuseFactor RGBA, diffuseTexture sRGB RGBA), whose F0 is the specular
+    // colour (specularFactor, times the specularGlossinessTexture's sRGB RGB: the specular colour of
+    // KHR_materials_specular scaled by 1 / 0.04, the F0 of IOR 1.5) and whose roughness is
+    // 1 - glossiness (glossinessFactor times the texture's linear A).
+    void read_specular_glossiness(const tg::Value& ext, Material* out, const std::string& what) {
+        const char* name = "KHR_materials_pbrSpecularGlossiness";
+        Color diffuse = Color::Ones();
+        float alpha = 1.0f;
+        if (const tg::Value* d = member(ext, "diffuseFactor")) {
+            if (!d->IsArray() || d->ArrayLen() != 4)
+                fail(what + ": " + name + " diffuseFactor is not 4 numbers (RGBA)");
+            for (int k = 0; k < 4; ++k) {
+                const tg::Value& e = d->Get(k);
+                const double v = e.IsNumber() ? e.GetNumberAsDouble() : std::nan("");
+                if (!(v >= 0 && v <= 1))
+                    fail(what + ": " + name + " diffuseFactor " +
+                         (e.IsNumber() ? number_text(v) : std::string("holds a non-number")) + " is outside [0, 1]");
+                if (k < 3) diffuse[k] = float(v);
+                else alpha = float(v);
+            }
+        }
+        out->base_color = diffuse, out->base_alpha = alpha;
+        out->base_color_texture = TextureSlot();
+        read_extension_slot(ext, "diffuseTexture", &out->base_color_texture, what, true);
+        out->metallic = 0;
+        out->metallic_roughness_texture = TextureSlot();
+        out->glossiness = float(extension_factor(ext, "glossinessFactor", 1.0, what, name));
+        out->roughness = 1 - out->glossiness;
+        out->specular_color = extension_colour(ext, "specularFactor", Color::Ones(), what, name) / 0.04f;
+        read_extension_slot(ext, "specularGlossinessTexture", &out->specular_color_texture, what, true);
+        out->glossiness_texture = out->specular_color_texture;
     }
 
     // KHR_materials_sheen: sheenColorFactor (3 numbers in [0, 1], default black: no sheen) and

@@ -16,6 +16,7 @@ ShadingPoint evaluate_material(const Scene& scene, const SurfaceHit& hit, const 
         Vec4 t = tex(m.metallic_roughness_texture);
         sp.roughness *= t.y(), sp.metallic *= t.z();
     }
+    if (m.glossiness_texture.present()) sp.roughness = 1 - m.glossiness * tex(m.glossiness_texture).w();
     if (m.specular_texture.present()) sp.specular *= tex(m.specular_texture).w();
     sp.specular_color = m.specular_color;
     if (m.specular_color_texture.present()) sp.specular_color *= tex(m.specular_color_texture).head<3>().array();

@@ -61,10 +61,15 @@ struct Material {
     float sheen_roughness = 0.0f;
     TextureSlot sheen_color_texture;      // sRGB RGB x sheen_color
     TextureSlot sheen_roughness_texture;  // linear A x sheen_roughness
-    TextureSlot normal_texture;           // linear, tangent space, scale in slot.scale
-    TextureSlot occlusion_texture;        // linear R, strength in slot.scale
-    Color emissive = Color::Zero();       // already multiplied by emissive_strength
-    TextureSlot emissive_texture;         // sRGB
+    // KHR_materials_pbrSpecularGlossiness (older exports): roughness = 1 - glossiness x this texture's
+    // A (linear), replacing roughness where present; the rest of the model maps onto the fields
+    // above (gltf_loader.cpp read_specular_glossiness).
+    float glossiness = 1.0f;
+    TextureSlot glossiness_texture;
+    TextureSlot normal_texture;      // linear, tangent space, scale in slot.scale
+    TextureSlot occlusion_texture;   // linear R, strength in slot.scale
+    Color emissive = Color::Zero();  // already multiplied by emissive_strength
+    TextureSlot emissive_texture;    // sRGB
     AlphaMode alpha_mode = AlphaMode::Opaque;
     float alpha_cutoff = 0.5f;
     bool double_sided = false;

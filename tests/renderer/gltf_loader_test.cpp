@@ -1,4 +1,5 @@
 #include "renderer/gltf_loader.h"
+#include "renderer/material_eval.h"
 
 #include <gtest/gtest.h>
 
@@ -1515,6 +1516,57 @@ TEST(GltfLoader, SheenIsReadAndBadColoursRefused) {
     EXPECT_FALSE(has_warning_containing(s, "KHR_materials_sheen"));
     const std::string e = load_error(write("sheen_bad", "{\"sheenColorFactor\":[1,2,0]}"));
     EXPECT_NE(e.find("KHR_materials_sheen sheenColorFactor 2 is outside [0, 1]"), std::string::npos) << e;
+    fs::remove_all(dir);
+}
+
+// KHR_materials_pbrSpecularGlossiness replaces the metal-rough fallback: a dielectric with the diffuse
+// colour and alpha as base, F0 the specular colour (specular colour x 0.04), roughness 1 - glossiness,
+// the diffuse texture as base colour texture and the specular-glossiness texture as both the F0
+// tint (sRGB RGB) and the glossiness (linear A); nothing is said to be ignored; bad values are named.
+TEST(GltfLoader, SpecularGlossinessMaterialsAreMappedOntoMetalRough) {
+    std::string dir = test::temp_dir("gltf");
+    const ExtensionMaterialQuad quad(dir, "KHR_materials_pbrSpecularGlossiness", "old");
+    auto write = [&](const std::string& name, const std::string& sg) { return quad.write(name, sg); };
+    Scene s = load_gltf(write("sg",
+                              "{\"diffuseFactor\":[0.5,0.25,0.125,0.8],\"specularFactor\":[0.2,0.1,0.05],"
+                              "\"glossinessFactor\":0.7,\"diffuseTexture\":{\"index\":0},"
+                              "\"specularGlossinessTexture\":{\"index\":0}}"));
+    const Material* m = material_named(s, "old");
+    ASSERT_NE(m, nullptr);
+    EXPECT_TRUE(m->base_color.isApprox(Color(0.5f, 0.25f, 0.125f)));
+    EXPECT_FLOAT_EQ(m->base_alpha, 0.8f);
+    EXPECT_EQ(m->metallic, 0.0f);
+    EXPECT_NEAR(m->roughness, 0.3f, 1e-6f);
+    EXPECT_TRUE((m->specular_color * 0.04f).isApprox(Color(0.2f, 0.1f, 0.05f)));
+    EXPECT_FALSE(m->metallic_roughness_texture.present());
+    ASSERT_TRUE(m->base_color_texture.present() && m->specular_color_texture.present() &&
+                m->glossiness_texture.present());
+    EXPECT_NEAR(texel_of(s, m->base_color_texture)[0], 0.5f, 0.01f) << "sRGB";
+    EXPECT_NEAR(texel_of(s, m->specular_color_texture)[0], 0.5f, 0.01f) << "sRGB";
+    EXPECT_NEAR(texel_of(s, m->glossiness_texture)[3], 0.5f, 0.01f) << "linear";
+    EXPECT_FALSE(has_warning_containing(s, "KHR_materials_pbrSpecularGlossiness"));
+    // Shaded: roughness 1 - 0.7 x A, F0 tint x the texture's RGB, base x the diffuse texture.
+    SurfaceHit hit;
+    hit.geometric_normal = hit.shading_normal = Vec3(0, 1, 0);
+    hit.texcoord[0] = Vec2(0.5f, 0.5f);
+    hit.material = m;
+    const ShadingPoint sp = evaluate_material(s, hit, Vec3(0, 1, 0));
+    const float a = texel_of(s, m->glossiness_texture)[3], t = texel_of(s, m->specular_color_texture)[0];
+    EXPECT_NEAR(sp.roughness, 1 - 0.7f * a, 1e-5f);
+    EXPECT_EQ(sp.metallic, 0.0f);
+    EXPECT_NEAR(sp.specular_color[0] * 0.04f, 0.2f * t, 1e-5f);
+    EXPECT_NEAR(sp.base_color[1], 0.25f * t, 1e-5f);
+    // Defaults: white diffuse, specular 1 (F0 1), glossiness 1 (roughness 0).
+    Scene d = load_gltf(write("sg_default", "{}"));
+    EXPECT_EQ(material_named(d, "old")->roughness, 0.0f);
+    EXPECT_TRUE(material_named(d, "old")->base_color.isApprox(Color::Ones()));
+    for (auto [json, says] : {std::pair<std::string, std::string>{"{\"diffuseFactor\":[1,1,1]}", "is not 4 numbers"},
+                              {"{\"diffuseFactor\":[1,2,1,1]}", "diffuseFactor 2 is outside [0, 1]"},
+                              {"{\"glossinessFactor\":-1}", "glossinessFactor -1 is outside [0, 1]"},
+                              {"{\"specularFactor\":[1,1]}", "specularFactor is not 3 numbers"}}) {
+        const std::string e = load_error(write("sg_bad", json));
+        EXPECT_NE(e.find(says), std::string::npos) << json << ": " << e;
+    }
     fs::remove_all(dir);
 }
 
