@@ -71,6 +71,13 @@ const std::set<std::string>& supported_extensions() {
     return s;
 }
 
+// Extensions that carry no meaning for a render (licence and authoring metadata, a promise that
+// meshes are closed): accepted without a word, as newer Khronos sample files all use the first.
+const std::set<std::string>& metadata_extensions() {
+    static const std::set<std::string> s = {"KHR_xmp_json_ld", "KHR_xmp", "EXT_mesh_manifold"};
+    return s;
+}
+
 std::string in_quotes(const std::string& s) { return "'" + s + "'"; }
 
 // Trims and joins tinygltf's newline-separated messages.
@@ -660,10 +667,10 @@ class GltfLoader {
 
     void check_extensions() {
         for (const std::string& e : model_.extensionsRequired)
-            if (!supported_extensions().count(e))
+            if (!supported_extensions().count(e) && !metadata_extensions().count(e))
                 fail("requires glTF extension " + in_quotes(e) + ", which dynsky does not support");
         for (const std::string& e : model_.extensionsUsed)
-            if (!supported_extensions().count(e)) {
+            if (!supported_extensions().count(e) && !metadata_extensions().count(e)) {
                 warn("extension " + in_quotes(e) + " is not supported: ignored");
             }
     }

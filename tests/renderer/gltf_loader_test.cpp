@@ -1570,6 +1570,19 @@ TEST(GltfLoader, SpecularGlossinessMaterialsAreMappedOntoMetalRough) {
     fs::remove_all(dir);
 }
 
+// Metadata extensions (licence, authoring, closed meshes) change nothing drawn: no warning, not even
+// when required; an unknown extension still gets one.
+TEST(GltfLoader, MetadataExtensionsAreAcceptedSilently) {
+    std::string dir = test::temp_dir("gltf");
+    const ExtensionMaterialQuad xmp(dir, "KHR_xmp_json_ld", "licensed");
+    Scene s = load_gltf(xmp.write("xmp", "{\"packet\":0}"));
+    EXPECT_FALSE(has_warning_containing(s, "KHR_xmp_json_ld"));
+    const ExtensionMaterialQuad unknown(dir, "EXT_made_up", "odd");
+    Scene u = load_gltf(unknown.write("unknown", "{}"));
+    EXPECT_TRUE(has_warning_containing(u, "EXT_made_up"));
+    fs::remove_all(dir);
+}
+
 // KHR_materials_unlit (an empty object) marks the material unlit, and nothing is said to be ignored;
 // a material without it is not.
 TEST(GltfLoader, UnlitMaterialsAreRead) {
