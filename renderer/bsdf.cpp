@@ -258,6 +258,62 @@ Vec3 MetalRoughBsdf::sample_ggx_vndf(const Vec3& wo, float alpha, const Vec2& u)
     return Vec3(alpha * nh.x(), alpha * nh.y(), std::max(1e-6f, nh.z())).normalized();
 }
 
+float MetalRoughBsdf::ggx_d(const Vec3& wm, float alpha_x, float alpha_y) {
+    if (wm.z() <= 0) return 0;
+    const float x = wm.x() / alpha_x, y = wm.y() / alpha_y, d = x * x + y * y + wm.z() * wm.z();
+    return 1 / (kPi * alpha_x * alpha_y * d * d);
+}
+
+float MetalRoughBsdf::smith_g1(const Vec3& w, float alpha_x, float alpha_y) {
+    const float c2 = w.z() * w.z();
+    if (c2 <= 0) return 0;
+    const float a2t2 = (alpha_x * alpha_x * w.x() * w.x() + alpha_y * alpha_y * w.y() * w.y()) / c2;
+    return 2.0f / (1.0f + std::sqrt(1.0f + a2t2));
+}
+
+Vec3 MetalRoughBsdf::sample_ggx_vndf(const Vec3& wo, float alpha_x, float alpha_y, const Vec2& u) {
+    // As the isotropic one, stretched by each axis' roughness.
+    Vec3 wh = Vec3(alpha_x * wo.x(), alpha_y * wo.y(), wo.z()).normalized();
+    if (wh.z() < 0) wh = -wh;
+    Vec3 t1 = wh.z() < 0.99999f ? Vec3::UnitZ().cross(wh).normalized() : Vec3::UnitX();
+    Vec3 t2 = wh.cross(t1);
+    float r = std::sqrt(u.x()), phi = 2 * kPi * u.y();
+    float p1 = r * std::cos(phi), p2 = r * std::sin(phi);
+    float s = 0.5f * (1 + wh.z());
+    p2 = (1 - s) * safe_sqrt(1 - p1 * p1) + s * p2;
+    Vec3 nh = p1 * t1 + p2 * t2 + safe_sqrt(1 - p1 * p1 - p2 * p2) * wh;
+    return Vec3(alpha_x * nh.x(), alpha_y * nh.y(), std::max(1e-6f, nh.z())).normalized();
+}
+
+float MetalRoughBsdf::ggx_vndf_pdf_wi(const Vec3& wo, const Vec3& wi, float alpha_x, float alpha_y) {
+    Vec3 wm = wo + wi;
+    if (wm.squaredNorm() == 0 || wo.z() <= 0) return 0;
+    wm.normalize();
+    if (wm.z() < 0) wm = -wm;
+    if (wo.dot(wm) <= 0) return 0;
+    return smith_g1(wo, alpha_x, alpha_y) * ggx_d(wm, alpha_x, alpha_y) / (4 * wo.z());
+}
+
+void MetalRoughBsdf::set_anisotropy(float strength) {
+    strength = clamp(strength, 0.0f, 1.0f);
+    if (!(strength > 0)) return;
+    anisotropic_ = true;
+    alpha_x_ = alpha_ + (1 - alpha_) * strength * strength, alpha_y_ = alpha_;
+    // The tables' perceptual roughness for the mean alpha.
+    roughness_ = std::sqrt(std::sqrt(alpha_x_ * alpha_y_));
+    update_f0();
+}
+
+float MetalRoughBsdf::specular_dgg(const Vec3& wm, const Vec3& wo, const Vec3& wi) const {
+    if (anisotropic_)
+        return ggx_d(wm, alpha_x_, alpha_y_) * smith_g1(wo, alpha_x_, alpha_y_) * smith_g1(wi, alpha_x_, alpha_y_);
+    return ggx_d(wm, alpha_) * smith_g1(wo, alpha_) * smith_g1(wi, alpha_);
+}
+
+float MetalRoughBsdf::specular_vndf_pdf(const Vec3& wo, const Vec3& wi) const {
+    return anisotropic_ ? ggx_vndf_pdf_wi(wo, wi, alpha_x_, alpha_y_) : ggx_vndf_pdf_wi(wo, wi, alpha_);
+}
+
 float MetalRoughBsdf::ggx_vndf_pdf_wi(const Vec3& wo, const Vec3& wi, float alpha) {
     Vec3 wm = wo + wi;
     if (wm.squaredNorm() == 0 || wo.z() <= 0) return 0;
@@ -276,7 +332,7 @@ Color MetalRoughBsdf::metal_rough_eval(const Vec3& wo, const Vec3& wi) const {
     float v_dot_h = clamp(wo.dot(wm), 0.0f, 1.0f);
     float w = schlick_weight(v_dot_h);
     // Specular microfacet term without Fresnel: D G / (4 cos_o cos_i), separable Smith G.
-    float spec = ggx_d(wm, alpha_) * smith_g1(wo, alpha_) * smith_g1(wi, alpha_) / (4 * wo.z() * wi.z());
+    float spec = specular_dgg(wm, wo, wi) / (4 * wo.z() * wi.z());
     // Dielectric: fresnel_mix(ior 1.5) of Lambert base and specular; metal: conductor Fresnel.
     float f_dielectric = specular_ * (f0_ + (1 - f0_) * w);
     float diffuse_weight = 1.0f;
@@ -310,7 +366,7 @@ float MetalRoughBsdf::specular_probability_for(const Vec3& wo, float e_spec) con
 float MetalRoughBsdf::metal_rough_pdf(const Vec3& wo, const Vec3& wi) const {
     if (wo.z() <= 0 || wi.z() <= 0) return 0;
     float ps = specular_probability(wo);
-    return ps * ggx_vndf_pdf_wi(wo, wi, alpha_) + (1 - ps) * wi.z() * kInvPi;
+    return ps * specular_vndf_pdf(wo, wi) + (1 - ps) * wi.z() * kInvPi;
 }
 
 void MetalRoughBsdf::set_sheen(const Color& colour, float roughness) {
@@ -373,7 +429,7 @@ bool MetalRoughBsdf::sample(const Vec3& wo, float u_lobe, const Vec2& u, BsdfSam
             if (psh > 0) u_lobe = std::min((u_lobe - psh) / (1 - psh), 0.99999994f);
             float ps = specular_probability(wo);
             if (u_lobe < ps) {
-                Vec3 wm = sample_ggx_vndf(wo, alpha_, u);
+                Vec3 wm = anisotropic_ ? sample_ggx_vndf(wo, alpha_x_, alpha_y_, u) : sample_ggx_vndf(wo, alpha_, u);
                 wi = 2 * wo.dot(wm) * wm - wo;
             } else {
                 wi = sample_cosine_hemisphere(u);

@@ -47,6 +47,13 @@ class MetalRoughBsdf {
     // stays the specular factor). Default white: every result bitwise as without it. Before set_wo.
     void set_specular_color(const Color& colour);
 
+    // KHR_materials_anisotropy: the specular lobe's roughness stretched along the local x axis (the
+    // caller turns the shading frame's tangent to the anisotropy direction): alpha_x = mix(alpha, 1,
+    // strength^2), alpha_y = alpha, as the extension defines. The albedo tables (energy compensation,
+    // lobe probabilities) take the lobe's mean roughness, alpha = sqrt(alpha_x alpha_y). 0 (the
+    // default): isotropic, every result bitwise as without it. Before set_wo.
+    void set_anisotropy(float strength);
+
     // KHR_materials_volume, thin: what transmitted() passes is also multiplied by this (per channel).
     void set_transmission_tint(const Color& tint) { tint_ = tint.max(0.0f).min(1.0f); }
 
@@ -76,6 +83,11 @@ class MetalRoughBsdf {
     // Visible-normal sampling (Heitz 2018, "Sampling the GGX Distribution of Visible Normals").
     static Vec3 sample_ggx_vndf(const Vec3& wo, float alpha, const Vec2& u);
     static float ggx_vndf_pdf_wi(const Vec3& wo, const Vec3& wi, float alpha);
+    // The same, anisotropic: roughness alpha_x along local x, alpha_y along y (Heitz 2018 covers both).
+    static float ggx_d(const Vec3& wm, float alpha_x, float alpha_y);
+    static float smith_g1(const Vec3& w, float alpha_x, float alpha_y);
+    static Vec3 sample_ggx_vndf(const Vec3& wo, float alpha_x, float alpha_y, const Vec2& u);
+    static float ggx_vndf_pdf_wi(const Vec3& wo, const Vec3& wi, float alpha_x, float alpha_y);
 
     // The sheen lobe alone (Charlie D and V, colour 1) and its directional albedo, for tests.
     static float sheen_lobe(const Vec3& wo, const Vec3& wi, float roughness);
@@ -115,6 +127,11 @@ class MetalRoughBsdf {
     float cached_e_coat_ = 0, cached_pc_ = 0;
     Color sheen_ = Color::Zero();  // set_sheen
     float sheen_max_ = 0, sheen_roughness_ = 0.07f;
+    bool anisotropic_ = false;  // set_anisotropy
+    float alpha_x_ = 0, alpha_y_ = 0;
+    // The specular lobe's D G1 G1 and visible-normal pdf, isotropic or not.
+    float specular_dgg(const Vec3& wm, const Vec3& wo, const Vec3& wi) const;
+    float specular_vndf_pdf(const Vec3& wo, const Vec3& wi) const;
 };
 
 }  // namespace dynsky

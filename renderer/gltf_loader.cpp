@@ -67,7 +67,8 @@ const std::set<std::string>& supported_extensions() {
                                             "KHR_materials_volume",       "EXT_texture_webp",
                                             "KHR_materials_sheen",        "KHR_materials_specular",
                                             "KHR_draco_mesh_compression", "EXT_meshopt_compression",
-                                            "KHR_materials_unlit",        "KHR_materials_pbrSpecularGlossiness"};
+                                            "KHR_materials_unlit",        "KHR_materials_pbrSpecularGlossiness",
+                                            "KHR_materials_anisotropy"};
     return s;
 }
 
@@ -1223,6 +1224,8 @@ class GltfLoader {
                 read_clearcoat(*cc, &out, what);
             if (const tg::Value* ior = extension(m.extensions, "KHR_materials_ior")) read_ior(*ior, &out, what);
             if (const tg::Value* sheen = extension(m.extensions, "KHR_materials_sheen")) read_sheen(*sheen, &out, what);
+            if (const tg::Value* an = extension(m.extensions, "KHR_materials_anisotropy"))
+                read_anisotropy(*an, &out, what);
             if (const tg::Value* volume = extension(m.extensions, "KHR_materials_volume"))
                 read_volume(*volume, &out, what);
             if (m.alphaMode == "MASK") out.alpha_mode = AlphaMode::Mask;
@@ -1326,6 +1329,21 @@ class GltfLoader {
         out->specular_color = extension_colour(ext, "specularFactor", Color::Ones(), what, name) / 0.04f;
         read_extension_slot(ext, "specularGlossinessTexture", &out->specular_color_texture, what, true);
         out->glossiness_texture = out->specular_color_texture;
+    }
+
+    // KHR_materials_anisotropy: anisotropyStrength in [0, 1], anisotropyRotation (radians, finite),
+    // anisotropyTexture (linear: RG a direction, B a strength).
+    void read_anisotropy(const tg::Value& ext, Material* out, const std::string& what) {
+        const char* name = "KHR_materials_anisotropy";
+        out->anisotropy_strength = float(extension_factor(ext, "anisotropyStrength", 0.0, what, name));
+        if (const tg::Value* r = member(ext, "anisotropyRotation")) {
+            const double x = r->IsNumber() ? r->GetNumberAsDouble() : std::nan("");
+            if (!r->IsNumber()) fail(what + ": " + name + " anisotropyRotation is not a number");
+            if (!std::isfinite(x) || std::abs(x) > 1e6)
+                fail(what + ": " + name + " anisotropyRotation " + number_text(x) + " is not an angle in radians");
+            out->anisotropy_rotation = float(std::remainder(x, 2 * kPiD));
+        }
+        read_extension_slot(ext, "anisotropyTexture", &out->anisotropy_texture, what);
     }
 
     // KHR_materials_sheen: sheenColorFactor (3 numbers in [0, 1], default black: no sheen) and

@@ -173,6 +173,7 @@ MetalRoughBsdf shading_bsdf(const ShadingPoint& sp, float roughness, float coat_
     if (sp.transmission > 0) bsdf.set_transmission_tint(sp.transmission_tint);
     if (sp.clearcoat > 0) bsdf.set_clearcoat(sp.clearcoat, coat_roughness);
     if ((sp.sheen_color > 0).any()) bsdf.set_sheen(sp.sheen_color, sp.sheen_roughness);
+    if (sp.anisotropy > 0) bsdf.set_anisotropy(sp.anisotropy);
     return bsdf;
 }
 

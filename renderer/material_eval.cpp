@@ -87,6 +87,26 @@ ShadingPoint evaluate_material(const Scene& scene, const SurfaceHit& hit, const 
     }
     sp.tangent.normalize();
     sp.bitangent = ns.cross(sp.tangent);
+    if (m.anisotropy_strength > 0) {
+        // The direction in the texture's tangent frame (its bitangent keeps the mesh's handedness),
+        // turned by the rotation; the shading frame's tangent is then that direction.
+        float dx = std::cos(m.anisotropy_rotation), dy = std::sin(m.anisotropy_rotation);
+        sp.anisotropy = m.anisotropy_strength;
+        if (m.anisotropy_texture.present()) {
+            const Vec4 a = tex(m.anisotropy_texture);
+            float tx = 2 * a.x() - 1, ty = 2 * a.y() - 1;
+            const float len = std::hypot(tx, ty);
+            if (len > 0) tx /= len, ty /= len;
+            else tx = 1, ty = 0;
+            const float rx = dx * tx - dy * ty, ry = dy * tx + dx * ty;
+            dx = rx, dy = ry;
+            sp.anisotropy *= a.z();
+        }
+        const float sign = (b.dot(sp.bitangent) < 0) ? -1.0f : 1.0f;
+        const Vec3 along = (dx * sp.tangent + dy * sign * sp.bitangent).normalized();
+        sp.tangent = along;
+        sp.bitangent = ns.cross(along);
+    }
     return sp;
 }
 

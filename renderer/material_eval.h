@@ -13,6 +13,8 @@ struct ShadingPoint {
     float clearcoat = 0, clearcoat_roughness = 0;  // KHR_materials_clearcoat
     Color sheen_color = Color::Zero();             // KHR_materials_sheen (black: none)
     float sheen_roughness = 0;
+    float anisotropy = 0;                     // KHR_materials_anisotropy strength (the frame's tangent
+                                              // is then its direction)
     float ior = 1.5f;                         // KHR_materials_ior
     Color transmission_tint = Color::Ones();  // KHR_materials_volume's absorption (Material::volume_tint)
     Color emission = Color::Zero();

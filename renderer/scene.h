@@ -66,6 +66,12 @@ struct Material {
     // above (gltf_loader.cpp read_specular_glossiness).
     float glossiness = 1.0f;
     TextureSlot glossiness_texture;
+    // KHR_materials_anisotropy: the specular lobe stretched along a direction in the tangent plane,
+    // the tangent turned by rotation (radians, counter-clockwise towards the bitangent), or by the
+    // texture's RG (a direction in tangent space, [0, 1] for [-1, 1]) then turned; strength times
+    // the texture's B (linear). 0: isotropic.
+    float anisotropy_strength = 0.0f, anisotropy_rotation = 0.0f;
+    TextureSlot anisotropy_texture;
     TextureSlot normal_texture;      // linear, tangent space, scale in slot.scale
     TextureSlot occlusion_texture;   // linear R, strength in slot.scale
     Color emissive = Color::Zero();  // already multiplied by emissive_strength

@@ -288,6 +288,57 @@ TEST(MetalRoughBsdf, SpecularColourTintsTheDielectricsFresnelAndKeepsEnergy) {
     EXPECT_EQ(none.pdf(wo, wi), white.pdf(wo, wi));
 }
 
+// KHR_materials_anisotropy: the anisotropic GGX distribution is normalised (the integral of D cos
+// over the hemisphere is 1), the lobe spreads further along local x (the anisotropy direction) than
+// along y, energy stays within 1 for a white metal and a white dielectric, the BSDF is reciprocal,
+// sampled as its pdf says (also for a wo off the anisotropy's axes), and strength 0 changes nothing.
+TEST(MetalRoughBsdf, AnisotropyStretchesTheLobeAndKeepsEnergy) {
+    for (auto [ax, ay] : {std::pair<float, float>{0.5f, 0.1f}, {0.15f, 0.6f}, {0.3f, 0.3f}}) {
+        const int n = 1200;
+        double sum = 0;
+        for (int a = 0; a < n; ++a)
+            for (int b = 0; b < 2 * n; ++b) {
+                const float z = (a + 0.5f) / n, phi = 2 * kPi * (b + 0.5f) / (2 * n), r = safe_sqrt(1 - z * z);
+                sum += MetalRoughBsdf::ggx_d(Vec3(r * std::cos(phi), r * std::sin(phi), z), ax, ay) * z;
+            }
+        EXPECT_NEAR(sum * 2 * kPiD / (double(n) * 2 * n), 1.0, 5e-3) << ax << " " << ay;
+    }
+    // Isotropic alphas give the isotropic functions.
+    const Vec3 w = Vec3(0.3f, -0.4f, 0.866f).normalized();
+    EXPECT_NEAR(MetalRoughBsdf::ggx_d(w, 0.4f, 0.4f), MetalRoughBsdf::ggx_d(w, 0.4f), 1e-5f);
+    EXPECT_NEAR(MetalRoughBsdf::smith_g1(w, 0.4f, 0.4f), MetalRoughBsdf::smith_g1(w, 0.4f), 1e-6f);
+
+    MetalRoughBsdf brushed(Color(0.9f, 0.8f, 0.6f), 1.0f, 0.3f);
+    brushed.set_anisotropy(0.8f);
+    const Vec3 up(0, 0, 1);
+    const Vec3 along_x = Vec3(std::sin(0.35f), 0, std::cos(0.35f)), along_y = Vec3(0, std::sin(0.35f), std::cos(0.35f));
+    EXPECT_GT(brushed.eval(up, along_x)[0], 3 * brushed.eval(up, along_y)[0]);
+    for (float metallic : {0.0f, 1.0f})
+        for (float theta : {0.0f, 0.8f, 1.3f}) {
+            MetalRoughBsdf white(Color::Ones(), metallic, 0.4f);
+            white.set_anisotropy(1.0f);
+            EXPECT_LE(albedo_quadrature(white, dir_from_theta(theta), 800).maxCoeff(), 1.0f + 1e-2f)
+                << metallic << " " << theta;
+        }
+    Rng rng(23, 4);
+    for (int k = 0; k < 1000; ++k) {
+        Vec3 a = sample_cosine_hemisphere(rng.uniform2()), b = sample_cosine_hemisphere(rng.uniform2());
+        Color f1 = brushed.eval(a, b), f2 = brushed.eval(b, a);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(f1[c], f2[c], 1e-4f * std::max(1.0f, f1[c]));
+    }
+    const Vec3 wo = Vec3(0.5f, 0.45f, 0.74f).normalized();
+    EXPECT_LE(pdf_integral(brushed, wo), 1.0 + 5e-3);
+    EXPECT_GT(pdf_integral(brushed, wo), 0.6);
+    expect_sampled_estimate_matches_quadrature(brushed, wo, &rng, "anisotropic metal");
+    MetalRoughBsdf satin(Color(0.6f, 0.2f, 0.2f), 0.0f, 0.5f);
+    satin.set_anisotropy(0.6f);
+    expect_sampled_estimate_matches_quadrature(satin, wo, &rng, "anisotropic dielectric");
+    MetalRoughBsdf none(Color(0.6f, 0.2f, 0.2f), 0.3f, 0.5f), zero(Color(0.6f, 0.2f, 0.2f), 0.3f, 0.5f);
+    zero.set_anisotropy(0.0f);
+    EXPECT_TRUE(none.eval(wo, dir_from_theta(-0.3f)).isApprox(zero.eval(wo, dir_from_theta(-0.3f)), 0.0f));
+    EXPECT_EQ(none.pdf(wo, dir_from_theta(-0.3f)), zero.pdf(wo, dir_from_theta(-0.3f)));
+}
+
 TEST(MetalRoughBsdf, PdfIntegratesToAtMostOne) {
     for (float metallic : {0.0f, 1.0f})
         for (float roughness : {0.3f, 0.8f})
