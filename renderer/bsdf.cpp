@@ -245,17 +245,7 @@ float MetalRoughBsdf::smith_g1(const Vec3& w, float alpha) {
 }
 
 Vec3 MetalRoughBsdf::sample_ggx_vndf(const Vec3& wo, float alpha, const Vec2& u) {
-    // Stretch the view vector to the hemisphere configuration, sample a projected disc, unstretch.
-    Vec3 wh = Vec3(alpha * wo.x(), alpha * wo.y(), wo.z()).normalized();
-    if (wh.z() < 0) wh = -wh;
-    Vec3 t1 = wh.z() < 0.99999f ? Vec3::UnitZ().cross(wh).normalized() : Vec3::UnitX();
-    Vec3 t2 = wh.cross(t1);
-    float r = std::sqrt(u.x()), phi = 2 * kPi * u.y();
-    float p1 = r * std::cos(phi), p2 = r * std::sin(phi);
-    float s = 0.5f * (1 + wh.z());
-    p2 = (1 - s) * safe_sqrt(1 - p1 * p1) + s * p2;
-    Vec3 nh = p1 * t1 + p2 * t2 + safe_sqrt(1 - p1 * p1 - p2 * p2) * wh;
-    return Vec3(alpha * nh.x(), alpha * nh.y(), std::max(1e-6f, nh.z())).normalized();
+    return sample_ggx_vndf(wo, alpha, alpha, u);  // the same arithmetic, bit for bit
 }
 
 float MetalRoughBsdf::ggx_d(const Vec3& wm, float alpha_x, float alpha_y) {
@@ -272,7 +262,7 @@ float MetalRoughBsdf::smith_g1(const Vec3& w, float alpha_x, float alpha_y) {
 }
 
 Vec3 MetalRoughBsdf::sample_ggx_vndf(const Vec3& wo, float alpha_x, float alpha_y, const Vec2& u) {
-    // As the isotropic one, stretched by each axis' roughness.
+    // Stretch the view vector to the hemisphere configuration, sample a projected disc, unstretch.
     Vec3 wh = Vec3(alpha_x * wo.x(), alpha_y * wo.y(), wo.z()).normalized();
     if (wh.z() < 0) wh = -wh;
     Vec3 t1 = wh.z() < 0.99999f ? Vec3::UnitZ().cross(wh).normalized() : Vec3::UnitX();
