@@ -1276,6 +1276,9 @@ class GltfLoader {
         if (!info || !info->IsObject()) return;
         const tg::Value* index = member(*info, "index");
         if (!index || !index->IsNumber()) fail(what + ": " + key + " has no texture index");
+        if (index->GetNumberAsInt() < 0)
+            fail(what + " " + key + " refers to texture " + std::to_string(index->GetNumberAsInt()) +
+                 ", which does not exist");
         tg::ExtensionMap extensions;
         if (const tg::Value* e = member(*info, "extensions"); e && e->IsObject())
             for (const std::string& k : e->Keys()) extensions[k] = e->Get(k);

@@ -1563,7 +1563,8 @@ TEST(GltfLoader, SpecularGlossinessMaterialsAreMappedOntoMetalRough) {
     for (auto [json, says] : {std::pair<std::string, std::string>{"{\"diffuseFactor\":[1,1,1]}", "is not 4 numbers"},
                               {"{\"diffuseFactor\":[1,2,1,1]}", "diffuseFactor 2 is outside [0, 1]"},
                               {"{\"glossinessFactor\":-1}", "glossinessFactor -1 is outside [0, 1]"},
-                              {"{\"specularFactor\":[1,1]}", "specularFactor is not 3 numbers"}}) {
+                              {"{\"specularFactor\":[1,1]}", "specularFactor is not 3 numbers"},
+                              {"{\"specularGlossinessTexture\":{\"index\":-1}}", "refers to texture -1"}}) {
         const std::string e = load_error(write("sg_bad", json));
         EXPECT_NE(e.find(says), std::string::npos) << json << ": " << e;
     }
