@@ -164,13 +164,14 @@ void run_import(const ImportOptions& o) {
                 filled += imported.not_sky[size_t(j) * o.resolution + i];
             }
     // How the values were taken: the file's pixels decide (--encoding auto), so say what was decided.
+    std::string why = " (--encoding)";
+    if (o.encoding == "auto")
+        why = imported.pixel_type.empty() ? ""
+                                          : " (" + imported.pixel_type + " pixels; --encoding " +
+                                                (imported.display_referred ? "linear" : "srgb") + " if they are not)";
     std::printf("values: %s%s\n",
                 imported.display_referred ? "sRGB-encoded, decoded to linear" : "linear, taken as they are",
-                o.encoding != "auto"          ? " (--encoding)"
-                : imported.pixel_type.empty() ? ""
-                                              : (" (" + imported.pixel_type + " pixels; --encoding " +
-                                                 (imported.display_referred ? "linear" : "srgb") + " if they are not)")
-                                                    .c_str());
+                why.c_str());
     if (imported.display_referred)
         std::printf("saturation: %s\n",
                     imported.clip_level < 1.0

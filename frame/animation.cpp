@@ -229,9 +229,10 @@ AnimationReport render_animation(const AnimationSettings& o) {
     }
     if (o.force && !o.quiet) std::fprintf(stderr, "--force: rendering every frame of %d-%d\n", first, last);
 
-    Accel accel(scene->scene);
     // Playing the scene's animation: each frame's pose loaded apart (frames rendered on a farm
-    // pose the same as in one run).
+    // pose the same as in one run), so the scene as loaded above needs no BVH of its own then.
+    std::optional<Accel> accel;
+    if (!o.play_scene_animation) accel.emplace(scene->scene);
     const double animation_start = std::max(0.0, o.scene.animation_time);
     const float aspect = float(width) / height;
     const std::string timings = store.file(timings_name);
@@ -270,7 +271,7 @@ AnimationReport render_animation(const AnimationSettings& o) {
             posed = load_scene(spec, aspect, false);
             posed_accel = std::make_unique<Accel>(posed->scene);
         }
-        PathIntegrator integrator(posed_accel ? *posed_accel : accel, light, render);
+        PathIntegrator integrator(posed_accel ? *posed_accel : *accel, light, render);
         RenderResult result = integrator.render(posed ? posed->camera : scene->camera);
 
         Image& image = result.color;

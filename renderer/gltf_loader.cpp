@@ -1250,23 +1250,31 @@ class GltfLoader {
         return x;
     }
 
-    // An extension's RGB factor: 3 numbers in [0, upper], or `fallback` when absent.
-    Color extension_colour(const tg::Value& ext, const char* key, const Color& fallback, const std::string& what,
-                           const char* extension_name, double upper = 1) {
-        const tg::Value* c = member(ext, key);
-        if (!c) return fallback;
-        if (!c->IsArray() || c->ArrayLen() != 3) fail(what + ": " + extension_name + " " + key + " is not 3 numbers");
-        Color colour;
-        for (int k = 0; k < 3; ++k) {
-            const tg::Value& e = c->Get(k);
+    // An extension's array of n numbers in [0, upper] (present: the caller checked), refused naming it.
+    std::vector<float> extension_numbers(const tg::Value& array, int n, const char* key, const std::string& what,
+                                         const char* extension_name, double upper) {
+        if (!array.IsArray() || int(array.ArrayLen()) != n)
+            fail(what + ": " + extension_name + " " + key + " is not " + std::to_string(n) + " numbers");
+        std::vector<float> values(static_cast<size_t>(n));
+        for (int k = 0; k < n; ++k) {
+            const tg::Value& e = array.Get(k);
             const double v = e.IsNumber() ? e.GetNumberAsDouble() : std::nan("");
             if (!(v >= 0 && v <= upper))
                 fail(what + ": " + extension_name + " " + key + " " +
                      (e.IsNumber() ? number_text(v) : std::string("holds a non-number")) + " is outside [0, " +
                      number_text(upper) + "]");
-            colour[k] = float(v);
+            values[size_t(k)] = float(v);
         }
-        return colour;
+        return values;
+    }
+
+    // An extension's RGB factor: 3 numbers in [0, upper], or `fallback` when absent.
+    Color extension_colour(const tg::Value& ext, const char* key, const Color& fallback, const std::string& what,
+                           const char* extension_name, double upper = 1) {
+        const tg::Value* c = member(ext, key);
+        if (!c) return fallback;
+        const std::vector<float> v = extension_numbers(*c, 3, key, what, extension_name, upper);
+        return Color(v[0], v[1], v[2]);
     }
 
     // A textureInfo object inside an extension ({"index", "texCoord", "extensions"}) into a slot.
@@ -1307,22 +1315,11 @@ class GltfLoader {
     // 1 - glossiness (glossinessFactor times the texture's linear A).
     void read_specular_glossiness(const tg::Value& ext, Material* out, const std::string& what) {
         const char* name = "KHR_materials_pbrSpecularGlossiness";
-        Color diffuse = Color::Ones();
-        float alpha = 1.0f;
+        out->base_color = Color::Ones(), out->base_alpha = 1.0f;
         if (const tg::Value* d = member(ext, "diffuseFactor")) {
-            if (!d->IsArray() || d->ArrayLen() != 4)
-                fail(what + ": " + name + " diffuseFactor is not 4 numbers (RGBA)");
-            for (int k = 0; k < 4; ++k) {
-                const tg::Value& e = d->Get(k);
-                const double v = e.IsNumber() ? e.GetNumberAsDouble() : std::nan("");
-                if (!(v >= 0 && v <= 1))
-                    fail(what + ": " + name + " diffuseFactor " +
-                         (e.IsNumber() ? number_text(v) : std::string("holds a non-number")) + " is outside [0, 1]");
-                if (k < 3) diffuse[k] = float(v);
-                else alpha = float(v);
-            }
+            const std::vector<float> rgba = extension_numbers(*d, 4, "diffuseFactor", what, name, 1);
+            out->base_color = Color(rgba[0], rgba[1], rgba[2]), out->base_alpha = rgba[3];
         }
-        out->base_color = diffuse, out->base_alpha = alpha;
         out->base_color_texture = TextureSlot();
         read_extension_slot(ext, "diffuseTexture", &out->base_color_texture, what, true);
         out->metallic = 0;
@@ -1340,8 +1337,8 @@ class GltfLoader {
         const char* name = "KHR_materials_anisotropy";
         out->anisotropy_strength = float(extension_factor(ext, "anisotropyStrength", 0.0, what, name));
         if (const tg::Value* r = member(ext, "anisotropyRotation")) {
-            const double x = r->IsNumber() ? r->GetNumberAsDouble() : std::nan("");
             if (!r->IsNumber()) fail(what + ": " + name + " anisotropyRotation is not a number");
+            const double x = r->GetNumberAsDouble();
             if (!std::isfinite(x) || std::abs(x) > 1e6)
                 fail(what + ": " + name + " anisotropyRotation " + number_text(x) + " is not an angle in radians");
             out->anisotropy_rotation = float(std::remainder(x, 2 * kPiD));

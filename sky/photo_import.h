@@ -152,8 +152,9 @@ struct ImportedPhoto {
 };
 
 // Whole pipeline from a file, the photograph first turned as its EXIF orientation says viewers show
-// it (util/image.h apply_orientation: --center, --north and masks refer to that view). Throws dynsky::Error naming the file on unreadable input, NaN/Inf
-// pixels, no detectable sky circle, a mask of the wrong size, ...
+// it (util/image.h apply_orientation: --center, --north and masks refer to that view). Throws
+// dynsky::Error naming the file on unreadable input, NaN/Inf pixels, no detectable sky circle, a
+// mask of the wrong size, ...
 ImportedPhoto import_photo(const std::string& path, const PhotoImportParams& params);
 
 // The smallest photograph side import_photo_image and find_sky_circle accept, pixels.

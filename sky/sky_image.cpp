@@ -144,8 +144,8 @@ SkyImage sky_from_image(const Image& image, const std::string& name) {
 }
 
 void refuse_jpeg_as_radiance(const std::string& path) {
-    // A JPEG is 8-bit display values whatever its name: refused before any decoder reads it (which
-    // also keeps OpenImageIO 2.4's EXIF reader, which reads past a corrupt APP1 segment, away).
+    // A JPEG is 8-bit display values whatever its name: refused by its first bytes, before it is
+    // decoded only to be refused by its pixel type.
     if (has_jpeg_signature(path))
         throw_file_error(path,
                          "is a JPEG file of 8-bit pixels: integer pixels are display-encoded values, not linear "
