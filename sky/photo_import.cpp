@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/xphoto.hpp>
 #include <opencv2/photo.hpp>
@@ -415,6 +416,107 @@ bool PhotoGeometry::unproject(double x, double y, Vec3d* direction) const {
     return true;
 }
 
+namespace {
+
+// A fisheye's lens circle on a black surround (the Mobotix, most all-sky cameras): the outline of
+// everything lit, fitted with a circle that ignores what is not the rim. None when the corners are
+// not black or no circle fits well.
+std::optional<SkyCircle> find_lens_circle_on_black(const cv::Mat& level, double r_min, double r_max) {
+    double p99 = quantile(std::vector<float>(level.begin<float>(), level.end<float>()), 0.99);
+    int cw = std::max(1, level.cols / 12), ch = std::max(1, level.rows / 12);
+    double corner = 0;
+    for (cv::Rect r : {cv::Rect(0, 0, cw, ch), cv::Rect(level.cols - cw, 0, cw, ch),
+                       cv::Rect(0, level.rows - ch, cw, ch), cv::Rect(level.cols - cw, level.rows - ch, cw, ch)}) {
+        cv::Mat patch = level(r).clone();
+        corner = std::max(corner, double(quantile(std::vector<float>(patch.begin<float>(), patch.end<float>()), 0.75)));
+    }
+    if (!(p99 >= 8 && corner <= std::max(2.0, 0.03 * p99))) return std::nullopt;
+
+    // Any light at all is inside the lens: the dark ground and rooftops at its rim (green at 1 of
+    // 255, red and blue 0, on a morning photograph) count, or the outline shrinks to the sky's and
+    // moves from frame to frame with the light (the Mobotix morning: radius 428-449 px against 486
+    // at noon). `level` is each pixel's brightest channel; an opening drops JPEG's stray single
+    // levels in the surround, and pieces under 16 pixels are noise.
+    cv::Mat lit = level > corner + 0.5, labels, stats, centroids;
+    cv::morphologyEx(lit, lit, cv::MORPH_OPEN, cv::getStructuringElement(cv::MORPH_CROSS, cv::Size(3, 3)));
+    int n = cv::connectedComponentsWithStats(lit, labels, stats, centroids, 8, CV_32S);
+    int largest = 0;
+    for (int i = 1; i < n; ++i)
+        if (largest == 0 || stats.at<int>(i, cv::CC_STAT_AREA) > stats.at<int>(largest, cv::CC_STAT_AREA)) largest = i;
+    if (largest == 0 || stats.at<int>(largest, cv::CC_STAT_AREA) < 64) return std::nullopt;
+    std::vector<char> kept(n, 0);
+    for (int i = 1; i < n; ++i) kept[i] = stats.at<int>(i, cv::CC_STAT_AREA) >= 16;
+
+    // The rim: per direction from the centre, the farthest lit pixel. Burnt-in captions beyond the
+    // circle, dark objects denting it and the frame cutting it (a lens circle taller than the
+    // sensor) give directions that are not the rim: the fit leaves them out (below).
+    double cx = centroids.at<double>(largest, 0), cy = centroids.at<double>(largest, 1);
+    double r = std::sqrt(stats.at<int>(largest, cv::CC_STAT_AREA) / kPiD);
+    constexpr int kDirections = 720;
+    for (int pass = 0; pass < 2; ++pass) {
+        std::vector<double> far(kDirections, -1.0);
+        std::vector<cv::Point2d> far_px(kDirections);
+        for (int y = 0; y < lit.rows; ++y)
+            for (int x = 0; x < lit.cols; ++x) {
+                if (!kept[labels.at<int>(y, x)]) continue;
+                // Only the outline can be farthest in its direction.
+                if (x > 0 && y > 0 && x + 1 < lit.cols && y + 1 < lit.rows && lit.at<unsigned char>(y, x - 1) &&
+                    lit.at<unsigned char>(y, x + 1) && lit.at<unsigned char>(y - 1, x) &&
+                    lit.at<unsigned char>(y + 1, x))
+                    continue;
+                double dx = x - cx, dy = y - cy, d = std::hypot(dx, dy);
+                int k = std::clamp(int((std::atan2(dy, dx) + kPiD) / (2 * kPiD) * kDirections), 0, kDirections - 1);
+                if (d > far[k]) far[k] = d, far_px[k] = cv::Point2d(x, y);
+            }
+        std::vector<cv::Point2d> rim;
+        for (int k = 0; k < kDirections; ++k) {
+            const cv::Point2d& p = far_px[k];
+            if (far[k] < 0 || p.x < 1 || p.y < 1 || p.x > lit.cols - 2 || p.y > lit.rows - 2) continue;
+            rim.push_back(p);
+        }
+        if (rim.size() < kDirections / 4) return std::nullopt;
+        // Least squares on x^2 + y^2 + D x + E y + F = 0, refitted on the points within a robust
+        // band of the last fit (median residual +- 3 MAD, at least 1.5 px): outliers go both ways.
+        std::vector<char> in(rim.size(), 1);
+        double rms = 0;
+        size_t inliers = rim.size();
+        for (int iter = 0; iter < 6; ++iter) {
+            Eigen::MatrixXd a(inliers, 3);
+            Eigen::VectorXd b(inliers);
+            for (size_t i = 0, row = 0; i < rim.size(); ++i)
+                if (in[i]) {
+                    a(row, 0) = rim[i].x, a(row, 1) = rim[i].y, a(row, 2) = 1;
+                    b(row++) = -(rim[i].x * rim[i].x + rim[i].y * rim[i].y);
+                }
+            Eigen::Vector3d d = a.colPivHouseholderQr().solve(b);
+            cx = -d(0) / 2, cy = -d(1) / 2;
+            double r2 = cx * cx + cy * cy - d(2);
+            if (!(r2 > 0)) return std::nullopt;
+            r = std::sqrt(r2);
+            std::vector<double> res(rim.size());
+            for (size_t i = 0; i < rim.size(); ++i) res[i] = std::hypot(rim[i].x - cx, rim[i].y - cy) - r;
+            std::vector<double> sorted = res;
+            double med = quantile(sorted, 0.5);
+            for (double& v : sorted) v = std::abs(v - med);
+            double band = std::max(1.5, 3 * 1.4826 * quantile(sorted, 0.5));
+            inliers = 0, rms = 0;
+            for (size_t i = 0; i < rim.size(); ++i) {
+                in[i] = std::abs(res[i] - med) <= band;
+                if (in[i]) ++inliers, rms += res[i] * res[i];
+            }
+            if (inliers < 5) return std::nullopt;
+            rms = std::sqrt(rms / inliers);
+        }
+        // A lens circle: most directions on one circle, closely. A lit shape that is not one
+        // (a letterboxed picture, a lamp) fails here and goes to the Hough search.
+        if (inliers * 2 < rim.size() || rms > 0.01 * r + 0.5) return std::nullopt;
+    }
+    if (r < r_min || r > r_max) return std::nullopt;
+    return SkyCircle{cx, cy, r};
+}
+
+}  // namespace
+
 SkyCircle find_sky_circle(const Image& photo, const std::string& name, double min_fraction, double max_fraction) {
     if (!(min_fraction > 0 && max_fraction > min_fraction))
         throw Error("sky circle search: the radius range must satisfy 0 < min < max (got " + fmt(min_fraction, 3) +
@@ -429,49 +531,19 @@ SkyCircle find_sky_circle(const Image& photo, const std::string& name, double mi
                                    "at most 8 times the other); give --center and --radius");
     cv::Mat grey = image_to_grey8(photo, true);
     int shorter_side = std::min(photo.width, photo.height);
-    {
-        // Lens circle on a black surround (fisheye cameras such as the Mobotix): the lit region's
-        // outline, fitted with an ellipse (robust to the dark objects that dent it at the rim).
-        double p99 = quantile(std::vector<unsigned char>(grey.begin<unsigned char>(), grey.end<unsigned char>()), 0.99);
-        int cw = std::max(1, grey.cols / 12), ch = std::max(1, grey.rows / 12);
-        double corner = 0;
-        for (cv::Rect r : {cv::Rect(0, 0, cw, ch), cv::Rect(grey.cols - cw, 0, cw, ch),
-                           cv::Rect(0, grey.rows - ch, cw, ch), cv::Rect(grey.cols - cw, grey.rows - ch, cw, ch)}) {
-            cv::Mat patch = grey(r).clone();
-            std::vector<unsigned char> pv(patch.begin<unsigned char>(), patch.end<unsigned char>());
-            std::nth_element(pv.begin(), pv.begin() + pv.size() * 3 / 4, pv.end());
-            corner = std::max(corner, double(pv[pv.size() * 3 / 4]));
+    // The lit region's outline is the lens circle itself, so its radius may lie further out of the
+    // Hough search's range (which guards against edges inside the sky): half its smallest to 1.4
+    // times its largest radius.
+    cv::Mat level(photo.height, photo.width, CV_32F);
+    for (int y = 0; y < photo.height; ++y)
+        for (int x = 0; x < photo.width; ++x) {
+            float brightest = 0;
+            for (int c = 0; c < std::min(photo.channels, 3); ++c) brightest = std::max(brightest, photo.at(x, y, c));
+            level.at<float>(y, x) = 255.0f * brightest;
         }
-        if (p99 >= 8 && corner <= std::max(2.0, 0.03 * p99)) {
-            cv::Mat lit = grey > corner + 2;
-            cv::morphologyEx(lit, lit, cv::MORPH_OPEN, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(7, 7)));
-            std::vector<std::vector<cv::Point>> contours;
-            cv::findContours(lit, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
-            size_t best = 0;
-            double best_area = 0;
-            for (size_t i = 0; i < contours.size(); ++i) {
-                double a = cv::contourArea(contours[i]);
-                if (a > best_area) best_area = a, best = i;
-            }
-            if (contours.size() && contours[best].size() >= 5) {
-                // The convex hull bridges the dents; resampled evenly so fitEllipse weighs the rim
-                // uniformly rather than by how many contour points each stretch happens to have.
-                std::vector<cv::Point> hull;
-                cv::convexHull(contours[best], hull);
-                std::vector<cv::Point2f> rim;
-                for (size_t i = 0; i < hull.size(); ++i) {
-                    cv::Point2f p = hull[i], q = hull[(i + 1) % hull.size()];
-                    int steps = std::max(1, int(cv::norm(q - p)));
-                    for (int t = 0; t < steps; ++t) rim.push_back(p + (q - p) * (float(t) / steps));
-                }
-                cv::RotatedRect e = cv::fitEllipse(rim);
-                double r = 0.25 * (e.size.width + e.size.height);
-                double aspect = std::min(e.size.width, e.size.height) / std::max(e.size.width, e.size.height);
-                if (aspect > 0.9 && r >= min_fraction * shorter_side && r <= max_fraction * shorter_side)
-                    return SkyCircle{e.center.x, e.center.y, r};
-            }
-        }
-    }
+    if (std::optional<SkyCircle> lens = find_lens_circle_on_black(level, 0.5 * min_fraction * shorter_side,
+                                                                  1.4 * max_fraction * shorter_side))
+        return *lens;
     double scale = std::min(1.0, 400.0 / std::max(grey.cols, grey.rows));
     cv::Mat small;
     cv::resize(grey, small, cv::Size(), scale, scale, cv::INTER_AREA);

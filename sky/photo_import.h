@@ -172,8 +172,10 @@ ImportedPhoto import_photo_image(const Image& photo, const std::string& name, co
                                  const Image* extra_not_sky = nullptr);
 
 // Finds the sky circle, radius in [min_fraction, max_fraction] of the photo's shorter side.
-// A lens circle on a black surround (fisheye cameras): the lit region's outline (threshold,
-// largest contour, convex hull, cv::fitEllipse). Otherwise the strongest circular edge
+// A lens circle on a black surround (fisheye cameras): the outline of every pixel with any light
+// (its farthest lit pixel in each of 720 directions), fitted with a circle that leaves out the
+// directions off it (captions, dark rooftops, the frame's edge where it cuts the circle); its radius
+// may then lie in [min_fraction / 2, 1.4 max_fraction]. Otherwise the strongest circular edge
 // (cv::HoughCircles on a contrast-stretched, blurred copy about 400 px wide). `photo` holds
 // display-encoded values in [0, 1]. Throws dynsky::Error naming `name` if no circle is found.
 SkyCircle find_sky_circle(const Image& photo, const std::string& name, double min_fraction = 0.30,

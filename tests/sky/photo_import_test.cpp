@@ -526,6 +526,63 @@ TEST(SkyCircle, FoundOnSyntheticPhotos) {
     }
 }
 
+TEST(SkyCircle, LensCircleOnBlackFoundWholeWhateverTheLightOrFraming) {
+    // What cameras not seen before give a circle finder, on a black surround: the outer tenth of the
+    // lens circle holding only dark ground (green at 1 of 255, red and blue 0, as the Mobotix at
+    // dawn), a burnt-in caption beside the circle, the circle cut by the frame at top and bottom,
+    // and a circle small in its frame. The circle is the lens's in each, not the bright sky's
+    // (found 0.88 of the radius and 10-20 px off centre before).
+    struct Case {
+        int width, height;
+        double cx, cy, radius;
+        bool dark_ground, caption;
+    };
+    for (const Case& k : {Case{640, 480, 327.3, 240.6, 230.0, true, true},
+                          Case{640, 400, 321.7, 198.2, 232.0, true, false},  // cut at top and bottom
+                          Case{800, 640, 331.0, 300.5, 150.0, false, true},  // 0.23 of the shorter side
+                          Case{640, 480, 320.4, 241.1, 236.0, false, false}}) {
+        Image photo(k.width, k.height, 3);
+        for (int y = 0; y < k.height; ++y)
+            for (int x = 0; x < k.width; ++x) {
+                double r = std::hypot(x - k.cx, y - k.cy) / k.radius;
+                Color c = Color::Zero();
+                if (r <= 0.88 || (r <= 1.0 && !k.dark_ground))
+                    c = Color(0.35f, 0.45f, 0.55f) + 0.1f * float(std::sin(x * 0.05) * std::cos(y * 0.07));
+                else if (r <= 1.0) c = Color(0.0f, 1.0f / 255, 0.0f);
+                for (int ch = 0; ch < 3; ++ch) photo.at(x, y, ch) = c[ch];
+            }
+        if (k.caption)  // white text-like strokes at the top right, touching the circle's rim
+            for (int y = 2; y < 14; ++y)
+                for (int x = int(k.cx + 0.35 * k.radius); x < k.width - 2; ++x)
+                    if ((x / 3) % 3 != 0 && y % 4 != 0)
+                        for (int ch = 0; ch < 3; ++ch) photo.at(x, y, ch) = 1.0f;
+        SkyCircle c = find_sky_circle(photo, "synthetic");
+        EXPECT_NEAR(c.center_x, k.cx, 1.5) << k.width << "x" << k.height << " r " << k.radius;
+        EXPECT_NEAR(c.center_y, k.cy, 1.5) << k.width << "x" << k.height << " r " << k.radius;
+        EXPECT_NEAR(c.radius, k.radius, 2.0) << k.width << "x" << k.height << " r " << k.radius;
+    }
+}
+
+TEST(SkyCircle, SameLensCircleFromDawnToNoonOnTheMobotix) {
+    DYNSKY_REQUIRE_SHARED();
+    // A sequence imported photo by photo must not wobble: the circle found on each frame of the
+    // Mobotix morning, from its darkest usable frame to noon, as found with no preset.
+    std::vector<SkyCircle> found;
+    for (const char* t : {"06_40", "07_20", "08_00", "09_40", "12_00", "13_40"}) {
+        std::string path = test::shared_path(std::string("skies/mobotix_sophia_20200812_morning/images/2020-08-12_") +
+                                             t + ".jpg");
+        found.push_back(find_sky_circle(read_image(path), path));
+    }
+    const SkyCircle preset = *camera_preset("mobotix").params.circle;
+    for (const SkyCircle& c : found) {
+        EXPECT_NEAR(c.center_x, preset.center_x, 1.5);
+        EXPECT_NEAR(c.center_y, preset.center_y, 1.5);
+        // 428-449 px before on the morning frames. The preset's radius was measured where the rim
+        // is brighter than 2 of 255; any light at all reaches up to 1 % further on bright frames.
+        EXPECT_NEAR(c.radius, preset.radius, 0.0125 * preset.radius);
+    }
+}
+
 TEST(PhotoImport, RealSequencesImportWithTheSkyCircleWhereExpected) {
     DYNSKY_REQUIRE_SHARED();
     // TSI: the circle found on the photo vs the one fitted to the TSI's own sun marker.
@@ -544,7 +601,7 @@ TEST(PhotoImport, RealSequencesImportWithTheSkyCircleWhereExpected) {
                                        mp.params.max_radius_fraction);
     EXPECT_NEAR(mfound.center_x, mp.params.circle->center_x, 4.0);
     EXPECT_NEAR(mfound.center_y, mp.params.circle->center_y, 4.0);
-    EXPECT_NEAR(mfound.radius, mp.params.circle->radius, 4.0);
+    EXPECT_NEAR(mfound.radius, mp.params.circle->radius, 5.0);  // any light: up to 1 % beyond the preset's
 
     // Whole imports with the presets and their masks.
     for (auto [path, preset] : {std::pair{tsi, std::string("arm-tsi")}, std::pair{mob, std::string("mobotix")}}) {
