@@ -19,12 +19,15 @@
 #include "util/color.h"
 #include "util/error.h"
 #include "util/image.h"
+#include "util/progress.h"
 
 namespace dynsky::cli {
 
 namespace {
 
 struct ImportOptions {
+    std::vector<std::string> photos;  // as given: one photograph, several, or a folder of them
+    std::string circle_origin;        // how the circle given came about ("" : "given")
     std::string photo, preset, center, lens, mask, mask_layout = "photo", encoding = "auto";
     double radius = 0, north = 0, tilt = 0, tilt_azimuth = 0;
     bool mirror = false, keep_colours = false, auto_circle = false, no_preset_mask = false, detect = false,
@@ -54,7 +57,9 @@ SkyCircle parse_center(const std::string& text, double radius) {
     return SkyCircle{x, y, radius};
 }
 
-void run_import(const ImportOptions& o) {
+// One photograph into one sky (o.photo, o.out, o.preview, o.filled_mask); `verbose`: the lines
+// saying what was found and done (a sequence's import says it once for all).
+void import_one(const ImportOptions& o, bool verbose) {
     // Check everything cheap first, so a bad run writes nothing.
     check_extension("--out", o.out, ".exr");
     if (!o.preview.empty()) check_extension("--preview", o.preview, ".png");
@@ -124,7 +129,8 @@ void run_import(const ImportOptions& o) {
         const PhotoTime found = photo_time(o.photo, utc_offset);
         time = found.iso;
         if (!time.empty() && !found.zone_in_file && o.preset.empty() && !o.offset_opt->count()) {
-            std::printf(
+            if (verbose)
+                std::printf(
                 "note: %s: its %s gives a time without a zone (%s): give --utc-offset HOURS (or --time) "
                 "to use it\n",
                 o.photo.c_str(), found.source.c_str(), time.substr(0, 19).c_str());
@@ -143,14 +149,16 @@ void run_import(const ImportOptions& o) {
     }
 
     ImportedPhoto imported = import_photo(o.photo, params);
-    if (imported.exif_orientation != 1)
+    if (imported.exif_orientation != 1 && verbose)
         std::printf(
             "EXIF orientation %d: the photograph is turned as viewers show it before anything else "
             "(--center, --north and masks refer to that view)\n",
             imported.exif_orientation);
     const SkyCircle& c = imported.geometry.circle;
-    std::printf("sky circle: centre (%.1f, %.1f) px, radius %.1f px (%s); lens %s, north %.1f deg, %s%s\n", c.center_x,
-                c.center_y, c.radius, imported.circle_detected ? "found" : "given",
+    if (verbose)
+        std::printf("sky circle: centre (%.1f, %.1f) px, radius %.1f px (%s); lens %s, north %.1f deg, %s%s\n", c.center_x,
+                c.center_y, c.radius,
+                    imported.circle_detected ? "found" : o.circle_origin.empty() ? "given" : o.circle_origin.c_str(),
                 lens_law_name(imported.geometry.lens), imported.geometry.north_deg,
                 imported.geometry.mirrored ? "mirrored" : "not mirrored",
                 imported.geometry.tilt_deg != 0
@@ -169,16 +177,18 @@ void run_import(const ImportOptions& o) {
         why = imported.pixel_type.empty() ? ""
                                           : " (" + imported.pixel_type + " pixels; --encoding " +
                                                 (imported.display_referred ? "linear" : "srgb") + " if they are not)";
-    std::printf("values: %s%s\n",
+    if (verbose)
+        std::printf("values: %s%s\n",
                 imported.display_referred ? "sRGB-encoded, decoded to linear" : "linear, taken as they are",
                 why.c_str());
-    if (imported.display_referred)
+    if (imported.display_referred && verbose)
         std::printf("saturation: %s\n",
                     imported.clip_level < 1.0
                         ? ("clipped at encoded level " + std::to_string(imported.clip_level)).c_str()
                         : "no clipping plateau found");
     if (obstructions.empty() && !params.mask_path.empty()) obstructions = "mask " + params.mask_path;
-    std::printf("not-sky pixels filled: %.1f%% of the disc%s%s\n", disc ? 100.0 * filled / disc : 0.0,
+    if (verbose)
+        std::printf("not-sky pixels filled: %.1f%% of the disc%s%s\n", disc ? 100.0 * filled / disc : 0.0,
                 obstructions.empty() ? "" : (" (" + obstructions + ")").c_str(),
                 params.inpaint ? "" : " (left black: --no-inpaint)");
     if (!o.filled_mask.empty()) {
@@ -193,7 +203,7 @@ void run_import(const ImportOptions& o) {
     std::string unit = "relative linear units (decoded photo values)";
     if (calibrate) {
         if (!imported.display_referred) {
-            std::printf("HDR input: kept at its own scale (no calibration)\n");
+            if (verbose) std::printf("HDR input: kept at its own scale (no calibration)\n");
         } else {
             HdrCalibrationParams hp;
             hp.time = utc;
@@ -204,21 +214,124 @@ void run_import(const ImportOptions& o) {
             hp.white_balance = !o.keep_colours;
             HdrCalibrationReport report;
             sky = recover_hdr(imported, hp, &report);
-            std::printf("time %s; %s\n", format_utc_time(utc).c_str(), report.summary().c_str());
+            if (verbose) std::printf("time %s; %s\n", format_utc_time(utc).c_str(), report.summary().c_str());
             if (std::string w = report.sun_offset_warning(); !w.empty())
                 std::fprintf(stderr, "dynsky: warning: %s: %s\n", o.photo.c_str(), w.c_str());
             unit = "W m^-2 sr^-1 (calibrated against the clear-sky model)";
         }
     } else {
-        std::printf("HDR: none (give --time with --lat/--lon or a --preset for calibrated radiance)\n");
+        if (verbose) std::printf("HDR: none (give --time with --lat/--lon or a --preset for calibrated radiance)\n");
     }
     std::ostringstream source;
     source << sky.source;
     if (!time.empty()) source << " time=" << time;
     sky.source = source.str();
     save_sky(o.out, sky);
-    std::printf("wrote %s (%dx%d fisheye, %s)\n", o.out.c_str(), o.resolution, o.resolution, unit.c_str());
-    if (!o.preview.empty()) write_preview(o.preview, sky_to_image(sky));
+    if (verbose) std::printf("wrote %s (%dx%d fisheye, %s)\n", o.out.c_str(), o.resolution, o.resolution, unit.c_str());
+    if (!o.preview.empty()) write_preview(o.preview, sky_to_image(sky), verbose);
+}
+
+// The image files of a folder, in name order (a sequence's frames are named by their time).
+std::vector<std::string> photos_in_folder(const std::string& folder) {
+    std::vector<std::string> out;
+    for (const auto& e : std::filesystem::directory_iterator(folder)) {
+        const std::string path = e.path().string(), ext = file_extension(path);
+        if (!e.is_regular_file() || (path.size() >= 11 && path.compare(path.size() - 11, 11, ".filled.png") == 0))
+            continue;
+        for (const char* known : {".jpg", ".jpeg", ".png", ".tif", ".tiff", ".exr", ".hdr", ".heic", ".heif", ".webp"})
+            if (ext == known) out.push_back(path);
+    }
+    std::sort(out.begin(), out.end());
+    if (out.empty())
+        throw_file_error(folder, "no photographs in this folder (.jpg, .jpeg, .png, .tif, .tiff, .exr, .hdr, .heic, .webp)");
+    return out;
+}
+
+void run_import(const ImportOptions& o) {
+    namespace fs = std::filesystem;
+    const bool sequence = o.photos.size() > 1 || fs::is_directory(o.photos.front());
+    if (!sequence) {
+        ImportOptions one = o;
+        one.photo = o.photos.front();
+        import_one(one, true);
+        return;
+    }
+    // A sequence: one sky per photograph in the folder -o, under the same sky circle, so frames
+    // imported one by one do not wobble against each other (sky/photo_import.h
+    // find_sequence_sky_circle). Each sky's filled mask and preview lie beside it, named as
+    // `sky evaluate --photos` and people look for them.
+    std::vector<std::string> photos;
+    for (const std::string& p : o.photos) {
+        if (fs::is_directory(p)) {
+            if (o.photos.size() > 1)
+                throw Error(p + ": a folder among several photographs: give one folder, or the photographs");
+            photos = photos_in_folder(p);
+        } else {
+            photos.push_back(p);
+        }
+    }
+    if (file_extension(o.out) == ".exr")
+        throw Error("-o " + o.out + ": with several photographs -o is the folder their skies go to (STEM.exr each)");
+    if (!o.preview.empty() || !o.filled_mask.empty())
+        throw Error(std::string(o.preview.empty() ? "--filled-mask" : "--preview") +
+                    ": with several photographs each sky's preview and filled mask are written beside it "
+                    "(STEM.png, STEM.filled.png)");
+    std::vector<std::string> outputs;
+    for (const std::string& p : photos) {
+        const std::string stem = fs::path(p).stem().string();
+        outputs.push_back((fs::path(o.out) / (stem + ".exr")).string());
+    }
+    for (size_t i = 1; i < photos.size(); ++i)
+        for (size_t j = 0; j < i; ++j)
+            if (outputs[i] == outputs[j])
+                throw Error(photos[i] + " and " + photos[j] + " would both become " + outputs[i] +
+                            " (the same name): rename one");
+    check_outputs_are_not_inputs(outputs, photos);
+    std::error_code ec;
+    fs::create_directories(o.out, ec);
+    if (ec || !fs::is_directory(o.out)) throw_file_error(o.out, "cannot create this output folder: " + ec.message());
+
+    ImportOptions each = o;
+    if (o.center.empty() && (o.preset.empty() || o.auto_circle || !camera_preset(o.preset).params.circle)) {
+        PhotoImportParams search = o.preset.empty() ? PhotoImportParams{} : camera_preset(o.preset).params;
+        search.encoding = o.encoding;
+        const SequenceSkyCircle found = find_sequence_sky_circle(photos, search);
+        const SkyCircle& c = found.circle;
+        std::printf(
+            "sky circle: centre (%.1f, %.1f) px, radius %.1f px, the median of %d of %d photographs spread over the "
+            "sequence (each within %.1f px of centre, %.1f px of radius); used for every photograph\n",
+            c.center_x, c.center_y, c.radius, found.found, found.tried, found.centre_spread_px, found.radius_spread_px);
+        for (const std::string& e : found.not_found) std::fprintf(stderr, "dynsky: warning: %s\n", e.c_str());
+        char centre[64];
+        std::snprintf(centre, sizeof centre, "%.3f,%.3f", c.center_x, c.center_y);
+        each.center = centre;
+        each.radius = c.radius;
+        each.auto_circle = false;
+        each.circle_origin = "the sequence's";
+    }
+    std::vector<std::string> failed;
+    ProgressBar progress((long long)photos.size(), "importing " + std::to_string(photos.size()) + " photographs");
+    for (size_t i = 0; i < photos.size(); ++i) {
+        each.photo = photos[i];
+        each.out = outputs[i];
+        each.preview = (fs::path(o.out) / (fs::path(photos[i]).stem().string() + ".png")).string();
+        each.filled_mask = (fs::path(o.out) / (fs::path(photos[i]).stem().string() + ".filled.png")).string();
+        try {
+            // The first says what it found and did, as a single import does; the rest as it.
+            import_one(each, i == 0);
+        } catch (const Error& e) {
+            // One unreadable frame does not lose the others: reported, the run exits 1 at the end.
+            std::fprintf(stderr, "dynsky: error: %s\n", e.what());
+            failed.push_back(photos[i]);
+        }
+        progress.advance();
+    }
+    progress.finish();
+    std::printf("imported %zu of %zu photographs into %s/ (STEM.exr, STEM.png, STEM.filled.png)\n",
+                photos.size() - failed.size(), photos.size(), o.out.c_str());
+    if (!failed.empty())
+        throw Error(std::to_string(failed.size()) + " of " + std::to_string(photos.size()) +
+                    " photographs not imported (each named above), the first " + failed.front());
 }
 
 // Without its mask file, a preset's own obstruction geometry in the photo's grid (as import uses it):
@@ -318,7 +431,10 @@ void register_sky_import_commands(CLI::App& sky) {
         "non-sky pixels (masts, shadow band, arm) by inpainting, decode sRGB to linear and, given the time\n"
         "and place, calibrate to absolute radiance against the clear-sky model and restore the clipped sun.\n"
         "See docs/sky-import.md.");
-    imp->add_option("photo", io->photo, "The photograph")->required();
+    imp->add_option("photo", io->photos,
+                    "The photograph; or several, or a folder of them (one camera's sequence: one sky circle for "
+                    "all, a sky per photograph in the folder -o)")
+        ->required();
     std::string presets;
     for (const auto& n : camera_preset_names()) presets += (presets.empty() ? "" : "|") + n;
     imp->add_option("--preset", io->preset,
@@ -396,7 +512,7 @@ void register_sky_import_commands(CLI::App& sky) {
         ->check(CLI::Range(16, 16384))
         ->capture_default_str();
     add_hidden_alias(imp, "--res", &io->resolution);
-    imp->add_option("--out,-o", io->out, "Output sky, .exr")->required();
+    imp->add_option("--out,-o", io->out, "Output sky, .exr; for several photographs a folder (STEM.exr, STEM.png, STEM.filled.png each)")->required();
     imp->add_option("--preview", io->preview, "Also write a tone-mapped .png preview");
     imp->add_option("--filled-mask", io->filled_mask,
                     "Also write the pixels the import filled in (arm, band, masts; 255) as a .png of the sky's size, "

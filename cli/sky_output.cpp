@@ -15,10 +15,10 @@ void check_extension(const std::string& option, const std::string& path, const s
     if (file_extension(path) != ext) throw Error(option + " " + path + ": must name a " + ext + " file");
 }
 
-void write_preview(const std::string& path, const Image& linear) {
+void write_preview(const std::string& path, const Image& linear, bool say) {
     const float ev = exposure_median(linear);
     write_image(path, tonemap_to_display(linear, ev));
-    std::printf("preview: %s (exposure %+.2f EV)\n", path.c_str(), ev);
+    if (say) std::printf("preview: %s (exposure %+.2f EV)\n", path.c_str(), ev);
 }
 
 }  // namespace dynsky::cli

@@ -14,6 +14,6 @@ void check_extension(const std::string& option, const std::string& path, const s
 // Writes a display preview of linear radiance: exposed so the median sky pixel lands at 18% grey
 // (a clear sky is ~5-30 W m^-2 sr^-1, far above the display range), then ACES and sRGB. Prints
 // the path and the exposure.
-void write_preview(const std::string& path, const Image& linear);
+void write_preview(const std::string& path, const Image& linear, bool say = true);
 
 }  // namespace dynsky::cli

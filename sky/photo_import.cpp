@@ -800,6 +800,47 @@ ImportedPhoto import_photo(const std::string& path, const PhotoImportParams& par
     return result;
 }
 
+
+SkyCircle find_photo_sky_circle(const std::string& path, const PhotoImportParams& params) {
+    Image photo = read_radiance_image(path);
+    apply_orientation(photo);
+    check_photo_fits(photo, path, params);
+    if (is_display_encoded(photo, path, params.encoding))
+        return find_sky_circle(photo, path, params.min_radius_fraction, params.max_radius_fraction);
+    return find_sky_circle(tone_mapped_grey(to_rgb_mat(photo, path)), path, params.min_radius_fraction,
+                           params.max_radius_fraction);
+}
+
+SequenceSkyCircle find_sequence_sky_circle(const std::vector<std::string>& photos, const PhotoImportParams& params,
+                                           int max_photos) {
+    if (photos.empty()) throw Error("no photographs to find a sky circle in");
+    SequenceSkyCircle out;
+    std::vector<double> xs, ys, rs;
+    const int n = int(photos.size()), tries = std::min(n, std::max(1, max_photos));
+    for (int k = 0; k < tries; ++k) {
+        // Spread over the sequence: a dark start (dawn) or a run of overcast frames is not all it sees.
+        const std::string& path = photos[tries == 1 ? 0 : size_t(std::lround(double(k) * (n - 1) / (tries - 1)))];
+        ++out.tried;
+        try {
+            SkyCircle c = find_photo_sky_circle(path, params);
+            xs.push_back(c.center_x), ys.push_back(c.center_y), rs.push_back(c.radius);
+        } catch (const Error& e) {
+            out.not_found.push_back(e.what());
+        }
+    }
+    out.found = int(rs.size());
+    if (rs.empty())
+        throw Error("no sky circle found in any of " + std::to_string(out.tried) + " photographs of the sequence (" +
+                    out.not_found.front() + "); give its centre and radius (--center X,Y --radius R)");
+    out.circle = SkyCircle{quantile(xs, 0.5), quantile(ys, 0.5), quantile(rs, 0.5)};
+    for (size_t i = 0; i < rs.size(); ++i) {
+        out.centre_spread_px = std::max(out.centre_spread_px,
+                                        std::hypot(xs[i] - out.circle.center_x, ys[i] - out.circle.center_y));
+        out.radius_spread_px = std::max(out.radius_spread_px, std::abs(rs[i] - out.circle.radius));
+    }
+    return out;
+}
+
 namespace {
 
 ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, const PhotoImportParams& params,

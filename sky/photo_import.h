@@ -181,6 +181,23 @@ ImportedPhoto import_photo_image(const Image& photo, const std::string& name, co
 SkyCircle find_sky_circle(const Image& photo, const std::string& name, double min_fraction = 0.30,
                           double max_fraction = 0.55);
 
+// The sky circle of one photograph file as import_photo finds it (turned by its EXIF orientation,
+// HDR files tone-mapped first), with params' search range and encoding.
+SkyCircle find_photo_sky_circle(const std::string& path, const PhotoImportParams& params);
+
+// One sky circle for a sequence of one camera's photographs, so that frames imported one by one do
+// not wobble against each other: found on up to max_photos of them spread evenly over the
+// sequence, the median centre and radius. Photos where none is found are listed and skipped;
+// throws dynsky::Error when none is found in any.
+struct SequenceSkyCircle {
+    SkyCircle circle;
+    int tried = 0, found = 0;
+    double centre_spread_px = 0, radius_spread_px = 0;  // largest distance of a photo's from the median
+    std::vector<std::string> not_found;                 // the errors of the photos without one
+};
+SequenceSkyCircle find_sequence_sky_circle(const std::vector<std::string>& photos, const PhotoImportParams& params,
+                                           int max_photos = 25);
+
 // Dark, sky-blocking objects (shadow band, arm, masts) inside the circle: pixels much darker than
 // the sky's median brightness, kept in large connected pieces. Returns a photo-sized 0/1 mask.
 // A heuristic: deep cloud shadows on dark overcast can be taken for obstructions (see docs).
