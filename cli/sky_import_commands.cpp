@@ -131,9 +131,9 @@ void import_one(const ImportOptions& o, bool verbose) {
         if (!time.empty() && !found.zone_in_file && o.preset.empty() && !o.offset_opt->count()) {
             if (verbose)
                 std::printf(
-                "note: %s: its %s gives a time without a zone (%s): give --utc-offset HOURS (or --time) "
-                "to use it\n",
-                o.photo.c_str(), found.source.c_str(), time.substr(0, 19).c_str());
+                    "note: %s: its %s gives a time without a zone (%s): give --utc-offset HOURS (or --time) "
+                    "to use it\n",
+                    o.photo.c_str(), found.source.c_str(), time.substr(0, 19).c_str());
             time.clear();
         }
     }
@@ -156,14 +156,16 @@ void import_one(const ImportOptions& o, bool verbose) {
             imported.exif_orientation);
     const SkyCircle& c = imported.geometry.circle;
     if (verbose)
-        std::printf("sky circle: centre (%.1f, %.1f) px, radius %.1f px (%s); lens %s, north %.1f deg, %s%s\n", c.center_x,
-                c.center_y, c.radius,
-                    imported.circle_detected ? "found" : o.circle_origin.empty() ? "given" : o.circle_origin.c_str(),
-                lens_law_name(imported.geometry.lens), imported.geometry.north_deg,
-                imported.geometry.mirrored ? "mirrored" : "not mirrored",
-                imported.geometry.tilt_deg != 0
-                    ? (", tilt " + std::to_string(imported.geometry.tilt_deg) + " deg").c_str()
-                    : "");
+        std::printf("sky circle: centre (%.1f, %.1f) px, radius %.1f px (%s); lens %s, north %.1f deg, %s%s\n",
+                    c.center_x, c.center_y, c.radius,
+                    imported.circle_detected  ? "found"
+                    : o.circle_origin.empty() ? "given"
+                                              : o.circle_origin.c_str(),
+                    lens_law_name(imported.geometry.lens), imported.geometry.north_deg,
+                    imported.geometry.mirrored ? "mirrored" : "not mirrored",
+                    imported.geometry.tilt_deg != 0
+                        ? (", tilt " + std::to_string(imported.geometry.tilt_deg) + " deg").c_str()
+                        : "");
     long long filled = 0, disc = 0;
     for (int j = 0; j < o.resolution; ++j)
         for (int i = 0; i < o.resolution; ++i)
@@ -179,8 +181,8 @@ void import_one(const ImportOptions& o, bool verbose) {
                                                 (imported.display_referred ? "linear" : "srgb") + " if they are not)";
     if (verbose)
         std::printf("values: %s%s\n",
-                imported.display_referred ? "sRGB-encoded, decoded to linear" : "linear, taken as they are",
-                why.c_str());
+                    imported.display_referred ? "sRGB-encoded, decoded to linear" : "linear, taken as they are",
+                    why.c_str());
     if (imported.display_referred && verbose)
         std::printf("saturation: %s\n",
                     imported.clip_level < 1.0
@@ -189,8 +191,8 @@ void import_one(const ImportOptions& o, bool verbose) {
     if (obstructions.empty() && !params.mask_path.empty()) obstructions = "mask " + params.mask_path;
     if (verbose)
         std::printf("not-sky pixels filled: %.1f%% of the disc%s%s\n", disc ? 100.0 * filled / disc : 0.0,
-                obstructions.empty() ? "" : (" (" + obstructions + ")").c_str(),
-                params.inpaint ? "" : " (left black: --no-inpaint)");
+                    obstructions.empty() ? "" : (" (" + obstructions + ")").c_str(),
+                    params.inpaint ? "" : " (left black: --no-inpaint)");
     if (!o.filled_mask.empty()) {
         // 255 where the import filled the sky in (arm, band, masts, unseen), 0 elsewhere: what
         // evaluations and training leave out.
@@ -243,7 +245,8 @@ std::vector<std::string> photos_in_folder(const std::string& folder) {
     }
     std::sort(out.begin(), out.end());
     if (out.empty())
-        throw_file_error(folder, "no photographs in this folder (.jpg, .jpeg, .png, .tif, .tiff, .exr, .hdr, .heic, .webp)");
+        throw_file_error(folder,
+                         "no photographs in this folder (.jpg, .jpeg, .png, .tif, .tiff, .exr, .hdr, .heic, .webp)");
     return out;
 }
 
@@ -430,10 +433,10 @@ void register_sky_import_commands(CLI::App& sky) {
         "find or take the sky circle, undo the lens law, rotation (north), mirroring and tilt, fill the\n"
         "non-sky pixels (masts, shadow band, arm) by inpainting, decode sRGB to linear and, given the time\n"
         "and place, calibrate to absolute radiance against the clear-sky model and restore the clipped sun.\n"
-        "See docs/sky-import.md.");
+        "A sequence (several photographs or a folder) is imported under one sky circle. See docs/sky-import.md.");
     imp->add_option("photo", io->photos,
-                    "The photograph; or several, or a folder of them (one camera's sequence: one sky circle for "
-                    "all, a sky per photograph in the folder -o)")
+                    "The photograph; or several, or a folder of them (one camera's sequence: one sky\n"
+                    "circle for all, a sky per photograph in the folder -o)")
         ->required();
     std::string presets;
     for (const auto& n : camera_preset_names()) presets += (presets.empty() ? "" : "|") + n;
@@ -483,7 +486,8 @@ void register_sky_import_commands(CLI::App& sky) {
         ->check(CLI::IsMember({"texture", "smooth"}));
     imp->add_option(
         "--encoding", io->encoding,
-        "Input values: auto (default: by the file's pixels: 8- and 16-bit files are sRGB unless their header says linear, float files (EXR, HDR, PFM, float TIFF) linear), srgb, linear");
+        "Input values: auto (default: by the file's pixels: 8- and 16-bit files are sRGB unless their header\n"
+        "says linear, float files (EXR, HDR, PFM, float TIFF) linear), srgb, linear");
     imp->add_option(
            "--time", io->time,
            "When the photo was taken, ISO 8601 with a zone (2017-05-24T17:00:00Z); default: from the file name, "
@@ -512,7 +516,9 @@ void register_sky_import_commands(CLI::App& sky) {
         ->check(CLI::Range(16, 16384))
         ->capture_default_str();
     add_hidden_alias(imp, "--res", &io->resolution);
-    imp->add_option("--out,-o", io->out, "Output sky, .exr; for several photographs a folder (STEM.exr, STEM.png, STEM.filled.png each)")->required();
+    imp->add_option("--out,-o", io->out,
+                    "Output sky, .exr; for several photographs a folder (STEM.exr, STEM.png, STEM.filled.png each)")
+        ->required();
     imp->add_option("--preview", io->preview, "Also write a tone-mapped .png preview");
     imp->add_option("--filled-mask", io->filled_mask,
                     "Also write the pixels the import filled in (arm, band, masts; 255) as a .png of the sky's size, "

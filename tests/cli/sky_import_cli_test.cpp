@@ -190,6 +190,60 @@ TEST(SkyImportCli, BadInputFailsNamingTheFileAndWritesNothing) {
     fs::remove_all(dir);
 }
 
+// A camera with no preset, its sequence in a folder: one sky circle for every frame (the median of
+// those found), a sky, preview and filled mask per photograph; a damaged frame is named and the
+// others are kept (exit 1 at the end).
+TEST(SkyImportCli, SequenceFolderImportsEveryFrameUnderOneCircle) {
+    DYNSKY_REQUIRE_SHARED();
+    std::string dir = test::temp_dir("sky-import-sequence");
+    fs::create_directories(dir + "/photos");
+    // Dawn to noon: each frame's own circle differs by up to 1.5 % in radius.
+    for (const char* t : {"0720", "0800", "1200", "1340"})
+        fs::copy_file(test::shared_path(std::string("skies/mobotix_sophia_20200812_morning/images/2020-08-12_") +
+                                        std::string(t, 2) + "_" + std::string(t + 2, 2) + ".jpg"),
+                      dir + "/photos/IMG_20200812_" + t + "00.jpg");
+    std::ofstream(dir + "/photos/IMG_20200812_090000.jpg") << "not a photograph";
+    const std::string common = " --lat 43.614 --lon 7.071 --utc-offset 2 --fill smooth --sky-res 64";
+    auto r = test::run_command(exe() + " sky import " + dir + "/photos" + common + " -o " + dir + "/skies");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("IMG_20200812_090000.jpg"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("the median of 4 of 5 photographs"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("imported 4 of 5 photographs"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/skies/IMG_20200812_090000.exr"));
+    for (const char* t : {"072000", "080000", "120000", "134000"})
+        for (const char* ext : {".exr", ".png", ".filled.png"})
+            EXPECT_TRUE(fs::exists(dir + "/skies/IMG_20200812_" + t + ext)) << t << ext;
+
+    // The circle used, given to a single import of the dawn frame, gives its sky bit for bit.
+    const size_t at = r.output.find("sky circle: centre (");
+    ASSERT_NE(at, std::string::npos) << r.output;
+    double x = 0, y = 0, radius = 0;
+    ASSERT_EQ(std::sscanf(r.output.c_str() + at, "sky circle: centre (%lf, %lf) px, radius %lf", &x, &y, &radius), 3);
+    EXPECT_NEAR(x, 654.7, 1.5);  // the Mobotix's measured circle
+    EXPECT_NEAR(y, 479.4, 1.5);
+    EXPECT_NEAR(radius, 485.8, 6.0);
+    EXPECT_NE(r.output.find("used for every photograph"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("(the sequence's)"), std::string::npos) << r.output;
+    // Noon's sky from the folder is the one a single import under that circle gives.
+    char circle[96];
+    std::snprintf(circle, sizeof circle, " --center %.1f,%.1f --radius %.1f", x, y, radius);
+    auto single = test::run_command(exe() + " sky import " + dir + "/photos/IMG_20200812_120000.jpg" + common + circle +
+                                    " -o " + dir + "/single.exr");
+    ASSERT_EQ(single.exit_code, 0) << single.output;
+    SkyImage from_folder = load_sky(dir + "/skies/IMG_20200812_120000.exr"), alone = load_sky(dir + "/single.exr");
+    ASSERT_EQ(from_folder.resolution, alone.resolution);
+    double diff = 0, sum = 0;
+    for (size_t k = 0; k < alone.rgb.size(); ++k)
+        diff += std::abs(from_folder.rgb[k] - alone.rgb[k]), sum += alone.rgb[k];
+    EXPECT_LT(diff, 0.005 * sum);  // the printed circle is rounded to 0.1 px
+
+    // -o naming one sky for several photographs is refused before anything is read.
+    r = test::run_command(exe() + " sky import " + dir + "/photos" + common + " -o " + dir + "/one.exr");
+    EXPECT_NE(r.exit_code, 0);
+    EXPECT_NE(r.output.find("is the folder their skies go to"), std::string::npos) << r.output;
+    fs::remove_all(dir);
+}
+
 TEST(SkyImportCli, MaskOfAWsisegPhoto) {
     DYNSKY_REQUIRE_SHARED();
     std::string dir = test::temp_dir("sky-mask-cli");

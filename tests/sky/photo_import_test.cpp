@@ -583,6 +583,36 @@ TEST(SkyCircle, SameLensCircleFromDawnToNoonOnTheMobotix) {
     }
 }
 
+TEST(SkyCircle, SequenceTakesTheMedianOfTheCirclesFoundSpreadOverIt) {
+    // Five photos of one camera whose circles, found one by one, differ by a pixel or two, and a
+    // picture with none: the median of the four found, spread reported, the fifth named.
+    std::string dir = test::temp_dir("sequence-circle");
+    std::vector<std::string> paths;
+    const double radii[] = {150.0, 151.0, 149.0, 152.0, 0.0, 150.5};
+    for (int k = 0; k < 6; ++k) {
+        Image photo(400, 320, 3);
+        for (int y = 0; y < 320; ++y)
+            for (int x = 0; x < 400; ++x) {
+                const bool in = std::hypot(x - 201.0 - 0.5 * k, y - 160.0) <= radii[k];
+                for (int c = 0; c < 3; ++c) photo.at(x, y, c) = radii[k] == 0 ? 0.5f : in ? 0.4f + 0.1f * c : 0.0f;
+            }
+        paths.push_back(dir + "/frame_" + std::to_string(k) + ".png");
+        write_image(paths.back(), photo);
+    }
+    const SequenceSkyCircle s = find_sequence_sky_circle(paths, PhotoImportParams{});
+    EXPECT_EQ(s.tried, 6);
+    EXPECT_EQ(s.found, 5);
+    ASSERT_EQ(s.not_found.size(), 1u);
+    EXPECT_NE(s.not_found[0].find("frame_4.png"), std::string::npos) << s.not_found[0];
+    EXPECT_NEAR(s.circle.radius, 150.5, 0.6);
+    EXPECT_NEAR(s.circle.center_x, 202.0, 0.6);
+    EXPECT_NEAR(s.circle.center_y, 160.0, 0.6);
+    EXPECT_NEAR(s.radius_spread_px, 1.5, 0.6);
+    // At most max_photos of them, the first and last among them.
+    EXPECT_EQ(find_sequence_sky_circle(paths, PhotoImportParams{}, 2).tried, 2);
+    std::filesystem::remove_all(dir);
+}
+
 TEST(PhotoImport, RealSequencesImportWithTheSkyCircleWhereExpected) {
     DYNSKY_REQUIRE_SHARED();
     // TSI: the circle found on the photo vs the one fitted to the TSI's own sun marker.
