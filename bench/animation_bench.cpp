@@ -103,6 +103,43 @@ void BM_MediumInterval(benchmark::State& state) {
 }
 BENCHMARK(BM_MediumInterval)->Arg(1024)->Arg(2048)->Iterations(3)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// A played scene animation (animate --play-anim): each frame's scene as it was made before (the
+// file loaded at the frame's time: read, buffers and textures decoded) against posing one load
+// (AnimatedGltf::pose: only the nodes and what hangs on them), both with the frame's BVH. The
+// CesiumMilkTruck (an animation, a 2048 px texture) from ../shared when it is there.
+// Counter pose_over_load: the posed frame's time over the loaded one's.
+void BM_PlayedAnimationScene(benchmark::State& state) {
+    const std::string truck = std::string(DYNSKY_SOURCE_DIR) + "/../shared/scenes/CesiumMilkTruck/CesiumMilkTruck.glb";
+    if (!std::filesystem::exists(truck)) {
+        state.SkipWithError("../shared/scenes/CesiumMilkTruck not found");
+        return;
+    }
+    AnimatedGltf animated(truck);
+    double load_s = 0, pose_s = 0;
+    int frames = 0;
+    for (auto _ : state) {
+        const double t = 0.1 * (frames % 40);
+        double a = now_s();
+        {
+            Scene s = load_gltf(truck, nullptr, t);
+            Accel accel(s);
+            benchmark::DoNotOptimize(&accel);
+        }
+        double b = now_s();
+        {
+            Scene s = animated.pose(t);
+            Accel accel(s);
+            benchmark::DoNotOptimize(&accel);
+        }
+        double c = now_s();
+        load_s += b - a, pose_s += c - b, ++frames;
+    }
+    state.counters["load_ms"] = load_s / frames * 1e3;
+    state.counters["pose_ms"] = pose_s / frames * 1e3;
+    state.counters["pose_over_load"] = pose_s / load_s;
+}
+BENCHMARK(BM_PlayedAnimationScene)->Iterations(10)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 }  // namespace
 }  // namespace dynsky
 

@@ -229,10 +229,13 @@ AnimationReport render_animation(const AnimationSettings& o) {
     }
     if (o.force && !o.quiet) std::fprintf(stderr, "--force: rendering every frame of %d-%d\n", first, last);
 
-    // Playing the scene's animation: each frame's pose loaded apart (frames rendered on a farm
+    // Playing the scene's animation: each frame posed at its own time (frames rendered on a farm
     // pose the same as in one run), so the scene as loaded above needs no BVH of its own then.
     std::optional<Accel> accel;
     if (!o.play_scene_animation) accel.emplace(scene->scene);
+    // The file is read and its textures decoded once; each frame poses it (AnimatedGltf).
+    std::unique_ptr<AnimatedGltf> animated;
+    if (o.play_scene_animation && o.scene.scene != "builtin") animated = std::make_unique<AnimatedGltf>(scene->path);
     const double animation_start = std::max(0.0, o.scene.animation_time);
     const float aspect = float(width) / height;
     const std::string timings = store.file(timings_name);
@@ -268,7 +271,7 @@ AnimationReport render_animation(const AnimationSettings& o) {
         if (o.play_scene_animation) {
             SceneSpec spec = o.scene;
             spec.animation_time = animation_start + t;
-            posed = load_scene(spec, aspect, false);
+            posed = animated ? pose_scene(spec, *animated, scene->path, aspect) : load_scene(spec, aspect, false);
             posed_accel = std::make_unique<Accel>(posed->scene);
         }
         PathIntegrator integrator(posed_accel ? *posed_accel : *accel, light, render);

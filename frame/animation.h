@@ -63,7 +63,8 @@ struct AnimationSettings {
     uint64_t seed = 0;
     bool seed_per_frame = false;
     // Play the glTF's animations along the frames: the frame at t seconds poses the scene at
-    // scene.animation_time (0 when unset) + t; the scene is loaded and its BVH built per frame.
+    // scene.animation_time (0 when unset) + t; the file is loaded once and posed per frame
+    // (renderer/gltf_loader.h AnimatedGltf), its BVH built per frame.
     bool play_scene_animation = false;
     int threads = 0;
     int max_depth = 8;

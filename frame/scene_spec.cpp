@@ -21,6 +21,21 @@ LoadedScene load_scene(const SceneSpec& o, float aspect_ratio, bool print_warnin
         if (print_warnings)
             for (const std::string& w : out.scene.warnings) std::fprintf(stderr, "dynsky: warning: %s\n", w.c_str());
     }
+    choose_camera(o, aspect_ratio, &out);
+    return out;
+}
+
+LoadedScene pose_scene(const SceneSpec& o, AnimatedGltf& file, const std::string& path, float aspect_ratio) {
+    if (!(o.ground_albedo >= 0 && o.ground_albedo <= 1)) throw Error("--ground-albedo must be in [0, 1]");
+    LoadedScene out;
+    out.path = path;
+    out.scene = file.pose(std::max(0.0, o.animation_time));
+    choose_camera(o, aspect_ratio, &out);
+    return out;
+}
+
+void choose_camera(const SceneSpec& o, float aspect_ratio, LoadedScene* loaded) {
+    LoadedScene& out = *loaded;
     if (out.scene.instances.empty()) throw Error(o.scene + ": the scene has no triangles to render");
     if (out.scene.cameras.empty()) {
         if (o.camera != 0)
@@ -47,7 +62,6 @@ LoadedScene load_scene(const SceneSpec& o, float aspect_ratio, bool print_warnin
         if (out.camera.orthographic) throw Error(o.scene + ": --fov given, but the camera is orthographic");
         out.camera.yfov = float(o.fov_deg * kPiD / 180);
     }
-    return out;
 }
 
 }  // namespace dynsky

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "renderer/gltf_loader.h"
 #include "renderer/scene.h"
 
 namespace dynsky {
@@ -33,5 +34,14 @@ struct LoadedScene {
 // looked up among the shipped data, util/data_path.h resolve_user_path) (warnings to stderr) and picks the camera; a file without
 // cameras gets one framing its bounds at aspect_ratio. Throws dynsky::Error naming the file.
 LoadedScene load_scene(const SceneSpec& spec, float aspect_ratio, bool print_warnings = true);
+
+// The same for a glTF file already loaded (path: the file it was loaded from), posed at
+// spec.animation_time (0 when negative): what load_scene gives, without reading the file again
+// (animate --play-anim poses one file per frame). Warnings are not printed.
+LoadedScene pose_scene(const SceneSpec& spec, AnimatedGltf& file, const std::string& path, float aspect_ratio);
+
+// The camera of a loaded scene as the spec asks (its glTF camera, one framing the bounds, the
+// look-at and field-of-view overrides); throws for a scene without triangles or a bad camera.
+void choose_camera(const SceneSpec& spec, float aspect_ratio, LoadedScene* loaded);
 
 }  // namespace dynsky

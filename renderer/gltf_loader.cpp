@@ -479,6 +479,8 @@ Eigen::Affine3f to_affine(const Eigen::Matrix4d& m) {
     return a;
 }
 
+}  // namespace
+
 class GltfLoader {
   public:
     GltfLoader(std::string path, double animation_time) : path_(std::move(path)), animation_time_(animation_time) {}
@@ -491,6 +493,7 @@ class GltfLoader {
         decode_meshopt_views();
         validate_buffer_views();
         decode_draco_primitives();
+        rest_nodes_ = model_.nodes;
         if (animation_time_ >= 0) pose_animations(animation_time_);
         build_materials();
         build_textures();
@@ -501,6 +504,33 @@ class GltfLoader {
                  " animation(s) not played: the scene is rendered in its rest pose (--anim-time T poses it at T s)");
         scene_.warnings = warnings_;
         return std::move(scene_);
+    }
+
+    // Loaded once (load_once), posed many times: the file's nodes are put back at rest and posed at
+    // t, and only what hangs on the nodes is built again (meshes with their skins and morph targets,
+    // instances, cameras, lights); materials and the decoded textures are the first load's. The
+    // result is what load() gives for that time.
+    void load_once() {
+        scene_.source = path_;
+        parse_file();
+        check_version();
+        check_extensions();
+        decode_meshopt_views();
+        validate_buffer_views();
+        decode_draco_primitives();
+        rest_nodes_ = model_.nodes;
+        build_materials();
+        build_textures();
+    }
+    Scene pose(double t) {
+        model_.nodes = rest_nodes_;
+        pose_animations(t);
+        scene_.meshes.clear(), scene_.instances.clear(), scene_.cameras.clear(), scene_.lights.clear();
+        group_of_mesh_.clear(), cameras_.clear();
+        traverse_nodes();
+        check_extent();
+        scene_.warnings = warnings_;
+        return scene_;
     }
 
   private:
@@ -588,7 +618,7 @@ class GltfLoader {
         std::string base_dir = fs::path(path_).parent_path().string();
         std::error_code ec;
         const fs::path folder = base_dir.empty() ? fs::path(".") : fs::path(base_dir);
-        AssetFolder asset{fs::canonical(folder, ec), fs::absolute(folder).lexically_normal(), ""};
+        AssetFolder asset{fs::canonical(folder, ec), fs::absolute(folder).lexically_normal(), "", {}};
         if (ec) fail("cannot resolve the file's folder: " + ec.message());
         if (!asset.as_given.has_filename()) asset.as_given = asset.as_given.parent_path();  // "dir/" -> "dir"
         tg::TinyGLTF gltf;
@@ -2262,6 +2292,7 @@ class GltfLoader {
     const std::string path_;
     const double animation_time_;
     tg::Model model_;
+    std::vector<tg::Node> rest_nodes_;  // the nodes as the file has them, before any pose
     Scene scene_;
     std::vector<std::string> warnings_;
     std::vector<int> group_of_mesh_;
@@ -2271,7 +2302,18 @@ class GltfLoader {
     std::vector<NodeCamera> cameras_;
 };
 
-}  // namespace
+AnimatedGltf::AnimatedGltf(const std::string& path) : loader_(std::make_unique<GltfLoader>(path, 0.0)) {
+    loader_->load_once();
+}
+
+AnimatedGltf::~AnimatedGltf() = default;
+
+Scene AnimatedGltf::pose(double animation_time) {
+    if (!std::isfinite(animation_time) || animation_time < 0)
+        throw Error("the animation time must be a finite number of seconds, at least 0");
+    return loader_->pose(animation_time);
+}
+
 
 Scene load_gltf(const std::string& path, std::vector<std::string>* warnings, double animation_time) {
     if (!std::isfinite(animation_time)) throw Error("the animation time must be a finite number of seconds");

@@ -19,6 +19,7 @@
 // an error. Values of the wrong JSON type are refused by their path (gltf_json_check.h).
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,25 @@ namespace dynsky {
 // the nodes' transforms and morph weights, skins included; negative (the default): the rest pose,
 // with a warning that animations were not played.
 Scene load_gltf(const std::string& path, std::vector<std::string>* warnings = nullptr, double animation_time = -1);
+
+class GltfLoader;
+
+// A glTF file loaded once and posed at any animation time (`dynsky animate --play-anim`): pose(t)
+// gives what load_gltf(path, nullptr, t) gives, but the file is read, its buffers decoded and its
+// materials and textures built once; each pose only evaluates the animations and builds what hangs
+// on the nodes (meshes with their skins and morph targets, instances, cameras, lights), the
+// textures shared with every other pose. Throws as load_gltf.
+class AnimatedGltf {
+  public:
+    explicit AnimatedGltf(const std::string& path);
+    ~AnimatedGltf();
+    AnimatedGltf(const AnimatedGltf&) = delete;
+    AnimatedGltf& operator=(const AnimatedGltf&) = delete;
+    Scene pose(double animation_time);
+
+  private:
+    std::unique_ptr<GltfLoader> loader_;
+};
 
 // KHR_texture_transform as a matrix on (u, v, 1): T(offset) * R(rotation) * S(scale), with R
 // rotating the UVs counter-clockwise by `rotation` radians as the extension text and its worked

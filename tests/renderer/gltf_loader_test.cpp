@@ -1057,6 +1057,34 @@ TEST(GltfLoader, ValuesOfTheWrongTypeOrOutsideTheSpecAreNamedByTheirPath) {
     fs::remove_all(dir);
 }
 
+// Two loads of the same file alike: every instance where the other has it, every mesh's vertices,
+// the cameras and the materials.
+void expect_same_scene(const Scene& a, const Scene& b, const std::string& what) {
+    ASSERT_EQ(a.instances.size(), b.instances.size()) << what;
+    ASSERT_EQ(a.meshes.size(), b.meshes.size()) << what;
+    for (size_t i = 0; i < a.instances.size(); ++i) {
+        EXPECT_EQ(a.instances[i].mesh_group, b.instances[i].mesh_group) << what << " instance " << i;
+        EXPECT_TRUE(a.instances[i].transform.matrix().isApprox(b.instances[i].transform.matrix(), 1e-6f))
+            << what << " instance " << i;
+    }
+    for (size_t m = 0; m < a.meshes.size(); ++m) {
+        ASSERT_EQ(a.meshes[m].primitives.size(), b.meshes[m].primitives.size()) << what;
+        for (size_t p = 0; p < a.meshes[m].primitives.size(); ++p) {
+            const TriangleMesh &x = a.meshes[m].primitives[p], &y = b.meshes[m].primitives[p];
+            ASSERT_EQ(x.positions.size(), y.positions.size()) << what;
+            EXPECT_EQ(x.indices, y.indices) << what;
+            for (size_t v = 0; v < x.positions.size(); ++v)
+                EXPECT_LT((x.positions[v] - y.positions[v]).norm(), 1e-6f) << what << " mesh " << m << " vertex " << v;
+        }
+    }
+    ASSERT_EQ(a.cameras.size(), b.cameras.size()) << what;
+    for (size_t c = 0; c < a.cameras.size(); ++c)
+        EXPECT_TRUE(a.cameras[c].camera_to_world.matrix().isApprox(b.cameras[c].camera_to_world.matrix(), 1e-6f))
+            << what << " camera " << c;
+    EXPECT_EQ(a.materials.size(), b.materials.size()) << what;
+    EXPECT_EQ(a.textures.size(), b.textures.size()) << what;
+}
+
 // KHR_lights_punctual: each node's light placed by its world transform, shining along its -Z, in
 // the sky's radiometric units (candela and lux / 683); impossible lights are refused by name.
 // Animations sampled at a time: a LINEAR translation, a LINEAR rotation (slerped), a STEP
@@ -1115,7 +1143,36 @@ TEST(GltfLoader, AnimationsArePosedAtTheTimeAsked) {
     Scene late = load_gltf(path, nullptr, 50.0);  // held at the last keys
     EXPECT_LT((corner(late, 0) - Vec3(4, 1, 0)).norm(), 1e-4f) << corner(late, 0).transpose();
     EXPECT_LT((corner(late, 1) - Vec3(3, 5, 3)).norm(), 1e-4f) << corner(late, 1).transpose();
+    // Posed again and again from one load (animate --play-anim): as loaded at each time.
+    AnimatedGltf animated(path);
+    for (double t : {1.0, 50.0, 0.0, 0.25})
+        expect_same_scene(animated.pose(t), load_gltf(path, nullptr, t), "at " + std::to_string(t) + " s");
     fs::remove_all(dir);
+}
+
+// animate --play-anim poses one file per frame: posing a file loaded once gives what loading it at
+// that time gives (transforms, TRS and morph animations, skins), in any order of times, and every
+// pose shares the first load's decoded textures.
+TEST(AnimatedGltf, PosesAsLoadingAtThatTimeWithTheTexturesDecodedOnce) {
+    DYNSKY_REQUIRE_SHARED();
+    const std::string truck = test::shared_path("scenes/CesiumMilkTruck/CesiumMilkTruck.glb");
+    AnimatedGltf animated(truck);
+    Scene first = animated.pose(0.0);
+    ASSERT_FALSE(first.textures.empty());
+    for (double t : {0.9, 0.0, 2.5, 0.3, 40.0}) {
+        const Scene posed = animated.pose(t);
+        expect_same_scene(posed, load_gltf(truck, nullptr, t), "CesiumMilkTruck at " + std::to_string(t) + " s");
+        for (size_t k = 0; k < posed.textures.size(); ++k)
+            EXPECT_EQ(posed.textures[k].get(), first.textures[k].get()) << "texture " << k << " decoded again";
+    }
+    // The wheels turn: two poses differ.
+    const Scene a = animated.pose(0.0), b = animated.pose(0.9);
+    bool moved = false;
+    for (size_t i = 0; i < a.instances.size(); ++i)
+        moved |= !a.instances[i].transform.matrix().isApprox(b.instances[i].transform.matrix(), 1e-4f);
+    EXPECT_TRUE(moved);
+    EXPECT_THROW(animated.pose(-1.0), Error);
+    EXPECT_THROW(animated.pose(std::nan("")), Error);
 }
 
 // KHR_draco_mesh_compression: a quad compressed by draco (positions quantised to 14 bits) loads
