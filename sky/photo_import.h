@@ -135,6 +135,15 @@ struct PhotoImportParams {
     // Saturation: a pixel is "clipped" if its largest channel is within 2/255 of this encoded level.
     // < 0: automatic (the photo's own maximum, if a plateau of pixels sits there; see the docs).
     double clip_level = -1;
+    // The camera's colour shading (a lens's IR-cut filter passes less red off-axis): a grey's
+    // log(R/G) and log(B/G) against the zenith's, as rg2 r^2 + rg4 r^4 and bg2 r^2 + bg4 r^4 at the
+    // canonical radius r (zenith angle / 90 degrees, evaluated at most at max_radius), divided out
+    // of the linear sky before its hidden pixels are filled. Saturated pixels keep their colour
+    // (none left to correct). None: the camera's colours as they are (presets measure theirs).
+    struct ColourShading {
+        double rg2 = 0, rg4 = 0, bg2 = 0, bg4 = 0, max_radius = 0.9;
+    };
+    std::optional<ColourShading> colour_shading;
 };
 
 // A photograph after import.

@@ -291,6 +291,73 @@ TEST(PhotoImport, MaskedObstructionIsInpaintedPlausibly) {
 // Inpainted, it came out as radial streaks: the texture at its inner edge (here stripes 9 degrees
 // apart) drawn out to the horizon. Now the ring holds the seen edge's colour smoothed over azimuth:
 // no stripes, the east-bright sky still brighter in the east, and the same mean as the seen edge.
+// Median log(R/G) of a sky's seen pixels in a ring of canonical radii [r0, r1).
+double ring_log_rg(const SkyImage& sky, const std::vector<unsigned char>& not_sky, double r0, double r1) {
+    const int n = sky.resolution;
+    const double c = (n - 1) / 2.0;
+    std::vector<double> v;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const double r = std::hypot(i - c, j - c) / (n / 2.0);
+            const Color p = sky.pixel(i, j);
+            if (r >= r0 && r < r1 && !not_sky[size_t(j) * n + i] && p.minCoeff() > 0)
+                v.push_back(std::log(double(p[0]) / p[1]));
+        }
+    return v.empty() ? std::nan("") : quantile(v, 0.5);
+}
+
+// A camera's colour shading (less red off-axis, as an IR-cut filter passes) is divided out: a grey
+// overcast photographed with the Mobotix's shading imports grey from the zenith to the horizon.
+TEST(PhotoImport, ColourShadingIsDividedOut) {
+    const PhotoImportParams::ColourShading shading = *camera_preset("mobotix").params.colour_shading;
+    TestCamera cam{200.0, 150.0, 140.0, 0.0, LensLaw::Equidistant, false};
+    Image photo(400, 300, 3);
+    for (int y = 0; y < 300; ++y)
+        for (int x = 0; x < 400; ++x) {
+            const double r = std::hypot(x - cam.cx, y - cam.cy) / cam.radius, r2 = std::min(r, 0.9) * std::min(r, 0.9);
+            Vec3d w;
+            const bool in = cam.direction(x, y, &w);
+            const double grey = in ? 0.3 + 0.1 * std::sin(7 * w.x()) * std::cos(5 * w.z()) : 0.0;
+            photo.at(x, y, 0) = float(grey * std::exp(shading.rg2 * r2 + shading.rg4 * r2 * r2));
+            photo.at(x, y, 1) = float(grey);
+            photo.at(x, y, 2) = float(grey * std::exp(shading.bg2 * r2 + shading.bg4 * r2 * r2));
+        }
+    PhotoImportParams p;
+    p.circle = SkyCircle{cam.cx, cam.cy, cam.radius};
+    p.encoding = "linear";
+    p.resolution = 128;
+    p.detect_thin_obstructions = false;
+    ImportedPhoto raw = import_photo_image(photo, "shaded", p);
+    p.colour_shading = shading;
+    ImportedPhoto flat = import_photo_image(photo, "shaded", p);
+    EXPECT_LT(ring_log_rg(raw.sky, raw.not_sky, 0.75, 0.88), -0.15);  // the shading, as photographed
+    for (double r0 : {0.0, 0.3, 0.6, 0.75}) {
+        EXPECT_NEAR(ring_log_rg(flat.sky, flat.not_sky, r0, r0 + 0.13), 0.0, 0.01) << r0;
+    }
+}
+
+// On the Mobotix's own held-out overcast frames (after the frames its shading was measured on):
+// the seen sky's red against green, near the horizon against the zenith's.
+TEST(PhotoImport, MobotixOvercastComesOutGreyToTheHorizon) {
+    DYNSKY_REQUIRE_SHARED();
+    for (const char* t : {"13_20", "13_50"}) {
+        const std::string path =
+            test::shared_path(std::string("skies/mobotix_sophia_20200812_morning/images/2020-08-12_") + t + ".jpg");
+        PhotoImportParams p = camera_preset("mobotix").params;
+        p.resolution = 128;
+        p.mask_path = find_preset_mask("mobotix", path);
+        ImportedPhoto shaded = import_photo(path, p);
+        const double drop = ring_log_rg(shaded.sky, shaded.not_sky, 0.7, 0.9) -
+                            ring_log_rg(shaded.sky, shaded.not_sky, 0.3, 0.5);
+        EXPECT_GT(drop, -0.08) << t << " " << drop;  // -0.03 and -0.07
+        p.colour_shading.reset();
+        ImportedPhoto raw = import_photo(path, p);
+        const double raw_drop = ring_log_rg(raw.sky, raw.not_sky, 0.7, 0.9) -
+                                ring_log_rg(raw.sky, raw.not_sky, 0.3, 0.5);
+        EXPECT_LT(raw_drop, -0.15) << t << " " << raw_drop;  // -0.18 and -0.22 as photographed
+    }
+}
+
 TEST(PhotoImport, AHorizonRingIsFilledAsAHazeBandNotStreaks) {
     TestCamera cam{200.0, 150.0, 140.0, 0.0, LensLaw::Equidistant, false};
     Image photo = render_photo(cam, 400, 300, false);
