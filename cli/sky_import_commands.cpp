@@ -26,8 +26,9 @@ namespace dynsky::cli {
 namespace {
 
 struct ImportOptions {
-    std::vector<std::string> photos;  // as given: one photograph, several, or a folder of them
-    std::string circle_origin;        // how the circle given came about ("" : "given")
+    std::vector<std::string> photos;                      // as given: one photograph, several, or a folder of them
+    std::string circle_origin;                            // how the circle given came about ("" : "given")
+    std::optional<std::array<int, 2>> circle_photo_size;  // the sequence's photos' size, when its circle is used
     std::string photo, preset, center, lens, mask, mask_layout = "photo", encoding = "auto";
     double radius = 0, north = 0, tilt = 0, tilt_azimuth = 0;
     bool mirror = false, keep_colours = false, auto_circle = false, no_preset_mask = false, detect = false,
@@ -102,6 +103,7 @@ void import_one(const ImportOptions& o, bool verbose) {
     params.encoding = o.encoding;
     if (!o.center.empty()) params.circle = parse_center(o.center, o.radius);
     else if (o.radius > 0) throw Error("--radius needs --center X,Y as well");
+    if (o.circle_photo_size) params.circle_photo_size = o.circle_photo_size, params.circle_source = "the sequence";
     if (o.auto_circle) params.circle.reset();
     if (o.lens_opt->count()) params.lens = parse_lens_law(o.lens);
     if (o.north_opt->count()) params.north_deg = o.north;
@@ -311,6 +313,7 @@ void run_import(const ImportOptions& o) {
         each.radius = c.radius;
         each.auto_circle = false;
         each.circle_origin = "the sequence's";
+        each.circle_photo_size = found.photo_size;
     }
     std::vector<std::string> failed;
     ProgressBar progress((long long)photos.size(), "importing " + std::to_string(photos.size()) + " photographs");

@@ -801,10 +801,11 @@ ImportedPhoto import_photo(const std::string& path, const PhotoImportParams& par
 }
 
 
-SkyCircle find_photo_sky_circle(const std::string& path, const PhotoImportParams& params) {
+SkyCircle find_photo_sky_circle(const std::string& path, const PhotoImportParams& params, std::array<int, 2>* size) {
     Image photo = read_radiance_image(path);
     apply_orientation(photo);
     check_photo_fits(photo, path, params);
+    if (size) *size = {photo.width, photo.height};
     if (is_display_encoded(photo, path, params.encoding))
         return find_sky_circle(photo, path, params.min_radius_fraction, params.max_radius_fraction);
     return find_sky_circle(tone_mapped_grey(to_rgb_mat(photo, path)), path, params.min_radius_fraction,
@@ -816,17 +817,32 @@ SequenceSkyCircle find_sequence_sky_circle(const std::vector<std::string>& photo
     if (photos.empty()) throw Error("no photographs to find a sky circle in");
     SequenceSkyCircle out;
     std::vector<double> xs, ys, rs;
+    std::string first;
     const int n = int(photos.size()), tries = std::min(n, std::max(1, max_photos));
     for (int k = 0; k < tries; ++k) {
         // Spread over the sequence: a dark start (dawn) or a run of overcast frames is not all it sees.
         const std::string& path = photos[tries == 1 ? 0 : size_t(std::lround(double(k) * (n - 1) / (tries - 1)))];
         ++out.tried;
+        std::array<int, 2> size{0, 0};
+        SkyCircle c;
         try {
-            SkyCircle c = find_photo_sky_circle(path, params);
-            xs.push_back(c.center_x), ys.push_back(c.center_y), rs.push_back(c.radius);
+            c = find_photo_sky_circle(path, params, &size);
         } catch (const Error& e) {
             out.not_found.push_back(e.what());
+            continue;
         }
+        // One camera, one size: a photograph of another size belongs to another camera (or was
+        // cropped or scaled), and one circle cannot serve both.
+        if (rs.empty()) {
+            out.photo_size = size, first = path;
+        } else if (size != out.photo_size) {
+            throw_file_error(path, "is " + std::to_string(size[0]) + " x " + std::to_string(size[1]) + " pixels, but " +
+                                       first + " is " + std::to_string(out.photo_size[0]) + " x " +
+                                       std::to_string(out.photo_size[1]) +
+                                       ": a sequence is one camera's photographs, all of one size (import the "
+                                       "others apart)");
+        }
+        xs.push_back(c.center_x), ys.push_back(c.center_y), rs.push_back(c.radius);
     }
     out.found = int(rs.size());
     if (rs.empty())
@@ -864,7 +880,10 @@ void check_photo_fits(const Image& photo, const std::string& name, const PhotoIm
                                    (params.circle_source.empty() ? std::string("the given sky circle")
                                                                  : params.circle_source + "'s sky circle") +
                                    " was measured on " + std::to_string((*s)[0]) + " x " + std::to_string((*s)[1]) +
-                                   " photographs: another camera? Import it without a preset (the circle is found)");
+                                   " photographs: another camera? " +
+                                   (params.circle_source == "the sequence"
+                                        ? std::string("Import it apart (its own circle is found)")
+                                        : std::string("Import it without a preset (the circle is found)")));
 }
 
 ImportedPhoto import_photo_image(const Image& photo, const std::string& name, const PhotoImportParams& params,

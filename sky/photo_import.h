@@ -191,18 +191,21 @@ SkyCircle find_sky_circle(const Image& photo, const std::string& name, double mi
                           double max_fraction = 0.55);
 
 // The sky circle of one photograph file as import_photo finds it (turned by its EXIF orientation,
-// HDR files tone-mapped first), with params' search range and encoding.
-SkyCircle find_photo_sky_circle(const std::string& path, const PhotoImportParams& params);
+// HDR files tone-mapped first), with params' search range and encoding; *size: the photo's width
+// and height as turned.
+SkyCircle find_photo_sky_circle(const std::string& path, const PhotoImportParams& params,
+                                std::array<int, 2>* size = nullptr);
 
 // One sky circle for a sequence of one camera's photographs, so that frames imported one by one do
 // not wobble against each other: found on up to max_photos of them spread evenly over the
 // sequence, the median centre and radius. Photos where none is found are listed and skipped;
-// throws dynsky::Error when none is found in any.
+// throws dynsky::Error when none is found in any, or naming a photo of another size than the others.
 struct SequenceSkyCircle {
     SkyCircle circle;
     int tried = 0, found = 0;
     double centre_spread_px = 0, radius_spread_px = 0;  // largest distance of a photo's from the median
     std::vector<std::string> not_found;                 // the errors of the photos without one
+    std::array<int, 2> photo_size{0, 0};                // width, height of the photographs (as turned)
 };
 SequenceSkyCircle find_sequence_sky_circle(const std::vector<std::string>& photos, const PhotoImportParams& params,
                                            int max_photos = 25);

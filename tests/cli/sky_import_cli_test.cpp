@@ -237,6 +237,19 @@ TEST(SkyImportCli, SequenceFolderImportsEveryFrameUnderOneCircle) {
         diff += std::abs(from_folder.rgb[k] - alone.rgb[k]), sum += alone.rgb[k];
     EXPECT_LT(diff, 0.005 * sum);  // the printed circle is rounded to 0.1 px
 
+    // A photograph of another size among them (another camera, or cropped) is named, not imported
+    // under a circle measured on the others.
+    Image half = read_image(dir + "/photos/IMG_20200812_120000.jpg");
+    Image small(half.width / 2, half.height / 2, 3);
+    for (int y = 0; y < small.height; ++y)
+        for (int x = 0; x < small.width; ++x)
+            for (int c = 0; c < 3; ++c) small.at(x, y, c) = half.at(2 * x, 2 * y, c);
+    write_image(dir + "/photos/IMG_20200812_100000.jpg", small);
+    r = test::run_command(exe() + " sky import " + dir + "/photos" + common + " -o " + dir + "/mixed");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("IMG_20200812_100000.jpg: is 640 x 480 pixels, but"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("all of one size"), std::string::npos) << r.output;
+
     // -o naming one sky for several photographs is refused before anything is read.
     r = test::run_command(exe() + " sky import " + dir + "/photos" + common + " -o " + dir + "/one.exr");
     EXPECT_NE(r.exit_code, 0);
