@@ -29,6 +29,8 @@ struct ImportOptions {
     std::vector<std::string> photos;                      // as given: one photograph, several, or a folder of them
     std::string circle_origin;                            // how the circle given came about ("" : "given")
     std::optional<std::array<int, 2>> circle_photo_size;  // the sequence's photos' size, when its circle is used
+    bool find_north = false;
+    std::optional<double> north_found;  // a sequence's north, found from the sun on its photographs
     std::string photo, preset, center, lens, mask, mask_layout = "photo", encoding = "auto";
     double radius = 0, north = 0, tilt = 0, tilt_azimuth = 0;
     bool mirror = false, keep_colours = false, auto_circle = false, no_preset_mask = false, detect = false,
@@ -58,10 +60,21 @@ SkyCircle parse_center(const std::string& text, double radius) {
     return SkyCircle{x, y, radius};
 }
 
-// One photograph into one sky (o.photo, o.out, o.preview, o.filled_mask); `verbose`: the lines
-// saying what was found and done (a sequence's import says it once for all).
-void import_one(const ImportOptions& o, bool verbose) {
-    // Check everything cheap first, so a bad run writes nothing.
+// What one photograph's import is given: geometry and masks, the place, its time, and whether it is
+// calibrated.
+struct ImportPlan {
+    PhotoImportParams params;
+    double sun_search = 3;
+    std::optional<CameraColour> camera_colour;
+    std::string obstructions, time;
+    bool calibrate = false;
+    UtcTime utc;
+    GeoLocation where;
+};
+
+ImportPlan plan_import(const ImportOptions& o, bool verbose) {
+    ImportPlan plan;
+    PhotoImportParams& params = plan.params;
     check_extension("--out", o.out, ".exr");
     if (!o.preview.empty()) check_extension("--preview", o.preview, ".png");
     if (!o.filled_mask.empty()) check_extension("--filled-mask", o.filled_mask, ".png");
@@ -74,11 +87,11 @@ void import_one(const ImportOptions& o, bool verbose) {
     if (o.hdr != "auto" && o.hdr != "none" && o.hdr != "calibrated")
         throw Error("--hdr '" + o.hdr + "': use none, calibrated or auto");
 
-    PhotoImportParams params;
-    double lat = o.lat, lon = o.lon, elevation = o.elevation, utc_offset = o.utc_offset, sun_search = 3;
-    std::optional<CameraColour> camera_colour;
+    double lat = o.lat, lon = o.lon, elevation = o.elevation, utc_offset = o.utc_offset;
+    double& sun_search = plan.sun_search;
+    std::optional<CameraColour>& camera_colour = plan.camera_colour;
     bool have_location = o.lat_opt->count() && o.lon_opt->count();
-    std::string obstructions;
+    std::string& obstructions = plan.obstructions;
     if (!o.preset.empty()) {
         // The preset's decisions (sky/preset_import.h), then the options that override them.
         const CameraPreset preset = camera_preset(o.preset);
@@ -107,6 +120,7 @@ void import_one(const ImportOptions& o, bool verbose) {
     if (o.auto_circle) params.circle.reset();
     if (o.lens_opt->count()) params.lens = parse_lens_law(o.lens);
     if (o.north_opt->count()) params.north_deg = o.north;
+    if (o.north_found) params.north_deg = *o.north_found;
     if (o.mirror) params.mirrored = true;
     if (o.tilt_opt->count()) params.tilt_deg = o.tilt;
     if (o.tilt_az_opt->count()) params.tilt_azimuth_deg = o.tilt_azimuth;
@@ -126,7 +140,8 @@ void import_one(const ImportOptions& o, bool verbose) {
     // Time: given, or the photograph's (its file name's, else its EXIF's: sky/photo_import.h
     // photo_time); one without a zone is on a clock --utc-offset hours ahead of UTC, which presets
     // know; without a preset or --utc-offset such a time is not guessed.
-    std::string time = o.time;
+    std::string& time = plan.time;
+    time = o.time;
     if (time.empty()) {
         const PhotoTime found = photo_time(o.photo, utc_offset);
         time = found.iso;
@@ -139,18 +154,53 @@ void import_one(const ImportOptions& o, bool verbose) {
             time.clear();
         }
     }
-    bool calibrate = o.hdr == "calibrated" || (o.hdr == "auto" && have_location && !time.empty());
-    UtcTime utc;
-    GeoLocation where{lat, lon, elevation};
-    if (calibrate) {
+    plan.calibrate = o.hdr == "calibrated" || (o.hdr == "auto" && have_location && !time.empty());
+    plan.where = GeoLocation{lat, lon, elevation};
+    if (plan.calibrate) {
         if (time.empty())
             throw_file_error(o.photo, "--hdr calibrated needs the photo's time: give --time (ISO 8601 with a zone)");
         if (!have_location) throw Error("--hdr calibrated needs the place: give --lat and --lon (or a --preset)");
-        utc = parse_utc_time(time);
-        validate_location(where);
+        plan.utc = parse_utc_time(time);
+        validate_location(plan.where);
     }
+    if (o.find_north && !o.north_found && !plan.calibrate)
+        throw Error(
+            "--find-north needs the photo's time and place (--time or a time in its name, --lat and --lon), "
+            "for the sun it turns the photograph by");
+    return plan;
+}
+
+// One photograph into one sky (o.photo, o.out, o.preview, o.filled_mask); `verbose`: the lines
+// saying what was found and done (a sequence's import says it once for all).
+void import_one(const ImportOptions& o, bool verbose) {
+    ImportPlan plan = plan_import(o, verbose);
+    PhotoImportParams& params = plan.params;
+    const bool calibrate = plan.calibrate;
+    const UtcTime& utc = plan.utc;
+    const GeoLocation& where = plan.where;
+    const std::string& time = plan.time;
+    const double sun_search = plan.sun_search;
+    const std::optional<CameraColour>& camera_colour = plan.camera_colour;
+    std::string obstructions = plan.obstructions;
 
     ImportedPhoto imported = import_photo(o.photo, params);
+    if (o.find_north && !o.north_found) {
+        // The photograph turned so that the sun it shows sits at the computed sun's azimuth.
+        if (const std::optional<NorthFromSun> found = north_from_seen_sun(imported, utc, where)) {
+            params.north_deg = found->north_deg;
+            imported = import_photo(o.photo, params);
+            if (verbose)
+                std::printf(
+                    "north: %.1f deg clockwise from the photo's top, found from the clipped sun (zenith %.1f deg, "
+                    "computed %.1f; it lay %.1f deg from the computed sun before)\n",
+                    found->north_deg, found->seen_zenith_deg, found->sun_zenith_deg, found->moved_deg);
+        } else {
+            std::fprintf(stderr,
+                         "dynsky: warning: %s: --find-north: no clipped sun at the computed sun's height (%.1f deg up; "
+                         "overcast, the sun hidden, a tilted camera or the wrong lens law?): north stays %.1f deg\n",
+                         o.photo.c_str(), compute_sun_position(utc, where).elevation_deg(), params.north_deg);
+        }
+    }
     if (imported.exif_orientation != 1 && verbose)
         std::printf(
             "EXIF orientation %d: the photograph is turned as viewers show it before anything else "
@@ -315,6 +365,50 @@ void run_import(const ImportOptions& o) {
         each.circle_origin = "the sequence's";
         each.circle_photo_size = found.photo_size;
     }
+    if (o.find_north) {
+        // One north for the sequence: found from the sun on up to 25 photographs spread over it (at
+        // 128 px), the one with the least summed angular distance to the others.
+        std::vector<double> norths;
+        const int count = int(photos.size()), tries = std::min(count, 25);
+        for (int k = 0; k < tries; ++k) {
+            ImportOptions probe = each;
+            const size_t at = tries == 1 ? 0 : size_t(std::lround(double(k) * (count - 1) / (tries - 1)));
+            probe.photo = photos[at], probe.out = outputs[at], probe.preview.clear(), probe.filled_mask.clear();
+            probe.resolution = 128;
+            try {
+                const ImportPlan plan = plan_import(probe, false);
+                const std::optional<NorthFromSun> f = north_from_seen_sun(import_photo(probe.photo, plan.params),
+                                                                          plan.utc, plan.where);
+                if (f) norths.push_back(f->north_deg);
+            } catch (const Error&) {
+                // No time, unreadable: this one says nothing about north (the import below names it).
+            }
+        }
+        auto apart = [](double a, double b) { return std::abs(std::remainder(a - b, 360.0)); };
+        if (norths.empty()) {
+            std::fprintf(
+                stderr,
+                "dynsky: warning: --find-north: none of %d photographs spread over the sequence shows a clipped "
+                "sun at the computed sun's height: north stays %.1f deg\n",
+                tries, o.north_opt->count() ? o.north : 0.0);
+        } else {
+            double best = norths[0], best_sum = 1e300, spread = 0;
+            for (double a : norths) {
+                double sum = 0;
+                for (double b : norths) sum += apart(a, b);
+                if (sum < best_sum) best_sum = sum, best = a;
+            }
+            int near = 0;
+            for (double a : norths)
+                if (apart(a, best) <= 10) ++near, spread = std::max(spread, apart(a, best));
+            std::printf(
+                "north: %.1f deg clockwise from the photos' top, found from the clipped sun on %zu of %d "
+                "photographs spread over the sequence (%d within %.1f deg of it); used for every photograph\n",
+                best, norths.size(), tries, near, spread);
+            each.north_found = best;
+        }
+        each.find_north = false;
+    }
     std::vector<std::string> failed;
     ProgressBar progress((long long)photos.size(), "importing " + std::to_string(photos.size()) + " photographs");
     for (size_t i = 0; i < photos.size(); ++i) {
@@ -458,6 +552,10 @@ void register_sky_import_commands(CLI::App& sky) {
         imp->add_option("--north", io->north,
                         "Where north appears in the photo, degrees clockwise from its top (default 0: north up)")
             ->check(finite_in(-360, 360));
+    imp->add_flag(
+        "--find-north", io->find_north,
+        "Find where north is from the sun the photo shows (its clipped blob at the computed sun's height, put\n"
+        "at its azimuth; a level camera, time and place needed); for a sequence, one north for all");
     imp->add_flag("--mirror", io->mirror,
                   "The photo is mirror-reversed (east clockwise from north), as mirror imagers (TSI) show the sky "
                   "(arm-tsi sets it already)");

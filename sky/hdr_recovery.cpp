@@ -50,6 +50,16 @@ std::string HdrCalibrationReport::summary() const {
 }
 
 std::string HdrCalibrationReport::sun_offset_warning() const {
+    if (sun_elsewhere) {
+        std::ostringstream s;
+        s.precision(3);
+        s << "no clipped sun near the sun computed for the photo's time and place, but one at its height "
+          << sun_elsewhere->moved_deg << " deg away (zenith " << sun_elsewhere->seen_zenith_deg << " deg, computed "
+          << sun_elsewhere->sun_zenith_deg << "): the sun disc was not restored and the sky's sun direction is the "
+          << "computed one; if the camera's north is not where --north says, --north " << sun_elsewhere->north_deg
+          << " (or --find-north) puts the computed sun on it";
+        return s.str();
+    }
     if (!(sun_offset_deg > kSunOffsetWarningDeg)) return "";
     const bool at_seen = angle_between(used_sun, computed_sun) > 1e-6;
     std::ostringstream s;
@@ -73,6 +83,55 @@ constexpr double kMinCloudFractionForGrey = 0.5;
 constexpr double kMinSunElevationForGreyDeg = 10;
 
 }  // namespace
+
+std::optional<NorthFromSun> north_from_seen_sun(const ImportedPhoto& photo, const UtcTime& time,
+                                                const GeoLocation& where, double max_zenith_error_deg) {
+    if (photo.geometry.tilt_deg != 0) return std::nullopt;
+    const SunPosition sp = compute_sun_position(time, where);
+    if (sp.elevation_deg() < 3) return std::nullopt;
+    const Vec3d sun = sp.direction();
+    const int n = photo.sky.resolution;
+    cv::Mat clipped(n, n, CV_8U);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+            clipped.at<unsigned char>(j, i) = photo.clipped[size_t(j) * n + i] && !photo.not_sky[size_t(j) * n + i]
+                                                  ? 255
+                                                  : 0;
+    cv::Mat labels;
+    const int blobs = cv::connectedComponents(clipped, labels, 8, CV_32S);
+    std::vector<double> solid_angle(size_t(std::max(blobs, 1)), 0.0);
+    std::vector<Vec3d> centroid(size_t(std::max(blobs, 1)), Vec3d::Zero());
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const int l = labels.at<int>(j, i);
+            if (l <= 0) continue;
+            const Vec2 uv = fisheye::pixel_center_uv(i, j, n);
+            const double a = fisheye::pixel_solid_angle(i, j, n);
+            centroid[size_t(l)] += a * fisheye::direction_from_uv(double(uv.x()), double(uv.y()));
+            solid_angle[size_t(l)] += a;
+        }
+    const double max_sr = 2 * kPiD * (1 - std::cos(20 * kDeg)), min_sr = 2 * kPiD * (1 - std::cos(1.5 * kDeg));
+    const double sun_zenith = std::acos(std::clamp(sun.y(), -1.0, 1.0));
+    int best = -1;
+    for (int l = 1; l < blobs; ++l) {
+        if (solid_angle[size_t(l)] < min_sr || solid_angle[size_t(l)] > max_sr) continue;
+        const Vec3d c = centroid[size_t(l)].normalized();
+        if (std::abs(std::acos(std::clamp(c.y(), -1.0, 1.0)) - sun_zenith) > max_zenith_error_deg * kDeg) continue;
+        if (best < 0 || solid_angle[size_t(l)] > solid_angle[size_t(best)]) best = l;
+    }
+    if (best < 0) return std::nullopt;
+    const Vec3d seen = centroid[size_t(best)].normalized();
+    NorthFromSun out;
+    out.seen_zenith_deg = std::acos(std::clamp(seen.y(), -1.0, 1.0)) / kDeg;
+    out.sun_zenith_deg = sun_zenith / kDeg;
+    out.moved_deg = angle_between(seen, sun) / kDeg;
+    // The photo shows a direction of azimuth A at angle north - A clockwise from its top (north + A
+    // mirrored): the blob imported at azimuth A_seen under north_0 lies where north puts A_sun.
+    const double turn = (fisheye::azimuth(sun) - fisheye::azimuth(seen)) / kDeg;
+    const double north = photo.geometry.north_deg + (photo.geometry.mirrored ? -turn : turn);
+    out.north_deg = std::fmod(std::fmod(north, 360.0) + 360.0, 360.0);
+    return out;
+}
 
 SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& params, HdrCalibrationReport* report_out) {
     if (!photo.display_referred)
@@ -128,6 +187,10 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
         if (nearest[size_t(l)] <= params.sun_search_deg * kDeg && solid_angle[size_t(l)] <= max_sun_sr &&
             (sun_blob < 0 || nearest[size_t(l)] < nearest[size_t(sun_blob)]))
             sun_blob = l;
+    if (sun_blob < 0 && !sun_hidden) {
+        std::optional<NorthFromSun> elsewhere = north_from_seen_sun(photo, params.time, params.location);
+        if (elsewhere && elsewhere->moved_deg > params.sun_search_deg) rep.sun_elsewhere = elsewhere;
+    }
     if (sun_blob > 0 && rep.computed_sun.y() > -0.02) {
         Vec3d seen = centroid[size_t(sun_blob)].normalized();
         rep.sun_visible = true;

@@ -67,6 +67,14 @@ struct HdrCalibrationParams {
     std::optional<CameraColour> camera_colour;
 };
 
+// A north found from the sun a photograph shows (north_from_seen_sun, below).
+struct NorthFromSun {
+    double north_deg = 0;        // [0, 360)
+    double seen_zenith_deg = 0;  // the blob's centre, as imported
+    double sun_zenith_deg = 0;   // computed
+    double moved_deg = 0;        // the blob's angle from the computed sun as imported (before the turn)
+};
+
 struct HdrCalibrationReport {
     // "clear-sky pixels", "mean-luminance fallback", or both blended (clear_weight between 0 and 1)
     std::string method;
@@ -82,15 +90,28 @@ struct HdrCalibrationReport {
     std::string white_balance_method = "none";
     bool sun_visible = false;  // clipped sun found, or sun behind the band with clear sky around
     bool sun_restored = false;
-    double sun_offset_deg = -1;    // angle between the clipped sun seen and the computed sun (-1: not seen)
+    double sun_offset_deg = -1;  // angle between the clipped sun seen and the computed sun (-1: not seen)
+    // No sun near the computed one, but a clipped sun at its height elsewhere (north_from_seen_sun):
+    // the camera's north is likely wrong; the north that would put the computed sun on it.
+    std::optional<NorthFromSun> sun_elsewhere;
     double sun_elevation_deg = 0;  // computed
     Vec3d computed_sun = Vec3d::UnitY(), used_sun = Vec3d::UnitY();
     std::string summary() const;  // one line for people
     // Non-empty when the clipped sun lies farther than kSunOffsetWarningDeg from the computed one
-    // (a wrong time, place or orientation, or glare taken for the sun): says so and what was done.
+    // (a wrong time, place or orientation, or glare taken for the sun), or is seen only elsewhere at
+    // its height (sun_elsewhere): says so, what was done, and the north that would fit.
     std::string sun_offset_warning() const;
     static constexpr double kSunOffsetWarningDeg = 3.0;
 };
+
+// Where north is in a photograph from the sun it shows, for a level camera whose north is not
+// known: the largest clipped blob that could be the sun (its saturated disc and aureole, within a
+// 20 degree cone, at least a 1.5 degree one) at the computed sun's zenith angle within
+// max_zenith_error_deg, and the north (PhotoGeometry::north_deg, the photo's convention) that puts
+// it at the computed sun's azimuth. None when the camera is tilted, the sun is under 3 degrees up
+// or no such blob is seen (overcast, or only a field of clipped cloud).
+std::optional<NorthFromSun> north_from_seen_sun(const ImportedPhoto& photo, const UtcTime& time,
+                                                const GeoLocation& where, double max_zenith_error_deg = 5);
 
 // Absolute radiance from an imported LDR photo (throws dynsky::Error if the photo was not
 // display-referred: HDR input already has its own scale). Sets sun_direction on the result.

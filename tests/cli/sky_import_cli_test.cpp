@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "sky/sky_image.h"
+#include "sky/sun_position.h"
 #include "tests/test_support.h"
 #include "util/image.h"
 
@@ -254,6 +255,64 @@ TEST(SkyImportCli, SequenceFolderImportsEveryFrameUnderOneCircle) {
     r = test::run_command(exe() + " sky import " + dir + "/photos" + common + " -o " + dir + "/one.exr");
     EXPECT_NE(r.exit_code, 0);
     EXPECT_NE(r.output.find("is the folder their skies go to"), std::string::npos) << r.output;
+    fs::remove_all(dir);
+}
+
+// A level camera of unknown north (70 degrees clockwise from the photo's top), its clipped sun in
+// view: the import says which north would put the computed sun there, and --find-north turns the
+// photograph by it, for one photograph and for a sequence.
+TEST(SkyImportCli, FindNorthTurnsThePhotographByTheSunItShows) {
+    std::string dir = test::temp_dir("sky-import-north");
+    fs::create_directories(dir + "/seq");
+    const GeoLocation paris{48.85, 2.35, 35};
+    const char* times[] = {"2026-06-21T08:00:00Z", "2026-06-21T08:30:00Z", "2026-06-21T09:00:00Z"};
+    for (int k = 0; k < 3; ++k) {
+        const Vec3d sun = compute_sun_position(parse_utc_time(times[k]), paris).direction();
+        Image photo(400, 300, 3);
+        for (int y = 0; y < 300; ++y)
+            for (int x = 0; x < 400; ++x) {
+                const double dx = x - 200.0, dy = y - 150.0, r = std::hypot(dx, dy) / 140.0;
+                Color c = Color::Zero();
+                if (r <= 1) {
+                    const double theta = r * kPiD / 2, a = 70 * kPiD / 180 - std::atan2(dx, -dy);
+                    const Vec3d w(std::sin(theta) * std::sin(a), std::cos(theta), -std::sin(theta) * std::cos(a));
+                    const double off = std::atan2(w.cross(sun).norm(), w.dot(sun));
+                    c = off < 4 * kPiD / 180 ? Color(1, 1, 1) : Color(0.25f, 0.35f, 0.6f) * float(0.8 + 0.2 * std::cos(off));
+                }
+                for (int ch = 0; ch < 3; ++ch) photo.at(x, y, ch) = c[ch];
+            }
+        write_image(dir + "/seq/sky_2026-06-21T0" + std::string(times[k] + 12, 1) + "-" +
+                        std::string(times[k] + 14, 2) + "-00Z.png",
+                    photo);
+    }
+    const std::string one = dir + "/seq/sky_2026-06-21T08-00-00Z.png";
+    ASSERT_TRUE(fs::exists(one));
+    const std::string place = " --lat 48.85 --lon 2.35 --sky-res 64";
+    auto r = test::run_command(exe() + " sky import " + one + place + " -o " + dir + "/plain.exr");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("(or --find-north) puts the computed sun on it"), std::string::npos) << r.output;
+    const size_t at = r.output.find("says, --north ");
+    ASSERT_NE(at, std::string::npos);
+    EXPECT_NEAR(std::atof(r.output.c_str() + at + 14), 70.0, 2.0) << r.output;
+
+    r = test::run_command(exe() + " sky import " + one + place + " --find-north -o " + dir + "/turned.exr");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(r.output.find("warning"), std::string::npos) << r.output;
+    const size_t north = r.output.find("north: ");
+    ASSERT_NE(north, std::string::npos) << r.output;
+    EXPECT_NEAR(std::atof(r.output.c_str() + north + 7), 70.0, 2.0) << r.output;
+    EXPECT_NE(r.output.find("sun disc restored"), std::string::npos) << r.output;
+
+    r = test::run_command(exe() + " sky import " + dir + "/seq" + place + " --find-north -o " + dir + "/skies");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("found from the clipped sun on 3 of 3 photographs"), std::string::npos) << r.output;
+
+    // No time: --find-north cannot know where the sun should be.
+    write_image(dir + "/untimed.png", read_image(one));
+    r = test::run_command(exe() + " sky import " + dir + "/untimed.png" + place + " --find-north -o " + dir + "/x.exr");
+    EXPECT_NE(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("--find-north needs the photo's time and place"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/x.exr"));
     fs::remove_all(dir);
 }
 

@@ -12,6 +12,7 @@
 #include <random>
 
 #include "sky/fisheye.h"
+#include "sky/hdr_recovery.h"
 #include "sky/sun_position.h"
 #include "tests/test_support.h"
 #include "util/color.h"
@@ -291,6 +292,65 @@ TEST(PhotoImport, MaskedObstructionIsInpaintedPlausibly) {
 // Inpainted, it came out as radial streaks: the texture at its inner edge (here stripes 9 degrees
 // apart) drawn out to the horizon. Now the ring holds the seen edge's colour smoothed over azimuth:
 // no stripes, the east-bright sky still brighter in the east, and the same mean as the seen edge.
+// A level camera whose north is not known, photographing a clear sky with its sun clipped (a
+// disc 4 degrees across, as glare makes it), north at `north_deg` in the photo.
+Image photo_with_clipped_sun(const TestCamera& cam, const Vec3d& sun) {
+    Image photo(400, 300, 3);
+    for (int y = 0; y < 300; ++y)
+        for (int x = 0; x < 400; ++x) {
+            Vec3d w;
+            Color c = Color::Zero();
+            if (cam.direction(x, y, &w)) {
+                const double a = std::atan2(w.cross(sun).norm(), w.dot(sun));
+                c = a < 4 * kDeg ? Color(1, 1, 1) : Color(0.25f, 0.35f, 0.6f) * float(0.8 + 0.2 * std::cos(a));
+            }
+            for (int k = 0; k < 3; ++k) photo.at(x, y, k) = c[k];
+        }
+    return photo;
+}
+
+// north_from_seen_sun turns the photograph so that the sun it shows is the computed one, for
+// normal and mirrored cameras; a photo whose clipped blob is not at the sun's height gives none.
+TEST(PhotoImport, NorthIsFoundFromTheSunThePhotoShows) {
+    const UtcTime when = parse_utc_time("2026-06-21T08:00:00Z");
+    const GeoLocation paris{48.85, 2.35, 35};
+    const Vec3d sun = compute_sun_position(when, paris).direction();
+    for (const bool mirrored : {false, true})
+        for (const double north : {70.0, 200.0, 333.0}) {
+            TestCamera cam{200.0, 150.0, 140.0, north, LensLaw::Equidistant, mirrored};
+            const Image photo = photo_with_clipped_sun(cam, sun);
+            PhotoImportParams p;
+            p.circle = SkyCircle{cam.cx, cam.cy, cam.radius};
+            p.mirrored = mirrored;
+            p.resolution = 128;
+            p.detect_thin_obstructions = false;
+            const ImportedPhoto unknown = import_photo_image(photo, "sun", p);  // north 0 assumed
+            const std::optional<NorthFromSun> found = north_from_seen_sun(unknown, when, paris);
+            ASSERT_TRUE(found.has_value()) << north << " " << mirrored;
+            EXPECT_LT(std::abs(std::remainder(found->north_deg - north, 360.0)), 2.0) << found->north_deg << " " << mirrored;
+            // Imported with it, the clipped sun is where the sun is computed.
+            p.north_deg = found->north_deg;
+            HdrCalibrationParams hp;
+            hp.time = when, hp.location = paris;
+            HdrCalibrationReport rep;
+            recover_hdr(import_photo_image(photo, "sun", p), hp, &rep);
+            EXPECT_TRUE(rep.sun_visible) << north;
+            EXPECT_LT(rep.sun_offset_deg, 2.0) << north;
+            EXPECT_FALSE(rep.sun_elsewhere.has_value());
+            // Imported with north 0, the calibration says where north would put it.
+            recover_hdr(unknown, hp, &rep);
+            ASSERT_TRUE(rep.sun_elsewhere.has_value());
+            EXPECT_NE(rep.sun_offset_warning().find("--find-north"), std::string::npos) << rep.sun_offset_warning();
+        }
+    // The sun 20 degrees lower than the blob (a wrong time): not taken for it.
+    TestCamera cam{200.0, 150.0, 140.0, 70.0, LensLaw::Equidistant, false};
+    const Vec3d higher = Eigen::AngleAxisd(20 * kDeg, sun.cross(Vec3d::UnitY()).normalized()) * sun;
+    PhotoImportParams p;
+    p.circle = SkyCircle{cam.cx, cam.cy, cam.radius};
+    p.resolution = 128;
+    EXPECT_FALSE(north_from_seen_sun(import_photo_image(photo_with_clipped_sun(cam, higher), "sun", p), when, paris));
+}
+
 // Median log(R/G) of a sky's seen pixels in a ring of canonical radii [r0, r1).
 double ring_log_rg(const SkyImage& sky, const std::vector<unsigned char>& not_sky, double r0, double r1) {
     const int n = sky.resolution;
