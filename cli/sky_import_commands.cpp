@@ -365,6 +365,38 @@ void run_import(const ImportOptions& o) {
         each.circle_origin = "the sequence's";
         each.circle_photo_size = found.photo_size;
     }
+    if (o.detect && o.preset.empty() && o.mask.empty()) {
+        // One obstruction mask for the sequence (sky/photo_import.h find_sequence_obstructions),
+        // written beside the skies, used by every import instead of finding them frame by frame.
+        PhotoImportParams search;
+        search.encoding = o.encoding;
+        const SkyCircle circle = parse_center(each.center, each.radius);
+        Image percentile;
+        const std::vector<unsigned char> hidden = find_sequence_obstructions(photos, circle, search, 15, &percentile);
+        Image mask(percentile.width, percentile.height, 1);
+        long long in_circle = 0, hidden_in_circle = 0;
+        for (int y = 0; y < mask.height; ++y)
+            for (int x = 0; x < mask.width; ++x) {
+                const size_t p = size_t(y) * mask.width + x;
+                mask.pixels[p] = hidden[p] ? 0.0f : 1.0f;
+                if (std::hypot(x - circle.center_x, y - circle.center_y) <= circle.radius)
+                    ++in_circle, hidden_in_circle += hidden[p];
+            }
+        const std::string mask_path = (fs::path(o.out) / "obstructions.png").string();
+        write_image(mask_path, mask);
+        std::printf(
+            "obstructions: found once for the sequence, on the 80th percentile of %zu photographs spread over "
+            "it: %.1f%% of the sky circle (%s, black = not sky); used for every photograph\n",
+            std::min<size_t>(photos.size(), 15), in_circle ? 100.0 * hidden_in_circle / in_circle : 0.0,
+            mask_path.c_str());
+        each.mask = mask_path;
+        each.mask_layout = "photo";
+        each.detect = false;
+        each.keep_thin = true;  // found on the percentile with the rest
+    } else if (o.preset.empty() && o.mask.empty())
+        std::printf(
+            "note: rooftops, trees and masts at the horizon are left in the skies (thin ones aside): "
+            "--detect-obstructions finds them once for the whole sequence\n");
     if (o.find_north) {
         // One north for the sequence: found from the sun on up to 25 photographs spread over it (at
         // 128 px), the one with the least summed angular distance to the others.

@@ -812,6 +812,53 @@ SkyCircle find_photo_sky_circle(const std::string& path, const PhotoImportParams
                            params.max_radius_fraction);
 }
 
+std::vector<unsigned char> find_sequence_obstructions(const std::vector<std::string>& photos, const SkyCircle& circle,
+                                                      const PhotoImportParams& params, int max_photos,
+                                                      Image* percentile_out) {
+    if (photos.empty()) throw Error("no photographs to find obstructions in");
+    const int n = int(photos.size()), tries = std::min(n, std::max(1, max_photos));
+    // The k-th largest encoded value per pixel and channel, k a fifth of the photos (the 80th
+    // percentile): kept as the k largest so far, 8-bit, k x the photo's size in memory.
+    const int k = std::max(1, int(std::lround(0.2 * tries)));
+    int width = 0, height = 0, channels = 0;
+    std::vector<unsigned char> top;  // [pixel * channels + c][k], descending
+    for (int t = 0; t < tries; ++t) {
+        const std::string& path = photos[tries == 1 ? 0 : size_t(std::lround(double(t) * (n - 1) / (tries - 1)))];
+        Image photo = read_radiance_image(path);
+        apply_orientation(photo);
+        check_photo_fits(photo, path, params);
+        const Image encoded = is_display_encoded(photo, path, params.encoding)
+                                  ? photo
+                                  : tone_mapped_grey(to_rgb_mat(photo, path));
+        if (t == 0) {
+            width = encoded.width, height = encoded.height, channels = std::min(encoded.channels, 3);
+            top.assign(size_t(width) * height * channels * k, 0);
+        } else if (encoded.width != width || encoded.height != height) {
+            throw_file_error(path, "is " + std::to_string(encoded.width) + " x " + std::to_string(encoded.height) +
+                                       " pixels, but the sequence's photographs are " + std::to_string(width) + " x " +
+                                       std::to_string(height));
+        }
+        tbb::parallel_for(0, height, [&](int y) {
+            for (int x = 0; x < width; ++x)
+                for (int c = 0; c < channels; ++c) {
+                    const float v = encoded.at(x, y, std::min(c, encoded.channels - 1));
+                    unsigned char q = (unsigned char)std::lround(std::clamp(std::isfinite(v) ? v : 0.0f, 0.0f, 1.0f) *
+                                                                 255);
+                    unsigned char* slot = &top[((size_t(y) * width + x) * channels + c) * k];
+                    for (int i = 0; i < k; ++i)
+                        if (q > slot[i]) std::swap(q, slot[i]);  // insert, the smallest falls off
+                }
+        });
+    }
+    Image percentile(width, height, channels);
+    for (size_t p = 0; p < size_t(width) * height * channels; ++p) percentile.pixels[p] = top[p * k + (k - 1)] / 255.0f;
+    std::vector<unsigned char> out = detect_dark_obstructions(percentile, circle);
+    const std::vector<unsigned char> thin = detect_thin_dark_structures(percentile, circle);
+    for (size_t p = 0; p < out.size(); ++p) out[p] = out[p] || thin[p];
+    if (percentile_out) *percentile_out = std::move(percentile);
+    return out;
+}
+
 SequenceSkyCircle find_sequence_sky_circle(const std::vector<std::string>& photos, const PhotoImportParams& params,
                                            int max_photos) {
     if (photos.empty()) throw Error("no photographs to find a sky circle in");

@@ -210,6 +210,18 @@ struct SequenceSkyCircle {
 SequenceSkyCircle find_sequence_sky_circle(const std::vector<std::string>& photos, const PhotoImportParams& params,
                                            int max_photos = 25);
 
+// What hides the sky in a sequence of one camera's photographs, found once for all: dark objects
+// (detect_dark_obstructions) and thin ones (detect_thin_dark_structures) on the per-pixel 80th
+// percentile of up to max_photos photographs spread over the sequence. The sky brightens at some
+// time at every pixel (a cloud lit, blue sky, the day brightening), a roof or a mast does not rise
+// above it, so every frame leaves out the same pixels and a cloud's shadow in one frame is not
+// taken for a roof. What moves (a shadow band following the sun) is not found. Photo-sized, 1 = not
+// sky; *percentile_out: the percentile image the objects were found on. Throws naming a photo of
+// another size than the first.
+std::vector<unsigned char> find_sequence_obstructions(const std::vector<std::string>& photos, const SkyCircle& circle,
+                                                      const PhotoImportParams& params, int max_photos = 15,
+                                                      Image* percentile_out = nullptr);
+
 // Dark, sky-blocking objects (shadow band, arm, masts) inside the circle: pixels much darker than
 // the sky's median brightness, kept in large connected pieces. Returns a photo-sized 0/1 mask.
 // A heuristic: deep cloud shadows on dark overcast can be taken for obstructions (see docs).

@@ -238,6 +238,26 @@ TEST(SkyImportCli, SequenceFolderImportsEveryFrameUnderOneCircle) {
         diff += std::abs(from_folder.rgb[k] - alone.rgb[k]), sum += alone.rgb[k];
     EXPECT_LT(diff, 0.005 * sum);  // the printed circle is rounded to 0.1 px
 
+    // --detect-obstructions: the roofs, railings and masts found once for the sequence (on the 80th
+    // percentile of its photos), written beside the skies, and every frame leaves out the same pixels
+    // (found frame by frame, the dawn frame's dark sky would take more).
+    fs::remove(dir + "/photos/IMG_20200812_090000.jpg");
+    r = test::run_command(exe() + " sky import " + dir + "/photos" + common + " --detect-obstructions -o " + dir +
+                          "/masked");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    ASSERT_TRUE(fs::exists(dir + "/masked/obstructions.png")) << r.output;
+    const size_t share_at = r.output.find("it: ");
+    ASSERT_NE(share_at, std::string::npos) << r.output;
+    const double share = std::atof(r.output.c_str() + share_at + 4);
+    EXPECT_GT(share, 10.0) << r.output;  // the Mobotix's horizon ring of roofs: about a fifth
+    EXPECT_LT(share, 35.0) << r.output;
+    const Image dawn = read_image(dir + "/masked/IMG_20200812_072000.filled.png"),
+                noon = read_image(dir + "/masked/IMG_20200812_120000.filled.png");
+    EXPECT_EQ(dawn.pixels, noon.pixels);
+    double filled = 0;
+    for (float v : noon.pixels) filled += v;
+    EXPECT_GT(filled, 0.1 * noon.pixels.size());
+
     // A photograph of another size among them (another camera, or cropped) is named, not imported
     // under a circle measured on the others.
     Image half = read_image(dir + "/photos/IMG_20200812_120000.jpg");
@@ -277,7 +297,8 @@ TEST(SkyImportCli, FindNorthTurnsThePhotographByTheSunItShows) {
                     const double theta = r * kPiD / 2, a = 70 * kPiD / 180 - std::atan2(dx, -dy);
                     const Vec3d w(std::sin(theta) * std::sin(a), std::cos(theta), -std::sin(theta) * std::cos(a));
                     const double off = std::atan2(w.cross(sun).norm(), w.dot(sun));
-                    c = off < 4 * kPiD / 180 ? Color(1, 1, 1) : Color(0.25f, 0.35f, 0.6f) * float(0.8 + 0.2 * std::cos(off));
+                    c = off < 4 * kPiD / 180 ? Color(1, 1, 1)
+                                             : Color(0.25f, 0.35f, 0.6f) * float(0.8 + 0.2 * std::cos(off));
                 }
                 for (int ch = 0; ch < 3; ++ch) photo.at(x, y, ch) = c[ch];
             }

@@ -740,6 +740,36 @@ TEST(SkyCircle, SequenceTakesTheMedianOfTheCirclesFoundSpreadOverIt) {
     std::filesystem::remove_all(dir);
 }
 
+// A sequence's obstructions found once: a roof at the rim in every photo is found, a dark cloud
+// that is somewhere else in each photo is not (found photo by photo, it would be).
+TEST(SkyCircle, SequenceObstructionsAreWhatStaysDark) {
+    std::string dir = test::temp_dir("sequence-obstructions");
+    std::vector<std::string> paths;
+    const SkyCircle circle{200.0, 160.0, 140.0};
+    auto roof = [&](int x, int y) { return y > 160 + 100 && std::abs(x - 200) < 60; };  // the rim's bottom
+    for (int k = 0; k < 6; ++k) {
+        Image photo(400, 320, 3);
+        const double cloud_x = 130 + 28 * k, cloud_y = 120;
+        for (int y = 0; y < 320; ++y)
+            for (int x = 0; x < 400; ++x) {
+                const double r = std::hypot(x - circle.center_x, y - circle.center_y);
+                float v = r > circle.radius ? 0.0f : 0.6f + 0.05f * float(std::sin(0.1 * x + k));
+                if (r <= circle.radius && std::hypot(x - cloud_x, y - cloud_y) < 25) v = 0.12f;  // a dark cloud
+                if (r <= circle.radius && roof(x, y)) v = 0.08f;
+                for (int c = 0; c < 3; ++c) photo.at(x, y, c) = v;
+            }
+        paths.push_back(dir + "/f" + std::to_string(k) + ".png");
+        write_image(paths.back(), photo);
+    }
+    const std::vector<unsigned char> hidden = find_sequence_obstructions(paths, circle, PhotoImportParams{});
+    EXPECT_TRUE(hidden[size_t(285) * 400 + 200]) << "the roof";
+    for (int k = 0; k < 6; ++k) EXPECT_FALSE(hidden[size_t(120) * 400 + 130 + 28 * k]) << "the cloud of photo " << k;
+    // One photo alone takes its dark cloud for an object.
+    const std::vector<unsigned char> alone = detect_dark_obstructions(read_image(paths[0]), circle);
+    EXPECT_TRUE(alone[size_t(120) * 400 + 130]);
+    std::filesystem::remove_all(dir);
+}
+
 TEST(PhotoImport, RealSequencesImportWithTheSkyCircleWhereExpected) {
     DYNSKY_REQUIRE_SHARED();
     // TSI: the circle found on the photo vs the one fitted to the TSI's own sun marker.
