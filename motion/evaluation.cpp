@@ -82,7 +82,9 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
     if (!o.photos.empty() && o.preset.empty() && !folder_holds_skies(o.photos))
         throw Error(
             "--photos needs --preset (arm-tsi or mobotix) for photographs; a folder of skies imported with "
-            "'dynsky sky import' (.exr, any camera) needs none");
+            "'dynsky sky import' (.exr, any camera) needs none: for another camera's photographs, import them "
+            "first, under one sky circle ('dynsky sky import " +
+            o.photos + " --lat DEG --lon DEG --utc-offset H --detect-obstructions -o SKIES/'), then --photos SKIES/");
     const std::string shared = o.shared.empty() && !o.sequence.empty() ? default_shared_dir() : o.shared;
     {
         // The report and what is written beside it must not replace an input or land in an input
