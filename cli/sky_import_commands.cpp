@@ -404,7 +404,7 @@ void run_import(const ImportOptions& o) {
         const int count = int(photos.size()), tries = std::min(count, 25);
         for (int k = 0; k < tries; ++k) {
             ImportOptions probe = each;
-            const size_t at = tries == 1 ? 0 : size_t(std::lround(double(k) * (count - 1) / (tries - 1)));
+            const size_t at = spread_index(k, tries, count);
             probe.photo = photos[at], probe.out = outputs[at], probe.preview.clear(), probe.filled_mask.clear();
             probe.resolution = 128;
             try {

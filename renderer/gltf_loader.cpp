@@ -486,17 +486,8 @@ class GltfLoader {
     GltfLoader(std::string path, double animation_time) : path_(std::move(path)), animation_time_(animation_time) {}
 
     Scene load() {
-        scene_.source = path_;
-        parse_file();
-        check_version();
-        check_extensions();
-        decode_meshopt_views();
-        validate_buffer_views();
-        decode_draco_primitives();
-        rest_nodes_ = model_.nodes;
+        load_once();
         if (animation_time_ >= 0) pose_animations(animation_time_);
-        build_materials();
-        build_textures();
         traverse_nodes();
         check_extent();
         if (!model_.animations.empty() && animation_time_ < 0)
@@ -506,10 +497,11 @@ class GltfLoader {
         return std::move(scene_);
     }
 
-    // Loaded once (load_once), posed many times: the file's nodes are put back at rest and posed at
-    // t, and only what hangs on the nodes is built again (meshes with their skins and morph targets,
-    // instances, cameras, lights); materials and the decoded textures are the first load's. The
-    // result is what load() gives for that time.
+    // Everything that does not hang on the nodes: the file read and checked, its buffers decoded, the
+    // materials and textures built. load() goes on to pose and build the nodes once; AnimatedGltf
+    // poses again and again (pose): the file's nodes put back at rest and posed at t, and only what
+    // hangs on them built again (meshes with their skins and morph targets, instances, cameras,
+    // lights), the materials and decoded textures shared. A pose is what load() gives for that time.
     void load_once() {
         scene_.source = path_;
         parse_file();

@@ -801,6 +801,10 @@ ImportedPhoto import_photo(const std::string& path, const PhotoImportParams& par
 }
 
 
+size_t spread_index(int k, int tries, int count) {
+    return tries <= 1 ? 0 : size_t(std::lround(double(k) * (count - 1) / (tries - 1)));
+}
+
 SkyCircle find_photo_sky_circle(const std::string& path, const PhotoImportParams& params, std::array<int, 2>* size) {
     Image photo = read_radiance_image(path);
     apply_orientation(photo);
@@ -823,7 +827,7 @@ std::vector<unsigned char> find_sequence_obstructions(const std::vector<std::str
     int width = 0, height = 0, channels = 0;
     std::vector<unsigned char> top;  // [pixel * channels + c][k], descending
     for (int t = 0; t < tries; ++t) {
-        const std::string& path = photos[tries == 1 ? 0 : size_t(std::lround(double(t) * (n - 1) / (tries - 1)))];
+        const std::string& path = photos[spread_index(t, tries, n)];
         Image photo = read_radiance_image(path);
         apply_orientation(photo);
         check_photo_fits(photo, path, params);
@@ -868,7 +872,7 @@ SequenceSkyCircle find_sequence_sky_circle(const std::vector<std::string>& photo
     const int n = int(photos.size()), tries = std::min(n, std::max(1, max_photos));
     for (int k = 0; k < tries; ++k) {
         // Spread over the sequence: a dark start (dawn) or a run of overcast frames is not all it sees.
-        const std::string& path = photos[tries == 1 ? 0 : size_t(std::lround(double(k) * (n - 1) / (tries - 1)))];
+        const std::string& path = photos[spread_index(k, tries, n)];
         ++out.tried;
         std::array<int, 2> size{0, 0};
         SkyCircle c;

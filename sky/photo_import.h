@@ -190,6 +190,10 @@ ImportedPhoto import_photo_image(const Image& photo, const std::string& name, co
 SkyCircle find_sky_circle(const Image& photo, const std::string& name, double min_fraction = 0.30,
                           double max_fraction = 0.55);
 
+// Which photograph is the k-th of `tries` spread evenly over a sequence of `count` (the first and
+// the last among them): what the sequence-wide searches below look at.
+size_t spread_index(int k, int tries, int count);
+
 // The sky circle of one photograph file as import_photo finds it (turned by its EXIF orientation,
 // HDR files tone-mapped first), with params' search range and encoding; *size: the photo's width
 // and height as turned.
