@@ -399,7 +399,7 @@ void run_import(const ImportOptions& o) {
             "--detect-obstructions finds them once for the whole sequence\n");
     if (o.find_north) {
         // One north for the sequence: found from the sun on up to 25 photographs spread over it (at
-        // 128 px), the one with the least summed angular distance to the others.
+        // 128 px), and agreed on (consensus_north).
         std::vector<double> norths;
         const int count = int(photos.size()), tries = std::min(count, 25);
         for (int k = 0; k < tries; ++k) {
@@ -416,7 +416,6 @@ void run_import(const ImportOptions& o) {
                 // No time, unreadable: this one says nothing about north (the import below names it).
             }
         }
-        auto apart = [](double a, double b) { return std::abs(std::remainder(a - b, 360.0)); };
         if (norths.empty()) {
             std::fprintf(
                 stderr,
@@ -424,20 +423,12 @@ void run_import(const ImportOptions& o) {
                 "sun at the computed sun's height: north stays %.1f deg\n",
                 tries, o.north_opt->count() ? o.north : 0.0);
         } else {
-            double best = norths[0], best_sum = 1e300, spread = 0;
-            for (double a : norths) {
-                double sum = 0;
-                for (double b : norths) sum += apart(a, b);
-                if (sum < best_sum) best_sum = sum, best = a;
-            }
-            int near = 0;
-            for (double a : norths)
-                if (apart(a, best) <= 10) ++near, spread = std::max(spread, apart(a, best));
+            const ConsensusNorth north = consensus_north(norths);
             std::printf(
                 "north: %.1f deg clockwise from the photos' top, found from the clipped sun on %zu of %d "
                 "photographs spread over the sequence (%d within %.1f deg of it); used for every photograph\n",
-                best, norths.size(), tries, near, spread);
-            each.north_found = best;
+                north.north_deg, norths.size(), tries, north.near, north.spread_deg);
+            each.north_found = north.north_deg;
         }
         each.find_north = false;
     }

@@ -133,6 +133,22 @@ std::optional<NorthFromSun> north_from_seen_sun(const ImportedPhoto& photo, cons
     return out;
 }
 
+ConsensusNorth consensus_north(const std::vector<double>& norths_deg) {
+    if (norths_deg.empty()) throw Error("no north found to agree on");
+    auto apart = [](double a, double b) { return std::abs(std::remainder(a - b, 360.0)); };
+    ConsensusNorth out;
+    double best_sum = 1e300;
+    for (double a : norths_deg) {
+        double sum = 0;
+        for (double b : norths_deg) sum += apart(a, b);
+        if (sum < best_sum) best_sum = sum, out.north_deg = a;
+    }
+    for (double a : norths_deg)
+        if (apart(a, out.north_deg) <= 10)
+            ++out.near, out.spread_deg = std::max(out.spread_deg, apart(a, out.north_deg));
+    return out;
+}
+
 SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& params, HdrCalibrationReport* report_out) {
     if (!photo.display_referred)
         throw_file_error(photo.photo_path,

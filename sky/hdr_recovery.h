@@ -26,6 +26,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "sky/cloud_mask.h"
 #include "sky/photo_import.h"
@@ -112,6 +113,17 @@ struct HdrCalibrationReport {
 // or no such blob is seen (overcast, or only a field of clipped cloud).
 std::optional<NorthFromSun> north_from_seen_sun(const ImportedPhoto& photo, const UtcTime& time,
                                                 const GeoLocation& where, double max_zenith_error_deg = 5);
+
+// One north from those found on several photographs of a sequence (north_from_seen_sun on each):
+// the one with the least summed angular distance to the others (a median on the circle: a photo
+// whose glare was taken for the sun does not pull it), how many lie within 10 degrees of it and
+// the farthest of those. Throws dynsky::Error for none.
+struct ConsensusNorth {
+    double north_deg = 0;
+    int near = 0;
+    double spread_deg = 0;
+};
+ConsensusNorth consensus_north(const std::vector<double>& norths_deg);
 
 // Absolute radiance from an imported LDR photo (throws dynsky::Error if the photo was not
 // display-referred: HDR input already has its own scale). Sets sun_direction on the result.

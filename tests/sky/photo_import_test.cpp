@@ -327,7 +327,8 @@ TEST(PhotoImport, NorthIsFoundFromTheSunThePhotoShows) {
             const ImportedPhoto unknown = import_photo_image(photo, "sun", p);  // north 0 assumed
             const std::optional<NorthFromSun> found = north_from_seen_sun(unknown, when, paris);
             ASSERT_TRUE(found.has_value()) << north << " " << mirrored;
-            EXPECT_LT(std::abs(std::remainder(found->north_deg - north, 360.0)), 2.0) << found->north_deg << " " << mirrored;
+            EXPECT_LT(std::abs(std::remainder(found->north_deg - north, 360.0)), 2.0)
+                << found->north_deg << " " << mirrored;
             // Imported with it, the clipped sun is where the sun is computed.
             p.north_deg = found->north_deg;
             HdrCalibrationParams hp;
@@ -349,6 +350,15 @@ TEST(PhotoImport, NorthIsFoundFromTheSunThePhotoShows) {
     p.circle = SkyCircle{cam.cx, cam.cy, cam.radius};
     p.resolution = 128;
     EXPECT_FALSE(north_from_seen_sun(import_photo_image(photo_with_clipped_sun(cam, higher), "sun", p), when, paris));
+}
+
+TEST(PhotoImport, ASequenceAgreesOnOneNorthAcrossZero) {
+    // Four photos agree about north (around 0 degrees, on both sides of it), one took glare for the sun.
+    const ConsensusNorth n = consensus_north({358.0, 2.0, 5.0, 359.0, 120.0});
+    EXPECT_DOUBLE_EQ(n.north_deg, 2.0);
+    EXPECT_EQ(n.near, 4);
+    EXPECT_DOUBLE_EQ(n.spread_deg, 4.0);
+    EXPECT_THROW(consensus_north({}), Error);
 }
 
 // Median log(R/G) of a sky's seen pixels in a ring of canonical radii [r0, r1).
