@@ -40,8 +40,8 @@ struct ImportOptions {
     int resolution = 512;
     std::string out, preview, filled_mask;
     // Set by CLI11 when given, so presets can be overridden option by option.
-    CLI::Option *lens_opt = nullptr, *north_opt = nullptr, *lat_opt = nullptr, *lon_opt = nullptr, *elev_opt = nullptr,
-                *offset_opt = nullptr, *tilt_opt = nullptr, *tilt_az_opt = nullptr;
+    CLI::Option *fill_opt = nullptr, *lens_opt = nullptr, *north_opt = nullptr, *lat_opt = nullptr, *lon_opt = nullptr,
+                *elev_opt = nullptr, *offset_opt = nullptr, *tilt_opt = nullptr, *tilt_az_opt = nullptr;
 };
 
 struct MaskOptions {
@@ -347,6 +347,9 @@ void run_import(const ImportOptions& o) {
     if (ec || !fs::is_directory(o.out)) throw_file_error(o.out, "cannot create this output folder: " + ec.message());
 
     ImportOptions each = o;
+    // A sequence's hidden pixels are filled smoothly unless asked otherwise: the texture fill takes
+    // seconds a frame and differs from frame to frame.
+    if (!o.fill_opt->count()) each.fill = "smooth";
     if (o.center.empty() && (o.preset.empty() || o.auto_circle || !camera_preset(o.preset).params.circle)) {
         PhotoImportParams search = o.preset.empty() ? PhotoImportParams{} : camera_preset(o.preset).params;
         search.encoding = o.encoding;
@@ -450,8 +453,8 @@ void run_import(const ImportOptions& o) {
         progress.advance();
     }
     progress.finish();
-    std::printf("imported %zu of %zu photographs into %s/ (STEM.exr, STEM.png, STEM.filled.png)\n",
-                photos.size() - failed.size(), photos.size(), o.out.c_str());
+    std::printf("imported %zu of %zu photographs into %s%s (STEM.exr, STEM.png, STEM.filled.png)\n",
+                photos.size() - failed.size(), photos.size(), o.out.c_str(), o.out.back() == '/' ? "" : "/");
     if (!failed.empty())
         throw Error(std::to_string(failed.size()) + " of " + std::to_string(photos.size()) +
                     " photographs not imported (each named above), the first " + failed.front());
@@ -603,11 +606,12 @@ void register_sky_import_commands(CLI::App& sky) {
                   "Do not look for thin dark objects (masts, wires, the housing's dark edge inside the circle), which "
                   "are otherwise found and filled on any photograph");
     imp->add_flag("--no-inpaint", io->no_inpaint, "Leave non-sky pixels black instead of filling them");
-    imp->add_option("--fill", io->fill,
-                    "How non-sky pixels are filled: texture (default: the sky's own clouds and blue copied in, "
-                    "so a moved sky carries no smooth streak; ~4 s at 512 px) or smooth (Telea inpainting: fast, "
-                    "the same from frame to frame, as sequences are imported)")
-        ->check(CLI::IsMember({"texture", "smooth"}));
+    io->fill_opt =
+        imp->add_option("--fill", io->fill,
+                        "How non-sky pixels are filled: texture (default for one photograph: the sky's own clouds and\n"
+                        "blue copied in, so a moved sky carries no smooth streak; ~4 s at 512 px) or smooth (Telea\n"
+                        "inpainting: fast, the same from frame to frame; the default for a sequence)")
+            ->check(CLI::IsMember({"texture", "smooth"}));
     imp->add_option(
         "--encoding", io->encoding,
         "Input values: auto (default: by the file's pixels: 8- and 16-bit files are sRGB unless their header\n"

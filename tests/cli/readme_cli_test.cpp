@@ -97,6 +97,22 @@ TEST(ReadmeCommands, SkyProceduralAndImport) {
     r = in_folder(dir, "sky import photo.jpg --preset arm-tsi --sky-res 512 --out sky.exr");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_TRUE(non_empty(fs::path(dir) / "sky.exr"));
+
+    // Another camera's sequence: imported under one circle, then scored.
+    fs::create_directories(fs::path(dir) / "PHOTOS");
+    for (int m = 0; m < 8; ++m) {
+        char name[64];
+        std::snprintf(name, sizeof name, "/2020-08-12_12_%02d.jpg", m);
+        const std::string renamed = "IMG_20200812_12" + std::string(name + 15, 2) + "00.jpg";
+        fs::copy_file(test::shared_path("skies/mobotix_sophia_20200812_morning/images") + name,
+                      fs::path(dir) / "PHOTOS" / renamed);
+    }
+    r = in_folder(dir, "sky import PHOTOS/ --lat 48.85 --lon=2.35 --utc-offset 2 -o SKIES/ --sky-res 64");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("imported 8 of 8 photographs into SKIES/ "), std::string::npos) << r.output;
+    r = in_folder(dir, "sky evaluate --photos SKIES/ --report eval/eval.md --import-res 64 --res 64 --horizons 1,2 -q");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_TRUE(non_empty(fs::path(dir) / "eval" / "eval.md"));
 }
 
 TEST(ReadmeCommands, InstalledProgramFindsItsScenesAndModels) {
