@@ -29,7 +29,8 @@ struct ImportOptions {
     std::vector<std::string> photos;                      // as given: one photograph, several, or a folder of them
     std::string circle_origin;                            // how the circle given came about ("" : "given")
     std::optional<std::array<int, 2>> circle_photo_size;  // the sequence's photos' size, when its circle is used
-    bool find_north = false;
+    bool find_north = false, flatten_colour = false;
+    std::optional<PhotoImportParams::ColourShading> colour_shading;  // a sequence's, measured on it
     std::optional<double> north_found;  // a sequence's north, found from the sun on its photographs
     std::string photo, preset, center, lens, mask, mask_layout = "photo", encoding = "auto";
     double radius = 0, north = 0, tilt = 0, tilt_azimuth = 0;
@@ -121,6 +122,7 @@ ImportPlan plan_import(const ImportOptions& o, bool verbose) {
     if (o.lens_opt->count()) params.lens = parse_lens_law(o.lens);
     if (o.north_opt->count()) params.north_deg = o.north;
     if (o.north_found) params.north_deg = *o.north_found;
+    if (o.colour_shading) params.colour_shading = o.colour_shading;
     if (o.mirror) params.mirrored = true;
     if (o.tilt_opt->count()) params.tilt_deg = o.tilt;
     if (o.tilt_az_opt->count()) params.tilt_azimuth_deg = o.tilt_azimuth;
@@ -306,6 +308,10 @@ void run_import(const ImportOptions& o) {
     namespace fs = std::filesystem;
     const bool sequence = o.photos.size() > 1 || fs::is_directory(o.photos.front());
     if (!sequence) {
+        if (o.flatten_colour)
+            throw Error(
+                "--flatten-colour measures a camera's colour shading on its overcast photographs: give a "
+                "sequence (several photographs or a folder)");
         ImportOptions one = o;
         one.photo = o.photos.front();
         import_one(one, true);
@@ -400,6 +406,29 @@ void run_import(const ImportOptions& o) {
         std::printf(
             "note: rooftops, trees and masts at the horizon are left in the skies (thin ones aside): "
             "--detect-obstructions finds them once for the whole sequence\n");
+    if (o.flatten_colour) {
+        // The camera's colour shading, measured on the sequence's overcast photos and divided out of
+        // every one (sky/photo_import.h find_sequence_colour_shading).
+        PhotoImportParams probe = o.preset.empty() ? PhotoImportParams{} : camera_preset(o.preset).params;
+        probe.encoding = o.encoding;
+        if (!each.center.empty()) probe.circle = parse_center(each.center, each.radius);
+        if (!each.mask.empty()) probe.mask_path = each.mask, probe.mask_layout = MaskLayout::PhotoBlackIsNotSky;
+        if (o.lens_opt->count()) probe.lens = parse_lens_law(o.lens);
+        if (const std::optional<SequenceColourShading> found = find_sequence_colour_shading(photos, probe)) {
+            const auto& c = found->shading;
+            const double r2 = 0.81;
+            std::printf(
+                "colour shading: log(R/G) %+.3f and log(B/G) %+.3f at 81 deg against the zenith, measured on "
+                "%d overcast of %d photographs (fit within %.3f); divided out of every photograph\n",
+                c.rg2 * r2 + c.rg4 * r2 * r2, c.bg2 * r2 + c.bg4 * r2 * r2, found->overcast, found->tried,
+                found->rms_fit);
+            each.colour_shading = c;
+        } else {
+            std::fprintf(stderr,
+                         "dynsky: warning: --flatten-colour: fewer than 3 overcast photographs among those looked at "
+                         "(a clear sky's colour changes towards the horizon by itself): the colours are kept\n");
+        }
+    }
     if (o.find_north) {
         // One north for the sequence: found from the sun on up to 25 photographs spread over it (at
         // 128 px), and agreed on (consensus_north).
@@ -582,6 +611,9 @@ void register_sky_import_commands(CLI::App& sky) {
         "--find-north", io->find_north,
         "Find where north is from the sun the photo shows (its clipped blob at the computed sun's height, put\n"
         "at its azimuth; a level camera, time and place needed); for a sequence, one north for all");
+    imp->add_flag("--flatten-colour", io->flatten_colour,
+                  "A sequence: measure the camera's colour shading (less red or blue towards the horizon) on its\n"
+                  "overcast photographs, where every pixel is a grey, and divide it out of every photograph");
     imp->add_flag("--mirror", io->mirror,
                   "The photo is mirror-reversed (east clockwise from north), as mirror imagers (TSI) show the sky "
                   "(arm-tsi sets it already)");

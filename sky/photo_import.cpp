@@ -13,6 +13,7 @@
 #include <regex>
 #include <sstream>
 
+#include "sky/cloud_mask.h"
 #include "sky/fisheye.h"
 #include "util/color.h"
 #include "util/error.h"
@@ -860,6 +861,84 @@ std::vector<unsigned char> find_sequence_obstructions(const std::vector<std::str
     const std::vector<unsigned char> thin = detect_thin_dark_structures(percentile, circle);
     for (size_t p = 0; p < out.size(); ++p) out[p] = out[p] || thin[p];
     if (percentile_out) *percentile_out = std::move(percentile);
+    return out;
+}
+
+std::optional<SequenceColourShading> find_sequence_colour_shading(const std::vector<std::string>& photos,
+                                                                  PhotoImportParams params, int max_photos) {
+    if (photos.empty()) throw Error("no photographs to measure colour shading on");
+    params.resolution = 128;
+    params.colour_shading.reset();
+    params.fill_method = PhotoImportParams::FillMethod::Smooth;
+    constexpr int kBands = 18;  // 5 % of the radius each, to 90 %
+    const CloudMaskParams rule{CloudRule::RedBlueRatio, kWsisegBestRedBlueThreshold};
+    const int n = int(photos.size()), tries = std::min(n, std::max(1, max_photos));
+    std::vector<std::vector<double>> rg(kBands), bg(kBands);  // per band, one value per overcast photo
+    SequenceColourShading out;
+    for (int t = 0; t < tries; ++t) {
+        const std::string& path = photos[spread_index(t, tries, n)];
+        ++out.tried;
+        ImportedPhoto imp;
+        try {
+            imp = import_photo(path, params);
+        } catch (const Error&) {
+            continue;  // the import proper names it
+        }
+        if (!imp.display_referred) continue;
+        const int m = imp.sky.resolution;
+        const double c = (m - 1) / 2.0;
+        // Overcast: nearly every seen pixel within half the radius is cloud by the rule (where the
+        // shading is weak). Then every seen pixel is a grey, at every radius.
+        long centre = 0, cloudy = 0;
+        std::vector<std::vector<double>> prg(kBands), pbg(kBands);
+        for (int j = 0; j < m; ++j)
+            for (int i = 0; i < m; ++i) {
+                const size_t p = size_t(j) * m + i;
+                const double r = std::hypot(i - c, j - c) / (m / 2.0);
+                const Color v = imp.sky.pixel(i, j);
+                if (r >= 0.9 || imp.not_sky[p] || imp.clipped[p] || !(v.minCoeff() > 0)) continue;
+                if (r < 0.5) {
+                    ++centre;
+                    cloudy += is_cloud(linear_to_srgb(v[0]), linear_to_srgb(v[1]), linear_to_srgb(v[2]), rule);
+                }
+                const int b = std::min(kBands - 1, int(r * 20));
+                prg[size_t(b)].push_back(std::log(double(v[0]) / v[1]));
+                pbg[size_t(b)].push_back(std::log(double(v[2]) / v[1]));
+            }
+        if (centre < 200 || cloudy < 0.95 * centre) continue;
+        // Against the photo's own zenith (the first 30 % of the radius).
+        std::vector<double> zrg, zbg;
+        for (int b = 0; b < 6; ++b)
+            zrg.insert(zrg.end(), prg[size_t(b)].begin(), prg[size_t(b)].end()),
+                zbg.insert(zbg.end(), pbg[size_t(b)].begin(), pbg[size_t(b)].end());
+        if (zrg.size() < 50) continue;
+        const double zr = quantile(zrg, 0.5), zb = quantile(zbg, 0.5);
+        ++out.overcast;
+        for (int b = 0; b < kBands; ++b)
+            if (prg[size_t(b)].size() >= 30) {
+                rg[size_t(b)].push_back(quantile(prg[size_t(b)], 0.5) - zr);
+                bg[size_t(b)].push_back(quantile(pbg[size_t(b)], 0.5) - zb);
+            }
+    }
+    if (out.overcast < 3) return std::nullopt;
+    // Medians over the photos per band, fitted as a r^2 + b r^4 (0 at the zenith).
+    Eigen::MatrixXd a(kBands, 2);
+    Eigen::VectorXd yr(kBands), yb(kBands);
+    int rows = 0;
+    for (int b = 0; b < kBands; ++b) {
+        if (int(rg[size_t(b)].size()) * 2 < out.overcast) continue;
+        const double r = (b + 0.5) / 20, r2 = r * r;
+        a(rows, 0) = r2, a(rows, 1) = r2 * r2;
+        yr(rows) = quantile(rg[size_t(b)], 0.5), yb(rows) = quantile(bg[size_t(b)], 0.5);
+        ++rows;
+    }
+    if (rows < 10) return std::nullopt;
+    const Eigen::MatrixXd am = a.topRows(rows);
+    const Eigen::Vector2d fr = am.colPivHouseholderQr().solve(yr.head(rows)),
+                          fb = am.colPivHouseholderQr().solve(yb.head(rows));
+    out.shading = PhotoImportParams::ColourShading{fr(0), fr(1), fb(0), fb(1), 0.9};
+    out.rms_fit = std::sqrt(((am * fr - yr.head(rows)).squaredNorm() + (am * fb - yb.head(rows)).squaredNorm()) /
+                            (2.0 * rows));
     return out;
 }
 

@@ -214,6 +214,20 @@ struct SequenceSkyCircle {
 SequenceSkyCircle find_sequence_sky_circle(const std::vector<std::string>& photos, const PhotoImportParams& params,
                                            int max_photos = 25);
 
+// A camera's colour shading (PhotoImportParams::ColourShading) measured on its own sequence: on the
+// overcast photos among up to max_photos spread over it (95 % of the seen pixels within half the
+// radius cloud by the red/blue rule), every seen pixel is a grey; per 5 % of the radius, the median
+// log(R/G) and log(B/G) against the photo's zenith's, medians over the photos, fitted as r^2 and
+// r^4 terms. None with fewer than 3 overcast photos (a clear sky's colour does change towards the
+// horizon: it cannot be told from shading). params: the sequence's geometry (imported at 128 px).
+struct SequenceColourShading {
+    PhotoImportParams::ColourShading shading;
+    int tried = 0, overcast = 0;
+    double rms_fit = 0;  // of the fit against the band medians, in log units
+};
+std::optional<SequenceColourShading> find_sequence_colour_shading(const std::vector<std::string>& photos,
+                                                                  PhotoImportParams params, int max_photos = 25);
+
 // What hides the sky in a sequence of one camera's photographs, found once for all: dark objects
 // (detect_dark_obstructions) and thin ones (detect_thin_dark_structures) on the per-pixel 80th
 // percentile of up to max_photos photographs spread over the sequence. The sky brightens at some

@@ -258,6 +258,18 @@ TEST(SkyImportCli, SequenceFolderImportsEveryFrameUnderOneCircle) {
     for (float v : noon.pixels) filled += v;
     EXPECT_GT(filled, 0.1 * noon.pixels.size());
 
+    // --flatten-colour: the camera's shading measured on the overcast frames (red falls off towards
+    // the horizon on this camera, as its preset measured) and divided out; a single photo refused.
+    r = test::run_command(exe() + " sky import " + dir + "/photos" + common + " --flatten-colour -o " + dir + "/flat");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const size_t shading_at = r.output.find("colour shading: log(R/G) ");
+    ASSERT_NE(shading_at, std::string::npos) << r.output;
+    EXPECT_LT(std::atof(r.output.c_str() + shading_at + 25), -0.15) << r.output;
+    r = test::run_command(exe() + " sky import " + dir + "/photos/IMG_20200812_120000.jpg" + common +
+                          " --flatten-colour -o " + dir + "/one.exr");
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("give a sequence"), std::string::npos) << r.output;
+
     // A photograph of another size among them (another camera, or cropped) is named, not imported
     // under a circle measured on the others.
     Image half = read_image(dir + "/photos/IMG_20200812_120000.jpg");

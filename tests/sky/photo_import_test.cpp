@@ -406,6 +406,47 @@ TEST(PhotoImport, ColourShadingIsDividedOut) {
     }
 }
 
+// A camera's shading measured on its own overcast sequence: recovered from five shaded grey skies
+// (a clear one among them is not used), and none from clear skies alone.
+TEST(PhotoImport, ColourShadingIsMeasuredOnASequencesOvercastPhotos) {
+    const PhotoImportParams::ColourShading truth{-0.15, -0.24, -0.05, 0.11, 0.9};
+    std::string dir = test::temp_dir("sequence-shading");
+    TestCamera cam{200.0, 150.0, 140.0, 0.0, LensLaw::Equidistant, false};
+    auto write = [&](const std::string& name, bool clear, int k) {
+        Image photo(400, 300, 3);
+        for (int y = 0; y < 300; ++y)
+            for (int x = 0; x < 400; ++x) {
+                const double r = std::min(std::hypot(x - cam.cx, y - cam.cy) / cam.radius, 0.9), r2 = r * r;
+                Vec3d w;
+                const bool in = cam.direction(x, y, &w);
+                const double grey = in ? 0.35 + 0.08 * std::sin(5 * w.x() + k) * std::cos(4 * w.z()) : 0.0;
+                Color lin = clear ? Color(0.2f, 0.35f, 0.8f) * float(grey / 0.35)
+                                  : Color(float(grey * std::exp(truth.rg2 * r2 + truth.rg4 * r2 * r2)), float(grey),
+                                          float(grey * std::exp(truth.bg2 * r2 + truth.bg4 * r2 * r2)));
+                for (int c = 0; c < 3; ++c) photo.at(x, y, c) = in ? linear_to_srgb(std::min(lin[c], 1.0f)) : 0.0f;
+            }
+        write_image(dir + "/" + name, photo);
+        return dir + "/" + name;
+    };
+    std::vector<std::string> overcast, clear;
+    for (int k = 0; k < 5; ++k) overcast.push_back(write("grey" + std::to_string(k) + ".png", false, k));
+    for (int k = 0; k < 4; ++k) clear.push_back(write("blue" + std::to_string(k) + ".png", true, k));
+    PhotoImportParams p;
+    p.circle = SkyCircle{cam.cx, cam.cy, cam.radius};
+    p.detect_thin_obstructions = false;
+    std::vector<std::string> both = overcast;
+    both.push_back(clear[0]);
+    const std::optional<SequenceColourShading> found = find_sequence_colour_shading(both, p);
+    ASSERT_TRUE(found.has_value());
+    EXPECT_EQ(found->overcast, 5);
+    const double r2 = 0.81;
+    auto at = [&](double a2, double a4) { return a2 * r2 + a4 * r2 * r2; };
+    EXPECT_NEAR(at(found->shading.rg2, found->shading.rg4), at(truth.rg2, truth.rg4), 0.02);  // -0.28
+    EXPECT_NEAR(at(found->shading.bg2, found->shading.bg4), at(truth.bg2, truth.bg4), 0.02);  // +0.03
+    EXPECT_FALSE(find_sequence_colour_shading(clear, p).has_value());
+    std::filesystem::remove_all(dir);
+}
+
 // On the Mobotix's own held-out overcast frames (after the frames its shading was measured on):
 // the seen sky's red against green, near the horizon against the zenith's.
 TEST(PhotoImport, MobotixOvercastComesOutGreyToTheHorizon) {
