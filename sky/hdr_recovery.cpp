@@ -84,36 +84,64 @@ constexpr double kMinSunElevationForGreyDeg = 10;
 
 }  // namespace
 
+namespace {
+
+// A clipped sun and its aureole stay well inside a 20 degree cone; a larger blob is a saturated
+// overcast or cloud field, not a sun to place.
+const double kMaxSunBlobSr = 2 * kPiD * (1 - std::cos(20 * kDeg));
+
+// The photo's clipped pixels in 8-connected blobs (label 0: none; filled pixels left out when
+// seen_only): per blob its solid angle, the sum of its pixels' directions (plain and weighted by
+// solid angle) and its pixels' smallest angle to `towards`.
+struct ClippedBlobs {
+    int count = 0;  // labels, 0 included
+    cv::Mat labels;
+    std::vector<double> solid_angle, nearest;
+    std::vector<Vec3d> direction_sum, weighted_sum;
+};
+ClippedBlobs clipped_blobs(const ImportedPhoto& photo, bool seen_only, const Vec3d& towards) {
+    const int n = photo.sky.resolution;
+    cv::Mat clipped(n, n, CV_8U);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const size_t p = size_t(j) * n + i;
+            clipped.at<unsigned char>(j, i) = photo.clipped[p] && !(seen_only && photo.not_sky[p]) ? 255 : 0;
+        }
+    ClippedBlobs out;
+    out.count = cv::connectedComponents(clipped, out.labels, 8, CV_32S);
+    const size_t m = size_t(std::max(out.count, 1));
+    out.solid_angle.assign(m, 0.0), out.nearest.assign(m, 1e9);
+    out.direction_sum.assign(m, Vec3d::Zero()), out.weighted_sum.assign(m, Vec3d::Zero());
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const int l = out.labels.at<int>(j, i);
+            if (l <= 0) continue;
+            const Vec2 uv = fisheye::pixel_center_uv(i, j, n);
+            const Vec3d w = fisheye::direction_from_uv(double(uv.x()), double(uv.y()));
+            const double a = fisheye::pixel_solid_angle(i, j, n);
+            out.nearest[size_t(l)] = std::min(out.nearest[size_t(l)], angle_between(w, towards));
+            out.direction_sum[size_t(l)] += w;
+            out.weighted_sum[size_t(l)] += a * w;
+            out.solid_angle[size_t(l)] += a;
+        }
+    return out;
+}
+
+}  // namespace
+
 std::optional<NorthFromSun> north_from_seen_sun(const ImportedPhoto& photo, const UtcTime& time,
                                                 const GeoLocation& where, double max_zenith_error_deg) {
     if (photo.geometry.tilt_deg != 0) return std::nullopt;
     const SunPosition sp = compute_sun_position(time, where);
     if (sp.elevation_deg() < 3) return std::nullopt;
     const Vec3d sun = sp.direction();
-    const int n = photo.sky.resolution;
-    cv::Mat clipped(n, n, CV_8U);
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i)
-            clipped.at<unsigned char>(j, i) = photo.clipped[size_t(j) * n + i] && !photo.not_sky[size_t(j) * n + i]
-                                                  ? 255
-                                                  : 0;
-    cv::Mat labels;
-    const int blobs = cv::connectedComponents(clipped, labels, 8, CV_32S);
-    std::vector<double> solid_angle(size_t(std::max(blobs, 1)), 0.0);
-    std::vector<Vec3d> centroid(size_t(std::max(blobs, 1)), Vec3d::Zero());
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) {
-            const int l = labels.at<int>(j, i);
-            if (l <= 0) continue;
-            const Vec2 uv = fisheye::pixel_center_uv(i, j, n);
-            const double a = fisheye::pixel_solid_angle(i, j, n);
-            centroid[size_t(l)] += a * fisheye::direction_from_uv(double(uv.x()), double(uv.y()));
-            solid_angle[size_t(l)] += a;
-        }
-    const double max_sr = 2 * kPiD * (1 - std::cos(20 * kDeg)), min_sr = 2 * kPiD * (1 - std::cos(1.5 * kDeg));
+    const ClippedBlobs blobs = clipped_blobs(photo, true, sun);
+    const std::vector<double>& solid_angle = blobs.solid_angle;
+    const std::vector<Vec3d>& centroid = blobs.weighted_sum;
+    const double max_sr = kMaxSunBlobSr, min_sr = 2 * kPiD * (1 - std::cos(1.5 * kDeg));
     const double sun_zenith = std::acos(std::clamp(sun.y(), -1.0, 1.0));
     int best = -1;
-    for (int l = 1; l < blobs; ++l) {
+    for (int l = 1; l < blobs.count; ++l) {
         if (solid_angle[size_t(l)] < min_sr || solid_angle[size_t(l)] > max_sr) continue;
         const Vec3d c = centroid[size_t(l)].normalized();
         if (std::abs(std::acos(std::clamp(c.y(), -1.0, 1.0)) - sun_zenith) > max_zenith_error_deg * kDeg) continue;
@@ -169,25 +197,12 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     };
 
     // The sun as the photo shows it: the clipped blob nearest the computed sun, within the search cone.
-    cv::Mat clipped(n, n, CV_8U);
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) clipped.at<unsigned char>(j, i) = photo.clipped[size_t(j) * n + i] ? 255 : 0;
-    cv::Mat labels;
-    int blobs = cv::connectedComponents(clipped, labels, 8, CV_32S);
-    std::vector<double> nearest(size_t(std::max(blobs, 1)), 1e9), solid_angle(size_t(std::max(blobs, 1)), 0.0);
-    std::vector<Vec3d> centroid(size_t(std::max(blobs, 1)), Vec3d::Zero());
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) {
-            int l = labels.at<int>(j, i);
-            if (l <= 0) continue;
-            const Vec3d w = dir(size_t(j) * n + i);
-            nearest[size_t(l)] = std::min(nearest[size_t(l)], angle_between(w, rep.computed_sun));
-            centroid[size_t(l)] += w;
-            solid_angle[size_t(l)] += fisheye::pixel_solid_angle(i, j, n);
-        }
-    // A clipped sun and its aureole stay well inside a 20 degree cone; a larger blob is a
-    // saturated overcast or cloud field, not a sun to place.
-    const double max_sun_sr = 2 * kPiD * (1 - std::cos(20 * kDeg));
+    const ClippedBlobs clipped = clipped_blobs(photo, false, rep.computed_sun);
+    const int blobs = clipped.count;
+    const cv::Mat& labels = clipped.labels;
+    const std::vector<double>&nearest = clipped.nearest, &solid_angle = clipped.solid_angle;
+    const std::vector<Vec3d>& centroid = clipped.direction_sum;
+    const double max_sun_sr = kMaxSunBlobSr;
     // Where the computed sun falls on a filled obstruction (the TSI's shadow band exists to hide
     // it), clipped clouds beside the obstruction are not the sun: see the band rule below instead.
     bool sun_hidden = false;

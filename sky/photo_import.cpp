@@ -806,15 +806,25 @@ size_t spread_index(int k, int tries, int count) {
     return tries <= 1 ? 0 : size_t(std::lround(double(k) * (count - 1) / (tries - 1)));
 }
 
-SkyCircle find_photo_sky_circle(const std::string& path, const PhotoImportParams& params, std::array<int, 2>* size) {
+namespace {
+
+// A photograph file as the geometry helpers look at it (find_sky_circle, the obstruction
+// detectors): read and turned as import_photo reads it, refused as it refuses it, display-encoded
+// (an HDR file tone-mapped to grey).
+Image encoded_photo(const std::string& path, const PhotoImportParams& params) {
     Image photo = read_radiance_image(path);
     apply_orientation(photo);
     check_photo_fits(photo, path, params);
-    if (size) *size = {photo.width, photo.height};
-    if (is_display_encoded(photo, path, params.encoding))
-        return find_sky_circle(photo, path, params.min_radius_fraction, params.max_radius_fraction);
-    return find_sky_circle(tone_mapped_grey(to_rgb_mat(photo, path)), path, params.min_radius_fraction,
-                           params.max_radius_fraction);
+    if (is_display_encoded(photo, path, params.encoding)) return photo;
+    return tone_mapped_grey(to_rgb_mat(photo, path));
+}
+
+}  // namespace
+
+SkyCircle find_photo_sky_circle(const std::string& path, const PhotoImportParams& params, std::array<int, 2>* size) {
+    const Image encoded = encoded_photo(path, params);
+    if (size) *size = {encoded.width, encoded.height};
+    return find_sky_circle(encoded, path, params.min_radius_fraction, params.max_radius_fraction);
 }
 
 std::vector<unsigned char> find_sequence_obstructions(const std::vector<std::string>& photos, const SkyCircle& circle,
@@ -829,12 +839,7 @@ std::vector<unsigned char> find_sequence_obstructions(const std::vector<std::str
     std::vector<unsigned char> top;  // [pixel * channels + c][k], descending
     for (int t = 0; t < tries; ++t) {
         const std::string& path = photos[spread_index(t, tries, n)];
-        Image photo = read_radiance_image(path);
-        apply_orientation(photo);
-        check_photo_fits(photo, path, params);
-        const Image encoded = is_display_encoded(photo, path, params.encoding)
-                                  ? photo
-                                  : tone_mapped_grey(to_rgb_mat(photo, path));
+        const Image encoded = encoded_photo(path, params);
         if (t == 0) {
             width = encoded.width, height = encoded.height, channels = std::min(encoded.channels, 3);
             top.assign(size_t(width) * height * channels * k, 0);
