@@ -633,7 +633,8 @@ void register_sky_import_commands(CLI::App& sky) {
                   "Do not look for the preset's mask beside the photo: use the preset's obstruction geometry");
     imp->add_flag(
         "--detect-obstructions", io->detect,
-        "Also detect large dark obstructions (shadow band, arm, rooftops) and fill them (thin ones are found by default)");
+        "Also detect large dark obstructions (shadow band, arm, rooftops) and fill them (thin ones are found by\n"
+        "default); for a sequence without a preset, found once for all on its photos (obstructions.png)");
     imp->add_flag("--keep-thin-objects", io->keep_thin,
                   "Do not look for thin dark objects (masts, wires, the housing's dark edge inside the circle), which "
                   "are otherwise found and filled on any photograph");
