@@ -162,7 +162,6 @@ struct LayerModel {
 
 struct LayerHit {
     double alpha = 0.0;              // visible opacity (aerial perspective included)
-    double direct = 1.0;             // transmittance of the cloud itself, for the sun disc behind it
     Color radiance = Color::Zero();  // premultiplied by alpha
 };
 
@@ -352,7 +351,6 @@ struct ProceduralSky::Impl {
         double alpha = -std::expm1(-tau_view);
         double air = std::exp(-dist / params.visibility_m);
         out.alpha = alpha * air;
-        out.direct = 1.0 - alpha;
         if (out.alpha <= 0.0) return out;
 
         double t_diff = diffuse_transmittance(tau_vertical);
@@ -418,6 +416,11 @@ struct ProceduralSky::Impl {
         }
         const double pixel_angle = kPiD / n;  // equidistant: every pixel spans pi/N radians of zenith angle
         const size_t nl = layers.size();
+        // The sun's disc is dimmed by the clouds along the sun's own line of sight, in every pixel
+        // its light falls in: it is half a degree wide, a 128 px pixel 1.4 degrees, and taken at
+        // the pixel's centre the sun went out whenever a wisp crossed a centre up to a degree away
+        // (5-10 s early or late at a cloud's edge), and lit the scene whatever lay over the sun itself.
+        const float disc_transmittance = float(sun_transmittance(time_s));
         tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
             std::vector<LayerHit> hits(nl);
             for (int j = rows.begin(); j != rows.end(); ++j) {
@@ -432,14 +435,13 @@ struct ProceduralSky::Impl {
                     // never the sun's disc, which only the clouds' own transmittance lets through.
                     bool any = false;
                     for (size_t k = 0; k < nl; ++k) any = any || hits[k].alpha > 0.0;
-                    if (any) {
-                        Color sky_light = clear_no_disc.pixel(i, j);
-                        Color disc = (out.pixel(i, j) - sky_light).max(0.0f);
-                        for (size_t k = nl; k-- > 0;) {
+                    Color sky_light = clear_no_disc.pixel(i, j);
+                    const Color disc = (out.pixel(i, j) - sky_light).max(0.0f);
+                    const bool sun_here = (disc > 0.0f).any();
+                    if (any || sun_here) {
+                        for (size_t k = nl; k-- > 0;)
                             sky_light = sky_light * float(1.0 - hits[k].alpha) + hits[k].radiance;
-                            disc *= float(hits[k].direct);
-                        }
-                        out.set_pixel(i, j, sky_light + disc);
+                        out.set_pixel(i, j, sky_light + disc * disc_transmittance);
                     }
                     if (!flow_out) continue;
                     // The flow is the most visible layer's: its opacity times what the layers
