@@ -145,9 +145,11 @@ class Checker {
         return true;
     }
     // An index into one of the document's arrays: a JSON integer >= 0.
+    // tinygltf keeps indices in 32-bit ints: 4294967296 read as 0 drew mesh 0 without a word.
     void index_value(const Json& v, const std::string& at) {
         if (!v.is_number()) error(at + " is " + describe(v) + ", not an index (a number)");
-        else integer_value(v, at, 0);
+        else if (integer_value(v, at, 0) && v.get<double>() > 2147483647.0)
+            error(at + " is " + v.dump() + ", beyond any array (indices are below 2^31)");
     }
     void index(const Json& parent, const std::string& key, const std::string& at) {
         if (auto it = parent.find(key); it != parent.end()) index_value(*it, at);

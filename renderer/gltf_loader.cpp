@@ -591,6 +591,7 @@ class GltfLoader {
         if (size_t depth = json_depth(json, json_size); depth > kMaxJsonDepth)
             fail("JSON nested " + std::to_string(depth) + " levels deep, more than the " +
                  std::to_string(kMaxJsonDepth) + " dynsky reads (a corrupt or hostile file?)");
+        std::vector<PlusUri> plus_uris;
         {
             nlohmann::json document = nlohmann::json::parse(json, json + json_size, nullptr, false);
             check_uris(document);
@@ -603,7 +604,8 @@ class GltfLoader {
             // indices take its place (decode_draco). meshopt's fallback buffers have no data
             // (tinygltf refuses or misreads them): a 4-byte stand-in, replaced by the decoded views.
             const bool draco = drop_draco_indices(&document), meshopt = stand_in_meshopt_fallbacks(&document);
-            if (draco || meshopt) bytes = with_json(bytes, binary, document.dump());
+            const bool plus = encode_literal_plus(&document, &plus_uris);
+            if (draco || meshopt || plus) bytes = with_json(bytes, binary, document.dump());
         }
 
         namespace fs = std::filesystem;
@@ -623,6 +625,11 @@ class GltfLoader {
                                                   base_dir)
                       : gltf.LoadASCIIFromString(&model_, &err, &warn_text, reinterpret_cast<const char*>(bytes.data()),
                                                  unsigned(bytes.size()), base_dir);
+        // The URIs as written, for the messages below.
+        for (const PlusUri& u : plus_uris) {
+            if (u.image && u.index < model_.images.size()) model_.images[u.index].uri = u.uri;
+            if (!u.image && u.index < model_.buffers.size()) model_.buffers[u.index].uri = u.uri;
+        }
         if (!asset.refusal.empty()) fail(asset.refusal);
         scene_.source_files = {path_};
         scene_.source_files.insert(scene_.source_files.end(), asset.read.begin(), asset.read.end());
@@ -718,6 +725,35 @@ class GltfLoader {
 
     // Gives EXT_meshopt_compression's fallback buffers (no uri, no data: every view of them is
     // compressed elsewhere) a 4-byte data URI; true if any.
+    // tinygltf decodes a URI's '+' as a space (HTML form encoding): "a+b.bin" was looked up as
+    // "a b.bin". In a URI path '+' is itself (RFC 3986): written %2B for tinygltf; the URIs as
+    // written are kept to be put back.
+    struct PlusUri {
+        bool image;
+        size_t index;
+        std::string uri;
+    };
+    static bool encode_literal_plus(nlohmann::json* document, std::vector<PlusUri>* originals) {
+        if (!document->is_object()) return false;
+        bool changed = false;
+        for (const char* kind : {"buffers", "images"}) {
+            auto list = document->find(kind);
+            if (list == document->end() || !list->is_array()) continue;
+            for (size_t i = 0; i < list->size(); ++i) {
+                nlohmann::json& item = (*list)[i];
+                if (!item.is_object() || !item.contains("uri") || !item["uri"].is_string()) continue;
+                const std::string uri = item["uri"].get<std::string>();
+                if (uri.rfind("data:", 0) == 0 || uri.find('+') == std::string::npos) continue;
+                std::string encoded;
+                for (char c : uri) encoded += c == '+' ? std::string("%2B") : std::string(1, c);
+                item["uri"] = encoded;
+                originals->push_back({std::string(kind) == "images", i, uri});
+                changed = true;
+            }
+        }
+        return changed;
+    }
+
     static bool stand_in_meshopt_fallbacks(nlohmann::json* document) {
         bool changed = false;
         auto buffers = document->find("buffers");
@@ -1456,9 +1492,9 @@ class GltfLoader {
             return {view_span(img.bufferView, 0, 1, 0, n, "image " + std::to_string(index)), n};
         }
         if (img.image.empty()) {
-            std::string file = img.uri;
+            std::string file = percent_decoded(img.uri);
             std::string dir = std::filesystem::path(path_).parent_path().string();
-            if (!dir.empty()) file = (std::filesystem::path(dir) / img.uri).string();
+            if (!dir.empty()) file = (std::filesystem::path(dir) / file).string();
             std::error_code ec;
             if (std::filesystem::is_regular_file(file, ec) && std::filesystem::file_size(file, ec) == 0 && !ec)
                 fail("texture file " + in_quotes(file) + " (image " + std::to_string(index) + ") is empty (0 bytes)");

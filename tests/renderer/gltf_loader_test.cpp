@@ -790,6 +790,31 @@ TEST(GltfLoader, MissingBinAndTextureFilesAreNamed) {
     EXPECT_NE(e.find("nobin.bin"), std::string::npos) << e;
 }
 
+// A '+' in a URI's path is a '+' (RFC 3986); tinygltf took it for a space (form encoding), so
+// "a+b.bin" was "missing file 'a b.bin'", and with an "a b.bin" beside it that file was read.
+TEST(GltfLoader, UrisWithAPlusReadTheFileWithThePlus) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+    std::string mesh = "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) + "},\"material\":0}]}";
+    std::string tex = "\"images\":[{\"uri\":\"" + write_png(dir, "t+1.png") +
+                      "\"}],\"textures\":[{\"source\":0}],"
+                      "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}]";
+    std::string path = g.write(dir, "a+b", one_node_scene(mesh, tex));
+    write_bytes(dir + "/a b.bin", "not this one");
+    Scene scene = load_gltf(path);
+    EXPECT_GT(scene.triangle_count(), 0u);
+    ASSERT_FALSE(scene.textures.empty());
+    EXPECT_EQ(scene.textures[0]->name(), "t+1.png");
+    // Missing, the texture is named as written, its path as looked for.
+    fs::remove(dir + "/t+1.png");
+    write_png(dir, "t 1.png");
+    std::string e = load_error(path);
+    EXPECT_NE(e.find("missing texture file"), std::string::npos) << e;
+    EXPECT_NE(e.find("t+1.png"), std::string::npos) << e;
+    fs::remove_all(dir);
+}
+
 TEST(GltfLoader, OutOfRangeAccessorsIndicesAndNodesThrow) {
     std::string dir = test::temp_dir("gltf");
     MiniGltf g;
@@ -966,6 +991,13 @@ TEST(GltfLoader, ValuesOfTheWrongTypeOrOutsideTheSpecAreNamedByTheirPath) {
          "\"meshes\":[" +
              mesh(pos) + "]",
          "scene is 1.84467e+19, beyond 2^53"},
+        {"mesh_2_to_the_32",  // tinygltf's 32-bit int read it as mesh 0
+         "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":4294967296}],\"meshes\":[" + mesh(pos) + "]",
+         "nodes[0].mesh is 4294967296, beyond any array (indices are below 2^31)"},
+        {"position_2_to_the_32",
+         "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[" +
+             mesh(pos, ",\"NORMAL\":4294967297") + "]",
+         "meshes[0].primitives[0].attributes.NORMAL is 4294967297, beyond any array"},
         {"scene_negative",
          "\"scene\":-1,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[" + mesh(pos) + "]",
          "scene is -1; it must be at least 0"},
