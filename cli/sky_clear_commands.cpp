@@ -121,7 +121,8 @@ Color parse_ground(const std::string& text) {
         try {
             size_t used = 0;
             float x = std::stof(item, &used);
-            if (used != item.size() || !std::isfinite(x) || x < 0) throw std::invalid_argument("bad");
+            if (used != item.size() || !std::isfinite(x) || x < 0 || x > kMaxSkyRadiance)
+                throw std::invalid_argument("bad");
             v.push_back(x);
         } catch (const std::exception&) {
             v.clear();
@@ -130,7 +131,7 @@ Color parse_ground(const std::string& text) {
     }
     if (v.size() == 1) return Color(v[0], v[0], v[0]);
     if (v.size() == 3) return Color(v[0], v[1], v[2]);
-    throw Error("--ground '" + text + "': expected one radiance or R,G,B (non-negative numbers, W m^-2 sr^-1)");
+    throw Error("--ground '" + text + "': expected one radiance or R,G,B (numbers from 0 to 1e9, W m^-2 sr^-1)");
 }
 
 void run_latlong(const LatLongOptions& o) {

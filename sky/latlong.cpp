@@ -8,6 +8,7 @@
 #include "sky/fisheye.h"
 #include "sky/sky_image.h"
 #include "util/error.h"
+#include "util/parse.h"
 
 namespace dynsky {
 
@@ -172,6 +173,13 @@ LatlongEnvironment latlong_environment(const Image& image, const std::string& pa
                 if (!(v >= 0 && std::isfinite(v)))
                     throw Error(path + ": pixel (" + std::to_string(x) + ", " + std::to_string(y) +
                                 ") is negative, infinite or NaN; not a radiance image");
+                // The ground half too: it lights the scene from below (1e30 there rendered as 1e30).
+                if (v > kMaxSkyRadiance)
+                    throw_file_error(path, "pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") of the " +
+                                               (2 * y < image.height ? "sky (upper half)" : "ground (lower half)") +
+                                               " is " + number_text(v, 3) +
+                                               " W m^-2 sr^-1, above the limit of 1e9 (the sun is about 2e7): a "
+                                               "corrupt or mis-scaled environment");
             }
     const int n = resolution > 0 ? resolution : std::max(16, image.height + (image.height & 1));
     LatlongEnvironment env;

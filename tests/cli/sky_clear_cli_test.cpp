@@ -123,6 +123,7 @@ TEST(SkyClearCli, LatLongConvertsASky) {
         {"sky latlong " + dir + "/missing.exr --out " + dir + "/bad.exr", "missing.exr"},
         {"sky latlong " + sky + " --out " + dir + "/bad.exr --width 33", "--width"},
         {"sky latlong " + sky + " --out " + dir + "/bad.exr --ground red", "--ground"},
+        {"sky latlong " + sky + " --out " + dir + "/bad.exr --ground 1e30", "--ground"},  // render refused it
         {"sky latlong " + sky + " --out " + dir + "/bad.png", "bad.png"}};
     std::vector<std::future<test::CommandResult>> runs;
     for (const auto& b : bad) runs.push_back(std::async(std::launch::async, [args = b.first] { return dynsky(args); }));

@@ -201,6 +201,22 @@ TEST(LatLong, ConvertsBackToTheFisheyeAndTheGround) {
     Image bad(8, 4, 3);
     bad.at(1, 1, 0) = -1;
     EXPECT_THROW(latlong_environment(bad, "bad.exr"), Error);
+    // A huge ground is refused as a huge sky is, named by the file's own pixel (the ground half
+    // lights the scene from below: 1e30 there rendered as 1e30).
+    for (int y : {1, 3}) {
+        Image huge(16, 8, 3);
+        std::fill(huge.pixels.begin(), huge.pixels.end(), 1.0f);
+        huge.at(5, 2 * y, 1) = 1e30f;
+        try {
+            latlong_environment(huge, "huge.exr");
+            ADD_FAILURE() << "1e30 at row " << 2 * y << " was accepted";
+        } catch (const Error& e) {
+            const std::string m = e.what();
+            EXPECT_NE(m.find("huge.exr"), std::string::npos) << m;
+            EXPECT_NE(m.find("pixel (5, " + std::to_string(2 * y) + ")"), std::string::npos) << m;
+            EXPECT_NE(m.find(y == 1 ? "sky (upper half)" : "ground (lower half)"), std::string::npos) << m;
+        }
+    }
 }
 
 TEST(LatLong, CarriesMetadataAndRejectsBadWidths) {
