@@ -121,15 +121,19 @@ int run_render(const RenderOptions& o) {
     if (o.override_material == "lambert") override_lambert(&scene);
 
     std::shared_ptr<SkyImage> sky, ground;  // ground: a lat-long environment's lower half
-    if (o.sky.empty() && o.generated.time.empty()) {
+    // A place given (--lat, --lon off their defaults) asks for a sky made here, as --time does:
+    // the built-in Paris sky ignored them without a word.
+    const SkySourceSpec defaults;
+    const bool placed = o.generated.latitude != defaults.latitude || o.generated.longitude != defaults.longitude;
+    if (o.sky.empty() && o.generated.time.empty() && !placed) {
         sky = default_sky();
     } else if (o.sky.empty() || is_generated_sky(o.sky)) {
         SkySourceSpec spec = o.generated;  // made as animate and compare make it (frame/sky_source.h)
         spec.sky = o.sky.empty() ? "clear" : o.sky;
         sky = std::make_shared<SkyImage>(make_generated_sky(spec));
-    } else if (!o.generated.time.empty()) {
-        throw Error("--time places the sun of a sky made here (--sky clear or procedural); " + o.sky +
-                    " keeps the sun it has");
+    } else if (!o.generated.time.empty() || placed) {
+        throw Error(std::string(placed ? "--lat and --lon place" : "--time places") +
+                    " the sun of a sky made here (--sky clear or procedural); " + o.sky + " keeps the sun it has");
     } else {
         sky = std::make_shared<SkyImage>(load_sky_or_latlong(o.sky, &ground));
     }
@@ -213,7 +217,8 @@ void register_render_command(CLI::App& app) {
         "(equirect, 2:1) HDRI in Blender's mapping: its upper half becomes the fisheye sky, its lower half the\n"
         "ground (instead of the ground model); or one made here as 'animate' makes it: 'clear' (Hosek-Wilkie)\n"
         "or 'procedural[:SEED]' at --time, --lat, --lon.\n"
-        "Default: a built-in clear sky (Paris, 2026-06-21 16:00 UTC, turbidity 3; with --time: 'clear')");
+        "Default: a built-in clear sky (Paris, 2026-06-21 16:00 UTC, turbidity 3; with --time, --lat or --lon:\n"
+        "'clear' there)");
     add_generated_sky_options(cmd, &o->generated);
     cmd->add_option("--out,-o", o->out,
                     "Output image: .exr (linear, with metadata; a tone-mapped .png is written beside it) or .png")

@@ -48,7 +48,7 @@ void add_sun_options(CLI::App* cmd, SunOptions* o) {
         ->check(finite_in(-90, 90))
         ->required();
     cmd->add_option("--lon", o->lon,
-                    "Longitude in degrees, EAST positive (-180..180); write --lon=-105.2 or --lon -105.2")
+                    "Longitude in degrees, EAST positive (-180..180, or 0..360); write --lon=-105.2 or --lon -105.2")
         ->check(finite_in(-360, 360))
         ->required();
     cmd->add_option("--time", o->time,

@@ -7,6 +7,7 @@
 
 #include "sky/fisheye.h"
 #include "util/error.h"
+#include "util/parse.h"
 
 namespace dynsky {
 
@@ -188,10 +189,12 @@ Vec3d SunPosition::direction() const { return fisheye::direction_from_angles(zen
 
 void validate_location(const GeoLocation& where) {
     if (!std::isfinite(where.latitude_deg) || where.latitude_deg < -90 || where.latitude_deg > 90)
-        throw Error("latitude " + std::to_string(where.latitude_deg) + " is not in [-90, 90] degrees");
-    if (!std::isfinite(where.longitude_deg) || where.longitude_deg < -180 || where.longitude_deg > 180)
-        throw Error("longitude " + std::to_string(where.longitude_deg) +
-                    " is not in [-180, 180] degrees (east positive)");
+        throw Error("latitude " + number_text(where.latitude_deg) + " is not in [-90, 90] degrees");
+    // Up to 360 either way: 200 east is 160 west (the hour angle only turns by whole turns), as
+    // tools that count longitudes 0..360 write them.
+    if (!std::isfinite(where.longitude_deg) || where.longitude_deg < -360 || where.longitude_deg > 360)
+        throw Error("longitude " + number_text(where.longitude_deg) +
+                    " is not in [-360, 360] degrees (east positive; 0..360 counts as 0..-360 west)");
     if (!std::isfinite(where.elevation_m) || where.elevation_m < -1000 || where.elevation_m > 100000)
         throw Error("elevation " + std::to_string(where.elevation_m) + " m is not in [-1000, 100000] m");
 }
@@ -358,8 +361,9 @@ void sun_geometric(double T, double* longitude_deg, double* latitude_deg, double
 SunPosition compute_sun_position(const UtcTime& t, const GeoLocation& where, bool refraction, double pressure_mbar,
                                  double temperature_c) {
     validate_location(where);
-    if (refraction && (!(pressure_mbar > 0 && pressure_mbar < 2000) || !(temperature_c > -100 && temperature_c < 100)))
-        throw Error("refraction needs a pressure in (0, 2000) mbar and a temperature in (-100, 100) C");
+    if (refraction &&
+        (!(pressure_mbar > 0 && pressure_mbar <= 2000) || !(temperature_c >= -100 && temperature_c <= 100)))
+        throw Error("refraction needs a pressure in (0, 2000] mbar and a temperature in [-100, 100] C");
 
     const double jd_ut = julian_date(t);
     const double decimal_year = t.year + (t.month - 0.5) / 12.0;

@@ -738,6 +738,9 @@ TEST(BadInputCli, OutOfRangeNumericOptionsAreRefusedNamingTheOption) {
         {p + "--visibility -1", "--visibility"},
         {p + "--sun-elevation 100", "--sun-elevation"},
         {c + "--lat 91", "--lat"},
+        {c + "--lon 360.5", "--lon"},
+        // A place for a sky file, which keeps its sun (ignored before, without a word).
+        {r + "--sky " + sky + " --lat -33.9 --lon 151.2", "--lat"},
         {c + "--turbidity nan", "--turbidity"},
         {c + "--sky-res 99999999999", "--sky-res"},
         {l + "--width -2", "--width"},

@@ -142,6 +142,22 @@ TEST(RenderCli, BadArgumentsFailBeforeRendering) {
     EXPECT_TRUE(fs::is_empty(dir));
 }
 
+// --lat and --lon without --sky make the clear sky there, as --time does: the built-in Paris sky
+// ignored them without a word. With a time: the same image as --sky clear at that place and time.
+TEST(RenderCli, APlaceWithoutASkyMakesTheClearSkyThere) {
+    const std::string dir = test::temp_dir("render_place");
+    const std::string place = " --lat -33.9 --lon 151.2 --time 2026-06-21T12:00:00+10:00";
+    Outcome a = render("builtin" + place, dir + "/a.exr");
+    Outcome b = render("builtin --sky clear" + place, dir + "/b.exr");
+    Outcome paris = render("builtin", dir + "/paris.exr");
+    Outcome sydney = render("builtin --lat -33.9 --lon 151.2", dir + "/sydney.exr");
+    for (const Outcome* o : {&a, &b, &paris, &sydney}) ASSERT_EQ(o->result.exit_code, 0) << o->result.output;
+    const Image ia = read_image(dir + "/a.exr"), ib = read_image(dir + "/b.exr");
+    EXPECT_EQ(ia.pixels, ib.pixels);
+    EXPECT_NE(read_image(dir + "/paris.exr").pixels, read_image(dir + "/sydney.exr").pixels);
+    fs::remove_all(dir);
+}
+
 TEST(RenderCli, WritesExrWithMetadataAndPng) {
     std::string dir = test::temp_dir("render");
     Outcome o = render("builtin --seed 5", dir + "/plaza.exr");

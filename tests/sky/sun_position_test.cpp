@@ -219,9 +219,25 @@ TEST(SunPosition, DirectionFollowsTheWorldFrame) {
 TEST(SunPosition, RejectsBadLocations) {
     UtcTime t = parse_utc_time("2026-06-21T12:00:00Z");
     EXPECT_THROW(compute_sun_position(t, GeoLocation{91, 0, 0}), Error);
-    EXPECT_THROW(compute_sun_position(t, GeoLocation{0, 181, 0}), Error);
+    EXPECT_THROW(compute_sun_position(t, GeoLocation{0, 361, 0}), Error);
+    EXPECT_THROW(compute_sun_position(t, GeoLocation{0, -360.5, 0}), Error);
     EXPECT_THROW(compute_sun_position(t, GeoLocation{NAN, 0, 0}), Error);
     EXPECT_THROW(compute_sun_position(t, GeoLocation{0, 0, 0}, true, -5, 10), Error);
+    EXPECT_THROW(compute_sun_position(t, GeoLocation{0, 0, 0}, true, 2000.5, 10), Error);
+}
+
+// Every CLI's --lon takes -360..360 (tools counting 0..360 east write 200 for 160 west), and the
+// refraction's ends as the help states them: the library took only [-180, 180] and open ranges.
+TEST(SunPosition, LongitudesBeyond180AreTheSameMeridianAndTheRefractionRangeIsClosed) {
+    UtcTime t = parse_utc_time("2026-03-20T23:00:00Z");
+    for (double lon : {-170.0, -20.0, 45.0, 170.0}) {
+        const SunPosition a = compute_sun_position(t, GeoLocation{-33.9, lon, 0});
+        const SunPosition b = compute_sun_position(t, GeoLocation{-33.9, lon < 0 ? lon + 360 : lon - 360, 0});
+        EXPECT_NEAR(a.zenith_deg, b.zenith_deg, 1e-9) << lon;
+        EXPECT_NEAR(a.azimuth_deg, b.azimuth_deg, 1e-9) << lon;
+    }
+    EXPECT_NO_THROW(compute_sun_position(t, GeoLocation{0, 0, 0}, true, 2000, 100));
+    EXPECT_NO_THROW(compute_sun_position(t, GeoLocation{0, 0, 0}, true, 1010, -100));
 }
 
 }  // namespace
