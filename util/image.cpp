@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cerrno>
 #include <cctype>
 #include <cstdio>
 #include <cstring>
@@ -129,6 +130,9 @@ std::string image_file_problem(const std::string& path) {
     if (fs::is_directory(path, ec)) return "is a directory, not an image";
     // A FIFO or device would block or never end: images are read from regular files only.
     if (!fs::is_regular_file(path, ec)) return "not a regular file (a FIFO or a device?)";
+    // Unreadable (permissions): said as such, not as "not an OpenEXR file" by the reader.
+    if (std::FILE* f = std::fopen(path.c_str(), "rb")) std::fclose(f);
+    else return std::string("cannot be opened: ") + std::strerror(errno);
     if (has_png_signature(path)) return png_truncation(path);
     return "";
 }
