@@ -4,6 +4,7 @@
 #include "bench/sampling_study.h"
 #include "cli/commands.h"
 #include "cli/options.h"
+#include "renderer/sky_sampler.h"
 
 namespace dynsky::cli {
 
@@ -34,7 +35,8 @@ void register_bench_commands(CLI::App& app) {
     s->add_option("--samplers", o->samplers,
                   "Only these samplers, e.g. cdf,cdf+mis,alias+mis (default all; "
                   "plain cdf is the baseline of every speed-up)")
-        ->delimiter(',');
+        ->delimiter(',')
+        ->check(parsed_by([](const std::string& s) { parse_sky_sampler(s); }, "SAMPLER"));
     s->add_option("--parts", o->parts, "Only these parts: accuracy, rebuild, failures (default all)")
         ->delimiter(',')
         ->check(CLI::IsMember({"accuracy", "rebuild", "failures"}));

@@ -57,6 +57,19 @@ CLI::Validator utc_time() {
 }
 CLI::Validator finite_above(double min, double max) { return finite_range(min, max, true); }
 
+CLI::Validator parsed_by(std::function<void(const std::string&)> parse, const std::string& what) {
+    return CLI::Validator(
+        [parse](std::string& text) -> std::string {
+            try {
+                parse(text);
+            } catch (const Error& e) {
+                return e.what();
+            }
+            return "";
+        },
+        what);
+}
+
 void add_scene_options(CLI::App* cmd, SceneSpec* o) {
     cmd->add_option(
            "scene", o->scene,

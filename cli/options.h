@@ -5,6 +5,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include <functional>
+
 #include "frame/scene_spec.h"
 #include "frame/sky_source.h"
 
@@ -19,6 +21,9 @@ void add_scene_options(CLI::App* cmd, SceneSpec* o);
 CLI::Validator finite_in(double min, double max);
 // A time parse_utc_time reads (ISO 8601 with a zone): a bad one is a usage error naming the option.
 CLI::Validator utc_time();
+// A value the library's own parser takes (it throws dynsky::Error naming the valid ones): a bad
+// name is a usage error naming the option (exit 2), not a failure after the work began.
+CLI::Validator parsed_by(std::function<void(const std::string&)> parse, const std::string& what);
 // A finite number in (min, max] (a strictly positive one for min = 0).
 CLI::Validator finite_above(double min, double max);
 // A whole number >= 0 written as digits (a seed): "-1" is refused, not wrapped to 2^64 - 1.

@@ -18,6 +18,7 @@
 #include "renderer/builtin_scene.h"
 #include "renderer/gltf_loader.h"
 #include "renderer/integrator.h"
+#include "renderer/sky_sampler.h"
 #include "sky/clear_sky.h"
 #include "sky/latlong.h"
 #include "sky/sun_position.h"
@@ -243,6 +244,7 @@ void register_render_command(CLI::App& app) {
            "Sky importance sampler: uniform, cosine, cdf, alias, mip, sun+cdf, sun+alias, sun+mip; pixel-based ones "
            "with '+mis' for MIS compensation (the renderer combines light and BSDF sampling by MIS). "
            "See docs/sampling/README.md")
+        ->check(parsed_by([](const std::string& s) { parse_sky_sampler(s); }, "SAMPLER"))
         ->capture_default_str();
     cmd->add_option("--aovs", o->aovs,
                     "Extra passes in the EXR, comma-separated: albedo ('Denoising Albedo'), normal ('Normal', world),\n"

@@ -595,14 +595,16 @@ void register_sky_import_commands(CLI::App& sky) {
     imp->add_option("--preset", io->preset,
                     "Camera preset (" + presets +
                         "): geometry, mask handling, place and file-name clock of the real cameras in ../shared/skies. "
-                        "Options given explicitly override it");
+                        "Options given explicitly override it")
+        ->check(CLI::IsMember(camera_preset_names()));
     imp->add_option("--center", io->center,
                     "Sky circle centre X,Y in photo pixels (pixel centres at integers); default: found automatically");
     imp->add_option("--radius", io->radius, "Sky circle radius in pixels: distance from the centre to 90 deg off-axis")
         ->check(finite_in(4, 1e6));
     imp->add_flag("--auto-circle", io->auto_circle, "Find the circle automatically even if the preset gives one");
     io->lens_opt = imp->add_option("--lens", io->lens,
-                                   "Lens law: equidistant (default), equisolid, orthographic, stereographic");
+                                   "Lens law: equidistant (default), equisolid, orthographic, stereographic")
+                       ->check(parsed_by([](const std::string& s) { parse_lens_law(s); }, "LENS"));
     io->north_opt =
         imp->add_option("--north", io->north,
                         "Where north appears in the photo, degrees clockwise from its top (default 0: north up)")
@@ -623,12 +625,14 @@ void register_sky_import_commands(CLI::App& sky) {
     io->tilt_az_opt = imp->add_option("--tilt-azimuth", io->tilt_azimuth,
                                       "Azimuth the optical axis leans towards, degrees east of north")
                           ->check(finite_in(-360, 360));
-    imp->add_option("--mask", io->mask,
-                    "Non-sky mask image (photo-sized; black = not sky unless --mask-layout says otherwise)");
+    CLI::Option* mask_opt = imp->add_option(
+        "--mask", io->mask, "Non-sky mask image (photo-sized; black = not sky unless --mask-layout says otherwise)");
     imp->add_option(
-        "--mask-layout", io->mask_layout,
-        "photo (default: photo-sized, black = not sky), tsi (a TSI tsi_cloudmask/ frame: black inside its circle, "
-        "extended radially beyond) or alonso-planar (the Mobotix background_mask.png)");
+           "--mask-layout", io->mask_layout,
+           "photo (default: photo-sized, black = not sky), tsi (a TSI tsi_cloudmask/ frame: black inside its circle, "
+           "extended radially beyond) or alonso-planar (the Mobotix background_mask.png)")
+        ->check(CLI::IsMember({"photo", "tsi", "alonso-planar"}))
+        ->needs(mask_opt);
     imp->add_flag("--no-preset-mask", io->no_preset_mask,
                   "Do not look for the preset's mask beside the photo: use the preset's obstruction geometry");
     imp->add_flag(
@@ -646,9 +650,10 @@ void register_sky_import_commands(CLI::App& sky) {
                         "inpainting: fast, the same from frame to frame; the default for a sequence)")
             ->check(CLI::IsMember({"texture", "smooth"}));
     imp->add_option(
-        "--encoding", io->encoding,
-        "Input values: auto (default: by the file's pixels: 8- and 16-bit files are sRGB unless their header\n"
-        "says linear, float files (EXR, HDR, PFM, float TIFF) linear), srgb, linear");
+           "--encoding", io->encoding,
+           "Input values: auto (default: by the file's pixels: 8- and 16-bit files are sRGB unless their header\n"
+           "says linear, float files (EXR, HDR, PFM, float TIFF) linear), srgb, linear")
+        ->check(CLI::IsMember({"auto", "srgb", "linear"}));
     imp->add_option(
            "--time", io->time,
            "When the photo was taken, ISO 8601 with a zone (2017-05-24T17:00:00Z); default: from the file name, "
@@ -697,8 +702,10 @@ void register_sky_import_commands(CLI::App& sky) {
     mask->add_option("--threshold", mo->threshold, "Rule threshold (default 0.46, the paper's r/b)")
         ->check(finite_in(-1e6, 1e6));
     mask->add_option("--rule", mo->rule,
-                     "rb: cloud if r/b > threshold (default); nbr: cloud if (b-r)/(b+r) < threshold");
-    mask->add_option("--preset", mo->preset, "Camera preset for the sky circle and non-sky mask (" + presets + ")");
+                     "rb: cloud if r/b > threshold (default); nbr: cloud if (b-r)/(b+r) < threshold")
+        ->check(parsed_by([](const std::string& s) { parse_cloud_rule(s); }, "RULE"));
+    mask->add_option("--preset", mo->preset, "Camera preset for the sky circle and non-sky mask (" + presets + ")")
+        ->check(CLI::IsMember(camera_preset_names()));
     mask->add_option("--center", mo->center, "Sky circle centre X,Y in pixels (photos only; default: preset or found)");
     mask->add_option("--radius", mo->radius, "Sky circle radius in pixels (with --center)")->check(finite_in(4, 1e6));
     mask->add_option("--mask", mo->mask, "Photo-sized non-sky mask (black = not sky)");

@@ -8,6 +8,8 @@
 #include "motion/evaluation.h"
 #include "motion/prediction.h"
 #include "motion/training_set.h"
+#include "sky/cloud_mask.h"
+#include "sky/photo_import.h"
 #include "util/atomic_file.h"
 
 namespace dynsky::cli {
@@ -83,7 +85,8 @@ void register_sky_model_commands(CLI::App& sky) {
                         "or of skies already imported from any camera ('dynsky sky import', .exr; a STEM.filled.png "
                         "beside each, from --filled-mask, leaves its filled pixels out)");
         cmd->add_option("--preset", o->preset,
-                        "Camera preset of --photos when they are photographs: arm-tsi or mobotix");
+                        "Camera preset of --photos when they are photographs: arm-tsi or mobotix")
+            ->check(CLI::IsMember(camera_preset_names()));
         cmd->add_option(
             "--frames", o->frames,
             "Start frames A-B to score (default: the model's held-out part of a sequence it was trained on,\n"
@@ -130,6 +133,7 @@ void register_sky_model_commands(CLI::App& sky) {
             ->capture_default_str();
         cmd->add_option("--cloud-rule", o->cloud_rule,
                         "Cloud mask rule: rb (red / blue > t) or nbr ((b - r) / (b + r) < t)")
+            ->check(parsed_by([](const std::string& s) { parse_cloud_rule(s); }, "RULE"))
             ->capture_default_str();
         cmd->add_option("--cloud-threshold", o->form.cloud_rule.threshold, "Cloud mask threshold t")
             ->check(finite_in(-1000, 1000))

@@ -756,6 +756,36 @@ TEST(BadInputCli, OutOfRangeNumericOptionsAreRefusedNamingTheOption) {
     bad.check();
 }
 
+// A name not on an option's list is a usage error naming the option (exit 2), as --hdr and --model
+// were: --sampler, --lens, --encoding, --preset, --rule, --cloud-rule and --samplers failed with exit 1
+// after starting; --mask-layout without --mask was taken silently.
+TEST(BadInputCli, NamesNotOnAnOptionsListAreUsageErrors) {
+    const std::string dir = test::temp_dir("bad_names");
+    const std::string photo = ldr_image(dir + "/photo.jpg", 64, 48);
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {"render builtin --res 8x6 --spp 1 -q -o " + dir + "/r.exr --sampler bogus", "--sampler"},
+        {"sky import " + photo + " -o " + dir + "/s.exr --lens fisheye", "--lens"},
+        {"sky import " + photo + " -o " + dir + "/s.exr --encoding rec709", "--encoding"},
+        {"sky import " + photo + " -o " + dir + "/s.exr --preset gopro", "--preset"},
+        {"sky import " + photo + " -o " + dir + "/s.exr --mask-layout tsi", "--mask"},
+        {"sky mask " + photo + " -o " + dir + "/m.png --rule blue", "--rule"},
+        {"sky mask " + photo + " -o " + dir + "/m.png --preset gopro", "--preset"},
+        {"sky evaluate --photos " + dir + " --preset gopro", "--preset"},
+        {"sky training-data --sequence arm-tsi --out " + dir + "/td --cloud-rule blue", "--cloud-rule"},
+        {"bench sampling --samplers cdf,bogus --out " + dir + "/b", "--samplers"},
+    };
+    std::vector<std::future<test::CommandResult>> runs;
+    for (const auto& c : cases) runs.push_back(std::async(std::launch::async, [a = c.first] { return dynsky(a); }));
+    for (size_t k = 0; k < cases.size(); ++k) {
+        const test::CommandResult r = runs[k].get();
+        SCOPED_TRACE("dynsky " + cases[k].first);
+        EXPECT_EQ(r.exit_code, 2) << r.output;
+        EXPECT_NE(r.output.find("dynsky: usage error: " + cases[k].second), std::string::npos) << r.output;
+    }
+    EXPECT_FALSE(fs::exists(dir + "/r.exr") || fs::exists(dir + "/s.exr") || fs::exists(dir + "/m.png"));
+    fs::remove_all(dir);
+}
+
 // The third audit (2026-12-03): a wind that moves the clouds infinitely far per step crashed the
 // warp (sky predict took any wind; animate any cloud height above 0; a model's dt_s of 1e308), a
 // procedural wind or evolution beyond range wrote NaN flows, an empty value read as 0, a 7-number
