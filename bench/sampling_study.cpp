@@ -19,6 +19,7 @@
 #include <thread>
 
 #include "bench/sampling_study.h"
+#include "util/progress.h"
 #include "util/shell.h"
 #include "renderer/builtin_scene.h"
 #include "renderer/gltf_loader.h"
@@ -299,12 +300,12 @@ int run_sampling_study(const SamplingStudyOptions& o) {
     // Skies serve the accuracy part, scenes also the failure cases: neither is made for others.
     std::vector<NamedSky> skies;
     if (run_accuracy) {
-        std::fprintf(stderr, "sampling bench: skies...\n");
+        if (!reports_silenced()) std::fprintf(stderr, "sampling bench: skies...\n");
         skies = make_skies(sky_n, o, &notes);
     }
     std::vector<NamedScene> scenes;
     if (run_accuracy || run_failures) {
-        std::fprintf(stderr, "sampling bench: scenes...\n");
+        if (!reports_silenced()) std::fprintf(stderr, "sampling bench: scenes...\n");
         scenes = make_scenes(o, float(w) / h, &notes);
         // Nothing to measure is an error, not an empty report.
         if (scenes.empty())
@@ -337,8 +338,9 @@ int run_sampling_study(const SamplingStudyOptions& o) {
         for (const NamedScene& sc : scenes) {
             Accel accel(sc.scene);
             for (const NamedSky& sky : skies) {
-                std::fprintf(stderr, "sampling bench: %s / %s (reference %d spp)\n", sc.name.c_str(), sky.name.c_str(),
-                             ref_spp);
+                if (!reports_silenced())
+                    std::fprintf(stderr, "sampling bench: %s / %s (reference %d spp)\n", sc.name.c_str(),
+                                 sky.name.c_str(), ref_spp);
                 Image ref = reference(accel, sc, sky, w, h, ref_spp, depth, cache);
                 // A finished case is kept in the cache (its rows, timings included), so a long run
                 // that is stopped resumes at the first unfinished case: no finished work is lost.
@@ -388,8 +390,9 @@ int run_sampling_study(const SamplingStudyOptions& o) {
                                     << r.rel_mse << "," << r.firefly << "," << r.trimmed_rmse << "\n";
                         }
                         resumed = true;
-                        std::fprintf(stderr, "sampling bench: %s / %s: finished earlier, read from %s\n",
-                                     sc.name.c_str(), sky.name.c_str(), case_file.c_str());
+                        if (!reports_silenced())
+                            std::fprintf(stderr, "sampling bench: %s / %s: finished earlier, read from %s\n",
+                                         sc.name.c_str(), sky.name.c_str(), case_file.c_str());
                     }
                 }
                 std::map<std::string, std::unique_ptr<EnvLight>> lights;
@@ -487,7 +490,7 @@ int run_sampling_study(const SamplingStudyOptions& o) {
     }
 
     // ---- Rebuild cost ----
-    if (run_rebuild) std::fprintf(stderr, "sampling bench: rebuild timings\n");
+    if (run_rebuild && !reports_silenced()) std::fprintf(stderr, "sampling bench: rebuild timings\n");
     std::vector<int> sizes = o.quick ? std::vector<int>{256, 1024, 2048} : std::vector<int>{256, 512, 1024, 2048, 4096};
     if (!run_rebuild) sizes.clear();
     std::ostringstream rb_csv, rb;
@@ -560,7 +563,7 @@ int run_sampling_study(const SamplingStudyOptions& o) {
     if (run_rebuild) write_file_atomic((out / "rebuild.csv").string(), rb_csv.str());
 
     // ---- Failure cases (on the plaza, or the first scene) ----
-    if (run_failures) std::fprintf(stderr, "sampling bench: failure cases\n");
+    if (run_failures && !reports_silenced()) std::fprintf(stderr, "sampling bench: failure cases\n");
     std::ostringstream fl_csv, fl;
     fl_csv << "case,sampler,rmse,rel_mse,firefly\n";
     fl << "| case | sampler | RMSE | rel. MSE | firefly share |\n|---|---|---|---|---|\n";
@@ -728,7 +731,8 @@ int run_sampling_study(const SamplingStudyOptions& o) {
            << fl.str() << "\n![failures](failures.png)\n\n";
     if (!notes.empty()) md << "## Notes\n\n" << notes << "\n";
     write_file_atomic((out / "README.md").string(), md.str());
-    std::fprintf(stderr, "wrote %s (%.0f s)\n", (out / "README.md").c_str(), seconds_since(start));
+    if (!reports_silenced())
+        std::fprintf(stderr, "wrote %s (%.0f s)\n", (out / "README.md").c_str(), seconds_since(start));
     return 0;
 }
 

@@ -14,6 +14,7 @@
 #include "cli/options.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
+#include "util/progress.h"
 
 namespace {
 
@@ -84,6 +85,10 @@ int main(int argc, char** argv) {
                      option.c_str());
         return dynsky::cli::kUsageError;
     }
+    // -q silences the libraries' reports and progress too (notes, bars, "wrote ..."), for the
+    // commands with their own --quiet as for the others.
+    for (int i = 1; i < argc; ++i)
+        if (std::string(argv[i]) == "-q" || std::string(argv[i]) == "--quiet") dynsky::silence_reports(true);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "sky/sun_position.h"
+#include "util/progress.h"
 #include "util/error.h"
 #include "util/parse.h"
 
@@ -174,8 +175,12 @@ void add_generated_sky_options(CLI::App* cmd, SkySourceSpec* o) {
 
 void add_quiet_flag(CLI::App* cmd) {
     cmd->add_flag_callback(
-        "-q,--quiet", [] { std::fflush(stdout), std::freopen("/dev/null", "w", stdout); },
-        "No report on stdout (warnings and errors still go to stderr)");
+        "-q,--quiet",
+        [] {
+            std::fflush(stdout), std::freopen("/dev/null", "w", stdout);
+            silence_reports(true);
+        },
+        "No report or progress (warnings and errors still go to stderr)");
 }
 
 }  // namespace dynsky::cli

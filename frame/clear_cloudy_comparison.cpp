@@ -13,6 +13,7 @@
 #include "renderer/accel.h"
 #include "renderer/env_light.h"
 #include "renderer/integrator.h"
+#include "util/progress.h"
 #include "util/image.h"
 #include "motion/radiance_scale.h"
 #include "sky/clear_sky.h"
@@ -197,12 +198,13 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
         }
     write_image((fs::path(o.out) / "side_by_side.png").string(), side);
     write_image((fs::path(o.out) / "difference.png").string(), diff);
-    std::fprintf(
-        stderr,
-        "wrote %s/side_by_side.png (clear | cloudy, same exposure %.2f EV) and difference.png (log2 cloudy/clear, "
-        "-3..+3 stops, colormap TWILIGHT_SHIFTED: mid = no change, colour bar below)\n"
-        "global horizontal illuminance at t=0: clear %.0f lx, cloudy %.0f lx\n",
-        o.out.c_str(), ev, 683.0 * luminance(e_clear), 683.0 * luminance(e_cloudy));
+    if (!reports_silenced())
+        std::fprintf(
+            stderr,
+            "wrote %s/side_by_side.png (clear | cloudy, same exposure %.2f EV) and difference.png (log2 cloudy/clear, "
+            "-3..+3 stops, colormap TWILIGHT_SHIFTED: mid = no change, colour bar below)\n"
+            "global horizontal illuminance at t=0: clear %.0f lx, cloudy %.0f lx\n",
+            o.out.c_str(), ev, 683.0 * luminance(e_clear), 683.0 * luminance(e_cloudy));
 
     // Illuminance over time at the chosen points, under both skies (the sun follows the clock).
     std::string csv = (fs::path(o.out) / "illuminance.csv").string();
@@ -225,14 +227,14 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
                 f << ',' << window_luminance(iy, x, y) << ',' << window_luminance(ic, x, y);
             }
             f << '\n';
-            std::fprintf(stderr, "chart frame %d/%d (t = %.1f s)\n", k + 1, o.chart_frames, t);
+            if (!reports_silenced()) std::fprintf(stderr, "chart frame %d/%d (t = %.1f s)\n", k + 1, o.chart_frames, t);
         }
         write_file_atomic(csv, f.str());
     }
     make_line_chart(csv, (fs::path(o.out) / "illuminance.png").string(),
                     "Clear vs cloudy sky: illuminance and luminance at chosen points", "time (s)", "lux / 100, cd/m^2",
                     true);
-    std::fprintf(stderr, "wrote %s and illuminance.png\n", csv.c_str());
+    if (!reports_silenced()) std::fprintf(stderr, "wrote %s and illuminance.png\n", csv.c_str());
 }
 
 }  // namespace dynsky

@@ -15,6 +15,7 @@
 #include "util/data_path.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
+#include "util/progress.h"
 #include "util/parse.h"
 #include "util/image.h"
 
@@ -125,7 +126,7 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
             throw_file_error(file, "is a " + std::to_string(s.resolution) + " x " + std::to_string(s.resolution) +
                                        " sky: a moving sky needs at least 8 x 8 pixels (its clouds' motion is "
                                        "measured on it)");
-        if (ground)
+        if (ground && !reports_silenced())
             std::fprintf(stderr,
                          "dynsky: note: %s is a lat-long sky: its upper half moves, as a fisheye; below the horizon "
                          "is the ground model (--ground-albedo)\n",
@@ -159,7 +160,7 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
         input.time_seconds = 0;
         if (input.source.empty()) input.source = sky_file;
         scale = bring_to_model_scale(&input, &motion.previous);
-        if (scale.apply)
+        if (scale.apply && !reports_silenced())
             std::fprintf(stderr,
                          "dynsky: note: %s is %s: its clouds are moved at the model's scale and its frames given "
                          "back in its own units\n",

@@ -982,7 +982,10 @@ SequenceSkyCircle find_sequence_sky_circle(const std::vector<std::string>& photo
     out.found = int(rs.size());
     if (rs.empty())
         throw Error("no sky circle found in any of " + std::to_string(out.tried) + " photographs of the sequence (" +
-                    out.not_found.front() + "); give its centre and radius (--center X,Y --radius R)");
+                    out.not_found.front() +
+                    (out.not_found.front().find("--center") == std::string::npos
+                         ? "); give its centre and radius (--center X,Y --radius R)"
+                         : ")"));
     out.circle = SkyCircle{quantile(xs, 0.5), quantile(ys, 0.5), quantile(rs, 0.5)};
     for (size_t i = 0; i < rs.size(); ++i) {
         out.centre_spread_px = std::max(out.centre_spread_px,

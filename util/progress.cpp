@@ -7,8 +7,18 @@
 
 namespace dynsky {
 
+namespace {
+std::atomic<bool> g_reports_silenced{false};
+}
+
+void silence_reports(bool silent) { g_reports_silenced = silent; }
+bool reports_silenced() { return g_reports_silenced; }
+
 ProgressBar::ProgressBar(long long total, std::string label, bool quiet)
-    : total_(total > 0 ? total : 1), label_(std::move(label)), quiet_(quiet), tty_(isatty(STDERR_FILENO)) {
+    : total_(total > 0 ? total : 1),
+      label_(std::move(label)),
+      quiet_(quiet || reports_silenced()),
+      tty_(isatty(STDERR_FILENO)) {
     start_ = last_draw_ = std::chrono::steady_clock::now();
     if (!quiet_) draw(0, false);
 }

@@ -13,9 +13,14 @@ namespace dynsky {
 // far; "?" before any progress).
 std::string format_progress(const std::string& label, double fraction, double elapsed_seconds);
 
+// The program-wide -q of commands without a --quiet of their own (cli/main.cpp): progress bars and
+// reports on stderr stay silent (warnings and errors are still said). Off by default.
+void silence_reports(bool silent);
+bool reports_silenced();
+
 class ProgressBar {
   public:
-    // Prints to stderr; quiet = true prints nothing (tests, --quiet).
+    // Prints to stderr; quiet = true (or reports_silenced()) prints nothing (tests, --quiet).
     ProgressBar(long long total, std::string label, bool quiet = false);
     ~ProgressBar();
     void advance(long long n = 1);

@@ -849,8 +849,12 @@ TEST(BadInputCli, ThirdAuditsWindsEmptyValuesAndOtherCamerasAreRefused) {
     // A lat-long made by `sky latlong` keeps its sky's sun: compare (which needs one) takes it.
     expect_accepted("sky clear --lat 48 --lon 2 --time 2026-06-21T12:00:00Z --sky-res 64 -q -o " + dir + "/c.exr");
     expect_accepted("sky latlong " + dir + "/c.exr --width 128 -q -o " + dir + "/ll.exr");
-    expect_accepted("compare builtin --sky " + dir +
-                    "/ll.exr --res 32x18 --spp 1 --chart-frames 2 --chart-res 16x9 -q -o " + dir + "/cmp_ll");
+    // And -q silences its report as every command's (compare's went on to stderr).
+    const test::CommandResult quiet = dynsky("compare builtin --sky " + dir +
+                                             "/ll.exr --res 32x18 --spp 1 --chart-frames 2 --chart-res 16x9 -q -o " +
+                                             dir + "/cmp_ll");
+    EXPECT_EQ(quiet.exit_code, 0) << quiet.output;
+    EXPECT_EQ(quiet.output, "") << "-q: nothing but warnings and errors";
     fs::remove_all(dir);
 }
 
