@@ -139,9 +139,20 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
         int a = 0, b = 0;
         std::stringstream ss(o.frames);
         char dash = 0;
-        if (!(ss >> a) || (ss >> dash && (dash != '-' || !(ss >> b))))
-            throw Error("--frames '" + o.frames + "': expected A-B");
+        std::string rest;
+        if (!(ss >> a) || (ss >> dash && (dash != '-' || !(ss >> b))) || (ss >> rest) || a < 0)
+            throw Error("--frames '" + o.frames + "': expected A-B, start frames from 0 (first to last)");
         if (!dash) b = a;
+        // Start frames need the frame before (the previous pair's flow) and h after.
+        const std::string range = "the start frames of " + seq.folder + " are 1-" + std::to_string(last) + " (" +
+                                  std::to_string(count) + " frames, horizon " + std::to_string(hmax) + ")";
+        if (b < a && last >= 1)
+            throw Error("--frames '" + o.frames + "': the last start frame is before the first; " + range);
+        if ((b < 1 || a > last) && last >= 1)
+            throw Error("--frames '" + o.frames + "': none of them can be scored; " + range);
+        if ((a < 1 || b > last) && last >= 1 && !o.quiet)
+            std::fprintf(stderr, "dynsky: note: --frames %s scores %d-%d: %s\n", o.frames.c_str(), std::max(1, a),
+                         std::min(last, b), range.c_str());
         first = std::max(1, a), last = std::min(last, b);
         part = "start frames " + o.frames + " (--frames)";
     } else if (folder != "advect") {

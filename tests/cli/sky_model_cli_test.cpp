@@ -320,6 +320,25 @@ TEST(SkyModelCli, EvaluateRejectsFoldersWithoutOneRegularSequence) {
         const std::string report((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
         EXPECT_NE(report.find("| 2 |"), std::string::npos) << report;
         EXPECT_EQ(report.find("| 6 |"), std::string::npos) << report;
+        // --frames as animate's: reversed, negative or outside the start frames is a usage error
+        // saying which can be scored ("too few frames" before); partly outside is clipped, said.
+        for (const std::string& frames : {"3-1", "-1", "7-9", "1-2x"}) {
+            auto bad = test::run_command(
+                dynsky("sky evaluate --model advect --no-paper --res 64 --import-res 64 "
+                       "--horizons 1 --photos " +
+                       dir + "/five --preset arm-tsi --frames " + frames + " --report " + dir + "/frames.md 2>&1"));
+            EXPECT_EQ(bad.exit_code, 2) << frames << ": " << bad.output;
+            EXPECT_NE(bad.output.find("--frames '" + frames + "'"), std::string::npos) << bad.output;
+            if (frames != "-1" && frames != "1-2x")
+                EXPECT_NE(bad.output.find("are 1-3 (5 frames, horizon 1)"), std::string::npos) << bad.output;
+            EXPECT_FALSE(fs::exists(dir + "/frames.md"));
+        }
+        auto clipped =
+            test::run_command(dynsky("sky evaluate --model advect --no-paper --res 64 --import-res 64 "
+                                     "--horizons 1 --photos " +
+                                     dir + "/five --preset arm-tsi --frames 0-99 --report " + dir + "/frames.md 2>&1"));
+        EXPECT_EQ(clipped.exit_code, 0) << clipped.output;
+        EXPECT_NE(clipped.output.find("--frames 0-99 scores 1-3"), std::string::npos) << clipped.output;
     }
     // A file whose name carries no time.
     fs::create_directories(dir + "/untimed");
