@@ -79,6 +79,12 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
     if (o.sequence.empty() == o.photos.empty())
         throw Error(
             "--sequence, --photos: give exactly one of --sequence (arm-tsi, arm-clear, arm-dusk, mobotix) and --photos DIR --preset P");
+    if (!o.photos.empty()) {
+        std::error_code ec;
+        if (!fs::exists(o.photos, ec)) throw_file_error(o.photos, "no such folder (--photos)");
+        if (!fs::is_directory(o.photos, ec))
+            throw_file_error(o.photos, "not a folder (--photos takes a folder of photographs or of imported skies)");
+    }
     if (!o.photos.empty() && o.preset.empty() && !folder_holds_skies(o.photos))
         throw Error(
             "--photos needs --preset (arm-tsi or mobotix) for photographs; a folder of skies imported with "

@@ -297,6 +297,7 @@ TEST(SkyModelCli, EvaluateRejectsFoldersWithoutOneRegularSequence) {
         std::string folder, message;
     } cases[] = {
         {dir + "/empty", "no photographs"},
+        {dir + "/nowhere", "nowhere: no such folder"},  // said it needed --preset
         {photo_folder(dir + "/gap", 8, {4}), "missing frames"},
         {photo_folder(dir + "/two", 2), "fewer than three photographs"},
     };
