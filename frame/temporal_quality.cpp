@@ -96,11 +96,19 @@ void analyse_temporal_quality(const std::string& folder) {
     make_line_chart(csv, (fs::path(o.folder) / "temporal.png").string(),
                     "Frame-to-frame change (shaded: pairs across a medium-step boundary)",
                     "time of the later frame (s)", "mean |dL| / L (%)", false);
+    // A mean of no pairs, or a ratio without both kinds, is not a figure: said in words.
+    auto mean_text = [](double sum, int n) {
+        return n ? number_text(sum / n, 4) + "% (" + std::to_string(n) + " pairs)" : std::string("none (0 pairs)");
+    };
+    const std::string ratio = (nb && nw && sum_w > 0)
+                                  ? number_text((sum_b / nb) / (sum_w / nw), 3)
+                                  : std::string(nb ? "none (no pair within an interval)"
+                                                   : "none (no pair across a medium-step boundary: the frames lie "
+                                                     "within one step, or the frames carry no step length)");
     std::printf(
-        "frames: %zu; mean frame-to-frame luminance change: across medium-step boundaries %.3f%% (%d pairs), "
-        "within intervals %.3f%% (%d pairs); ratio %.2f\n",
-        files.size(), nb ? sum_b / nb : 0.0, nb, nw ? sum_w / nw : 0.0, nw,
-        (nb && nw && sum_w > 0) ? (sum_b / nb) / (sum_w / nw) : 0.0);
+        "frames: %zu; mean frame-to-frame luminance change: across medium-step boundaries %s, within intervals %s; "
+        "ratio %s\n",
+        files.size(), mean_text(sum_b, nb).c_str(), mean_text(sum_w, nw).c_str(), ratio.c_str());
     std::printf("wrote %s and temporal.png\n", csv.c_str());
 }
 

@@ -246,6 +246,16 @@ TEST(AnimateCli, ResumeRerendersDamagedFramesAndFramesOfOtherSettings) {
     EXPECT_EQ(r.exit_code, 1) << r.output;
     EXPECT_NE(r.output.find("frame 2 is missing"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(gap + "/temporal.csv"));
+    // Three frames within one medium step (0, 0.125, 0.25 s; dt 0.5 s): no pair across a boundary,
+    // so no ratio (it said "0.000% (0 pairs)" and "ratio 0.00", as if measured).
+    const std::string pair = dir + "/pair";
+    fs::create_directories(pair);
+    for (int k : {0, 1, 2}) fs::copy_file(frame(a, k), numbered(pair, "frame", k, ".exr"));
+    r = test::run_command(std::string(DYNSKY_EXE) + " temporal " + pair);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("none (0 pairs)"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("ratio none ("), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("0 pairs)%"), std::string::npos) << r.output;
 
     // --force: every frame written anew.
     r = test::run_command(animate(a, "--force"));
