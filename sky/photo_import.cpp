@@ -17,6 +17,7 @@
 #include "sky/fisheye.h"
 #include "util/color.h"
 #include "util/error.h"
+#include "util/parse.h"
 #include "util/image.h"
 
 namespace dynsky {
@@ -62,6 +63,8 @@ bool is_display_encoded(const Image& photo, const std::string& path, const std::
     return !(ext == ".exr" || ext == ".hdr" || ext == ".pfm" || ext == ".tif" || ext == ".tiff");
 }
 
+constexpr float kMaxPhotoValue = 1e15f;
+
 // RGB float image (3 channels, RGB order) from any channel count.
 cv::Mat to_rgb_mat(const Image& image, const std::string& name) {
     if (image.channels != 1 && image.channels < 3)
@@ -81,6 +84,13 @@ cv::Mat to_rgb_mat(const Image& image, const std::string& name) {
                     throw_file_error(name, "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
                                                ") is negative (" + std::to_string(v) +
                                                "): a photograph cannot hold negative light");
+                // Named here, by the photo's own pixel: the sky made from it named a resampled one.
+                // (Not 1e9, the sky's limit: a photo in cd/m^2 holds the sun at about 1.6e9.)
+                if (v > kMaxPhotoValue)
+                    throw_file_error(name, "pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") is " +
+                                               number_text(v, 3) +
+                                               ", far beyond any light a camera records (above 1e15): a corrupt "
+                                               "or mis-scaled photograph");
                 row[x][c] = v;
             }
         }

@@ -988,6 +988,11 @@ TEST(PhotoImport, BadInputGivesErrorsNamingTheFile) {
     write_image(nan_path, hdr);
     p.circle = SkyCircle{32, 32, 30};
     expect_error(nan_path, "NaN", p);
+    // 1e31: named by the photo's own pixel (the sky made from it named a resampled one).
+    hdr.at(10, 12, 1) = 1e31f;
+    const std::string huge_path = dir + "/huge.exr";
+    write_image(huge_path, hdr);
+    expect_error(huge_path, "pixel (10, 12) is 1e+31", p);
 
     // A mask of the wrong size names the mask.
     std::string photo_path = dir + "/ok.exr";
