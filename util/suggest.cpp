@@ -27,6 +27,8 @@ std::string closest_name(const std::string& word, const std::vector<std::string>
     for (const std::string& name : names) {
         int d = edit_distance(word, name);
         if (word.size() >= 3 && name.rfind(word, 0) == 0) d = std::min(d, 1);
+        // A name the word starts with ("--outdir" for --out): a longer spelling of it.
+        else if (name.size() >= 5 && word.rfind(name, 0) == 0) d = std::min(d, allowed);
         if (d < best_distance) best = name, best_distance = d;
     }
     return best;

@@ -158,6 +158,9 @@ TEST(Suggest, ClosestNames) {
     EXPECT_EQ(closest_name("anim", commands), "animate");  // the start of a name
     EXPECT_EQ(closest_name("xyzzy", commands), "");
     EXPECT_EQ(closest_name("--sppp", {"--spp", "--seed", "--sky"}), "--spp");
+    EXPECT_EQ(closest_name("--outdir", {"--out", "--steps", "--in"}), "--out");  // a longer spelling
+    EXPECT_EQ(closest_name("--output-file", {"--out", "--steps"}), "--out");
+    EXPECT_EQ(closest_name("skyfall", {"sky", "render"}), "");  // too short a name to say so
 }
 
 }  // namespace
