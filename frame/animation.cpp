@@ -20,6 +20,7 @@
 #include "renderer/accel.h"
 #include "renderer/env_light.h"
 #include "renderer/integrator.h"
+#include "util/data_path.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
 #include "util/exposure.h"
@@ -143,10 +144,19 @@ AnimationReport render_animation(const AnimationSettings& o) {
                              " s): make it with this --duration");
     // The scene is read only by stages that render (encode checks the frames' files and settings).
     std::optional<LoadedScene> scene;
+    // Played, the file is read and its textures decoded once; each frame poses it (AnimatedGltf),
+    // and the scene here is its first pose.
+    std::unique_ptr<AnimatedGltf> animated;
     if (stage != "encode") {
         SceneSpec spec = o.scene;  // played: posed from the start (and no "not played" warning)
         if (o.play_scene_animation) spec.animation_time = std::max(0.0, spec.animation_time);
-        scene = load_scene(spec, float(width) / height);
+        if (o.play_scene_animation && o.scene.scene != "builtin") {
+            const std::string path = resolve_user_path(o.scene.scene);
+            animated = std::make_unique<AnimatedGltf>(path);
+            scene = pose_scene(spec, *animated, path, float(width) / height, /*print_warnings=*/true);
+        } else {
+            scene = load_scene(spec, float(width) / height);
+        }
     }
     const OutputFolder folder(o.out);  // removed again if this run fails before writing anything
     const FrameStore store(o.out);
@@ -233,9 +243,6 @@ AnimationReport render_animation(const AnimationSettings& o) {
     // pose the same as in one run), so the scene as loaded above needs no BVH of its own then.
     std::optional<Accel> accel;
     if (!o.play_scene_animation) accel.emplace(scene->scene);
-    // The file is read and its textures decoded once; each frame poses it (AnimatedGltf).
-    std::unique_ptr<AnimatedGltf> animated;
-    if (o.play_scene_animation && o.scene.scene != "builtin") animated = std::make_unique<AnimatedGltf>(scene->path);
     const double animation_start = std::max(0.0, o.scene.animation_time);
     const float aspect = float(width) / height;
     const std::string timings = store.file(timings_name);

@@ -25,11 +25,14 @@ LoadedScene load_scene(const SceneSpec& o, float aspect_ratio, bool print_warnin
     return out;
 }
 
-LoadedScene pose_scene(const SceneSpec& o, AnimatedGltf& file, const std::string& path, float aspect_ratio) {
+LoadedScene pose_scene(const SceneSpec& o, AnimatedGltf& file, const std::string& path, float aspect_ratio,
+                       bool print_warnings) {
     if (!(o.ground_albedo >= 0 && o.ground_albedo <= 1)) throw Error("--ground-albedo must be in [0, 1]");
     LoadedScene out;
     out.path = path;
     out.scene = file.pose(std::max(0.0, o.animation_time));
+    if (print_warnings)
+        for (const std::string& w : out.scene.warnings) std::fprintf(stderr, "dynsky: warning: %s\n", w.c_str());
     choose_camera(o, aspect_ratio, &out);
     return out;
 }

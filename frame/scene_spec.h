@@ -37,8 +37,9 @@ LoadedScene load_scene(const SceneSpec& spec, float aspect_ratio, bool print_war
 
 // The same for a glTF file already loaded (path: the file it was loaded from), posed at
 // spec.animation_time (0 when negative): what load_scene gives, without reading the file again
-// (animate --play-anim poses one file per frame). Warnings are not printed.
-LoadedScene pose_scene(const SceneSpec& spec, AnimatedGltf& file, const std::string& path, float aspect_ratio);
+// (animate --play-anim poses one file per frame); the file's warnings printed when asked.
+LoadedScene pose_scene(const SceneSpec& spec, AnimatedGltf& file, const std::string& path, float aspect_ratio,
+                       bool print_warnings = false);
 
 // The camera of a loaded scene as the spec asks (its glTF camera, one framing the bounds, the
 // look-at and field-of-view overrides); throws for a scene without triangles or a bad camera.
