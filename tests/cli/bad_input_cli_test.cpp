@@ -668,7 +668,7 @@ TEST(BadInputCli, AuditedInputsAreRefusedClearly) {
             {"photo.png", "of the sky disc is seen sky"});
     // An HDR photograph of absurd values: imported, then refused only by render.
     bad.add("sky import " + sky_exr(dir + "/huge.exr", 64, 1e31f) + " --center 32,32 --radius 30 -o " + dir + "/s.exr",
-            {"huge.exr", "above the limit"});
+            {"huge.exr", "pixel (0, 0) is 1e+31, far beyond any light"});
     // The preview and the filled mask asked into one file: one silently replaced the other.
     bad.add("sky import " + photo + " --center 100,80 --radius 70 -o " + dir + "/s.exr --preview " + dir +
                 "/p.png --filled-mask " + dir + "/p.png",
