@@ -112,8 +112,8 @@ void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {
            "'advect' (pure advection along the motion), 'paper' (the paper's FlowNet + CloudNet,\n"
            "networks/models/arm_tsi), 'procedural' (the procedural sky's own next frame; procedural input only),\n"
            "'flow' (extrapolate the Farneback flow of the last two steps; a uniform drift first), or\n"
-           "'network:FOLDER'. The motion: --prev when given, else the wind (--wind-from, --wind-speed,\n"
-           "--cloud-height)")
+           "a model folder ('network:FOLDER' or the folder). The motion: --prev when given, else the wind\n"
+           "(--wind-from, --wind-speed, --cloud-height)")
         ->capture_default_str();
     cmd->add_option(
            "--dt", m->dt,

@@ -40,7 +40,7 @@ struct RenderOptions {
     int max_depth = 8;
     float exposure = std::numeric_limits<float>::quiet_NaN();  // NaN: automatic
     bool quiet = false;
-    std::string sampler = sky_sampler_name(recommended_sky_sampler()) + "+mis";
+    std::string sampler = sky_sampler_name(path_tracer_sky_sampler());
     std::string aovs, region;
     float noise_threshold = 0, clamp_indirect = 0, filter_glossy = 0;
     double time_limit = 0;

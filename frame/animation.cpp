@@ -189,7 +189,7 @@ AnimationReport render_animation(const AnimationSettings& o) {
 
     // One exposure for the whole animation (per-frame auto exposure would flicker), from the sky
     // at t = 0 so every frame range agrees on it.
-    EnvLight light(o.scene.ground_albedo);
+    EnvLight light(o.scene.ground_albedo, path_tracer_sky_sampler());  // as render's default (cdf+mis)
     auto sky0 = std::make_shared<const SkyImage>(timeline.sky_at(0.0));
     light.set_sky(sky0);
     const float ev = std::isnan(o.exposure) ? exposure_for_irradiance(light.sky_irradiance()) : o.exposure;

@@ -152,7 +152,7 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
     };
 
     Accel accel(scene.scene);
-    EnvLight light(o.scene.ground_albedo);
+    EnvLight light(o.scene.ground_albedo, path_tracer_sky_sampler());  // as render's default (cdf+mis)
     auto clear0 = clear_at(0.0);
     auto cloudy0 = std::make_shared<const SkyImage>(cloudy.sky_at(0.0));
     Image a = render_frame(accel, light, scene.camera, clear0, w, h, o.spp, o.seed);

@@ -168,8 +168,14 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     }
     std::string model_name = m.model;
     if (model_name != "auto" && model_name != "flow" && model_name != "procedural" && model_name != "advect" &&
-        model_name != "paper" && model_name.rfind("network:", 0) != 0)
-        throw Error("--model '" + model_name + "': expected auto, advect, paper, procedural, flow or network:FOLDER");
+        model_name != "paper" && model_name.rfind("network:", 0) != 0) {
+        // A model folder as `sky predict` takes it (network: optional), else a usage error.
+        std::error_code ec;
+        if (!fs::is_directory(resolve_user_path(model_name), ec))
+            throw Error("--model '" + model_name +
+                        "': expected auto, advect, paper, procedural, flow, or a model folder (network:FOLDER)");
+        model_name = "network:" + model_name;
+    }
     std::unique_ptr<MediumStepModel> model;
     if (model_name == "auto" || model_name == "paper" || model_name == "advect") {
         const std::string folder = resolve_cloud_model(model_name);

@@ -33,7 +33,13 @@ std::unique_ptr<MediumStepModel> make_network_step_model(const std::string& fold
     return std::make_unique<NetworkStepModel>(folder);
 }
 
-std::string resolve_cloud_model(const std::string& name) {
+std::string resolve_cloud_model(const std::string& name_in) {
+    // "network:FOLDER", as animate and sky timeline write a folder, is the folder.
+    const std::string name = name_in.rfind("network:", 0) == 0 ? name_in.substr(8) : name_in;
+    if (name == "flow" || name == "procedural")
+        throw Error("--model " + name +
+                    ": a model of the moving sky of 'animate' and 'sky timeline' (it needs their sky); give auto, "
+                    "advect, paper or a model folder");
     auto installed = [](const std::string& rel) -> std::string {
         try {
             std::string p = data_path(rel + "/model.json");

@@ -20,8 +20,9 @@ std::unique_ptr<MediumStepModel> make_network_step_model(const std::string& fold
 
 // The folder (or "advect") a model name stands for: "" and "auto" -> networks/models/advect_residual
 // when installed (else "advect": pure advection); "paper" -> networks/models/arm_tsi; "advect";
-// else the name itself (a folder; a relative one not found from the working folder is looked up among
-// the shipped data, util/data_path.h).
+// else the name itself, "network:" taken off (a folder; a relative one not found from the working
+// folder is looked up among the shipped data, util/data_path.h). "flow" and "procedural" (models of
+// the timeline's own skies) throw.
 std::string resolve_cloud_model(const std::string& name);
 
 }  // namespace dynsky

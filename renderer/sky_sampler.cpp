@@ -554,6 +554,12 @@ SkySamplerOptions recommended_sky_sampler() {
     return SkySamplerOptions{};
 }
 
+SkySamplerOptions path_tracer_sky_sampler() {
+    SkySamplerOptions o = recommended_sky_sampler();
+    o.mis_compensation = true;  // the integrator always combines light and BSDF samples by MIS
+    return o;
+}
+
 std::unique_ptr<SkySampler> make_sky_sampler(const SkySamplerOptions& o) {
     if (o.method == SkySamplerMethod::Uniform) return std::make_unique<UniformSampler>();
     if (o.method == SkySamplerMethod::Cosine) return std::make_unique<CosineSampler>();

@@ -48,6 +48,9 @@ std::vector<std::string> sky_sampler_base_names();
 // The default the renderer uses (chosen from docs/sampling/README.md's measurements), without
 // MIS compensation; the render command adds "+mis" since it always combines strategies by MIS.
 SkySamplerOptions recommended_sky_sampler();
+// What the path tracer's commands use (render's default --sampler, every frame of animate and
+// compare): the recommended sampler with MIS compensation ("cdf+mis").
+SkySamplerOptions path_tracer_sky_sampler();
 
 // The per-pixel weights EnvLight hands to a sampler's build (one streaming pass over the image).
 struct SkyWeights {

@@ -174,6 +174,15 @@ TEST(SkyModelCli, PredictBadInputsFailClearlyAndWriteNothing) {
     EXPECT_EQ(r.exit_code, 2);  // a bad option value: usage error
     EXPECT_NE(r.output.find("--steps"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(dir + "/o3"));
+    // --model as animate and sky timeline spell it: network:FOLDER is the folder (it was "model folder
+    // not found"); their flow and procedural models need their skies: a usage error saying so.
+    r = test::run_command(dynsky("sky predict --quiet --model network:" + shipped_model() + " --in " + in +
+                                 " --steps 1 --out " + dir + "/o4"));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    r = test::run_command(dynsky("sky predict --model flow --in " + in + " --steps 1 --out " + dir + "/o5"));
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("--model flow: a model of the moving sky of 'animate'"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/o5"));
     fs::remove_all(dir);
 }
 
