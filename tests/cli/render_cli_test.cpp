@@ -155,6 +155,11 @@ TEST(RenderCli, APlaceWithoutASkyMakesTheClearSkyThere) {
     const Image ia = read_image(dir + "/a.exr"), ib = read_image(dir + "/b.exr");
     EXPECT_EQ(ia.pixels, ib.pixels);
     EXPECT_NE(read_image(dir + "/paris.exr").pixels, read_image(dir + "/sydney.exr").pixels);
+    // --sky-res sizes the built-in sky too (it stayed 1024 without a word): its report says so.
+    test::CommandResult small = test::run_command(exe() + " render builtin --sky-res 32 --res 16x9 --spp 1 --out " +
+                                                  dir + "/small.exr");
+    ASSERT_EQ(small.exit_code, 0) << small.output;
+    EXPECT_NE(small.output.find("(32x32)"), std::string::npos) << small.output;
     fs::remove_all(dir);
 }
 
