@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <cstdlib>
 #include <iterator>
 #include <map>
 #include <memory>
@@ -51,16 +52,29 @@ std::string frame_list(const std::vector<int>& frames) {
     return s;
 }
 
-// timings.csv gains a line per frame; rewritten whole each time (atomic, checked).
-void append_timing(const std::string& path, const std::string& line, bool start_over) {
-    std::string text;
+// timings.csv holds a line per frame, in frame order: a frame rendered again (a resumed run
+// repairing it) replaces its line (it was appended a second time). Rewritten whole each time
+// (atomic, checked).
+void record_timing(const std::string& path, int frame, const std::string& line, bool start_over) {
+    const std::string header = "frame,time_s,sky_ms,distribution_ms,render_ms,medium_steps_so_far\n";
+    std::map<int, std::string> rows;
     if (!start_over) {
         std::ifstream f(path, std::ios::binary);
-        text.assign(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+        std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+        // A table cut short (a killed run) starts over, as before.
+        if (!text.empty() && text.back() == '\n' && text.rfind(header, 0) == 0) {
+            std::istringstream in(text.substr(header.size()));
+            for (std::string row; std::getline(in, row);) {
+                char* end = nullptr;
+                const long k = std::strtol(row.c_str(), &end, 10);
+                if (end != row.c_str() && *end == ',') rows[int(k)] = row + "\n";
+            }
+        }
     }
-    if (text.empty() || text.back() != '\n')
-        text = "frame,time_s,sky_ms,distribution_ms,render_ms,medium_steps_so_far\n";
-    write_file_atomic(path, text + line);
+    rows[frame] = line;
+    std::string text = header;
+    for (const auto& [k, row] : rows) text += row;
+    write_file_atomic(path, text);
 }
 
 }  // namespace
@@ -312,7 +326,7 @@ AnimationReport render_animation(const AnimationSettings& o) {
         std::ostringstream line;
         line << k << ',' << t << ',' << sky_s * 1e3 << ',' << light.last_build_seconds() * 1e3 << ','
              << result.stats.seconds * 1e3 << ',' << timeline.timings().medium_steps << '\n';
-        append_timing(timings, line.str(), timings_start_over);
+        record_timing(timings, k, line.str(), timings_start_over);
         timings_start_over = false;
         if (!o.quiet)
             std::fprintf(stderr, "frame %d/%d t=%.3f s: sky %.1f ms, distribution %.1f ms, render %.1f ms\n", k,

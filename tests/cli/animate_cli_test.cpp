@@ -209,6 +209,18 @@ TEST(AnimateCli, ResumeRerendersDamagedFramesAndFramesOfOtherSettings) {
     EXPECT_TRUE(read_image(frame(a, 5)).pixels == frame5.pixels);
     EXPECT_GT(fs::file_size(numbered(a, "frame", 5, ".png")), 0u);
     EXPECT_TRUE(fs::exists(numbered(a, "sky", 6, ".png")));
+    {
+        // timings.csv: one line per frame, in order (a repaired frame's line was appended again).
+        std::ifstream in(a + "/timings.csv");
+        std::string row;
+        std::getline(in, row);
+        std::vector<int> frames;
+        while (std::getline(in, row)) frames.push_back(std::stoi(row));
+        std::vector<int> expected(frames.size());
+        for (size_t k = 0; k < expected.size(); ++k) expected[k] = int(k);
+        EXPECT_EQ(frames, expected);
+        EXPECT_GE(frames.size(), 7u);
+    }
 
     // A frame whose EXR was overwritten with a NaN pixel (its settings intact): `temporal` refuses
     // it naming the file (its table was all NaN), and a resumed run renders it again.
