@@ -81,8 +81,13 @@ void make_video(const std::string& dir, const std::string& prefix, double fps, c
 }
 
 void contact_sheet_grid(int total, int* count, int* columns) {
-    int n = std::clamp(total, 1, 12);
-    int c = n <= 5 ? n : (n >= 8 ? 4 : 3);
+    const int n = std::clamp(total, 1, 12);
+    // Up to 5 in one row; more in the rows of 4, 3 or 5 that show the most of them (9 frames: 3 x 3,
+    // where rows of 4 dropped one).
+    int c = n;
+    if (n > 5)
+        for (int option : {4, 3, 5})
+            if (n / option * option > n / c * c || c == n) c = option;
     *count = n / c * c, *columns = c;
 }
 

@@ -15,8 +15,8 @@ namespace dynsky {
 void make_video(const std::string& folder, const std::string& prefix, double fps, const std::string& out, bool quiet);
 
 // Up to 12 frames, evenly spaced from the first to the last, each 320 pixels wide, in a full grid
-// (no empty cells: up to 5 frames in one row; more in rows of 3 or 4, the count rounded down to
-// fill them), each labelled with its frame time t = k / fps.
+// (no empty cells: up to 5 frames in one row; more in rows of 4, 3 or 5, whichever shows the most,
+// the count rounded down to fill them), each labelled with its frame time t = k / fps.
 void make_contact_sheet(const FrameStore& store, int total, double fps, const std::string& out);
 
 // How many frames the contact sheet of an animation of `total` frames shows, in how many columns.

@@ -5,12 +5,14 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 
 #include "frame/frame_metadata.h"
 #include "frame/frame_store.h"
+#include "frame/video.h"
 #include "tests/test_support.h"
 #include "util/error.h"
 #include "util/image.h"
@@ -174,6 +176,21 @@ TEST(Animation, ResumeKeepsCompleteFramesAndRendersTheRest) {
     EXPECT_TRUE(r.complete);
     expect_same_frames(whole, resumed, 4, settings);
     fs::remove_all(dir);
+}
+
+// The contact sheet's grid shows as many frames as a full grid can: 9 frames in 3 x 3 (rows of 4
+// dropped one), 10 and 11 in rows of 5, never an empty cell.
+TEST(ContactSheet, GridShowsTheMostFramesAFullGridCan) {
+    const std::vector<std::array<int, 3>> expected = {{1, 1, 1},   {3, 3, 3},   {5, 5, 5},   {6, 6, 3},
+                                                      {7, 6, 3},   {8, 8, 4},   {9, 9, 3},   {10, 10, 5},
+                                                      {11, 10, 5}, {12, 12, 4}, {13, 12, 4}, {400, 12, 4}};
+    for (const auto& [total, count, columns] : expected) {
+        int n = 0, c = 0;
+        contact_sheet_grid(total, &n, &c);
+        EXPECT_EQ(n, count) << total << " frames";
+        EXPECT_EQ(c, columns) << total << " frames";
+        EXPECT_EQ(n % c, 0);
+    }
 }
 
 TEST(FrameStore, NamesAndCompleteness) {
