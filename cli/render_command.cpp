@@ -162,7 +162,9 @@ int run_render(const RenderOptions& o) {
     Image& image = result.color;
     // Nothing lit reached the camera: written (it is what the scene shows), but said.
     if (is_black_everywhere(image)) std::fprintf(stderr, "dynsky: warning: the image %s\n", kBlackRenderHint);
-    image.metadata.numbers["dynsky:spp"] = o.spp;
+    image.metadata.numbers["dynsky:spp"] = o.spp;  // the most asked for; what was taken (adaptive, --time-limit):
+    image.metadata.numbers["dynsky:spp_mean"] = double(result.stats.camera_rays) /
+                                                std::max<double>(1.0, double(image.width) * image.height);
     image.metadata.numbers["dynsky:seed"] = double(o.seed);
     image.metadata.numbers["dynsky:render_seconds"] = result.stats.seconds;
     // CPU time of all threads: comparable across runs on a shared machine (bench/cycles_equal_error.sh).

@@ -170,6 +170,7 @@ TEST(RenderCli, WritesExrWithMetadataAndPng) {
     Image im = read_image(dir + "/plaza.exr");
     EXPECT_EQ(im.width, 32);
     EXPECT_EQ(im.metadata.numbers["dynsky:spp"], 2);
+    EXPECT_EQ(im.metadata.numbers["dynsky:spp_mean"], 2);  // what was taken (the cap above)
     EXPECT_EQ(im.metadata.numbers["dynsky:seed"], 5);
     EXPECT_GT(im.metadata.numbers["dynsky:render_seconds"], 0);
     EXPECT_FALSE(im.metadata.strings["dynsky:sky"].empty());
