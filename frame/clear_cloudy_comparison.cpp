@@ -162,6 +162,25 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
     Color e_cloudy = light.sky_irradiance();
     if (is_black_everywhere(a) && is_black_everywhere(b))
         std::fprintf(stderr, "dynsky: warning: the clear and the cloudy image are black: each %s\n", kBlackRenderHint);
+    // What each image is, as render's and animate's say (they were written bare).
+    auto describe = [&](Image* image, const SkyImage& sky, const std::string& model) {
+        ImageMetadata& m = image->metadata;
+        m.numbers["dynsky:time"] = 0.0;
+        m.numbers["dynsky:spp"] = o.spp;
+        m.numbers["dynsky:seed"] = double(o.seed);
+        m.numbers["dynsky:png_exposure_ev"] = ev;
+        m.numbers["dynsky:ground_albedo"] = o.scene.ground_albedo;
+        m.strings["dynsky:sky"] = sky.source;
+        if (!model.empty()) m.strings["dynsky:sky_model"] = model;
+        m.strings["dynsky:scene"] = o.scene.scene;
+        m.strings["dynsky:camera"] = scene.camera.name;
+        if (sky.sun_direction)
+            for (int c = 0; c < 3; ++c)
+                m.numbers[std::string("dynsky:sun_") + "xyz"[c]] = double((*sky.sun_direction)[c]);
+        m.strings["DateTime"] = "    :  :     :  :  ";  // EXIF's unknown: not the time of writing
+    };
+    describe(&a, *clear0, "");
+    describe(&b, *cloudy0, cloudy.model().name());
     write_image((fs::path(o.out) / "clear.exr").string(), a);
     write_image((fs::path(o.out) / "cloudy.exr").string(), b);
     Image da = tonemap_to_display(a, ev), db = tonemap_to_display(b, ev);

@@ -855,6 +855,13 @@ TEST(BadInputCli, ThirdAuditsWindsEmptyValuesAndOtherCamerasAreRefused) {
                                              dir + "/cmp_ll");
     EXPECT_EQ(quiet.exit_code, 0) << quiet.output;
     EXPECT_EQ(quiet.output, "") << "-q: nothing but warnings and errors";
+    // Its images say what they are, as render's do (they were written bare).
+    for (const char* name : {"clear.exr", "cloudy.exr"}) {
+        Image im = read_image(dir + "/cmp_ll/" + name);
+        EXPECT_EQ(im.metadata.strings["dynsky:scene"], "builtin") << name;
+        EXPECT_EQ(im.metadata.numbers["dynsky:spp"], 1) << name;
+        EXPECT_GT(im.metadata.numbers["dynsky:sun_y"], 0) << name;
+    }
     fs::remove_all(dir);
 }
 
