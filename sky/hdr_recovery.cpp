@@ -44,7 +44,8 @@ std::string HdrCalibrationReport::summary() const {
           << " " << chroma_bg << ")";
     s << ", sun elevation " << sun_elevation_deg << " deg";
     if (sun_elevation_deg < 0) s << " (below the horizon: the model is a sunset sky, the scale is unreliable)";
-    if (sun_offset_deg >= 0) s << ", clipped sun seen " << sun_offset_deg << " deg from the computed one";
+    if (sun_joined) s << ", clipped sun seen joined to other clipped sky (put at the computed sun)";
+    else if (sun_offset_deg >= 0) s << ", clipped sun seen " << sun_offset_deg << " deg from the computed one";
     s << (sun_restored ? ", sun disc restored" : (sun_visible ? ", sun seen" : ", sun not seen (not restored)"));
     return s.str();
 }
@@ -125,6 +126,33 @@ ClippedBlobs clipped_blobs(const ImportedPhoto& photo, bool seen_only, const Vec
             out.solid_angle[size_t(l)] += a;
         }
     return out;
+}
+
+// A clipped blob's round core near the sun: the centre and radius of the largest disc inside it
+// (distance transform of the blob) among centres within kSunCoreSearchDeg of `sun`.
+constexpr double kSunCoreSearchDeg = 10, kMaxSunCoreDeg = 10, kSunCoreAgreeDeg = 3, kSunCoreOnSunDeg = 6;
+struct SunCore {
+    bool found = false;
+    Vec3d direction = Vec3d::Zero();
+    double radius_deg = 0;
+};
+SunCore round_core(const cv::Mat& labels, int blob, const Vec3d& sun) {
+    const int n = labels.rows;
+    cv::Mat mask = (labels == blob), distance;
+    cv::distanceTransform(mask, distance, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+    SunCore core;
+    float best = 0;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const float d = distance.at<float>(j, i);
+            if (d <= best) continue;
+            const Vec2 uv = fisheye::pixel_center_uv(i, j, n);
+            const Vec3d w = fisheye::direction_from_uv(double(uv.x()), double(uv.y()));
+            if (angle_between(w, sun) > kSunCoreSearchDeg * kDeg) continue;
+            best = d, core.found = true, core.direction = w;
+        }
+    core.radius_deg = best * 180.0 / n;  // equidistant: pi / n radians of zenith angle per pixel
+    return core;
 }
 
 }  // namespace
@@ -215,15 +243,35 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     }
     int sun_blob = -1;
     for (int l = 1; l < blobs && !sun_hidden; ++l)
-        if (nearest[size_t(l)] <= params.sun_search_deg * kDeg && solid_angle[size_t(l)] <= max_sun_sr &&
+        if (nearest[size_t(l)] <= params.sun_search_deg * kDeg &&
             (sun_blob < 0 || nearest[size_t(l)] < nearest[size_t(sun_blob)]))
             sun_blob = l;
+    // Where the photo shows the sun. A compact blob: its centroid, as always. But the sun's round
+    // glare is often joined to other clipped sky (the bright horizon under a low sun, sunlit cloud
+    // beside it): the blob's centroid then lay 18 degrees from the sun, or the blob was too large
+    // and the sun not seen at all (73 % of the sky's irradiance lost). Such a blob is the sun when
+    // it has a round core (the largest disc inside it near the computed sun, at most kMaxSunCoreDeg
+    // across, a glare's size) on the computed sun; a joined blob's shape cannot say where the sun is
+    // more closely than the clock does (its core leans into the neck by 2-4 degrees), so the sun is
+    // put where the clock puts it.
+    Vec3d seen = Vec3d::Zero();
+    if (sun_blob > 0) {
+        const SunCore core = round_core(labels, sun_blob, rep.computed_sun);
+        const Vec3d blob_centre = centroid[size_t(sun_blob)].normalized();
+        const bool compact = solid_angle[size_t(sun_blob)] <= max_sun_sr;
+        const bool joined_glare = core.found && core.radius_deg <= kMaxSunCoreDeg &&
+                                  angle_between(core.direction, rep.computed_sun) <= kSunCoreOnSunDeg * kDeg;
+        if (compact && (!core.found || angle_between(blob_centre, core.direction) <= kSunCoreAgreeDeg * kDeg))
+            seen = blob_centre;
+        else if (joined_glare) seen = rep.computed_sun, rep.sun_joined = true;
+        else if (compact) seen = blob_centre;
+        else sun_blob = -1;
+    }
     if (sun_blob < 0 && !sun_hidden) {
         std::optional<NorthFromSun> elsewhere = north_from_seen_sun(photo, params.time, params.location);
         if (elsewhere && elsewhere->moved_deg > params.sun_search_deg) rep.sun_elsewhere = elsewhere;
     }
     if (sun_blob > 0 && rep.computed_sun.y() > -0.02) {
-        Vec3d seen = centroid[size_t(sun_blob)].normalized();
         rep.sun_visible = true;
         rep.sun_offset_deg = angle_between(seen, rep.computed_sun) / kDeg;
         if (params.use_observed_sun) rep.used_sun = seen;

@@ -92,6 +92,9 @@ struct HdrCalibrationReport {
     bool sun_visible = false;  // clipped sun found, or sun behind the band with clear sky around
     bool sun_restored = false;
     double sun_offset_deg = -1;  // angle between the clipped sun seen and the computed sun (-1: not seen)
+    // The clipped sun was joined to other clipped sky (the horizon under it, sunlit cloud): seen, and
+    // put at the computed sun (its blob's shape cannot place it more closely).
+    bool sun_joined = false;
     // No sun near the computed one, but a clipped sun at its height elsewhere (north_from_seen_sun):
     // the camera's north is likely wrong; the north that would put the computed sun on it.
     std::optional<NorthFromSun> sun_elsewhere;

@@ -131,6 +131,65 @@ TEST(HdrRecovery, CalibratesAClearSkyPhotoToTheModelAndRestoresTheSun) {
     ASSERT_TRUE(hdr.sun_direction.has_value());
 }
 
+// A low sun's clipped glare joined to other clipped sky, as auto-exposed photos show it: the bright
+// horizon under the sun, or a sunlit cloud beside it. The joined blob was too large to be the sun
+// (not restored: 27 % of the sky's horizontal irradiance) or its centroid lay 10-18 degrees from
+// the sun (the disc restored there, the calibration's model posed at the wrong sun). Now the sun is
+// seen and put where the clock puts it.
+TEST(HdrRecovery, ASunGlareJoinedToClippedHorizonOrCloudIsStillTheSun) {
+    const int n = 256;
+    const double kDeg = kPiD / 180.0;
+    HdrCalibrationParams params;
+    params.time = parse_utc_time("2024-06-01T08:00:00Z");
+    params.location = {48.85, 2.35, 35};
+    ClearSkyParams cp;
+    const Vec3d sun = compute_sun_position(params.time, params.location).direction();
+    cp.sun_direction = sun;
+    const SkyImage truth = make_clear_sky(cp, n);
+    auto horizontal_irradiance = [n](const SkyImage& sky) {
+        double e = 0;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                const Vec2 uv = fisheye::pixel_center_uv(i, j, n);
+                const double cos_theta = fisheye::direction_from_uv(double(uv.x()), double(uv.y())).y();
+                e += luminance(sky.pixel(i, j)) * cos_theta * fisheye::pixel_solid_angle(i, j, n);
+            }
+        return e;
+    };
+    const double e_truth = horizontal_irradiance(truth);
+    // A bright cloud 4-16 degrees from the sun towards the zenith's side, joined to its glare.
+    const Vec3d up = (Vec3d::UnitY() - sun.y() * sun).normalized();
+    const Vec3d cloud = (std::cos(10 * kDeg) * sun + std::sin(10 * kDeg) * up).normalized();
+    for (bool with_cloud : {false, true}) {
+        const double k0 = 30;  // the horizon below the sun clips at this exposure
+        Image photo(n, n, 3);
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                const Vec2 uv = fisheye::pixel_center_uv(i, j, n);
+                const Vec3d w = fisheye::direction_from_uv(double(uv.x()), double(uv.y()));
+                const double glare = 3 * k0 * std::exp(-std::acos(std::clamp(w.dot(sun), -1.0, 1.0)) / (2 * kDeg));
+                const bool cloudy = with_cloud && std::acos(std::clamp(w.dot(cloud), -1.0, 1.0)) < 7 * kDeg;
+                for (int k = 0; k < 3; ++k) {
+                    const double radiance = cloudy ? 2 * k0 : truth.pixel(i, j)[k] + glare;
+                    const float v = std::min(1.0f, float(radiance / k0));
+                    photo.at(i, j, k) = std::round(linear_to_srgb(v) * 255.0f) / 255.0f;
+                }
+            }
+        ImportedPhoto imp = import_canonical(photo, n);
+        HdrCalibrationReport rep;
+        const SkyImage hdr = recover_hdr(imp, params, &rep);
+        SCOPED_TRACE(with_cloud ? "glare joined to a cloud" : "glare joined to the horizon");
+        std::printf("%s: %s; irradiance %.3f of the truth's\n", with_cloud ? "cloud" : "horizon", rep.summary().c_str(),
+                    horizontal_irradiance(hdr) / e_truth);
+        EXPECT_TRUE(rep.sun_visible);
+        EXPECT_TRUE(rep.sun_restored);
+        EXPECT_LT(std::atan2(rep.used_sun.cross(sun).norm(), rep.used_sun.dot(sun)) / kDeg, 1.0);
+        EXPECT_NEAR(rep.scale / k0, 1.0, 0.05);
+        // The cloud is brighter than the clear sky it replaces: the irradiance a little above.
+        EXPECT_NEAR(horizontal_irradiance(hdr) / e_truth, 1.0, with_cloud ? 0.15 : 0.05);
+    }
+}
+
 TEST(HdrRecovery, OvercastFallsBackToMeanLuminance) {
     const int n = 96;
     Image grey(n, n, 3);  // r/b = 1 everywhere: all cloud; brighter towards one side, as overcast is
