@@ -42,7 +42,10 @@ void validate_sky(const SkyImage& sky, const std::string& name) {
             if (sky.in_disc(i, j)) total += c.sum(), brightest = std::max(brightest, double(c.maxCoeff()));
         }
     }
-    if (!(total > 0)) throw_file_error(name, "sky is black everywhere inside the fisheye disc: nothing to light with");
+    if (!(total > 0))
+        throw_file_error(name,
+                         "sky is black everywhere inside the fisheye disc: nothing to light with (a scene lit by its "
+                         "own lights at night: give a faint sky, e.g. a constant 1e-4, the light of a moonless night)");
     // Light this faint underflows single precision on its way to a pixel: a black render.
     if (brightest < kMinSkyRadiance)
         throw_file_error(name, "sky's brightest pixel is " + number_text(brightest, 3) + ", below " +
