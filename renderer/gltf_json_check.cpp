@@ -201,6 +201,10 @@ class Checker {
         index(n, "camera", at + ".camera");
         index(n, "mesh", at + ".mesh");
         index(n, "skin", at + ".skin");
+        // The punctual light's index, read by tinygltf as a 32-bit int too (2^32 lit light 0).
+        if (auto ext = n.find("extensions"); ext != n.end() && ext->is_object())
+            if (auto light = ext->find("KHR_lights_punctual"); light != ext->end() && light->is_object())
+                index(*light, "light", at + ".extensions.KHR_lights_punctual.light");
         indices(n, "children", at);
         numbers(n, "translation", at + ".translation", 3);
         numbers(n, "scale", at + ".scale", 3);
@@ -287,9 +291,64 @@ class Checker {
 
 }  // namespace
 
+namespace {
+
+// Every index anywhere in the document, extensions included (KHR_texture_transform's texCoord,
+// EXT_texture_webp's source, a skin's joints, an animation's target node...): tinygltf keeps them
+// all in 32-bit ints, so one of 2^31 or more silently named another object. Found by the keys
+// glTF and its extensions give indices, and every value of a primitive's attributes and targets;
+// "extras" (the application's own data) is not looked into.
+const char* const kIndexKeys[] = {
+    "scene",   "nodes",    "children",   "camera",  "mesh",    "skin",   "skeleton", "joints",   "inverseBindMatrices",
+    "indices", "material", "bufferView", "buffer",  "sampler", "source", "index",    "texCoord", "input",
+    "output",  "node",     "light",      "variant", "variants"};
+
+bool is_index_key(const std::string& key) {
+    for (const char* k : kIndexKeys)
+        if (key == k) return true;
+    return false;
+}
+
+// Values: none are indices but by their key; Elements: an index key's array (its numbers are
+// indices, its objects looked into as usual); All: attributes and targets (every number an index).
+enum class IndexValues { ByKey, Elements, All };
+
+std::string wrapped_index(const Json& v, const std::string& at, IndexValues mode) {
+    auto too_big = [](const Json& x) { return x.is_number_integer() && x.get<double>() > 2147483647.0; };
+    auto said = [](const std::string& here, const Json& x) {
+        return here + " is " + x.dump() + ", beyond any array (indices are below 2^31)";
+    };
+    if (v.is_object()) {
+        for (auto it = v.begin(); it != v.end(); ++it) {
+            if (it.key() == "extras") continue;
+            const std::string here = at + "." + it.key();
+            const bool all = mode == IndexValues::All || it.key() == "attributes" || it.key() == "targets";
+            if ((all || is_index_key(it.key())) && too_big(*it)) return said(here, *it);
+            const IndexValues inner = all                                        ? IndexValues::All
+                                      : is_index_key(it.key()) && it->is_array() ? IndexValues::Elements
+                                                                                 : IndexValues::ByKey;
+            if (std::string e = wrapped_index(*it, here, inner); !e.empty()) return e;
+        }
+    } else if (v.is_array()) {
+        for (size_t i = 0; i < v.size(); ++i) {
+            const std::string here = at + "[" + std::to_string(i) + "]";
+            if (mode != IndexValues::ByKey && too_big(v[i])) return said(here, v[i]);
+            const IndexValues inner = mode == IndexValues::All ? IndexValues::All : IndexValues::ByKey;
+            if (std::string e = wrapped_index(v[i], here, inner); !e.empty()) return e;
+        }
+    }
+    return "";
+}
+
+}  // namespace
+
 GltfJsonReport check_gltf_json(const Json& root) {
     Checker checker;
     if (root.is_object()) checker.run(root);
+    if (root.is_object() && checker.report.error.empty()) {
+        std::string e = wrapped_index(root, "", IndexValues::ByKey);
+        if (!e.empty()) checker.report.error = e.substr(1);  // no leading "."
+    }
     return checker.report;
 }
 

@@ -994,6 +994,21 @@ TEST(GltfLoader, ValuesOfTheWrongTypeOrOutsideTheSpecAreNamedByTheirPath) {
         {"mesh_2_to_the_32",  // tinygltf's 32-bit int read it as mesh 0
          "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":4294967296}],\"meshes\":[" + mesh(pos) + "]",
          "nodes[0].mesh is 4294967296, beyond any array (indices are below 2^31)"},
+        {"light_2_to_the_32",
+         "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0,\"extensions\":{\"KHR_lights_punctual\":"
+         "{\"light\":4294967296}}}],\"extensions\":{\"KHR_lights_punctual\":{\"lights\":[{\"type\":\"point\"}]}},"
+         "\"meshes\":[" +
+             mesh(pos) + "]",
+         "nodes[0].extensions.KHR_lights_punctual.light is 4294967296, beyond any array"},
+        // Anywhere else an index lies, extensions included (found by its key).
+        {"joint_2_to_the_32", with_node("\"skin\":0") + ",\"skins\":[{\"joints\":[0,4294967296]}]",
+         "skins[0].joints[1] is 4294967296, beyond any array"},
+        {"transform_texcoord_2_to_the_32",
+         with_node("\"name\":\"n\"") +
+             ",\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0,\"extensions\":"
+             "{\"KHR_texture_transform\":{\"texCoord\":4294967296}}}}}],\"textures\":[{\"source\":0}],"
+             "\"images\":[{\"uri\":\"t.png\"}]",
+         "KHR_texture_transform.texCoord is 4294967296, beyond any array"},
         {"position_2_to_the_32",
          "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[" +
              mesh(pos, ",\"NORMAL\":4294967297") + "]",
@@ -1059,6 +1074,8 @@ TEST(GltfLoader, ValuesOfTheWrongTypeOrOutsideTheSpecAreNamedByTheirPath) {
                      "yfov 1e-30 rad is outside 0.01 to 179.9 degrees");
     ASSERT_EQ(f.cameras.size(), 1u);
     EXPECT_GT(f.cameras[0].yfov, 0.1f);  // the default
+    // The application's own data may hold any number.
+    EXPECT_NO_THROW(load_gltf(g.write(dir, "extras", with_node("\"extras\":{\"id\":4294967296}"))));
     std::vector<std::string> notes;
     Scene p = load_gltf(packed_file.write(dir, "stride0", one_node_scene(mesh(packed))), &notes);
     ASSERT_FALSE(notes.empty());
