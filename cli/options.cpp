@@ -4,7 +4,6 @@
 #include <cstdio>
 
 #include "sky/sun_position.h"
-#include "util/progress.h"
 #include "util/error.h"
 #include "util/parse.h"
 
@@ -175,11 +174,7 @@ void add_generated_sky_options(CLI::App* cmd, SkySourceSpec* o) {
 
 void add_quiet_flag(CLI::App* cmd) {
     cmd->add_flag_callback(
-        "-q,--quiet",
-        [] {
-            std::fflush(stdout), std::freopen("/dev/null", "w", stdout);
-            silence_reports(true);
-        },
+        "-q,--quiet", [] { std::fflush(stdout), std::freopen("/dev/null", "w", stdout); },
         "No report or progress (warnings and errors still go to stderr)");
 }
 

@@ -13,8 +13,9 @@ namespace dynsky {
 // far; "?" before any progress).
 std::string format_progress(const std::string& label, double fraction, double elapsed_seconds);
 
-// The program-wide -q of commands without a --quiet of their own (cli/main.cpp): progress bars and
-// reports on stderr stay silent (warnings and errors are still said). Off by default.
+// The program-wide -q (cli/main.cpp sets it for every command, with or without a --quiet of its
+// own): progress bars and reports on stderr stay silent (warnings and errors are still said).
+// Off by default.
 void silence_reports(bool silent);
 bool reports_silenced();
 
