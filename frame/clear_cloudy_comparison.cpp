@@ -165,6 +165,7 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
     // What each image is, as render's and animate's say (they were written bare).
     auto describe = [&](Image* image, const SkyImage& sky, const std::string& model) {
         ImageMetadata& m = image->metadata;
+        write_sky_metadata(sky, &m);  // its sun and source
         m.numbers["dynsky:time"] = 0.0;
         m.numbers["dynsky:spp"] = o.spp;
         m.numbers["dynsky:seed"] = double(o.seed);
@@ -174,9 +175,6 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
         if (!model.empty()) m.strings["dynsky:sky_model"] = model;
         m.strings["dynsky:scene"] = o.scene.scene;
         m.strings["dynsky:camera"] = scene.camera.name;
-        if (sky.sun_direction)
-            for (int c = 0; c < 3; ++c)
-                m.numbers[std::string("dynsky:sun_") + "xyz"[c]] = double((*sky.sun_direction)[c]);
         m.strings["DateTime"] = "    :  :     :  :  ";  // EXIF's unknown: not the time of writing
     };
     describe(&a, *clear0, "");
