@@ -85,9 +85,11 @@ void contact_sheet_grid(int total, int* count, int* columns) {
     // Up to 5 in one row; more in the rows of 4, 3 or 5 that show the most of them (9 frames: 3 x 3,
     // where rows of 4 dropped one).
     int c = n;
-    if (n > 5)
-        for (int option : {4, 3, 5})
-            if (n / option * option > n / c * c || c == n) c = option;
+    if (n > 5) {
+        c = 4;
+        for (int option : {3, 5})
+            if (n / option * option > n / c * c) c = option;
+    }
     *count = n / c * c, *columns = c;
 }
 
