@@ -24,6 +24,7 @@
 #include "sky/hdr_recovery.h"
 #include "sky/preset_import.h"
 #include "sky/procedural_clouds.h"
+#include "tests/sky/frozen_cumulus.h"
 #include "tests/test_support.h"
 
 namespace dynsky {
@@ -48,13 +49,8 @@ TEST(SunTransmittance, ClearSkyLetsTheSunThrough) {
 // Frozen cumulus under a steady wind (12 m/s from 250 degrees), the first seed whose sun starts
 // clear and is covered within `duration` seconds (looked at every dt); nullopt when none is.
 std::optional<ProceduralSkyParams> cloud_crossing_the_sun(double duration, double dt) {
-    ProceduralSkyParams p;
-    p.coverage = 0.45;
-    p.layers = {cumulus_layer()};
-    p.layers[0].wind_from_deg = 250, p.layers[0].wind_speed_mps = 12, p.layers[0].evolution_time_s = 0;
-    p.clear_sky.sun_direction = fisheye::direction_from_angles(0.8, 1.2);
     for (uint64_t seed = 1; seed < 200; ++seed) {
-        p.seed = seed;
+        const ProceduralSkyParams p = test::frozen_cumulus(seed);
         if (procedural_sun_transmittance(p, 0) < 0.95) continue;
         for (double t = dt; t <= duration; t += dt)
             if (procedural_sun_transmittance(p, t) < 0.1) return p;
@@ -261,12 +257,7 @@ TEST(SunTransmittance, PredictedStepsDimTheSunAsTheTimelineDoes) {
 // the dim one behind the cloud, so once the cloud moves off the clear sun must come back (it stayed
 // at 0.35 of the truth's illuminance when only the input's own sun was put back).
 TEST(SunTransmittance, SunComingOutOfACloudShinesAsTheClearSun) {
-    ProceduralSkyParams p;
-    p.coverage = 0.45;
-    p.layers = {cumulus_layer()};
-    p.layers[0].wind_from_deg = 250, p.layers[0].wind_speed_mps = 12, p.layers[0].evolution_time_s = 0;
-    p.clear_sky.sun_direction = fisheye::direction_from_angles(0.8, 1.2);
-    p.seed = 1;
+    const ProceduralSkyParams p = test::frozen_cumulus(1);
     ProceduralSky truth(p);
     ASSERT_LT(truth.sun_transmittance(0), 0.1);
     ASSERT_GT(truth.sun_transmittance(40), 0.95);

@@ -7,6 +7,7 @@
 
 #include "sky/clear_sky.h"
 #include "sky/fisheye.h"
+#include "tests/sky/frozen_cumulus.h"
 #include "tests/test_support.h"
 #include "util/error.h"
 
@@ -228,12 +229,7 @@ TEST(ProceduralClouds, SunIsDimmedWhenACloudCoversIt) {
 // reached it (seed 7 below, at 10 s: 38 % of the truth's illuminance), and a wisp over a centre a
 // degree away blinked it out for one frame (bench/sun_seeds).
 TEST(ProceduralClouds, SunDiscIsDimmedByTheCloudOnTheSunsLineOfSight) {
-    ProceduralSkyParams p;
-    p.coverage = 0.45;
-    p.layers = {cumulus_layer()};
-    p.layers[0].wind_from_deg = 250, p.layers[0].wind_speed_mps = 12, p.layers[0].evolution_time_s = 0;
-    p.clear_sky.sun_direction = fisheye::direction_from_angles(0.8, 1.2);
-    p.seed = 7;
+    const ProceduralSkyParams p = test::frozen_cumulus(7);
     ProceduralSkyParams no_disc = p;
     no_disc.clear_sky.sun_disc = false;
     for (int n : {64, 128, 256}) {
