@@ -27,6 +27,7 @@
 #include "sky/clear_sky.h"
 #include "sky/fisheye.h"
 #include "sky/procedural_clouds.h"
+#include "tests/sky/frozen_cumulus.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
 #include "util/parse.h"
@@ -38,15 +39,8 @@ namespace {
 
 constexpr double kDuration = 120, kDt = 10, kFrame = 5;
 
-ProceduralSkyParams cumulus(uint64_t seed) {
-    ProceduralSkyParams p;
-    p.coverage = 0.45;
-    p.layers = {cumulus_layer()};
-    p.layers[0].wind_from_deg = 250, p.layers[0].wind_speed_mps = 12, p.layers[0].evolution_time_s = 0;
-    p.clear_sky.sun_direction = fisheye::direction_from_angles(0.8, 1.2);
-    p.seed = seed;
-    return p;
-}
+// The sun tests' sky (tests/sky/frozen_cumulus.h), so the bench's seeds are theirs.
+ProceduralSkyParams cumulus(uint64_t seed) { return test::frozen_cumulus(seed); }
 
 // 1: the sun starts clear and is covered within the run; 2: starts covered and comes out; 0: neither.
 int kind_of(const ProceduralSkyParams& p) {

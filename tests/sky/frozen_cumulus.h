@@ -1,5 +1,5 @@
-// The sky the sun tests share (tests/sky/procedural_clouds_test.cpp, tests/motion/sun_transmittance_test.cpp;
-// bench/sun_seeds.cpp describes the same): frozen cumulus, coverage 0.45, under a steady 12 m/s wind
+// The sky the sun tests share (tests/sky/procedural_clouds_test.cpp, tests/motion/sun_transmittance_test.cpp,
+// and bench/sun_seeds.cpp, whose seeds must be theirs): frozen cumulus, coverage 0.45, under a steady 12 m/s wind
 // from 250 degrees, the sun 46 degrees from the zenith, so that a cloud's edge crosses it within a
 // minute or two on most seeds.
 #pragma once
