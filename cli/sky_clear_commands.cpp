@@ -9,7 +9,7 @@
 
 #include "cli/commands.h"
 #include "cli/options.h"
-#include "cli/sky_output.h"
+#include "util/exposure.h"
 #include "sky/clear_sky.h"
 #include "sky/latlong.h"
 #include "sky/sky_image.h"
@@ -110,7 +110,7 @@ void run_clear(const ClearOptions& o) {
     save_sky(o.out, sky);
     std::printf("wrote %s (%dx%d fisheye, linear Rec.709 radiance in W m^-2 sr^-1; luminance = 683 Y cd/m^2)\n",
                 o.out.c_str(), o.resolution, o.resolution);
-    if (!o.preview.empty()) write_preview(o.preview, sky_to_image(sky));
+    if (!o.preview.empty()) write_display_preview(o.preview, sky_to_image(sky));
 }
 
 Color parse_ground(const std::string& text) {
@@ -149,7 +149,7 @@ void run_latlong(const LatLongOptions& o) {
         "wrote %s (%dx%d equirectangular: top row zenith, centre column east, north at u = 0.25; "
         "Blender's Environment Texture convention with north = +Y)\n",
         o.out.c_str(), ll.width, ll.height);
-    if (!o.preview.empty()) write_preview(o.preview, ll);
+    if (!o.preview.empty()) write_display_preview(o.preview, ll);
 }
 
 }  // namespace

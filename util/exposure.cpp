@@ -1,6 +1,7 @@
 #include "util/exposure.h"
 
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 namespace dynsky {
@@ -37,6 +38,12 @@ float exposure_for_irradiance(const Color& irradiance) {
     double e = luminance(irradiance);
     if (!(e > 0)) return 0.0f;
     return float(std::log2(0.18 * kPiD / (0.4 * e)));
+}
+
+void write_display_preview(const std::string& path, const Image& linear, bool say) {
+    const float ev = exposure_median(linear);
+    write_image(path, tonemap_to_display(linear, ev));
+    if (say) std::printf("preview: %s (exposure %+.2f EV)\n", path.c_str(), ev);
 }
 
 }  // namespace dynsky

@@ -10,6 +10,8 @@
 //                one fixed exposure for a whole animation from the sky at t = 0 (no flicker).
 #pragma once
 
+#include <string>
+
 #include "util/image.h"
 #include "util/math.h"
 
@@ -24,5 +26,9 @@ float exposure_median(const Image& linear, float middle_grey = 0.18f);
 
 // 0.4 * E / pi (the radiance of a grey horizontal surface) to 0.18. 0 for E <= 0.
 float exposure_for_irradiance(const Color& irradiance);
+
+// Writes a display preview of a sky's linear radiance (exposure_median, then ACES and sRGB), and
+// with say prints the path and the exposure.
+void write_display_preview(const std::string& path, const Image& linear, bool say = true);
 
 }  // namespace dynsky

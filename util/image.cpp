@@ -162,6 +162,22 @@ std::vector<std::string> image_header_strings(const std::string& path, const std
     return values;
 }
 
+std::optional<double> image_header_number(const std::string& path, const std::string& name) {
+    if (!image_file_problem(path).empty()) return std::nullopt;
+    ImageFileInput in(path);
+    if (!in) return std::nullopt;
+    const OIIO::ParamValue* p = in->spec().find_attribute(name);
+    if (!p) return std::nullopt;
+    double d = 0;
+    // As read_image takes numbers: floats, ints and doubles.
+    if (p->type() == OIIO::TypeDesc::FLOAT) d = p->get_float();
+    else if (p->type() == OIIO::TypeDesc::INT) d = p->get_int();
+    else if (!(p->type() == OIIO::TypeDesc::DOUBLE && in->spec().getattribute(name, OIIO::TypeDesc::DOUBLE, &d)))
+        return std::nullopt;
+    if (!std::isfinite(d)) return std::nullopt;
+    return d;
+}
+
 Image read_image(const std::string& path) {
     if (std::string why = image_file_problem(path); !why.empty()) throw_file_error(path, why);
     ImageFileInput in(path);
@@ -312,6 +328,10 @@ Image tonemap_to_display(const Image& linear, float exposure_ev) {
                 out.at(x, y, c) = linear_to_srgb(tonemap_aces(scale * linear.at(x, y, c)));
     out.metadata = linear.metadata;
     return out;
+}
+
+void check_extension(const std::string& option, const std::string& path, const std::string& ext) {
+    if (file_extension(path) != ext) throw Error(option + " " + path + ": must name a " + ext + " file");
 }
 
 }  // namespace dynsky

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -70,6 +71,9 @@ int apply_orientation(Image& image);
 // "DateTime", ...), read in one opening without decoding pixels; "" for each the file lacks, all ""
 // when it cannot be opened.
 std::vector<std::string> image_header_strings(const std::string& path, const std::vector<std::string>& names);
+// A number attribute of an image's header (read without its pixels); nullopt when the file cannot be
+// read or has no such number.
+std::optional<double> image_header_number(const std::string& path, const std::string& name);
 
 // The index (in Image::pixels) of the first value that is NaN or infinite, or -1 when there is
 // none: what a renderer wrote is finite everywhere, so such a frame was damaged since.
@@ -93,5 +97,9 @@ Image tonemap_to_display(const Image& linear, float exposure_ev = 0.0f);
 
 // Lower-cased extension with the dot (".exr"), or "" if none.
 std::string file_extension(const std::string& path);
+
+// Throws naming path unless it ends in ext (".exr", ".png"); option names the flag in the message,
+// which starts with it (a usage error, exit 2: docs/exit-codes.md).
+void check_extension(const std::string& option, const std::string& path, const std::string& ext);
 
 }  // namespace dynsky
