@@ -182,6 +182,17 @@ int run_render(const RenderOptions& o) {
     if (o.noise_threshold > 0) image.metadata.numbers["dynsky:noise_threshold"] = o.noise_threshold;
     image.metadata.numbers["dynsky:rounds"] = result.rounds;
     image.metadata.strings["dynsky:sampler_pattern"] = o.sampler_pattern;
+    // Everything else that changes the image, so that it can be rendered again from its header.
+    image.metadata.numbers["dynsky:max_depth"] = o.max_depth;
+    image.metadata.strings["dynsky:sky_sampler"] = o.sampler;
+    if (o.override_material != "none") image.metadata.strings["dynsky:override_material"] = o.override_material;
+    if (!o.scene.look_at.empty()) {
+        std::string eye_target;
+        for (double v : o.scene.look_at) eye_target += (eye_target.empty() ? "" : ",") + number_text(v);
+        image.metadata.strings["dynsky:look_at"] = eye_target;  // eye x,y,z, target x,y,z
+    }
+    if (camera.orthographic) image.metadata.numbers["dynsky:camera_ymag"] = camera.ymag;
+    else image.metadata.numbers["dynsky:camera_yfov_deg"] = camera.yfov * 180.0 / kPiD;
     float ev = std::isnan(o.exposure) ? exposure_log_average(image) : o.exposure;
     image.metadata.numbers["dynsky:png_exposure_ev"] = ev;
     if (ext == ".exr") {

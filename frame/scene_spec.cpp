@@ -1,5 +1,6 @@
 #include "frame/scene_spec.h"
 
+#include <algorithm>
 #include <cstdio>
 
 #include "renderer/builtin_scene.h"
@@ -40,15 +41,29 @@ LoadedScene pose_scene(const SceneSpec& o, AnimatedGltf& file, const std::string
 void choose_camera(const SceneSpec& o, float aspect_ratio, LoadedScene* loaded) {
     LoadedScene& out = *loaded;
     if (out.scene.instances.empty()) throw Error(o.scene + ": the scene has no triangles to render");
-    if (out.scene.cameras.empty()) {
-        if (o.camera != 0)
-            throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " asked for, but the file has no cameras");
+    if (out.scene.cameras.empty() && o.camera == 0) {
         out.camera = frame_bounds_camera(out.scene.world_bounds(), aspect_ratio);
-    } else {
+    } else if (out.scene.cameras.empty() && out.scene.file_camera_names.empty()) {
+        throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " asked for, but the file has no cameras");
+    } else if (out.scene.file_camera_names.empty()) {
         if (o.camera < 0 || o.camera >= int(out.scene.cameras.size()))
-            throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " is out of range (the file has " +
+            throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " is out of range (the scene has " +
                         std::to_string(out.scene.cameras.size()) + " camera(s), numbered from 0)");
         out.camera = out.scene.cameras[size_t(o.camera)];
+    } else {
+        // glTF cameras are numbered as in the file's cameras array (counting only those placed on a
+        // node, camera 1 of three of which two were placed rendered the third).
+        const std::vector<std::string>& names = out.scene.file_camera_names;
+        if (o.camera < 0 || o.camera >= int(names.size()))
+            throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " is out of range (the file has " +
+                        std::to_string(names.size()) + " camera(s), numbered from 0)");
+        const auto it = std::find_if(out.scene.cameras.begin(), out.scene.cameras.end(),
+                                     [&](const Camera& c) { return c.file_index == o.camera; });
+        if (it == out.scene.cameras.end())
+            throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " ('" + names[size_t(o.camera)] +
+                        "') is not placed on any node of the scene, or was skipped (see the warnings): nothing "
+                        "says where it looks from");
+        out.camera = *it;
     }
     if (!o.look_at.empty() && o.look_at.size() != 6)
         throw Error("--look-at takes 6 numbers, eye_x,eye_y,eye_z,target_x,target_y,target_z (got " +

@@ -12,7 +12,7 @@ namespace dynsky {
 
 struct SceneSpec {
     std::string scene = "scenes/tower/tower.gltf";  // .gltf/.glb or "builtin"
-    int camera = 0;                                 // index of the glTF perspective camera
+    int camera = 0;                                 // index in the glTF file's cameras array
     float ground_albedo = 0.3f;                     // the Lambertian ground below the horizon
     // Camera overrides: look_at = {eye x, y, z, target x, y, z} (world frame, metres; empty: none)
     // replaces the camera by a perspective one there, +Y up; fov_deg (0: none) sets the vertical

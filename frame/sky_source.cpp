@@ -90,8 +90,8 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     }
     // What moves the clouds for models that take a motion: the previous frame, else the wind.
     CloudMotion motion;
-    // A captured sequence (a folder of sky EXRs): the last is the input, the one before it the
-    // previous frame.
+    // A captured sequence (a folder of sky EXRs): the last in time is the input, the one before it
+    // the previous frame.
     std::string sky_file = o.sky, previous_file = o.previous;
     if (fs::is_directory(o.sky)) {
         std::vector<std::string> exrs, others;
@@ -102,7 +102,7 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
             else if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".hdr" || ext == ".tif")
                 others.push_back(e.path().filename().string());
         }
-        std::sort(exrs.begin(), exrs.end());
+        exrs = skies_in_time_order(exrs);
         if (!others.empty()) {  // a photograph among the skies, not imported: said, not silently skipped
             std::sort(others.begin(), others.end());
             std::fprintf(stderr,

@@ -83,8 +83,8 @@ AdvectResidualNetwork AdvectResidualNetwork::load(const std::string& folder) {
         info.compensated = base == "compensated";
         // The network is always the folder's model.onnx: a file named otherwise is not what would run.
         if (j.contains("onnx_file") && j["onnx_file"] != "model.onnx")
-            throw_file_error(json_path, "onnx_file " + j["onnx_file"].dump() +
-                                            ": the network must be the folder's model.onnx");
+            throw_file_error(json_path,
+                             "onnx_file " + j["onnx_file"].dump() + ": the network must be the folder's model.onnx");
         info.form.unit_map.scale = j.value("unit_scale", info.form.unit_map.scale);
         info.form.unit_map.max_radiance = j.value("unit_max", info.form.unit_map.max_radiance);
         info.form.cloud_rule.rule = parse_cloud_rule(j.value("cloud_rule", std::string("rb")));
@@ -872,17 +872,16 @@ double previous_frame_gap(const SkyImage& sky, const SkyImage& previous, double 
                           const std::string& previous_name) {
     if (!(given >= 0) || !std::isfinite(given)) throw Error("--prev-dt: must be a positive number of seconds");
     if (given > 0) return given;
-    // The sequence's clock (dynsky:time), else, when neither has one (two imported photographs: both
-    // 0), the UTC times they record: a 60 s pair taken as one 30 s step moved the clouds twice as
-    // fast. Only one clock (an input and a step predicted from it, which records the input's time):
-    // one step.
+    // The sequence's clock (dynsky:time, read from both files; a sequence's first frame is at 0),
+    // else the UTC times their imports recorded: two imported photographs both say 0, and a 60 s
+    // pair taken as one 30 s step moved the clouds twice as fast. Neither: one medium step.
     double gap = 0;
     const char* clock = "clock (dynsky:time)";
-    if (sky.time_seconds != 0 && previous.time_seconds != 0) {
+    if (sky.has_clock && previous.has_clock && (sky.time_seconds != 0 || previous.time_seconds != 0)) {
         gap = sky.time_seconds - previous.time_seconds;
     } else {
         const auto a = sky_recorded_utc_seconds(previous), b = sky_recorded_utc_seconds(sky);
-        if (sky.time_seconds != 0 || previous.time_seconds != 0 || !a || !b) return 0;  // a clock is missing
+        if (!a || !b) return 0;
         gap = *b - *a, clock = "recorded time";
     }
     if (gap <= 0 || gap > 3600) {

@@ -52,7 +52,9 @@ struct CloudMotion {
 };
 
 // The seconds between a previous frame and the sky: `given` when positive, else their clocks'
-// difference (dynsky:time) when both carry one, else 0 (one medium step). Throws naming both files
+// difference (dynsky:time) when both files carry one (0 included: a sequence's first frame) and
+// they are not both 0, else the difference of the UTC times their imports recorded, else 0 (one
+// medium step). Throws naming both files
 // when their clocks put the previous frame at or after the sky, or more than an hour before it (not
 // a previous frame of the same sky: its motion says nothing about this one's).
 double previous_frame_gap(const SkyImage& sky, const SkyImage& previous, double given, const std::string& sky_name,

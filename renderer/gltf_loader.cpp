@@ -2122,6 +2122,7 @@ class GltfLoader {
             cam.aspect_ratio = c.perspective.aspectRatio > 0 ? aspect_or_image(c.perspective.aspectRatio, "aspectRatio")
                                                              : 0.0f;
         }
+        cam.file_index = node.camera;
         cameras_.push_back({node.camera, node_index, std::move(cam)});
     }
 
@@ -2298,6 +2299,10 @@ class GltfLoader {
             return std::tie(a.camera_index, a.node_index) < std::tie(b.camera_index, b.node_index);
         });
         for (NodeCamera& c : cameras_) scene_.cameras.push_back(std::move(c.camera));
+        scene_.file_camera_names.clear();
+        for (size_t k = 0; k < model_.cameras.size(); ++k)
+            scene_.file_camera_names.push_back(model_.cameras[k].name.empty() ? "camera " + std::to_string(k)
+                                                                              : model_.cameras[k].name);
     }
 
     static constexpr double kMaxCoordinate = kMaxSceneCoordinate;  // metres from the origin (scene.h)

@@ -62,12 +62,17 @@ Camera look_at_camera(const Vec3& eye, const Vec3& target, float yfov) {
     Camera cam;
     cam.name = "look-at camera";
     cam.yfov = yfov;
-    Vec3 forward = (target - eye).normalized();
-    Vec3 up_hint = std::abs(forward.y()) > 0.999f ? Vec3::UnitZ() : Vec3::UnitY();
-    Vec3 right = forward.cross(up_hint).normalized();
-    Vec3 up = right.cross(forward);
+    // Up is the world's +Y as seen along the view, down to views a hair from vertical (in double:
+    // right = forward x Y keeps its direction as its length goes to 0). Switching to another hint
+    // near vertical turned the image half round between two views a degree apart; only a view
+    // exactly vertical, which has no such up, takes +Z.
+    const Eigen::Vector3d f = (target.cast<double>() - eye.cast<double>()).normalized();
+    const double across = std::hypot(f.x(), f.z());
+    const Eigen::Vector3d right = across > 1e-12 ? Eigen::Vector3d(-f.z(), 0.0, f.x()) / across
+                                                 : f.cross(Eigen::Vector3d::UnitZ()).normalized();
+    const Eigen::Vector3d up = right.cross(f);
     Eigen::Matrix3f rot;
-    rot.col(0) = right, rot.col(1) = up, rot.col(2) = -forward;
+    rot.col(0) = right.cast<float>(), rot.col(1) = up.normalized().cast<float>(), rot.col(2) = -f.cast<float>();
     cam.camera_to_world = Eigen::Translation3f(eye) * rot;
     return cam;
 }

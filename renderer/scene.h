@@ -119,6 +119,7 @@ struct Camera {
     // image's aspect decides the width, as it does for perspective cameras; glTF's xmag is ignored).
     bool orthographic = false;
     float ymag = 1.0f;
+    int file_index = -1;  // its index in the glTF file's cameras array (-1: not from a file)
 };
 
 // A perspective camera at eye looking at target, +Y up (a straight up or down view takes +Z as up).
@@ -157,7 +158,9 @@ struct Scene {
     std::vector<Instance> instances;
     std::vector<Material> materials;
     std::vector<std::shared_ptr<Texture>> textures;
-    std::vector<Camera> cameras;            // glTF cameras (perspective and orthographic), in file order
+    std::vector<Camera> cameras;  // glTF cameras (perspective and orthographic), in file order
+    // The names of the file's cameras array, placed on a node or not (--camera N is its N-th).
+    std::vector<std::string> file_camera_names;
     std::vector<PunctualLight> lights;      // KHR_lights_punctual, one per node that holds one
     std::vector<std::string> warnings;      // e.g. extensions used but not supported
     std::vector<std::string> source_files;  // the files it was read from (glTF, buffers, images): never outputs

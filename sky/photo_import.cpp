@@ -1423,14 +1423,16 @@ PhotoTime photo_time(const std::string& path, double utc_offset_hours) {
         t.source = "file name";
         return t;
     }
-    // EXIF: "YYYY:MM:DD hh:mm:ss", its zone (EXIF 2.31) "+hh:mm".
-    const std::vector<std::string> exif_values = image_header_strings(path, {"Exif:DateTimeOriginal", "DateTime",
+    // EXIF: "YYYY:MM:DD hh:mm:ss", its zone (EXIF 2.31) "+hh:mm". Only the time the photograph was
+    // taken: DateTime is the time the file was last changed (any conversion or edit stamps it), and a
+    // converted photo was calibrated against the sun of the moment it was converted.
+    const std::vector<std::string> exif_values = image_header_strings(path, {"Exif:DateTimeOriginal",
                                                                              "Exif:OffsetTimeOriginal"});
-    const std::string& when = exif_values[0].empty() ? exif_values[1] : exif_values[0];
+    const std::string& when = exif_values[0];
     std::smatch m;
     static const std::regex exif("^\\s*(\\d{4}):(\\d{2}):(\\d{2})[ T](\\d{2}):(\\d{2}):(\\d{2})");
     if (!std::regex_search(when, m, exif)) return t;
-    std::string given = exif_values[2];
+    std::string given = exif_values[1];
     static const std::regex offset("^\\s*([+\\-]\\d{2}:\\d{2})\\s*$");
     std::smatch z;
     given = std::regex_search(given, z, offset) ? zone_text(z[1].str()) : "";

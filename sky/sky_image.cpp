@@ -80,7 +80,7 @@ void read_sky_metadata(const ImageMetadata& metadata, const std::string& name, S
         if (num.count(key) && !std::isfinite(num.at(key)))
             throw_file_error(name, std::string(key) + " is " + number_text(num.at(key)) + ", not a finite number");
     }
-    if (auto it = num.find("dynsky:time"); it != num.end()) sky.time_seconds = it->second;
+    if (auto it = num.find("dynsky:time"); it != num.end()) sky.time_seconds = it->second, sky.has_clock = true;
     const int sun_parts = int(num.count("dynsky:sun_x") + num.count("dynsky:sun_y") + num.count("dynsky:sun_z"));
     if (sun_parts != 0 && sun_parts != 3)
         throw_file_error(name, "has only part of the sun's direction (dynsky:sun_x, _y, _z: all three or none)");
@@ -257,6 +257,31 @@ std::optional<double> sky_recorded_utc_seconds(const SkyImage& sky) {
     } catch (const Error&) {
         return std::nullopt;
     }
+}
+
+std::vector<std::string> skies_in_time_order(std::vector<std::string> files) {
+    std::sort(files.begin(), files.end());
+    std::vector<double> clocks, utc;
+    bool all_clocks = true, all_utc = true, any_clock_set = false;
+    for (const std::string& f : files) {
+        const std::optional<double> t = image_header_number(f, "dynsky:time");
+        all_clocks = all_clocks && t.has_value();
+        any_clock_set = any_clock_set || (t && *t != 0);
+        clocks.push_back(t.value_or(0));
+        SkyImage recorded;
+        recorded.source = image_header_strings(f, {"dynsky:source"}).front();
+        const std::optional<double> u = sky_recorded_utc_seconds(recorded);
+        all_utc = all_utc && u.has_value();
+        utc.push_back(u.value_or(0));
+    }
+    const std::vector<double>* key = all_clocks && any_clock_set ? &clocks : all_utc ? &utc : nullptr;
+    if (!key) return files;
+    std::vector<size_t> order(files.size());
+    for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return (*key)[a] < (*key)[b]; });
+    std::vector<std::string> sorted;
+    for (size_t k : order) sorted.push_back(files[k]);
+    return sorted;
 }
 
 }  // namespace dynsky

@@ -14,6 +14,7 @@ struct SkyImage {
     int resolution = 0;                 // N: the image is N x N
     std::vector<float> rgb;             // N * N * 3, row-major, row 0 at the top (north); 0 outside the disc
     double time_seconds = 0.0;          // the sequence's own clock (CONVENTIONS.md, Time)
+    bool has_clock = false;             // time_seconds was read from the file (dynsky:time), 0 included
     std::optional<Vec3> sun_direction;  // world frame, unit, if known
     std::string source;                 // what made it ("hosek-wilkie", "photo:FILE", "procedural", ...)
 
@@ -64,6 +65,13 @@ void save_sky(const std::string& path, const SkyImage& sky, const std::string& p
 // nullopt when the source names no time or an unreadable one. Its dynsky:time is the sequence's own
 // clock instead (0 for a single import), so two imported photographs are told apart by this.
 std::optional<double> sky_recorded_utc_seconds(const SkyImage& sky);
+
+// Sky files (a captured or imported sequence) in the order they were taken, from their headers: by
+// their clocks (dynsky:time) when every file has one and they are not all 0, else by the UTC times
+// their imports recorded (dynsky:source "time=") when every file has one, else by name. Ties keep
+// name order. (By name alone, sky_9.exr came after sky_11.exr and a sequence started from the
+// wrong frame.)
+std::vector<std::string> skies_in_time_order(std::vector<std::string> files);
 
 // A sky's own metadata in an image header: dynsky:time, dynsky:sun_x/y/z (when known) and
 // dynsky:source (when set). Every sky file writer uses it; load_sky reads it back.

@@ -175,6 +175,20 @@ TEST(RenderCli, WritesExrWithMetadataAndPng) {
     EXPECT_GT(im.metadata.numbers["dynsky:render_seconds"], 0);
     EXPECT_FALSE(im.metadata.strings["dynsky:sky"].empty());
     EXPECT_TRUE(fs::exists(dir + "/plaza.png"));
+    // Everything that changes the image is in its header, to render it again from there.
+    Outcome more = render(
+        "builtin --max-depth 2 --override-material lambert --sampler uniform --look-at 0,1,3,0,0,0 "
+        "--fov 33",
+        dir + "/more.exr");
+    ASSERT_EQ(more.result.exit_code, 0) << more.result.output;
+    Image m = read_image(dir + "/more.exr");
+    EXPECT_EQ(m.metadata.numbers["dynsky:max_depth"], 2);
+    EXPECT_EQ(m.metadata.strings["dynsky:override_material"], "lambert");
+    EXPECT_EQ(m.metadata.strings["dynsky:sky_sampler"], "uniform");
+    EXPECT_EQ(m.metadata.strings["dynsky:look_at"], "0,1,3,0,0,0");
+    EXPECT_NEAR(m.metadata.numbers["dynsky:camera_yfov_deg"], 33, 1e-4);
+    EXPECT_EQ(im.metadata.strings.count("dynsky:override_material"), 0u);  // none: not said
+    EXPECT_EQ(im.metadata.strings["dynsky:sky_sampler"], "cdf+mis");
 }
 
 // A 2:1 image is a lat-long environment: its upper half lights the scene, its lower half is the ground.

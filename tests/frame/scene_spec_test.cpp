@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <iterator>
 
 #include "frame/scene_spec.h"
 #include "renderer/integrator.h"
@@ -96,6 +97,70 @@ TEST(RenderCamera, LookAtOverrideEqualsTheEquivalentGltfCamera) {
     }
     EXPECT_THROW(load_scene(SceneSpec{path, 0, 0.3f, {}, 180}, 1.0f), Error);
     EXPECT_THROW(load_scene(SceneSpec{path, 1, 0.3f, {}, 40}, 1.0f), Error);  // --fov on an orthographic camera
+}
+
+// --camera N is the file's N-th camera: with cameras A, B and C of which only B and C are placed
+// (and the placed ones listed in another order), 1 is B and 2 is C; A has no place to look from.
+TEST(RenderCamera, CameraIndexIsTheFilesCamerasArray) {
+    std::string dir = test::temp_dir("camera_index");
+    std::string path = write_camera_gltf(dir, 0.6f, 1.5f);
+    std::string json;
+    {
+        std::ifstream in(path);
+        json.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    }
+    // A new camera 0, "A", placed nowhere; the perspective one becomes 1 ("C"), the orthographic one 2 ("B").
+    auto replace = [&](const std::string& from, const std::string& to) {
+        const size_t at = json.find(from);
+        ASSERT_NE(at, std::string::npos) << from;
+        json.replace(at, from.size(), to);
+    };
+    replace("{\"camera\": 1,", "{\"camera\": 2,");
+    replace("{\"camera\": 0,", "{\"camera\": 1,");
+    replace("\"cameras\": [{\"type\": \"perspective\"",
+            "\"cameras\": [{\"name\": \"A\", \"type\": \"perspective\", \"perspective\": {\"yfov\": 1.0, "
+            "\"znear\": 0.1}}, {\"type\": \"perspective\"");
+    // The array is now A, perspective, orthographic: name them B and C in the order placed above.
+    replace("{\"type\": \"perspective\", \"perspective\": {\"yfov\": 0.6",
+            "{\"name\": \"C\", \"type\": \"perspective\", \"perspective\": {\"yfov\": 0.6");
+    replace("{\"type\": \"orthographic\"", "{\"name\": \"B\", \"type\": \"orthographic\"");
+    std::ofstream(path) << json;
+    // cameras = [A, C (perspective, on node 1), B (orthographic, on node 2)]; placed: C, B.
+    SceneSpec spec{path, 1, 0.3f, {}, 0};
+    EXPECT_EQ(load_scene(spec, 1.0f).camera.name, "C");
+    spec.camera = 2;
+    EXPECT_EQ(load_scene(spec, 1.0f).camera.name, "B");
+    spec.camera = 0;
+    try {
+        load_scene(spec, 1.0f);
+        FAIL() << "camera A has no node, yet it was rendered";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("'A') is not placed on any node"), std::string::npos) << e.what();
+    }
+    spec.camera = 3;
+    try {
+        load_scene(spec, 1.0f);
+        FAIL();
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("the file has 3 camera(s)"), std::string::npos) << e.what();
+    }
+}
+
+// --look-at keeps the world's +Y as the image's up down to a hair from vertical: two views a degree
+// apart near the zenith (or the nadir) are a degree apart in the image too, not half a turn.
+TEST(RenderCamera, LookAtUpTurnsSmoothlyThroughNearlyVerticalViews) {
+    for (double down : {1.0, -1.0})
+        for (double t : {0.2, 0.05, 0.03, 0.01, 1e-3, 1e-5, 1e-7}) {
+            const Camera cam = look_at_camera(Vec3(0, 0, 0), Vec3(0, float(down), float(t)), 0.8f);
+            const Eigen::Matrix3f r = cam.camera_to_world.linear();
+            // Leaning towards +Z while looking up, the image's top is towards -Z (and +Z looking down).
+            EXPECT_LT(down * r.col(1).z(), -0.97) << "target (0, " << down << ", " << t << ")";
+            EXPECT_NEAR(r.determinant(), 1.0f, 1e-5f);
+            EXPECT_NEAR((r.transpose() * r - Eigen::Matrix3f::Identity()).cwiseAbs().maxCoeff(), 0.0f, 1e-5f);
+        }
+    // Exactly vertical: a fixed up (+Z hint), still a rotation.
+    const Eigen::Matrix3f r = look_at_camera(Vec3(0, 0, 0), Vec3(0, 1, 0), 0.8f).camera_to_world.linear();
+    EXPECT_NEAR(r.determinant(), 1.0f, 1e-5f);
 }
 
 TEST(RenderCamera, OrthographicCameraSeesTheWallAtOneDepthAndItsTrueSize) {

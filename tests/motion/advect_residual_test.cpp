@@ -352,6 +352,7 @@ TEST(AdvectResidual, ASkyOfUnknownScaleMovesTheSameInAnyUnits) {
 // or hours before it, is refused naming both files (its motion says nothing about this sky's).
 TEST(AdvectResidual, APreviousFrameMustComeShortlyBeforeTheSky) {
     SkyImage sky(8), previous(8);
+    sky.has_clock = previous.has_clock = true;
     sky.time_seconds = 1000, previous.time_seconds = 970;
     EXPECT_DOUBLE_EQ(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), 30.0);
     EXPECT_DOUBLE_EQ(previous_frame_gap(sky, previous, 60, "b.exr", "a.exr"), 60.0);  // given wins
@@ -372,19 +373,22 @@ TEST(AdvectResidual, APreviousFrameMustComeShortlyBeforeTheSky) {
     }
     previous.time_seconds = 1000 - 7200;
     EXPECT_THROW(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), Error);
-    previous.time_seconds = 0;  // no clock: one medium step
+    // A sequence's first frame is at 0 on its clock: frames 0 and 1 of a 10 s sequence are 10 s apart
+    // (taken as one medium step, 30 s, the clouds moved a third as fast).
+    previous.time_seconds = 0, sky.time_seconds = 10;
+    EXPECT_DOUBLE_EQ(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), 10.0);
+    previous.has_clock = false;  // no clock in one file, no recorded times: one medium step
     EXPECT_DOUBLE_EQ(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), 0.0);
     EXPECT_THROW(previous_frame_gap(sky, previous, -5, "b.exr", "a.exr"), Error);
     // Two imported photographs (dynsky:time 0 on both): the times their import recorded, in any zone.
     // Taken as one 30 s step, a 60 s Mobotix pair moved the clouds twice as fast.
-    sky.time_seconds = 0;
+    sky.time_seconds = 0, previous.has_clock = true;
     previous.source = "photo:/x/2020-08-12_09_19.jpg (hdr: mean-luminance fallback) time=2020-08-12T09:19:00+02:00";
     sky.source = "photo:/x/2020-08-12_09_20.jpg (hdr: clear-sky pixels) time=2020-08-12T07:20:00Z";
     EXPECT_NEAR(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), 60.0, 1e-3);
     EXPECT_THROW(previous_frame_gap(previous, sky, 0, "a.exr", "b.exr"), Error);  // the other way round
-    previous.time_seconds = 30;  // one clock only (a step records the time of the sky it came from): one step
-    EXPECT_DOUBLE_EQ(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), 0.0);
-    previous.time_seconds = 0;
+    sky.has_clock = false;  // a file without a clock: the recorded times still say
+    EXPECT_NEAR(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), 60.0, 1e-3);
     sky.source = "photo:/x/2020-08-12_09_20.jpg (hdr: clear-sky pixels)";  // no time recorded
     EXPECT_DOUBLE_EQ(previous_frame_gap(sky, previous, 0, "b.exr", "a.exr"), 0.0);
     sky.source = "photo:/x/y.jpg time=not-a-time";

@@ -914,11 +914,13 @@ TEST(PhotoImport, PresetsFileNamesAndTimes) {
 
 TEST(PhotoImport, PhotoTimeFallsBackToExif) {
     const std::string dir = test::temp_dir("photo_time_exif");
-    auto write_jpeg = [&](const std::string& path, const char* when, const char* offset) {
+    auto write_jpeg = [&](const std::string& path, const char* when, const char* offset,
+                          const char* changed = nullptr) {
         auto out = OIIO::ImageOutput::create(path);
         ASSERT_TRUE(out);
         OIIO::ImageSpec spec(16, 16, 3, OIIO::TypeDesc::UINT8);
         if (when) spec.attribute("Exif:DateTimeOriginal", when);
+        if (changed) spec.attribute("DateTime", changed);
         if (offset) spec.attribute("Exif:OffsetTimeOriginal", offset);
         std::vector<unsigned char> px(16 * 16 * 3, 128);
         ASSERT_TRUE(out->open(path, spec));
@@ -936,6 +938,12 @@ TEST(PhotoImport, PhotoTimeFallsBackToExif) {
     EXPECT_TRUE(t.zone_in_file);
     write_jpeg(dir + "/c.jpg", nullptr, nullptr);
     EXPECT_EQ(photo_time(dir + "/c.jpg").iso, "");
+    // DateTime is when the file was last changed (a conversion stamps it), not when it was taken.
+    write_jpeg(dir + "/d.jpg", nullptr, nullptr, "2026:12:05 04:35:42");
+    EXPECT_EQ(image_header_strings(dir + "/d.jpg", {"DateTime"}).at(0), "2026:12:05 04:35:42");
+    EXPECT_EQ(photo_time(dir + "/d.jpg", 0.0).iso, "");
+    write_jpeg(dir + "/e.jpg", "2021:03:04 05:06:07", nullptr, "2026:12:05 04:35:42");
+    EXPECT_EQ(photo_time(dir + "/e.jpg", 0.0).iso, "2021-03-04T05:06:07+00:00");
     // The name wins over the EXIF.
     write_jpeg(dir + "/sky_20200101_000000.jpg", "2021:03:04 05:06:07", nullptr);
     t = photo_time(dir + "/sky_20200101_000000.jpg");

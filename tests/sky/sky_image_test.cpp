@@ -65,6 +65,34 @@ TEST(SkyImage, SaveAndLoadKeepPixelsBitForBitAndTheAttributes) {
     fs::remove_all(dir);
 }
 
+// A folder's skies in the order they were taken, from their headers: by name, sky_9 came after
+// sky_11 and a sequence started from the wrong frame. Imported photographs (all at 0 on the clock)
+// by the UTC times their imports recorded; a file without either leaves name order.
+TEST(SkyImage, SkiesOfAFolderAreOrderedByTheirClocksThenTheirRecordedTimes) {
+    const std::string dir = test::temp_dir("sky_order");
+    SkyImage sky = awkward_sky(8);
+    auto write = [&](const std::string& name, double t, const std::string& source) {
+        sky.time_seconds = t, sky.source = source;
+        save_sky(dir + "/" + name, sky);
+        return dir + "/" + name;
+    };
+    const std::string a = write("sky_1.exr", 0, "procedural"), b = write("sky_11.exr", 100.25, "procedural"),
+                      c = write("sky_9.exr", 80, "procedural");
+    EXPECT_EQ(skies_in_time_order({b, c, a}), (std::vector<std::string>{a, c, b}));
+    EXPECT_EQ(image_header_number(b, "dynsky:time").value_or(-1), 100.25);
+    EXPECT_EQ(skies_in_time_order({c}), std::vector<std::string>{c});
+    EXPECT_TRUE(skies_in_time_order({}).empty());
+    // Imported photographs: every clock at 0, their recorded times in any zone.
+    const std::string p = write("p_a.exr", 0, "photo:x.jpg time=2020-08-12T09:21:00+02:00"),
+                      q = write("p_b.exr", 0, "photo:y.jpg time=2020-08-12T07:20:00Z"),
+                      r = write("p_c.exr", 0, "photo:z.jpg time=2020-08-12T07:19:00Z");
+    EXPECT_EQ(skies_in_time_order({p, q, r}), (std::vector<std::string>{r, q, p}));
+    // One without a recorded time: name order.
+    const std::string u = write("p_d.exr", 0, "photo:w.jpg");
+    EXPECT_EQ(skies_in_time_order({u, r, p, q}), (std::vector<std::string>{p, q, r, u}));
+    fs::remove_all(dir);
+}
+
 TEST(SkyImage, WithoutSunOrSourceTheLoadedSkyHasNoSunAndNamesItsFile) {
     std::string dir = test::temp_dir("sky_image_plain");
     SkyImage sky = awkward_sky(16);
