@@ -68,6 +68,47 @@ double pixel_relative_error(int n, double sum, double sum_squares) {
     return std::sqrt(variance / n) / mean;
 }
 
+std::vector<double> adaptive_error_estimates(int width, int height, const std::vector<int>& n,
+                                             const std::vector<double>& lum_sum, const std::vector<double>& lum_sum2,
+                                             int radius) {
+    const size_t count = size_t(width) * height;
+    if (n.size() != count || lum_sum.size() != count || lum_sum2.size() != count)
+        throw Error("adaptive_error_estimates: the statistics are not width x height");
+    // Summed-area tables of each pixel's mean and sample variance (one row and column of zeros first).
+    const size_t sw = size_t(width) + 1;
+    std::vector<double> mean_table(sw * (height + 1), 0.0), var_table(sw * (height + 1), 0.0);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            const size_t p = size_t(y) * width + x;
+            const int k = n[p];
+            const double mean = k > 0 ? lum_sum[p] / k : 0.0;
+            const double var = k > 1 ? std::max(0.0, (lum_sum2[p] / k - mean * mean) * (double(k) / (k - 1))) : 0.0;
+            const size_t t = size_t(y + 1) * sw + x + 1;
+            mean_table[t] = mean + mean_table[t - 1] + mean_table[t - sw] - mean_table[t - sw - 1];
+            var_table[t] = var + var_table[t - 1] + var_table[t - sw] - var_table[t - sw - 1];
+        }
+    auto box = [&](const std::vector<double>& table, int x0, int y0, int x1, int y1) {
+        return table[size_t(y1) * sw + x1] - table[size_t(y0) * sw + x1] - table[size_t(y1) * sw + x0] +
+               table[size_t(y0) * sw + x0];
+    };
+    std::vector<double> out(count);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            const size_t p = size_t(y) * width + x;
+            const int x0 = std::max(0, x - radius), x1 = std::min(width, x + radius + 1);
+            const int y0 = std::max(0, y - radius), y1 = std::min(height, y + radius + 1);
+            const double pixels = double(x1 - x0) * (y1 - y0);
+            const double mean = std::max(0.0, box(mean_table, x0, y0, x1, y1)) / pixels;
+            const double var = std::max(0.0, box(var_table, x0, y0, x1, y1)) / pixels;
+            double around = 0.0;
+            if (n[p] < 2) around = std::numeric_limits<double>::infinity();
+            else if (mean > 0) around = std::sqrt(var / n[p]) / mean;
+            else if (var > 0) around = std::numeric_limits<double>::infinity();
+            out[p] = std::max(pixel_relative_error(n[p], lum_sum[p], lum_sum2[p]), around);
+        }
+    return out;
+}
+
 Image render_layers(const RenderResult& r) {
     const Image& c = r.color;
     std::vector<std::pair<const Image*, std::vector<std::string>>> parts = {{&c, {"R", "G", "B"}}};
@@ -594,10 +635,13 @@ RenderResult PathIntegrator::render(const Camera& camera) const {
         for (int y = region.y0; y < region.y1; ++y)
             for (int x = region.x0; x < region.x1; ++x)
                 states.emplace_back(pixel_rng(x, y), keep_extra ? &extras[states.size()] : nullptr);
+        const size_t count_px = size_t(rw) * rh;
+        std::vector<double> estimate(adaptive ? count_px : 0, std::numeric_limits<double>::infinity());
+        std::vector<int> n(adaptive ? count_px : 0);
+        std::vector<double> lum_sum(n.size()), lum_sum2(n.size());
         int taken = 0;
         while (taken < settings_.spp) {
             const int count = std::min(round_spp, settings_.spp - taken);
-            std::atomic<long long> active{0};
             for_each_tile([&](std::vector<TilePixel>& pixels, RenderStats* stats) {
                 std::vector<TilePixel> live;  // the pixels still taking samples
                 for (TilePixel p : pixels) {
@@ -605,15 +649,24 @@ RenderResult PathIntegrator::render(const Camera& camera) const {
                     if (!p.state->done) live.push_back(p);
                 }
                 sample_tile(camera, tan_half, aspect, live.data(), int(live.size()), count, stats);
-                for (const TilePixel& p : live) {
-                    PixelState& st = *p.state;
-                    if (adaptive &&
-                        pixel_relative_error(st.n, st.extra->lum_sum, st.extra->lum_sum2) < settings_.noise_threshold)
-                        st.done = true;
-                    else ++active;
-                }
             });
             taken += count, ++result.rounds;
+            long long active = 0;
+            if (adaptive) {
+                // Every pixel's estimate from the statistics of all (those stopped keep theirs).
+                for (size_t k = 0; k < count_px; ++k)
+                    n[k] = states[k].n, lum_sum[k] = states[k].extra->lum_sum, lum_sum2[k] = states[k].extra->lum_sum2;
+                const std::vector<double> now = adaptive_error_estimates(rw, rh, n, lum_sum, lum_sum2,
+                                                                         kAdaptiveNeighbourhoodRadius);
+                for (size_t k = 0; k < count_px; ++k) {
+                    if (states[k].done) continue;
+                    estimate[k] = now[k];
+                    if (now[k] < settings_.noise_threshold) states[k].done = true;
+                    else ++active;
+                }
+            } else {
+                active = (long long)count_px;  // a time limit alone: every pixel takes every round
+            }
             if (active == 0) break;
             if (settings_.time_limit_seconds > 0 &&
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >=
@@ -623,6 +676,8 @@ RenderResult PathIntegrator::render(const Camera& camera) const {
         tbb::parallel_for(0, rh, [&](int y) {
             for (int x = 0; x < rw; ++x) store_pixel(camera, states[size_t(y) * rw + x], x, y, &result);
         });
+        if (adaptive)
+            for (size_t k = 0; k < estimate.size(); ++k) result.relative_error.pixels[k] = float(estimate[k]);
     }
     progress.finish();
     result.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

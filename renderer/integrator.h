@@ -65,8 +65,8 @@ struct RenderSettings {
     int tile_size = 16;
     PixelRegion region;  // render only these pixels; the result is cropped to them
     AovSelection aovs;
-    // Adaptive sampling (0: off): after each round of round_spp samples a pixel whose relative
-    // error estimate (pixel_relative_error) is under the threshold takes no more samples.
+    // Adaptive sampling (0: off): after each round of round_spp samples a pixel whose error
+    // estimate (adaptive_error_estimates) is under the threshold takes no more samples.
     float noise_threshold = 0;
     int round_spp = 16;
     double time_limit_seconds = 0;  // no new round starts after this much time (0: none); the first always runs
@@ -85,6 +85,19 @@ SamplePattern parse_sample_pattern(const std::string& name);
 // sqrt(variance of the mean) / mean; 0 when every sample is 0, infinite for n < 2.
 double pixel_relative_error(int n, double sum, double sum_squares);
 
+// Adaptive sampling's error estimate of each pixel of a width x height image (row-major: its sample
+// count n and the sums of its samples' luminance and squared luminance): the larger of its own
+// relative error (pixel_relative_error) and its neighbourhood's, the sample variances of the
+// (2 radius + 1)^2 pixels around it (fewer at the image's edges) averaged, for the pixel's n, over
+// their mean luminance. On its own, a pixel none of whose first samples found a small light (a lamp
+// the size of a hand, a caustic) had a variance of 0 and stopped at once: 83 % of a floor lit by a
+// 20 cm emitter stopped after 16 samples and the image came out 3-6 times too dark. Its neighbours
+// that found the light say it is there.
+std::vector<double> adaptive_error_estimates(int width, int height, const std::vector<int>& n,
+                                             const std::vector<double>& lum_sum, const std::vector<double>& lum_sum2,
+                                             int radius);
+constexpr int kAdaptiveNeighbourhoodRadius = 4;  // 9 x 9 pixels
+
 struct RenderStats {
     double seconds = 0;
     uint64_t camera_rays = 0, extension_rays = 0, shadow_rays = 0;
@@ -96,7 +109,9 @@ struct RenderResult {
     Image variance;  // variance of each pixel's mean (3 channels) if requested
     // The passes asked for (empty otherwise): albedo and normal 3 channels, the rest 1.
     Image albedo, normal, depth, alpha, sample_count;
-    Image relative_error;  // with adaptive sampling or compute_variance: each pixel's pixel_relative_error (1 channel)
+    // 1 channel: with adaptive sampling, the estimate each pixel stopped at (or its last one:
+    // adaptive_error_estimates); else with compute_variance, its pixel_relative_error.
+    Image relative_error;
     RenderStats stats;
     int rounds = 0;  // sampling rounds run
 };
