@@ -244,6 +244,7 @@ class AdvectResidualStepModel : public MediumStepModel {
     cv::Mat last_cloud_opacity() const override { return last_opacity_; }
     cv::Mat input_cloud_opacity() const override { return input_opacity_; }
     void set_input_sun_cover(double c) override { sun_cover_ = c; }
+    cv::Mat last_step_flow() const override { return last_flow_; }
 
   private:
     AdvectResidualNetwork network_;
@@ -263,6 +264,7 @@ class AdvectResidualStepModel : public MediumStepModel {
     std::optional<Vec3> sun_;  // from the timeline, else the sky's own
     cv::Mat last_opacity_, input_opacity_;
     double sun_cover_ = 0;
+    cv::Mat last_flow_;  // the flow of the last step, at the given sky's resolution
 };
 
 // The kind of a model folder's model.json ("advect-residual", or "flownet-cloudnet" for the

@@ -20,6 +20,7 @@ SkyImage FlowExtrapolationStepModel::step(const std::vector<std::shared_ptr<cons
         Vec3d axis = Vec3d::UnitY().cross(to);
         flow = rotation_flow(last.resolution, axis, degrees_per_second_ * dt * kPiD / 180.0);
     }
+    last_flow_ = flow;
     SkyImage next = advect_great_arc(last, flow, 1.0);
     next.time_seconds = last.time_seconds + dt;
     next.source = "flow-extrapolation of " + last.source;

@@ -20,10 +20,12 @@ class FlowExtrapolationStepModel : public MediumStepModel {
                                SkyFlowParams flow_params = {});
     SkyImage step(const std::vector<std::shared_ptr<const SkyImage>>& history, double dt) override;
     std::string name() const override { return "flow-extrapolation"; }
+    cv::Mat last_step_flow() const override { return last_flow_; }
 
   private:
     double wind_from_deg_, degrees_per_second_;
     SkyFlowParams flow_params_;
+    cv::Mat last_flow_;  // the flow the last step advected along
 };
 
 }  // namespace dynsky

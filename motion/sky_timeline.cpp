@@ -166,6 +166,10 @@ std::shared_ptr<const SkyImage> SkyTimeline::step(int i) {
         clear_outside_disc(&next);
         model_opacity_.resize(steps_.size() + 1);
         model_opacity_.back() = model_->last_cloud_opacity();
+        model_flow_.resize(steps_.size() + 1);
+        model_flow_.back() = model_->last_step_flow();
+        if (!model_flow_.back().empty() && model_flow_.back().rows != next.resolution)
+            model_flow_.back() = flow_at_resolution(model_flow_.back(), next.resolution);
         if (steps_.size() == 1) model_opacity_[0] = model_->input_cloud_opacity();
         if (model_->makes_own_sun()) {
             if (sun) next.sun_direction = sun->cast<float>();
@@ -187,7 +191,10 @@ SkyTimeline::Interval& SkyTimeline::interval(int i) {
     auto a = step(i), b = step(i + 1);
     auto t0 = std::chrono::steady_clock::now();
     Interval iv;
+    // The motion the model gave step i + 1 when it knows it, else measured between the steps.
     if (stored_last_step_ >= 0) iv.flow = stored_flow(i);
+    else if (size_t(i + 1) < model_flow_.size() && !model_flow_[size_t(i + 1)].empty())
+        iv.flow = model_flow_[size_t(i + 1)];
     else iv.flow = estimate_sky_flow(*a, *b, flow_params_);
     timings_.medium_seconds += seconds_since(t0);
     // Frames run forwards: intervals two behind are not needed again.

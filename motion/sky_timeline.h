@@ -150,6 +150,9 @@ class SkyTimeline {
     // Per step (0: the input), the opacity of the clouds the model moved (MediumStepModel::
     // last_cloud_opacity; empty: none), and the sun's weight at s in interval i from them.
     std::vector<cv::Mat> model_opacity_;
+    // Per step (0: none), the motion the model gave it (MediumStepModel::last_step_flow; empty:
+    // unknown, measured between the steps).
+    std::vector<cv::Mat> model_flow_;
     // relative: over the input's opacity at the sun (in [0, 1]); else the transmittance itself.
     std::optional<double> model_sun_weight(int i, double s, const Vec3d& sun, bool relative = true);
     // The input's sun when a cloud dimmed it (it holds under half the clear sun's irradiance, or

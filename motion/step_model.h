@@ -40,6 +40,12 @@ class MediumStepModel {
     // True when only native_dt() is right (the paper's networks learnt one step's motion); models
     // that take their motion as an input work at any Delta t.
     virtual bool dt_is_fixed() const { return native_dt() > 0; }
+    // The motion the step just made gave the clouds, when the model knows it (it moved them along
+    // a flow): CV_32FC2 at the sky's resolution, in its pixels per step, the content at x carried to
+    // about x + F(x). Empty: unknown, and the timeline measures the motion between the two steps
+    // (Farneback, which loses displacements of more than a few pixels: in-betweens of a 16 px step
+    // stalled, then jumped).
+    virtual cv::Mat last_step_flow() const { return cv::Mat(); }
 };
 
 }  // namespace dynsky

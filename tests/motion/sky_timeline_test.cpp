@@ -171,7 +171,9 @@ TEST(SkyTimeline, ConstantGammaIsExactAtTheStepsAndCarriesBothStepsToTheMoment) 
     EXPECT_EQ(timeline.sky_at(0.0).rgb, s0.rgb);
     EXPECT_EQ(timeline.sky_at(10.0).rgb, s1.rgb);
     EXPECT_EQ(timeline.sky_at(20.0).rgb, s2.rgb);
-    cv::Mat f1 = estimate_sky_flow(s1, s2);
+    // The interval's flow: the motion the model gave step 2 (flow extrapolation: S0 -> S1's, carried on).
+    const cv::Mat f1 = timeline.flow(1);
+    EXPECT_EQ(cv::norm(f1, estimate_sky_flow(s0, s1), cv::NORM_INF), 0.0);
     const double s = 0.37;
     SkyImage got = timeline.sky_at(10.0 + s * 10.0);
     SkyImage want = blend_skies(advect_great_arc(s1, f1, s), advect_great_arc(s2, f1, -(1 - s)), s);
@@ -207,6 +209,70 @@ TEST(SkyTimeline, ConstantGammaMovesCloudsAtAnEvenPaceThePapersDoesNot) {
     EXPECT_LT(worst[int(GammaKind::constant)], 0.05);
     EXPECT_GT(worst[int(GammaKind::paper)], 2 * worst[int(GammaKind::constant)]);
     EXPECT_GT(worst[int(GammaKind::paper)], 0.035);
+}
+
+// xi: the sky shifted by `px` pixels towards +x per step, telling the timeline the motion it gave
+// (MediumStepModel::last_step_flow) when `tells`.
+class ShiftingModel : public MediumStepModel {
+  public:
+    ShiftingModel(double px, bool tells) : px_(px), tells_(tells) {}
+    SkyImage step(const std::vector<std::shared_ptr<const SkyImage>>& h, double dt) override {
+        const SkyImage& last = *h.back();
+        flow_ = cv::Mat(last.resolution, last.resolution, CV_32FC2, cv::Scalar(px_, 0));
+        SkyImage next = shifted(last, px_);
+        next.time_seconds = last.time_seconds + dt;
+        return next;
+    }
+    std::string name() const override { return "shifting"; }
+    cv::Mat last_step_flow() const override { return tells_ ? flow_ : cv::Mat(); }
+    static SkyImage shifted(const SkyImage& sky, double px) {
+        const int n = sky.resolution;
+        cv::Mat in(n, n, CV_32FC3, const_cast<float*>(sky.rgb.data())), out;
+        cv::Mat m = (cv::Mat_<double>(2, 3) << 1, 0, px, 0, 1, 0);
+        cv::warpAffine(in, out, m, in.size(), cv::INTER_LINEAR, cv::BORDER_REFLECT);
+        SkyImage r = sky;
+        std::copy(out.ptr<float>(), out.ptr<float>() + r.rgb.size(), r.rgb.begin());
+        return r;
+    }
+
+  private:
+    double px_;
+    bool tells_;
+    cv::Mat flow_;
+};
+
+// A model that knows the motion it gave (it moved the clouds along a flow) tells the timeline, and
+// the in-betweens follow it at an even pace however large the step: measured between the steps
+// (Farneback), a 16 px step at 128 px stalled and then jumped (docs/animation.md).
+TEST(SkyTimeline, InBetweensFollowTheMotionTheModelGave) {
+    const int n = 64;
+    const double per_step = 12.0;  // pixels: a fast cumulus at this size
+    SkyImage input = textured_sky(n, 9);
+    // The central part of a frame against the input shifted by d (0.25 px steps): the best d.
+    auto shift_of = [&](const SkyImage& frame) {
+        double best = 1e300, at = 0;
+        for (double d = -1; d <= per_step + 1; d += 0.25) {
+            const SkyImage ref = ShiftingModel::shifted(input, d);
+            double c = 0;
+            for (int j = n / 4; j < 3 * n / 4; ++j)
+                for (int i = n / 4; i < 3 * n / 4; ++i) {
+                    const double e = std::log(luminance(frame.pixel(i, j))) - std::log(luminance(ref.pixel(i, j)));
+                    c += e * e;
+                }
+            if (c < best) best = c, at = d;
+        }
+        return at;
+    };
+    SkyTimeline timeline(input, std::make_unique<ShiftingModel>(per_step, true), 10.0);
+    const cv::Mat& flow = timeline.flow(0);
+    ASSERT_EQ(flow.rows, n);
+    EXPECT_EQ(flow.at<cv::Vec2f>(n / 2, n / 2), cv::Vec2f(float(per_step), 0.0f));  // the model's, as it said
+    double worst = 0;
+    for (int k = 1; k < 10; ++k) worst = std::max(worst, std::abs(shift_of(timeline.sky_at(k)) - per_step * k / 10));
+    EXPECT_LT(worst, 1.0) << "px from an even pace";
+    // Not told, the timeline measures the motion between the steps (its own estimate).
+    SkyTimeline measured(input, std::make_unique<ShiftingModel>(per_step, false), 10.0);
+    EXPECT_NE(measured.flow(0).at<cv::Vec2f>(n / 2, n / 2), cv::Vec2f(float(per_step), 0.0f));
 }
 
 TEST(SkyTimeline, ConstantGammaRampsBrightnessLinearlyThePapersInTheMiddleThird) {
