@@ -45,6 +45,8 @@ std::string HdrCalibrationReport::summary() const {
     s << ", sun elevation " << sun_elevation_deg << " deg";
     if (sun_elevation_deg < 0) s << " (below the horizon: the model is a sunset sky, the scale is unreliable)";
     if (sun_joined) s << ", clipped sun seen joined to other clipped sky (put at the computed sun)";
+    else if (sun_in_wide_glare)
+        s << ", clipped sun seen in a wide clipped glare on a clear sky (put at the computed sun)";
     else if (sun_offset_deg >= 0) s << ", clipped sun seen " << sun_offset_deg << " deg from the computed one";
     s << (sun_restored ? ", sun disc restored" : (sun_visible ? ", sun seen" : ", sun not seen (not restored)"));
     return s.str();
@@ -254,6 +256,25 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     // across, a glare's size) on the computed sun; a joined blob's shape cannot say where the sun is
     // more closely than the clock does (its core leans into the neck by 2-4 degrees), so the sun is
     // put where the clock puts it.
+    // An over-exposed clear sky clips wide around the sun (at 1/20 of the exposure that keeps the
+    // sky, 20-30 degrees): the blob holds the computed sun, and most of the unclipped sky within 45
+    // degrees of it is clear. Dropped as too large, the sun was not restored and 78 % of the sky's
+    // irradiance was lost. Clipped cloud over the sun (overcast, a bright cumulus) has cloud around.
+    auto wide_glare_on_clear_sky = [&](int blob) {
+        double sx, sy;
+        if (!fisheye::uv_from_direction(rep.computed_sun, &sx, &sy)) return false;
+        const int si = std::clamp(int((sx + 1) / 2 * n), 0, n - 1), sj = std::clamp(int((sy + 1) / 2 * n), 0, n - 1);
+        if (labels.at<int>(sj, si) != blob) return false;
+        long long around = 0, clear = 0;
+        for (size_t p = 0; p < size_t(n) * n; ++p) {
+            if (photo.not_sky[p] || photo.clipped[p] || !in.in_disc(int(p % n), int(p / n))) continue;
+            if (angle_between(dir(p), rep.computed_sun) > 45 * kDeg) continue;
+            ++around;
+            const float* c = &in.rgb[p * 3];
+            clear += !is_cloud(linear_to_srgb(c[0]), linear_to_srgb(c[1]), linear_to_srgb(c[2]), params.clear_rule);
+        }
+        return around > 0 && clear >= 0.6 * double(around);
+    };
     Vec3d seen = Vec3d::Zero();
     if (sun_blob > 0) {
         const SunCore core = round_core(labels, sun_blob, rep.computed_sun);
@@ -265,6 +286,7 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
             seen = blob_centre;
         else if (joined_glare) seen = rep.computed_sun, rep.sun_joined = true;
         else if (compact) seen = blob_centre;
+        else if (wide_glare_on_clear_sky(sun_blob)) seen = rep.computed_sun, rep.sun_in_wide_glare = true;
         else sun_blob = -1;
     }
     if (sun_blob < 0 && !sun_hidden) {

@@ -95,6 +95,8 @@ struct HdrCalibrationReport {
     // The clipped sun was joined to other clipped sky (the horizon under it, sunlit cloud): seen, and
     // put at the computed sun (its blob's shape cannot place it more closely).
     bool sun_joined = false;
+    // ... or the middle of a wide clipped glare on a clear sky (an over-exposed photo): also put there.
+    bool sun_in_wide_glare = false;
     // No sun near the computed one, but a clipped sun at its height elsewhere (north_from_seen_sun):
     // the camera's north is likely wrong; the north that would put the computed sun on it.
     std::optional<NorthFromSun> sun_elsewhere;

@@ -443,87 +443,95 @@ std::optional<SkyCircle> find_lens_circle_on_black(const cv::Mat& level, double 
     }
     if (!(p99 >= 8 && corner <= std::max(2.0, 0.03 * p99))) return std::nullopt;
 
-    // Any light at all is inside the lens: the dark ground and rooftops at its rim (green at 1 of
-    // 255, red and blue 0, on a morning photograph) count, or the outline shrinks to the sky's and
-    // moves from frame to frame with the light (the Mobotix morning: radius 428-449 px against 486
-    // at noon). `level` is each pixel's brightest channel; an opening drops JPEG's stray single
-    // levels in the surround, and pieces under 16 pixels are noise.
-    cv::Mat lit = level > corner + 0.5, labels, stats, centroids;
-    cv::morphologyEx(lit, lit, cv::MORPH_OPEN, cv::getStructuringElement(cv::MORPH_CROSS, cv::Size(3, 3)));
-    int n = cv::connectedComponentsWithStats(lit, labels, stats, centroids, 8, CV_32S);
-    int largest = 0;
-    for (int i = 1; i < n; ++i)
-        if (largest == 0 || stats.at<int>(i, cv::CC_STAT_AREA) > stats.at<int>(largest, cv::CC_STAT_AREA)) largest = i;
-    if (largest == 0 || stats.at<int>(largest, cv::CC_STAT_AREA) < 64) return std::nullopt;
-    std::vector<char> kept(n, 0);
-    for (int i = 1; i < n; ++i) kept[i] = stats.at<int>(i, cv::CC_STAT_AREA) >= 16;
+    // Any light at all is inside the lens first; failing that (a JPEG's ringing beyond a bright rim
+    // lit the surround up to 16 levels, 8 px out, and the outline fitted no circle), light above a
+    // tenth of the photo's bright level.
+    auto fit = [&](double threshold) -> std::optional<SkyCircle> {
+        // Any light at all is inside the lens: the dark ground and rooftops at its rim (green at 1 of
+        // 255, red and blue 0, on a morning photograph) count, or the outline shrinks to the sky's and
+        // moves from frame to frame with the light (the Mobotix morning: radius 428-449 px against 486
+        // at noon). `level` is each pixel's brightest channel; an opening drops JPEG's stray single
+        // levels in the surround, and pieces under 16 pixels are noise.
+        cv::Mat lit = level > threshold, labels, stats, centroids;
+        cv::morphologyEx(lit, lit, cv::MORPH_OPEN, cv::getStructuringElement(cv::MORPH_CROSS, cv::Size(3, 3)));
+        int n = cv::connectedComponentsWithStats(lit, labels, stats, centroids, 8, CV_32S);
+        int largest = 0;
+        for (int i = 1; i < n; ++i)
+            if (largest == 0 || stats.at<int>(i, cv::CC_STAT_AREA) > stats.at<int>(largest, cv::CC_STAT_AREA))
+                largest = i;
+        if (largest == 0 || stats.at<int>(largest, cv::CC_STAT_AREA) < 64) return std::optional<SkyCircle>();
+        std::vector<char> kept(n, 0);
+        for (int i = 1; i < n; ++i) kept[i] = stats.at<int>(i, cv::CC_STAT_AREA) >= 16;
 
-    // The rim: per direction from the centre, the farthest lit pixel. Burnt-in captions beyond the
-    // circle, dark objects denting it and the frame cutting it (a lens circle taller than the
-    // sensor) give directions that are not the rim: the fit leaves them out (below).
-    double cx = centroids.at<double>(largest, 0), cy = centroids.at<double>(largest, 1);
-    double r = std::sqrt(stats.at<int>(largest, cv::CC_STAT_AREA) / kPiD);
-    constexpr int kDirections = 720;
-    for (int pass = 0; pass < 2; ++pass) {
-        std::vector<double> far(kDirections, -1.0);
-        std::vector<cv::Point2d> far_px(kDirections);
-        for (int y = 0; y < lit.rows; ++y)
-            for (int x = 0; x < lit.cols; ++x) {
-                if (!kept[labels.at<int>(y, x)]) continue;
-                // Only the outline can be farthest in its direction.
-                if (x > 0 && y > 0 && x + 1 < lit.cols && y + 1 < lit.rows && lit.at<unsigned char>(y, x - 1) &&
-                    lit.at<unsigned char>(y, x + 1) && lit.at<unsigned char>(y - 1, x) &&
-                    lit.at<unsigned char>(y + 1, x))
-                    continue;
-                double dx = x - cx, dy = y - cy, d = std::hypot(dx, dy);
-                int k = std::clamp(int((std::atan2(dy, dx) + kPiD) / (2 * kPiD) * kDirections), 0, kDirections - 1);
-                if (d > far[k]) far[k] = d, far_px[k] = cv::Point2d(x, y);
-            }
-        std::vector<cv::Point2d> rim;
-        for (int k = 0; k < kDirections; ++k) {
-            const cv::Point2d& p = far_px[k];
-            if (far[k] < 0 || p.x < 1 || p.y < 1 || p.x > lit.cols - 2 || p.y > lit.rows - 2) continue;
-            rim.push_back(p);
-        }
-        if (rim.size() < kDirections / 4) return std::nullopt;
-        // Least squares on x^2 + y^2 + D x + E y + F = 0, refitted on the points within a robust
-        // band of the last fit (median residual +- 3 MAD, at least 1.5 px): outliers go both ways.
-        std::vector<char> in(rim.size(), 1);
-        double rms = 0;
-        size_t inliers = rim.size();
-        for (int iter = 0; iter < 6; ++iter) {
-            Eigen::MatrixXd a(inliers, 3);
-            Eigen::VectorXd b(inliers);
-            for (size_t i = 0, row = 0; i < rim.size(); ++i)
-                if (in[i]) {
-                    a(row, 0) = rim[i].x, a(row, 1) = rim[i].y, a(row, 2) = 1;
-                    b(row++) = -(rim[i].x * rim[i].x + rim[i].y * rim[i].y);
+        // The rim: per direction from the centre, the farthest lit pixel. Burnt-in captions beyond the
+        // circle, dark objects denting it and the frame cutting it (a lens circle taller than the
+        // sensor) give directions that are not the rim: the fit leaves them out (below).
+        double cx = centroids.at<double>(largest, 0), cy = centroids.at<double>(largest, 1);
+        double r = std::sqrt(stats.at<int>(largest, cv::CC_STAT_AREA) / kPiD);
+        constexpr int kDirections = 720;
+        for (int pass = 0; pass < 2; ++pass) {
+            std::vector<double> far(kDirections, -1.0);
+            std::vector<cv::Point2d> far_px(kDirections);
+            for (int y = 0; y < lit.rows; ++y)
+                for (int x = 0; x < lit.cols; ++x) {
+                    if (!kept[labels.at<int>(y, x)]) continue;
+                    // Only the outline can be farthest in its direction.
+                    if (x > 0 && y > 0 && x + 1 < lit.cols && y + 1 < lit.rows && lit.at<unsigned char>(y, x - 1) &&
+                        lit.at<unsigned char>(y, x + 1) && lit.at<unsigned char>(y - 1, x) &&
+                        lit.at<unsigned char>(y + 1, x))
+                        continue;
+                    double dx = x - cx, dy = y - cy, d = std::hypot(dx, dy);
+                    int k = std::clamp(int((std::atan2(dy, dx) + kPiD) / (2 * kPiD) * kDirections), 0, kDirections - 1);
+                    if (d > far[k]) far[k] = d, far_px[k] = cv::Point2d(x, y);
                 }
-            Eigen::Vector3d d = a.colPivHouseholderQr().solve(b);
-            cx = -d(0) / 2, cy = -d(1) / 2;
-            double r2 = cx * cx + cy * cy - d(2);
-            if (!(r2 > 0)) return std::nullopt;
-            r = std::sqrt(r2);
-            std::vector<double> res(rim.size());
-            for (size_t i = 0; i < rim.size(); ++i) res[i] = std::hypot(rim[i].x - cx, rim[i].y - cy) - r;
-            std::vector<double> sorted = res;
-            double med = quantile(sorted, 0.5);
-            for (double& v : sorted) v = std::abs(v - med);
-            double band = std::max(1.5, 3 * 1.4826 * quantile(sorted, 0.5));
-            inliers = 0, rms = 0;
-            for (size_t i = 0; i < rim.size(); ++i) {
-                in[i] = std::abs(res[i] - med) <= band;
-                if (in[i]) ++inliers, rms += res[i] * res[i];
+            std::vector<cv::Point2d> rim;
+            for (int k = 0; k < kDirections; ++k) {
+                const cv::Point2d& p = far_px[k];
+                if (far[k] < 0 || p.x < 1 || p.y < 1 || p.x > lit.cols - 2 || p.y > lit.rows - 2) continue;
+                rim.push_back(p);
             }
-            if (inliers < 5) return std::nullopt;
-            rms = std::sqrt(rms / inliers);
+            if (rim.size() < kDirections / 4) return std::optional<SkyCircle>();
+            // Least squares on x^2 + y^2 + D x + E y + F = 0, refitted on the points within a robust
+            // band of the last fit (median residual +- 3 MAD, at least 1.5 px): outliers go both ways.
+            std::vector<char> in(rim.size(), 1);
+            double rms = 0;
+            size_t inliers = rim.size();
+            for (int iter = 0; iter < 6; ++iter) {
+                Eigen::MatrixXd a(inliers, 3);
+                Eigen::VectorXd b(inliers);
+                for (size_t i = 0, row = 0; i < rim.size(); ++i)
+                    if (in[i]) {
+                        a(row, 0) = rim[i].x, a(row, 1) = rim[i].y, a(row, 2) = 1;
+                        b(row++) = -(rim[i].x * rim[i].x + rim[i].y * rim[i].y);
+                    }
+                Eigen::Vector3d d = a.colPivHouseholderQr().solve(b);
+                cx = -d(0) / 2, cy = -d(1) / 2;
+                double r2 = cx * cx + cy * cy - d(2);
+                if (!(r2 > 0)) return std::optional<SkyCircle>();
+                r = std::sqrt(r2);
+                std::vector<double> res(rim.size());
+                for (size_t i = 0; i < rim.size(); ++i) res[i] = std::hypot(rim[i].x - cx, rim[i].y - cy) - r;
+                std::vector<double> sorted = res;
+                double med = quantile(sorted, 0.5);
+                for (double& v : sorted) v = std::abs(v - med);
+                double band = std::max(1.5, 3 * 1.4826 * quantile(sorted, 0.5));
+                inliers = 0, rms = 0;
+                for (size_t i = 0; i < rim.size(); ++i) {
+                    in[i] = std::abs(res[i] - med) <= band;
+                    if (in[i]) ++inliers, rms += res[i] * res[i];
+                }
+                if (inliers < 5) return std::optional<SkyCircle>();
+                rms = std::sqrt(rms / inliers);
+            }
+            // A lens circle: most directions on one circle, closely. A lit shape that is not one
+            // (a letterboxed picture, a lamp) fails here and goes to the Hough search.
+            if (inliers * 2 < rim.size() || rms > 0.01 * r + 0.5) return std::optional<SkyCircle>();
         }
-        // A lens circle: most directions on one circle, closely. A lit shape that is not one
-        // (a letterboxed picture, a lamp) fails here and goes to the Hough search.
-        if (inliers * 2 < rim.size() || rms > 0.01 * r + 0.5) return std::nullopt;
-    }
-    if (r < r_min || r > r_max) return std::nullopt;
-    return SkyCircle{cx, cy, r};
+        if (r < r_min || r > r_max) return std::optional<SkyCircle>();
+        return SkyCircle{cx, cy, r};
+    };
+    if (std::optional<SkyCircle> c = fit(corner + 0.5)) return c;
+    return fit(corner + std::max(2.0, 0.1 * p99));
 }
 
 }  // namespace
