@@ -81,9 +81,10 @@ void register_sky_model_commands(CLI::App& sky) {
         cmd->add_option("--sequence", o->sequence,
                         "A named sequence in the shared data: arm-tsi, arm-clear, arm-dusk, mobotix");
         cmd->add_option("--photos", o->photos,
-                        "Any folder of photographs of one camera (or its images/ sub-folder), times in the file names; "
-                        "or of skies already imported from any camera ('dynsky sky import', .exr; a STEM.filled.png "
-                        "beside each, from --filled-mask, leaves its filled pixels out)");
+                        "A folder of photographs of one of the preset cameras (with --preset; or its images/ "
+                        "sub-folder), times in the file names; or of skies already imported from any camera ('dynsky "
+                        "sky import', .exr: another camera's photographs are imported first; a STEM.filled.png beside "
+                        "each, from --filled-mask, leaves its filled pixels out)");
         cmd->add_option("--preset", o->preset,
                         "Camera preset of --photos when they are photographs: arm-tsi or mobotix")
             ->check(CLI::IsMember(camera_preset_names()));

@@ -20,9 +20,9 @@ void register_sky_procedural_command(CLI::App& sky) {
         "procedural",
         "Procedural cloudy skies with known motion: cloud layers (cumulus at 1.5 km, cirrus at 8 km)\n"
         "drifting with the wind and slowly changing shape over a Hosek-Wilkie clear sky. Writes\n"
-        "DIR/frame_00000.exr ... (canonical fisheye radiance, W m^-2 sr^-1), DIR/flow_00000.exr ...\n"
-        "(the exact motion of the clouds over --dt: channels dx, dy in pixels of the image, +x right,\n"
-        "+y down, and the cloud opacity) and DIR/manifest.json. Frames are at t = 0, dt, 2 dt, ...\n"
+        "DIR/frame_0000.exr ... (canonical fisheye radiance, W m^-2 sr^-1), DIR/flow_0000.exr ...\n"
+        "(the exact motion of the clouds over --dt: channels R = dx, G = dy in pixels of the image, +x\n"
+        "right, +y down, B = the cloud opacity) and DIR/manifest.json. Frames are at t = 0, dt, 2 dt, ...\n"
         "up to --duration. See docs/procedural-sky.md.");
     cmd->add_option("--seed", o->seed, "Random seed: the same seed and options give identical frames")
         ->check(non_negative_whole())

@@ -221,7 +221,16 @@ void import_one(const OnePhoto& o, bool verbose) {
     std::string unit = "relative linear units (decoded photo values)";
     if (calibrate) {
         if (!imported.display_referred) {
-            if (verbose) std::printf("HDR input: kept at its own scale (no calibration)\n");
+            // Its own radiance, but where the sun is follows from the time and place: recorded, as a
+            // calibrated sky records it (the moving sky and the frame stage look for it there).
+            const SunPosition sun = compute_sun_position(utc, where);
+            if (sun.elevation_deg() > 0) sky.sun_direction = sun.direction().cast<float>();
+            if (verbose)
+                std::printf(
+                    "HDR input: kept at its own scale (no calibration); time %s, sun at azimuth %.1f deg, "
+                    "elevation %.1f deg%s\n",
+                    format_utc_time(utc).c_str(), sun.azimuth_deg, sun.elevation_deg(),
+                    sky.sun_direction ? " (recorded)" : " (below the horizon: not recorded)");
         } else {
             HdrCalibrationParams hp;
             hp.time = utc;

@@ -148,7 +148,9 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o, bool use_loc
         layers.push_back(j);
     }
     manifest["layers"] = layers;
+    // The EXR's channels are R, G, B (what every viewer opens); the manifest says what each holds.
     manifest["flow"] = {{"channels", {"dx_px", "dy_px", "cloud_opacity"}},
+                        {"exr_channels", {"R", "G", "B"}},
                         {"units", "pixels of the canonical fisheye at this resolution"},
                         {"sign",
                          "forward: the cloud seen at pixel (x, y) of frame k is at (x + dx, y + dy) at time t_k + dt; "

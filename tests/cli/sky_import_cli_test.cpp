@@ -3,6 +3,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -77,6 +78,31 @@ TEST(SkyImportCli, TurnedSixteenBitTiffSaysHowItWasRead) {
     const auto [tx, ty] = centre(r.output);
     EXPECT_NEAR(tx, photo.height - 1 - py, 2.0) << r.output << plain.output;
     EXPECT_NEAR(ty, px, 2.0) << r.output << plain.output;
+    fs::remove_all(dir);
+}
+
+// A linear HDR photograph keeps its own radiance, but its sun's place follows from the time and place
+// given: recorded as a calibrated import records it (was left out, so the moving sky and the frame
+// stage did not know where the sun was).
+TEST(SkyImportCli, AnHdrPhotoWithTimeAndPlaceRecordsItsSun) {
+    std::string dir = test::temp_dir("sky-import-hdr");
+    const int n = 64;
+    Image photo(n, n, 3);
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x)
+            for (int c = 0; c < 3; ++c)
+                photo.at(x, y, c) = std::hypot(x - 31.5, y - 31.5) <= 32 ? 0.5f + 0.1f * float(c) : 0.0f;
+    write_image(dir + "/hdr.exr", photo);
+    const std::string time = "2026-06-21T09:00:00Z";
+    auto r = test::run_command(exe() + " sky import " + dir + "/hdr.exr --lat 40 --lon 10 --time " + time +
+                               " --center 31.5,31.5 --radius 32 --sky-res 64 --out " + dir + "/sky.exr");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("HDR input: kept at its own scale"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("(recorded)"), std::string::npos) << r.output;
+    const SkyImage sky = load_sky(dir + "/sky.exr");
+    ASSERT_TRUE(sky.sun_direction.has_value()) << r.output;
+    const Vec3d want = compute_sun_position(parse_utc_time(time), GeoLocation{40, 10, 0}).direction();
+    EXPECT_LT((sky.sun_direction->cast<double>() - want).norm(), 1e-4);
     fs::remove_all(dir);
 }
 
