@@ -91,6 +91,19 @@ SyntheticClearPhoto clear_photo(int n, double k0 = 40.0) {
     return s;
 }
 
+// A sky's irradiance on a horizontal plane (its luminance x cos(theta) over the disc's solid angle).
+double horizontal_irradiance(const SkyImage& sky) {
+    const int n = sky.resolution;
+    double e = 0;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const Vec2 uv = fisheye::pixel_center_uv(i, j, n);
+            const double cos_theta = fisheye::direction_from_uv(double(uv.x()), double(uv.y())).y();
+            e += luminance(sky.pixel(i, j)) * cos_theta * fisheye::pixel_solid_angle(i, j, n);
+        }
+    return e;
+}
+
 ImportedPhoto import_canonical(const Image& photo, int n) {
     PhotoImportParams p;
     p.resolution = n;
@@ -114,16 +127,6 @@ TEST(HdrRecovery, CalibratesAClearSkyPhotoToTheModelAndRestoresTheSun) {
 
     // Energy: the recovered sky's irradiance on a horizontal plane matches the model's within 15%;
     // without the restored sun it would miss most of it (the disc clips at 1 / k0 of its radiance).
-    auto horizontal_irradiance = [n](const SkyImage& sky) {
-        double e = 0;
-        for (int j = 0; j < n; ++j)
-            for (int i = 0; i < n; ++i) {
-                Vec2 uv = fisheye::pixel_center_uv(i, j, n);
-                double cos_theta = fisheye::direction_from_uv(double(uv.x()), double(uv.y())).y();
-                e += luminance(sky.pixel(i, j)) * cos_theta * fisheye::pixel_solid_angle(i, j, n);
-            }
-        return e;
-    };
     double e_truth = horizontal_irradiance(s.truth), e_hdr = horizontal_irradiance(hdr);
     EXPECT_NEAR(e_hdr / e_truth, 1.0, 0.15);
     HdrCalibrationParams no_sun = s.params;
@@ -147,16 +150,6 @@ TEST(HdrRecovery, AnOverExposedClearSkysWideGlareIsTheSun) {
         EXPECT_TRUE(rep.sun_in_wide_glare);
         EXPECT_TRUE(rep.sun_restored);
         EXPECT_NEAR(rep.scale / k0, 1.0, 0.05);
-        auto horizontal_irradiance = [n](const SkyImage& sky) {
-            double e = 0;
-            for (int j = 0; j < n; ++j)
-                for (int i = 0; i < n; ++i) {
-                    Vec2 uv = fisheye::pixel_center_uv(i, j, n);
-                    double cos_theta = fisheye::direction_from_uv(double(uv.x()), double(uv.y())).y();
-                    e += luminance(sky.pixel(i, j)) * cos_theta * fisheye::pixel_solid_angle(i, j, n);
-                }
-            return e;
-        };
         EXPECT_NEAR(horizontal_irradiance(hdr) / horizontal_irradiance(s.truth), 1.0, 0.15);
     }
     // Grey cloud clipped over the sun and 30 degrees around, grey cloud beyond: no sun.
@@ -191,16 +184,6 @@ TEST(HdrRecovery, ASunGlareJoinedToClippedHorizonOrCloudIsStillTheSun) {
     const Vec3d sun = compute_sun_position(params.time, params.location).direction();
     cp.sun_direction = sun;
     const SkyImage truth = make_clear_sky(cp, n);
-    auto horizontal_irradiance = [n](const SkyImage& sky) {
-        double e = 0;
-        for (int j = 0; j < n; ++j)
-            for (int i = 0; i < n; ++i) {
-                const Vec2 uv = fisheye::pixel_center_uv(i, j, n);
-                const double cos_theta = fisheye::direction_from_uv(double(uv.x()), double(uv.y())).y();
-                e += luminance(sky.pixel(i, j)) * cos_theta * fisheye::pixel_solid_angle(i, j, n);
-            }
-        return e;
-    };
     const double e_truth = horizontal_irradiance(truth);
     // A bright cloud 4-16 degrees from the sun towards the zenith's side, joined to its glare.
     const Vec3d up = (Vec3d::UnitY() - sun.y() * sun).normalized();
