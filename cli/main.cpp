@@ -13,6 +13,7 @@
 #include "cli/exit_codes.h"
 #include "cli/options.h"
 #include "util/atomic_file.h"
+#include "util/child_process.h"
 #include "util/error.h"
 #include "util/progress.h"
 
@@ -21,6 +22,7 @@ namespace {
 // SIGINT/SIGTERM/SIGHUP: remove the output being written (nothing half-written stays; an animation's
 // frames written so far are kept and resume) and exit with kInterrupted.
 extern "C" void on_interrupt(int) {
+    dynsky::stop_active_child();  // ffmpeg, writing the temporary removed next
     dynsky::remove_active_temporary();
     const char message[] = "dynsky: interrupted\n";
     ssize_t ignored = ::write(2, message, sizeof message - 1);

@@ -55,7 +55,9 @@ std::string frame_list(const std::vector<int>& frames) {
 // timings.csv holds a line per frame, in frame order: a frame rendered again (a resumed run
 // repairing it) replaces its line (it was appended a second time). Rewritten whole each time
 // (atomic, checked).
-void record_timing(const std::string& path, int frame, const std::string& line, bool start_over) {
+// Frame `frame`'s row (none for -1) into the table at path, keeping the other rows of frames 0 ..
+// total - 1 (one per frame, in order).
+void record_timing(const std::string& path, int frame, const std::string& line, bool start_over, int total) {
     const std::string header = "frame,time_s,sky_ms,distribution_ms,render_ms,medium_steps_so_far\n";
     std::map<int, std::string> rows;
     if (!start_over) {
@@ -67,11 +69,12 @@ void record_timing(const std::string& path, int frame, const std::string& line, 
             for (std::string row; std::getline(in, row);) {
                 char* end = nullptr;
                 const long k = std::strtol(row.c_str(), &end, 10);
-                if (end != row.c_str() && *end == ',') rows[int(k)] = row + "\n";
+                // Rows of frames past this animation's last (an earlier, longer run's) are dropped.
+                if (end != row.c_str() && *end == ',' && k >= 0 && k < total) rows[int(k)] = row + "\n";
             }
         }
     }
-    rows[frame] = line;
+    if (frame >= 0) rows[frame] = line;
     std::string text = header;
     for (const auto& [k, row] : rows) text += row;
     write_file_atomic(path, text);
@@ -84,7 +87,7 @@ FrameSettings animation_frame_settings(const AnimationSettings& o, const std::st
     FrameSettings s = sky_timeline_settings(o.sky, o.model);  // as asked; the model and Delta t as resolved:
     s["model"] = model_name;
     s["dt"] = number(dt);
-    s["scene"] = describe_input(o.scene.scene);
+    s["scene"] = describe_scene_input(o.scene.scene);
     s["camera"] = std::to_string(o.scene.camera);
     s["ground_albedo"] = number(o.scene.ground_albedo);
     s["fps"] = number(o.fps);
@@ -244,8 +247,8 @@ AnimationReport render_animation(const AnimationSettings& o) {
                                         std::to_string(total - 1) +
                                         " are not complete with these settings; render them first");
         if (!o.no_video) {
-            make_video(o.out, "frame", o.fps, store.file("animation.mp4"), o.quiet);
-            make_video(o.out, "sky", o.fps, store.file("sky.mp4"), o.quiet);
+            make_video(o.out, "frame", total, o.fps, store.file("animation.mp4"), o.quiet);
+            make_video(o.out, "sky", total, o.fps, store.file("sky.mp4"), o.quiet);
         }
         make_contact_sheet(store, total, o.fps, store.file("contact_sheet.png"));
         if (!o.quiet) std::fprintf(stderr, "wrote %s\n", store.file("contact_sheet.png").c_str());
@@ -293,6 +296,9 @@ AnimationReport render_animation(const AnimationSettings& o) {
             SceneSpec spec = o.scene;
             spec.animation_time = animation_start + t;
             posed = animated ? pose_scene(spec, *animated, scene->path, aspect) : load_scene(spec, aspect, false);
+            // A file without cameras is framed once, on its first pose: framed on every pose, still
+            // objects drifted and changed size as others moved.
+            if (posed->scene.cameras.empty() && o.scene.look_at.empty()) posed->camera = scene->camera;
             posed_accel = std::make_unique<Accel>(posed->scene);
         }
         PathIntegrator integrator(posed_accel ? *posed_accel : *accel, light, render);
@@ -317,21 +323,25 @@ AnimationReport render_animation(const AnimationSettings& o) {
             meta.date_time = text;
         }
         meta.write_to(&image.metadata);
+        // The frame's timing row first: killed before its images are all written, the frame is
+        // rendered again and its row replaced; the other way round a kept frame lost its row.
+        std::ostringstream line;
+        line << k << ',' << t << ',' << sky_s * 1e3 << ',' << light.last_build_seconds() * 1e3 << ','
+             << result.stats.seconds * 1e3 << ',' << timeline.timings().medium_steps << '\n';
+        record_timing(timings, k, line.str(), timings_start_over, total);
+        timings_start_over = false;
         write_image(store.frame_exr(k), aovs.any() ? render_layers(result) : image);
         write_image(store.frame_png(k), tonemap_to_display(image, ev));
         write_image(store.sky_png(k), tonemap_to_display(sky_to_image(*sky), sky_ev));
         keep[size_t(k)] = 1;
 
         sum_sky += sky_s, sum_build += light.last_build_seconds(), sum_render += result.stats.seconds, ++rendered;
-        std::ostringstream line;
-        line << k << ',' << t << ',' << sky_s * 1e3 << ',' << light.last_build_seconds() * 1e3 << ','
-             << result.stats.seconds * 1e3 << ',' << timeline.timings().medium_steps << '\n';
-        record_timing(timings, k, line.str(), timings_start_over);
-        timings_start_over = false;
         if (!o.quiet)
             std::fprintf(stderr, "frame %d/%d t=%.3f s: sky %.1f ms, distribution %.1f ms, render %.1f ms\n", k,
                          total - 1, t, sky_s * 1e3, light.last_build_seconds() * 1e3, result.stats.seconds * 1e3);
     }
+    // An earlier, longer run's rows past this animation's last frame go (none rendered: no rewrite yet).
+    if (!farm_task && fs::exists(timings)) record_timing(timings, -1, "", false, total);
     if (!o.quiet) {
         std::fprintf(stderr, "%d frame(s) rendered, %d already complete (kept)\n", rendered, skipped);
         if (rendered > 0)
@@ -362,8 +372,8 @@ AnimationReport render_animation(const AnimationSettings& o) {
         return report;
     }
     if (!o.no_video) {
-        make_video(o.out, "frame", o.fps, store.file("animation.mp4"), o.quiet);
-        make_video(o.out, "sky", o.fps, store.file("sky.mp4"), o.quiet);
+        make_video(o.out, "frame", total, o.fps, store.file("animation.mp4"), o.quiet);
+        make_video(o.out, "sky", total, o.fps, store.file("sky.mp4"), o.quiet);
     }
     make_contact_sheet(store, total, o.fps, store.file("contact_sheet.png"));
     if (!o.quiet) std::fprintf(stderr, "wrote %s\n", store.file("contact_sheet.png").c_str());

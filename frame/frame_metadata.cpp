@@ -1,11 +1,16 @@
 #include "frame/frame_metadata.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "util/image.h"
 
 namespace dynsky {
 
@@ -78,6 +83,44 @@ std::string describe_settings_change(const FrameSettings& before, const FrameSet
     }
     if (more) out += " and " + std::to_string(more) + " more";
     return out;
+}
+
+std::string describe_scene_input(const std::string& scene) {
+    std::error_code ec;
+    if (!fs::is_regular_file(scene, ec) || file_extension(scene) != ".gltf") return describe_input(scene);
+    std::string s = describe_file(scene);
+    // The files its buffers and images name (percent-escapes decoded; data: URIs are in the JSON).
+    nlohmann::json j;
+    try {
+        std::ifstream f(scene);
+        j = nlohmann::json::parse(f);
+    } catch (const nlohmann::json::exception&) {
+        return s;  // the loader names what is wrong with it
+    }
+    auto decoded = [](const std::string& uri) {
+        std::string out;
+        for (size_t i = 0; i < uri.size(); ++i) {
+            if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit((unsigned char)uri[i + 1]) &&
+                std::isxdigit((unsigned char)uri[i + 2])) {
+                out += char(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
+                i += 2;
+            } else {
+                out += uri[i];
+            }
+        }
+        return out;
+    };
+    for (const char* key : {"buffers", "images"}) {
+        if (!j.contains(key) || !j[key].is_array()) continue;
+        for (const auto& item : j[key]) {
+            if (!item.is_object() || !item.contains("uri") || !item["uri"].is_string()) continue;
+            const std::string uri = item["uri"].get<std::string>();
+            if (uri.rfind("data:", 0) == 0) continue;
+            const fs::path file = fs::path(scene).parent_path() / decoded(uri);
+            if (fs::is_regular_file(file, ec)) s += "; " + describe_file(file);
+        }
+    }
+    return s;
 }
 
 std::string describe_input(const std::string& input) {

@@ -31,6 +31,10 @@ std::string describe_settings_change(const FrameSettings& before, const FrameSet
 // replaced file counts and a moved one does not; a folder as the list of its files so; anything
 // else (builtin, procedural:3, clear) as written.
 std::string describe_input(const std::string& input);
+// A scene as it enters the settings: a .gltf with the buffers and images its JSON names (a key moved
+// in Blender and exported again changes only the .bin: its frames were kept); anything else as
+// describe_input.
+std::string describe_scene_input(const std::string& scene);
 
 struct FrameMetadata {
     int frame = 0;            // k, from 0

@@ -21,12 +21,32 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// The folder's frame_NNNN.exr in frame order (four digits or more: frame 10000 is frame_10000.exr),
+// those of the first frame's settings only (frames of other settings are another run's: said, left
+// out).
 std::vector<std::string> frame_files(const std::string& dir) {
+    std::vector<std::pair<long, std::string>> found;
+    std::regex re("^frame_([0-9]{4,9})\\.exr$");
+    std::smatch m;
+    for (const auto& e : fs::directory_iterator(dir)) {
+        const std::string name = e.path().filename().string();
+        if (std::regex_match(name, m, re)) found.emplace_back(std::stol(m[1].str()), e.path().string());
+    }
+    std::sort(found.begin(), found.end());
     std::vector<std::string> out;
-    std::regex re("^frame_[0-9]{4}\\.exr$");
-    for (const auto& e : fs::directory_iterator(dir))
-        if (std::regex_match(e.path().filename().string(), re)) out.push_back(e.path().string());
-    std::sort(out.begin(), out.end());
+    if (found.empty()) return out;
+    const std::string hash = image_header_strings(found.front().second, {"dynsky:settings_hash"}).front();
+    std::vector<std::string> other;
+    for (const auto& [k, path] : found) {
+        if (!hash.empty() && image_header_strings(path, {"dynsky:settings_hash"}).front() != hash)
+            other.push_back(fs::path(path).filename().string());
+        else out.push_back(path);
+    }
+    if (!other.empty())
+        std::fprintf(stderr,
+                     "dynsky: note: %s: %zu frame(s) made with other settings than the first left out (%s%s: "
+                     "another run's)\n",
+                     dir.c_str(), other.size(), other.front().c_str(), other.size() > 1 ? ", ..." : "");
     return out;
 }
 

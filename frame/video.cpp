@@ -1,21 +1,21 @@
 #include "frame/video.h"
 
 #include <opencv2/imgproc.hpp>
-#include <sys/wait.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <vector>
 
 #include "util/atomic_file.h"
+#include "util/child_process.h"
 #include "util/error.h"
 #include "util/frame_names.h"
 #include "util/image.h"
-#include "util/shell.h"
 
 namespace dynsky {
 
@@ -56,22 +56,44 @@ std::string mp4_problem(const std::string& path) {
 
 }  // namespace
 
-void make_video(const std::string& dir, const std::string& prefix, double fps, const std::string& out, bool quiet) {
+void make_video(const std::string& dir, const std::string& prefix, int frames, double fps, const std::string& out,
+                bool quiet) {
     TemporaryFile tmp(out);
     std::string pattern = (fs::path(dir) / numbered_pattern(prefix, ".png")).string();
     char rate[32];
     std::snprintf(rate, sizeof rate, "%g", fps);
-    std::string cmd = "ffmpeg -y -loglevel error -framerate " + std::string(rate) + " -i " + shell_quote(pattern) +
-                      " -vf 'scale=trunc(iw/2)*2:trunc(ih/2)*2' -c:v libx264 -pix_fmt yuv420p -crf 18 " +
-                      shell_quote(tmp.path()) + " </dev/null";
-    int status = std::system(cmd.c_str());
-    if (status != 0) {
-        int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    // Frames 0 .. frames - 1 only: an earlier, longer run's frames after them in the folder are not this
+    // animation's (a 5 s animation was encoded as 20 s).
+    const ChildResult run = run_program({"ffmpeg",
+                                         "-y",
+                                         "-loglevel",
+                                         "error",
+                                         "-framerate",
+                                         rate,
+                                         "-start_number",
+                                         "0",
+                                         "-i",
+                                         pattern,
+                                         "-frames:v",
+                                         std::to_string(frames),
+                                         "-vf",
+                                         "scale=trunc(iw/2)*2:trunc(ih/2)*2",
+                                         "-c:v",
+                                         "libx264",
+                                         "-pix_fmt",
+                                         "yuv420p",
+                                         "-crf",
+                                         "18",
+                                         tmp.path()});
+    if (!run.started)
         throw_file_error(out, "could not write the video: ffmpeg " +
-                                  (code == 127 ? std::string("is not installed (--no-video skips the videos)")
-                                   : code >= 0 ? "failed (exit " + std::to_string(code) + ")"
-                                               : std::string("was killed")));
-    }
+                                  (run.spawn_error == ENOENT
+                                       ? std::string("is not installed (--no-video skips the videos)")
+                                       : "could not be started: " + std::string(std::strerror(run.spawn_error))));
+    if (!run.exited || run.exit_code != 0)
+        throw_file_error(out, "could not write the video: ffmpeg " +
+                                  (run.exited ? "failed (exit " + std::to_string(run.exit_code) + ")"
+                                              : std::string("was killed")));
     std::error_code ec;
     if (fs::file_size(tmp.path(), ec) > 0 && !ec)  // a missing or empty file: commit() says so
         if (std::string problem = mp4_problem(tmp.path()); !problem.empty())

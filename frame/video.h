@@ -8,11 +8,12 @@
 
 namespace dynsky {
 
-// PREFIX_NNNN.png of the folder at `fps` to `out` (H.264, yuv420p, even size), through a temporary
+// PREFIX_0000.png .. PREFIX_(frames - 1).png of the folder at `fps` to `out` (H.264, yuv420p, even size), through a temporary
 // name renamed when complete (util/atomic_file.h). Throws dynsky::Error naming out, leaving no
 // partial file, if ffmpeg is missing, fails, writes nothing or writes an incomplete MP4 (its boxes
 // do not tile the file, or the index is missing: ffmpeg exits 0 when the trailer's write fails).
-void make_video(const std::string& folder, const std::string& prefix, double fps, const std::string& out, bool quiet);
+void make_video(const std::string& folder, const std::string& prefix, int frames, double fps, const std::string& out,
+                bool quiet);
 
 // Up to 12 frames, evenly spaced from the first to the last, each 320 pixels wide, in a full grid
 // (no empty cells: up to 5 frames in one row; more in rows of 4, 3 or 5, whichever shows the most,

@@ -909,8 +909,11 @@ class GltfLoader {
             const size_t k = t <= tk.front() ? 0 : keys - 1;
             for (int c = 0; c < width; ++c) v[size_t(c)] = value(k, c);
         } else {
-            const size_t k = size_t(std::upper_bound(tk.begin(), tk.end(), float(t)) - tk.begin()) - 1;
-            const double d = double(tk[k + 1]) - tk[k], u = d > 0 ? (t - tk[k]) / d : 0;
+            // At most the last but one: a time a rounding under the last key (1/3 s against the float
+            // 0.33333334) found the last key and read past the samples.
+            const size_t k = std::min(size_t(std::upper_bound(tk.begin(), tk.end(), float(t)) - tk.begin()) - 1,
+                                      keys - 2);
+            const double d = double(tk[k + 1]) - tk[k], u = d > 0 ? std::clamp((t - tk[k]) / d, 0.0, 1.0) : 0;
             if (mode == "STEP") {
                 for (int c = 0; c < width; ++c) v[size_t(c)] = value(k, c);
             } else if (cubic) {
@@ -1696,11 +1699,18 @@ class GltfLoader {
     // Adds the morph targets' `attribute` displacements, weighted (glTF: base + sum w_i target_i).
     void add_morph_deltas(const tg::Primitive& p, const std::vector<double>& weights, const char* attribute,
                           const std::string& what, std::vector<Vec3>* values) const {
-        for (size_t t = 0; t < p.targets.size() && t < weights.size(); ++t) {
-            if (weights[t] == 0) continue;
+        for (size_t t = 0; t < p.targets.size(); ++t) {
             auto it = p.targets[t].find(attribute);
             if (it == p.targets[t].end()) continue;
             const std::string name = what + " morph target " + std::to_string(t) + " " + attribute;
+            // Every target's size checked, weighted or not: one whose weight an animation raised only
+            // later failed at that frame, after the frames before it were written.
+            if (it->second < 0 || size_t(it->second) >= model_.accessors.size())
+                fail(name + " refers to accessor " + std::to_string(it->second) + ", which does not exist");
+            if (model_.accessors[size_t(it->second)].count != values->size())
+                fail(name + " has " + std::to_string(model_.accessors[size_t(it->second)].count) +
+                     " elements but the primitive has " + std::to_string(values->size()) + " vertices");
+            if (t >= weights.size() || weights[t] == 0) continue;
             FloatArray d = read_floats(it->second, name, {TINYGLTF_TYPE_VEC3});
             if (d.count != values->size())
                 fail(name + " has " + std::to_string(d.count) + " elements but the primitive has " +

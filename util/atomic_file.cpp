@@ -32,6 +32,28 @@ int sync_path(const fs::path& p, int flags) {
     return err == EINVAL || err == EBADF ? 0 : err;
 }
 
+// Where an output named `target` is written: through symbolic links to the file they name (the
+// link kept, as `cp` and editors keep it); a device, FIFO or socket there is refused (renamed over,
+// /dev/full or a FIFO became a plain file and the write "succeeded").
+std::string output_target(const std::string& target) {
+    std::error_code ec;
+    fs::path p(target);
+    for (int hops = 0; hops < 40 && fs::is_symlink(fs::symlink_status(p, ec)); ++hops) {
+        const fs::path to = fs::read_symlink(p, ec);
+        if (ec) break;
+        p = to.is_absolute() ? to : p.parent_path() / to;
+    }
+    const fs::file_status st = fs::status(p, ec);
+    if (fs::exists(st) && !fs::is_regular_file(st) && !fs::is_directory(st))
+        throw_file_error(target, std::string("is a ") +
+                                     (fs::is_character_file(st) || fs::is_block_file(st) ? "device"
+                                      : fs::is_fifo(st)                                  ? "FIFO"
+                                                                                         : "special file") +
+                                     ", not a file: outputs are written whole and renamed into place, which "
+                                     "would replace it; give a file name");
+    return p.string();
+}
+
 void make_parent(const fs::path& target) {
     if (target.parent_path().empty()) return;
     std::error_code ec;
@@ -76,7 +98,7 @@ void remove_active_temporary() noexcept {
     if (g_active_set) ::unlink(g_active);
 }
 
-TemporaryFile::TemporaryFile(std::string target) : target_(std::move(target)), path_(temporary_path(target_)) {
+TemporaryFile::TemporaryFile(std::string target) : target_(output_target(target)), path_(temporary_path(target_)) {
     make_parent(fs::path(target_));
     registered_ = register_active(path_);
 }

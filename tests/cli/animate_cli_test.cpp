@@ -291,6 +291,41 @@ TEST(AnimateCli, FrameRangesEqualOneRun) {
     fs::remove_all(dir);
 }
 
+// A shorter animation rendered into the folder of a longer one: its videos hold its own frames
+// only (the 8 of the first run were encoded as well), and its timings.csv rows; frames numbered
+// from 10000 on count for `temporal` (it read only four-digit names).
+TEST(AnimateCli, AShorterRunEncodesItsOwnFramesOnly) {
+    std::string dir = test::temp_dir("animate_shorter");
+    const std::string out = dir + "/a";
+    ASSERT_EQ(test::run_command(animate(out)).exit_code, 0);
+    std::string with_video = animate(out, "--duration 0.5");
+    with_video.replace(with_video.find(" --no-video"), 11, "");
+    auto r = test::run_command(with_video);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    for (const char* video : {"/animation.mp4", "/sky.mp4"}) {
+        auto probe = test::run_command(
+            "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+            "stream=nb_read_frames -of default=noprint_wrappers=1:nokey=1 " +
+            out + video);
+        ASSERT_EQ(probe.exit_code, 0) << probe.output;
+        EXPECT_EQ(std::stoi(probe.output), 4) << video;
+    }
+    std::ifstream timings(out + "/timings.csv");
+    int rows = -1;
+    for (std::string line; std::getline(timings, line);) ++rows;
+    EXPECT_EQ(rows, 4);
+    const std::string big = dir + "/big";
+    r = test::run_command(std::string(DYNSKY_EXE) +
+                          " animate builtin --sky procedural:1 --model procedural --sky-res 16 --duration 1001 "
+                          "--fps 10 --res 8x8 --spp 1 --frames 9997-10001 --no-video -q --out " +
+                          big);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    r = test::run_command(std::string(DYNSKY_EXE) + " temporal " + big);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("frames: 5"), std::string::npos) << r.output;
+    fs::remove_all(dir);
+}
+
 std::string bytes_of(const std::string& path) {
     std::ifstream f(path, std::ios::binary);
     return std::string(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());

@@ -143,6 +143,31 @@ TEST(OutputsCli, FailedVideoFailsCleanly) {
     fs::remove_all(dir);
 }
 
+// Interrupted while ffmpeg encodes: dynsky stops it, removes the video's temporary and exits 3
+// (docs/exit-codes.md). Under std::system a kill -INT of dynsky was ignored until ffmpeg ended, and a
+// SIGTERM left ffmpeg running on with its temporary.
+TEST(OutputsCli, InterruptedWhileEncodingStopsTheEncoderAndLeavesNothing) {
+    const std::string dir = test::temp_dir("outputs_encode_interrupt");
+    const std::string anim = dir + "/anim", bin = dir + "/bin";
+    const std::string animate = kAnimate + anim + " --res 64x36 --spp 1";
+    ASSERT_EQ(test::run_command(kExe + animate + " --no-video").exit_code, 0);
+    fs::create_directories(bin);
+    // Starts its output and then takes its time, as a long encode does.
+    std::ofstream(bin + "/ffmpeg") << "#!/bin/sh\nfor a; do out=$a; done\nprintf 'half' > \"$out\"\nexec sleep 41.5\n";
+    fs::permissions(bin + "/ffmpeg", fs::perms::owner_all);
+    for (const char* sig : {"INT", "TERM"}) {
+        auto r =
+            test::run_command("PATH=" + bin + ":$PATH " + kExe + animate + " & p=$!; sleep 3; kill -" + sig +
+                              " $p; wait $p; echo \"rc=$?\"; sleep 0.5; pgrep -f 'sleep 41[.]5' || echo 'no encoder'");
+        EXPECT_NE(r.output.find("rc=3"), std::string::npos) << sig << ": " << r.output;
+        EXPECT_NE(r.output.find("no encoder"), std::string::npos) << sig << ": " << r.output;
+        EXPECT_FALSE(fs::exists(anim + "/animation.mp4")) << sig;
+        for (const auto& e : fs::directory_iterator(anim))
+            EXPECT_NE(e.path().filename().string().rfind(".tmp-", 0), 0u) << sig << ": " << e.path();
+    }
+    fs::remove_all(dir);
+}
+
 TEST(OutputsCli, OutputThatIsAnInputIsRefusedBeforeAnyWork) {
     const std::string dir = test::temp_dir("outputs_same");
     ASSERT_EQ(test::run_command(kExe +

@@ -310,6 +310,43 @@ TEST(Animation, PlayedSceneAnimationMovesTheScenePerFrame) {
     alone.out = dir + "/alone", alone.frames = "3";
     ASSERT_EQ(render_animation(alone).rendered, 1);
     EXPECT_TRUE(read_image(FrameStore(alone.out).frame_exr(3)).pixels == read_image(p.frame_exr(3)).pixels);
+
+    // A key moved and exported again changes only the .bin: its frames are rendered again, not kept.
+    const float back[] = {0, 0, 0, -10, 0, 0};
+    std::ofstream(dir + "/slide.bin", std::ios::binary | std::ios::trunc)
+        << bin.substr(0, 68) + std::string(reinterpret_cast<const char*>(back), sizeof back);
+    EXPECT_EQ(render_animation(played).rendered, 4) << "the frames of the old .bin were kept";
+
+    // Without a camera the view is framed once, on the first pose: a still, glowing quad keeps its
+    // place and size while the other slides away (framed on every pose, it shrank to a ninth).
+    std::ofstream(dir + "/nocam.gltf") << R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0,1]}],
+"extensionsUsed":["KHR_materials_emissive_strength"],
+"nodes":[{"mesh":0},{"mesh":1,"translation":[0,5,0]}],
+"meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"material":0}]},
+{"primitives":[{"attributes":{"POSITION":0},"indices":1,"material":1}]}],
+"materials":[{"pbrMetallicRoughness":{"baseColorFactor":[0.05,0.05,0.05,1],"metallicFactor":0}},
+{"emissiveFactor":[1,1,1],"extensions":{"KHR_materials_emissive_strength":{"emissiveStrength":1000}}}],
+"animations":[{"samplers":[{"input":2,"output":3}],"channels":[{"sampler":0,"target":{"node":0,"path":"translation"}}]}],
+"buffers":[{"uri":"slide.bin","byteLength":92}],
+"bufferViews":[{"buffer":0,"byteLength":48},{"buffer":0,"byteOffset":48,"byteLength":12},
+{"buffer":0,"byteOffset":60,"byteLength":8},{"buffer":0,"byteOffset":68,"byteLength":24}],
+"accessors":[{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[-2,-2,0],"max":[2,2,0]},
+{"bufferView":1,"componentType":5123,"count":6,"type":"SCALAR"},
+{"bufferView":2,"componentType":5126,"count":2,"type":"SCALAR","min":[0],"max":[1]},
+{"bufferView":3,"componentType":5126,"count":2,"type":"VEC3"}]})";
+    AnimationSettings framed = played;
+    framed.scene.scene = dir + "/nocam.gltf", framed.out = dir + "/nocam";
+    ASSERT_TRUE(render_animation(framed).complete);
+    auto glowing = [](const std::string& exr) {
+        const Image im = read_image(exr);
+        int count = 0;
+        for (int y = 0; y < im.height; ++y)
+            for (int x = 0; x < im.width; ++x) count += im.at(x, y, 1) > 100 && im.at(x, y, 1) < 1e5f;
+        return count;
+    };
+    const FrameStore f(framed.out);
+    ASSERT_GT(glowing(f.frame_exr(0)), 10);
+    EXPECT_EQ(glowing(f.frame_exr(3)), glowing(f.frame_exr(0)));
     fs::remove_all(dir);
 }
 

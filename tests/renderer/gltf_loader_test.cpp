@@ -1196,6 +1196,17 @@ TEST(GltfLoader, AnimationsArePosedAtTheTimeAsked) {
     AnimatedGltf animated(path);
     for (double t : {1.0, 50.0, 0.0, 0.25})
         expect_same_scene(animated.pose(t), load_gltf(path, nullptr, t), "at " + std::to_string(t) + " s");
+    // A frame a rounding under the last key (24 fps, the key at Blender's frame 8: t = 1/3 against
+    // the float 0.33333334): the last key's value, read within the samples (it read past them; the
+    // sanitized suite catches that).
+    int third = g.accessor(g.view(std::vector<float>{0, 1.0f / 3.0f}), kFloat, 2, "SCALAR");
+    const std::string last_key =
+        g.write(dir, "last_key",
+                "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[" + mesh +
+                    "],\"animations\":[{\"samplers\":[" + sampler(third, moves, "LINEAR") + "," +
+                    sampler(third, spline, "CUBICSPLINE") + "],\"channels\":[" + channel(0, 0, "translation") + "," +
+                    channel(1, 0, "scale") + "]}]");
+    EXPECT_LT((corner(load_gltf(last_key, nullptr, 1.0 / 3.0), 0) - Vec3(7, 0, 0)).norm(), 1e-3f);
     fs::remove_all(dir);
 }
 
@@ -1457,6 +1468,17 @@ TEST(GltfLoader, MorphTargetsAreAppliedWithTheirWeights) {
         EXPECT_LT((corner - expected).norm(), 1e-5f) << k << ": " << corner.transpose();
     }
     EXPECT_FALSE(has_warning_containing(s, "morph")) << "applied, not ignored";
+    // A target of the wrong size is refused at load even at weight 0 (an animation raising its
+    // weight later failed at that frame, after the frames before it were written).
+    const int short_target = g.accessor(g.view(std::vector<float>{0, 0, 1, 0, 0, 1, 0, 0, 1}), kFloat, 3, "VEC3");
+    const std::string bad = "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) +
+                            "},\"indices\":" + std::to_string(idx) +
+                            ",\"targets\":[{\"POSITION\":" + std::to_string(short_target) + "}]}],\"weights\":[0]}";
+    const std::string e = load_error(
+        g.write(dir, "morph_short",
+                "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[" + bad + "]"));
+    EXPECT_NE(e.find("morph target 0 POSITION has 3 elements but the primitive has 4 vertices"), std::string::npos)
+        << e;
     fs::remove_all(dir);
 }
 

@@ -7,11 +7,13 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <random>
 
 #include "tests/test_support.h"
@@ -96,6 +98,29 @@ TEST(AtomicFile, WritesExactBytesAndEmptyFiles) {
     write_file_atomic(dir + "/empty.csv", "");
     EXPECT_EQ(fs::file_size(dir + "/empty.csv"), 0u);
     EXPECT_THROW(write_file_atomic(dir + "/empty.csv/inside", "x"), Error);  // a file is no folder
+    fs::remove_all(dir);
+}
+
+// An output named by a symbolic link is written to the file the link names (the link kept); a FIFO
+// (or a device) in its place is refused naming it, not replaced by a plain file.
+TEST(AtomicFile, OutputsThroughLinksAndOverSpecialFiles) {
+    const std::string dir = test::temp_dir("atomic_special");
+    write_file_atomic(dir + "/real.csv", "old\n");
+    fs::create_symlink("real.csv", dir + "/link.csv");
+    write_file_atomic(dir + "/link.csv", "new\n");
+    EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dir + "/link.csv")));
+    std::ifstream f(dir + "/real.csv");
+    std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(text, "new\n");
+    ASSERT_EQ(::mkfifo((dir + "/pipe.csv").c_str(), 0600), 0);
+    try {
+        write_file_atomic(dir + "/pipe.csv", "x\n");
+        FAIL() << "a FIFO was replaced";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("pipe.csv"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("is a FIFO"), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(fs::is_fifo(fs::status(dir + "/pipe.csv")));
     fs::remove_all(dir);
 }
 

@@ -1,0 +1,26 @@
+// Another program run to completion (ffmpeg for the videos): started directly (no shell), its
+// standard input from /dev/null, waited for. While it runs it is the active child: an interrupt of
+// dynsky (cli/main.cpp: SIGINT, SIGTERM, SIGHUP) stops it too, so no orphan goes on writing.
+// (std::system ignored SIGINT in dynsky while the child ran: a kill -INT of dynsky did nothing, and
+// a SIGTERM left ffmpeg running with its temporary.)
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace dynsky {
+
+struct ChildResult {
+    bool started = false;  // false: it could not be run (spawn_error says why: ENOENT, not installed)
+    int spawn_error = 0;
+    bool exited = false;  // true: it exited with exit_code; false: a signal ended it
+    int exit_code = -1;
+};
+
+// Runs argv[0] (looked up on PATH) with argv[1..]; returns when it has ended.
+ChildResult run_program(const std::vector<std::string>& argv);
+
+// Async-signal-safe: sends SIGTERM to the active child, if any (called by the interrupt handler).
+void stop_active_child() noexcept;
+
+}  // namespace dynsky
