@@ -21,6 +21,14 @@ def rows_of(name):
         return list(csv.DictReader(f))
 
 
+# One colour per sampler in every chart (20 distinct: with matplotlib's 10 of its cycle, uniform and
+# cdf+mis, alias and sun+cdf+mis, ... shared one in the failure bars).
+_names = set()
+for _file in ("accuracy_summary.csv", "rebuild.csv", "failures.csv"):
+    _names.update(r.get("sampler", "") for r in rows_of(_file))
+COLOUR = {n: plt.get_cmap("tab20")(i % 20) for i, n in enumerate(sorted(n for n in _names if n and n != "floor"))}
+COLOUR["floor"] = "k"
+
 # Error against spp and against modelled frame time, mean and one standard deviation over seeds.
 groups = {}
 for r in rows_of("accuracy_summary.csv"):
@@ -33,9 +41,11 @@ for (scene, sky), by in groups.items():
         e = [float(r["trimmed_rmse"]) for r in rs]
         sd = [float(r["trimmed_rmse_std"]) for r in rs]
         t = [1e3 * float(r["seconds"]) for r in rs]
-        axes[0].errorbar([float(r["spp"]) for r in rs], e, yerr=sd, fmt=style, marker="o", ms=3, capsize=2, label=name)
-        axes[1].errorbar(t, e, yerr=sd, fmt=style, marker="o", ms=3, capsize=2, label=name)
-        axes[2].plot(t, [float(r["rel_mse"]) for r in rs], style, marker="o", ms=3, label=name)
+        c = COLOUR.get(name)
+        axes[0].errorbar([float(r["spp"]) for r in rs], e, yerr=sd, fmt=style, marker="o", ms=3, capsize=2, label=name,
+                         color=c)
+        axes[1].errorbar(t, e, yerr=sd, fmt=style, marker="o", ms=3, capsize=2, label=name, color=c)
+        axes[2].plot(t, [float(r["rel_mse"]) for r in rs], style, marker="o", ms=3, label=name, color=c)
     axes[0].set_xlabel("samples per pixel")
     axes[1].set_xlabel("modelled frame time (ms): rebuild + spp x ms per spp")
     axes[2].set_xlabel("modelled frame time (ms)")
@@ -61,8 +71,9 @@ if rows:
                 by.setdefault(r["sampler"], []).append(r)
         for name, rs in sorted(by.items()):
             rs.sort(key=lambda r: int(r["n"]))
-            style = "k:" if name == "floor" else "-"
-            axes[k].loglog([int(r["n"]) for r in rs], [float(r["ms"]) for r in rs], style, marker="o", ms=3, label=name)
+            style = ":" if name == "floor" else "-"
+            axes[k].loglog([int(r["n"]) for r in rs], [float(r["ms"]) for r in rs], style, marker="o", ms=3, label=name,
+                           color=COLOUR.get(name))
         axes[k].set_title("rebuild, %s thread(s)" % threads)
         axes[k].set_xlabel("sky resolution N")
         axes[k].set_ylabel("ms")
@@ -81,8 +92,10 @@ if rows:
     for i, name in enumerate(names):
         vals = {r["case"]: r for r in rows if r["sampler"] == name}
         xs = [c + i * w for c in range(len(cases))]
-        axes[0].bar(xs, [float(vals[c]["rel_mse"]) if c in vals else 0 for c in cases], w, label=name)
-        axes[1].bar(xs, [float(vals[c]["firefly"]) if c in vals else 0 for c in cases], w, label=name)
+        axes[0].bar(xs, [float(vals[c]["rel_mse"]) if c in vals else 0 for c in cases], w, label=name,
+                    color=COLOUR.get(name))
+        axes[1].bar(xs, [float(vals[c]["firefly"]) if c in vals else 0 for c in cases], w, label=name,
+                    color=COLOUR.get(name))
     for a, t in zip(axes, ["relative MSE (log)", "share of squared error in brightest 0.1% pixels"]):
         a.set_xticks([c + 0.4 for c in range(len(cases))])
         a.set_xticklabels(cases, rotation=30, fontsize=7)

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <string_view>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -215,14 +216,27 @@ std::string fmt(const char* f, double v) {
     return buf;
 }
 
-// Reference image cache: EXR per (scene, sky, size, spp, depth).
+// The sampler references are rendered with: the study's own least noisy under a sun (sun+cdf+mis, the
+// noisiest, made the failure table measure its reference's noise: every sampler 179-183 on a 1e6 sun).
+const char* const kReferenceSampler = "cdf+mis";
+
+// A sky's pixels as a key for the cache (the same name may hold another photograph or file).
+std::string sky_content_key(const SkyImage& sky) {
+    const std::string_view bytes(reinterpret_cast<const char*>(sky.rgb.data()), sky.rgb.size() * sizeof(float));
+    char buf[24];
+    std::snprintf(buf, sizeof buf, "%016zx", std::hash<std::string_view>{}(bytes));
+    return buf;
+}
+
+// Reference image cache: EXR per (scene, sky and its pixels, size, spp, depth, sampler).
 Image reference(const Accel& accel, const NamedScene& sc, const NamedSky& sky, int w, int h, int spp, int depth,
                 const fs::path& cache) {
     fs::path file = cache / (sc.name + "_" + sky.name + "_" + std::to_string(w) + "x" + std::to_string(h) + "_" +
                              std::to_string(spp) + "spp_d" + std::to_string(depth) + "_n" +
-                             std::to_string(sky.sky->resolution) + ".exr");
+                             std::to_string(sky.sky->resolution) + "_" + sky_content_key(*sky.sky) + "_" +
+                             kReferenceSampler + ".exr");
     if (fs::exists(file)) return read_image(file.string());
-    EnvLight light(sky.sky, 0.3f, parse_sky_sampler("sun+cdf+mis"));
+    EnvLight light(sky.sky, 0.3f, parse_sky_sampler(kReferenceSampler));
     Image img = render(accel, light, sc.camera, w, h, spp, 12345, depth).color;
     write_image(file.string(), img);
     return img;
@@ -278,7 +292,7 @@ int run_sampling_study(const SamplingStudyOptions& o) {
     // The report and cache folders must not be, or lie in, the shared data the study reads.
     check_outputs_are_not_inputs({o.out, o.cache}, {o.shared});
     fs::path out(o.out);
-    fs::create_directories(out);
+    const OutputFolder out_folder(o.out);  // removed again if the study fails before writing anything
     fs::path cache = o.cache.empty() ? out / "cache" : fs::path(o.cache);
     std::string notes;
 
@@ -295,7 +309,6 @@ int run_sampling_study(const SamplingStudyOptions& o) {
         notes += "- plain cdf (the baseline of every speed-up) was not selected: no speed-ups\n";
     const bool run_accuracy = selected(o.parts, "accuracy"), run_rebuild = selected(o.parts, "rebuild"),
                run_failures = selected(o.parts, "failures");
-    if (run_accuracy) fs::create_directories(cache);
 
     // Skies serve the accuracy part, scenes also the failure cases: neither is made for others.
     std::vector<NamedSky> skies;
@@ -309,10 +322,14 @@ int run_sampling_study(const SamplingStudyOptions& o) {
         scenes = make_scenes(o, float(w) / h, &notes);
         // Nothing to measure is an error, not an empty report.
         if (scenes.empty())
-            throw Error("--scenes: none of the selected scenes could be loaded (" + o.shared + "/scenes missing?):\n" +
-                        notes);
+            throw_file_error(o.shared,
+                             "none of the selected scenes (--scenes) could be loaded (its scenes/ missing?):\n" +
+                                 notes);
     }
-    if (run_accuracy && skies.empty()) throw Error("--skies: none of the selected skies could be made:\n" + notes);
+    // An input missing or bad (exit 1), not a usage error; nothing written yet.
+    if (run_accuracy && skies.empty())
+        throw_file_error(o.shared, "none of the selected skies (--skies) could be made:\n" + notes);
+    if (run_accuracy) fs::create_directories(cache);
 
     // ---- Accuracy against time ----
     std::vector<Run> runs;
@@ -346,7 +363,7 @@ int run_sampling_study(const SamplingStudyOptions& o) {
                 // that is stopped resumes at the first unfinished case: no finished work is lost.
                 std::string key = sc.name + "_" + sky.name + "_" + std::to_string(w) + "x" + std::to_string(h) + "_d" +
                                   std::to_string(depth) + "_n" + std::to_string(sky_n) + "_s" + std::to_string(seeds) +
-                                  "_spp";
+                                  "_" + sky_content_key(*sky.sky) + "_" + kReferenceSampler + "_spp";
                 for (int spp : spps) key += "-" + std::to_string(spp);
                 std::string sampler_list;
                 for (const std::string& name : samplers) sampler_list += name + ";";
@@ -618,8 +635,8 @@ int run_sampling_study(const SamplingStudyOptions& o) {
         cases.push_back({"all_black", "", std::make_shared<SkyImage>(n)});
         for (const NamedSky& c : cases) {
             // Reference: the light with NaNs removed is what every sampler must converge to.
-            EnvLight ref_light(c.sky, 0.3f, parse_sky_sampler("sun+cdf+mis"));
-            Image ref = render(accel, ref_light, sc.camera, w, h, ref_spp / 2, 4321, depth).color;
+            EnvLight ref_light(c.sky, 0.3f, parse_sky_sampler(kReferenceSampler));
+            Image ref = render(accel, ref_light, sc.camera, w, h, ref_spp, 4321, depth).color;
             for (const std::string& name : samplers) {
                 EnvLight light(c.sky, 0.3f, parse_sky_sampler(name));
                 Image img = render(accel, light, sc.camera, w, h, spp, 7, depth).color;
@@ -642,7 +659,7 @@ int run_sampling_study(const SamplingStudyOptions& o) {
     if (rc != 0) notes += "- chart script failed (exit " + std::to_string(rc) + "); tables are complete\n";
 
     // ---- Recommendation: fastest median time to plain cdf's error over all cases ----
-    auto med = [](std::vector<double> v) { return v.empty() ? 0.0 : median(std::move(v)); };
+    auto med = [](std::vector<double> v) { return v.empty() ? 0.0 : middle_mean(std::move(v)); };
     std::string best;
     double best_speed = 0;
     for (const auto& [name, v] : speedups)
@@ -664,8 +681,8 @@ int run_sampling_study(const SamplingStudyOptions& o) {
        << "Produced by `" << command << "` in " << fmt("%.0f", seconds_since(start)) << " s.\n\n"
        << "Machine: " << machine_description() << ".\n\n"
        << "Settings: sky " << sky_n << "x" << sky_n << ", image " << w << "x" << h << ", max depth " << depth << ", "
-       << seeds << " seeds per point, reference " << ref_spp << " spp (sun+cdf+mis, cached in " << cache.string()
-       << "), MIS (power heuristic) throughout"
+       << seeds << " seeds per point, reference " << ref_spp << " spp (" << kReferenceSampler << ", cached in "
+       << cache.string() << "), MIS (power heuristic) throughout"
        << (run_accuracy || run_failures ? "" : " (accuracy and failures not run)") << ".\n\n";
     if (run_accuracy) {
         md << "## Recommendation\n\n"
@@ -725,8 +742,8 @@ int run_sampling_study(const SamplingStudyOptions& o) {
            << per_call.str() << "\n";
     if (run_failures)
         md << "## Failure cases\n\n"
-           << failure_scene << " scene, " << w << "x" << h << ", 128x128 skies; reference " << ref_spp / 2
-           << " spp with sun+cdf+mis. "
+           << failure_scene << " scene, " << w << "x" << h << ", 128x128 skies; reference " << ref_spp << " spp with "
+           << kReferenceSampler << ". "
            << "Firefly share: fraction of the squared error held by the brightest 0.1% of pixels.\n\n"
            << fl.str() << "\n![failures](failures.png)\n\n";
     if (!notes.empty()) md << "## Notes\n\n" << notes << "\n";

@@ -26,6 +26,15 @@ T median(std::vector<T> v) {
     std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
     return v[v.size() / 2];
 }
+// The median as reports give it: the middle value, the mean of the two middle ones for an even
+// count (median() is the upper of them: a rank, for robust estimates inside the code).
+inline double middle_mean(std::vector<double> v) {
+    const size_t n = v.size();
+    std::nth_element(v.begin(), v.begin() + long(n / 2), v.end());
+    const double upper = v[n / 2];
+    if (n % 2 == 1) return upper;
+    return 0.5 * (upper + *std::max_element(v.begin(), v.begin() + long(n / 2)));
+}
 template <typename T>
 T quantile(std::vector<T> v, double q) {
     const size_t k = size_t(q * double(v.size() - 1));

@@ -50,6 +50,14 @@ TEST(BenchSamplingCli, BadSelectionsFail) {
         EXPECT_NE(r.exit_code, 0) << bad << ": " << r.output;
         EXPECT_FALSE(fs::exists(dir + "/x")) << bad << ": nothing may be written";
     }
+    // A data folder without the scenes: an input missing (exit 1, naming it), not a usage error,
+    // and no empty report or cache folder left behind.
+    auto r = test::run_command(std::string(DYNSKY_EXE) +
+                               " bench sampling --quick --parts accuracy --skies clear --scenes diffuse --shared " +
+                               dir + "/nowhere --out " + dir + "/y 2>&1");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find(dir + "/nowhere"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/y")) << r.output;
     fs::remove_all(dir);
 }
 
