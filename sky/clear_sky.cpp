@@ -39,7 +39,9 @@ ClearSkyModel::ClearSkyModel(const ClearSkyParams& params, bool warn)
       model_sun_(raise_to_horizon(sun_)),
       clamped_(sun_.y() < 0),
       model_(params.turbidity, params.ground_albedo, model_elevation(sun_)) {
-    if (warn && clamped_) std::fprintf(stderr, "dynsky: warning: %s\n", clamp_warning().c_str());
+    // Said once per run: compare and animate make a clear sky per frame (the same line 4-5 times).
+    static std::atomic<bool> said{false};
+    if (warn && clamped_ && !said.exchange(true)) std::fprintf(stderr, "dynsky: warning: %s\n", clamp_warning().c_str());
 }
 
 std::string ClearSkyModel::clamp_warning() const {
