@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "util/image.h"
+#include "util/parse.h"
 
 namespace dynsky {
 
@@ -97,26 +98,13 @@ std::string describe_scene_input(const std::string& scene) {
     } catch (const nlohmann::json::exception&) {
         return s;  // the loader names what is wrong with it
     }
-    auto decoded = [](const std::string& uri) {
-        std::string out;
-        for (size_t i = 0; i < uri.size(); ++i) {
-            if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit((unsigned char)uri[i + 1]) &&
-                std::isxdigit((unsigned char)uri[i + 2])) {
-                out += char(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
-                i += 2;
-            } else {
-                out += uri[i];
-            }
-        }
-        return out;
-    };
     for (const char* key : {"buffers", "images"}) {
         if (!j.contains(key) || !j[key].is_array()) continue;
         for (const auto& item : j[key]) {
             if (!item.is_object() || !item.contains("uri") || !item["uri"].is_string()) continue;
             const std::string uri = item["uri"].get<std::string>();
             if (uri.rfind("data:", 0) == 0) continue;
-            const fs::path file = fs::path(scene).parent_path() / decoded(uri);
+            const fs::path file = fs::path(scene).parent_path() / percent_decoded(uri);
             if (fs::is_regular_file(file, ec)) s += "; " + describe_file(file);
         }
     }

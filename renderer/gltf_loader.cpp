@@ -134,21 +134,6 @@ size_t json_depth(const char* text, size_t size) {
     return deepest;
 }
 
-// %XX escapes decoded, as tinygltf decodes URIs before opening them.
-std::string percent_decoded(const std::string& uri) {
-    std::string out;
-    for (size_t i = 0; i < uri.size(); ++i) {
-        if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit((unsigned char)uri[i + 1]) &&
-            std::isxdigit((unsigned char)uri[i + 2])) {
-            out += char(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
-            i += 2;
-        } else {
-            out += uri[i];
-        }
-    }
-    return out;
-}
-
 // The size an encoded image's header declares: a PNG's IHDR read directly (stb gives up on
 // headers beyond its own limit, which then went unchecked to libpng: a 16385^2 PNG of zeros took
 // 5.4 GB), anything else through stb. False when it cannot tell.

@@ -1,5 +1,7 @@
 #include "util/parse.h"
 
+#include <cctype>
+
 #include <algorithm>
 #include <cstdio>
 #include <regex>
@@ -57,6 +59,20 @@ void parse_frame_size(const std::string& text, int* w, int* h, const std::string
         return std::stoi(digits);
     };
     *w = side(m[1]), *h = side(m[2]);
+}
+
+std::string percent_decoded(const std::string& uri) {
+    std::string out;
+    for (size_t i = 0; i < uri.size(); ++i) {
+        if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit((unsigned char)uri[i + 1]) &&
+            std::isxdigit((unsigned char)uri[i + 2])) {
+            out += char(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
+            i += 2;
+        } else {
+            out += uri[i];
+        }
+    }
+    return out;
 }
 
 }  // namespace dynsky

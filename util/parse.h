@@ -21,4 +21,8 @@ void parse_frame_size(const std::string& text, int* w, int* h, const std::string
 // A number for a message, printf's %g with `significant` digits: 1e+35, 0.5, 128.
 std::string number_text(double v, int significant = 6);
 
+// A URI's %XX escapes decoded (as tinygltf decodes a glTF's buffer and image URIs before opening
+// them); everything else as written.
+std::string percent_decoded(const std::string& uri);
+
 }  // namespace dynsky

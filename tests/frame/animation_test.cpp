@@ -265,6 +265,18 @@ TEST(FrameStore, FrameRanges) {
 // --play-anim: a quad in front of a fixed glTF camera slides out of view over one second (its
 // node's translation animated, LINEAR); played, frame 3 (t = 0.75 s) sees the sky where frame 0 saw
 // the quad; not played, both see the quad; rendering frame 3 alone poses it the same.
+// The end of the test scenes' glTF: node 0 slides along +x over a second (slide.bin: the quad, its
+// indices, key times and translations), and where its data lie.
+const char* const kSlideTail =
+    R"("animations":[{"samplers":[{"input":2,"output":3}],"channels":[{"sampler":0,"target":{"node":0,"path":"translation"}}]}],
+"buffers":[{"uri":"slide.bin","byteLength":92}],
+"bufferViews":[{"buffer":0,"byteLength":48},{"buffer":0,"byteOffset":48,"byteLength":12},
+{"buffer":0,"byteOffset":60,"byteLength":8},{"buffer":0,"byteOffset":68,"byteLength":24}],
+"accessors":[{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[-2,-2,0],"max":[2,2,0]},
+{"bufferView":1,"componentType":5123,"count":6,"type":"SCALAR"},
+{"bufferView":2,"componentType":5126,"count":2,"type":"SCALAR","min":[0],"max":[1]},
+{"bufferView":3,"componentType":5126,"count":2,"type":"VEC3"}]})";
+
 TEST(Animation, PlayedSceneAnimationMovesTheScenePerFrame) {
     const std::string dir = test::temp_dir("play_anim");
     // Buffer: the quad (4 x VEC3, 48 bytes), its indices (6 x uint16, 12), key times (2 floats, 8),
@@ -281,15 +293,8 @@ TEST(Animation, PlayedSceneAnimationMovesTheScenePerFrame) {
 "nodes":[{"mesh":0},{"camera":0,"translation":[0,0,4]}],
 "cameras":[{"type":"perspective","perspective":{"yfov":0.6,"znear":0.1}}],
 "meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"material":0}]}],
-"materials":[{"pbrMetallicRoughness":{"baseColorFactor":[0.05,0.05,0.05,1],"metallicFactor":0}}],
-"animations":[{"samplers":[{"input":2,"output":3}],"channels":[{"sampler":0,"target":{"node":0,"path":"translation"}}]}],
-"buffers":[{"uri":"slide.bin","byteLength":92}],
-"bufferViews":[{"buffer":0,"byteLength":48},{"buffer":0,"byteOffset":48,"byteLength":12},
-{"buffer":0,"byteOffset":60,"byteLength":8},{"buffer":0,"byteOffset":68,"byteLength":24}],
-"accessors":[{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[-2,-2,0],"max":[2,2,0]},
-{"bufferView":1,"componentType":5123,"count":6,"type":"SCALAR"},
-{"bufferView":2,"componentType":5126,"count":2,"type":"SCALAR","min":[0],"max":[1]},
-{"bufferView":3,"componentType":5126,"count":2,"type":"VEC3"}]})";
+"materials":[{"pbrMetallicRoughness":{"baseColorFactor":[0.05,0.05,0.05,1],"metallicFactor":0}}],)"
+                                       << kSlideTail;
     auto centre = [](const std::string& exr) {
         const Image im = read_image(exr);
         return im.at(im.width / 2, im.height / 2, 1);
@@ -325,15 +330,8 @@ TEST(Animation, PlayedSceneAnimationMovesTheScenePerFrame) {
 "meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"material":0}]},
 {"primitives":[{"attributes":{"POSITION":0},"indices":1,"material":1}]}],
 "materials":[{"pbrMetallicRoughness":{"baseColorFactor":[0.05,0.05,0.05,1],"metallicFactor":0}},
-{"emissiveFactor":[1,1,1],"extensions":{"KHR_materials_emissive_strength":{"emissiveStrength":1000}}}],
-"animations":[{"samplers":[{"input":2,"output":3}],"channels":[{"sampler":0,"target":{"node":0,"path":"translation"}}]}],
-"buffers":[{"uri":"slide.bin","byteLength":92}],
-"bufferViews":[{"buffer":0,"byteLength":48},{"buffer":0,"byteOffset":48,"byteLength":12},
-{"buffer":0,"byteOffset":60,"byteLength":8},{"buffer":0,"byteOffset":68,"byteLength":24}],
-"accessors":[{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[-2,-2,0],"max":[2,2,0]},
-{"bufferView":1,"componentType":5123,"count":6,"type":"SCALAR"},
-{"bufferView":2,"componentType":5126,"count":2,"type":"SCALAR","min":[0],"max":[1]},
-{"bufferView":3,"componentType":5126,"count":2,"type":"VEC3"}]})";
+{"emissiveFactor":[1,1,1],"extensions":{"KHR_materials_emissive_strength":{"emissiveStrength":1000}}}],)"
+                                       << kSlideTail;
     AnimationSettings framed = played;
     framed.scene.scene = dir + "/nocam.gltf", framed.out = dir + "/nocam";
     ASSERT_TRUE(render_animation(framed).complete);
