@@ -74,23 +74,34 @@ std::vector<double> adaptive_error_estimates(int width, int height, const std::v
     const size_t count = size_t(width) * height;
     if (n.size() != count || lum_sum.size() != count || lum_sum2.size() != count)
         throw Error("adaptive_error_estimates: the statistics are not width x height");
-    // Summed-area tables of each pixel's mean and sample variance (one row and column of zeros first).
-    const size_t sw = size_t(width) + 1;
-    std::vector<double> mean_table(sw * (height + 1), 0.0), var_table(sw * (height + 1), 0.0);
-    for (int y = 0; y < height; ++y)
-        for (int x = 0; x < width; ++x) {
-            const size_t p = size_t(y) * width + x;
-            const int k = n[p];
-            const double mean = k > 0 ? lum_sum[p] / k : 0.0;
-            const double var = k > 1 ? std::max(0.0, (lum_sum2[p] / k - mean * mean) * (double(k) / (k - 1))) : 0.0;
-            const size_t t = size_t(y + 1) * sw + x + 1;
-            mean_table[t] = mean + mean_table[t - 1] + mean_table[t - sw] - mean_table[t - sw - 1];
-            var_table[t] = var + var_table[t - 1] + var_table[t - sw] - var_table[t - sw - 1];
-        }
-    auto box = [&](const std::vector<double>& table, int x0, int y0, int x1, int y1) {
-        return table[size_t(y1) * sw + x1] - table[size_t(y0) * sw + x1] - table[size_t(y1) * sw + x0] +
-               table[size_t(y0) * sw + x0];
+    // Each pixel's mean and sample variance, then their sums over the box, row then column, each
+    // summed afresh (a running or summed-area table would carry a sun pixel's 1e14 into the
+    // differences of dark boxes far from it).
+    std::vector<double> mean(count), var(count);
+    for (size_t p = 0; p < count; ++p) {
+        const int k = n[p];
+        mean[p] = k > 0 ? lum_sum[p] / k : 0.0;
+        var[p] = k > 1 ? std::max(0.0, (lum_sum2[p] / k - mean[p] * mean[p]) * (double(k) / (k - 1))) : 0.0;
+    }
+    auto box_sum = [&](const std::vector<double>& v) {
+        std::vector<double> rows(count), out(count);
+        for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x) {
+                double sum = 0;
+                for (int i = std::max(0, x - radius); i < std::min(width, x + radius + 1); ++i)
+                    sum += v[size_t(y) * width + i];
+                rows[size_t(y) * width + x] = sum;
+            }
+        for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x) {
+                double sum = 0;
+                for (int j = std::max(0, y - radius); j < std::min(height, y + radius + 1); ++j)
+                    sum += rows[size_t(j) * width + x];
+                out[size_t(y) * width + x] = sum;
+            }
+        return out;
     };
+    const std::vector<double> mean_sum = box_sum(mean), var_sum = box_sum(var);
     std::vector<double> out(count);
     for (int y = 0; y < height; ++y)
         for (int x = 0; x < width; ++x) {
@@ -98,12 +109,11 @@ std::vector<double> adaptive_error_estimates(int width, int height, const std::v
             const int x0 = std::max(0, x - radius), x1 = std::min(width, x + radius + 1);
             const int y0 = std::max(0, y - radius), y1 = std::min(height, y + radius + 1);
             const double pixels = double(x1 - x0) * (y1 - y0);
-            const double mean = std::max(0.0, box(mean_table, x0, y0, x1, y1)) / pixels;
-            const double var = std::max(0.0, box(var_table, x0, y0, x1, y1)) / pixels;
+            const double m = mean_sum[p] / pixels, v = var_sum[p] / pixels;
             double around = 0.0;
             if (n[p] < 2) around = std::numeric_limits<double>::infinity();
-            else if (mean > 0) around = std::sqrt(var / n[p]) / mean;
-            else if (var > 0) around = std::numeric_limits<double>::infinity();
+            else if (m > 0) around = std::sqrt(v / n[p]) / m;
+            else if (v > 0) around = std::numeric_limits<double>::infinity();
             out[p] = std::max(pixel_relative_error(n[p], lum_sum[p], lum_sum2[p]), around);
         }
     return out;

@@ -288,6 +288,14 @@ TEST(AdaptiveSampling, NeighbourhoodEstimateOfKnownStatistics) {
     EXPECT_EQ(e[0], 0.0);  // two pixels away, outside the radius
     EXPECT_GE(e[12], pixel_relative_error(16, 50, 2500));
     EXPECT_TRUE(std::isinf(adaptive_error_estimates(1, 1, {1}, {1.0}, {1.0}, 4)[0]));  // one sample says nothing
+    // A sun pixel's enormous variance stays in its own neighbourhood: flat pixels far along the row
+    // keep an estimate of exactly 0 (summed over the whole row, its 1e14 left a residue everywhere).
+    std::vector<int> row_n(40, 16);
+    std::vector<double> row_sum(40, 16.0), row_sum2(40, 16.0);
+    row_sum[0] = 16e7, row_sum2[0] = 16e14 + 1e15;  // mean 1e7, variance about 6.7e13
+    const std::vector<double> row = adaptive_error_estimates(40, 1, row_n, row_sum, row_sum2, 4);
+    EXPECT_GT(row[3], 0.1);
+    for (int x = 10; x < 40; ++x) EXPECT_EQ(row[size_t(x)], 0.0) << x;
     EXPECT_THROW(adaptive_error_estimates(2, 2, {1}, {1.0}, {1.0}, 1), Error);
 }
 
