@@ -29,8 +29,15 @@ namespace dynsky::cli {
 
 namespace {
 
+// render's default scene is the built-in one (animate and compare default to the tower).
+SceneSpec builtin_scene_spec() {
+    SceneSpec spec;
+    spec.scene = "builtin";
+    return spec;
+}
+
 struct RenderOptions {
-    SceneSpec scene{"builtin"};  // the scene and camera options every command shares (cli/options.h)
+    SceneSpec scene = builtin_scene_spec();  // the scene and camera options every command shares (cli/options.h)
     std::string sky;
     std::string out = "render.exr";
     std::string resolution = "960x540";
