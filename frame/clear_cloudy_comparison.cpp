@@ -50,8 +50,12 @@ double window_luminance(const Image& im, int x, int y, int r = 2) {
 }
 
 // The difference image (BGR, 8 bit) with its colour bar below it: the colormap from -3 to +3 stops
-// with labelled ticks.
-cv::Mat with_colour_bar(const cv::Mat& coloured) {
+// with labelled ticks. An image under 240 px wide is first enlarged by a whole factor (nearest
+// pixel), so the bar's labels and title fit (at 64 px they ran into each other and the title was cut).
+cv::Mat with_colour_bar(const cv::Mat& image) {
+    cv::Mat coloured = image;
+    if (const int k = (240 + image.cols - 1) / std::max(1, image.cols); k > 1)
+        cv::resize(image, coloured, cv::Size(), k, k, cv::INTER_NEAREST);
     const int w = coloured.cols, bar_h = 14, margin = std::min(std::max(8, w / 20), w / 4), panel_h = 52;
     cv::Mat ramp(1, w - 2 * margin, CV_8UC1);
     for (int x = 0; x < ramp.cols; ++x)
