@@ -196,13 +196,13 @@ AnimationReport render_animation(const AnimationSettings& o) {
                      o.out.c_str(), stale[0].c_str(), stale.size() > 1 ? ", ..." : "");
 
     if (!o.quiet)
-        std::fprintf(
-            stderr,
-            "scene: %s (%zu triangles); sky: %s, model %s, Delta t %g s, Gamma %s; %d frames at %g fps, rendering "
-            "%d-%d\n",
-            scene ? scene->path.c_str() : o.scene.scene.c_str(), scene ? scene->scene.triangle_count() : size_t(0),
-            timeline.step(0)->source.c_str(), timeline.model().name().c_str(), timeline.dt(),
-            gamma_name(timeline.gamma()), total, o.fps, first, last);
+        std::fprintf(stderr,
+                     "scene: %s%s; sky: %s, model %s, Delta t %g s, Gamma %s; %d frames at %g fps, rendering %d-%d\n",
+                     scene ? scene->path.c_str() : o.scene.scene.c_str(),
+                     scene ? (" (" + std::to_string(scene->scene.triangle_count()) + " triangles)").c_str()
+                           : " (not read: encoding)",
+                     timeline.step(0)->source.c_str(), timeline.model().name().c_str(), timeline.dt(),
+                     gamma_name(timeline.gamma()), total, o.fps, first, last);
 
     // One exposure for the whole animation (per-frame auto exposure would flicker), from the sky
     // at t = 0 so every frame range agrees on it.
