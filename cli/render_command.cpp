@@ -273,7 +273,8 @@ void register_render_command(CLI::App& app) {
     cmd->add_option(
         "--region", o->region,
         "Render only pixels [x0, x1) x [y0, y1) of the --res image, 'x0,y0,x1,y1' (the output is cropped to\n"
-        "them; they equal the same pixels of a full render with the same seed)");
+        "them; they equal the same pixels of a full render with the same seed; with --noise-threshold only\n"
+        "where the stopping rule's 9 x 9 neighbourhood lies inside the region)");
     cmd->add_option(
            "--noise-threshold", o->noise_threshold,
            "Adaptive sampling (0: off): a pixel stops taking samples, in rounds of 16, once the relative error\n"

@@ -57,8 +57,11 @@ void choose_camera(const SceneSpec& o, float aspect_ratio, LoadedScene* loaded) 
         if (o.camera < 0 || o.camera >= int(names.size()))
             throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " is out of range (the file has " +
                         std::to_string(names.size()) + " camera(s), numbered from 0)");
-        const auto it = std::find_if(out.scene.cameras.begin(), out.scene.cameras.end(),
-                                     [&](const Camera& c) { return c.file_index == o.camera; });
+        auto it = std::find_if(out.scene.cameras.begin(), out.scene.cameras.end(),
+                               [&](const Camera& c) { return c.file_index == o.camera; });
+        // Camera 0 (the default) placed nowhere, or any under --look-at (which replaces it): the
+        // first camera placed, as when cameras were counted by their nodes.
+        if (it == out.scene.cameras.end() && (o.camera == 0 || !o.look_at.empty())) it = out.scene.cameras.begin();
         if (it == out.scene.cameras.end())
             throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " ('" + names[size_t(o.camera)] +
                         "') is not placed on any node of the scene, or was skipped (see the warnings): nothing "

@@ -98,7 +98,10 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
         for (const auto& e : fs::directory_iterator(o.sky)) {
             if (!e.is_regular_file()) continue;
             const std::string ext = file_extension(e.path().string());
-            if (ext == ".exr") exrs.push_back(e.path().string());
+            // `sky procedural`'s flow_NNNN.exr beside its frames hold motion, not skies (at the
+            // frames' times: ordered by time, one was taken for the previous frame).
+            if (ext == ".exr" && !image_header_number(e.path().string(), "dynsky:flow_dt"))
+                exrs.push_back(e.path().string());
             else if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".hdr" || ext == ".tif")
                 others.push_back(e.path().filename().string());
         }

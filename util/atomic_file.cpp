@@ -38,7 +38,8 @@ int sync_path(const fs::path& p, int flags) {
 std::string output_target(const std::string& target) {
     std::error_code ec;
     fs::path p(target);
-    for (int hops = 0; hops < 40 && fs::is_symlink(fs::symlink_status(p, ec)); ++hops) {
+    for (int hops = 0; fs::is_symlink(fs::symlink_status(p, ec)); ++hops) {
+        if (hops == 40) throw_file_error(target, "is a loop of symbolic links: give a file name");
         const fs::path to = fs::read_symlink(p, ec);
         if (ec) break;
         p = to.is_absolute() ? to : p.parent_path() / to;
@@ -98,7 +99,13 @@ void remove_active_temporary() noexcept {
     if (g_active_set) ::unlink(g_active);
 }
 
-TemporaryFile::TemporaryFile(std::string target) : target_(output_target(target)), path_(temporary_path(target_)) {
+// The temporary lies beside the file written (a link's target), named after the name given: its
+// extension is what tools (ffmpeg, matplotlib) take the format from, and a link "animation.mp4" to
+// "anim" made ffmpeg fail on ".tmp-anim-PID".
+TemporaryFile::TemporaryFile(std::string target)
+    : given_(target),
+      target_(output_target(target)),
+      path_((fs::path(target_).parent_path() / fs::path(temporary_path(given_)).filename()).string()) {
     make_parent(fs::path(target_));
     registered_ = register_active(path_);
 }
@@ -114,7 +121,7 @@ void TemporaryFile::commit(const std::string& what, bool may_be_empty) {
     std::error_code ec;
     auto fail = [&](const std::string& why) {
         fs::remove(tmp, ec);
-        throw_file_error(target_, "could not write the file: " + what + ": " + why);
+        throw_file_error(given_, "could not write the file: " + what + ": " + why);
     };
     if (!fs::is_regular_file(tmp, ec)) fail("it wrote no file");
     if ((fs::file_size(tmp, ec) == 0 && !may_be_empty) || ec) fail("it wrote an empty file");

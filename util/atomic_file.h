@@ -35,7 +35,7 @@ class TemporaryFile {
     void commit(const std::string& what, bool may_be_empty = false);
 
   private:
-    std::string target_, path_;
+    std::string given_, target_, path_;  // the name given, the file written (through links), the temporary
     bool committed_ = false, registered_ = false;
 };
 

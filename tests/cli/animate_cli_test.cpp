@@ -320,6 +320,15 @@ TEST(AnimateCli, AShorterRunEncodesItsOwnFramesOnly) {
                           "--fps 10 --res 8x8 --spp 1 --frames 9997-10001 --no-video -q --out " +
                           big);
     ASSERT_EQ(r.exit_code, 0) << r.output;
+    // A `sky procedural` folder (frames and their flows, at the same times) moves as a captured
+    // sequence: its last frame the input, the one before it the previous frame (a flow was taken).
+    const std::string proc = dir + "/proc";
+    r = test::run_command(std::string(DYNSKY_EXE) + " sky procedural --sky-res 32 --duration 30 --dt 10 -q -o " + proc);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    r = test::run_command(std::string(DYNSKY_EXE) + " animate builtin --sky " + proc +
+                          " --model advect --res 16x16 --spp 1 --fps 4 --duration 0.5 --no-video -q -o " + dir +
+                          "/from_proc");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
     r = test::run_command(std::string(DYNSKY_EXE) + " temporal " + big);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("frames: 5"), std::string::npos) << r.output;

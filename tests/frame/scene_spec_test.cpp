@@ -124,25 +124,33 @@ TEST(RenderCamera, CameraIndexIsTheFilesCamerasArray) {
     replace("{\"type\": \"perspective\", \"perspective\": {\"yfov\": 0.6",
             "{\"name\": \"C\", \"type\": \"perspective\", \"perspective\": {\"yfov\": 0.6");
     replace("{\"type\": \"orthographic\"", "{\"name\": \"B\", \"type\": \"orthographic\"");
+    const size_t end_of_cameras = json.find("]", json.find("\"cameras\""));
+    json.insert(end_of_cameras,
+                ", {\"name\": \"D\", \"type\": \"perspective\", \"perspective\": {\"yfov\": 1.0, "
+                "\"znear\": 0.1}}");
     std::ofstream(path) << json;
-    // cameras = [A, C (perspective, on node 1), B (orthographic, on node 2)]; placed: C, B.
+    // cameras = [A, C (perspective, on node 1), B (orthographic, on node 2), D]; placed: C, B.
     SceneSpec spec{path, 1, 0.3f, {}, 0};
     EXPECT_EQ(load_scene(spec, 1.0f).camera.name, "C");
     spec.camera = 2;
     EXPECT_EQ(load_scene(spec, 1.0f).camera.name, "B");
+    // The default, camera 0, placed nowhere: the first camera placed (a file whose cameras[0] is a
+    // spare still renders by default).
     spec.camera = 0;
+    EXPECT_EQ(load_scene(spec, 1.0f).camera.name, "C");
+    spec.camera = 3;
     try {
         load_scene(spec, 1.0f);
-        FAIL() << "camera A has no node, yet it was rendered";
+        FAIL() << "camera D has no node, yet it was rendered";
     } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find("'A') is not placed on any node"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("'D') is not placed on any node"), std::string::npos) << e.what();
     }
-    spec.camera = 3;
+    spec.camera = 4;
     try {
         load_scene(spec, 1.0f);
         FAIL();
     } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find("the file has 3 camera(s)"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("the file has 4 camera(s)"), std::string::npos) << e.what();
     }
 }
 

@@ -121,6 +121,17 @@ TEST(AtomicFile, OutputsThroughLinksAndOverSpecialFiles) {
         EXPECT_NE(std::string(e.what()).find("is a FIFO"), std::string::npos) << e.what();
     }
     EXPECT_TRUE(fs::is_fifo(fs::status(dir + "/pipe.csv")));
+    // The temporary is named after the name given (tools take the format from its extension), and
+    // lies beside the linked file; a loop of links is refused.
+    fs::create_directories(dir + "/store");
+    fs::create_symlink("store/anim", dir + "/animation.mp4");
+    TemporaryFile tmp(dir + "/animation.mp4");
+    EXPECT_EQ(fs::path(tmp.path()).extension(), ".mp4");
+    EXPECT_EQ(fs::path(tmp.path()).parent_path(), fs::path(dir) / "store");
+    fs::create_symlink("loop_b", dir + "/loop_a");
+    fs::create_symlink("loop_a", dir + "/loop_b");
+    EXPECT_THROW(write_file_atomic(dir + "/loop_a", "x"), Error);
+    EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dir + "/loop_a")));
     fs::remove_all(dir);
 }
 
