@@ -235,14 +235,21 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     const double max_sun_sr = kMaxSunBlobSr;
     // Where the computed sun falls on a filled obstruction (the TSI's shadow band exists to hide
     // it), clipped clouds beside the obstruction are not the sun: see the band rule below instead.
-    bool sun_hidden = false;
+    // The pixel the computed sun falls in (none below the horizon's circle).
+    std::optional<size_t> sun_pixel;
     {
         double sx, sy;
         if (fisheye::uv_from_direction(rep.computed_sun, &sx, &sy)) {
             int si = std::clamp(int((sx + 1) / 2 * n), 0, n - 1), sj = std::clamp(int((sy + 1) / 2 * n), 0, n - 1);
-            sun_hidden = photo.not_sky[size_t(sj) * n + si] != 0;
+            sun_pixel = size_t(sj) * n + si;
         }
     }
+    const bool sun_hidden = sun_pixel && photo.not_sky[*sun_pixel] != 0;
+    // Encoded values for the cloud rule (the photo's own, up to resampling).
+    auto encoded = [&](size_t p) {
+        const float* c = &in.rgb[p * 3];
+        return Color(linear_to_srgb(c[0]), linear_to_srgb(c[1]), linear_to_srgb(c[2]));
+    };
     int sun_blob = -1;
     for (int l = 1; l < blobs && !sun_hidden; ++l)
         if (nearest[size_t(l)] <= params.sun_search_deg * kDeg &&
@@ -261,17 +268,14 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     // degrees of it is clear. Dropped as too large, the sun was not restored and 78 % of the sky's
     // irradiance was lost. Clipped cloud over the sun (overcast, a bright cumulus) has cloud around.
     auto wide_glare_on_clear_sky = [&](int blob) {
-        double sx, sy;
-        if (!fisheye::uv_from_direction(rep.computed_sun, &sx, &sy)) return false;
-        const int si = std::clamp(int((sx + 1) / 2 * n), 0, n - 1), sj = std::clamp(int((sy + 1) / 2 * n), 0, n - 1);
-        if (labels.at<int>(sj, si) != blob) return false;
+        if (!sun_pixel || labels.at<int>(int(*sun_pixel / n), int(*sun_pixel % n)) != blob) return false;
         long long around = 0, clear = 0;
         for (size_t p = 0; p < size_t(n) * n; ++p) {
             if (photo.not_sky[p] || photo.clipped[p] || !in.in_disc(int(p % n), int(p / n))) continue;
             if (angle_between(dir(p), rep.computed_sun) > 45 * kDeg) continue;
             ++around;
-            const float* c = &in.rgb[p * 3];
-            clear += !is_cloud(linear_to_srgb(c[0]), linear_to_srgb(c[1]), linear_to_srgb(c[2]), params.clear_rule);
+            const Color e = encoded(p);
+            clear += !is_cloud(e[0], e[1], e[2], params.clear_rule);
         }
         return around > 0 && clear >= 0.6 * double(around);
     };
@@ -298,12 +302,6 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
         rep.sun_offset_deg = angle_between(seen, rep.computed_sun) / kDeg;
         if (params.use_observed_sun) rep.used_sun = seen;
     }
-
-    // Encoded values for the cloud rule (the photo's own, up to resampling).
-    auto encoded = [&](size_t p) {
-        const float* c = &in.rgb[p * 3];
-        return Color(linear_to_srgb(c[0]), linear_to_srgb(c[1]), linear_to_srgb(c[2]));
-    };
 
     // A sun behind the shadow band (or another filled obstruction): seen if the sky next to the
     // obstruction near the sun, 4-15 degrees out, is mostly clear or clipped.
