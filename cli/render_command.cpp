@@ -278,7 +278,9 @@ void register_render_command(CLI::App& app) {
     cmd->add_option(
            "--noise-threshold", o->noise_threshold,
            "Adaptive sampling (0: off): a pixel stops taking samples, in rounds of 16, once the relative error\n"
-           "of its mean (luminance) is under this; --spp is then the most a pixel takes")
+           "of its mean (luminance), and that of its 9 x 9 neighbourhood, are under this (so a pixel whose first\n"
+           "samples missed a small light keeps sampling while its neighbours see it); --spp is then the most a\n"
+           "pixel takes")
         ->capture_default_str();
     cmd->add_option("--time-limit", o->time_limit,
                     "Seconds of rendering after which no new round of 16 samples starts (0: none); --spp still caps")
