@@ -46,7 +46,9 @@ void register_compare_command(CLI::App& app) {
     cmd->add_option("--chart-spp", c->chart_spp, "Chart: samples per pixel (the same seed every frame)")
         ->check(CLI::Range(1, kMaxSpp))
         ->capture_default_str();
-    cmd->add_option("--seed", c->seed, "Random seed")->check(non_negative_whole())->capture_default_str();
+    cmd->add_option("--seed", c->seed, "Random seed of the path tracer")
+        ->check(non_negative_whole())
+        ->capture_default_str();
     cmd->add_option("--threads", c->threads, "Worker threads (0: all cores)")
         ->check(CLI::Range(0, kMaxThreads))
         ->capture_default_str();

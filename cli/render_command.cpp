@@ -64,14 +64,13 @@ double process_cpu_seconds() {
 }
 
 // The default sky when --sky is not given: a clear afternoon over Paris at the summer solstice.
-std::shared_ptr<SkyImage> default_sky(int resolution) {
-    ClearSkyParams p;
-    GeoLocation where{48.8566, 2.3522, 35};
-    p.sun_direction = compute_sun_position(parse_utc_time("2026-06-21T16:00:00Z"), where).direction();
-    p.turbidity = 3;
-    auto sky = std::make_shared<SkyImage>(make_clear_sky(p, resolution));  // --sky-res, as for 'clear'
-
-    sky->source = "builtin: clear sky, Paris 2026-06-21T16:00:00Z, turbidity 3";
+std::shared_ptr<SkyImage> builtin_clear_sky(int resolution) {
+    SkySourceSpec clear;  // the place, time and turbidity of `--sky clear` everywhere
+    clear.sky = "clear";
+    clear.sky_resolution = resolution;  // --sky-res, as for 'clear'
+    auto sky = std::make_shared<SkyImage>(make_generated_sky(clear));
+    sky->source = std::string("builtin: clear sky, Paris ") + default_sky::kStartTime + ", turbidity " +
+                  number_text(default_sky::kTurbidity);
     return sky;
 }
 
@@ -135,7 +134,7 @@ int run_render(const RenderOptions& o) {
     const SkySourceSpec defaults;
     const bool placed = o.generated.latitude != defaults.latitude || o.generated.longitude != defaults.longitude;
     if (o.sky.empty() && o.generated.time.empty() && !placed) {
-        sky = default_sky(o.generated.sky_resolution);
+        sky = builtin_clear_sky(o.generated.sky_resolution);
     } else if (o.sky.empty() || is_generated_sky(o.sky)) {
         SkySourceSpec spec = o.generated;  // made as animate and compare make it (frame/sky_source.h)
         spec.sky = o.sky.empty() ? "clear" : o.sky;

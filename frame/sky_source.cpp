@@ -24,7 +24,7 @@ namespace dynsky {
 namespace fs = std::filesystem;
 
 UtcTime start_time(const SkySourceSpec& o) {
-    return parse_utc_time(o.time.empty() ? std::string("2026-06-21T16:00:00Z") : o.time);
+    return parse_utc_time(o.time.empty() ? std::string(default_sky::kStartTime) : o.time);
 }
 
 namespace {
@@ -38,7 +38,7 @@ ProceduralSkyParams procedural_params(const SkySourceSpec& o, uint64_t seed, con
     p.layers[0].wind_speed_mps = o.wind_speed_mps;
     p.layers[0].altitude_m = o.cloud_height_m;
     p.clear_sky.sun_direction = sun;
-    p.clear_sky.turbidity = 3;
+    p.clear_sky.turbidity = default_sky::kTurbidity;
     validate_procedural_params(p);
     return p;
 }
@@ -66,7 +66,7 @@ SkyImage make_generated_sky(const SkySourceSpec& o) {
     if (o.sky == "clear") {
         ClearSkyParams p;
         p.sun_direction = sun;
-        p.turbidity = 3;
+        p.turbidity = default_sky::kTurbidity;
         input = make_clear_sky(p, o.sky_resolution);
         input.source = "clear sky (Hosek-Wilkie, turbidity 3)";
     } else {

@@ -8,6 +8,7 @@
 
 #include "frame/frame_metadata.h"
 #include "motion/sky_timeline.h"
+#include "sky/default_sky.h"
 #include "sky/sun_position.h"
 
 namespace dynsky {
@@ -29,9 +30,10 @@ struct SkySourceSpec {
     std::string sky = "procedural";
     int sky_resolution = 1024;
     std::string time;
-    double latitude = 48.8566, longitude = 2.3522;
-    double coverage = 0.5;
-    double wind_from_deg = 270.0, wind_speed_mps = 12.0, cloud_height_m = 1500.0;
+    double latitude = default_sky::kLatitudeDeg, longitude = default_sky::kLongitudeDeg;
+    double coverage = default_sky::kCoverage;
+    double wind_from_deg = default_sky::kWindFromDeg, wind_speed_mps = default_sky::kWindSpeedMps;
+    double cloud_height_m = default_sky::kCloudHeightM;
     std::string previous;
     double previous_dt = 0.0;
 };

@@ -15,6 +15,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "sky/default_sky.h"
 #include "sky/sky_image.h"
 
 namespace dynsky {
@@ -64,9 +65,9 @@ cv::Mat rotation_flow(int resolution, const Vec3d& axis, double angle);
 // 0.38 degrees per second. Defaults: from the west at 12 m/s, a cumulus base at 1500 m (the
 // procedural sky's cumulus layer).
 struct Wind {
-    double from_deg = 270.0;
-    double speed_mps = 12.0;
-    double cloud_height_m = 1500.0;
+    double from_deg = default_sky::kWindFromDeg;
+    double speed_mps = default_sky::kWindSpeedMps;
+    double cloud_height_m = default_sky::kCloudHeightM;
 };
 
 // The flow of that layer over dt seconds at resolution n, by destination: F(x) = x - s(x), where

@@ -56,14 +56,14 @@ def procedural_list():
         cirrus = i >= 8
         sun_el = [20, 35, 50, 65, 80, 30, 45, 60][(i * 3 + 1) % 8]
         sun_az = (i * 67 + 30) % 360
-        args = ["--coverage", str(cover), "--wind", f"{speed},{direction}", "--cumulus-altitude",
+        args = ["--coverage", str(cover), "--wind-speed", str(speed), "--wind-from", str(direction), "--cloud-height",
                 str(heights[i % 4]), "--sun-elevation", str(sun_el), "--sun-azimuth", str(sun_az),
                 "--layers", "cumulus,cirrus" if cirrus else "cumulus"]
         if cirrus:
             args += ["--cirrus-wind", f"{min(30, speed + 8)},{(direction + 30) % 360}"]
         out.append((f"proc_{i:02d}", 100 + i, args, 80))
     for i, (el, az) in enumerate([(15, 90), (35, 200), (55, 300), (75, 140)]):
-        out.append((f"proc_clear_{i}", 200 + i, ["--coverage", "0", "--wind", "10,270", "--sun-elevation", str(el),
+        out.append((f"proc_clear_{i}", 200 + i, ["--coverage", "0", "--wind-speed", "10", "--wind-from", "270", "--sun-elevation", str(el),
                                                  "--sun-azimuth", str(az)], 60))
     return out
 
@@ -111,7 +111,7 @@ def main(argv=None):
         if (only and name not in only) or (not only and os.path.exists(os.path.join(dest, "meta.json"))):
             continue
         tmp = os.path.join(args.out, "_frames_" + name)
-        run([args.dynsky, "sky", "procedural", "--seed", str(seed), "--dt", "30", "--duration", str(30 * (frames - 1)),
+        run([args.dynsky, "sky", "procedural", "--cloud-seed", str(seed), "--dt", "30", "--duration", str(30 * (frames - 1)),
              "--res", str(args.import_res), "--quiet", "--out", tmp] + extra)
         run([args.dynsky, "sky", "training-data", "--procedural", tmp, "--out", dest] + common)
         shutil.rmtree(tmp)

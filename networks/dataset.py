@@ -28,8 +28,8 @@ ROOT = os.path.dirname(HERE)
 
 # Procedural sequences: (name, seed, extra `sky procedural` arguments). 120 frames = 1 hour at 30 s.
 PROCEDURAL = [
-    ("proc_s1", 1, ["--coverage", "0.45", "--wind", "9,300", "--sun-elevation", "55", "--sun-azimuth", "160"]),
-    ("proc_s2", 2, ["--coverage", "0.6", "--wind", "13,210", "--layers", "cumulus,cirrus", "--sun-elevation", "35",
+    ("proc_s1", 1, ["--coverage", "0.45", "--wind-speed", "9", "--wind-from", "300", "--sun-elevation", "55", "--sun-azimuth", "160"]),
+    ("proc_s2", 2, ["--coverage", "0.6", "--wind-speed", "13", "--wind-from", "210", "--layers", "cumulus,cirrus", "--sun-elevation", "35",
                     "--sun-azimuth", "240"]),
 ]
 HELDOUT_FRACTION = 0.2
@@ -68,7 +68,7 @@ def main(argv=None):
     if not args.no_procedural:
         for name, seed, extra in PROCEDURAL:
             frames = os.path.join(args.out, "frames_" + name)
-            run([args.dynsky, "sky", "procedural", "--seed", str(seed), "--dt", "30", "--duration",
+            run([args.dynsky, "sky", "procedural", "--cloud-seed", str(seed), "--dt", "30", "--duration",
                  str(30 * (args.procedural_frames - 1)), "--res", str(args.import_res), "--quiet", "--out", frames] + extra)
             run([args.dynsky, "sky", "training-data", "--procedural", frames, "--out", os.path.join(args.out, name)] + common)
             if not args.keep_frames:

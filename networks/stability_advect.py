@@ -53,7 +53,7 @@ def main(argv=None):
              os.path.join(tmp, name.replace(".jpg", ".exr"))])
     starts["photograph (ARM, held out, previous frame)"] = (
         os.path.join(tmp, "tsi_sgpC1_20170524174000Z.exr"), ["--prev", os.path.join(tmp, "tsi_sgpC1_20170524173930Z.exr")])
-    run([d, "sky", "procedural", "--seed", "11", "--coverage", "0.5", "--duration", "0", "--wind", "10,240",
+    run([d, "sky", "procedural", "--cloud-seed", "11", "--coverage", "0.5", "--duration", "0", "--wind-speed", "10", "--wind-from", "240", "--sun-elevation", "45",
          "--sky-res", str(args.res), "--out", os.path.join(tmp, "proc"), "-q"])
     starts["procedural cumulus (its wind)"] = (os.path.join(tmp, "proc", "frame_0000.exr"),
                                                ["--wind-from", "240", "--wind-speed", "10"])

@@ -14,7 +14,7 @@ run() {
     "$EXE" render builtin --spp 4 --res 96x64 --out "$OUT/builtin.exr" -q
     "$EXE" sky clear --lat 48.85 --lon 2.35 --time 2026-06-21T12:00:00Z --res 128 --out "$OUT/clear.exr" >/dev/null
     "$EXE" render scenes/house/house.gltf --sky "$OUT/clear.exr" --spp 4 --res 96x64 --out "$OUT/house.exr" -q
-    "$EXE" sky procedural --seed 1 --coverage 0.5 --duration 20 --dt 10 --res 128 --out "$OUT/proc" --quiet
+    "$EXE" sky procedural --cloud-seed 1 --coverage 0.5 --duration 20 --dt 10 --res 128 --out "$OUT/proc" --quiet
     "$EXE" sky import $S/skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524160000Z.jpg --preset arm-tsi --res 128 \
         --out "$OUT/import.exr" >/dev/null
     "$EXE" sky predict --model networks/models/arm_tsi --steps 3 --in "$OUT/import.exr" --out "$OUT/pred" --quiet

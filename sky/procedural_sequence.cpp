@@ -50,9 +50,9 @@ Image flow_preview(const Image& flow, double max_speed) {
 CloudLayer make_layer(const std::string& name, const ProceduralSequenceSettings& o) {
     if (name == "cumulus") {
         CloudLayer l = cumulus_layer();
-        l.altitude_m = o.cumulus_altitude;
+        l.altitude_m = o.cloud_height_m;
         l.evolution_time_s = o.evolution;
-        if (!o.wind.empty()) l.wind_speed_mps = o.wind[0], l.wind_from_deg = o.wind[1];
+        l.wind_speed_mps = o.wind_speed_mps, l.wind_from_deg = o.wind_from_deg;
         return l;
     }
     if (name == "cirrus") {
@@ -65,7 +65,8 @@ CloudLayer make_layer(const std::string& name, const ProceduralSequenceSettings&
 
 }  // namespace
 
-void write_procedural_sequence(const ProceduralSequenceSettings& o, bool use_location) {
+void write_procedural_sequence(const ProceduralSequenceSettings& o) {
+    const bool use_location = !o.fixed_sun;
     // Everything is checked before the output folder is touched, so a bad argument leaves nothing.
     if (o.out.empty()) throw Error("--out: an output folder is required");
     if (!std::isfinite(o.dt) || o.dt <= 0)
@@ -83,7 +84,7 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o, bool use_loc
     if (fs::exists(o.out) && !fs::is_directory(o.out)) throw_file_error(o.out, "exists and is not a folder");
 
     ProceduralSkyParams params;
-    params.seed = o.seed;
+    params.seed = o.cloud_seed;
     params.coverage = o.coverage;
     params.visibility_m = o.visibility;
     params.clear_sky.turbidity = o.turbidity;
@@ -122,7 +123,7 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o, bool use_loc
     fs::create_directories(o.out);
     nlohmann::ordered_json manifest;
     manifest["generator"] = "dynsky sky procedural";
-    manifest["seed"] = o.seed;
+    manifest["seed"] = o.cloud_seed;
     manifest["coverage"] = o.coverage;
     manifest["resolution"] = o.resolution;
     manifest["dt_s"] = o.dt;
