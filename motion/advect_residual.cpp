@@ -778,22 +778,22 @@ const cv::Mat& CloudRollout::advance() {
 
 namespace {
 
-// The sun's weight from the clouds a rollout moved over it (CloudRollout::opacity): the transmittance
-// of the moved opacity relative to the start's, as the timeline takes it (sun_weight_reference), in
+// The sun's weight from the clouds a rollout moved over it (CloudRollout::opacity), as the timeline
+// takes it (motion/sun_patch.h opacity_sun_weight; start_look: the look around the start's sun), in
 // [0, 1]; nullopt without a sun or a background (no opacity).
-std::optional<double> opacity_sun_weight(const CloudRollout& rollout, const std::optional<Vec3d>& sun,
-                                         double input_sun_share) {
+std::optional<double> rollout_sun_weight(const CloudRollout& rollout, const std::optional<Vec3d>& sun,
+                                         double start_look, double input_sun_share) {
     if (!sun || rollout.opacity().empty() || rollout.start_opacity().empty()) return std::nullopt;
-    const double before = sun_weight_reference(sun_transmittance_of_opacity(rollout.start_opacity(), *sun),
-                                               input_sun_share);
-    return std::clamp(sun_transmittance_of_opacity(rollout.opacity(), *sun) / before, 0.0, 1.0);
+    return opacity_sun_weight(sun_transmittance_of_opacity(rollout.opacity(), *sun),
+                              sun_transmittance_of_opacity(rollout.start_opacity(), *sun), start_look, input_sun_share);
 }
 
-// How much of the clear sun a sky shows at its sun (sun_patch_share of the sun remove_sun would cut);
-// 0 without one.
+// How much of the clear sun a sky shows at its sun (sun_patch_share of the sun remove_sun would cut
+// there: the sky's own, or where its brightest pixels put it); 0 without one.
 double shown_sun_share(const SkyImage& sky, const std::optional<Vec3d>& sun) {
-    if (!sun || !sky.sun_direction) return 0.0;
+    if (!sun) return 0.0;
     SkyImage copy = sky;
+    if (!copy.sun_direction) copy.sun_direction = sun->cast<float>();
     return sun_patch_share(remove_sun(&copy), sky.resolution, *sun);
 }
 
@@ -831,14 +831,16 @@ void AdvectResidualNetwork::rollout(const SkyImage& given, const CloudFlow& flow
     CloudRollout rollout(this, state, flow, background,
                          sky.sun_direction ? sun_unseen_mask(sky.resolution, *at) : cv::Mat(), at);
     const double share = has_sun ? shown_sun_share(sky, at) : 0.0;
+    const double start_look = has_sun && at ? estimate_sun_transmittance(sky, *at) : 1.0;
     for (int k = 1; k <= steps; ++k) {
         SkyImage next = from_network_form(rollout.advance(), sky, info_.form);
         next.time_seconds = sky.time_seconds + k * info_.dt;
         // What was cut out comes back dimmed by the cloud the rollout moved over the sun (as the
         // step model does).
         if (has_sun) {
-            const double t = relative_sun_transmittance(next, sky);
-            restore_pixels(&next, sky, sun, std::min(t, opacity_sun_weight(rollout, at, share).value_or(1.0)));
+            const double t = relative_sun_transmittance(next, sky, at);
+            restore_pixels(&next, sky, sun,
+                           std::min(t, rollout_sun_weight(rollout, at, start_look, share).value_or(1.0)));
         }
         on_step(k, scale == 1.0 ? next : scaled_sky(next, 1.0 / scale));
     }
@@ -982,8 +984,9 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
         // Dimmed by the cloud the sky shows at the sun or, when more, by the clouds moved there.
         const double t = relative_sun_transmittance(next, input, at);
         if (!input_sun_share_) input_sun_share_ = shown_sun_share(input, at);
+        const double start_look = at ? estimate_sun_transmittance(input, *at) : 1.0;
         restore_pixels(&next, input, sun_mask_,
-                       std::min(t, opacity_sun_weight(*rollout_, at, *input_sun_share_).value_or(1.0)));
+                       std::min(t, rollout_sun_weight(*rollout_, at, start_look, *input_sun_share_).value_or(1.0)));
     }
     next.time_seconds = history.back()->time_seconds + dt;
     if (scale_ != 1.0) next = scaled_sky(next, 1.0 / scale_);

@@ -68,7 +68,7 @@ SkyTimeline::SkyTimeline(SkyImage input, std::unique_ptr<MediumStepModel> model,
     input_time_ = input.time_seconds;
     // The sun is cut out where the image has it; it is put back where the clock says.
     suns_.push_back(remove_sun(&input));
-    if (input_sun_) input_transmittance_ = std::max(estimate_sun_transmittance(input, *input_sun_), 0.05);
+    if (input_sun_) input_look_transmittance_ = estimate_sun_transmittance(input, *input_sun_);
     if (clock_) {
         validate_location(clock_->where);
         input.sun_direction = compute_sun_position(clock_->start, clock_->where).direction().cast<float>();
@@ -87,9 +87,6 @@ std::optional<double> SkyTimeline::model_sun_weight(int i, double s, const Vec3d
     auto opacity = [&](int k) { return size_t(k) < model_opacity_.size() ? model_opacity_[size_t(k)] : cv::Mat(); };
     const cv::Mat o0 = opacity(0), a = opacity(i), b = s > 0 ? opacity(i + 1) : a;
     if (o0.empty() || a.empty() || b.empty()) return std::nullopt;
-    // Relative to the input's cover at the sun, never more than its sun showed (sun_weight_reference).
-    const double before = relative ? sun_weight_reference(sun_transmittance_of_opacity(o0, sun), input_sun_share())
-                                   : 1.0;
     double t = sun_transmittance_of_opacity(a, sun);
     if (s > 0) {
         // Between two steps the clouds move as Gamma moves them: what covers the sun at s was at
@@ -108,7 +105,9 @@ std::optional<double> SkyTimeline::model_sun_weight(int i, double s, const Vec3d
         const Vec3d to = fisheye::direction_from_pixel(x + (1 - s) * f[0], y + (1 - s) * f[1], n);
         t = std::min(sun_transmittance_of_opacity(a, from), sun_transmittance_of_opacity(b, to));
     }
-    return std::clamp(t / before, 0.0, 1.0);
+    // Relative to the input's cover at the sun, never more than its sun showed (opacity_sun_weight).
+    if (!relative) return std::clamp(t, 0.0, 1.0);
+    return opacity_sun_weight(t, sun_transmittance_of_opacity(o0, sun), input_look_transmittance_, input_sun_share());
 }
 
 const SunPatch& SkyTimeline::covered_input_sun(int n) {
@@ -119,10 +118,11 @@ const SunPatch& SkyTimeline::covered_input_sun(int n) {
         // Only when the sky around the sun says so too: a cloud lit by forward scattering can look
         // as clear as the aureole it hides, and then the look cannot tell when it moves off either.
         if (input_sun_ && !model_->makes_own_sun() && input_sun_share() < 0.5) {
-            double around = input_transmittance_;
+            double around = input_look_transmittance_;
             if (!model_opacity_.empty() && !model_opacity_[0].empty())
                 around = std::min(around, sun_transmittance_of_opacity(model_opacity_[0], *input_sun_));
             if (around < 0.5) clear_sun_ = clear_sun_patch(n, *input_sun_);
+            covered_input_transmittance_ = around;
         }
     }
     return clear_sun_;
@@ -271,12 +271,19 @@ void SkyTimeline::sky_at(double t, SkyImage* out) {
             // the input this is its dim sun again. The input's dim sun added by 1 - that (as if its
             // cloud stayed) kept shining through a thicker cloud moved over a half-covered sun: on
             // a procedural seed 50 % over the truth for the whole run (docs/animation.md).
-            last_sun_weight_ = estimate_sun_transmittance(*out, *sun);
-            if (auto w = model_sun_weight(i, s, *sun, false)) last_sun_weight_ = std::min(last_sun_weight_, *w);
+            double t_frame = estimate_sun_transmittance(*out, *sun);
+            if (auto w = model_sun_weight(i, s, *sun, false)) t_frame = std::min(t_frame, *w);
+            // As the cover at the sun changes from the input's: where it stays, the input's dim
+            // sun stays (an overcast sky's sun seen through its cloud was put out on the first
+            // step, the grey around it read as cloud); where it clears, up to the clear sun.
+            // Where the input's cover at the sun reads as its share (the usual case) this is
+            // t_frame itself.
+            last_sun_weight_ = std::clamp(input_sun_share() + t_frame - covered_input_transmittance_, 0.0, 1.0);
             insert_sun(out, clear_sun_, *sun, last_sun_weight_);
         } else {
             if (!model_->makes_own_sun() && !at_input && !suns_[0].empty()) {
-                last_sun_weight_ = std::clamp(estimate_sun_transmittance(*out, *sun) / input_transmittance_, 0.0, 1.0);
+                last_sun_weight_ = relative_transmittance(estimate_sun_transmittance(*out, *sun),
+                                                          input_look_transmittance_);
                 // The model's, from the clouds it moved over the sun, when it knows them: a cloud is
                 // over the sun when either says so.
                 if (auto w = model_sun_weight(i, s, *sun)) last_sun_weight_ = std::min(last_sun_weight_, *w);

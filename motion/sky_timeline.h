@@ -145,7 +145,7 @@ class SkyTimeline {
     std::map<int, Interval> intervals_;
     std::vector<SunPatch> suns_;  // per step: the sun cut out of it (all the input's for models without a sun)
     std::optional<Vec3d> input_sun_;
-    double input_transmittance_ = 1.0;  // around the input's sun, after the cut
+    double input_look_transmittance_ = 1.0;  // around the input's sun, after the cut
     double last_sun_weight_ = 1.0;
     // Per step (0: the input), the opacity of the clouds the model moved (MediumStepModel::
     // last_cloud_opacity; empty: none), and the sun's weight at s in interval i from them.
@@ -160,6 +160,7 @@ class SkyTimeline {
     // when first needed (empty otherwise). Set by covered_input_sun().
     bool covered_checked_ = false;
     SunPatch clear_sun_;
+    double covered_input_transmittance_ = 0.0;  // at the covered input's sun, as frames measure theirs
     const SunPatch& covered_input_sun(int n);
     // The input's cut sun over the clear sun's irradiance (sun_patch_share at the input's
     // resolution; 0 without a sun), worked out when first needed.

@@ -131,7 +131,7 @@ void SkyTimeline::save(const std::string& folder, int last_step, const std::stri
               {"input_time", input_time_},
               {"input_sun",
                input_sun_ ? json::array({(*input_sun_)[0], (*input_sun_)[1], (*input_sun_)[2]}) : json(nullptr)},
-              {"input_transmittance", input_transmittance_},
+              {"input_look_transmittance", input_look_transmittance_},
               {"radiance_scale", radiance_scale_},
               {"clock", clock},
               {"steps", steps},
@@ -166,7 +166,10 @@ SkyTimeline SkyTimeline::load(const std::string& folder, std::string* settings) 
         if (!j.at("input_sun").is_null())
             t.input_sun_ = Vec3d(j["input_sun"][0].get<double>(), j["input_sun"][1].get<double>(),
                                  j["input_sun"][2].get<double>());
-        t.input_transmittance_ = j.at("input_transmittance").get<double>();
+        // Before 2026-12-05 stored at least 0.05 under another name.
+        t.input_look_transmittance_ = j.contains("input_look_transmittance")
+                                          ? j.at("input_look_transmittance").get<double>()
+                                          : j.at("input_transmittance").get<double>();
         t.radiance_scale_ = j.value("radiance_scale", 1.0);  // absent before 2026-12-04: at scale
         if (!(t.radiance_scale_ > 0 && std::isfinite(t.radiance_scale_)))
             throw_file_error(path, "radiance_scale is not a positive number");

@@ -308,11 +308,20 @@ double sun_weight_reference(double start_transmittance, double input_sun_share) 
     return std::max({start_transmittance, std::min(1.0, input_sun_share), 0.05});
 }
 
+double relative_transmittance(double moved, double start) {
+    const double e = std::max(0.0, 0.05 - start);
+    return std::clamp((moved + e) / (start + e), 0.0, 1.0);
+}
+
 double relative_sun_transmittance(const SkyImage& moved, const SkyImage& start, std::optional<Vec3d> sun) {
     if (!sun && start.sun_direction) sun = start.sun_direction->cast<double>();
     if (!sun) return 1.0;
-    const double before = std::max(estimate_sun_transmittance(start, *sun), 0.05);
-    return std::clamp(estimate_sun_transmittance(moved, *sun) / before, 0.0, 1.0);
+    return relative_transmittance(estimate_sun_transmittance(moved, *sun), estimate_sun_transmittance(start, *sun));
+}
+
+double opacity_sun_weight(double moved_opacity_t, double start_opacity_t, double start_look, double input_sun_share) {
+    if (start_look < 0.05 && input_sun_share >= 0.05) return relative_transmittance(moved_opacity_t, start_opacity_t);
+    return std::clamp(moved_opacity_t / sun_weight_reference(start_opacity_t, input_sun_share), 0.0, 1.0);
 }
 
 }  // namespace dynsky

@@ -129,10 +129,24 @@ double sun_transmittance_of_opacity(const cv::Mat& opacity, const Vec3d& sun,
 // (SkyTimeline::model_sun_weight) and `sky predict` (AdvectResidualNetwork::rollout) both use it.
 double sun_weight_reference(double start_transmittance, double input_sun_share);
 
-// The sun put back into a moved sky, relative to the sky it was cut from: T(moved) / T(start),
-// in [0, 1] (never brighter than it was; a start with T below 0.05 counts as 0.05). The sky's own
-// sun direction when `sun` is not given; 1 when neither knows one.
+// A transmittance at the sun relative to the start's, in [0, 1] (never brighter than it was):
+// moved / start, where a start under 0.05 reads as cloud that nothing can thicken: moved + e over
+// start + e with e = 0.05 - start (continuous at 0.05; 1 for a start of 0). An overcast sky seen
+// with its sun through it read 0 at the start and 0 after a step with no wind, and the sun went out
+// (0 / 0.05); the sun is put back there as it was.
+double relative_transmittance(double moved, double start);
+
+// The sun put back into a moved sky, relative to the sky it was cut from: relative_transmittance
+// of the look around the sun (estimate_sun_transmittance). The sky's own sun direction when `sun`
+// is not given; 1 when neither knows one.
 double relative_sun_transmittance(const SkyImage& moved, const SkyImage& start,
                                   std::optional<Vec3d> sun = std::nullopt);
+
+// The weight of the start's cut sun in a moved sky from the clouds a model moved over it (the
+// opacity's transmittance at the sun, moved and at the start): relative to sun_weight_reference,
+// unless the look around the start's sun also said cloud (start_look under 0.05) while that sun
+// shone through (input_sun_share >= 0.05): a sun seen through an overcast or hazy sky, whose cover
+// neither measure can see thicken, relative to the start's own (relative_transmittance).
+double opacity_sun_weight(double moved_opacity_t, double start_opacity_t, double start_look, double input_sun_share);
 
 }  // namespace dynsky

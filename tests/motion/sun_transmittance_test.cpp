@@ -253,6 +253,53 @@ TEST(SunTransmittance, PredictedStepsDimTheSunAsTheTimelineDoes) {
     EXPECT_LT(sum / frames, test::run_size(0.125, 0.105));
 }
 
+// A sun seen through an even overcast (a grey sky, its sun one bright pixel): the look around it
+// and the opacity the model carries both read cloud at the start and nothing thickens it, so a
+// sky that does not change keeps its sun. It went out on the first step (0 / 0.05), 33 x darker,
+// for a sun bright (elevation 60) or dim (a tenth as bright), in the timeline and in `sky predict`;
+// with the sun's direction recorded or found from the brightest pixel.
+TEST(SunTransmittance, ASunSeenThroughAnOvercastIsKeptWhileNothingChanges) {
+    const int n = 64;
+    const Vec3d sun = fisheye::direction_from_angles(30.0 * kPiD / 180.0, 10.0 * kPiD / 180.0);
+    for (const double sun_radiance : {5e4, 5e3})
+        for (const bool recorded : {true, false}) {
+            SkyImage grey(n);
+            for (int j = 0; j < n; ++j)
+                for (int i = 0; i < n; ++i)
+                    if (fisheye::pixel_center_uv(i, j, n).squaredNorm() <= 1.0)
+                        for (int c = 0; c < 3; ++c) grey.rgb[(size_t(j) * n + i) * 3 + c] = 1.0f;
+            double x, y;
+            fisheye::pixel_from_direction(sun, n, &x, &y);
+            for (int c = 0; c < 3; ++c) grey.rgb[(size_t(y) * n + size_t(x)) * 3 + c] = float(sun_radiance);
+            if (recorded) grey.sun_direction = sun.cast<float>();
+            const double start = horizontal_illuminance(grey);
+            const std::string what = std::to_string(sun_radiance) + (recorded ? ", recorded" : ", found");
+            if (recorded) {
+                CloudMotion still;
+                still.wind = Wind{270, 0, 1500};
+                SkyTimeline timeline(grey, make_network_step_model("advect", still), 10);
+                for (double t : {5.0, 10.0, 25.0})
+                    // The dim sun (under half the clear one's) comes back as the clear sun's disc at its
+                    // share: its irradiance, spread a little otherwise (2.7 %).
+                    EXPECT_NEAR(horizontal_illuminance(timeline.sky_at(t)) / start, 1.0, 0.03) << what << " t " << t;
+            }
+            AdvectResidualNetwork advect = AdvectResidualNetwork::pure_advection();
+            advect.rollout(grey, CloudFlow::from_wind(wind_flow(n, Wind{270, 0, 1500}, 30)), 3,
+                           [&](int k, const SkyImage& sky) {
+                               EXPECT_NEAR(horizontal_illuminance(sky) / start, 1.0, 0.01) << what << " step " << k;
+                           });
+        }
+}
+
+TEST(SunTransmittance, RelativeTransmittanceIsContinuousAndKeepsAnOpaqueStart) {
+    EXPECT_DOUBLE_EQ(relative_transmittance(0.25, 0.5), 0.5);
+    EXPECT_DOUBLE_EQ(relative_transmittance(1.0, 0.5), 1.0);  // never brighter than it was
+    EXPECT_DOUBLE_EQ(relative_transmittance(0.0, 0.0), 1.0);  // an opaque start: nothing to thicken
+    EXPECT_NEAR(relative_transmittance(0.0, 0.0499999), 0.0, 1e-5);
+    EXPECT_NEAR(relative_transmittance(0.0, 0.025), 0.5, 1e-12);
+    EXPECT_NEAR(relative_transmittance(0.02, 0.05), 0.4, 1e-12);
+}
+
 // The cumulus above on seed 1, whose sun starts covered and comes out at 25 s: the input's sun is
 // the dim one behind the cloud, so once the cloud moves off the clear sun must come back (it stayed
 // at 0.35 of the truth's illuminance when only the input's own sun was put back).
