@@ -81,6 +81,7 @@ Accel::Accel(const Scene& scene) : scene_(scene) {
 
     top_ = rtcNewScene(device_);
     normal_matrices_.resize(scene.instances.size());
+    handedness_.resize(scene.instances.size());
     for (size_t i = 0; i < scene.instances.size(); ++i) {
         const Instance& inst = scene.instances[i];
         RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
@@ -91,6 +92,7 @@ Accel::Accel(const Scene& scene) : scene_(scene) {
         rtcAttachGeometryByID(top_, geom, unsigned(i));
         rtcReleaseGeometry(geom);
         normal_matrices_[i] = inst.transform.linear().inverse().transpose();
+        handedness_[i] = inst.transform.linear().determinant() < 0 ? -1.0f : 1.0f;
     }
     rtcCommitScene(top_);
     RTCBounds b;
@@ -226,8 +228,10 @@ bool Accel::surface_hit(const Ray& ray, const RTCRayHit& rh, SurfaceHit* hit, bo
         Vec4 t = b0 * mesh.tangents[i0] + b1 * mesh.tangents[i1] + b2 * mesh.tangents[i2];
         Vec3 tw = instance.transform.linear() * t.head<3>();
         float l = tw.norm();
-        hit->tangent = l > 0 ? Vec4(tw.x() / l, tw.y() / l, tw.z() / l, mesh.tangents[i0].w() < 0 ? -1.0f : 1.0f)
-                             : Vec4::Zero();
+        // A mirroring instance turns the frame's handedness: the bitangent n x t w it gives would
+        // point against the object's own (the normal map's green channel flipped on a mirrored half).
+        const float w = (mesh.tangents[i0].w() < 0 ? -1.0f : 1.0f) * handedness_[size_t(inst)];
+        hit->tangent = l > 0 ? Vec4(tw.x() / l, tw.y() / l, tw.z() / l, w) : Vec4::Zero();
     } else {
         hit->tangent = Vec4::Zero();
     }

@@ -69,6 +69,7 @@ class Accel {
     RTCScene top_ = nullptr;
     std::vector<RTCScene> mesh_scenes_;
     std::vector<Eigen::Matrix3f> normal_matrices_;  // per instance: inverse transpose of the linear part
+    std::vector<float> handedness_;                 // per instance: -1 where it mirrors (det < 0), else 1
     // The three vertex normals of every triangle (9 floats, primitives of all meshes one after the
     // other; corner_first_[group][primitive] is a primitive's first triangle, -1 without normals):
     // a hit then reads one record instead of the index buffer and three scattered normals. On huge
