@@ -31,6 +31,12 @@
 #include "util/image.h"
 #include "util/parse.h"
 
+// tinygltf's base64 decoder: libtinygltf exports it, its header declares it only to the library's
+// own implementation.
+namespace tinygltf {
+std::string base64_decode(std::string const& encoded);
+}
+
 namespace dynsky {
 
 Eigen::Matrix3f texture_transform_matrix(const Vec2& offset, float rotation, const Vec2& scale) {
@@ -637,12 +643,35 @@ class GltfLoader {
                 }
             fail("cannot load glTF: " + (text.empty() ? std::string("tinygltf failed without a message") : text));
         }
+        decode_other_data_uris();
         // Missing external images are only warnings in tinygltf: build_textures() turns them into
         // errors when a material needs them. Keep other tinygltf warnings.
         for (const std::string& l : split_lines(warn_text))
             if (l.rfind("File not found", 0) != 0 &&
                 l.find("Failed to load external 'uri' for image") == std::string::npos)
                 warn("tinygltf: " + l);
+    }
+
+    // tinygltf decodes the data: URIs of PNG, JPEG, BMP and GIF images only: a WebP embedded as
+    // data:image/webp;base64 (EXT_texture_webp, as gltf-transform writes it) was reported as a
+    // missing file named after the URI. Any other base64 image is decoded here (the decoders then
+    // name its format); a data: URI that is not base64 is refused as what it is.
+    void decode_other_data_uris() {
+        for (size_t i = 0; i < model_.images.size(); ++i) {
+            tg::Image& img = model_.images[i];
+            if (img.bufferView >= 0 || !img.image.empty() || img.uri.rfind("data:", 0) != 0) continue;
+            const size_t comma = img.uri.find(',');
+            const std::string head = img.uri.substr(0, std::min(comma, img.uri.size()));
+            if (comma == std::string::npos || head.size() < 7 || head.compare(head.size() - 7, 7, ";base64") != 0)
+                fail("image " + std::to_string(i) + ": its data: URI " +
+                     in_quotes(head.size() > 80 ? head.substr(0, 80) + "..." : head) +
+                     " is not base64 (glTF embeds images as data:MIME;base64,...)");
+            const std::string bytes = tg::base64_decode(img.uri.substr(comma + 1));
+            if (bytes.empty())
+                fail("image " + std::to_string(i) + ": its data: URI " + in_quotes(head) + " holds no bytes");
+            img.image.assign(bytes.begin(), bytes.end());
+            img.as_is = true;
+        }
     }
 
     // Every buffer and image URI, before tinygltf opens any: relative and inside the asset's folder.
@@ -1914,8 +1943,11 @@ class GltfLoader {
                     add_morph_deltas(p, weights, "TANGENT", what, &xyz);
                     // Tangents are directions in the surface: the skin's linear part (the inverse
                     // transpose's inverse transpose) carries them.
-                    for (size_t i = 0; i < normal_matrices.size(); ++i)
+                    for (size_t i = 0; i < normal_matrices.size(); ++i) {
                         xyz[i] = normal_matrices[i].inverse().transpose() * xyz[i];
+                        // A joint that mirrors turns the frame's handedness (as a mirroring node does).
+                        if (normal_matrices[i].determinant() < 0) mesh->tangents[i].w() = -mesh->tangents[i].w();
+                    }
                     for (size_t i = 0; i < n; ++i) mesh->tangents[i].head<3>() = xyz[i];
                 }
                 bool tangents_valid = true;

@@ -23,6 +23,11 @@
 #include "util/error.h"
 #include "util/image.h"
 
+// libtinygltf's base64 encoder (its header declares it only to the library's implementation).
+namespace tinygltf {
+std::string base64_encode(unsigned char const* bytes, unsigned int length);
+}
+
 namespace dynsky {
 namespace {
 
@@ -1584,6 +1589,31 @@ TEST(GltfLoader, WebpTexturesAreReadWithTheirFallbackIgnored) {
     EXPECT_FALSE(has_warning_containing(s, "EXT_texture_webp"));
     std::string e = load_error(write("webp_missing", 5));
     EXPECT_NE(e.find("EXT_texture_webp's source 5 does not exist (the file has 2 images)"), std::string::npos) << e;
+    // Embedded as a data: URI (gltf-transform's output), which tinygltf leaves undecoded for WebP:
+    // it was "missing texture file '.../data:image/webp;base64,...'".
+    auto embedded = [&](const std::string& name, const std::string& uri) {
+        return quad.write(
+            dir, name,
+            "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}],\"textures\":[{\"source\":0,"
+            "\"extensions\":{\"EXT_texture_webp\":{\"source\":1}}}],\"images\":[{\"uri\":\"green.png\"},"
+            "{\"uri\":\"" +
+                uri + "\"}",
+            "\"EXT_texture_webp\"");
+    };
+    s = load_gltf(embedded("webp_embedded",
+                           "data:image/webp;base64," + tinygltf::base64_encode(webp.data(), unsigned(webp.size()))));
+    m = &s.materials.at(0);
+    EXPECT_NEAR(s.textures[size_t(m->base_color_texture.texture)]->evaluate(Vec2(0.5f, 0.5f))[0], 1.0f, 1e-3f);
+    // Another format embedded is named as a file of it is; a data: URI that is not base64 as that.
+    const std::string ktx = "\xabKTX 20\xbb\r\n\x1a\n" + std::string(64, '\0');
+    e = load_error(embedded("ktx_embedded",
+                            "data:image/ktx2;base64," +
+                                tinygltf::base64_encode(reinterpret_cast<const unsigned char*>(ktx.data()),
+                                                        unsigned(ktx.size()))));
+    EXPECT_NE(e.find("glTF textures are PNG or JPEG, or WebP"), std::string::npos) << e;
+    EXPECT_EQ(e.find("missing texture file"), std::string::npos) << e;
+    e = load_error(embedded("not_base64", "data:image/png,notbase64"));
+    EXPECT_NE(e.find("image 1: its data: URI 'data:image/png' is not base64"), std::string::npos) << e;
     // The canvas each kind of WebP header declares is checked before decoding: VP8X (24-bit sizes),
     // VP8L (lossless, 14-bit) and VP8 (lossy, 14-bit).
     auto riff = [](const std::string& chunk, const std::string& data) {
