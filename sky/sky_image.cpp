@@ -95,19 +95,10 @@ void read_sky_metadata(const ImageMetadata& metadata, const std::string& name, S
     if (auto it = metadata.strings.find("dynsky:source"); it != metadata.strings.end()) sky.source = it->second;
 }
 
-SkyImage sky_from_image(const Image& image, const std::string& name) {
-    if (image.width != image.height)
-        throw_file_error(name, "sky image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
-                                   ", but a canonical fisheye sky must be square (render, animate, compare and sky "
-                                   "predict also take a 2:1 lat-long)");
-    if (image.width < 4)
-        throw_file_error(name, "sky image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
-                                   " pixels: too small to hold a sky (at least 4 x 4)");
-    if (image.channels < 3)
-        throw_file_error(name, "sky image needs 3 colour channels, has " + std::to_string(image.channels));
+std::array<int, 3> rgb_channel_indices(const Image& image, const std::string& name) {
     // The colour channels by name, any case: R, G, B; else one layer's LAYER.R, .G, .B (a render's
     // AOV layers beside its RGB are ignored); a file without names gives its first three.
-    int rgb[3] = {0, 1, 2};
+    std::array<int, 3> rgb = {0, 1, 2};
     if (!image.channel_names.empty()) {
         std::vector<std::string> upper = image.channel_names;
         for (std::string& n : upper)
@@ -135,10 +126,24 @@ SkyImage sky_from_image(const Image& image, const std::string& name) {
                 std::string listed;
                 for (const std::string& n : image.channel_names) listed += (listed.empty() ? "" : ", ") + n;
                 throw_file_error(name, "has no " + want + " channel (its channels: " + listed +
-                                           "): a sky needs R, G and B radiance");
+                                           "): radiance needs R, G and B channels");
             }
         }
     }
+    return rgb;
+}
+
+SkyImage sky_from_image(const Image& image, const std::string& name) {
+    if (image.width != image.height)
+        throw_file_error(name, "sky image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                                   ", but a canonical fisheye sky must be square (render, animate, compare and sky "
+                                   "predict also take a 2:1 lat-long)");
+    if (image.width < 4)
+        throw_file_error(name, "sky image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                                   " pixels: too small to hold a sky (at least 4 x 4)");
+    if (image.channels < 3)
+        throw_file_error(name, "sky image needs 3 colour channels, has " + std::to_string(image.channels));
+    const std::array<int, 3> rgb = rgb_channel_indices(image, name);
     SkyImage sky(image.width);
     for (size_t p = 0; p < size_t(image.width) * image.height; ++p)
         for (int c = 0; c < 3; ++c) sky.rgb[p * 3 + c] = image.pixels[p * image.channels + size_t(rgb[c])];
@@ -158,6 +163,21 @@ void refuse_jpeg_as_radiance(const std::string& path) {
 
 Image read_radiance_image(const std::string& path) {
     Image image = read_image(path);
+    if (image.channels > 3 || (image.channels == 3 && !image.channel_names.empty())) {
+        // R, G and B by name (a lat-long or a photograph with AOV layers, X Y Z or Y BY RY: its
+        // first three channels read as colour without a word).
+        const std::array<int, 3> rgb = rgb_channel_indices(image, path);
+        if (image.channels != 3 || rgb != std::array<int, 3>{0, 1, 2}) {
+            Image picked(image.width, image.height, 3);
+            for (size_t q = 0; q < size_t(image.width) * image.height; ++q)
+                for (int c = 0; c < 3; ++c)
+                    picked.pixels[q * 3 + c] = image.pixels[q * image.channels + size_t(rgb[c])];
+            picked.metadata = std::move(image.metadata);
+            picked.file_format = image.file_format, picked.file_pixel_type = image.file_pixel_type;
+            image = std::move(picked);
+        }
+        image.channel_names = {"R", "G", "B"};
+    }
     float top = 0;
     for (float v : image.pixels)
         if (std::isfinite(v)) top = std::max(top, v);
@@ -169,7 +189,9 @@ Image read_radiance_image(const std::string& path) {
 
 SkyImage load_sky(const std::string& path) {
     refuse_jpeg_as_radiance(path);
-    return sky_from_radiance_file(read_radiance_image(path), path);
+    Image image = read_radiance_image(path);
+    apply_orientation(image);  // a file stored turned (a "+Y" .hdr is bottom-up): north and south swapped
+    return sky_from_radiance_file(image, path);
 }
 
 void require_radiance_pixels(const Image& image, const std::string& path) {

@@ -1,6 +1,7 @@
 // A sky: one canonical fisheye image (sky/fisheye.h) of linear HDR radiance, with its time and sun.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -84,11 +85,18 @@ void read_sky_metadata(const ImageMetadata& metadata, const std::string& name, S
 // read_image for a file of radiance (a sky, a lat-long environment, an HDR photograph): lossily
 // compressed EXRs (DWAA, DWAB, B44) ring slightly below zero next to bright pixels (-5e-6 beside a
 // clear sky's 0.1, more beside the sun), so values below zero by at most 1e-3 of the image's
-// largest finite value read as 0. Larger negatives stay (validation refuses them).
+// largest finite value read as 0. Larger negatives stay (validation refuses them). An image of
+// more than 3 channels, or of 3 named ones, comes back as its R, G and B (rgb_channel_indices).
 Image read_radiance_image(const std::string& path);
 // Throws naming the file when it is a JPEG (by its first bytes, whatever its name): 8-bit display
 // values, never radiance. Called before any decoder reads a file that must hold radiance.
 void refuse_jpeg_as_radiance(const std::string& path);
+
+// The R, G and B channels of a radiance image (3 channels or more) by name, any case: R, G, B; else
+// one layer's LAYER.R, .G, .B (a render's AOV layers beside its RGB are ignored); a file without
+// names gives its first three. Throws naming the file when they are not there (X Y Z, Y BY RY) or
+// in more than one layer.
+std::array<int, 3> rgb_channel_indices(const Image& image, const std::string& name);
 
 // Conversions between SkyImage and the generic Image (3 channels).
 Image sky_to_image(const SkyImage& sky);

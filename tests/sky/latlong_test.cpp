@@ -7,7 +7,9 @@
 
 #include "sky/clear_sky.h"
 #include "sky/fisheye.h"
+#include "tests/test_support.h"
 #include "util/error.h"
+#include "util/image.h"
 
 namespace dynsky {
 namespace {
@@ -217,6 +219,50 @@ TEST(LatLong, ConvertsBackToTheFisheyeAndTheGround) {
             EXPECT_NE(m.find(y == 1 ? "sky (upper half)" : "ground (lower half)"), std::string::npos) << m;
         }
     }
+}
+
+// A lat-long file's colour is its R, G and B by name, as a fisheye sky's is: a Blender render's
+// layers (Denoising.Depth first) were read by position, the depth as red (25 for 0.5), and X Y Z
+// passed as R G B; and a file stored turned (Orientation 4: bottom-up, a "+Y" .hdr) is read the
+// right way up (its sky and ground were swapped).
+TEST(LatLong, FilesAreReadByChannelNameAndOrientation) {
+    const std::string dir = test::temp_dir("latlong_channels");
+    Image layered(16, 8, 5);
+    layered.channel_names = {"Denoising.Depth", "Denoising.Albedo.G", "Image.R", "Image.G", "Image.B"};
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 16; ++x) {
+            const float v[5] = {50, 0.8f, 1, 2, 3};
+            for (int c = 0; c < 5; ++c) layered.at(x, y, c) = v[c] * (y < 4 ? 1.0f : 0.25f);
+        }
+    write_image(dir + "/layered.exr", layered);
+    std::shared_ptr<SkyImage> ground;
+    SkyImage sky = load_sky_or_latlong(dir + "/layered.exr", &ground);
+    const Color zenith = sky.pixel(sky.resolution / 2, sky.resolution / 2);
+    EXPECT_NEAR(zenith[0], 1.0f, 1e-4f);
+    EXPECT_NEAR(zenith[1], 2.0f, 1e-4f);
+    EXPECT_NEAR(zenith[2], 3.0f, 1e-4f);
+    EXPECT_NEAR(ground->pixel(ground->resolution / 2, ground->resolution / 2)[2], 0.75f, 1e-4f);
+
+    Image xyz = layered;
+    xyz.channels = 3, xyz.pixels.resize(16 * 8 * 3), xyz.channel_names = {"X", "Y", "Z"};
+    write_image(dir + "/xyz.exr", xyz);
+    try {
+        load_sky_or_latlong(dir + "/xyz.exr", &ground);
+        ADD_FAILURE() << "X Y Z read as colour";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("has no R channel (its channels: X, Y, Z)"), std::string::npos)
+            << e.what();
+    }
+
+    Image turned(16, 8, 3);
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 16; ++x)
+            for (int c = 0; c < 3; ++c) turned.at(x, y, c) = y < 4 ? 0.5f : 2.0f;  // stored bottom-up: sky 2
+    turned.metadata.numbers["Orientation"] = 4;
+    write_image(dir + "/turned.exr", turned);
+    sky = load_sky_or_latlong(dir + "/turned.exr", &ground);
+    EXPECT_NEAR(sky.pixel(sky.resolution / 2, sky.resolution / 2)[0], 2.0f, 1e-4f);
+    EXPECT_NEAR(ground->pixel(ground->resolution / 2, ground->resolution / 2)[0], 0.5f, 1e-4f);
 }
 
 TEST(LatLong, CarriesMetadataAndRejectsBadWidths) {
