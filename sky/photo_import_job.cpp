@@ -76,7 +76,8 @@ ImportPlan plan_import(const OnePhoto& o, bool verbose) {
         // The shadow band follows the sun at the time used (given, or the file name's on its clock).
         std::string band_time = o.time.empty() ? photo_time(o.photo, utc_offset).iso : o.time;
         if (o.mask.empty()) {
-            PresetImportPlan plan = plan_preset_import(o.preset, o.photo, o.resolution, band_time, !o.no_preset_mask);
+            PresetImportPlan plan = plan_preset_import(o.preset, o.photo, o.resolution, band_time, !o.no_preset_mask,
+                                                       GeoLocation{lat, lon, elevation});
             params = plan.params;
             obstructions = plan.obstructions;
         } else {
@@ -258,6 +259,35 @@ void import_one(const OnePhoto& o, bool verbose) {
     if (!o.preview.empty()) write_display_preview(o.preview, sky_to_image(sky), verbose);
 }
 
+// Every photograph's time, before anything is written: a sequence some of whose photographs have a
+// time and others none (a name without a zone, no EXIF) made skies calibrated against the sun
+// (W m^-2 sr^-1) beside skies in the photographs' own units, 40 x apart on a test, and ordered them
+// wrongly; the warning named the first photograph only.
+void refuse_mixed_times(const PhotoImportJob& o, const std::vector<std::string>& photos,
+                        const std::vector<std::string>& outputs) {
+    std::vector<std::string> timeless;
+    size_t timed = 0;
+    for (size_t i = 0; i < photos.size(); ++i) {
+        OnePhoto probe(o);
+        probe.photo = photos[i], probe.out = outputs[i], probe.preview.clear(), probe.filled_mask.clear();
+        try {
+            if (plan_import(probe, false).time.empty()) timeless.push_back(photos[i]);
+            else ++timed;
+        } catch (const Error&) {
+            // Named by its own import below.
+        }
+    }
+    if (timed == 0 || timeless.empty()) return;
+    std::string listed;
+    for (size_t k = 0; k < timeless.size() && k < 4; ++k) listed += (k ? ", " : "") + timeless[k];
+    if (timeless.size() > 4) listed += ", ...";
+    throw Error(std::to_string(timeless.size()) + " of " + std::to_string(photos.size()) +
+                " photographs have no time the import can use (" + listed +
+                ": a time without a zone in the name or EXIF, or none) and the others have one: their skies "
+                "would be in the photographs' own units beside skies calibrated against the sun, and out of "
+                "order. Give --utc-offset HOURS (the camera clock's offset from UTC), or import them apart");
+}
+
 // The image files of a folder, in name order (a sequence's frames are named by their time).
 std::vector<std::string> photos_in_folder(const std::string& folder) {
     std::vector<std::string> out;
@@ -322,6 +352,7 @@ void run_photo_import(const PhotoImportJob& o) {
                 throw Error(photos[i] + " and " + photos[j] + " would both become " + outputs[i] +
                             " (the same name): rename one");
     check_outputs_are_not_inputs(outputs, photos);
+    refuse_mixed_times(o, photos, outputs);
     std::error_code ec;
     fs::create_directories(o.out, ec);
     if (ec || !fs::is_directory(o.out)) throw_file_error(o.out, "cannot create this output folder: " + ec.message());

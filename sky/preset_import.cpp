@@ -7,7 +7,8 @@
 namespace dynsky {
 
 PresetImportPlan plan_preset_import(const std::string& preset, const std::string& photo, int resolution,
-                                    const std::string& time, bool look_for_mask) {
+                                    const std::string& time, bool look_for_mask,
+                                    const std::optional<GeoLocation>& place) {
     PresetImportPlan plan;
     plan.preset = camera_preset(preset);
     const CameraPreset& cam = plan.preset;
@@ -15,7 +16,7 @@ PresetImportPlan plan_preset_import(const std::string& preset, const std::string
     plan.params.resolution = resolution;
     plan.params.mask_path = look_for_mask ? find_preset_mask(preset, photo) : "";
     plan.mask_found = !plan.params.mask_path.empty();
-    plan.location = GeoLocation{cam.latitude_deg, cam.longitude_deg, cam.elevation_m};
+    plan.location = place.value_or(GeoLocation{cam.latitude_deg, cam.longitude_deg, cam.elevation_m});
     plan.time = time.empty() ? photo_time(photo, cam.filename_utc_offset_hours).iso : time;
     if (plan.mask_found) {
         plan.obstructions = "mask " + plan.params.mask_path;

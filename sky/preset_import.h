@@ -10,6 +10,7 @@
 // when the time is known.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,10 +29,12 @@ struct PresetImportPlan {
     std::string obstructions;  // for people: where the not-sky pixels come from
 };
 
-// `time` (ISO 8601 with a zone) overrides the file name's; the band follows the time used.
-// look_for_mask false: the preset's geometry even if a mask file lies beside the photo.
+// `time` (ISO 8601 with a zone) overrides the file name's, `place` the preset's site (--lat, --lon,
+// --elevation); the band follows the sun at the time and place used. look_for_mask false: the
+// preset's geometry even if a mask file lies beside the photo.
 PresetImportPlan plan_preset_import(const std::string& preset, const std::string& photo, int resolution,
-                                    const std::string& time = "", bool look_for_mask = true);
+                                    const std::string& time = "", bool look_for_mask = true,
+                                    const std::optional<GeoLocation>& place = std::nullopt);
 
 // The HDR calibration of a planned import: the photo's time (from its file name unless overridden),
 // the camera's place, sun search radius and typical colour.

@@ -313,6 +313,23 @@ TEST(SkyImportCli, SequenceFolderImportsEveryFrameUnderOneCircle) {
     r = test::run_command(exe() + " sky import " + dir + "/photos" + common + " -o " + dir + "/one.exr");
     EXPECT_NE(r.exit_code, 0);
     EXPECT_NE(r.output.find("is the folder their skies go to"), std::string::npos) << r.output;
+
+    // Some photographs with a time (a zone in the name) and some without (no zone, no --utc-offset):
+    // their skies were calibrated and not, 40 x apart, with a note on the first only. Refused before
+    // anything is written, naming those without; with --utc-offset every one has its time.
+    fs::create_directories(dir + "/times");
+    fs::copy_file(dir + "/photos/IMG_20200812_072000.jpg", dir + "/times/2020-08-12T07:20:00+02:00.jpg");
+    fs::copy_file(dir + "/photos/IMG_20200812_080000.jpg", dir + "/times/IMG_20200812_080000.jpg");
+    const std::string place = " --lat 43.614 --lon 7.071 --fill smooth --sky-res 64";
+    r = test::run_command(exe() + " sky import " + dir + "/times" + place + " -o " + dir + "/timed");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("1 of 2 photographs have no time the import can use (" + dir +
+                            "/times/IMG_20200812_080000.jpg"),
+              std::string::npos)
+        << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/timed"));
+    r = test::run_command(exe() + " sky import " + dir + "/times" + place + " --utc-offset 2 -o " + dir + "/timed");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
     fs::remove_all(dir);
 }
 

@@ -126,6 +126,23 @@ TEST(PresetImport, TsiWithoutMasksFillsArmHousingAndBandOnEveryFrame) {
 
 // The Mobotix without background_mask.png beside its photographs: the preset's horizon profile
 // hides the masts and railings the mask hides; the share stays near the mask-based import's.
+// The band follows the sun at the place used: a TSI imported with --lat/--lon of another site had
+// its band at the preset site's sun (14 degrees off at longitude -90; at 40 N 3 W the azimuth of a
+// sun below the horizon there) while the sun was restored where the given place has it.
+TEST(PresetImport, TsiShadowBandFollowsTheSunOfThePlaceGiven) {
+    const std::string photo = "/nowhere/tsi_sgpC1_20170524170000Z.jpg";  // only its name is read
+    const UtcTime t = parse_utc_time("2017-05-24T17:00:00Z");
+    const PresetImportPlan at_site = plan_preset_import("arm-tsi", photo, 64, "", false);
+    ASSERT_TRUE(at_site.params.shadow_band);
+    EXPECT_NEAR(at_site.params.shadow_band->azimuth_deg, compute_sun_position(t, at_site.location).azimuth_deg, 1e-9);
+    for (const GeoLocation place : {GeoLocation{36.6, -90.0, 0}, GeoLocation{40.0, -3.0, 600}}) {
+        const PresetImportPlan plan = plan_preset_import("arm-tsi", photo, 64, "", false, place);
+        ASSERT_TRUE(plan.params.shadow_band);
+        EXPECT_NEAR(plan.params.shadow_band->azimuth_deg, compute_sun_position(t, place).azimuth_deg, 1e-9);
+        EXPECT_GT(std::abs(plan.params.shadow_band->azimuth_deg - at_site.params.shadow_band->azimuth_deg), 5.0);
+    }
+}
+
 TEST(PresetImport, MobotixWithoutMaskFillsItsHorizonObjects) {
     DYNSKY_REQUIRE_SHARED();
     const int n = 256;
