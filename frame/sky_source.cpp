@@ -100,10 +100,17 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
             const std::string ext = file_extension(e.path().string());
             // `sky procedural`'s flow_NNNN.exr beside its frames hold motion, not skies (at the
             // frames' times: ordered by time, one was taken for the previous frame).
-            if (ext == ".exr" && !image_header_number(e.path().string(), "dynsky:flow_dt"))
+            if (ext == ".exr" && !image_header_number(e.path().string(), "dynsky:flow_dt")) {
                 exrs.push_back(e.path().string());
-            else if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".hdr" || ext == ".tif")
+            } else if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".hdr" || ext == ".tif") {
+                // The previews and filled masks `sky import` and `sky procedural` write beside each
+                // sky (STEM.png, STEM.filled.png) are theirs, not photographs left out.
+                fs::path stem = e.path().stem();
+                if (stem.extension() == ".filled") stem = stem.stem();
+                const fs::path sky_beside = e.path().parent_path() / (stem.string() + ".exr");
+                if (ext == ".png" && fs::exists(sky_beside)) continue;
                 others.push_back(e.path().filename().string());
+            }
         }
         exrs = skies_in_time_order(exrs);
         if (!others.empty()) {  // a photograph among the skies, not imported: said, not silently skipped
@@ -157,9 +164,16 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
                         ": no such sky file (give 'procedural[:SEED]', 'clear', a canonical fisheye .exr or a "
                         "folder of them; import photographs first with 'dynsky sky import')");
         input = load_input_sky(sky_file);
-        if (motion.previous)
+        if (motion.previous) {
             motion.previous_dt = previous_frame_gap(input, *motion.previous, motion.previous_dt, sky_file,
                                                     previous_file);
+            if (motion.previous_dt == 0 && !reports_silenced())
+                std::fprintf(stderr,
+                             "dynsky: note: neither %s nor the previous frame %s says when it was taken (no clock, "
+                             "no recorded time): taken one medium step (Delta t) apart; give --prev-dt SECONDS if "
+                             "they are not\n",
+                             sky_file.c_str(), previous_file.c_str());
+        }
         input.time_seconds = 0;
         if (input.source.empty()) input.source = sky_file;
         scale = bring_to_model_scale(&input, &motion.previous);

@@ -51,6 +51,12 @@ void write_prediction(const PredictionOptions& o) {
         if (o.wind) throw Error("--prev and --wind-*: give one source of motion, not both");
         motion.previous = std::make_shared<const SkyImage>(load_sky_or_latlong(o.previous, &unused_ground));
         motion.previous_dt = previous_frame_gap(sky, *motion.previous, o.previous_dt, o.in, o.previous);
+        if (motion.previous_dt == 0 && !o.quiet)
+            std::fprintf(stderr,
+                         "dynsky: note: neither %s nor the previous frame %s says when it was taken (no clock, no "
+                         "recorded time): taken one medium step (Delta t) apart; give --prev-dt SECONDS if they are "
+                         "not\n",
+                         o.in.c_str(), o.previous.c_str());
     }
     // A sky in other units than the models' (motion/radiance_scale.h) moves divided by its scale; every
     // step is written multiplied back.
@@ -135,6 +141,22 @@ void write_prediction(const PredictionOptions& o) {
         progress.advance();
     });
     progress.finish();
+    // Steps of an earlier run into the same folder that this one did not write (more steps, another
+    // --every) would read as this sky's future: `animate --sky` took a stale one as its last frame.
+    int stale = 0;
+    for (const auto& e : fs::directory_iterator(o.out)) {
+        const std::string name = e.path().filename().string(), ext = e.path().extension().string();
+        if (!e.is_regular_file() || name.rfind("step_", 0) != 0 || (ext != ".exr" && ext != ".png")) continue;
+        const std::string digits = e.path().stem().string().substr(5);
+        if (digits.size() < 4 || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos)
+            continue;
+        const int k = std::stoi(digits);
+        if (k >= 1 && k <= o.steps && (k % o.every == 0 || k == o.steps) && (ext == ".exr" || o.preview)) continue;
+        fs::remove(e.path()), ++stale;
+    }
+    if (stale && !o.quiet)
+        std::fprintf(stderr, "dynsky: note: removed %d step file(s) of an earlier prediction from %s\n", stale,
+                     o.out.c_str());
     if (!o.stats.empty()) write_file_atomic(o.stats, csv.str());
     if (!o.quiet)
         std::printf("wrote %d predicted skies (Delta t = %g s, %d steps) to %s\n", written, dt, o.steps, o.out.c_str());

@@ -915,6 +915,9 @@ TEST(BadInputCli, FourthAuditsTinyMovingSkiesAndMaskPhotosAreRefusedFirst) {
     fs::create_directories(dir + "/seq");
     sky_exr(dir + "/seq/a.exr", 32);
     ldr_image(dir + "/seq/b.png", 32, 32);
+    // The preview and filled mask `sky import` writes beside a sky are its own, not left out.
+    ldr_image(dir + "/seq/a.png", 32, 32);
+    ldr_image(dir + "/seq/a.filled.png", 32, 32);
     test::CommandResult r = dynsky("animate builtin --sky " + dir +
                                    "/seq --duration 10 --fps 0.2 --res 16x9 --spp 1 "
                                    "--no-video -q -o " +

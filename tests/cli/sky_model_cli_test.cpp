@@ -65,6 +65,27 @@ TEST(SkyModelCli, PredictWritesStepsAndStats) {
         EXPECT_EQ(line.substr(line.rfind(',') + 1), "0") << "non-finite pixels in " << line;
     }
     EXPECT_EQ(rows, 5);  // step 0 (the input) and 4 steps
+
+    // A shorter prediction into the same folder leaves none of the earlier one's steps (they read
+    // as this sky's future: `animate --sky` took the stale step 4 as its last frame).
+    std::ofstream(dir + "/out/step_0003.png") << "a stale preview";
+    std::ofstream(dir + "/out/steps.txt") << "not a step";
+    r = test::run_command(dynsky("sky predict --model advect --in " + in + " --steps 2 --out " + dir + "/out"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_TRUE(fs::exists(dir + "/out/step_0001.exr"));
+    EXPECT_TRUE(fs::exists(dir + "/out/step_0002.exr"));
+    EXPECT_FALSE(fs::exists(dir + "/out/step_0003.png"));
+    EXPECT_FALSE(fs::exists(dir + "/out/step_0004.exr"));
+    EXPECT_TRUE(fs::exists(dir + "/out/steps.txt"));
+    EXPECT_NE(r.output.find("removed 2 step file(s) of an earlier prediction"), std::string::npos) << r.output;
+
+    // A previous frame when neither file says when it was taken: one medium step, said.
+    r = test::run_command(dynsky("sky predict --model advect --in " + in + " --prev " + in + " --steps 1 --out " + dir +
+                                 "/prev"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("says when it was taken (no clock, no recorded time): taken one medium step"),
+              std::string::npos)
+        << r.output;
     fs::remove_all(dir);
 }
 
