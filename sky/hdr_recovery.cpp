@@ -168,14 +168,25 @@ std::optional<NorthFromSun> north_from_seen_sun(const ImportedPhoto& photo, cons
     const ClippedBlobs blobs = clipped_blobs(photo, true, sun);
     const std::vector<double>& solid_angle = blobs.solid_angle;
     const std::vector<Vec3d>& centroid = blobs.weighted_sum;
-    const double max_sr = kMaxSunBlobSr, min_sr = 2 * kPiD * (1 - std::cos(1.5 * kDeg));
+    // At least the sun's disc and a pixel and a half: a low-resolution camera's clipped sun covers a
+    // few pixels, under the 1.5 degree cone once asked for, and a clipped cloud edge beside it was
+    // taken instead (north 8.6 degrees off on a 400 x 300 camera).
+    const int n = photo.sky.resolution;
+    const double max_sr = kMaxSunBlobSr, min_sr = std::max(2 * kPiD * (1 - std::cos(0.5 * kDeg)),
+                                                           1.5 * fisheye::pixel_solid_angle(n / 2, n / 2, n));
     const double sun_zenith = std::acos(std::clamp(sun.y(), -1.0, 1.0));
+    // The blob nearest the computed sun's zenith angle, larger ones preferred: each doubling of the
+    // solid angle is worth 1.5 degrees of zenith error (a sun's wide glare, its centroid pulled a
+    // degree or two off by the clouds beside it, still beats a pixel of cloud edge at the height).
     int best = -1;
+    double best_score = 0;
     for (int l = 1; l < blobs.count; ++l) {
         if (solid_angle[size_t(l)] < min_sr || solid_angle[size_t(l)] > max_sr) continue;
         const Vec3d c = centroid[size_t(l)].normalized();
-        if (std::abs(std::acos(std::clamp(c.y(), -1.0, 1.0)) - sun_zenith) > max_zenith_error_deg * kDeg) continue;
-        if (best < 0 || solid_angle[size_t(l)] > solid_angle[size_t(best)]) best = l;
+        const double error = std::abs(std::acos(std::clamp(c.y(), -1.0, 1.0)) - sun_zenith);
+        if (error > max_zenith_error_deg * kDeg) continue;
+        const double score = error / kDeg - 1.5 * std::log2(solid_angle[size_t(l)] / min_sr);
+        if (best < 0 || score < best_score) best = l, best_score = score;
     }
     if (best < 0) return std::nullopt;
     const Vec3d seen = centroid[size_t(best)].normalized();

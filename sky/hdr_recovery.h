@@ -111,10 +111,10 @@ struct HdrCalibrationReport {
 };
 
 // Where north is in a photograph from the sun it shows, for a level camera whose north is not
-// known: the largest clipped blob that could be the sun (its saturated disc and aureole, within a
-// 20 degree cone, at least a 1.5 degree one) at the computed sun's zenith angle within
-// max_zenith_error_deg, and the north (PhotoGeometry::north_deg, the photo's convention) that puts
-// it at the computed sun's azimuth. None when the camera is tilted, the sun is under 3 degrees up
+// known: the clipped blob that could be the sun (its saturated disc and aureole, within a 20 degree
+// cone, at least the sun's disc and 1.5 pixels) nearest the computed sun's zenith angle (within
+// max_zenith_error_deg; larger blobs preferred, 1.5 degrees per doubling), and the north
+// (PhotoGeometry::north_deg, the photo's convention) that puts it at the computed sun's azimuth. None when the camera is tilted, the sun is under 3 degrees up
 // or no such blob is seen (overcast, or only a field of clipped cloud).
 std::optional<NorthFromSun> north_from_seen_sun(const ImportedPhoto& photo, const UtcTime& time,
                                                 const GeoLocation& where, double max_zenith_error_deg = 5);
