@@ -86,6 +86,9 @@ ImportPlan plan_import(const OnePhoto& o, bool verbose) {
     }
     params.resolution = o.resolution;
     params.encoding = o.encoding;
+    // A circle given (--center, --radius) or searched for (--auto-circle) is not the preset's: the
+    // preset's photo size no longer applies (another camera under a preset was refused even so).
+    if (o.circle || o.auto_circle) params.circle_photo_size.reset();
     if (o.circle) params.circle = o.circle;
     if (o.circle_photo_size) params.circle_photo_size = o.circle_photo_size, params.circle_source = "the sequence";
     if (o.auto_circle) params.circle.reset();
@@ -336,7 +339,8 @@ void run_photo_import(const PhotoImportJob& o) {
         }
     }
     if (file_extension(o.out) == ".exr")
-        throw Error("-o " + o.out + ": with several photographs -o is the folder their skies go to (STEM.exr each)");
+        throw Error("--out " + o.out +
+                    ": with several photographs -o, --out is the folder their skies go to (STEM.exr each)");
     if (!o.preview.empty() || !o.filled_mask.empty())
         throw Error(std::string(o.preview.empty() ? "--filled-mask" : "--preview") +
                     ": with several photographs each sky's preview and filled mask are written beside it "

@@ -311,7 +311,7 @@ TEST(SkyImportCli, SequenceFolderImportsEveryFrameUnderOneCircle) {
 
     // -o naming one sky for several photographs is refused before anything is read.
     r = test::run_command(exe() + " sky import " + dir + "/photos" + common + " -o " + dir + "/one.exr");
-    EXPECT_NE(r.exit_code, 0);
+    EXPECT_EQ(r.exit_code, 2);  // a usage error, as --out x.png is
     EXPECT_NE(r.output.find("is the folder their skies go to"), std::string::npos) << r.output;
 
     // Some photographs with a time (a zone in the name) and some without (no zone, no --utc-offset):
@@ -404,6 +404,15 @@ TEST(SkyImportCli, FindNorthTurnsThePhotographByTheSunItShows) {
     ASSERT_NE(small_north, std::string::npos) << r.output;
     EXPECT_NEAR(std::atof(r.output.c_str() + small_north + 7), 70.0, 1.5) << r.output;
     EXPECT_NE(r.output.find("found from the clipped sun on 3 of 3 photographs"), std::string::npos) << r.output;
+
+    // A preset's circle was measured on its camera's photographs: another camera's photo is refused
+    // under it, but not with its own circle given (it was refused even so).
+    r = test::run_command(exe() + " sky import " + one + place + " --preset mobotix -o " + dir + "/preset.exr");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("was measured on"), std::string::npos) << r.output;
+    r = test::run_command(exe() + " sky import " + one + place + " --preset mobotix --center 200,150 --radius 140 -o " +
+                          dir + "/preset.exr");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
 
     // No time: --find-north cannot know where the sun should be.
     write_image(dir + "/untimed.png", read_image(one));
