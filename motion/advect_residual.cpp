@@ -505,7 +505,32 @@ CloudRollout::CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start,
 void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3d>& sun) {
     sun_ = sun;
     cv::Mat background, clipped;
+    // An overcast start (the networks' cloud rule finds cloud on at least 90 % of the disc) shows no
+    // clear sky: what stays where it is while its clouds move is its own light, the large-scale
+    // brightening towards the sun, not the model's clear sky. Over the model's clear sky the grey
+    // carried from the bright west to the zenith took the zenith's blue, and where the grey matched
+    // the dim model at dusk it read clear: blue bands grew through the ARM dusk's overcast (cloud
+    // cover 1.00 -> 0.73 in 6 steps). Its background is the start blurred over 20 degrees instead,
+    // and all of it is cloud.
+    bool overcast = false;
+    cv::Mat rule_cloud;
     if (!given.empty()) {
+        rule_cloud = network_cloud_mask(start_, network_->info().form) & disc_big_;
+        const int disc_pixels = cv::countNonZero(disc_big_);
+        overcast = disc_pixels > 0 && cv::countNonZero(rule_cloud) >= 0.9 * disc_pixels;
+    }
+    if (overcast) {
+        cv::Mat weight, masked, blurred, spread;
+        disc_big_.convertTo(weight, CV_32F, 1.0 / 255.0);
+        cv::Mat weight3;
+        cv::merge(std::vector<cv::Mat>{weight, weight, weight}, weight3);
+        masked = start_.mul(weight3);
+        const double sigma = 20.0 / 180.0 * start_.rows;
+        cv::GaussianBlur(masked, blurred, cv::Size(), sigma, sigma, cv::BORDER_CONSTANT);
+        cv::GaussianBlur(weight3, spread, cv::Size(), sigma, sigma, cv::BORDER_CONSTANT);
+        cv::divide(blurred, cv::max(spread, 1e-6), background);
+        background.setTo(cv::Scalar::all(0), ~disc_big_);
+    } else if (!given.empty()) {
         // Where the model's clear sky clips (the sun's aureole) the start was filled in too: there
         // the background is the start itself, so nothing of the sun moves with the clouds.
         // The model's clear sky made the start's own where the start is clear (clear_sky_field):
@@ -533,6 +558,12 @@ void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3
         // to 0.78 of its start (0.82 additively; tests/motion/advect_residual_test.cpp).
         share_ = circumsolar_share(start_.rows, sun_);
         cv::Mat alpha = background_opacity(start_, background, network_->info().form, share_, given);
+        if (overcast) {
+            // Its clouds are opaque (they cover the sun), and compose additively over its own light
+            // everywhere (nothing of the model's aureole to hide).
+            alpha.setTo(1.0f, rule_cloud);
+            share_.setTo(0.0f);
+        }
         // The sun's pixels were cut out (darker than the clear sky's sun there, they would read as
         // cloud over it), and where the model's sky clips the background is the start itself: the
         // start says nothing there, so they take the opacity of the clouds around them. Counted
