@@ -378,7 +378,10 @@ cv::Mat enclosed_clear_near_sun(const cv::Mat& alpha, const cv::Mat& share, cons
 // from the clear-sky model (a 90th percentile takes in the rule's own clear band, up to 1.12 in
 // colour), never under kTightestCloudRatio / kTightestBrightnessRatio and never over the
 // rule's own. A sky that matches its clear model closely (procedural) is judged closely near the
-// sun; a photograph's clear sky, with its camera's departures, keeps the rule as it was. Both the
+// sun; a photograph's clear sky, with its camera's departures, keeps the rule as it was: one whose
+// colour departs too far to tighten keeps its brightness threshold too (its calibration fitted the
+// brightness to the model, so that alone tightened, to 1.4 x on the ARM clear morning, and the
+// glare between a low sun and the horizon read as cloud over a whole sun, putting it out). Both the
 // spread and the tightened rule compare with the clear-sky model itself (`model`), not with the
 // background made the start's own: that field, smooth and fitted at 128 px, is off by 3-10 % beside
 // clouds (procedural cumulus at 512 px), more than the tightened rule allows.
@@ -422,7 +425,9 @@ cv::Mat background_opacity(const cv::Mat& start, const cv::Mat& background, cons
         return v[v.size() / 2];
     };
     const double log_c = std::log(rule.cloud_ratio), log_b = std::log(rule.brightness_ratio);
-    const double tight_c = std::clamp(kClearSpreadFactor * median(colour), std::log(kTightestCloudRatio), log_c);
+    const double spread_c = kClearSpreadFactor * median(colour);
+    if (spread_c >= log_c) return opacity;  // a photograph's colours: the rule as it was
+    const double tight_c = std::clamp(spread_c, std::log(kTightestCloudRatio), log_c);
     const double tight_b = std::clamp(kClearSpreadFactor * median(brightness), std::log(kTightestBrightnessRatio),
                                       log_b);
     tbb::parallel_for(0, big, [&](int y) {
