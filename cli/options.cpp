@@ -29,8 +29,12 @@ CLI::Validator finite_range(double min, double max, bool open_min) {
 CLI::Validator non_negative_whole() {
     return CLI::Validator(
         [](std::string& text) -> std::string {
-            if (text.empty() || text.size() > 19 || text.find_first_not_of("0123456789") != std::string::npos)
-                return "'" + text + "' is not a whole number in 0..9999999999999999999";
+            // Up to 2^64 - 1: every seed a frame of `animate --seed-per-frame` uses (seed + k x
+            // 0x9E3779B97F4A7C15, wrapping) can be given to `render` again.
+            const std::string top = "18446744073709551615";
+            if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos || text.size() > top.size() ||
+                (text.size() == top.size() && text > top))
+                return "'" + text + "' is not a whole number in 0.." + top;
             return "";
         },
         "a whole number >= 0");
@@ -116,7 +120,8 @@ void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {
         ->capture_default_str();
     cmd->add_option(
            "--dt", m->dt,
-           "Delta t: seconds between medium steps (0: a network model's own Delta t from its model.json, else the paper's 10 s)")
+           "Delta t: seconds between medium steps (0: the model's own: a network's from its model.json, 30 for\n"
+           "advect, 10 for procedural and flow)")
         ->check(finite_in(0, 86400))
         ->capture_default_str();
     cmd->add_option(

@@ -167,11 +167,16 @@ int run_render(const RenderOptions& o) {
 
     Image& image = result.color;
     // Nothing lit reached the camera: written (it is what the scene shows), but said.
-    if (is_black_everywhere(image)) std::fprintf(stderr, "dynsky: warning: the image %s\n", kBlackRenderHint);
+    if (is_black_everywhere(image))
+        std::fprintf(stderr, "dynsky: warning: the image %s\n",
+                     o.max_depth == 0 ? "is black everywhere: --max-depth 0 shows only emitters and the sky seen "
+                                        "directly, and the camera sees neither"
+                                      : kBlackRenderHint);
     image.metadata.numbers["dynsky:spp"] = o.spp;  // the most asked for; what was taken (adaptive, --time-limit):
     image.metadata.numbers["dynsky:spp_mean"] = double(result.stats.camera_rays) /
                                                 std::max<double>(1.0, double(image.width) * image.height);
     image.metadata.numbers["dynsky:seed"] = double(o.seed);
+    image.metadata.strings["dynsky:seed_exact"] = std::to_string(o.seed);  // a double holds 53 bits of it
     image.metadata.numbers["dynsky:render_seconds"] = result.stats.seconds;
     // CPU time of all threads: comparable across runs on a shared machine (bench/cycles_equal_error.sh).
     image.metadata.numbers["dynsky:render_cpu_seconds"] = render_cpu_seconds;
@@ -186,6 +191,8 @@ int run_render(const RenderOptions& o) {
     if (o.clamp_indirect > 0) image.metadata.numbers["dynsky:clamp_indirect"] = o.clamp_indirect;
     if (o.filter_glossy > 0) image.metadata.numbers["dynsky:filter_glossy"] = o.filter_glossy;
     if (o.noise_threshold > 0) image.metadata.numbers["dynsky:noise_threshold"] = o.noise_threshold;
+    if (o.time_limit > 0) image.metadata.numbers["dynsky:time_limit_seconds"] = o.time_limit;
+    if (o.scene.animation_time >= 0) image.metadata.numbers["dynsky:anim_time"] = o.scene.animation_time;
     image.metadata.numbers["dynsky:rounds"] = result.rounds;
     image.metadata.strings["dynsky:sampler_pattern"] = o.sampler_pattern;
     // Everything else that changes the image, so that it can be rendered again from its header.
@@ -273,7 +280,8 @@ void register_render_command(CLI::App& app) {
         "--region", o->region,
         "Render only pixels [x0, x1) x [y0, y1) of the --res image, 'x0,y0,x1,y1' (the output is cropped to\n"
         "them; they equal the same pixels of a full render with the same seed; with --noise-threshold only\n"
-        "where the stopping rule's 9 x 9 neighbourhood lies inside the region)");
+        "where the stopping rule's 9 x 9 neighbourhood lies inside the region). The PNG's automatic exposure\n"
+        "is the region's own: give --exposure for tiles that match");
     cmd->add_option(
            "--noise-threshold", o->noise_threshold,
            "Adaptive sampling (0: off): a pixel stops taking samples, in rounds of 16, once the relative error\n"

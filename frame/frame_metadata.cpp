@@ -130,6 +130,7 @@ void FrameMetadata::write_to(ImageMetadata* m) const {
     m->numbers["dynsky:fps"] = fps;
     m->numbers["dynsky:spp"] = spp;
     m->numbers["dynsky:seed"] = double(seed);
+    m->strings["dynsky:seed_exact"] = std::to_string(seed);  // a double holds 53 bits of it
     m->numbers["dynsky:medium_step_seconds"] = medium_step_seconds;
     m->numbers["dynsky:png_exposure_ev"] = png_exposure_ev;
     m->strings["dynsky:sky"] = sky;

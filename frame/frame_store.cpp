@@ -68,8 +68,9 @@ void parse_frame_range(const std::string& text, int total, int* first, int* last
         throw Error("--frames '" + text + "': expected A-B (inclusive, from 0) or a single frame number");
     *first = int(parse_whole_number(m[1], "--frames '" + text + "'", 0, 1 << 30));
     *last = m[3].matched ? int(parse_whole_number(m[3], "--frames '" + text + "'", 0, 1 << 30)) : *first;
-    if (*first > *last || *last >= total)
-        throw Error("--frames '" + text + "': the animation has frames 0-" + std::to_string(total - 1));
+    if (*first > *last)
+        throw Error("--frames '" + text + "': the first frame comes after the last (give A-B with A <= B)");
+    if (*last >= total) throw Error("--frames '" + text + "': the animation has frames 0-" + std::to_string(total - 1));
 }
 
 }  // namespace dynsky

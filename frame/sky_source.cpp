@@ -63,16 +63,21 @@ SkyImage make_generated_sky(const SkySourceSpec& o) {
     validate_location(where);
     const Vec3d sun = compute_sun_position(start_time(o), where).direction();
     SkyImage input;
+    // What made it, whole: a render's header names the sky it can be made again from.
+    const std::string made = " at " + format_utc_time(start_time(o)) + ", " + number_text(o.latitude) + " N " +
+                             number_text(o.longitude) + " E, " + std::to_string(o.sky_resolution) + " px";
     if (o.sky == "clear") {
         ClearSkyParams p;
         p.sun_direction = sun;
         p.turbidity = default_sky::kTurbidity;
         input = make_clear_sky(p, o.sky_resolution);
-        input.source = "clear sky (Hosek-Wilkie, turbidity 3)";
+        input.source = "clear sky (Hosek-Wilkie, turbidity " + number_text(p.turbidity) + ")" + made;
     } else {
         const uint64_t seed = procedural_seed(o.sky);
         input = render_procedural_sky(procedural_params(o, seed, sun), 0.0, o.sky_resolution);
-        input.source = "procedural (seed " + std::to_string(seed) + ", coverage " + std::to_string(o.coverage) + ")";
+        input.source = "procedural (seed " + std::to_string(seed) + ", coverage " + number_text(o.coverage) +
+                       ", wind " + number_text(o.wind_speed_mps) + " m/s from " + number_text(o.wind_from_deg) +
+                       " deg at " + number_text(o.cloud_height_m) + " m)" + made;
     }
     return input;
 }

@@ -43,7 +43,7 @@ struct SkySourceSpec {
 //                            shipped advect-residual network (networks/models/advect_residual)
 //                            when installed, else advect (pure advection along the motion); paper:
 //                            the paper's FlowNet + CloudNet (networks/models/arm_tsi)
-//   dt               0       Delta t in seconds; 0: a network's own, else 10
+//   dt               0       Delta t in seconds; 0: the model's own (a network's, advect 30), else 10
 //   drift_deg_per_s  0.25    flow model: first-step drift of a single input sky (from wind_from_deg)
 //   gamma            "constant"  the in-between of two steps (motion/sky_timeline.h GammaKind):
 //                            constant (even pace) or paper (the paper's keys at 1/3 and 2/3)

@@ -725,6 +725,8 @@ TEST(BadInputCli, OutOfRangeNumericOptionsAreRefusedNamingTheOption) {
         {a + "--duration 1 --fps 0", "--fps"},
         {a + "--duration 1 --fps nan", "--fps"},
         {a + "--duration 1 --fps 1 --frames 99999999999999999999", "--frames"},
+        {a + "--duration 1 --fps 8 --frames 5-3", "the first frame comes after the last"},
+        {"render builtin --spp 1 -q -o " + dir + "/out.exr --seed 18446744073709551616", "--seed"},
         {a + "--duration 1 --fps 1 --coverage 1.5", "--coverage"},
         {a + "--duration 1 --fps 1 --wind-speed -3", "--wind-speed"},
         {a + "--duration 1 --fps 1 --cloud-height 0", "--cloud-height"},

@@ -178,7 +178,8 @@ TEST(RenderCli, WritesExrWithMetadataAndPng) {
     // Everything that changes the image is in its header, to render it again from there.
     Outcome more = render(
         "builtin --max-depth 2 --override-material lambert --sampler uniform --look-at 0,1,3,0,0,0 "
-        "--fov 33",
+        "--fov 33 --seed 18446744073709551615 --time-limit 600 --sky clear --time 2026-03-01T09:00:00Z --lat 10 "
+        "--lon 20",
         dir + "/more.exr");
     ASSERT_EQ(more.result.exit_code, 0) << more.result.output;
     Image m = read_image(dir + "/more.exr");
@@ -187,6 +188,12 @@ TEST(RenderCli, WritesExrWithMetadataAndPng) {
     EXPECT_EQ(m.metadata.strings["dynsky:sky_sampler"], "uniform");
     EXPECT_EQ(m.metadata.strings["dynsky:look_at"], "0,1,3,0,0,0");
     EXPECT_NEAR(m.metadata.numbers["dynsky:camera_yfov_deg"], 33, 1e-4);
+    // The seed exactly (a double holds 53 bits: animate --seed-per-frame's seeds reach 2^64 - 1),
+    // the time limit, and the sky made here with its time and place.
+    EXPECT_EQ(m.metadata.strings["dynsky:seed_exact"], "18446744073709551615");
+    EXPECT_EQ(m.metadata.numbers["dynsky:time_limit_seconds"], 600);
+    EXPECT_NE(m.metadata.strings["dynsky:sky"].find("at 2026-03-01T09:00:00Z, 10 N 20 E"), std::string::npos)
+        << m.metadata.strings["dynsky:sky"];
     EXPECT_EQ(im.metadata.strings.count("dynsky:override_material"), 0u);  // none: not said
     EXPECT_EQ(im.metadata.strings["dynsky:sky_sampler"], "cdf+mis");
 }
@@ -263,6 +270,11 @@ TEST(RenderCli, ACameraInsideClosedGeometryIsToldInEveryCommand) {
                           "/lit.exr");
     EXPECT_EQ(r.exit_code, 0) << r.output;
     EXPECT_EQ(r.output.find("black"), std::string::npos) << r.output;
+    // Black for --max-depth 0 (a box lit only by the sky, which the camera does not see): that is said.
+    r = test::run_command(exe() + " render '" + box_glb() + "' --sky-res 64 -q --res 16x12 --spp 1 --max-depth 0 " +
+                          "--look-at 0,0,-3,0,0,0 --fov 8 -o " + dir + "/depth0.exr");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("--max-depth 0 shows only emitters"), std::string::npos) << r.output;
     fs::remove_all(dir);
 }
 

@@ -265,6 +265,25 @@ TEST(LatLong, FilesAreReadByChannelNameAndOrientation) {
     EXPECT_NEAR(ground->pixel(ground->resolution / 2, ground->resolution / 2)[0], 0.5f, 1e-4f);
 }
 
+// The sky fisheye reads only the upper half's rows, the ground only the lower half's: a bright
+// ground (snow, 20 x the sky) leaked into the sky's horizon ring through the filter.
+TEST(LatLong, EachHalfIsReadWithoutTheOthersRows) {
+    Image ll(64, 32, 3);
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 64; ++x)
+            for (int c = 0; c < 3; ++c) ll.at(x, y, c) = y < 16 ? 1.0f : 20.0f;
+    const SkyImage sky = latlong_to_fisheye(ll, 64), ground = latlong_to_fisheye(ll, 64, true);
+    float sky_max = 0, ground_min = 1e9f;
+    for (int j = 0; j < 64; ++j)
+        for (int i = 0; i < 64; ++i)
+            if (sky.in_disc(i, j)) {
+                sky_max = std::max(sky_max, sky.pixel(i, j).maxCoeff());
+                ground_min = std::min(ground_min, ground.pixel(i, j).minCoeff());
+            }
+    EXPECT_NEAR(sky_max, 1.0f, 1e-5f);
+    EXPECT_NEAR(ground_min, 20.0f, 1e-4f);
+}
+
 TEST(LatLong, CarriesMetadataAndRejectsBadWidths) {
     SkyImage sky = sky_from_function(32, synthetic);
     sky.time_seconds = 12.5;
