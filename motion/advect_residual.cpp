@@ -471,8 +471,14 @@ cv::Mat circumsolar_share(int n, const std::optional<Vec3d>& sun) {
 }  // namespace
 
 CloudRollout::CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start, const CloudFlow& flow,
-                           const cv::Mat& background, const cv::Mat& unseen, const std::optional<Vec3d>& sun)
-    : network_(network), flow_(flow), start_(start.clone()), state_(start.clone()), unseen_(unseen) {
+                           const cv::Mat& background, const cv::Mat& unseen, const std::optional<Vec3d>& sun,
+                           bool sun_seen_whole)
+    : network_(network),
+      flow_(flow),
+      start_(start.clone()),
+      state_(start.clone()),
+      unseen_(unseen),
+      sun_seen_whole_(sun_seen_whole) {
     keep_large_allocations();  // each step's full-sky temporaries would page-fault in again
     const int n = network->info().resolution, big = start.rows;
     if (flow.measured.rows != big || flow.measured.cols != big || flow.measured.type() != CV_32FC2)
@@ -516,10 +522,11 @@ void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3
     // carried from the bright west to the zenith took the zenith's blue, and where the grey matched
     // the dim model at dusk it read clear: blue bands grew through the ARM dusk's overcast (cloud
     // cover 1.00 -> 0.73 in 6 steps). Its background is the start blurred over 20 degrees instead,
-    // and all of it is cloud.
+    // and all of it is cloud. Not a start that shows its sun whole: a clear sky at sunrise is red
+    // enough all over for the cloud rule, and its sun went out.
     bool overcast = false;
     cv::Mat rule_cloud;
-    if (!given.empty()) {
+    if (!given.empty() && !sun_seen_whole_) {
         rule_cloud = network_cloud_mask(start_, network_->info().form) & disc_big_;
         const int disc_pixels = cv::countNonZero(disc_big_);
         overcast = disc_pixels > 0 && cv::countNonZero(rule_cloud) >= 0.9 * disc_pixels;
@@ -864,9 +871,9 @@ void AdvectResidualNetwork::rollout(const SkyImage& given, const CloudFlow& flow
     if (sky.sun_direction) at = sky.sun_direction->cast<double>();
     else at = sun_from_brightest_pixels(sky);
     if (background.empty() && at) background = this->background(at->cast<float>(), sky.resolution);
-    CloudRollout rollout(this, state, flow, background,
-                         sky.sun_direction ? sun_unseen_mask(sky.resolution, *at) : cv::Mat(), at);
     const double share = has_sun ? shown_sun_share(sky, at) : 0.0;
+    CloudRollout rollout(this, state, flow, background,
+                         sky.sun_direction ? sun_unseen_mask(sky.resolution, *at) : cv::Mat(), at, share >= 0.5);
     const double start_look = has_sun && at ? estimate_sun_transmittance(sky, *at) : 1.0;
     for (int k = 1; k <= steps; ++k) {
         SkyImage next = from_network_form(rollout.advance(), sky, info_.form);
@@ -1008,6 +1015,9 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
     if (sun && (background_.rows != input.resolution || (*sun - background_sun_).norm() > 0.0035)) {
         background_ = network_.background(*sun, input.resolution);
         background_sun_ = *sun;
+        if (!input_sun_share_) input_sun_share_ = shown_sun_share(input, sun->cast<double>());
+        rollout_->set_sun_seen_whole(told_sun_share_ ? *told_sun_share_ >= 0.5
+                                                     : cv::countNonZero(sun_mask_) > 0 && *input_sun_share_ >= 0.5);
         rollout_->set_background(background_, sun->cast<double>());
     }
     SkyImage next = from_network_form(rollout_->advance(), input, network_.info().form);

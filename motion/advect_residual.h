@@ -177,10 +177,13 @@ class CloudRollout {
     // unseen (CV_8UC1, may be empty): pixels of the start whose cloud cannot be judged (the sun cut
     // out and the sky around it, motion/sun_patch.h sun_unseen_mask); they count as clear in
     // opacity(). sun: the background's (see set_background).
+    // sun_seen_whole: the start shows its sun whole (sun_patch_share >= 0.5), so it is not overcast
+    // whatever its colours (set_background).
     CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start, const CloudFlow& flow,
                  const cv::Mat& background = cv::Mat(), const cv::Mat& unseen = cv::Mat(),
-                 const std::optional<Vec3d>& sun = std::nullopt);
-    const cv::Mat& advance();  // the next step's state
+                 const std::optional<Vec3d>& sun = std::nullopt, bool sun_seen_whole = false);
+    void set_sun_seen_whole(bool whole) { sun_seen_whole_ = whole; }  // for the next set_background
+    const cv::Mat& advance();                                         // the next step's state
     int steps() const { return steps_; }
     const cv::Mat& state() const { return state_; }
     // The clear background (at the state's resolution) for the following steps; used only when the
@@ -216,6 +219,7 @@ class CloudRollout {
     cv::Mat cloud_own_ext_;              // a x the cloud's own radiance, a (CV_32FC4): what the tile carries
     cv::Mat opacity_, carried_opacity_;  // a at the start, and where the clouds have taken it
     cv::Mat unseen_;
+    bool sun_seen_whole_ = false;
     double unseen_opacity_ = 0;
     cv::Mat share_;             // circumsolar share (where a cloud hides the background)
     std::optional<Vec3d> sun_;  // the background's
@@ -244,6 +248,7 @@ class AdvectResidualStepModel : public MediumStepModel {
     cv::Mat last_cloud_opacity() const override { return last_opacity_; }
     cv::Mat input_cloud_opacity() const override { return input_opacity_; }
     void set_input_sun_cover(double c) override { sun_cover_ = c; }
+    void set_input_sun_share(double s) override { told_sun_share_ = s; }
     cv::Mat last_step_flow() const override { return last_flow_; }
 
   private:
@@ -264,7 +269,8 @@ class AdvectResidualStepModel : public MediumStepModel {
     std::optional<Vec3> sun_;  // from the timeline, else the sky's own
     cv::Mat last_opacity_, input_opacity_;
     double sun_cover_ = 0;
-    cv::Mat last_flow_;  // the flow of the last step, at the given sky's resolution
+    std::optional<double> told_sun_share_;  // set_input_sun_share: the input's sun before the timeline cut it
+    cv::Mat last_flow_;                     // the flow of the last step, at the given sky's resolution
 };
 
 // The kind of a model folder's model.json ("advect-residual", or "flownet-cloudnet" for the

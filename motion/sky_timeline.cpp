@@ -74,6 +74,7 @@ SkyTimeline::SkyTimeline(SkyImage input, std::unique_ptr<MediumStepModel> model,
         input.sun_direction = compute_sun_position(clock_->start, clock_->where).direction().cast<float>();
     }
     steps_.push_back(std::make_shared<const SkyImage>(std::move(input)));
+    if (input_sun_) model_->set_input_sun_share(input_sun_share());
     if (input_sun_ && input_sun_share() < 0.5) model_->set_input_sun_cover(1.0 - input_sun_share());
 }
 

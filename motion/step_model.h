@@ -37,6 +37,9 @@ class MediumStepModel {
     // How much of the input's sun a cloud hid (1 - its share of the clear sun), told before the
     // first step: models with an opacity count the sun's cut-out pixels at least this opaque.
     virtual void set_input_sun_cover(double) {}
+    // How much of the clear sun the input showed before its sun was cut out (sun_patch_share),
+    // told before the first step: a sky that shows its sun whole is not overcast.
+    virtual void set_input_sun_share(double) {}
     // True when only native_dt() is right (the paper's networks learnt one step's motion); models
     // that take their motion as an input work at any Delta t.
     virtual bool dt_is_fixed() const { return native_dt() > 0; }

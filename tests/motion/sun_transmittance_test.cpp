@@ -24,6 +24,7 @@
 #include "sky/hdr_recovery.h"
 #include "sky/preset_import.h"
 #include "sky/procedural_clouds.h"
+#include "sky/sun_position.h"
 #include "tests/sky/frozen_cumulus.h"
 #include "tests/test_support.h"
 
@@ -313,6 +314,27 @@ TEST(SunTransmittance, AClearPhotographKeepsItsSun) {
                 << (measured ? "measured motion" : "wind") << ", step " << k;
         });
     }
+}
+
+// A clear sky at sunrise is red enough all over for the networks' cloud rule to call it overcast,
+// but its sun shows whole: it is not overcast, and keeps its sun in `sky predict` and in the
+// timeline (the overcast rule put it out on the first step: 2.58 -> 0.01).
+TEST(SunTransmittance, AClearSkyAtSunriseKeepsItsSun) {
+    ClearSkyParams p;  // Paris at 04:10 UTC on 21 June: the sun 1.3 degrees up in the north-east
+    p.sun_direction =
+        compute_sun_position(parse_utc_time("2026-06-21T04:10:00Z"), GeoLocation{48.8566, 2.3522, 0}).direction();
+    p.turbidity = 3;
+    const SkyImage sky = make_clear_sky(p, 256);
+    const double start = horizontal_illuminance(sky);
+    AdvectResidualNetwork advect = AdvectResidualNetwork::pure_advection();
+    CloudMotion motion;
+    motion.wind = Wind{};
+    advect.rollout(sky, advect.motion_flow(sky, motion, 30, sky.resolution), 3, [&](int k, const SkyImage& s) {
+        EXPECT_NEAR(horizontal_illuminance(s) / start, 1.0, 0.03) << "sky predict, step " << k;
+    });
+    SkyTimeline timeline(sky, make_network_step_model("advect", motion), 30);
+    for (double t : {15.0, 30.0, 60.0})
+        EXPECT_NEAR(horizontal_illuminance(timeline.sky_at(t)) / start, 1.0, 0.03) << "timeline, t " << t;
 }
 
 TEST(SunTransmittance, RelativeTransmittanceIsContinuousAndKeepsAnOpaqueStart) {
