@@ -47,7 +47,11 @@ uint64_t procedural_seed(const std::string& sky) {
     if (sky.size() <= 10) return 0;
     if (sky[10] != ':' || sky.size() == 11 || sky.find_first_not_of("0123456789", 11) != std::string::npos)
         throw Error("--sky '" + sky + "': expected 'procedural' or 'procedural:SEED' (SEED a whole number)");
-    return uint64_t(parse_whole_number(sky.substr(11), "--sky '" + sky + "' (the seed)", 0, 999999999999999999LL));
+    // Any 64-bit seed, as `sky procedural --cloud-seed` takes.
+    const std::string digits = sky.substr(11), top = "18446744073709551615";
+    if (digits.size() > top.size() || (digits.size() == top.size() && digits > top))
+        throw Error("--sky '" + sky + "': the seed must be a whole number in 0.." + top);
+    return std::stoull(digits);
 }
 
 }  // namespace

@@ -143,10 +143,18 @@ void write_prediction(const PredictionOptions& o) {
     progress.finish();
     // Steps of an earlier run into the same folder that this one did not write (more steps, another
     // --every) would read as this sky's future: `animate --sky` took a stale one as its last frame.
+    // Never this run's inputs (a prediction continued from its own last step into its folder).
+    auto is_input = [&](const fs::path& p) {
+        std::error_code ec;
+        for (const std::string& input : {o.in, o.previous})
+            if (!input.empty() && fs::exists(input, ec) && fs::equivalent(p, input, ec)) return true;
+        return false;
+    };
     int stale = 0;
     for (const auto& e : fs::directory_iterator(o.out)) {
         const std::string name = e.path().filename().string(), ext = e.path().extension().string();
         if (!e.is_regular_file() || name.rfind("step_", 0) != 0 || (ext != ".exr" && ext != ".png")) continue;
+        if (is_input(e.path())) continue;
         const std::string digits = e.path().stem().string().substr(5);
         if (digits.size() < 4 || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos)
             continue;

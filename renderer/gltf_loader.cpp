@@ -1639,6 +1639,8 @@ class GltfLoader {
             if (!decoded[k].error.empty()) {
                 const tg::Image& img = model_.images[size_t(images[k])];
                 std::string name = !img.uri.empty() ? img.uri : img.name;
+                // An embedded image is named by its data: URI's head, not its megabytes of base64.
+                if (name.rfind("data:", 0) == 0) name = name.substr(0, std::min(name.find(','), size_t(80))) + ",...";
                 fail("cannot decode image " + std::to_string(images[k]) + (name.empty() ? "" : " " + in_quotes(name)) +
                      ": " + decoded[k].error);
             }

@@ -79,6 +79,17 @@ TEST(SkyModelCli, PredictWritesStepsAndStats) {
     EXPECT_TRUE(fs::exists(dir + "/out/steps.txt"));
     EXPECT_NE(r.output.find("removed 2 step file(s) of an earlier prediction"), std::string::npos) << r.output;
 
+    // Continued from its own last step into the same folder: its inputs stay (they were removed
+    // as stale steps), the rest of the earlier run's steps go.
+    r = test::run_command(dynsky("sky predict --model advect --in " + in + " --steps 4 --out " + dir + "/cont -q"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    r = test::run_command(dynsky("sky predict --model advect --in " + dir + "/cont/step_0004.exr --prev " + dir +
+                                 "/cont/step_0003.exr --steps 2 --out " + dir + "/cont"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_TRUE(fs::exists(dir + "/cont/step_0004.exr"));
+    EXPECT_TRUE(fs::exists(dir + "/cont/step_0003.exr"));
+    EXPECT_TRUE(fs::exists(dir + "/cont/step_0002.exr"));  // written again, by this run
+
     // A previous frame when neither file says when it was taken: one medium step, said.
     r = test::run_command(dynsky("sky predict --model advect --in " + in + " --prev " + in + " --steps 1 --out " + dir +
                                  "/prev"));
