@@ -159,9 +159,9 @@ namespace {
 using Hidden = cv::Vec<float, 5>;  // a x background, a, circumsolar share
 
 // The clear background at n, computed at most at 256 px and upsampled (it is smooth).
-cv::Mat background_at(const Vec3& sun, int n, const NetworkFormParams& form) {
+cv::Mat background_at(const Vec3& sun, int n, const NetworkFormParams& form, double turbidity) {
     const int w = std::min(n, 256);
-    cv::Mat b = clear_background(sun.cast<double>(), w, form);
+    cv::Mat b = clear_background(sun.cast<double>(), w, form, turbidity);
     if (w == n) return b;
     cv::Mat up;
     cv::resize(extend_past_rim(b), up, cv::Size(n, n), 0, 0, cv::INTER_LINEAR);
@@ -870,7 +870,8 @@ void AdvectResidualNetwork::rollout(const SkyImage& given, const CloudFlow& flow
     std::optional<Vec3d> at;
     if (sky.sun_direction) at = sky.sun_direction->cast<double>();
     else at = sun_from_brightest_pixels(sky);
-    if (background.empty() && at) background = this->background(at->cast<float>(), sky.resolution);
+    if (background.empty() && at)
+        background = this->background(at->cast<float>(), sky.resolution, clear_sky_turbidity(sky, *at));
     const double share = has_sun ? shown_sun_share(sky, at) : 0.0;
     CloudRollout rollout(this, state, flow, background,
                          sky.sun_direction ? sun_unseen_mask(sky.resolution, *at) : cv::Mat(), at, share >= 0.5);
@@ -962,7 +963,9 @@ SkyImage scaled_sky(const SkyImage& sky, double factor) {
     return out;
 }
 
-cv::Mat AdvectResidualNetwork::background(const Vec3& sun, int n) const { return background_at(sun, n, info_.form); }
+cv::Mat AdvectResidualNetwork::background(const Vec3& sun, int n, double turbidity) const {
+    return background_at(sun, n, info_.form, turbidity);
+}
 
 AdvectResidualStepModel::AdvectResidualStepModel(AdvectResidualNetwork network, CloudMotion motion)
     : network_(std::move(network)), motion_(std::move(motion)) {}
@@ -1009,11 +1012,13 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
         rollout_->set_unseen_opacity(sun_cover_);
         background_ = cv::Mat();  // the new rollout needs its background (and opacity)
         rollout_input_ = history.front().get();
+        turbidity_.reset();
         for (int j = 1; j < k; ++j) rollout_->advance();  // catch up (not the timeline's order)
     }
     const std::optional<Vec3> sun = sun_ ? sun_ : input.sun_direction ? input.sun_direction : estimated_sun_;
     if (sun && (background_.rows != input.resolution || (*sun - background_sun_).norm() > 0.0035)) {
-        background_ = network_.background(*sun, input.resolution);
+        if (!turbidity_) turbidity_ = clear_sky_turbidity(input, sun->cast<double>());
+        background_ = network_.background(*sun, input.resolution, *turbidity_);
         background_sun_ = *sun;
         if (!input_sun_share_) input_sun_share_ = shown_sun_share(input, sun->cast<double>());
         rollout_->set_sun_seen_whole(told_sun_share_ ? *told_sun_share_ >= 0.5

@@ -136,7 +136,7 @@ class AdvectResidualNetwork {
                  const std::function<void(int, const SkyImage&)>& on_step, cv::Mat background = cv::Mat());
 
     // The clear background of a sun at n (computed at most at 256 px and upsampled: it is smooth).
-    cv::Mat background(const Vec3& sun, int n) const;
+    cv::Mat background(const Vec3& sun, int n, double turbidity = 3.0) const;
 
     // The same on the network form: state (R x R CV_32FC3, any R >= N, no saturated pixels) and
     // flow (R x R CV_32FC2, per step); on_step(k, state_k) for k = 1..K.
@@ -269,6 +269,7 @@ class AdvectResidualStepModel : public MediumStepModel {
     std::optional<Vec3> sun_;  // from the timeline, else the sky's own
     cv::Mat last_opacity_, input_opacity_;
     double sun_cover_ = 0;
+    std::optional<double> turbidity_;       // of the input's clear background (clear_sky_turbidity), found once
     std::optional<double> told_sun_share_;  // set_input_sun_share: the input's sun before the timeline cut it
     cv::Mat last_flow_;                     // the flow of the last step, at the given sky's resolution
 };

@@ -1,6 +1,9 @@
 #include "motion/network_form.h"
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
+#include <vector>
 
 #include <opencv2/imgproc.hpp>
 
@@ -126,10 +129,42 @@ NetworkFrame network_frame_from_photo(const std::string& path, const std::string
     return resolution == import_resolution ? at_import : resample_frame(at_import, resolution);
 }
 
-cv::Mat clear_background(const Vec3d& sun_direction, int n, const NetworkFormParams& form) {
+double clear_sky_turbidity(const SkyImage& sky, const Vec3d& sun_direction) {
+    if (!(sun_direction.y() > 0.01) || sky.resolution < 16) return 3.0;
+    const int n = 64;
+    const SkyImage small = sky.resolution == n ? sky : resampled_sky(sky, n);
+    const Vec3d sun = sun_direction.normalized();
+    const double cos_sun = std::cos(5.0 * kPiD / 180);  // the sun and its disc's spread left out
+    auto departure = [&](double turbidity) {
+        ClearSkyParams p;
+        p.sun_direction = sun;
+        p.turbidity = turbidity;
+        p.sun_disc = false;
+        const SkyImage model = make_clear_sky(p, n);
+        std::vector<double> d;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                if (!small.in_disc(i, j) || fisheye::direction_from_pixel(i, j, n).dot(sun) > cos_sun) continue;
+                const Color v = small.pixel(i, j), m = model.pixel(i, j);
+                if (!(luminance(v) > 0) || !(luminance(m) > 0) || !(v[2] > 0) || !(m[2] > 0) || !(v[0] > 0)) continue;
+                d.push_back(std::abs(std::log(luminance(v) / luminance(m))) +
+                            std::abs(std::log((v[0] / v[2]) / (m[0] / m[2]))));
+            }
+        if (d.size() < 100) return 1e9;
+        std::nth_element(d.begin(), d.begin() + long(d.size() / 2), d.end());
+        return d[d.size() / 2];
+    };
+    const double at_three = departure(3.0);
+    double best = 3.0, best_departure = at_three;
+    for (double t : {1.5, 2.0, 2.5, 3.5, 4.0, 5.0, 6.0, 8.0, 10.0})
+        if (const double d = departure(t); d < best_departure) best = t, best_departure = d;
+    return best_departure < 0.02 && best_departure < 0.5 * at_three ? best : 3.0;
+}
+
+cv::Mat clear_background(const Vec3d& sun_direction, int n, const NetworkFormParams& form, double turbidity) {
     ClearSkyParams p;
     p.sun_direction = sun_direction.y() > 0.01 ? sun_direction : Vec3d(sun_direction.x(), 0.01, sun_direction.z());
-    p.turbidity = 3;
+    p.turbidity = turbidity;
     p.sun_disc = false;
     return to_network_form(make_clear_sky(p, n), form, n);
 }

@@ -43,9 +43,16 @@ struct NetworkFrame {
     std::optional<Vec3> sun_direction;  // the sky's, when known
 };
 
-// The clear sky of a sun direction (Hosek-Wilkie, turbidity 3, no solar disc) in the network form
-// at n: the background the clouds of a sky move over (glossary: "clear background").
-cv::Mat clear_background(const Vec3d& sun_direction, int n, const NetworkFormParams& form);
+// The clear sky of a sun direction (Hosek-Wilkie, turbidity 3 unless given, no solar disc) in the
+// network form at n: the background the clouds of a sky move over (glossary: "clear background").
+cv::Mat clear_background(const Vec3d& sun_direction, int n, const NetworkFormParams& form, double turbidity = 3.0);
+
+// The turbidity of the background for a sky: 3, unless the sky is a Hosek-Wilkie clear sky of
+// another turbidity (1.5..10): one whose median departure from that model, in log luminance and
+// log red/blue, is under 0.02 and under half its departure from turbidity 3 (a clear sky made by
+// `dynsky sky clear --turbidity 2`). A photograph or a cloudy sky keeps 3. Against turbidity 3 a
+// turbidity-2 sky at sunrise read as cloud near the sun, which went out for 11-14 minutes.
+double clear_sky_turbidity(const SkyImage& sky, const Vec3d& sun_direction);
 
 // From a sky of any resolution. `not_sky` (sky.resolution^2 values, 1 = hidden by the camera's arm,
 // band or masts and filled in by the import) may be empty (everything seen). A pixel at N is valid

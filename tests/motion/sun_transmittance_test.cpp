@@ -15,6 +15,7 @@
 
 #include "motion/advect_residual.h"
 #include "motion/flow.h"
+#include "motion/network_form.h"
 #include "motion/network_step_model.h"
 #include "motion/photo_sequence.h"
 #include "motion/sky_timeline.h"
@@ -303,6 +304,8 @@ TEST(SunTransmittance, AClearPhotographKeepsItsSun) {
     const SkyImage previous = import_preset_photo(test::shared_path(dir + "tsi_sgpC1_20170524124930Z.jpg"), "arm-tsi",
                                                   256);
     const SkyImage sky = import_preset_photo(test::shared_path(dir + "tsi_sgpC1_20170524125000Z.jpg"), "arm-tsi", 256);
+    ASSERT_TRUE(sky.sun_direction);
+    EXPECT_EQ(clear_sky_turbidity(sky, sky.sun_direction->cast<double>()), 3.0);  // a photograph: the default
     const double start = horizontal_illuminance(sky);
     AdvectResidualNetwork advect = AdvectResidualNetwork::pure_advection();
     for (const bool measured : {true, false}) {
@@ -316,25 +319,30 @@ TEST(SunTransmittance, AClearPhotographKeepsItsSun) {
     }
 }
 
-// A clear sky at sunrise is red enough all over for the networks' cloud rule to call it overcast,
-// but its sun shows whole: it is not overcast, and keeps its sun in `sky predict` and in the
-// timeline (the overcast rule put it out on the first step: 2.58 -> 0.01).
+// A clear sky at sunrise keeps its sun in `sky predict` and in the timeline. At turbidity 3 it is
+// red enough all over for the networks' cloud rule to call it overcast, but its sun shows whole
+// (the overcast rule put it out on the first step: 2.58 -> 0.01); at turbidity 2 its aureole,
+// against the background's turbidity 3, read as cloud over the sun (out for 11-14 minutes): the
+// background is a clear sky's own turbidity (clear_sky_turbidity).
 TEST(SunTransmittance, AClearSkyAtSunriseKeepsItsSun) {
-    ClearSkyParams p;  // Paris at 04:10 UTC on 21 June: the sun 1.3 degrees up in the north-east
-    p.sun_direction =
-        compute_sun_position(parse_utc_time("2026-06-21T04:10:00Z"), GeoLocation{48.8566, 2.3522, 0}).direction();
-    p.turbidity = 3;
-    const SkyImage sky = make_clear_sky(p, 256);
-    const double start = horizontal_illuminance(sky);
-    AdvectResidualNetwork advect = AdvectResidualNetwork::pure_advection();
-    CloudMotion motion;
-    motion.wind = Wind{};
-    advect.rollout(sky, advect.motion_flow(sky, motion, 30, sky.resolution), 3, [&](int k, const SkyImage& s) {
-        EXPECT_NEAR(horizontal_illuminance(s) / start, 1.0, 0.03) << "sky predict, step " << k;
-    });
-    SkyTimeline timeline(sky, make_network_step_model("advect", motion), 30);
-    for (double t : {15.0, 30.0, 60.0})
-        EXPECT_NEAR(horizontal_illuminance(timeline.sky_at(t)) / start, 1.0, 0.03) << "timeline, t " << t;
+    for (const auto& [time, turbidity] : {std::pair<const char*, double>{"2026-06-21T04:10:00Z", 3.0},
+                                          std::pair<const char*, double>{"2026-06-21T04:20:00Z", 2.0}}) {
+        ClearSkyParams p;  // Paris on 21 June: the sun 1.3 and 2.7 degrees up in the north-east
+        p.sun_direction = compute_sun_position(parse_utc_time(time), GeoLocation{48.8566, 2.3522, 0}).direction();
+        p.turbidity = turbidity;
+        const SkyImage sky = make_clear_sky(p, 256);
+        EXPECT_DOUBLE_EQ(clear_sky_turbidity(sky, p.sun_direction), turbidity) << time;
+        const double start = horizontal_illuminance(sky);
+        AdvectResidualNetwork advect = AdvectResidualNetwork::pure_advection();
+        CloudMotion motion;
+        motion.wind = Wind{};
+        advect.rollout(sky, advect.motion_flow(sky, motion, 30, sky.resolution), 3, [&](int k, const SkyImage& s) {
+            EXPECT_NEAR(horizontal_illuminance(s) / start, 1.0, 0.03) << time << ", sky predict, step " << k;
+        });
+        SkyTimeline timeline(sky, make_network_step_model("advect", motion), 30);
+        for (double t : {15.0, 30.0, 60.0})
+            EXPECT_NEAR(horizontal_illuminance(timeline.sky_at(t)) / start, 1.0, 0.03) << time << ", timeline, t " << t;
+    }
 }
 
 TEST(SunTransmittance, RelativeTransmittanceIsContinuousAndKeepsAnOpaqueStart) {
