@@ -633,6 +633,13 @@ class GltfLoader {
             std::string text = join(lines, "; ");
             if (text.find("parse_error") != std::string::npos || text.find("Failed to parse JSON") != std::string::npos)
                 fail("invalid JSON: " + text);
+            // tinygltf says "Failed to decode 'uri'" also for base64 that decodes, but to fewer
+            // or more bytes than the buffer's byteLength.
+            if (text.find("Failed to decode 'uri' : data:") != std::string::npos)
+                fail(
+                    "a buffer's data: URI does not decode to its byteLength (not base64, or the byteLength "
+                    "is wrong): " +
+                    text);
             for (const std::string& l : lines)
                 if (l.rfind("File not found", 0) == 0) {
                     size_t colon = l.find(':');
@@ -1684,13 +1691,15 @@ class GltfLoader {
     // ---- Meshes -----------------------------------------------------------------------------
 
     // Triangle list from a primitive's index stream, per glTF 2.0 section 3.7.2.1.
-    std::vector<uint32_t> triangulate(int mode, const std::vector<uint32_t>& v, const std::string& what) {
+    // `indexed`: the stream is the primitive's indices, else its vertices in order (said so).
+    std::vector<uint32_t> triangulate(int mode, const std::vector<uint32_t>& v, const std::string& what,
+                                      bool indexed = true) {
         std::vector<uint32_t> tri;
         size_t n = v.size();
         if (mode == TINYGLTF_MODE_TRIANGLES) {
             if (n % 3)
-                warn(what + ": " + std::to_string(n) + " indices is not a multiple of 3, the last " +
-                     std::to_string(n % 3) + " ignored");
+                warn(what + ": " + std::to_string(n) + (indexed ? " indices" : " vertices (no indices)") +
+                     " is not a multiple of 3, the last " + std::to_string(n % 3) + " ignored");
             tri.assign(v.begin(), v.begin() + std::ptrdiff_t(n - n % 3));
         } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
             for (size_t i = 0; i + 2 < n; ++i) {
@@ -1858,7 +1867,7 @@ class GltfLoader {
             stream.resize(n);
             for (size_t i = 0; i < n; ++i) stream[i] = uint32_t(i);
         }
-        mesh->indices = triangulate(mode, stream, what);
+        mesh->indices = triangulate(mode, stream, what, p.indices >= 0);
         if (mesh->indices.empty()) {
             warn(what + ": no triangles, skipped");
             return false;
