@@ -29,12 +29,11 @@ CLI::Validator finite_range(double min, double max, bool open_min) {
 CLI::Validator non_negative_whole() {
     return CLI::Validator(
         [](std::string& text) -> std::string {
-            // Up to 2^64 - 1: every seed a frame of `animate --seed-per-frame` uses (seed + k x
-            // 0x9E3779B97F4A7C15, wrapping) can be given to `render` again.
-            const std::string top = "18446744073709551615";
-            if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos || text.size() > top.size() ||
-                (text.size() == top.size() && text > top))
-                return "'" + text + "' is not a whole number in 0.." + top;
+            try {
+                parse_seed(text, "");  // up to 2^64 - 1, as `animate --seed-per-frame` makes them
+            } catch (const Error& e) {
+                return std::string(e.what()).substr(2);  // without the empty name's ": "
+            }
             return "";
         },
         "a whole number >= 0");

@@ -47,11 +47,7 @@ uint64_t procedural_seed(const std::string& sky) {
     if (sky.size() <= 10) return 0;
     if (sky[10] != ':' || sky.size() == 11 || sky.find_first_not_of("0123456789", 11) != std::string::npos)
         throw Error("--sky '" + sky + "': expected 'procedural' or 'procedural:SEED' (SEED a whole number)");
-    // Any 64-bit seed, as `sky procedural --cloud-seed` takes.
-    const std::string digits = sky.substr(11), top = "18446744073709551615";
-    if (digits.size() > top.size() || (digits.size() == top.size() && digits > top))
-        throw Error("--sky '" + sky + "': the seed must be a whole number in 0.." + top);
-    return std::stoull(digits);
+    return parse_seed(sky.substr(11), "--sky '" + sky + "' (the seed)");  // as `sky procedural --cloud-seed`
 }
 
 }  // namespace
@@ -177,11 +173,7 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
             motion.previous_dt = previous_frame_gap(input, *motion.previous, motion.previous_dt, sky_file,
                                                     previous_file);
             if (motion.previous_dt == 0 && !reports_silenced())
-                std::fprintf(stderr,
-                             "dynsky: note: neither %s nor the previous frame %s says when it was taken (no clock, "
-                             "no recorded time): taken one medium step (Delta t) apart; give --prev-dt SECONDS if "
-                             "they are not\n",
-                             sky_file.c_str(), previous_file.c_str());
+                std::fputs(unknown_previous_gap_note(sky_file, previous_file).c_str(), stderr);
         }
         input.time_seconds = 0;
         if (input.source.empty()) input.source = sky_file;

@@ -941,6 +941,12 @@ double previous_frame_gap(const SkyImage& sky, const SkyImage& previous, double 
     return gap;
 }
 
+std::string unknown_previous_gap_note(const std::string& sky_name, const std::string& previous_name) {
+    return "dynsky: note: neither " + sky_name + " nor the previous frame " + previous_name +
+           " says when it was taken (no clock, no recorded time): taken one medium step (Delta t) apart; give "
+           "--prev-dt SECONDS if they are not\n";
+}
+
 double model_scale(const SkyImage& sky) {
     if (sky.sun_direction) return 1.0;
     std::vector<float> values;
@@ -998,7 +1004,7 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
         flow_dt_ = dt;
         cv::Mat start = to_network_form(input, network_.info().form);
         sun_mask_ = fill_saturated_pixels(&start);
-        input_sun_share_.reset();
+        input_sun_share_.reset(), input_sun_look_.reset();
         // A sky without its sun has it estimated from its brightest pixels (as rollout() does).
         estimated_sun_.reset();
         if (!input.sun_direction)
@@ -1035,9 +1041,10 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
         // Dimmed by the cloud the sky shows at the sun or, when more, by the clouds moved there.
         const double t = relative_sun_transmittance(next, input, at);
         if (!input_sun_share_) input_sun_share_ = shown_sun_share(input, at);
-        const double start_look = at ? estimate_sun_transmittance(input, *at) : 1.0;
+        if (!input_sun_look_) input_sun_look_ = at ? estimate_sun_transmittance(input, *at) : 1.0;
         restore_pixels(&next, input, sun_mask_,
-                       std::min(t, rollout_sun_weight(*rollout_, at, start_look, *input_sun_share_).value_or(1.0)));
+                       std::min(t,
+                                rollout_sun_weight(*rollout_, at, *input_sun_look_, *input_sun_share_).value_or(1.0)));
     }
     next.time_seconds = history.back()->time_seconds + dt;
     if (scale_ != 1.0) next = scaled_sky(next, 1.0 / scale_);

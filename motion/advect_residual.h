@@ -59,6 +59,8 @@ struct CloudMotion {
 // a previous frame of the same sky: its motion says nothing about this one's).
 double previous_frame_gap(const SkyImage& sky, const SkyImage& previous, double given, const std::string& sky_name,
                           const std::string& previous_name);
+// The note given when previous_frame_gap returns 0 (neither file says when it was taken).
+std::string unknown_previous_gap_note(const std::string& sky_name, const std::string& previous_name);
 
 // The flow of one rollout, per step, at one resolution. A measured flow (from a previous frame) is
 // trusted for the first steps and relaxes to the uniform wind that best explains it
@@ -264,6 +266,7 @@ class AdvectResidualStepModel : public MediumStepModel {
     std::optional<Vec3> estimated_sun_;  // from the input's brightest pixels, when it has no sun
     cv::Mat sun_mask_;
     std::optional<double> input_sun_share_;  // how much of the clear sun the input shows (sun_weight_reference)
+    std::optional<double> input_sun_look_;   // the look around the input's sun (estimate_sun_transmittance)
     cv::Mat background_;                     // of background_sun_ (recomputed when the sun has moved by 0.2 degrees)
     Vec3 background_sun_ = Vec3::Zero();
     std::optional<Vec3> sun_;  // from the timeline, else the sky's own

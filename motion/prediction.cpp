@@ -52,11 +52,7 @@ void write_prediction(const PredictionOptions& o) {
         motion.previous = std::make_shared<const SkyImage>(load_sky_or_latlong(o.previous, &unused_ground));
         motion.previous_dt = previous_frame_gap(sky, *motion.previous, o.previous_dt, o.in, o.previous);
         if (motion.previous_dt == 0 && !o.quiet)
-            std::fprintf(stderr,
-                         "dynsky: note: neither %s nor the previous frame %s says when it was taken (no clock, no "
-                         "recorded time): taken one medium step (Delta t) apart; give --prev-dt SECONDS if they are "
-                         "not\n",
-                         o.in.c_str(), o.previous.c_str());
+            std::fputs(unknown_previous_gap_note(o.in, o.previous).c_str(), stderr);
     }
     // A sky in other units than the models' (motion/radiance_scale.h) moves divided by its scale; every
     // step is written multiplied back.

@@ -143,18 +143,14 @@ SkyImage latlong_to_fisheye(const Image& latlong, int resolution, bool lower) {
 }
 
 LatlongEnvironment load_latlong_environment(const std::string& path, int resolution) {
-    refuse_jpeg_as_radiance(path);
-    Image image = read_radiance_image(path);
-    apply_orientation(image);  // a file stored turned (a "+Y" .hdr is bottom-up): sky and ground swapped
+    Image image = read_sky_file(path);
     require_radiance_pixels(image, path);
     return latlong_environment(image, path, resolution);
 }
 
 SkyImage load_sky_or_latlong(const std::string& path, std::shared_ptr<SkyImage>* ground) {
     *ground = nullptr;
-    refuse_jpeg_as_radiance(path);
-    Image image = read_radiance_image(path);
-    apply_orientation(image);  // a file stored turned (a "+Y" .hdr is bottom-up): sky and ground swapped
+    Image image = read_sky_file(path);
     if (!is_latlong_shape(image.width, image.height)) return sky_from_radiance_file(image, path);  // read once
     require_radiance_pixels(image, path);
     if (image.height < 4)

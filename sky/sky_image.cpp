@@ -187,12 +187,14 @@ Image read_radiance_image(const std::string& path) {
     return image;
 }
 
-SkyImage load_sky(const std::string& path) {
+Image read_sky_file(const std::string& path) {
     refuse_jpeg_as_radiance(path);
     Image image = read_radiance_image(path);
-    apply_orientation(image);  // a file stored turned (a "+Y" .hdr is bottom-up): north and south swapped
-    return sky_from_radiance_file(image, path);
+    apply_orientation(image);
+    return image;
 }
+
+SkyImage load_sky(const std::string& path) { return sky_from_radiance_file(read_sky_file(path), path); }
 
 void require_radiance_pixels(const Image& image, const std::string& path) {
     const std::string& type = image.file_pixel_type;

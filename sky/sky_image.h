@@ -91,6 +91,10 @@ Image read_radiance_image(const std::string& path);
 // Throws naming the file when it is a JPEG (by its first bytes, whatever its name): 8-bit display
 // values, never radiance. Called before any decoder reads a file that must hold radiance.
 void refuse_jpeg_as_radiance(const std::string& path);
+// A sky file (a fisheye or a lat-long): a JPEG refused, read_radiance_image, and turned the right way
+// up when stored turned (an Orientation attribute; a "+Y" .hdr is bottom-up: north and south, or sky
+// and ground, were swapped).
+Image read_sky_file(const std::string& path);
 
 // The R, G and B channels of a radiance image (3 channels or more) by name, any case: R, G, B; else
 // one layer's LAYER.R, .G, .B (a render's AOV layers beside its RGB are ignored); a file without

@@ -29,6 +29,14 @@ long long parse_whole_number(const std::string& text, const std::string& what, l
     return v;
 }
 
+unsigned long long parse_seed(const std::string& text, const std::string& what) {
+    const std::string top = "18446744073709551615";  // 2^64 - 1
+    if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos || text.size() > top.size() ||
+        (text.size() == top.size() && text > top))
+        throw Error(what + ": '" + text + "' is not a whole number in 0.." + top);
+    return std::stoull(text);
+}
+
 std::vector<int> parse_int_list(const std::string& text, const std::string& option) {
     std::vector<int> out;
     std::stringstream ss(text);

@@ -11,6 +11,11 @@ namespace dynsky {
 // number in MIN..MAX" (never std::stoi's bare "stoi" for an over-long number).
 long long parse_whole_number(const std::string& text, const std::string& what, long long min, long long max);
 
+// Any 64-bit seed, 0..18446744073709551615 (digits only), or dynsky::Error "WHAT: 'TEXT' is not
+// a whole number in 0..18446744073709551615": every seed a frame of `animate --seed-per-frame`
+// uses (seed + k x 0x9E3779B97F4A7C15, wrapping) can be given again.
+unsigned long long parse_seed(const std::string& text, const std::string& what);
+
 // "1,2,3,6" -> {1, 2, 3, 6}, sorted, duplicates removed, each >= 1. Throws dynsky::Error naming
 // `option` and the bad item.
 std::vector<int> parse_int_list(const std::string& text, const std::string& option);
