@@ -64,6 +64,78 @@ std::string fmt(const char* f, double v) {
     return buf;
 }
 
+// Which frames of `seq` a model folder was trained on or chose itself with: every frame before the
+// held-out part of a sequence in its split.json, and every frame of a sequence its model.json lists
+// as trained on with no split to say what was held out. Frames are matched by capture time against
+// the named sequences of the shared data, so a copy of their photographs, a renamed folder or skies
+// imported from them are found too; a folder's name decides nothing.
+struct TrainedFrames {
+    std::vector<char> trained;           // per frame of seq
+    std::string matched;                 // "arm_tsi frames 100-107 (trained on: before 240)"; empty: none
+    std::vector<std::string> unchecked;  // training sequences whose photographs could not be read
+};
+
+TrainedFrames model_training_frames(const PhotoSequence& seq, const std::string& model_folder,
+                                    const std::string& shared) {
+    TrainedFrames r;
+    r.trained.assign(seq.photos.size(), 0);
+    if (model_folder == "advect") return r;
+    const fs::path split_path = fs::path(model_folder) / "split.json",
+                   info_path = fs::path(model_folder) / "model.json";
+    const nlohmann::json split = fs::exists(split_path) ? read_json(split_path.string()) : nlohmann::json::object();
+    std::vector<std::string> sources;
+    for (const auto& [name, v] : split.items()) sources.push_back(name);
+    if (fs::exists(info_path)) {
+        const nlohmann::json info = read_json(info_path.string());
+        if (info.contains("trained_on") && info["trained_on"].is_array())
+            for (const auto& name : info["trained_on"])
+                if (name.is_string() &&
+                    std::find(sources.begin(), sources.end(), name.get<std::string>()) == sources.end())
+                    sources.push_back(name.get<std::string>());
+    }
+    for (const std::string& name : sources) {
+        PhotoSequence known;
+        try {
+            known = named_photo_sequence(name, shared);
+        } catch (const Error&) {
+            // Procedural sources (proc_00, ...) are not photographs; a named one whose folder is
+            // missing cannot be checked.
+            if (name.rfind("proc", 0) != 0) r.unchecked.push_back(name);
+            continue;
+        }
+        // Held out from this frame on (every frame trained on when the split does not say).
+        int heldout = int(known.photos.size());
+        if (split.contains(name) && split[name].contains("heldout") && split[name]["heldout"].is_array() &&
+            !split[name]["heldout"].empty() && split[name]["heldout"][0].is_number_integer())
+            heldout = split[name]["heldout"][0].get<int>();
+        const bool same_folder = !seq.preset.empty() && fs::path(seq.folder) == fs::path(known.folder);
+        int lo = -1, hi = -1;
+        for (size_t k = 0; k < seq.photos.size(); ++k) {
+            int index = -1;
+            if (same_folder) {
+                index = int(k);
+            } else if (k < seq.utc.size() && std::isfinite(seq.utc[k]) &&
+                       (seq.preset.empty() || seq.preset == known.preset)) {
+                const double t = seq.utc[k], tolerance = std::max(1.0, 0.25 * known.dt);
+                for (size_t i = 0; i < known.utc.size() && index < 0; ++i)
+                    if (std::abs(known.utc[i] - t) <= tolerance) index = int(i);
+            }
+            if (index < 0) continue;
+            if (index < heldout) {
+                r.trained[k] = 1;
+                lo = lo < 0 ? index : std::min(lo, index), hi = std::max(hi, index);
+            }
+        }
+        if (lo >= 0)
+            r.matched += (r.matched.empty() ? "" : "; ") + name + " frames " + std::to_string(lo) + "-" +
+                         std::to_string(hi) + " trained on" +
+                         (heldout < int(known.photos.size())
+                              ? ", its split.json holding out frames " + std::to_string(heldout) + " on"
+                              : std::string(": model.json lists it, with no split.json to say what was held out"));
+    }
+    return r;
+}
+
 }  // namespace
 
 EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
@@ -101,6 +173,7 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
             for (const char* ext : {".csv", ".png"}) outputs.push_back(base + "_" + std::to_string(r) + ext);
         const bool model_folder = o.model != "auto" && o.model != "advect" && o.model != "paper";
         check_outputs_are_not_inputs(outputs, {o.photos, shared, model_folder ? o.model : ""});
+        for (const std::string& out : outputs) check_output_file(out);  // before the scoring, not after
     }
     PhotoSequence seq = o.sequence.empty() ? photo_sequence_from_folder(o.photos, o.preset)
                                            : named_photo_sequence(o.sequence, shared);
@@ -140,7 +213,23 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
         }
     }
     int first = 1, last = count - 1 - hmax;
-    std::string part = "every frame (the model was not trained on this sequence)";
+    const TrainedFrames trained = model_training_frames(seq, folder, shared.empty() ? default_shared_dir() : shared);
+    // A start frame is held out when it and the frames it predicts were never trained on (the frame
+    // before it only gives the motion).
+    auto held_out = [&](int k) {
+        for (int j = k; j <= k + hmax && j < count; ++j)
+            if (trained.trained[size_t(j)]) return false;
+        return true;
+    };
+    std::string part = "every frame (none of them among the model's training photographs)";
+    if (!trained.unchecked.empty() && !o.quiet) {
+        std::string list;
+        for (const std::string& n : trained.unchecked) list += (list.empty() ? "" : ", ") + n;
+        std::fprintf(stderr,
+                     "dynsky: note: the model was trained on %s, whose photographs were not found (--shared): "
+                     "whether these frames are among them is not checked\n",
+                     list.c_str());
+    }
     if (!o.frames.empty()) {
         int a = 0, b = 0;
         std::stringstream ss(o.frames);
@@ -161,22 +250,56 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
                          std::min(last, b), range.c_str());
         first = std::max(1, a), last = std::min(last, b);
         part = "start frames " + o.frames + " (--frames)";
-    } else if (folder != "advect") {
-        const std::string split_path = (fs::path(folder) / "split.json").string();
-        if (fs::exists(split_path)) {
-            nlohmann::json split = read_json(split_path);
-            if (split.contains(seq.name) && split[seq.name].contains("heldout")) {
-                first = std::max(1, split[seq.name]["heldout"].at(0).get<int>());
-                last = std::min(last, split[seq.name]["heldout"].at(1).get<int>() - 1 - hmax);
-                part =
-                    "the held-out frames of the model's split.json (last in time, never trained on or used to choose)";
-            }
+        int seen = 0;
+        for (int k = first; k <= last; ++k) seen += !held_out(k);
+        if (seen > 0) {
+            part += ", " + std::to_string(seen) + " of them predicting frames the model was trained on (" +
+                    trained.matched + ")";
+            if (!o.quiet)
+                std::fprintf(stderr,
+                             "dynsky: note: %d of the start frames scored predict frames the model was "
+                             "trained on (%s): the scores flatter it\n",
+                             seen, trained.matched.c_str());
         }
+    } else if (!trained.matched.empty()) {
+        // The longest run of held-out start frames (a split holds out the last part in time).
+        int best_first = 1, best_len = 0;
+        for (int k = 1; k <= last; ++k) {
+            if (!held_out(k)) continue;
+            int e = k;
+            while (e + 1 <= last && held_out(e + 1)) ++e;
+            if (e - k + 1 > best_len) best_first = k, best_len = e - k + 1;
+            k = e;
+        }
+        if (best_len == 0)
+            throw Error(seq.folder + ": every frame that could be scored at horizon " + std::to_string(hmax) +
+                        " is one the model was trained on or chose itself with (" + trained.matched +
+                        "): nothing held out to score. Give photographs it never saw, or --frames A-B to score "
+                        "these anyway");
+        first = best_first, last = best_first + best_len - 1;
+        part = "the frames the model never saw, held out (last in time, never trained on or used to choose): " +
+               trained.matched;
     }
     if (o.limit > 0) last = std::min(last, first + o.limit - 1);
     if (last < first)
         throw Error(seq.folder + ": too few frames to score horizon " + std::to_string(hmax) + " (" +
                     std::to_string(count) + " frames)");
+
+    // Imported skies leave out the pixels their import filled when a STEM.filled.png lies beside
+    // them (sky import --filled-mask); say how many have one, since the scores depend on it.
+    std::string filled_note;
+    if (seq.preset.empty()) {
+        int with_mask = 0;
+        for (int k = first - 1; k <= last + hmax; ++k)
+            with_mask += fs::exists(fs::path(seq.photos[size_t(k)]).replace_extension(".filled.png"));
+        const int used = last + hmax - first + 2;
+        filled_note = with_mask == used ? "every sky's filled pixels (STEM.filled.png) left out"
+                      : with_mask == 0
+                          ? "no STEM.filled.png beside the skies: pixels their imports filled are scored too"
+                          : std::to_string(with_mask) + " of the " + std::to_string(used) +
+                                " skies with a STEM.filled.png (their filled pixels left out), the others scored whole";
+        if (with_mask < used && !o.quiet) std::fprintf(stderr, "dynsky: note: %s\n", filled_note.c_str());
+    }
 
     // Import the frames needed (first - 1 .. last + hmax) once, at the import resolution.
     const int big = o.import_resolution;
@@ -271,7 +394,9 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
     md << "Photographs: `" << seq.folder << "` (" << count << " frames every " << seq.dt << " s, "
        << (seq.preset.empty() ? std::string("imported skies") : "preset " + seq.preset) << "); scored: " << part
        << ", start frames " << first << ".." << last << ". Imported at " << big
-       << " px and area-averaged to each resolution; network form; pixels seen in both frames and not saturated. "
+       << " px and area-averaged to each resolution; network form; pixels seen in both frames and not saturated"
+       << (filled_note.empty() ? "" : " (" + filled_note + ")")
+       << ". "
           "PSNR/SSIM: means of per-frame values. farneback = the previous pair's flow applied h times (one warp by h F, "
           "with the rim extended so it never pulls in black); "
           "model+wind = from one frame with the wind fitted to the following pair's measured motion.\n\n";

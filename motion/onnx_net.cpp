@@ -83,9 +83,11 @@ cv::Mat probe_net(cv::dnn::Net& net, const cv::Mat& blob, const std::string& onn
         out = net.forward().clone();
     } catch (const cv::Exception& e) {
         const std::string n = std::to_string(resolution);
-        throw_file_error(onnx_path,
-                         "does not run at model.json's resolution " + n + " x " + n +
-                             " (a network made for another size, or an edited model.json?); OpenCV: " + e.err);
+        throw_file_error(onnx_path, "does not run on the input model.json describes (" + std::to_string(blob.size[1]) +
+                                        " channels at " + n + " x " + n +
+                                        "): a network made for another input or size, another kind of model, or "
+                                        "an edited model.json? OpenCV: " +
+                                        e.err);
     }
     return from_blob(out, onnx_path);
 }

@@ -1,6 +1,7 @@
 #include "motion/photo_sequence.h"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -60,6 +61,11 @@ PhotoSequence named_photo_sequence(const std::string& name, const std::string& s
         throw_file_error(s.folder, "sequence folder not found (give the shared data folder with --shared)");
     }
     if (s.photos.size() < 2) throw_file_error(s.folder, "fewer than two frames");
+    const double utc_offset = camera_preset(s.preset).filename_utc_offset_hours;
+    for (const std::string& p : s.photos) {
+        const std::string time = time_from_file_name(p, utc_offset);
+        s.utc.push_back(time.empty() ? std::nan("") : utc_seconds(time));
+    }
     return s;
 }
 
@@ -96,6 +102,16 @@ PhotoSequence photo_sequence_from_folder(const std::string& folder, const std::s
     for (const auto& e : fs::directory_iterator(dir)) {
         if (!e.is_regular_file()) continue;
         const std::string ext = file_extension(e.path().string());
+        if (skies && (ext == ".jpg" || ext == ".jpeg" || ext == ".png")) {
+            // Beside its imported skies a folder holds their previews and filled masks (STEM.png,
+            // STEM.filled.png); another photograph would be left out of the sequence unseen.
+            std::string stem = e.path().stem().string();
+            if (stem.size() > 7 && stem.compare(stem.size() - 7, 7, ".filled") == 0) stem.resize(stem.size() - 7);
+            if (ext == ".png" && fs::exists(dir / (stem + ".exr"))) continue;
+            throw_file_error(e.path().string(),
+                             "is a photograph among imported skies (.exr): import it with the others ('dynsky sky "
+                             "import' with the camera's options) or move it out of the folder");
+        }
         if (skies ? ext != ".exr" : ext != ".jpg" && ext != ".jpeg" && ext != ".png") continue;
         std::optional<double> seconds;
         if (skies) {
@@ -141,7 +157,7 @@ PhotoSequence photo_sequence_from_folder(const std::string& folder, const std::s
     s.preset = preset;
     s.folder = folder;
     s.dt = std::round(cadence);
-    for (auto& [t, p] : timed) s.photos.push_back(p);
+    for (auto& [t, p] : timed) s.photos.push_back(p), s.utc.push_back(t);
     return s;
 }
 

@@ -13,6 +13,7 @@ struct PhotoSequence {
     std::string folder;
     double dt = 0;                    // cadence: seconds between frames
     std::vector<std::string> photos;  // in time order
+    std::vector<double> utc;          // their capture times (UTC seconds, utc_seconds); NaN where unknown
 };
 
 // A named sequence ("arm-tsi", "mobotix") in the shared data folder. Throws dynsky::Error for an

@@ -2,7 +2,7 @@
 """Builds the data set of the advection-residual model (docs/networks-advect-residual.md):
 
   /usr/bin/python3 networks/build_dataset_v2.py --out /work/data/dataset_v2 \
-      --dynsky /work/tools/dynsky-snapshot --shared /work/shared
+      --dynsky build/cli/dynsky --shared ../shared
 
 Sources (one sub-folder each, written by `dynsky sky training-data`; arrays: networks/data.py):
 - arm_tsi:          ARM TSI 2017-05-24 15:40-18:09 UTC, broken cumulus, 300 frames, 30 s
@@ -82,12 +82,15 @@ def run(cmd):
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--out", required=True)
-    p.add_argument("--dynsky", default="/work/tools/dynsky-snapshot")
+    p.add_argument("--dynsky", default=os.path.join(ROOT, "build", "cli", "dynsky"),
+                   help="the dynsky program (default: this checkout's build/cli/dynsky)")
     p.add_argument("--shared", default=os.path.join(os.path.dirname(ROOT), "shared"))
     p.add_argument("--res", type=int, default=64)
     p.add_argument("--import-res", type=int, default=256)
     p.add_argument("--only", default="", help="comma-separated names to (re)build; default all missing")
     args = p.parse_args(argv)
+    if not (os.path.isfile(args.dynsky) and os.access(args.dynsky, os.X_OK)):
+        sys.exit(f"{args.dynsky}: no dynsky program there (build it, or give --dynsky PATH)")
     os.makedirs(args.out, exist_ok=True)
     common = ["--res", str(args.res), "--import-res", str(args.import_res), "--quiet"]
     only = set(a for a in args.only.split(",") if a)
@@ -117,6 +120,8 @@ def main(argv=None):
         shutil.rmtree(tmp)
     split = {}
     for name in names:
+        if not os.path.exists(os.path.join(args.out, name, "meta.json")):
+            continue  # not built (--only built others)
         with open(os.path.join(args.out, name, "meta.json")) as f:
             meta = json.load(f)
         split[name] = split_for(meta["frame_count"])
@@ -132,7 +137,7 @@ def main(argv=None):
         split = old
     with open(path, "w") as f:
         json.dump(split, f, indent=2)
-    print(f"wrote {len(names)} sequences and {path}")
+    print(f"wrote {path}: {len(split)} sequences")
 
 
 if __name__ == "__main__":

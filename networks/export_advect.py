@@ -202,7 +202,9 @@ def main(argv=None):
     p.add_argument("--checkpoint", required=True)
     p.add_argument("--data", required=True)
     p.add_argument("--out", required=True)
-    p.add_argument("--reference-source", default="arm_tsi")
+    p.add_argument("--reference-source", default="",
+                   help="the data set's sequence whose first held-out frame gives the reference pair "
+                        "(default: arm_tsi when the data set has it, else the first in its split.json)")
     p.add_argument("--extra", default="", help="JSON file of extra model.json fields (metrics, timings)")
     p.add_argument("--card-tables", default="", help="markdown (networks/report_advect.py --tables) for the card")
     p.add_argument("--command", default="", help="the training command, for the card")
@@ -212,12 +214,19 @@ def main(argv=None):
     import train_advect as T
     model, targs = T.load_model(args.checkpoint)
     os.makedirs(args.out, exist_ok=True)
-    src = AD.Source(os.path.join(args.data, args.reference_source))
+    split_path = os.path.join(args.data, "split.json")
+    if not os.path.exists(split_path):
+        sys.exit(f"{split_path}: not found (--data must be a data set of networks/build_dataset_v2.py)")
+    split = json.load(open(split_path))
+    reference = args.reference_source or ("arm_tsi" if "arm_tsi" in split else (sorted(split) or [""])[0])
+    if reference not in split or not os.path.exists(os.path.join(args.data, reference, "meta.json")):
+        sys.exit(f"{args.data}: no sequence '{reference}' for the reference pair (--reference-source; "
+                 f"the data set has: {', '.join(sorted(split)) or 'none'})")
+    src = AD.Source(os.path.join(args.data, reference))
     if targs.get("res") and targs["res"] != src.n:
         T.resize_sequence_advect(src, targs["res"])
     n = src.n
     ops = export_onnx(model, n, os.path.join(args.out, "model.onnx"))
-    split = json.load(open(os.path.join(args.data, "split.json")))
     k = split[src.name]["heldout"][0] + 1
     write_reference(model, AD.t_img(src.images[k:k + 1]), AD.t_img(src.flow[k - 1:k]), args.out)
     extra = json.load(open(args.extra)) if args.extra else {}

@@ -614,7 +614,7 @@ TEST(BadInputCli, ModelDescriptionsWithoutTheirFormatOrVersionAreRefused) {
         json.replace(at, 16, "\"resolution\": 32");
         write_bytes(folder + "/model.json", json);
         bad.add("sky predict --model " + folder + " --sky " + sky + " --steps 1 -q -o " + dir + "/pred",
-                {"resized_" + shipped, ".onnx: does not run at model.json's resolution 32 x 32"});
+                {"resized_" + shipped, ".onnx: does not run on the input model.json describes"});
     }
     bad.check();
 }

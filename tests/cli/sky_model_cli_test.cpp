@@ -219,7 +219,7 @@ TEST(SkyModelCli, PredictBadInputsFailClearlyAndWriteNothing) {
 }
 
 // A folder of `count` consecutive ARM photographs (links), skipping the frames in `skip`.
-std::string photo_folder(const std::string& dir, int count, std::vector<int> skip = {}) {
+std::string photo_folder(const std::string& dir, int count, std::vector<int> skip = {}, int first = 100) {
     const std::string src = test::shared_path("skies/arm_tsi_sgp_20170524/images");
     std::vector<fs::path> all;
     for (const auto& e : fs::directory_iterator(src)) all.push_back(e.path());
@@ -227,7 +227,7 @@ std::string photo_folder(const std::string& dir, int count, std::vector<int> ski
     fs::create_directories(dir);
     for (int k = 0; k < count; ++k)
         if (std::find(skip.begin(), skip.end(), k) == skip.end())
-            fs::create_symlink(all[size_t(100 + k)], fs::path(dir) / all[size_t(100 + k)].filename());
+            fs::create_symlink(all[size_t(first + k)], fs::path(dir) / all[size_t(first + k)].filename());
     return dir;
 }
 
@@ -299,6 +299,8 @@ TEST(SkyModelCli, EvaluateScoresAFolderOfImportedSkiesAsItsPhotographs) {
     r = test::run_command(dynsky("sky evaluate --photos " + dir + "/skies" + common + dir + "/skies.md"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(read_text(dir + "/skies.md").find("every 30 s, imported skies"), std::string::npos);
+    EXPECT_NE(read_text(dir + "/skies.md").find("every sky's filled pixels (STEM.filled.png) left out"),
+              std::string::npos);
     const auto from_photos = evaluation_psnr(dir + "/photos.csv"), from_skies = evaluation_psnr(dir + "/skies.csv");
     ASSERT_EQ(from_photos.size(), 2u * 2u * 5u);  // 2 resolutions x 2 horizons x 5 methods
     ASSERT_EQ(from_skies.size(), from_photos.size());
@@ -313,6 +315,14 @@ TEST(SkyModelCli, EvaluateScoresAFolderOfImportedSkiesAsItsPhotographs) {
     r = test::run_command(dynsky("sky evaluate --photos " + dir + "/skies" + common + dir + "/unmasked.md"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(evaluation_psnr(dir + "/unmasked.csv").at("256/1/persistence"), from_photos.at("256/1/persistence"));
+    EXPECT_NE(read_text(dir + "/unmasked.md").find("no STEM.filled.png beside the skies"), std::string::npos);
+    // A photograph among the skies would be left out unseen: refused, named.
+    fs::copy_file(list[0], dir + "/skies/" + list[0].filename().string());
+    r = test::run_command(dynsky("sky evaluate --photos " + dir + "/skies" + common + dir + "/mixed.md 2>&1"));
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find(list[0].filename().string() + ": is a photograph among imported skies"), std::string::npos)
+        << r.output;
+    fs::remove(dir + "/skies/" + list[0].filename().string());
     // Skies smaller than the import resolution, and skies that carry no time, are refused naming a file.
     r = test::run_command(dynsky("sky evaluate --photos " + dir + "/skies --import-res 512" + common + dir +
                                  "/big.md 2>&1"));
@@ -327,6 +337,33 @@ TEST(SkyModelCli, EvaluateScoresAFolderOfImportedSkiesAsItsPhotographs) {
                                  "/procedural.md 2>&1"));
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.output.find("carries no time"), std::string::npos) << r.output;
+    fs::remove_all(dir);
+}
+
+// Which frames count as held out is decided by the photographs, never by a folder's name: a copy of
+// the shipped model's training frames in a folder named after another of its sequences was scored
+// as "held-out frames of the model's split.json", and a folder of any other name as "not trained on".
+TEST(SkyModelCli, EvaluateNeverScoresTheModelsTrainingFramesAsHeldOut) {
+    DYNSKY_REQUIRE_SHARED();
+    const std::string dir = test::temp_dir("evaluate_trained");
+    const std::string common = " --quiet --no-paper --preset arm-tsi --horizons 1 --res 64 --report ";
+    for (const char* name : {"/arm_dusk", "/mine"}) {
+        const std::string photos = photo_folder(dir + name, 5);  // ARM day frames 100-104: trained on
+        auto r = test::run_command(dynsky("sky evaluate --photos " + photos + common + dir + "/t.md 2>&1"));
+        EXPECT_EQ(r.exit_code, 1) << r.output;
+        EXPECT_NE(r.output.find("nothing held out to score"), std::string::npos) << r.output;
+        EXPECT_NE(r.output.find("arm_tsi frames"), std::string::npos) << r.output;
+        EXPECT_FALSE(fs::exists(dir + "/t.md"));
+        // Scored anyway when asked, and said so.
+        r = test::run_command(dynsky("sky evaluate --frames 1-2 --photos " + photos + common + dir + "/f.md"));
+        ASSERT_EQ(r.exit_code, 0) << r.output;
+        EXPECT_NE(read_text(dir + "/f.md").find("predicting frames the model was trained on"), std::string::npos);
+    }
+    // The same day's held-out frames (its split holds out 240 on) are scored as such.
+    const std::string held_out = photo_folder(dir + "/late", 5, {}, 250);
+    auto r = test::run_command(dynsky("sky evaluate --photos " + held_out + common + dir + "/h.md"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(read_text(dir + "/h.md").find("none of them among the model's training photographs"), std::string::npos);
     fs::remove_all(dir);
 }
 
