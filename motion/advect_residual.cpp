@@ -650,6 +650,13 @@ const cv::Mat& CloudRollout::advance() {
     cv::Mat compensation_n;
     if (!background_.empty()) compensation_n = background_n_ - warp_in_disc(background_n_, f_n);
     const cv::Mat sources = warp_sources(f_big);
+    if (sun_) {
+        double x, y;
+        fisheye::pixel_from_direction(*sun_, big, &x, &y);
+        const cv::Vec2f f = f_big.at<cv::Vec2f>(std::clamp(int(std::lround(y)), 0, big - 1),
+                                                std::clamp(int(std::lround(x)), 0, big - 1));
+        sun_travel_ += cv::Vec2d(f[0], f[1]);
+    }
     // The corrections ride along and fade (e-folding kCorrectionSteps = 1): what the network adds is
     // a short-lived change of the clouds; kept, a small bias per step adds up to weather nobody
     // asked for. On the validation frames (not the held-out ones) an e-folding of 6 steps lost
@@ -828,7 +835,8 @@ std::optional<double> rollout_sun_weight(const CloudRollout& rollout, const std:
                                          double start_look, double input_sun_share) {
     if (!sun || rollout.opacity().empty() || rollout.start_opacity().empty()) return std::nullopt;
     return opacity_sun_weight(sun_transmittance_of_opacity(rollout.opacity(), *sun),
-                              sun_transmittance_of_opacity(rollout.start_opacity(), *sun), start_look, input_sun_share);
+                              sun_transmittance_of_opacity(rollout.start_opacity(), *sun), start_look, input_sun_share,
+                              sun_travel_fraction(rollout.sun_travel_px(), rollout.state().rows));
 }
 
 // How much of the clear sun a sky shows at its sun (sun_patch_share of the sun remove_sun would cut

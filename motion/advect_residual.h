@@ -202,6 +202,9 @@ class CloudRollout {
     // background.
     const cv::Mat& opacity() const { return carried_opacity_; }
     const cv::Mat& start_opacity() const { return opacity_; }
+    // How far the clouds at the background's sun have moved since the start (pixels of the state):
+    // the length of the summed flow at the sun (motion/sun_patch.h opacity_sun_weight's travel).
+    double sun_travel_px() const { return cv::norm(sun_travel_); }
 
   private:
     AdvectResidualNetwork* network_;
@@ -227,6 +230,7 @@ class CloudRollout {
     std::optional<Vec3d> sun_;  // the background's
     double background_weight_ = 1.0;
     int steps_ = 0;
+    cv::Vec2d sun_travel_ = cv::Vec2d(0, 0);
 };
 
 // The motion measured from a previous frame: Farneback flow previous -> current (and back) on the

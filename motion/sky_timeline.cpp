@@ -64,6 +64,10 @@ SkyTimeline::SkyTimeline(SkyImage input, std::unique_ptr<MediumStepModel> model,
     : model_(std::move(model)), dt_(dt), clock_(clock), flow_params_(flow_params) {
     if (!(dt_ > 0)) throw Error("sky timeline: Delta t must be positive");
     validate_sky(input, input.source.empty() ? "input sky" : input.source);
+    // A sky that does not record its sun (a downloaded HDRI): where its brightest pixels are. Left
+    // in, the clouds' motion carried it off as a second sun beside the one put back.
+    if (!input.sun_direction)
+        if (const auto found = sun_from_brightest_pixels(input)) input.sun_direction = found->cast<float>();
     input_sun_ = input.sun_direction ? std::optional<Vec3d>(input.sun_direction->cast<double>()) : std::nullopt;
     input_time_ = input.time_seconds;
     // The sun is cut out where the image has it; it is put back where the clock says.
@@ -108,7 +112,26 @@ std::optional<double> SkyTimeline::model_sun_weight(int i, double s, const Vec3d
     }
     // Relative to the input's cover at the sun, never more than its sun showed (opacity_sun_weight).
     if (!relative) return std::clamp(t, 0.0, 1.0);
-    return opacity_sun_weight(t, sun_transmittance_of_opacity(o0, sun), input_look_transmittance_, input_sun_share());
+    // How far the clouds at the sun have moved by then: the steps' flows there, summed (unknown
+    // without them: as if far).
+    double travel = 1.0;
+    cv::Vec2d moved(0, 0);
+    bool known = true;
+    for (int k = 1; k <= i + (s > 0 ? 1 : 0) && known; ++k) {
+        const cv::Mat f = size_t(k) < model_flow_.size() ? model_flow_[size_t(k)] : cv::Mat();
+        if (f.empty() || f.type() != CV_32FC2) {
+            known = false;
+            break;
+        }
+        double x, y;
+        fisheye::pixel_from_direction(sun, f.rows, &x, &y);
+        const cv::Vec2f v = f.at<cv::Vec2f>(std::clamp(int(std::lround(y)), 0, f.rows - 1),
+                                            std::clamp(int(std::lround(x)), 0, f.rows - 1));
+        moved += (k == i + 1 ? s : 1.0) * cv::Vec2d(v[0], v[1]) * (double(o0.rows) / f.rows);
+    }
+    if (known) travel = sun_travel_fraction(cv::norm(moved), o0.rows);
+    return opacity_sun_weight(t, sun_transmittance_of_opacity(o0, sun), input_look_transmittance_, input_sun_share(),
+                              travel);
 }
 
 const SunPatch& SkyTimeline::covered_input_sun(int n) {

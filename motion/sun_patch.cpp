@@ -319,9 +319,19 @@ double relative_sun_transmittance(const SkyImage& moved, const SkyImage& start, 
     return relative_transmittance(estimate_sun_transmittance(moved, *sun), estimate_sun_transmittance(start, *sun));
 }
 
-double opacity_sun_weight(double moved_opacity_t, double start_opacity_t, double start_look, double input_sun_share) {
-    if (start_look < 0.05 && input_sun_share >= 0.05) return relative_transmittance(moved_opacity_t, start_opacity_t);
-    return std::clamp(moved_opacity_t / sun_weight_reference(start_opacity_t, input_sun_share), 0.0, 1.0);
+double opacity_sun_weight(double moved_opacity_t, double start_opacity_t, double start_look, double input_sun_share,
+                          double travel) {
+    const double own = relative_transmittance(moved_opacity_t, start_opacity_t);
+    if (start_look < 0.05 && input_sun_share >= 0.05) return own;
+    const double moved = std::clamp(moved_opacity_t / sun_weight_reference(start_opacity_t, input_sun_share), 0.0, 1.0);
+    travel = std::clamp(travel, 0.0, 1.0);
+    return (1.0 - travel) * own + travel * moved;
+}
+
+double sun_travel_fraction(double displacement_px, int resolution) {
+    // The sun's own diameter (0.53 degrees): clouds that moved less have not changed what covers it.
+    const double scale_px = 0.53 / 90.0 * resolution / 2.0;
+    return std::clamp(displacement_px / scale_px, 0.0, 1.0);
 }
 
 }  // namespace dynsky

@@ -147,6 +147,15 @@ double relative_sun_transmittance(const SkyImage& moved, const SkyImage& start,
 // unless the look around the start's sun also said cloud (start_look under 0.05) while that sun
 // shone through (input_sun_share >= 0.05): a sun seen through an overcast or hazy sky, whose cover
 // neither measure can see thicken, relative to the start's own (relative_transmittance).
-double opacity_sun_weight(double moved_opacity_t, double start_opacity_t, double start_look, double input_sun_share);
+// `travel`: how far the clouds at the sun have moved, as a fraction of the sun's diameter
+// (sun_travel_fraction): clouds that have not moved cover the sun as they did at the start, so the
+// weight goes from the start's own (1 when nothing moved) at 0 to the rule above at 1. With no
+// wind a sun in a gap 2 degrees from a cloud went to half its radiance on the first step.
+double opacity_sun_weight(double moved_opacity_t, double start_opacity_t, double start_look, double input_sun_share,
+                          double travel = 1.0);
+
+// The clouds' displacement at the sun (pixels of a sky of `resolution`) as a fraction of the sun's
+// diameter (0.53 degrees), in [0, 1].
+double sun_travel_fraction(double displacement_px, int resolution);
 
 }  // namespace dynsky

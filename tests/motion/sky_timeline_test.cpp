@@ -339,6 +339,38 @@ TEST(SkyTimeline, SunIsCutOutAndFollowsTheClock) {
     EXPECT_LT(angle, 1.0);
 }
 
+// A sky that does not record its sun (a downloaded HDRI, a file through another tool) has it cut
+// out where its brightest pixels are: left in, the clouds' motion carried it off as a second sun
+// beside the one put back (two shadows in the scene), with the clock as without one.
+TEST(SkyTimeline, ASkyWithoutARecordedSunKeepsOneSun) {
+    SunClock clock{parse_utc_time("2026-06-21T08:00:00Z"), GeoLocation{48.85, 2.35, 0}};
+    ClearSkyParams p;
+    p.sun_direction = compute_sun_position(clock.start, clock.where).direction();
+    SkyImage sky = make_clear_sky(p, 128);
+    sky.sun_direction.reset();
+    for (const bool clocked : {false, true}) {
+        CloudMotion wind;
+        wind.wind = Wind{270, 12, 1500};
+        SkyTimeline timeline(sky, make_network_step_model("advect", wind), 30,
+                             clocked ? std::optional<SunClock>(clock) : std::nullopt);
+        for (double t : {30.0, 60.0, 75.0}) {
+            const SkyImage s = timeline.sky_at(t);
+            const Vec3d sun = clocked ? *timeline.sun_direction_at(t) : p.sun_direction;
+            double near = 0, far = 0;
+            for (int j = 0; j < s.resolution; ++j)
+                for (int i = 0; i < s.resolution; ++i) {
+                    const double l = luminance(s.pixel(i, j));
+                    if (!(l > 1e4)) continue;  // sun-bright (the clear sky is below 1e3)
+                    const double a = std::acos(std::clamp(fisheye::direction_from_pixel(i, j, 128).dot(sun), -1.0,
+                                                          1.0));
+                    (a * 180 / kPiD < 3 ? near : far) += l;
+                }
+            EXPECT_GT(near, 0) << "t " << t;
+            EXPECT_LT(far, 1e-3 * near) << "a second sun at t " << t << (clocked ? " (clock)" : "");
+        }
+    }
+}
+
 // A stored timeline (the render farm's keys) gives the very skies of the timeline that computed
 // them, with a sun cut out and put back dimmed by the clock, in both Gamma forms, asked in any order.
 // The clear sky of Paris at 10:00 UTC with a texture to track, n x n (the stored timelines' input).
