@@ -116,6 +116,7 @@ int run_render(const RenderOptions& o) {
     const std::string png_beside = ext == ".exr" ? std::filesystem::path(o.out).replace_extension(".png").string()
                                                  : std::string();
     check_outputs_are_not_inputs({o.out, png_beside}, {o.scene.scene, o.sky});
+    for (const std::string& out : {o.out, png_beside}) check_output_file(out);  // before the render, not after
 
     std::unique_ptr<tbb::global_control> threads;
     if (o.threads > 0)
@@ -279,7 +280,7 @@ void register_render_command(CLI::App& app) {
     cmd->add_option(
         "--region", o->region,
         "Render only pixels [x0, x1) x [y0, y1) of the --res image, 'x0,y0,x1,y1' (the output is cropped to\n"
-        "them; they equal the same pixels of a full render with the same seed; with --noise-threshold only\n"
+        "them, the EXR placing them in the whole image by its data window, as compositors expect; they equal the same pixels of a full render with the same seed; with --noise-threshold only\n"
         "where the stopping rule's 9 x 9 neighbourhood lies inside the region). The PNG's automatic exposure\n"
         "is the region's own: give --exposure for tiles that match");
     cmd->add_option(

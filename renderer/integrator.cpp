@@ -132,6 +132,8 @@ Image render_layers(const RenderResult& r) {
     for (const auto& p : parts) channels += p.first->channels;
     Image out(c.width, c.height, channels);
     out.metadata = c.metadata;
+    out.origin_x = c.origin_x, out.origin_y = c.origin_y, out.full_width = c.full_width,
+    out.full_height = c.full_height;
     int at = 0;
     for (const auto& [image, names] : parts) {
         for (int y = 0; y < c.height; ++y)
@@ -693,6 +695,11 @@ RenderResult PathIntegrator::render(const Camera& camera) const {
     result.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     result.stats.camera_rays = camera_rays, result.stats.extension_rays = extension_rays;
     result.stats.shadow_rays = shadow_rays;
+    if (!settings_.region.empty())  // each pass knows where it lies in the full image
+        for (Image* im : {&result.color, &result.variance, &result.albedo, &result.normal, &result.depth, &result.alpha,
+                          &result.sample_count, &result.relative_error})
+            if (!im->empty())
+                im->origin_x = region.x0, im->origin_y = region.y0, im->full_width = w, im->full_height = h;
     return result;
 }
 

@@ -178,7 +178,7 @@ std::optional<double> image_header_number(const std::string& path, const std::st
     return d;
 }
 
-Image read_image(const std::string& path) {
+Image read_image(const std::string& path, DataWindow part) {
     if (std::string why = image_file_problem(path); !why.empty()) throw_file_error(path, why);
     ImageFileInput in(path);
     if (!in) {
@@ -189,8 +189,12 @@ Image read_image(const std::string& path) {
     // Sizes come from the header: check them before anything is allocated.
     check_image_size(path, spec.width, spec.height, spec.nchannels);
     if (spec.depth > 1) throw_file_error(path, "is a volume image (depth " + std::to_string(spec.depth) + ")");
-    if (spec.x != spec.full_x || spec.y != spec.full_y || spec.width != spec.full_width ||
-        spec.height != spec.full_height)
+    const bool whole = spec.x == spec.full_x && spec.y == spec.full_y && spec.width == spec.full_width &&
+                       spec.height == spec.full_height;
+    const bool inside = spec.x >= spec.full_x && spec.y >= spec.full_y &&
+                        spec.x + spec.width <= spec.full_x + spec.full_width &&
+                        spec.y + spec.height <= spec.full_y + spec.full_height;
+    if (!whole && !(part == DataWindow::PartAllowed && inside))
         throw_file_error(path, "its pixels (data window " + std::to_string(spec.width) + "x" +
                                    std::to_string(spec.height) + " at " + std::to_string(spec.x) + "," +
                                    std::to_string(spec.y) + ") do not cover its image (display window " +
@@ -209,6 +213,10 @@ Image read_image(const std::string& path) {
     (void)in->geterror();  // seeking past the last part may leave a message
     if (!in->seek_subimage(0, 0)) throw_file_error(path, "cannot read its first part: " + in->geterror());
     Image image(spec.width, spec.height, spec.nchannels);
+    if (!whole) {
+        image.origin_x = spec.x - spec.full_x, image.origin_y = spec.y - spec.full_y;
+        image.full_width = spec.full_width, image.full_height = spec.full_height;
+    }
     image.file_format = in->format_name();
     image.file_pixel_type = spec.format.c_str();
     bool read = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()) && !in->has_error();
@@ -278,6 +286,14 @@ void write_image(const std::string& path, const Image& image) {
     OIIO::ImageSpec spec(image.width, image.height, image.channels,
                          is_exr ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
     if (is_exr) spec.attribute("compression", "zip");
+    if (is_exr && image.full_width > 0) {  // a part of a larger image (a render region)
+        if (image.origin_x < 0 || image.origin_y < 0 || image.origin_x + image.width > image.full_width ||
+            image.origin_y + image.height > image.full_height)
+            throw_file_error(path, "the pixels do not lie inside the image they are said to be part of");
+        spec.x = image.origin_x, spec.y = image.origin_y;
+        spec.full_x = spec.full_y = 0;
+        spec.full_width = image.full_width, spec.full_height = image.full_height;
+    }
     // OpenImageIO stamps an EXR with the wall-clock time (capDate) unless DateTime is set; an empty
     // one writes none, so a file depends only on its pixels and metadata (a resumed animation's
     // frames equal an uninterrupted run's byte for byte). An image read with a DateTime keeps it.

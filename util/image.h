@@ -25,6 +25,11 @@ struct Image {
     // For images read from a file: OpenImageIO's name of its format ("openexr", "png", "jpeg") and
     // of its stored pixel type ("uint8", "uint16", "half", "float"); empty for images made here.
     std::string file_format, file_pixel_type;
+    // Where the pixels lie in a larger image: an EXR's data window at (origin_x, origin_y) in a
+    // display window of full_width x full_height at (0, 0). A render region is written so, as
+    // pbrt and Cycles write crops, and compositors put it in its place. full_width 0: the pixels
+    // are the whole image. Only EXR keeps it.
+    int origin_x = 0, origin_y = 0, full_width = 0, full_height = 0;
 
     Image() = default;
     Image(int w, int h, int c) : width(w), height(h), channels(c), pixels(size_t(w) * h * c, 0.0f) {}
@@ -59,7 +64,11 @@ bool has_jpeg_signature(const std::string& path);
 // missing file, one that is not a regular file, a header beyond the limits above, a file of
 // several parts (multi-part EXR, multi-page TIFF: which one would be meant?) and a truncated or
 // corrupt file (including a JPEG cut short, which its decoder would silently fill with grey).
-Image read_image(const std::string& path);
+// A file whose pixels are only part of its image (an EXR data window other than its display
+// window) is refused as ambiguous, unless `part` is DataWindow::PartAllowed and they lie inside
+// it (a render region): then the pixels are read with their place (Image::origin_x, full_width).
+enum class DataWindow { Whole, PartAllowed };
+Image read_image(const std::string& path, DataWindow part = DataWindow::Whole);
 
 // Turns and mirrors an image as its EXIF orientation (metadata "Orientation", 1-8) says viewers
 // show it (OpenImageIO's reorient), so a photograph's pixel positions and "up" are the ones its

@@ -7,6 +7,7 @@
 
 #include "sky/sky_image.h"
 #include "tests/test_support.h"
+#include "util/error.h"
 #include "util/image.h"
 
 namespace dynsky {
@@ -222,9 +223,16 @@ TEST(RenderCli, AovsRegionAndCameraOptions) {
     std::string dir = test::temp_dir("render");
     Outcome o = render("builtin --aovs albedo,normal,depth,alpha,samples --region 4,2,20,14", dir + "/aov.exr");
     ASSERT_EQ(o.result.exit_code, 0) << o.result.output;
-    Image im = read_image(dir + "/aov.exr");
+    // The region's pixels, placed in the full image as compositors expect (data window (4, 2)-(19, 13)
+    // of a display window of the whole --res image), and refused where a whole image is needed.
+    Image im = read_image(dir + "/aov.exr", DataWindow::PartAllowed);
     EXPECT_EQ(im.width, 16);
     EXPECT_EQ(im.height, 12);
+    EXPECT_EQ(im.origin_x, 4);
+    EXPECT_EQ(im.origin_y, 2);
+    EXPECT_GT(im.full_width, 20);
+    EXPECT_GT(im.full_height, 14);
+    EXPECT_THROW(read_image(dir + "/aov.exr"), dynsky::Error);
     for (const char* name : {"R", "G", "B", "A", "Denoising Albedo.R", "Normal.Z", "Depth.Z", "Sample Count.X"})
         EXPECT_GE(im.channel_index(name), 0) << name;
     EXPECT_EQ(im.metadata.strings["dynsky:region"], "4,2,20,14");
