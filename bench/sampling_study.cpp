@@ -63,9 +63,10 @@ struct NamedScene {
 
 // Pixel sampling is deterministic in (seed, pixel): renders are repeatable.
 RenderResult render(const Accel& accel, const EnvLight& light, const Camera& cam, int w, int h, int spp, uint64_t seed,
-                    int depth) {
+                    int depth, bool with_alpha = false) {
     RenderSettings s;
     s.width = w, s.height = h, s.spp = spp, s.seed = seed, s.quiet = true, s.max_depth = depth;
+    s.aovs.alpha = with_alpha;  // where the camera sees the scene, not the sky (compare's `scored`)
     return PathIntegrator(accel, light, s).render(cam);
 }
 
@@ -75,17 +76,24 @@ struct ErrorStats {
 };
 
 // RMSE and relative MSE (per channel, (x - r)^2 / (r^2 + 1e-2 mean^2)); firefly share: fraction of
-// the squared error held by the brightest 0.1% of the render's pixels (at least one pixel).
-ErrorStats compare(const Image& img, const Image& ref) {
-    const size_t pixels = ref.pixels.size() / 3;
+// the squared error held by the brightest 0.1% of the render's pixels (at least one pixel). Over
+// the pixels `scored` marks (all when empty).
+ErrorStats compare(const Image& img, const Image& ref, const std::vector<char>& scored = {}) {
+    std::vector<size_t> index;
+    for (size_t p = 0; p < ref.pixels.size() / 3; ++p)
+        if (scored.empty() || scored[p]) index.push_back(p);
+    const size_t pixels = index.size();
+    if (pixels == 0) return {};
     double mean = 0;
-    for (float v : ref.pixels) mean += v;
-    mean /= double(ref.pixels.size());
+    for (size_t p : index)
+        for (int c = 0; c < 3; ++c) mean += ref.pixels[3 * p + c];
+    mean /= double(3 * pixels);
     const double eps = 1e-2 * mean * mean + 1e-12;
     std::vector<std::pair<float, double>> by_brightness(pixels);
     std::vector<double> pixel_se(pixels);
     double se = 0, rel = 0;
-    for (size_t p = 0; p < pixels; ++p) {
+    for (size_t q = 0; q < pixels; ++q) {
+        const size_t p = index[q];
         double e = 0;
         for (int c = 0; c < 3; ++c) {
             double d = double(img.pixels[3 * p + c]) - ref.pixels[3 * p + c];
@@ -93,9 +101,9 @@ ErrorStats compare(const Image& img, const Image& ref) {
             rel += d * d / (double(ref.pixels[3 * p + c]) * ref.pixels[3 * p + c] + eps);
         }
         se += e;
-        pixel_se[p] = e;
+        pixel_se[q] = e;
         float lum = 0.2126f * img.pixels[3 * p] + 0.7152f * img.pixels[3 * p + 1] + 0.0722f * img.pixels[3 * p + 2];
-        by_brightness[p] = {lum, e};
+        by_brightness[q] = {lum, e};
     }
     size_t top = std::max<size_t>(1, pixels / 1000);
     std::partial_sort(by_brightness.begin(), by_brightness.begin() + long(top), by_brightness.end(),
@@ -249,14 +257,36 @@ struct Run {
     double render_seconds, rebuild_seconds, rmse, rel_mse, firefly, trimmed_rmse;
 };
 
+// Seconds per sample per pixel from renders (spp, seconds): the median of the slopes between every
+// two renders of different spp (Theil-Sen), so that neither a render slowed by the machine's load
+// nor the fixed cost of a render decides it (seconds / spp pooled over the renders let the single
+// largest render set it: one slow 16 spp render moved a speed-up from 2.4 to 1.06x). Pooled
+// seconds / spp when no two renders differ in spp.
+double seconds_per_spp_of(const std::vector<std::pair<double, double>>& renders) {
+    std::vector<double> slopes;
+    double secs = 0, spp = 0;
+    for (size_t a = 0; a < renders.size(); ++a) {
+        secs += renders[a].second, spp += renders[a].first;
+        for (size_t b = 0; b < renders.size(); ++b)
+            if (renders[b].first > renders[a].first)
+                slopes.push_back((renders[b].second - renders[a].second) / (renders[b].first - renders[a].first));
+    }
+    if (slopes.empty()) return spp > 0 ? secs / spp : 0.0;
+    return std::max(median(slopes), 1e-12);
+}
+
 // A sampler's results on one scene and sky: per spp level, the RMSE of every seed, and its cost
-// model: seconds per frame = rebuild + spp x seconds per spp, both pooled over all its renders
-// (robust against the load of a shared machine, which a single render's time is not).
+// model: seconds per frame = rebuild + spp x seconds per spp (seconds_per_spp_of over all its
+// renders; per seed over that seed's, for the bracket, so it shows the timing noise as well).
 struct Curve {
     std::vector<double> spp;
     std::vector<std::vector<double>> rmse;            // [spp level][seed]: trimmed RMSE (see compare)
     std::vector<double> rel_mse, firefly, full_rmse;  // means per spp level (full_rmse: untrimmed)
     double seconds_per_spp = 0, rebuild_seconds = 0;
+    std::vector<double> seed_seconds_per_spp;  // [seed]
+    double seed_seconds_at(int seed, double spp_value) const {
+        return rebuild_seconds + spp_value * seed_seconds_per_spp[size_t(seed)];
+    }
     double mean_rmse(size_t level) const {
         double s = 0;
         for (double e : rmse[level]) s += e;
@@ -443,7 +473,9 @@ int run_sampling_study(const SamplingStudyOptions& o) {
                 std::map<std::string, Curve> curves;
                 for (const std::string& name : samplers) {
                     Curve& c = curves[name];
-                    double secs = 0, spp_total = 0;
+                    std::vector<std::pair<double, double>> timed;
+                    std::vector<std::vector<std::pair<double, double>>> seed_timed;
+                    seed_timed.resize(size_t(seeds));
                     std::vector<double> rebuilds;
                     for (int spp : spps) {
                         c.spp.push_back(spp);
@@ -453,12 +485,16 @@ int run_sampling_study(const SamplingStudyOptions& o) {
                             if (r.scene == sc.name && r.sky == sky.name && r.sampler == name && r.spp == spp) {
                                 c.rmse.back().push_back(r.trimmed_rmse);
                                 rel += r.rel_mse / seeds, ff += r.firefly / seeds, full += r.rmse / seeds;
-                                secs += r.render_seconds, spp_total += spp;
+                                timed.emplace_back(spp, r.render_seconds);
+                                if (r.seed >= 0 && r.seed < seeds)
+                                    seed_timed[size_t(r.seed)].emplace_back(spp, r.render_seconds);
                                 rebuilds.push_back(r.rebuild_seconds);
                             }
                         c.rel_mse.push_back(rel), c.firefly.push_back(ff), c.full_rmse.push_back(full);
                     }
-                    c.seconds_per_spp = secs / spp_total;
+                    c.seconds_per_spp = seconds_per_spp_of(timed);
+                    for (const auto& t : seed_timed)
+                        c.seed_seconds_per_spp.push_back(t.empty() ? c.seconds_per_spp : seconds_per_spp_of(t));
                     c.rebuild_seconds = median(rebuilds);
                     for (size_t k = 0; k < c.spp.size(); ++k)
                         sum_csv << sc.name << "," << sky.name << "," << name << "," << c.spp[k] << ","
@@ -483,7 +519,8 @@ int run_sampling_study(const SamplingStudyOptions& o) {
                         std::vector<double> ek(c.spp.size()), ck(cdf.spp.size());
                         for (size_t l = 0; l < ek.size(); ++l)
                             ek[l] = c.rmse[l][size_t(k)], ck[l] = cdf.rmse[l][size_t(k)];
-                        double sk = t_cdf / c.seconds_at(spp_to_reach(c.spp, ek, monotone(ck).back()));
+                        double sk = cdf.seed_seconds_at(k, cdf.spp[top]) /
+                                    c.seed_seconds_at(k, spp_to_reach(c.spp, ek, monotone(ck).back()));
                         lo = std::min(lo, sk), hi = std::max(hi, sk);
                     }
                     double spp_at_equal_time = std::max((t_cdf - c.rebuild_seconds) / c.seconds_per_spp, 1e-3);
@@ -636,13 +673,18 @@ int run_sampling_study(const SamplingStudyOptions& o) {
         for (const NamedSky& c : cases) {
             // Reference: the light with NaNs removed is what every sampler must converge to.
             EnvLight ref_light(c.sky, 0.3f, parse_sky_sampler(kReferenceSampler));
-            Image ref = render(accel, ref_light, sc.camera, w, h, ref_spp, 4321, depth).color;
+            const RenderResult reference = render(accel, ref_light, sc.camera, w, h, ref_spp, 4321, depth, true);
+            const Image& ref = reference.color;
+            // Scored where the camera sees the scene: a pixel that sees the sky directly is the same
+            // for every sky sampler, and where it sees a 1e6 sun it held 96-99.5 % of each one's error.
+            std::vector<char> surface(reference.alpha.pixels.size());
+            for (size_t p = 0; p < surface.size(); ++p) surface[p] = reference.alpha.pixels[p] > 0.999f;
             for (const std::string& name : samplers) {
                 EnvLight light(c.sky, 0.3f, parse_sky_sampler(name));
                 Image img = render(accel, light, sc.camera, w, h, spp, 7, depth).color;
                 bool finite = std::all_of(img.pixels.begin(), img.pixels.end(),
                                           [](float v) { return std::isfinite(v); });
-                ErrorStats e = compare(img, ref);
+                ErrorStats e = compare(img, ref, surface);
                 if (!finite) notes += "- NON-FINITE pixels: " + c.name + " / " + name + "\n";
                 fl_csv << c.name << "," << name << "," << e.rmse << "," << e.rel_mse << "," << e.firefly_share << "\n";
                 fl << "| " << c.name << " | " << name << " | " << fmt("%.4g", e.rmse) << " | " << fmt("%.3g", e.rel_mse)
@@ -685,28 +727,39 @@ int run_sampling_study(const SamplingStudyOptions& o) {
        << cache.string() << "), MIS (power heuristic) throughout"
        << (run_accuracy || run_failures ? "" : " (accuracy and failures not run)") << ".\n\n";
     if (run_accuracy) {
-        md << "## Recommendation\n\n"
-           << "Best median speed-up to plain cdf's error over the scenes and skies measured: **" << best << "** ("
-           << fmt("%.2f", best_speed) << "x; " << fmt("%.2f", med(spp_gains[best]))
-           << "x fewer spp). The renderer's default is **" << def
-           << "** (EnvLight: without +mis, the render command adds it).\n\n"
-           << "Under the clear (sunny) sky, median over the scenes of the default's speed-up to plain cdf's error: "
-           << fmt("%.2f", med(sunny_speedups[def]))
-           << "x (per-seed range of the scenes' speed-ups: " << fmt("%.2f", med(sunny_low[def])) << "x to "
-           << fmt("%.2f", med(sunny_high[def])) << "x, medians over the scenes; goal: >= 2x).\n\n";
+        md << "## Recommendation\n\n";
+        // Speed-ups are to plain cdf's error: without cdf (or the default) among the samplers run
+        // there is nothing to state, not a speed-up of 0.
+        if (best.empty())
+            md << "Not measured: speed-ups are to plain cdf's error, and cdf was not among the samplers run "
+                  "(--samplers).\n\n";
+        else
+            md << "Best median speed-up to plain cdf's error over the scenes and skies measured: **" << best << "** ("
+               << fmt("%.2f", best_speed) << "x; " << fmt("%.2f", med(spp_gains[best])) << "x fewer spp). ";
+        md << "The renderer's default is **" << def
+           << "** (`render`'s default --sampler; a name given there is used as given: cdf renders without MIS).\n\n";
+        if (!best.empty() && !sunny_speedups[def].empty())
+            md << "Under the clear (sunny) sky, median over the scenes of the default's speed-up to plain cdf's error: "
+               << fmt("%.2f", med(sunny_speedups[def]))
+               << "x (per-seed range of the scenes' speed-ups: " << fmt("%.2f", med(sunny_low[def])) << "x to "
+               << fmt("%.2f", med(sunny_high[def])) << "x, medians over the scenes; goal: >= 2x).\n\n";
+        else
+            md << "The default's speed-up under the clear (sunny) sky: not measured (it needs cdf and " << def
+               << " among the samplers and the clear sky among the skies).\n\n";
     }
     if (run_rebuild)
         md << "Rebuild at 2048 of the default (" << def << "), all threads: " << fmt("%.2f", ratio_2048[def])
            << "x the streaming floor (goal: <= 2x); plain cdf: " << fmt("%.2f", ratio_2048["cdf"]) << "x.\n\n";
     if (run_accuracy) {
         md << "How time is measured: every render is timed apart from its frame's rebuild; a sampler's cost is modelled as "
-              "rebuild + spp x (seconds per spp), both pooled over all its renders of that scene and sky (samplers interleaved "
-              "in the same loop, so the machine's load falls on all alike). Error = RMSE without the 0.1% of pixels with the largest error "
+              "rebuild + spp x (seconds per spp): the median rebuild, and the median of the slopes between every two of its "
+              "renders of that scene and sky at different spp (Theil-Sen: neither one slow render nor a render's fixed cost "
+              "decides it; samplers interleaved in the same loop, so the machine's load falls on all alike). Error = RMSE without the 0.1% of pixels with the largest error "
               "(as in path-guiding comparisons, e.g. Mueller et al. 2017: otherwise a handful of fireflies, paths that reach "
               "the tiny sun through a glossy bounce, which no sky sampler helps, decide the whole error; the untrimmed RMSE "
               "and the fireflies' share are in the tables and CSV files). Time to error = that cost at the spp where the "
               "sampler's mean error (over seeds) reaches plain cdf's mean error at its highest spp; speed-up = cdf's time / that "
-              "time; the bracket is the range of the same speed-up computed from each seed's curves alone. The spp gain is "
+              "time; the bracket is the range of the same speed-up computed from each seed's curves and timings alone, so it shows the timing noise too. The spp gain is "
               "the same ratio at equal samples per pixel.\n\n"
               "| sampler | median speed-up | sunny (clear) median | sunny per-seed range | median spp gain | sunny spp gain |\n"
               "|---|---|---|---|---|---|\n";
@@ -743,8 +796,11 @@ int run_sampling_study(const SamplingStudyOptions& o) {
     if (run_failures)
         md << "## Failure cases\n\n"
            << failure_scene << " scene, " << w << "x" << h << ", 128x128 skies; reference " << ref_spp << " spp with "
-           << kReferenceSampler << ". "
-           << "Firefly share: fraction of the squared error held by the brightest 0.1% of pixels.\n\n"
+           << kReferenceSampler
+           << ". Errors over the pixels where the camera sees the scene (those that see the "
+              "sky directly are the same for every sky sampler, and one that sees the 1e6 sun held 96-99.5 % of "
+              "every sampler's error). Firefly share: fraction of the squared error held by the brightest 0.1% of "
+              "those pixels.\n\n"
            << fl.str() << "\n![failures](failures.png)\n\n";
     if (!notes.empty()) md << "## Notes\n\n" << notes << "\n";
     write_file_atomic((out / "README.md").string(), md.str());
