@@ -55,7 +55,7 @@ void register_animate_command(CLI::App& app) {
         "sampling, which keeps Monte Carlo noise from flickering between frames)");
     cmd->add_flag("--play-anim", a->play_scene_animation,
                   "Play the glTF's animations along the frames: the frame at t s poses the scene at --anim-time + t "
-                  "(the scene is loaded per frame)");
+                  "(the file is loaded once and posed per frame)");
     cmd->add_option("--threads", a->threads, "Worker threads (0: all cores)")
         ->check(CLI::Range(0, kMaxThreads))
         ->capture_default_str();

@@ -204,7 +204,7 @@ void register_sky_clear_commands(CLI::App& sky) {
     ll->add_option("sky", ll_opts->sky, "Input fisheye sky (.exr)")->required();
     ll->add_option("--out,-o", ll_opts->out, "Output lat-long image, .exr")->required();
     ll->add_option("--width", ll_opts->width, "Width W in pixels, even (height W/2); default 2N for an N x N sky")
-        ->check(CLI::Range(4, 65536));
+        ->check(CLI::Range(4, 16384));  // dynsky reads images up to 16384 a side (docs/input-limits.md)
     ll->add_option("--ground", ll_opts->ground,
                    "Radiance of the lower half: one value or R,G,B in W m^-2 sr^-1 (default 0, black)");
     ll->add_option("--preview", ll_opts->preview, "Also write a tone-mapped .png preview (auto exposure)");

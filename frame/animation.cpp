@@ -85,7 +85,7 @@ void record_timing(const std::string& path, int frame, const std::string& line, 
 FrameSettings animation_frame_settings(const AnimationSettings& o, const std::string& model_name, double dt,
                                        float png_exposure_ev) {
     FrameSettings s = sky_timeline_settings(o.sky, o.model);  // as asked; the model and Delta t as resolved:
-    s["model"] = model_name;
+    s["model"] = model_name + cloud_model_files(o.model.model);
     s["dt"] = number(dt);
     s["scene"] = describe_scene_input(o.scene.scene);
     s["camera"] = std::to_string(o.scene.camera);
@@ -330,9 +330,11 @@ AnimationReport render_animation(const AnimationSettings& o) {
              << result.stats.seconds * 1e3 << ',' << timeline.timings().medium_steps << '\n';
         record_timing(timings, k, line.str(), timings_start_over, total);
         timings_start_over = false;
-        write_image(store.frame_exr(k), aovs.any() ? render_layers(result) : image);
+        // The EXR last: it carries the settings a resumed run keeps a frame by, so PNGs of an
+        // earlier run never stay beside it (a run stopped between the files renders the frame again).
         write_image(store.frame_png(k), tonemap_to_display(image, ev));
         write_image(store.sky_png(k), tonemap_to_display(sky_to_image(*sky), sky_ev));
+        write_image(store.frame_exr(k), aovs.any() ? render_layers(result) : image);
         keep[size_t(k)] = 1;
 
         sum_sky += sky_s, sum_build += light.last_build_seconds(), sum_render += result.stats.seconds, ++rendered;

@@ -236,6 +236,26 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
 }
 
 
+std::string cloud_model_files(const std::string& name) {
+    std::string folder;
+    try {
+        folder = resolve_cloud_model(name);
+    } catch (const Error&) {
+        return "";  // the model's own loading says what is wrong
+    }
+    std::error_code ec;
+    if (!fs::is_directory(folder, ec)) return "";
+    std::vector<fs::path> files;
+    for (const auto& e : fs::directory_iterator(folder, ec)) {
+        const std::string ext = file_extension(e.path().string());
+        if (e.is_regular_file(ec) && (ext == ".json" || ext == ".onnx")) files.push_back(e.path());
+    }
+    std::sort(files.begin(), files.end());
+    std::string s = " [";
+    for (size_t i = 0; i < files.size(); ++i) s += (i ? "; " : "") + describe_input(files[i].string());
+    return s + "]";
+}
+
 FrameSettings sky_timeline_settings(const SkySourceSpec& o, const StepModelSpec& m) {
     auto number = [](double v) {
         char buf[40];
@@ -252,7 +272,7 @@ FrameSettings sky_timeline_settings(const SkySourceSpec& o, const StepModelSpec&
     s["cloud_height"] = number(o.cloud_height_m);
     s["prev"] = o.previous.empty() ? "" : describe_input(o.previous);
     s["prev_dt"] = number(o.previous_dt);
-    s["model"] = m.model;
+    s["model"] = m.model + cloud_model_files(m.model);
     s["dt"] = number(m.dt);
     s["drift"] = number(m.drift_deg_per_s);
     return s;

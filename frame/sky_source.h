@@ -70,6 +70,11 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& sky, const StepModelSpec& mod
 // only for the same.
 FrameSettings sky_timeline_settings(const SkySourceSpec& sky, const StepModelSpec& model);
 
+// The contents of a cloud model's description and networks (model.json, *.onnx: name, size, hash),
+// " [...]", for the settings frames and timelines are kept by: a retrained model, or the shipped
+// one of another version, moves the clouds otherwise. "" for a model without a folder.
+std::string cloud_model_files(const std::string& name);
+
 // A stored timeline (glossary "stored timeline"): makes the timeline and saves the steps covering
 // t in [0, duration] into `folder` (motion/sky_timeline.h SkyTimeline::save). A folder already
 // holding one of these settings that covers the duration is kept (a rerun does nothing). Returns

@@ -80,6 +80,9 @@ void SkyTimeline::save(const std::string& folder, int last_step, const std::stri
     const OutputFolder made(folder);  // removed again if this fails before writing anything
     json steps = json::array(), flows = json::array();
     step(last_step);  // every step first: the input's cloud opacity comes with step 1
+    // An earlier timeline's description goes before any of its steps is replaced: a run that stops
+    // midway (a full disk, Ctrl-C) must not leave it describing this run's steps.
+    remove_stale_marker((fs::path(folder) / "timeline.json").string());
     for (int i = 0; i <= last_step; ++i) {
         auto s = step(i);
         const std::string file = numbered(folder, "step", i, ".exr");

@@ -160,6 +160,9 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
     nlohmann::ordered_json frame_list = nlohmann::ordered_json::array();
     double max_speed = 0.0;
     Vec3d current_sun = params.clear_sky.sun_direction;
+    // An earlier sequence's manifest goes before any of its frames is replaced: a run that stops
+    // midway must not leave it describing this run's frames.
+    remove_stale_marker((fs::path(o.out) / "manifest.json").string());
     ProgressBar progress(frames, "procedural sky", o.quiet);
     for (int k = 0; k < frames; ++k) {
         double t = k * o.dt;

@@ -157,6 +157,28 @@ OutputFolder::~OutputFolder() {
         else break;
 }
 
+void check_output_file(const std::string& path) {
+    if (path.empty()) return;
+    const fs::path target(output_target(path));
+    std::error_code ec;
+    if (fs::is_directory(target, ec)) throw_file_error(path, "a folder of that name is in the way");
+    // The nearest existing folder above it must be a folder, and writable.
+    fs::path up = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+    while (!fs::exists(up, ec) && up.has_parent_path() && up.parent_path() != up) up = up.parent_path();
+    if (fs::exists(up, ec) && !fs::is_directory(up, ec))
+        throw_file_error(path, "cannot create its folder: " + up.string() + " is a file");
+    if (fs::is_directory(up, ec) && ::access(up.c_str(), W_OK) != 0)
+        throw_file_error(path, "cannot write into " + up.string() + ": " + std::strerror(errno));
+}
+
+void remove_stale_marker(const std::string& path) {
+    std::error_code ec;
+    if (!std::filesystem::exists(std::filesystem::symlink_status(path, ec))) return;
+    if (!std::filesystem::remove(path, ec) || ec)
+        throw_file_error(path, "could not remove it before replacing the files it describes" +
+                                   (ec ? ": " + ec.message() : std::string()));
+}
+
 void write_file_atomic(const std::string& path, const std::string& bytes) {
     TemporaryFile tmp(path);
     int fd = ::open(tmp.path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);

@@ -17,6 +17,11 @@ namespace dynsky {
 // temporary removed, nothing under path changed).
 void write_file_atomic(const std::string& path, const std::string& bytes);
 
+// Removes a file that says a folder's contents are complete (a timeline.json, a manifest.json)
+// before a run replaces any of them, so that a run stopped midway never leaves it describing
+// files it did not write. Nothing when absent; throws dynsky::Error naming path if it stays.
+void remove_stale_marker(const std::string& path);
+
 // The temporary name of this process for path (same folder): .tmp-STEM-PID.EXT.
 std::string temporary_path(const std::string& path);
 
@@ -64,6 +69,11 @@ std::vector<std::string> remove_stale_temporaries(const std::string& folder);
 // a render farm's task cleans up after its own killed attempt, never the temporaries of another
 // task writing into the same folder from another machine (whose process ids mean nothing here).
 std::vector<std::string> remove_stale_temporaries(const std::string& folder, const std::vector<std::string>& stems);
+
+// Throws before any work if a file could not be written at `path` when the work is done: a folder
+// of that name is in the way, a file stands where one of its folders would be made, or its
+// folder is not writable. (A full disk is found only when writing.)
+void check_output_file(const std::string& path);
 
 // Throws before any work if an output would replace one of the inputs (the same file or folder,
 // by canonical path; an output inside an input folder counts too). Empty names are ignored.

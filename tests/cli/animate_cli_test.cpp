@@ -15,6 +15,7 @@
 #include <random>
 
 #include "tests/test_support.h"
+#include "util/data_path.h"
 #include "util/image.h"
 
 namespace dynsky {
@@ -274,6 +275,42 @@ TEST(AnimateCli, ResumeRerendersDamagedFramesAndFramesOfOtherSettings) {
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(inode(frame(a, 0)), kept);
     EXPECT_TRUE(read_image(frame(a, 5)).pixels == frame5.pixels);
+    fs::remove_all(dir);
+}
+
+// What a frame is made of includes the cloud model's files and a .glb's external textures, not
+// their names alone: a retrained model in the same folder and a .glb's changed colormap.png (the
+// Kenney city kit's tiles share one) kept the old frames.
+TEST(AnimateCli, ResumeRerendersFramesOfAChangedModelOrGlbTexture) {
+    DYNSKY_REQUIRE_SHARED();
+    const std::string dir = test::temp_dir("animate_resume_files");
+    fs::copy(data_path("networks/models/advect_residual"), dir + "/model", fs::copy_options::recursive);
+    fs::create_directories(dir + "/kit/Textures");
+    fs::copy_file(test::shared_path("scenes/KenneyCityKit/building-small-a.glb"), dir + "/kit/building.glb");
+    fs::copy_file(test::shared_path("scenes/KenneyCityKit/Textures/colormap.png"), dir + "/kit/Textures/colormap.png");
+    const std::string run = std::string(DYNSKY_EXE) + " animate " + dir +
+                            "/kit/building.glb --sky procedural:2 --model " + dir +
+                            "/model --sky-res 64 --res 32x18 --spp 1 --duration 60 --fps 0.05 --no-video --out " + dir +
+                            "/a 2>&1";
+    ASSERT_EQ(test::run_command(run + " -q").exit_code, 0);
+    auto r = test::run_command(run);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("already complete"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("rendering again"), std::string::npos) << r.output;
+    // The texture changed (its colours inverted): every frame again, the file named.
+    {
+        Image texture = read_image(dir + "/kit/Textures/colormap.png");
+        for (float& v : texture.pixels) v = 1.0f - v;
+        write_image(dir + "/kit/Textures/colormap.png", texture);
+    }
+    r = test::run_command(run);
+    EXPECT_NE(r.output.find("rendering again frame(s) 0-"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("colormap.png"), std::string::npos) << r.output;
+    // The model's description changed: again, the model named.
+    { std::ofstream(dir + "/model/model.json", std::ios::app) << "\n"; }
+    r = test::run_command(run);
+    EXPECT_NE(r.output.find("rendering again frame(s) 0-"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("model.json"), std::string::npos) << r.output;
     fs::remove_all(dir);
 }
 

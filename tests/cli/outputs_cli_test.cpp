@@ -102,10 +102,10 @@ TEST(OutputsCli, FullDiskFailsCleanlyForEveryFormat) {
                            "/stats.csv -q --out " + dir + "/pred");
     expect_clean_failure(r, dir + "/stats.csv", dir);
 
-    // animate: frames, then (all frames there) the contact sheet, then the chart of `temporal`.
+    // animate: frames (the PNGs first, the EXR that says a frame is complete last), then (all frames there) the contact sheet, then the chart of `temporal`.
     const std::string anim = dir + "/anim";
     r = run_with_full_disk(kAnimate + anim + " --no-video");
-    expect_clean_failure(r, anim + "/frame_0000.exr", dir);
+    expect_clean_failure(r, anim + "/frame_0000.png", dir);
     ASSERT_EQ(test::run_command(kExe + kAnimate + anim + " --no-video").exit_code, 0);
     fs::remove(anim + "/contact_sheet.png");
     r = run_with_full_disk(kAnimate + anim + " --no-video");
@@ -117,6 +117,52 @@ TEST(OutputsCli, FullDiskFailsCleanlyForEveryFormat) {
 
 // ffmpeg's part: its exit status and its file are checked (a fake ffmpeg first on the PATH, then
 // the real one under the size limit; the videos are made before the contact sheet).
+// A folder's "complete" marker (a timeline's timeline.json, a procedural sequence's manifest.json)
+// goes before a run replaces any of the files it describes: a run into the same folder that stopped
+// midway (here a full disk) left the old marker over new files, and the next run kept them.
+TEST(OutputsCli, AStoppedRunLeavesNoMarkerOverItsFiles) {
+    const std::string dir = test::temp_dir("outputs_marker");
+    const std::string tl = dir + "/tl", proc = dir + "/proc";
+    ASSERT_EQ(
+        test::run_command(kExe + " sky timeline --sky procedural:1 --sky-res 64 --duration 60 -q -o " + tl).exit_code,
+        0);
+    ASSERT_TRUE(fs::exists(tl + "/timeline.json"));
+    auto r = run_with_full_disk("sky timeline --sky procedural:9 --sky-res 64 --duration 60 -q -o " + tl);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_FALSE(fs::exists(tl + "/timeline.json")) << "the old description stayed over new steps";
+    ASSERT_EQ(test::run_command(kExe + " sky procedural --sky-res 64 --duration 20 -q -o " + proc).exit_code, 0);
+    ASSERT_TRUE(fs::exists(proc + "/manifest.json"));
+    r = run_with_full_disk("sky procedural --cloud-seed 7 --sky-res 64 --duration 20 -q -o " + proc);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_FALSE(fs::exists(proc + "/manifest.json")) << "the old manifest stayed over new frames";
+    fs::remove_all(dir);
+}
+
+// An output that cannot be written is found before the work, not after it (minutes of render).
+TEST(OutputsCli, AnUnwritableOutputIsRefusedBeforeAnyWork) {
+    const std::string dir = test::temp_dir("outputs_blocked");
+    std::ofstream(dir + "/afile") << "x\n";
+    fs::create_directories(dir + "/taken.exr");
+    fs::create_directories(dir + "/report.md");
+    struct Case {
+        std::string args, message;
+    } cases[] = {
+        {"render builtin --res 16x9 --spp 1 -q -o " + dir + "/afile/x.exr", "is a file"},
+        {"render builtin --res 16x9 --spp 1 -q -o " + dir + "/taken.exr", "a folder of that name is in the way"},
+        {"sky evaluate --model advect --no-paper --sequence arm-clear --limit 1 --res 64 --horizons 1 -q -o " + dir +
+             "/report.md",
+         "a folder of that name is in the way"},
+    };
+    for (const Case& c : cases) {
+        const auto r = test::run_command(kExe + " " + c.args + " 2>&1");
+        EXPECT_EQ(r.exit_code, 1) << c.args << "\n" << r.output;
+        EXPECT_NE(r.output.find(c.message), std::string::npos) << c.args << "\n" << r.output;
+    }
+    EXPECT_FALSE(fs::exists(dir + "/report.csv"));  // nothing of the report written beside it
+    EXPECT_FALSE(fs::exists(dir + "/report_64.csv"));
+    fs::remove_all(dir);
+}
+
 TEST(OutputsCli, FailedVideoFailsCleanly) {
     const std::string dir = test::temp_dir("outputs_video");
     const std::string anim = dir + "/anim", bin = dir + "/bin";
