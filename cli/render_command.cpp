@@ -194,6 +194,7 @@ int run_render(const RenderOptions& o) {
     if (o.noise_threshold > 0) image.metadata.numbers["dynsky:noise_threshold"] = o.noise_threshold;
     if (o.time_limit > 0) image.metadata.numbers["dynsky:time_limit_seconds"] = o.time_limit;
     if (o.scene.animation_time >= 0) image.metadata.numbers["dynsky:anim_time"] = o.scene.animation_time;
+    if (!o.scene.animation.empty()) image.metadata.strings["dynsky:animation"] = o.scene.animation;
     image.metadata.numbers["dynsky:rounds"] = result.rounds;
     image.metadata.strings["dynsky:sampler_pattern"] = o.sampler_pattern;
     // Everything else that changes the image, so that it can be rendered again from its header.

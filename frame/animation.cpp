@@ -99,6 +99,7 @@ FrameSettings animation_frame_settings(const AnimationSettings& o, const std::st
     // Only when used: frames of runs before these options keep their settings.
     if (o.scene.animation_time >= 0) s["anim_time"] = number(o.scene.animation_time);
     if (o.play_scene_animation) s["play_anim"] = "1";
+    if (!o.scene.animation.empty()) s["animation"] = o.scene.animation;
     s["exposure"] = number(png_exposure_ev);
     std::string look_at;
     for (double v : o.scene.look_at) look_at += (look_at.empty() ? "" : ",") + number(v);
@@ -169,7 +170,7 @@ AnimationReport render_animation(const AnimationSettings& o) {
         if (o.play_scene_animation) spec.animation_time = std::max(0.0, spec.animation_time);
         if (o.play_scene_animation && o.scene.scene != "builtin") {
             const std::string path = resolve_user_path(o.scene.scene);
-            animated = std::make_unique<AnimatedGltf>(path);
+            animated = std::make_unique<AnimatedGltf>(path, o.scene.animation);
             scene = pose_scene(spec, *animated, path, float(width) / height, /*print_warnings=*/true);
         } else {
             scene = load_scene(spec, float(width) / height);

@@ -18,7 +18,7 @@ LoadedScene load_scene(const SceneSpec& o, float aspect_ratio, bool print_warnin
         out.path = o.scene;
     } else {
         out.path = resolve_user_path(o.scene);  // shipped scenes work from any folder
-        out.scene = load_gltf(out.path, nullptr, o.animation_time);
+        out.scene = load_gltf(out.path, nullptr, o.animation_time, o.animation);
         if (print_warnings)
             for (const std::string& w : out.scene.warnings) std::fprintf(stderr, "dynsky: warning: %s\n", w.c_str());
     }

@@ -22,6 +22,8 @@ struct SceneSpec {
     // The glTF's animations sampled at this time in seconds (held at their ends), posing nodes,
     // skins and morph targets; negative: the rest pose.
     double animation_time = -1;
+    // Which of the file's animations plays: its name or index; empty: every one.
+    std::string animation;
 };
 
 struct LoadedScene {

@@ -474,7 +474,8 @@ Eigen::Affine3f to_affine(const Eigen::Matrix4d& m) {
 
 class GltfLoader {
   public:
-    GltfLoader(std::string path, double animation_time) : path_(std::move(path)), animation_time_(animation_time) {}
+    GltfLoader(std::string path, double animation_time, std::string animation = "")
+        : path_(std::move(path)), animation_time_(animation_time), animation_(std::move(animation)) {}
 
     Scene load() {
         load_once();
@@ -502,6 +503,7 @@ class GltfLoader {
         validate_buffer_views();
         decode_draco_primitives();
         rest_nodes_ = model_.nodes;
+        choose_animations();
         build_materials();
         build_textures();
     }
@@ -858,10 +860,40 @@ class GltfLoader {
 
     // ---- Animations -------------------------------------------------------------------------
 
-    // Samples every channel of every animation at time t (held at the ends) into the targeted
-    // nodes' translation, rotation, scale and morph weights, which the node traversal then uses.
+    // Which animations play: every one, or the one `animation_` names (its name, else its index).
+    // A file exported with several actions (Idle, Walk, Run) played all at once is none of them.
+    void choose_animations() {
+        const size_t count = model_.animations.size();
+        playing_.assign(count, animation_.empty());
+        auto list = [&]() {
+            std::string s;
+            for (size_t i = 0; i < count; ++i)
+                s += (i ? ", " : "") + std::to_string(i) +
+                     (model_.animations[i].name.empty() ? "" : " '" + model_.animations[i].name + "'");
+            return count ? s : std::string("none");
+        };
+        if (animation_.empty()) {
+            if (count > 1 && animation_time_ >= 0)
+                warn(std::to_string(count) + " animations play together (" + list() +
+                     "); --animation NAME or INDEX plays one");
+            return;
+        }
+        for (size_t i = 0; i < count; ++i)
+            if (model_.animations[i].name == animation_) playing_[i] = true;
+        if (std::count(playing_.begin(), playing_.end(), true) == 0 && !animation_.empty() &&
+            std::all_of(animation_.begin(), animation_.end(), [](char c) { return c >= '0' && c <= '9'; }) &&
+            animation_.size() < 10 && size_t(std::stoul(animation_)) < count)
+            playing_[std::stoul(animation_)] = true;
+        if (std::count(playing_.begin(), playing_.end(), true) == 0)
+            fail("has no animation '" + animation_ + "' (--animation; its animations: " + list() + ")");
+    }
+
+    // Samples every channel of every playing animation at time t (held at the ends) into the
+    // targeted nodes' translation, rotation, scale and morph weights, which the node traversal then
+    // uses.
     void pose_animations(double t) {
         for (size_t ai = 0; ai < model_.animations.size(); ++ai) {
+            if (ai < playing_.size() && !playing_[ai]) continue;
             const tg::Animation& a = model_.animations[ai];
             for (size_t ci = 0; ci < a.channels.size(); ++ci) {
                 const tg::AnimationChannel& ch = a.channels[ci];
@@ -2362,6 +2394,8 @@ class GltfLoader {
 
     const std::string path_;
     const double animation_time_;
+    const std::string animation_;  // the one animation played (name or index); empty: all
+    std::vector<bool> playing_;    // per animation of the file
     tg::Model model_;
     std::vector<tg::Node> rest_nodes_;  // the nodes as the file has them, before any pose
     Scene scene_;
@@ -2373,7 +2407,8 @@ class GltfLoader {
     std::vector<NodeCamera> cameras_;
 };
 
-AnimatedGltf::AnimatedGltf(const std::string& path) : loader_(std::make_unique<GltfLoader>(path, 0.0)) {
+AnimatedGltf::AnimatedGltf(const std::string& path, const std::string& animation)
+    : loader_(std::make_unique<GltfLoader>(path, 0.0, animation)) {
     loader_->load_once();
 }
 
@@ -2386,9 +2421,10 @@ Scene AnimatedGltf::pose(double animation_time) {
 }
 
 
-Scene load_gltf(const std::string& path, std::vector<std::string>* warnings, double animation_time) {
+Scene load_gltf(const std::string& path, std::vector<std::string>* warnings, double animation_time,
+                const std::string& animation) {
     if (!std::isfinite(animation_time)) throw Error("the animation time must be a finite number of seconds");
-    Scene scene = GltfLoader(path, animation_time).load();
+    Scene scene = GltfLoader(path, animation_time, animation).load();
     if (warnings) warnings->insert(warnings->end(), scene.warnings.begin(), scene.warnings.end());
     return scene;
 }

@@ -34,8 +34,12 @@ namespace dynsky {
 // animation_time (seconds, >= 0): the file's animations (all of them, in file order) are sampled
 // at that time, held at their ends (STEP, LINEAR with slerped rotations, CUBICSPLINE), and drive
 // the nodes' transforms and morph weights, skins included; negative (the default): the rest pose,
-// with a warning that animations were not played.
-Scene load_gltf(const std::string& path, std::vector<std::string>* warnings = nullptr, double animation_time = -1);
+// with a warning that animations were not played. `animation`: only the animation of that name
+// (else of that index) plays; empty: every one (with a warning when there are several: a file
+// exported with several actions, Idle, Walk, Run, played all at once is none of them). An
+// animation the file does not have is an error listing those it has.
+Scene load_gltf(const std::string& path, std::vector<std::string>* warnings = nullptr, double animation_time = -1,
+                const std::string& animation = "");
 
 class GltfLoader;
 
@@ -46,7 +50,7 @@ class GltfLoader;
 // textures shared with every other pose. Throws as load_gltf.
 class AnimatedGltf {
   public:
-    explicit AnimatedGltf(const std::string& path);
+    explicit AnimatedGltf(const std::string& path, const std::string& animation = "");
     ~AnimatedGltf();
     AnimatedGltf(const AnimatedGltf&) = delete;
     AnimatedGltf& operator=(const AnimatedGltf&) = delete;

@@ -81,12 +81,12 @@ TEST(AnimateCli, KilledRunResumesToTheSameFrames) {
     // through a temporary named .tmp-frame_0003-PID.exr (util/image.cpp), so a named pipe put there
     // beforehand (the shell execs dynsky, keeping its PID) holds the run in open() until it is
     // killed. Frames 0-2 are then complete and nothing of frame 3 or later exists, however fast
-    // or slow the machine; the wait for frame 2 is bounded (60 s).
+    // or slow the machine; the wait for frame 2 (its EXR, written after its PNGs) is bounded (60 s).
     fs::create_directories(killed);
     const std::string pipe = killed + "/.tmp-frame_0003-$$.exr";
     std::ofstream(dir + "/run.sh") << "mkfifo " << pipe << " && exec " << animate(killed) << "\n";
     std::ofstream(dir + "/kill.sh") << "sh " << dir << "/run.sh & pid=$!\n"
-                                    << "for i in $(seq 1 600); do [ -e " << killed << "/sky_0002.png ] && break; "
+                                    << "for i in $(seq 1 600); do [ -e " << frame(killed, 2) << " ] && break; "
                                     << "kill -0 $pid 2>/dev/null || break; sleep 0.1; done\n"
                                     << "kill -9 $pid; wait $pid; echo rc=$?\n";
     r = test::run_command("sh " + dir + "/kill.sh");

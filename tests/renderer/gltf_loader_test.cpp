@@ -1227,6 +1227,50 @@ TEST(GltfLoader, AnimationsArePosedAtTheTimeAsked) {
     fs::remove_all(dir);
 }
 
+// A file with several animations (actions exported from Blender: Idle, Walk, Run) plays them all
+// at once unless --animation picks one, by name or index, and says so; a name it lacks is refused
+// with the list it has.
+TEST(GltfLoader, OneAnimationOfSeveralPlaysByNameOrIndex) {
+    std::string dir = test::temp_dir("gltf");
+    MiniGltf g;
+    int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+    int idx = g.accessor(g.view(std::vector<uint16_t>{0, 1, 2, 0, 2, 3}), kUShort, 6, "SCALAR");
+    int times = g.accessor(g.view(std::vector<float>{0, 2}), kFloat, 2, "SCALAR");
+    int along_x = g.accessor(g.view(std::vector<float>{0, 0, 0, 4, 0, 0}), kFloat, 2, "VEC3");
+    int along_y = g.accessor(g.view(std::vector<float>{0, 0, 0, 0, 6, 0}), kFloat, 2, "VEC3");
+    auto animation = [&](const char* name, int out) {
+        return std::string("{\"name\":\"") + name + "\",\"samplers\":[{\"input\":" + std::to_string(times) +
+               ",\"output\":" + std::to_string(out) +
+               "}],\"channels\":[{\"sampler\":0,\"target\":{\"node\":0,"
+               "\"path\":\"translation\"}}]}";
+    };
+    const std::string path =
+        g.write(dir, "two_actions",
+                "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[{\"primitives\":[{"
+                "\"attributes\":{\"POSITION\":" +
+                    std::to_string(pos) + "},\"indices\":" + std::to_string(idx) + "}]}],\"animations\":[" +
+                    animation("Walk", along_x) + "," + animation("Jump", along_y) + "]");
+    auto origin = [](const Scene& s) { return Vec3(s.instances.at(0).transform * Vec3(0, 0, 0)); };
+    const Scene both = load_gltf(path, nullptr, 2.0);
+    EXPECT_TRUE(has_warning_containing(both, "2 animations play together (0 'Walk', 1 'Jump')"));
+    EXPECT_LT((origin(both) - Vec3(0, 6, 0)).norm(), 1e-5f);  // the last one written wins
+    const Scene walk = load_gltf(path, nullptr, 2.0, "Walk");
+    EXPECT_FALSE(has_warning_containing(walk, "animation"));
+    EXPECT_LT((origin(walk) - Vec3(4, 0, 0)).norm(), 1e-5f);
+    EXPECT_LT((origin(load_gltf(path, nullptr, 1.0, "1")) - Vec3(0, 3, 0)).norm(), 1e-5f);
+    AnimatedGltf animated(path, "Walk");
+    expect_same_scene(animated.pose(1.5), load_gltf(path, nullptr, 1.5, "Walk"), "Walk at 1.5 s");
+    std::string e;
+    try {
+        load_gltf(path, nullptr, 1.0, "Run");
+    } catch (const Error& error) {
+        e = error.what();
+    }
+    EXPECT_NE(e.find("has no animation 'Run' (--animation; its animations: 0 'Walk', 1 'Jump')"), std::string::npos)
+        << e;
+    fs::remove_all(dir);
+}
+
 // animate --play-anim poses one file per frame: posing a file loaded once gives what loading it at
 // that time gives (transforms, TRS and morph animations, skins), in any order of times, and every
 // pose shares the first load's decoded textures.
