@@ -98,6 +98,7 @@ void register_animate_command(CLI::App& app) {
                         std::to_string(look_at->results().size()) + ")");
         parse_frame_size(o->resolution, &o->settings.width, &o->settings.height);
         if (o->count_frames) {
+            check_animation_settings(o->settings, /*inputs_exist=*/true);  // a typo fails before a farm queues
             std::printf("%d\n", animation_frame_count(o->settings));
             return;
         }

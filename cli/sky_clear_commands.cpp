@@ -140,9 +140,11 @@ void run_latlong(const LatLongOptions& o) {
     check_outputs_are_not_inputs({o.out, o.preview}, {o.sky});
     Color ground = parse_ground(o.ground);
     SkyImage sky = load_sky(o.sky);
-    int width = o.width > 0 ? o.width : 2 * sky.resolution;
-    if (width < 4 || width % 2 != 0 || width > 65536)
-        throw Error("--width " + std::to_string(width) + ": must be even, 4..65536 (the image is W x W/2)");
+    // At most what dynsky reads back (kMaxImageSide), the default too.
+    int width = o.width > 0 ? o.width : std::min<int>(2 * sky.resolution, int(kMaxImageSide));
+    if (width < 4 || width % 2 != 0 || width > kMaxImageSide)
+        throw Error("--width " + std::to_string(width) + ": must be even, 4.." + std::to_string(kMaxImageSide) +
+                    " (the image is W x W/2)");
     Image ll = sky_to_latlong(sky, width, ground);
     write_image(o.out, ll);
     std::printf(
@@ -203,8 +205,9 @@ void register_sky_clear_commands(CLI::App& sky) {
         "our north (-Z). Energy-preserving: a one-pixel sun is neither missed nor doubled.");
     ll->add_option("sky", ll_opts->sky, "Input fisheye sky (.exr)")->required();
     ll->add_option("--out,-o", ll_opts->out, "Output lat-long image, .exr")->required();
-    ll->add_option("--width", ll_opts->width, "Width W in pixels, even (height W/2); default 2N for an N x N sky")
-        ->check(CLI::Range(4, 16384));  // dynsky reads images up to 16384 a side (docs/input-limits.md)
+    ll->add_option("--width", ll_opts->width,
+                   "Width W in pixels, even (height W/2); default 2N for an N x N sky, at most 16384")
+        ->check(CLI::Range(4, int(kMaxImageSide)));  // what dynsky reads back (docs/input-limits.md)
     ll->add_option("--ground", ll_opts->ground,
                    "Radiance of the lower half: one value or R,G,B in W m^-2 sr^-1 (default 0, black)");
     ll->add_option("--preview", ll_opts->preview, "Also write a tone-mapped .png preview (auto exposure)");

@@ -96,7 +96,9 @@ void register_sky_model_commands(CLI::App& sky) {
         cmd->add_option("--res", o->resolutions,
                         "Resolutions N to score at, comma-separated (each divides --import-res)")
             ->capture_default_str();
-        cmd->add_option("--shared", o->shared, "The shared data folder (default: ../shared beside the source tree)");
+        cmd->add_option(
+            "--shared", o->shared,
+            "The shared data folder (default: ../shared beside the source tree dynsky was built from, else beside the working folder)");
         cmd->add_option("--report,-o", o->report, "Markdown file to write (a .csv and charts beside it)")
             ->capture_default_str();
         cmd->add_option("--import-res", o->import_resolution, "Resolution the photographs are imported at")
@@ -112,16 +114,18 @@ void register_sky_model_commands(CLI::App& sky) {
         CLI::App* cmd = sky.add_subcommand(
             "training-data",
             "Build one sequence of a cloud-model training set (networks/dataset.py runs this): frames in the\n"
-            "networks' [0, 1] form at --res, seen-sky and cloud masks, Farneback flow frame k -> k+1 and, for\n"
+            "networks' [0, 1] form at --sky-res, seen-sky and cloud masks, Farneback flow frame k -> k+1 and, for\n"
             "procedural sequences, the exact flow, as .npy files plus meta.json in --out.");
         cmd->add_option("--sequence", o->sequence, "Real sequence to import: arm-tsi or mobotix");
         cmd->add_option("--procedural", o->procedural,
                         "Folder written by `dynsky sky procedural` (with manifest.json)");
-        cmd->add_option("--shared", o->shared, "The shared data folder (default: ../shared beside the source tree)");
+        cmd->add_option(
+            "--shared", o->shared,
+            "The shared data folder (default: ../shared beside the source tree dynsky was built from, else beside the working folder)");
         cmd->add_option("--sky-res", o->resolution, "Resolution N of the training images")->capture_default_str();
         add_hidden_alias(cmd, "--res", &o->resolution);
         cmd->add_option("--import-res", o->import_resolution,
-                        "Resolution frames are imported (and Farneback flow computed) at; a multiple of --res")
+                        "Resolution frames are imported (and Farneback flow computed) at; a multiple of --sky-res")
             ->capture_default_str();
         cmd->add_option("--unit-scale", o->form.unit_map.scale,
                         "HDR -> [0, 1] log map (sky/hdr_recovery.h): radiance scale, W m^-2 sr^-1")

@@ -18,6 +18,7 @@
 #include "frame/frame_metadata.h"
 #include "frame/frame_store.h"
 #include "frame/video.h"
+#include "motion/network_step_model.h"
 #include "renderer/accel.h"
 #include "renderer/env_light.h"
 #include "renderer/integrator.h"
@@ -124,12 +125,11 @@ int animation_frame_count(const AnimationSettings& o) {
     return std::max(1, int(frames));
 }
 
-AnimationReport render_animation(const AnimationSettings& o) {
-    const int width = o.width, height = o.height;
-    if (width < 1 || height < 1) throw Error("animation: the frame size must be positive");
+void check_animation_settings(const AnimationSettings& o, bool inputs_exist) {
+    if (o.width < 1 || o.height < 1) throw Error("animation: the frame size must be positive");
     if (o.spp < 1) throw Error("--spp must be at least 1");
-    const AovSelection aovs = parse_aovs(o.aovs);
-    const SamplePattern pattern = parse_sample_pattern(o.sampler_pattern);
+    parse_aovs(o.aovs);
+    parse_sample_pattern(o.sampler_pattern);
     if (!(o.clamp_indirect >= 0)) throw Error("--clamp-indirect must be 0 (off) or positive");
     if (!(o.filter_glossy >= 0)) throw Error("--filter-glossy must be 0 (off) or positive");
     const int total = animation_frame_count(o);
@@ -139,8 +139,44 @@ AnimationReport render_animation(const AnimationSettings& o) {
     if (stage == "keys" && o.timeline.empty()) throw Error("--stage keys needs --timeline FOLDER (where to write it)");
     int first, last;
     parse_frame_range(o.frames, total, &first, &last);
-    // The frame folder must not be (or hold) an input: its frames would replace or join them.
+    // The frame folder must not be (or hold) an input: its frames would replace or join them. The
+    // timeline may lie inside it (OUT/timeline) but not be it: found only once both exist, the keys
+    // stage's work was lost to the frames stage's refusal.
+    std::error_code ec;
+    if (!o.timeline.empty() &&
+        fs::weakly_canonical(fs::absolute(o.timeline), ec) == fs::weakly_canonical(fs::absolute(o.out), ec))
+        throw Error("--timeline " + o.timeline + " is the frames' folder --out: give it a folder of its own, e.g. " +
+                    (fs::path(o.out) / "timeline").string());
     check_outputs_are_not_inputs({o.out}, {o.sky.sky, o.sky.previous, o.scene.scene, o.timeline});
+    if (!inputs_exist) return;
+    // What a farm script checks before queueing anything (--count-frames): the files named exist
+    // and the model is one there is (their contents are read by the stages).
+    auto exists = [&](const std::string& path, const char* option) {
+        if (!path.empty() && !fs::exists(resolve_user_path(path), ec))
+            throw_file_error(path, std::string("no such file or folder (") + option + ")");
+    };
+    if (o.scene.scene != "builtin") exists(o.scene.scene, "the scene");
+    if (!is_generated_sky(o.sky.sky)) exists(o.sky.sky, "--sky");
+    exists(o.sky.previous, "--prev");
+    if (stage != "keys" && stage != "all") exists(o.timeline, "--timeline");
+    const std::string& m = o.model.model;
+    if (m != "auto" && m != "flow" && m != "procedural" && m != "advect") {
+        const std::string folder = resolve_cloud_model(m);  // "paper" not installed throws
+        if (!fs::is_directory(folder, ec) || !fs::exists(fs::path(folder) / "model.json", ec))
+            throw Error("--model '" + m +
+                        "': expected auto, advect, paper, procedural, flow, or a model folder with its model.json");
+    }
+}
+
+AnimationReport render_animation(const AnimationSettings& o) {
+    check_animation_settings(o, false);
+    const int width = o.width, height = o.height;
+    const AovSelection aovs = parse_aovs(o.aovs);
+    const SamplePattern pattern = parse_sample_pattern(o.sampler_pattern);
+    const int total = animation_frame_count(o);
+    const std::string& stage = o.stage;
+    int first, last;
+    parse_frame_range(o.frames, total, &first, &last);
 
     std::unique_ptr<tbb::global_control> threads;
     if (o.threads > 0)

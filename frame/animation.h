@@ -94,6 +94,11 @@ FrameSettings animation_frame_settings(const AnimationSettings& settings, const 
 // round(duration * fps), at least 1, after checking duration and fps (what --frames counts in).
 int animation_frame_count(const AnimationSettings& settings);
 
+// Checks the options before any work (render_animation starts with it); with inputs_exist, also
+// that the scene, sky, previous frame, timeline and model named exist (what `--count-frames`
+// checks for a farm script before anything is queued). Throws dynsky::Error naming the option.
+void check_animation_settings(const AnimationSettings& settings, bool inputs_exist);
+
 AnimationReport render_animation(const AnimationSettings& settings);
 
 }  // namespace dynsky

@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -67,6 +68,26 @@ FrameSettings parse_settings(const std::string& canonical) {
 
 std::string settings_hash(const std::string& canonical) { return hex64(fnv1a(canonical.data(), canonical.size())); }
 
+namespace {
+
+// A number of the settings as a person typed it: stored with 17 digits so that it round-trips,
+// --coverage 0.6 read "0.59999999999999998". 15 digits unless that hides the change.
+std::string readable_number(const std::string& value, const std::string& other) {
+    char* end = nullptr;
+    const double v = std::strtod(value.c_str(), &end);
+    if (value.empty() || end != value.c_str() + value.size()) return value;
+    char a[40], b[40];
+    std::snprintf(a, sizeof a, "%.15g", v);
+    const double w = std::strtod(other.c_str(), &end);
+    if (!other.empty() && end == other.c_str() + other.size()) {
+        std::snprintf(b, sizeof b, "%.15g", w);
+        if (std::string(a) == b) return value;
+    }
+    return a;
+}
+
+}  // namespace
+
 std::string describe_settings_change(const FrameSettings& before, const FrameSettings& now, int limit) {
     std::vector<std::string> keys;
     for (const auto& [k, v] : now) keys.push_back(k);
@@ -82,7 +103,7 @@ std::string describe_settings_change(const FrameSettings& before, const FrameSet
             ++more;
             continue;
         }
-        out += (named++ ? ", " : "") + k + " " + va + " -> " + vb;
+        out += (named++ ? ", " : "") + k + " " + readable_number(va, vb) + " -> " + readable_number(vb, va);
     }
     if (more) out += " and " + std::to_string(more) + " more";
     return out;

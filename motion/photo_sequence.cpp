@@ -19,12 +19,15 @@ namespace dynsky {
 namespace fs = std::filesystem;
 
 std::string default_shared_dir() {
-    // The shared data sits beside the source tree (the tests' ../shared).
-    try {
-        return (fs::path(data_path("sky")).parent_path().parent_path() / "shared").string();
-    } catch (const Error&) {
-        return "../shared";
+    // The shared data sits beside the source tree (the tests' ../shared): beside any data root that
+    // has one (the source tree recorded at build time, DYNSKY_DATA), else beside the working folder.
+    // An installed program's root (PREFIX/share/dynsky) has none beside it; the first existing wins.
+    std::error_code ec;
+    for (const std::string& root : data_roots()) {
+        const fs::path candidate = (fs::path(root) / ".." / "shared").lexically_normal();
+        if (fs::is_directory(candidate / "skies", ec)) return candidate.string();
     }
+    return "../shared";
 }
 
 PhotoSequence named_photo_sequence(const std::string& name, const std::string& shared_dir) {

@@ -171,6 +171,11 @@ class SkyTimeline {
     std::string stored_folder_;  // a loaded timeline's folder (steps and flows read from there)
     int stored_last_step_ = -1;
     std::string stored_steps_json_;  // its steps' entries in timeline.json (file, time, sun, source)
+    // timeline.json as it was read (inode, size, modification time): checked after each step or
+    // flow read later, since a keys run replacing the timeline meanwhile (it removes timeline.json
+    // first) gave frames of two timelines under the first one's settings.
+    std::string stored_identity_;
+    void check_stored_unchanged() const;
 };
 
 // Upsilon: (1 - w) a + w b, pixel by pixel (same resolution); metadata from a.

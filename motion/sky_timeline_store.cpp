@@ -13,6 +13,8 @@
 #include <string>
 
 #include "motion/sky_timeline.h"
+
+#include <sys/stat.h>
 #include "util/atomic_file.h"
 #include "util/error.h"
 #include "util/npy.h"
@@ -144,8 +146,30 @@ void SkyTimeline::save(const std::string& folder, int last_step, const std::stri
     write_file_atomic((fs::path(folder) / "timeline.json").string(), j.dump(1) + "\n");
 }
 
+namespace {
+
+// A file's identity: inode, size and modification time (empty when it is gone). A replaced file
+// is a new inode (written whole and renamed in).
+std::string file_identity(const std::string& path) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0) return "";
+    return std::to_string(st.st_ino) + ":" + std::to_string(st.st_size) + ":" + std::to_string(st.st_mtim.tv_sec) +
+           "." + std::to_string(st.st_mtim.tv_nsec);
+}
+
+}  // namespace
+
+void SkyTimeline::check_stored_unchanged() const {
+    const std::string path = (fs::path(stored_folder_) / "timeline.json").string();
+    if (file_identity(path) != stored_identity_)
+        throw_file_error(path,
+                         "the stored sky timeline was replaced or removed while this run read it (another keys "
+                         "run?): its frames would mix two timelines; run again once the timeline is complete");
+}
+
 SkyTimeline SkyTimeline::load(const std::string& folder, std::string* settings) {
     const std::string path = (fs::path(folder) / "timeline.json").string();
+    const std::string identity = file_identity(path);
     std::ifstream in(path, std::ios::binary);
     if (!in)
         throw_file_error(folder,
@@ -162,6 +186,7 @@ SkyTimeline SkyTimeline::load(const std::string& folder, std::string* settings) 
         t.stored_last_step_ = j.at("last_step").get<int>();
         if (!(t.dt_ > 0) || t.stored_last_step_ < 1) throw_file_error(path, "bad Delta t or step count");
         t.stored_folder_ = folder;
+        t.stored_identity_ = identity;
         t.model_ = std::make_unique<StoredStepModel>(j.at("model").get<std::string>(),
                                                      j.at("model_makes_own_sun").get<bool>(),
                                                      j.at("model_native_dt").get<double>());
@@ -234,6 +259,7 @@ std::shared_ptr<const SkyImage> SkyTimeline::stored_step(int i) {
     if (!steps_[size_t(i)]) {
         const json entry = json::parse(stored_steps_json_).at(size_t(i));
         SkyImage s = load_sky((fs::path(stored_folder_) / entry.at("file").get<std::string>()).string());
+        check_stored_unchanged();  // the step read is this timeline's
         // The metadata as computed (the EXR's sun is normalised again on reading).
         s.time_seconds = entry.at("time").get<double>();
         s.sun_direction = vec_from(entry.at("sun"));
@@ -248,6 +274,7 @@ std::shared_ptr<const SkyImage> SkyTimeline::stored_step(int i) {
 cv::Mat SkyTimeline::stored_flow(int i) const {
     const std::string file = numbered(stored_folder_, "flow", i, ".npy");
     NpyArray a = read_npy(file);
+    check_stored_unchanged();  // the flow read is this timeline's
     const int n = steps_[0]->resolution;
     if (a.shape != std::vector<size_t>{size_t(n), size_t(n), 2})
         throw_file_error(file, "is not an N x N x 2 flow of this timeline's N = " + std::to_string(n));

@@ -62,8 +62,8 @@ dynsky=$(realpath "$dynsky")
 mkdir -p "$out/logs"
 out=$(realpath "$out")
 
-# The frame count decides the shards; dynsky checks the options on the way (a typo fails here,
-# before anything is queued).
+# The frame count decides the shards; dynsky checks the options and that the scene, sky and model
+# exist on the way (a typo fails here, before anything is queued).
 total=$("$dynsky" animate "$@" --out "$out" --count-frames)
 if [[ -z $tasks ]]; then
   tasks=$(((total + 7) / 8))

@@ -314,6 +314,32 @@ TEST(AnimateCli, ResumeRerendersFramesOfAChangedModelOrGlbTexture) {
     fs::remove_all(dir);
 }
 
+// What a farm script checks before queueing anything (`--count-frames`): a typo in the scene, sky
+// or model name, or a bad pass list, fails there, not in every frames task after the keys job
+// (a misspelt scene went through, and each task failed and was requeued). A timeline folder that
+// is the frames' folder is refused by the keys stage, not only by the stages after it.
+TEST(AnimateCli, CountFramesChecksWhatAFarmWouldQueue) {
+    const std::string dir = test::temp_dir("animate_count");
+    const std::string base = std::string(DYNSKY_EXE) + " animate ";
+    const std::string ok = "builtin --sky procedural:1 --duration 90 --fps 0.1 --out " + dir + "/a";
+    auto r = test::run_command(base + ok + " --count-frames");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(r.output, "9\n");
+    for (const std::string& bad :
+         {std::string("scenes/tower/towr.gltf --duration 90 --fps 0.1 --out ") + dir + "/a",
+          ok + " --sky-res 64 --model nosuch", ok + " --aovs bogus", "builtin --sky nosuch.exr --out " + dir + "/a"}) {
+        r = test::run_command(base + bad + " --count-frames 2>&1");
+        EXPECT_NE(r.exit_code, 0) << bad << "\n" << r.output;
+        EXPECT_EQ(r.output.find("\n9\n"), std::string::npos) << bad;
+    }
+    r = test::run_command(base + "builtin --sky procedural:1 --sky-res 64 --duration 60 --fps 0.1 --out " + dir +
+                          "/e --timeline " + dir + "/e --stage keys 2>&1");
+    EXPECT_NE(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("give it a folder of its own"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/e/timeline.json"));
+    fs::remove_all(dir);
+}
+
 TEST(AnimateCli, FrameRangesEqualOneRun) {
     std::string dir = test::temp_dir("animate_ranges");
     std::string full = dir + "/full", parts = dir + "/parts";

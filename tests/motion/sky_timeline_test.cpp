@@ -384,6 +384,30 @@ SkyImage clocked_textured_sky(int n, SunClock* clock) {
     return input;
 }
 
+// A frames task reads a stored timeline's steps as it needs them: when a keys run replaces the
+// timeline meanwhile (another wind), a later step is refused rather than mixed in, whose frames
+// would carry the first timeline's settings (a farm audit found 17 of 30 frames so).
+TEST(SkyTimeline, AStoredTimelineReplacedWhileReadIsRefused) {
+    SunClock clock;
+    const SkyImage input = clocked_textured_sky(64, &clock);
+    const std::string dir = ::testing::TempDir() + "/dynsky_replaced_timeline";
+    std::filesystem::remove_all(dir);
+    SkyTimeline(input, std::make_unique<FlowExtrapolationStepModel>(250.0, 0.4), 5.0, clock).save(dir, 4, "a");
+    SkyTimeline loaded = SkyTimeline::load(dir);
+    loaded.sky_at(2.0);  // steps 0 and 1 read
+    SkyTimeline(input, std::make_unique<FlowExtrapolationStepModel>(90.0, 0.8), 5.0, clock).save(dir, 4, "b");
+    try {
+        loaded.sky_at(17.0);
+        ADD_FAILURE() << "a step of the replacing timeline was read";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("replaced or removed while this run read it"), std::string::npos)
+            << e.what();
+    }
+    // Loaded again, the new one reads whole.
+    EXPECT_NO_THROW(SkyTimeline::load(dir).sky_at(17.0));
+    std::filesystem::remove_all(dir);
+}
+
 TEST(SkyTimeline, SavedAndLoadedGivesTheSameSkiesBitForBit) {
     SunClock clock;
     const SkyImage input = clocked_textured_sky(96, &clock);
