@@ -1,5 +1,7 @@
 #include "motion/advect_residual.h"
 
+#include "motion/radiance_scale.h"
+
 #include <tbb/parallel_for.h>
 
 #include <opencv2/imgproc.hpp>
@@ -881,8 +883,10 @@ void AdvectResidualNetwork::rollout(const SkyImage& given, const CloudFlow& flow
     if (background.empty() && at)
         background = this->background(at->cast<float>(), sky.resolution, clear_sky_turbidity(sky, *at));
     const double share = has_sun ? shown_sun_share(sky, at) : 0.0;
-    CloudRollout rollout(this, state, flow, background,
-                         sky.sun_direction ? sun_unseen_mask(sky.resolution, *at) : cv::Mat(), at, share >= 0.5);
+    // Around the sun, recorded or estimated, the clouds' look says nothing (glare, aureole): a
+    // sunset HDRI without metadata had its glow judged cloud and dragged across the sky.
+    CloudRollout rollout(this, state, flow, background, at ? sun_unseen_mask(sky.resolution, *at) : cv::Mat(), at,
+                         share >= 0.5);
     const double start_look = has_sun && at ? estimate_sun_transmittance(sky, *at) : 1.0;
     for (int k = 1; k <= steps; ++k) {
         SkyImage next = from_network_form(rollout.advance(), sky, info_.form);
@@ -957,6 +961,8 @@ std::string unknown_previous_gap_note(const std::string& sky_name, const std::st
 
 double model_scale(const SkyImage& sky) {
     if (sky.sun_direction) return 1.0;
+    if (const RadianceScale measured = measure_radiance_scale(sky); measured.measured)
+        return measured.apply ? 1.0 / measured.factor : 1.0;
     std::vector<float> values;
     for (int j = 0; j < sky.resolution; ++j)
         for (int i = 0; i < sky.resolution; ++i)
@@ -1019,9 +1025,10 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
             if (const auto d = sun_from_brightest_pixels(input)) estimated_sun_ = d->cast<float>();
         // The timeline cut the input's sun out (motion/sun_patch.h remove_sun) where the input has it;
         // around it the clouds' look says nothing (sun_unseen_mask).
-        const cv::Mat unseen = input.sun_direction
-                                   ? sun_unseen_mask(input.resolution, input.sun_direction->cast<double>())
-                                   : cv::Mat();
+        // (Or where its brightest pixels put it: a sunset HDRI without metadata had its glow
+        // judged cloud and dragged across the sky.)
+        const std::optional<Vec3> unseen_sun = input.sun_direction ? input.sun_direction : estimated_sun_;
+        const cv::Mat unseen = unseen_sun ? sun_unseen_mask(input.resolution, unseen_sun->cast<double>()) : cv::Mat();
         rollout_ = std::make_unique<CloudRollout>(&network_, start, flow_, cv::Mat(), unseen);
         rollout_->set_unseen_opacity(sun_cover_);
         background_ = cv::Mat();  // the new rollout needs its background (and opacity)

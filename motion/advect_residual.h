@@ -161,7 +161,11 @@ class AdvectResidualNetwork {
 // e.g. an uncalibrated photograph in [0, 1] or an HDRI of its own scale) is brought to the
 // networks' range by a factor that puts its median luminance at kUnknownScaleMedian (W m^-2 sr^-1,
 // about a daylight sky's), and back after: in the networks' log map (0..300) a [0, 1] photograph
-// was nearly black and its clear sky 50x dimmer than any background. 1 for a sky with its sun.
+// was nearly black and its clear sky 50x dimmer than any background. 1 for a sky with its sun. A
+// sky whose brightest pixels show a sun (sun_from_brightest_pixels) is measured against the clear-sky
+// model of that sun instead (motion/radiance_scale.h; 1 within its band): a clear sunset HDRI
+// without metadata, put at median 20, was 8 x its model and read as cloud everywhere, its glow
+// dragged across the sky.
 constexpr double kUnknownScaleMedian = 20.0;
 double model_scale(const SkyImage& sky);
 SkyImage scaled_sky(const SkyImage& sky, double factor);

@@ -188,7 +188,11 @@ std::optional<Vec3d> sun_from_brightest_pixels(const SkyImage& sky) {
     const double d = std::max(stats.at<int>(best, cv::CC_STAT_WIDTH), stats.at<int>(best, cv::CC_STAT_HEIGHT));
     if (area > 0.03 * disc || area < 0.33 * 0.25 * kPi * d * d) return std::nullopt;
     const Vec3d sun = fisheye::direction_from_pixel(centroids.at<double>(best, 0), centroids.at<double>(best, 1), n);
-    if (!(sun.y() > std::sin(5.0 * kPi / 180.0))) return std::nullopt;
+    // Near the horizon an overexposed cloud or haze can be the brightest; a sun that is 1000 x the
+    // sky's median is a sun there too (a sunset HDRI's, 1.7 degrees up: left in, its sky moved as
+    // overcast and its glow was dragged across the sky).
+    const double floor = top > 1000.0 * median_lum ? 0.0 : std::sin(5.0 * kPi / 180.0);
+    if (!(sun.y() > floor)) return std::nullopt;
     return sun.normalized();
 }
 

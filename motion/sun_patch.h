@@ -65,7 +65,8 @@ cv::Mat fill_saturated_pixels(cv::Mat* unit);
 // Where the sun probably is in a sky that does not say (no time and place): the centroid of the
 // largest blob of pixels within 2 % of the sky's brightest, when that is at least twice the median
 // and the blob is compact (at most 3 % of the disc, filling at least a third of its bounding circle)
-// and above 5 degrees of elevation; else nullopt (an overexposed cloud or horizon is not a sun).
+// and above 5 degrees of elevation (any elevation when it is 1000 x the median: an HDR sun at
+// sunset); else nullopt (an overexposed cloud or horizon is not a sun).
 std::optional<Vec3d> sun_from_brightest_pixels(const SkyImage& sky);
 
 // Copies `from`'s pixels where mask (CV_8UC1, the skies' size) is set. With a transmittance T below
