@@ -262,15 +262,18 @@ struct Run {
 // nor the fixed cost of a render decides it (seconds / spp pooled over the renders let the single
 // largest render set it: one slow 16 spp render moved a speed-up from 2.4 to 1.06x). Pooled
 // seconds / spp when no two renders differ in spp.
-double seconds_per_spp_of(const std::vector<std::pair<double, double>>& renders) {
+double seconds_per_spp_of(const std::vector<std::vector<std::pair<double, double>>>& seeds) {
+    // Pairs within a seed only, as the per-seed bracket takes them (pairs across seeds put the
+    // estimate outside its own bracket).
     std::vector<double> slopes;
     double secs = 0, spp = 0;
-    for (size_t a = 0; a < renders.size(); ++a) {
-        secs += renders[a].second, spp += renders[a].first;
-        for (size_t b = 0; b < renders.size(); ++b)
-            if (renders[b].first > renders[a].first)
-                slopes.push_back((renders[b].second - renders[a].second) / (renders[b].first - renders[a].first));
-    }
+    for (const auto& renders : seeds)
+        for (size_t a = 0; a < renders.size(); ++a) {
+            secs += renders[a].second, spp += renders[a].first;
+            for (size_t b = 0; b < renders.size(); ++b)
+                if (renders[b].first > renders[a].first)
+                    slopes.push_back((renders[b].second - renders[a].second) / (renders[b].first - renders[a].first));
+        }
     if (slopes.empty()) return spp > 0 ? secs / spp : 0.0;
     return std::max(median(slopes), 1e-12);
 }
@@ -492,9 +495,10 @@ int run_sampling_study(const SamplingStudyOptions& o) {
                             }
                         c.rel_mse.push_back(rel), c.firefly.push_back(ff), c.full_rmse.push_back(full);
                     }
-                    c.seconds_per_spp = seconds_per_spp_of(timed);
+                    c.seconds_per_spp = seconds_per_spp_of(seed_timed);
+                    if (!(c.seconds_per_spp > 0)) c.seconds_per_spp = seconds_per_spp_of({timed});
                     for (const auto& t : seed_timed)
-                        c.seed_seconds_per_spp.push_back(t.empty() ? c.seconds_per_spp : seconds_per_spp_of(t));
+                        c.seed_seconds_per_spp.push_back(t.empty() ? c.seconds_per_spp : seconds_per_spp_of({t}));
                     c.rebuild_seconds = median(rebuilds);
                     for (size_t k = 0; k < c.spp.size(); ++k)
                         sum_csv << sc.name << "," << sky.name << "," << name << "," << c.spp[k] << ","
@@ -753,7 +757,8 @@ int run_sampling_study(const SamplingStudyOptions& o) {
     if (run_accuracy) {
         md << "How time is measured: every render is timed apart from its frame's rebuild; a sampler's cost is modelled as "
               "rebuild + spp x (seconds per spp): the median rebuild, and the median of the slopes between every two of its "
-              "renders of that scene and sky at different spp (Theil-Sen: neither one slow render nor a render's fixed cost "
+              "renders of one seed "
+              "(of that scene and sky) at different spp (Theil-Sen: neither one slow render nor a render's fixed cost "
               "decides it; samplers interleaved in the same loop, so the machine's load falls on all alike). Error = RMSE without the 0.1% of pixels with the largest error "
               "(as in path-guiding comparisons, e.g. Mueller et al. 2017: otherwise a handful of fireflies, paths that reach "
               "the tiny sun through a glossy bounce, which no sky sampler helps, decide the whole error; the untrimmed RMSE "

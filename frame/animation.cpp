@@ -143,8 +143,11 @@ void check_animation_settings(const AnimationSettings& o, bool inputs_exist) {
     // timeline may lie inside it (OUT/timeline) but not be it: found only once both exist, the keys
     // stage's work was lost to the frames stage's refusal.
     std::error_code ec;
-    if (!o.timeline.empty() &&
-        fs::weakly_canonical(fs::absolute(o.timeline), ec) == fs::weakly_canonical(fs::absolute(o.out), ec))
+    auto folder = [&](const std::string& p) {  // "out1/", "./out1/." and "out1" alike, made or not
+        fs::path f = fs::weakly_canonical(fs::absolute(p), ec).lexically_normal();
+        return f.has_filename() ? f : f.parent_path();
+    };
+    if (!o.timeline.empty() && folder(o.timeline) == folder(o.out))
         throw Error("--timeline " + o.timeline + " is the frames' folder --out: give it a folder of its own, e.g. " +
                     (fs::path(o.out) / "timeline").string());
     check_outputs_are_not_inputs({o.out}, {o.sky.sky, o.sky.previous, o.scene.scene, o.timeline});

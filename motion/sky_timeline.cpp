@@ -88,6 +88,30 @@ double SkyTimeline::input_sun_share() {
     return *input_sun_share_;
 }
 
+double SkyTimeline::sun_travel_px(int i, double s, const Vec3d& sun, int n) {
+    if (travel_n_ != n) travel_sums_.clear(), travel_n_ = n;
+    if (travel_sums_.empty()) travel_sums_.push_back(cv::Vec2d(0, 0));
+    const double far = sun_diameter_px(n);  // moved past the sun: nothing more to read
+    auto flow_at = [&](int k) {
+        const cv::Mat f = stored_last_step_ >= 0 ? stored_flow(k) : interval(k).flow;
+        const Vec3d at = sun_direction_at(k * dt_).value_or(sun);
+        double x, y;
+        fisheye::pixel_from_direction(at, f.rows, &x, &y);
+        const cv::Vec2f v = f.at<cv::Vec2f>(std::clamp(int(std::lround(y)), 0, f.rows - 1),
+                                            std::clamp(int(std::lround(x)), 0, f.rows - 1));
+        return cv::Vec2d(v[0], v[1]) * (double(n) / f.rows);
+    };
+    const int whole = i + (s > 0 ? 1 : 0);
+    while (int(travel_sums_.size()) <= whole) {
+        const cv::Vec2d last = travel_sums_.back();
+        const int k = int(travel_sums_.size()) - 1;
+        travel_sums_.push_back(cv::norm(last) >= far ? last : last + flow_at(k));
+    }
+    cv::Vec2d moved = travel_sums_[size_t(i)];
+    if (s > 0 && cv::norm(moved) < far) moved += s * (travel_sums_[size_t(i) + 1] - travel_sums_[size_t(i)]);
+    return cv::norm(moved);
+}
+
 std::optional<double> SkyTimeline::model_sun_weight(int i, double s, const Vec3d& sun, bool relative) {
     auto opacity = [&](int k) { return size_t(k) < model_opacity_.size() ? model_opacity_[size_t(k)] : cv::Mat(); };
     const cv::Mat o0 = opacity(0), a = opacity(i), b = s > 0 ? opacity(i + 1) : a;
@@ -112,24 +136,9 @@ std::optional<double> SkyTimeline::model_sun_weight(int i, double s, const Vec3d
     }
     // Relative to the input's cover at the sun, never more than its sun showed (opacity_sun_weight).
     if (!relative) return std::clamp(t, 0.0, 1.0);
-    // How far the clouds at the sun have moved by then: the steps' flows there, summed (unknown
-    // without them: as if far).
-    double travel = 1.0;
-    cv::Vec2d moved(0, 0);
-    bool known = true;
-    for (int k = 1; k <= i + (s > 0 ? 1 : 0) && known; ++k) {
-        const cv::Mat f = size_t(k) < model_flow_.size() ? model_flow_[size_t(k)] : cv::Mat();
-        if (f.empty() || f.type() != CV_32FC2) {
-            known = false;
-            break;
-        }
-        double x, y;
-        fisheye::pixel_from_direction(sun, f.rows, &x, &y);
-        const cv::Vec2f v = f.at<cv::Vec2f>(std::clamp(int(std::lround(y)), 0, f.rows - 1),
-                                            std::clamp(int(std::lround(x)), 0, f.rows - 1));
-        moved += (k == i + 1 ? s : 1.0) * cv::Vec2d(v[0], v[1]) * (double(o0.rows) / f.rows);
-    }
-    if (known) travel = sun_travel_fraction(cv::norm(moved), o0.rows);
+    // How far the clouds at the sun have moved by then (the same for a computed and a stored
+    // timeline: a farm's frames equal one run's).
+    const double travel = sun_travel_fraction(sun_travel_px(i, s, sun, o0.rows), o0.rows);
     return opacity_sun_weight(t, sun_transmittance_of_opacity(o0, sun), input_look_transmittance_, input_sun_share(),
                               travel);
 }

@@ -155,6 +155,12 @@ class SkyTimeline {
     std::vector<cv::Mat> model_flow_;
     // relative: over the input's opacity at the sun (in [0, 1]); else the transmittance itself.
     std::optional<double> model_sun_weight(int i, double s, const Vec3d& sun, bool relative = true);
+    // How far the clouds at the sun have moved by step i + s, in pixels of an n px sky: the
+    // intervals' flows (the same whether computed or stored) summed at the sun of each interval's
+    // start, remembered per step; once past the sun's diameter no further flow is read.
+    double sun_travel_px(int i, double s, const Vec3d& sun, int n);
+    std::vector<cv::Vec2d> travel_sums_;  // [k]: the summed flow at the sun over intervals 0..k-1 (pixels at travel_n_)
+    int travel_n_ = 0;
     // The input's sun when a cloud dimmed it (it holds under half the clear sun's irradiance, or
     // nothing was cut): the clear sun put back by the frame's own transmittance instead, made
     // when first needed (empty otherwise). Set by covered_input_sun().

@@ -332,10 +332,11 @@ double opacity_sun_weight(double moved_opacity_t, double start_opacity_t, double
     return (1.0 - travel) * own + travel * moved;
 }
 
+double sun_diameter_px(int resolution) { return 0.53 / 90.0 * resolution / 2.0; }
+
 double sun_travel_fraction(double displacement_px, int resolution) {
-    // The sun's own diameter (0.53 degrees): clouds that moved less have not changed what covers it.
-    const double scale_px = 0.53 / 90.0 * resolution / 2.0;
-    return std::clamp(displacement_px / scale_px, 0.0, 1.0);
+    // The sun's own diameter: clouds that moved less have not changed what covers it.
+    return std::clamp(displacement_px / sun_diameter_px(resolution), 0.0, 1.0);
 }
 
 }  // namespace dynsky

@@ -158,5 +158,7 @@ double opacity_sun_weight(double moved_opacity_t, double start_opacity_t, double
 // The clouds' displacement at the sun (pixels of a sky of `resolution`) as a fraction of the sun's
 // diameter (0.53 degrees), in [0, 1].
 double sun_travel_fraction(double displacement_px, int resolution);
+// The sun's diameter (0.53 degrees) in pixels of a sky of `resolution` near the zenith.
+double sun_diameter_px(int resolution);
 
 }  // namespace dynsky

@@ -359,6 +359,16 @@ TEST(SkyModelCli, EvaluateNeverScoresTheModelsTrainingFramesAsHeldOut) {
         ASSERT_EQ(r.exit_code, 0) << r.output;
         EXPECT_NE(read_text(dir + "/f.md").find("predicting frames the model was trained on"), std::string::npos);
     }
+    // Without the training photographs (a wrong --shared) it cannot tell, and says so in the report.
+    {
+        const std::string photos = dir + "/mine";
+        auto r = test::run_command(dynsky("sky evaluate --shared " + dir + "/nowhere --photos " + photos + common +
+                                          dir + "/u.md 2>&1"));
+        ASSERT_EQ(r.exit_code, 0) << r.output;
+        EXPECT_NE(r.output.find("warning: the model was trained on"), std::string::npos) << r.output;
+        EXPECT_NE(read_text(dir + "/u.md").find("NOT checked against the model's training photographs"),
+                  std::string::npos);
+    }
     // The same day's held-out frames (its split holds out 240 on) are scored as such.
     const std::string held_out = photo_folder(dir + "/late", 5, {}, 250);
     auto r = test::run_command(dynsky("sky evaluate --photos " + held_out + common + dir + "/h.md"));
