@@ -455,6 +455,106 @@ cv::Mat background_opacity(const cv::Mat& start, const cv::Mat& background, cons
 // background, as the long rollouts were tuned with: a real cloud brightens towards the sun by its
 // own forward scattering much as the clear sky does (with 25-45 degrees a 3-hour rollout of the
 // ARM photograph dipped to 0.79 of its start, 0.82 additively, 0.805 so).
+// A photograph's clipped glare around its sun (network form, start at n px): the pixels at one
+// value, the camera's clip level as calibrated, joined to the ring 3-8 degrees from the sun, when
+// most of that ring holds it. Empty when the ring is not mostly one value (any sky not clipped
+// there: procedural, Hosek-Wilkie, a photograph exposed for its sun).
+cv::Mat glare_plateau(const cv::Mat& start, const Vec3d& sun) {
+    const int n = start.rows;
+    if (!(sun.y() > 0) || start.type() != CV_32FC3) return cv::Mat();
+    const Vec3d s = sun.normalized();
+    const double c3 = std::cos(3.0 * kPiD / 180), c8 = std::cos(8.0 * kPiD / 180);
+    std::vector<cv::Vec3f> ring;
+    cv::Mat near(n, n, CV_8UC1, cv::Scalar(0));
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            if (fisheye::pixel_center_uv(x, y, n).squaredNorm() > 1) continue;
+            const double c = fisheye::direction_from_pixel(double(x), double(y), n).dot(s);
+            if (c >= c8) near.at<uint8_t>(y, x) = 255;
+            if (c >= c8 && c <= c3) ring.push_back(start.at<cv::Vec3f>(y, x));
+        }
+    if (ring.size() < 8) return cv::Mat();
+    cv::Vec3f level;
+    for (int k = 0; k < 3; ++k) {
+        std::vector<float> v;
+        for (const cv::Vec3f& p : ring) v.push_back(p[k]);
+        std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+        level[k] = v[v.size() / 2];
+    }
+    auto at_level = [&](const cv::Vec3f& p, float tolerance) {
+        return std::abs(p[0] - level[0]) <= tolerance && std::abs(p[1] - level[1]) <= tolerance &&
+               std::abs(p[2] - level[2]) <= tolerance;
+    };
+    const long flat = std::count_if(ring.begin(), ring.end(), [&](const cv::Vec3f& p) { return at_level(p, 0.002f); });
+    if (flat < long(0.6 * double(ring.size())) || !(level[0] + level[1] + level[2] > 0)) return cv::Mat();
+    cv::Mat plateau(n, n, CV_8UC1, cv::Scalar(0));
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x)
+            if (fisheye::pixel_center_uv(x, y, n).squaredNorm() <= 1 && at_level(start.at<cv::Vec3f>(y, x), 0.004f))
+                plateau.at<uint8_t>(y, x) = 255;
+    // Only the pieces that reach within 8 degrees of the sun (a clipped cloud elsewhere is a cloud).
+    cv::Mat labels;
+    const int count = cv::connectedComponents(plateau, labels, 8, CV_32S);
+    std::vector<char> keep(size_t(count), 0);
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x)
+            if (near.at<uint8_t>(y, x) && plateau.at<uint8_t>(y, x)) keep[size_t(labels.at<int>(y, x))] = 1;
+    keep[0] = 0;
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x)
+            if (!keep[size_t(labels.at<int>(y, x))]) plateau.at<uint8_t>(y, x) = 0;
+    cv::dilate(plateau, plateau, cv::Mat(), cv::Point(-1, -1), 1);  // its edge, resampled half way
+    return plateau;
+}
+
+// Within kGlareHaloDeg of a sun whose camera clipped around it (glare_plateau), the background is
+// at least the start's lower quartile at that distance from the sun (per channel, 1-degree rings):
+// the camera's glare falls off with the distance alone, a cloud stands out of its ring. The glare
+// is then neither cloud nor moved: on a clear all-sky photograph (WSISEG 077) it was read as cloud
+// next to the sun, carried onto it by the wind and put it out for 14 of 40 steps, and moved as a
+// hard white blob.
+constexpr double kGlareHaloDeg = 35.0;
+void raise_to_glare_halo(const cv::Mat& start, const Vec3d& sun, cv::Mat* background) {
+    const int n = start.rows, rings = int(kGlareHaloDeg);
+    const Vec3d s = sun.normalized();
+    cv::Mat angle(n, n, CV_32FC1, cv::Scalar(-1));
+    std::vector<std::array<std::vector<float>, 3>> values;
+    values.resize(size_t(rings));
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            if (fisheye::pixel_center_uv(x, y, n).squaredNorm() > 1) continue;
+            const double a = std::acos(std::clamp(fisheye::direction_from_pixel(double(x), double(y), n).dot(s), -1.0,
+                                                  1.0)) *
+                             180 / kPiD;
+            if (a >= kGlareHaloDeg) continue;
+            angle.at<float>(y, x) = float(a);
+            const cv::Vec3f v = start.at<cv::Vec3f>(y, x);
+            for (int k = 0; k < 3; ++k) values[size_t(a)][size_t(k)].push_back(v[k]);
+        }
+    std::vector<cv::Vec3f> profile(size_t(rings), cv::Vec3f(0, 0, 0));
+    for (int r = 0; r < rings; ++r)
+        for (int k = 0; k < 3; ++k) {
+            std::vector<float>& v = values[size_t(r)][size_t(k)];
+            if (v.empty()) continue;
+            std::nth_element(v.begin(), v.begin() + long(v.size() / 4), v.end());
+            profile[size_t(r)][k] = v[v.size() / 4];
+        }
+    for (int r = 1; r < rings; ++r)  // empty rings (beyond the horizon) take the one inside
+        if (profile[size_t(r)] == cv::Vec3f(0, 0, 0)) profile[size_t(r)] = profile[size_t(r) - 1];
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            const float a = angle.at<float>(y, x);
+            if (a < 0) continue;
+            // Linear between ring centres, fading into the model's background over the last 5 degrees.
+            const float f = std::clamp(a - 0.5f, 0.0f, float(rings - 1));
+            const int r0 = int(f), r1 = std::min(rings - 1, r0 + 1);
+            const cv::Vec3f p = (1 - (f - r0)) * profile[size_t(r0)] + (f - r0) * profile[size_t(r1)];
+            const float fade = std::clamp((float(kGlareHaloDeg) - a) / 5.0f, 0.0f, 1.0f);
+            cv::Vec3f& b = background->at<cv::Vec3f>(y, x);
+            for (int k = 0; k < 3; ++k) b[k] = std::max(b[k], b[k] + fade * (p[k] - b[k]));
+        }
+}
+
 cv::Mat circumsolar_share(int n, const std::optional<Vec3d>& sun) {
     cv::Mat share(n, n, CV_32FC1, cv::Scalar(0));
     if (!sun) return share;
@@ -557,6 +657,12 @@ void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3
         cv::split(given, ch);
         clipped = (ch[0] >= 0.999f) | (ch[1] >= 0.999f) | (ch[2] >= 0.999f);
         cv::dilate(clipped, clipped, cv::Mat(), cv::Point(-1, -1), 2);
+        // A photograph's clipped glare around its sun stays with it, as does its halo.
+        if (sun_)
+            if (const cv::Mat glare = glare_plateau(start_, *sun_); !glare.empty()) {
+                raise_to_glare_halo(start_, *sun_, &background);
+                clipped |= glare;
+            }
         start_.copyTo(background, clipped);
     }
     background_ = background.empty() ? cv::Mat() : background * background_weight_;
