@@ -224,14 +224,14 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
     std::string part = "every frame (none of them among the model's training photographs)";
     std::string unchecked;
     for (const std::string& n : trained.unchecked) unchecked += (unchecked.empty() ? "" : ", ") + n;
-    if (!unchecked.empty())
+    if (!unchecked.empty()) {  // said in the report, and warned even with -q: the scores may flatter the model
         part = "every frame (NOT checked against the model's training photographs: " + unchecked +
                " not found; give --shared)";
-    if (!unchecked.empty())  // a warning even with -q: the scores may flatter the model
         std::fprintf(stderr,
                      "dynsky: warning: the model was trained on %s, whose photographs were not found (--shared): "
                      "whether these frames are among them is not checked\n",
                      unchecked.c_str());
+    }
     if (!o.frames.empty()) {
         int a = 0, b = 0;
         std::stringstream ss(o.frames);
