@@ -16,6 +16,9 @@ LoadedScene load_scene(const SceneSpec& o, float aspect_ratio, bool print_warnin
     if (o.scene == "builtin") {
         out.scene = make_builtin_scene();
         out.path = o.scene;
+        if (!o.animation.empty() && print_warnings)
+            std::fprintf(stderr, "dynsky: warning: the built-in scene has no animations: --animation %s does nothing\n",
+                         o.animation.c_str());
     } else {
         out.path = resolve_user_path(o.scene);  // shipped scenes work from any folder
         out.scene = load_gltf(out.path, nullptr, o.animation_time, o.animation);

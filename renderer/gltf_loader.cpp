@@ -484,7 +484,8 @@ class GltfLoader {
         check_extent();
         if (!model_.animations.empty() && animation_time_ < 0)
             warn(std::to_string(model_.animations.size()) +
-                 " animation(s) not played: the scene is rendered in its rest pose (--anim-time T poses it at T s)");
+                 " animation(s) not played: the scene is rendered in its rest pose (--anim-time T poses it at T s" +
+                 (animation_.empty() ? std::string(")") : ", --animation " + animation_ + " picking which)"));
         scene_.warnings = warnings_;
         return std::move(scene_);
     }

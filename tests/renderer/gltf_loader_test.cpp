@@ -1258,6 +1258,8 @@ TEST(GltfLoader, OneAnimationOfSeveralPlaysByNameOrIndex) {
     EXPECT_FALSE(has_warning_containing(walk, "animation"));
     EXPECT_LT((origin(walk) - Vec3(4, 0, 0)).norm(), 1e-5f);
     EXPECT_LT((origin(load_gltf(path, nullptr, 1.0, "1")) - Vec3(0, 3, 0)).norm(), 1e-5f);
+    // Picked but not posed (no time): the rest pose, and the warning says how to pose it.
+    EXPECT_TRUE(has_warning_containing(load_gltf(path, nullptr, -1, "Walk"), "--animation Walk picking which"));
     AnimatedGltf animated(path, "Walk");
     expect_same_scene(animated.pose(1.5), load_gltf(path, nullptr, 1.5, "Walk"), "Walk at 1.5 s");
     std::string e;
