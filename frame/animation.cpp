@@ -162,12 +162,11 @@ void check_animation_settings(const AnimationSettings& o, bool inputs_exist) {
     if (!is_generated_sky(o.sky.sky)) exists(o.sky.sky, "--sky");
     exists(o.sky.previous, "--prev");
     if (stage != "keys" && stage != "all") exists(o.timeline, "--timeline");
-    const std::string& m = o.model.model;
-    if (m != "auto" && m != "flow" && m != "procedural" && m != "advect") {
+    const std::string m = step_model_name(o.model.model);
+    if (m == "paper" || m.rfind("network:", 0) == 0) {
         const std::string folder = resolve_cloud_model(m);  // "paper" not installed throws
-        if (!fs::is_directory(folder, ec) || !fs::exists(fs::path(folder) / "model.json", ec))
-            throw Error("--model '" + m +
-                        "': expected auto, advect, paper, procedural, flow, or a model folder with its model.json");
+        if (!fs::exists(fs::path(folder) / "model.json", ec))
+            throw_file_error(folder, "no model.json: not a cloud model folder (--model)");
     }
 }
 

@@ -108,12 +108,7 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
             if (ext == ".exr" && !image_header_number(e.path().string(), "dynsky:flow_dt")) {
                 exrs.push_back(e.path().string());
             } else if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".hdr" || ext == ".tif") {
-                // The previews and filled masks `sky import` and `sky procedural` write beside each
-                // sky (STEM.png, STEM.filled.png) are theirs, not photographs left out.
-                fs::path stem = e.path().stem();
-                if (stem.extension() == ".filled") stem = stem.stem();
-                const fs::path sky_beside = e.path().parent_path() / (stem.string() + ".exr");
-                if (ext == ".png" && fs::exists(sky_beside)) continue;
+                if (written_beside_a_sky(e.path().string())) continue;
                 others.push_back(e.path().filename().string());
             }
         }
@@ -184,16 +179,7 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
                          "back in its own units\n",
                          sky_file.c_str(), scale.describe().c_str());
     }
-    std::string model_name = m.model;
-    if (model_name != "auto" && model_name != "flow" && model_name != "procedural" && model_name != "advect" &&
-        model_name != "paper" && model_name.rfind("network:", 0) != 0) {
-        // A model folder as `sky predict` takes it (network: optional), else a usage error.
-        std::error_code ec;
-        if (!fs::is_directory(resolve_user_path(model_name), ec))
-            throw Error("--model '" + model_name +
-                        "': expected auto, advect, paper, procedural, flow, or a model folder (network:FOLDER)");
-        model_name = "network:" + model_name;
-    }
+    std::string model_name = step_model_name(m.model);
     std::unique_ptr<MediumStepModel> model;
     if (model_name == "auto" || model_name == "paper" || model_name == "advect") {
         const std::string folder = resolve_cloud_model(model_name);
@@ -235,6 +221,18 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     return timeline;
 }
 
+
+std::string step_model_name(const std::string& model) {
+    if (model == "auto" || model == "flow" || model == "procedural" || model == "advect" || model == "paper" ||
+        model.rfind("network:", 0) == 0)
+        return model;
+    // A model folder as `sky predict` takes it (network: optional), else a usage error.
+    std::error_code ec;
+    if (!fs::is_directory(resolve_user_path(model), ec))
+        throw Error("--model '" + model +
+                    "': expected auto, advect, paper, procedural, flow, or a model folder (network:FOLDER)");
+    return "network:" + model;
+}
 
 std::string cloud_model_files(const std::string& name) {
     std::string folder;

@@ -70,6 +70,10 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& sky, const StepModelSpec& mod
 // only for the same.
 FrameSettings sky_timeline_settings(const SkySourceSpec& sky, const StepModelSpec& model);
 
+// --model as the timeline takes it: auto, advect, paper, procedural, flow or network:FOLDER (a
+// folder given bare gets the prefix). Throws dynsky::Error for anything else.
+std::string step_model_name(const std::string& model);
+
 // The contents of a cloud model's description and networks (model.json, *.onnx: name, size, hash),
 // " [...]", for the settings frames and timelines are kept by: a retrained model, or the shipped
 // one of another version, moves the clouds otherwise. "" for a model without a folder.

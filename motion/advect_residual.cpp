@@ -759,10 +759,7 @@ const cv::Mat& CloudRollout::advance() {
     if (!background_.empty()) compensation_n = background_n_ - warp_in_disc(background_n_, f_n);
     const cv::Mat sources = warp_sources(f_big);
     if (sun_) {
-        double x, y;
-        fisheye::pixel_from_direction(*sun_, big, &x, &y);
-        const cv::Vec2f f = f_big.at<cv::Vec2f>(std::clamp(int(std::lround(y)), 0, big - 1),
-                                                std::clamp(int(std::lround(x)), 0, big - 1));
+        const cv::Vec2f f = flow_at_direction(f_big, *sun_);
         sun_travel_ += cv::Vec2d(f[0], f[1]);
     }
     // The corrections ride along and fade (e-folding kCorrectionSteps = 1): what the network adds is

@@ -312,4 +312,11 @@ Wind fit_wind(const cv::Mat& flow, const cv::Mat& weight, double dt, double clou
     return w;
 }
 
+cv::Vec2f flow_at_direction(const cv::Mat& flow, const Vec3d& direction) {
+    double x, y;
+    fisheye::pixel_from_direction(direction, flow.rows, &x, &y);
+    return flow.at<cv::Vec2f>(std::clamp(int(std::lround(y)), 0, flow.rows - 1),
+                              std::clamp(int(std::lround(x)), 0, flow.cols - 1));
+}
+
 }  // namespace dynsky

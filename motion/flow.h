@@ -118,4 +118,8 @@ MeasuredMotion measured_motion(const cv::Mat& previous, const cv::Mat& current, 
 // one) and rescaled to N's pixels.
 cv::Mat flow_at_resolution(const cv::Mat& flow, int n);
 
+// A flow field's displacement (CV_32FC2, pixels of its own resolution) at the pixel nearest to a
+// direction of the sky: the motion of the clouds at the sun.
+cv::Vec2f flow_at_direction(const cv::Mat& flow, const Vec3d& direction);
+
 }  // namespace dynsky

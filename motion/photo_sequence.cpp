@@ -106,11 +106,8 @@ PhotoSequence photo_sequence_from_folder(const std::string& folder, const std::s
         if (!e.is_regular_file()) continue;
         const std::string ext = file_extension(e.path().string());
         if (skies && (ext == ".jpg" || ext == ".jpeg" || ext == ".png")) {
-            // Beside its imported skies a folder holds their previews and filled masks (STEM.png,
-            // STEM.filled.png); another photograph would be left out of the sequence unseen.
-            std::string stem = e.path().stem().string();
-            if (stem.size() > 7 && stem.compare(stem.size() - 7, 7, ".filled") == 0) stem.resize(stem.size() - 7);
-            if (ext == ".png" && fs::exists(dir / (stem + ".exr"))) continue;
+            // Another photograph would be left out of the sequence unseen.
+            if (written_beside_a_sky(e.path().string())) continue;
             throw_file_error(e.path().string(),
                              "is a photograph among imported skies (.exr): import it with the others ('dynsky sky "
                              "import' with the camera's options) or move it out of the folder");

@@ -94,11 +94,7 @@ double SkyTimeline::sun_travel_px(int i, double s, const Vec3d& sun, int n) {
     const double far = sun_diameter_px(n);  // moved past the sun: nothing more to read
     auto flow_at = [&](int k) {
         const cv::Mat f = stored_last_step_ >= 0 ? stored_flow(k) : interval(k).flow;
-        const Vec3d at = sun_direction_at(k * dt_).value_or(sun);
-        double x, y;
-        fisheye::pixel_from_direction(at, f.rows, &x, &y);
-        const cv::Vec2f v = f.at<cv::Vec2f>(std::clamp(int(std::lround(y)), 0, f.rows - 1),
-                                            std::clamp(int(std::lround(x)), 0, f.rows - 1));
+        const cv::Vec2f v = flow_at_direction(f, sun_direction_at(k * dt_).value_or(sun));
         return cv::Vec2d(v[0], v[1]) * (double(n) / f.rows);
     };
     const int whole = i + (s > 0 ? 1 : 0);
@@ -128,8 +124,7 @@ std::optional<double> SkyTimeline::model_sun_weight(int i, double s, const Vec3d
         const int n = flow.rows;
         double x, y;
         fisheye::pixel_from_direction(sun, n, &x, &y);
-        const cv::Vec2f f = flow.at<cv::Vec2f>(std::clamp(int(std::lround(y)), 0, n - 1),
-                                               std::clamp(int(std::lround(x)), 0, n - 1));
+        const cv::Vec2f f = flow_at_direction(flow, sun);
         const Vec3d from = fisheye::direction_from_pixel(x - s * f[0], y - s * f[1], n);
         const Vec3d to = fisheye::direction_from_pixel(x + (1 - s) * f[0], y + (1 - s) * f[1], n);
         t = std::min(sun_transmittance_of_opacity(a, from), sun_transmittance_of_opacity(b, to));

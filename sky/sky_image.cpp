@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <opencv2/imgproc.hpp>
 
 #include "sky/fisheye.h"
@@ -281,6 +282,15 @@ std::optional<double> sky_recorded_utc_seconds(const SkyImage& sky) {
     } catch (const Error&) {
         return std::nullopt;
     }
+}
+
+bool written_beside_a_sky(const std::string& path) {
+    const std::filesystem::path p(path);
+    if (file_extension(path) != ".png") return false;
+    std::filesystem::path stem = p.stem();
+    if (stem.extension() == ".filled") stem = stem.stem();
+    std::error_code ec;
+    return std::filesystem::exists(p.parent_path() / (stem.string() + ".exr"), ec);
 }
 
 std::vector<std::string> skies_in_time_order(std::vector<std::string> files) {

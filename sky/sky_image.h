@@ -74,6 +74,11 @@ std::optional<double> sky_recorded_utc_seconds(const SkyImage& sky);
 // wrong frame.)
 std::vector<std::string> skies_in_time_order(std::vector<std::string> files);
 
+// A preview or filled mask written beside a sky (STEM.png or STEM.filled.png next to STEM.exr, as
+// `sky import` and `sky procedural` write them): part of that sky, not a photograph left out of a
+// folder of skies.
+bool written_beside_a_sky(const std::string& path);
+
 // A sky's own metadata in an image header: dynsky:time, dynsky:sun_x/y/z (when known) and
 // dynsky:source (when set). Every sky file writer uses it; load_sky reads it back.
 void write_sky_metadata(const SkyImage& sky, ImageMetadata* m);
