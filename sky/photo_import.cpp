@@ -710,6 +710,66 @@ std::vector<unsigned char> shadow_band_mask(const ShadowBand& band, const PhotoG
     return std::vector<unsigned char>(mask.datastart, mask.dataend);
 }
 
+std::optional<ShadowBandFound> find_shadow_band(const Image& encoded_photo, const PhotoGeometry& geometry,
+                                                const ShadowBand& band, const std::vector<unsigned char>& hidden) {
+    // The pixels judged: seen, between a sixth of the radius (the housing) and the rim's glare;
+    // every pixel but on large photos (about 300 across the circle). Each by its brightest channel
+    // plus its chroma (brightest - faintest): the TSI's band is grey, about as bright as a deep blue
+    // sky in its blue channel but far less coloured, and darker than an overcast.
+    const SkyCircle& c = geometry.circle;
+    const int w = encoded_photo.width, h = encoded_photo.height;
+    const int stride = std::max(1, int(c.radius / 150));
+    struct Sample {
+        float x, y, v;
+    };
+    std::vector<Sample> samples;
+    for (int y = 0; y < h; y += stride)
+        for (int x = 0; x < w; x += stride) {
+            const double dx = x + 0.5 - c.center_x, dy = y + 0.5 - c.center_y, r = std::hypot(dx, dy);
+            if (r < c.radius / 6 || r > 0.92 * c.radius || (!hidden.empty() && hidden[size_t(y) * w + x])) continue;
+            float hi = 0, lo = 1e30f;
+            for (int ch = 0; ch < std::min(3, encoded_photo.channels); ++ch)
+                hi = std::max(hi, encoded_photo.at(x, y, ch)), lo = std::min(lo, encoded_photo.at(x, y, ch));
+            samples.push_back({float(dx), float(dy), 2 * hi - lo});
+        }
+    const double hw = band.half_width_px;
+    // The strip's median over its neighbours' for a world azimuth (the band's direction in the
+    // photo as shadow_band_mask finds it); medians, so the sun's glare on the band does not count.
+    std::vector<float> in, beside;
+    auto contrast = [&](double azimuth_deg, int step) {
+        double x = 0, y = 0;
+        if (!geometry.project(fisheye::direction_from_angles(45 * kDeg, azimuth_deg * kDeg), &x, &y)) return 1.0;
+        double ux = x - c.center_x, uy = y - c.center_y;
+        const double len = std::hypot(ux, uy);
+        if (!(len > 0)) return 1.0;
+        ux /= len, uy /= len;
+        in.clear(), beside.clear();
+        for (size_t k = 0; k < samples.size(); k += size_t(step)) {
+            const Sample& s = samples[k];
+            const double along = s.x * ux + s.y * uy, across = std::abs(s.x * uy - s.y * ux);
+            if (along < band.start_px) continue;
+            if (across <= hw) in.push_back(s.v);
+            else if (across >= 2 * hw && across <= 4 * hw) beside.push_back(s.v);
+        }
+        if (in.size() < 20 || beside.size() < 20) return 1.0;
+        const double b = median(std::vector<float>(beside));
+        return b > 0 ? median(std::vector<float>(in)) / b : 1.0;
+    };
+    ShadowBandFound best;
+    for (double a = 0; a < 360; a += 1) {
+        const double q = contrast(a, 3);
+        if (q < best.contrast) best = {a, q};
+    }
+    const double coarse = best.azimuth_deg;
+    best.contrast = 1;
+    for (double a = coarse - 1.5; a <= coarse + 1.5 + 1e-9; a += 0.1) {
+        const double q = contrast(a, 1);
+        if (q < best.contrast) best = {std::fmod(a + 360, 360), q};
+    }
+    if (!(best.contrast < kShadowBandContrast)) return std::nullopt;
+    return best;
+}
+
 std::vector<unsigned char> horizon_obstruction_mask(const std::vector<HorizonObstruction>& profile,
                                                     const SkyCircle& circle, int photo_width, int photo_height) {
     std::vector<unsigned char> out(size_t(photo_width) * photo_height, 0);
@@ -1101,9 +1161,19 @@ ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, 
         cv::Rect rect = cv::Rect(r[0], r[1], r[2], r[3]) & cv::Rect(0, 0, rgb.cols, rgb.rows);
         if (rect.area() > 0) not_sky(rect).setTo(1);
     }
-    if (params.shadow_band || !params.horizon_obstructions.empty()) {
+    std::optional<ShadowBand> shadow_band = params.shadow_band;
+    bool detect_obstructions = params.detect_obstructions;
+    if (shadow_band && shadow_band->find_in_photo) {
+        // No time to put it at the sun: found in the photograph, else taken as a dark object.
+        const std::vector<unsigned char> hidden(not_sky.datastart, not_sky.dataend);
+        out.shadow_band_found = find_shadow_band(out.display_referred ? photo : tone_mapped_grey(rgb), out.geometry,
+                                                 *shadow_band, hidden);
+        if (out.shadow_band_found) shadow_band->azimuth_deg = out.shadow_band_found->azimuth_deg;
+        else shadow_band.reset(), detect_obstructions = true;
+    }
+    if (shadow_band || !params.horizon_obstructions.empty()) {
         std::vector<unsigned char> band(size_t(rgb.cols) * rgb.rows, 0);
-        if (params.shadow_band) band = shadow_band_mask(*params.shadow_band, out.geometry, rgb.cols, rgb.rows);
+        if (shadow_band) band = shadow_band_mask(*shadow_band, out.geometry, rgb.cols, rgb.rows);
         auto horizon = horizon_obstruction_mask(params.horizon_obstructions, circle, rgb.cols, rgb.rows);
         for (int y = 0; y < rgb.rows; ++y)
             for (int x = 0; x < rgb.cols; ++x) {
@@ -1111,10 +1181,10 @@ ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, 
                 if (band[p] || horizon[p]) not_sky.at<unsigned char>(y, x) = 1;
             }
     }
-    if (params.detect_obstructions || params.detect_thin_obstructions) {
+    if (detect_obstructions || params.detect_thin_obstructions) {
         const Image encoded = out.display_referred ? photo : tone_mapped_grey(rgb);
         std::vector<unsigned char> m, t;
-        if (params.detect_obstructions) m = detect_dark_obstructions(encoded, circle);
+        if (detect_obstructions) m = detect_dark_obstructions(encoded, circle);
         if (params.detect_thin_obstructions) t = detect_thin_dark_structures(encoded, circle);
         for (int y = 0; y < rgb.rows; ++y)
             for (int x = 0; x < rgb.cols; ++x) {
@@ -1405,10 +1475,11 @@ std::string time_from_file_name(const std::string& path, double utc_offset_hours
         // ISO-like with separators, optional seconds, fraction and zone.
         std::regex("(?:^|\\D)(\\d{4})-(\\d{2})-(\\d{2})[T_ ](\\d{2})[:\\-_.](\\d{2})(?:[:\\-_.](\\d{2}))?(?:\\.\\d+)?"
                    "(Z|[+\\-]\\d{2}:\\d{2}|[+\\-]\\d{4}(?!\\d))?(?!\\d)"),
-        // Compact: 14 digits (optionally a separator after the date), optional Z.
-        std::regex("(?:^|\\D)(\\d{4})(\\d{2})(\\d{2})[T_\\-]?(\\d{2})(\\d{2})(\\d{2})(Z?)(?!\\d)"),
+        // Compact: 14 digits (optionally a separator after the date: ARM's archive names are
+        // sgptsiskyimageC1.a1.20170524.163000.jpg), optional Z.
+        std::regex("(?:^|\\D)(\\d{4})(\\d{2})(\\d{2})[T_.\\-]?(\\d{2})(\\d{2})(\\d{2})(Z?)(?!\\d)"),
         // Compact without seconds: date, a separator, 4 digits.
-        std::regex("(?:^|\\D)(\\d{4})(\\d{2})(\\d{2})[T_\\-](\\d{2})(\\d{2})()()(?!\\d)"),
+        std::regex("(?:^|\\D)(\\d{4})(\\d{2})(\\d{2})[T_.\\-](\\d{2})(\\d{2})()()(?!\\d)"),
     };
     for (const std::regex& re : patterns) {
         for (auto it = std::sregex_iterator(file.begin(), file.end(), re); it != std::sregex_iterator(); ++it) {

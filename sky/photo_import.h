@@ -87,7 +87,25 @@ struct ShadowBand {
     double azimuth_deg = 0;     // the sun's at the photo's time (set per photo)
     double half_width_px = 30;  // photo pixels either side of the centre line
     double start_px = -20;      // where the strip begins, along its direction from the circle's centre
+    // No time to put it at the sun (a photograph whose name and EXIF give none): its azimuth is
+    // found in the photograph (find_shadow_band) and azimuth_deg is not used.
+    bool find_in_photo = false;
 };
+
+// Where a shadow band of `band`'s shape lies in an encoded photograph (0..1): the world azimuth
+// whose strip is darkest and greyest against the strips beside it (two to four times its half
+// width away), by the medians of each pixel's brightest channel plus its chroma; searched every
+// degree, then refined to 0.1. Pixels in `hidden` (photo-sized 0/1: the arm, the housing) are left
+// out. `contrast` = the strip's median over its neighbours'; none when no strip is below
+// kShadowBandContrast (nothing band-like). On the shared TSI sets the band's strip is at most 0.76
+// of its neighbours, any other strip at least 0.82.
+struct ShadowBandFound {
+    double azimuth_deg = 0;
+    double contrast = 1;
+};
+constexpr double kShadowBandContrast = 0.8;
+std::optional<ShadowBandFound> find_shadow_band(const Image& encoded_photo, const PhotoGeometry& geometry,
+                                                const ShadowBand& band, const std::vector<unsigned char>& hidden);
 
 // An obstruction on the horizon (roof, railing, mast) in the photo: from radius_fraction x the sky
 // circle's radius outwards, between two image angles (degrees clockwise from the photo's top).
@@ -158,6 +176,8 @@ struct ImportedPhoto {
     int exif_orientation = 1;            // the file's EXIF orientation, applied before anything else
     std::string pixel_type;              // the file's stored pixels ("uint8", "half", ...; "" in memory)
     std::string photo_path;
+    // A band with find_in_photo: where it was found (none: not found, dark objects were filled instead).
+    std::optional<ShadowBandFound> shadow_band_found;
 };
 
 // Whole pipeline from a file, the photograph first turned as its EXIF orientation says viewers show

@@ -209,6 +209,22 @@ void import_one(const OnePhoto& o, bool verbose) {
                         ? ("clipped at encoded level " + std::to_string(imported.clip_level)).c_str()
                         : "no clipping plateau found");
     if (obstructions.empty() && !params.mask_path.empty()) obstructions = "mask " + params.mask_path;
+    if (params.shadow_band && params.shadow_band->find_in_photo) {
+        char found[160];
+        if (imported.shadow_band_found)
+            std::snprintf(found, sizeof found,
+                          ": at azimuth %.1f deg, its strip %.0f %% of the sky beside it in brightness and colour",
+                          imported.shadow_band_found->azimuth_deg, 100 * imported.shadow_band_found->contrast);
+        else
+            std::snprintf(found, sizeof found, ": none darker than %.0f %% of the sky beside it, dark objects filled",
+                          100 * kShadowBandContrast);
+        obstructions += found;
+        if (!imported.shadow_band_found)
+            std::fprintf(stderr,
+                         "dynsky: warning: %s: no shadow band found in the photograph; give --time (the band is at "
+                         "the sun)\n",
+                         o.photo.c_str());
+    }
     if (verbose)
         std::printf("not-sky pixels filled: %.1f%% of the disc%s%s\n", disc ? 100.0 * filled / disc : 0.0,
                     obstructions.empty() ? "" : (" (" + obstructions + ")").c_str(),

@@ -35,9 +35,12 @@ PresetImportPlan plan_preset_import(const std::string& preset, const std::string
     plan.obstructions = "the preset's obstruction geometry (no mask file)";
     if (cam.shadow_band) {
         if (plan.time.empty()) {
-            // The band follows the sun: without a time it can only be found as a dark object.
-            plan.params.detect_obstructions = true;
-            plan.obstructions += "; no time, so the shadow band is detected as a dark object";
+            // The band follows the sun: without a time it is found in the photograph (the darkest
+            // strip of its shape), else taken as a dark object.
+            ShadowBand band = *cam.shadow_band;
+            band.find_in_photo = true;
+            plan.params.shadow_band = band;
+            plan.obstructions += "; no time, so the shadow band is found in the photograph";
         } else {
             ShadowBand band = *cam.shadow_band;
             band.azimuth_deg = compute_sun_position(parse_utc_time(plan.time), plan.location).azimuth_deg;

@@ -930,6 +930,10 @@ TEST(PhotoImport, PresetsFileNamesAndTimes) {
     EXPECT_EQ(time_from_file_name("x/2020-08-12_10_07.jpg", 2.0), "2020-08-12T10:07:00+02:00");
     EXPECT_EQ(time_from_file_name("x/2020-08-12_10_07.jpg", -5.5), "2020-08-12T10:07:00-05:30");
     EXPECT_EQ(time_from_file_name("holiday.jpg"), "");
+    // ARM's archive names: date and time apart.
+    EXPECT_EQ(time_from_file_name("sgptsiskyimageC1.a1.20170524.163000.jpg"), "2017-05-24T16:30:00+00:00");
+    EXPECT_EQ(time_from_file_name("sgptsiskyimageC1.a1.20170524.163000.jpg.20170524163000.jpg"),
+              "2017-05-24T16:30:00+00:00");
     // Other cameras' names: ISO-like with or without a zone, compact with a separator.
     bool zone = true;
     EXPECT_EQ(time_from_file_name("cam/2021-03-04T05:06:07Z.jpg", 0, &zone), "2021-03-04T05:06:07Z");
