@@ -155,7 +155,19 @@ double julian_date(const UtcTime& t) {
 double utc_seconds(const std::string& iso8601) { return julian_date(parse_utc_time(iso8601)) * 86400.0; }
 
 double delta_t_seconds(double y) {
-    // Espenak & Meeus (2006), the pieces covering 1900-2150.
+    // Espenak & Meeus (2006), the pieces covering 1800-2150 (the 1900-1920 piece extrapolated to
+    // 1800 gave -7.4 h: the sun 0.3 degrees off).
+    if (y < 1860) {
+        const double t = y - 1800;
+        return 13.72 + t * (-0.332447 +
+                            t * (0.0068612 +
+                                 t * (0.0041116 + t * (-0.00037436 + t * (0.0000121272 +
+                                                                          t * (-0.0000001699 + t * 0.000000000875))))));
+    }
+    if (y < 1900) {
+        const double t = y - 1860;
+        return 7.62 + t * (0.5737 + t * (-0.251754 + t * (0.01680668 + t * (-0.0004473624 + t / 233174.0))));
+    }
     if (y < 1920) {
         double t = y - 1900;
         return -2.79 + 1.494119 * t - 0.0598939 * t * t + 0.0061966 * t * t * t - 0.000197 * t * t * t * t;

@@ -70,6 +70,14 @@ TEST(SunPosition, JulianDates) {
     // ~2 s high by 2020 (0.00003 deg of solar longitude: harmless).
     EXPECT_NEAR(delta_t_seconds(2000.0), 63.83, 0.2);
     EXPECT_NEAR(delta_t_seconds(2020.0), 69.36, 3.0);
+    // Years from 1800 are accepted: the 1900-1920 piece extrapolated gave -26600 s at 1800 (the sun
+    // 0.3 degrees off). Espenak & Meeus's table: 13.7 s at 1800, 7.1 at 1850, -5.4 at 1880, -2.7 at
+    // 1900; the pieces meet at 1860 and 1900.
+    EXPECT_NEAR(delta_t_seconds(1800.0), 13.7, 0.3);
+    EXPECT_NEAR(delta_t_seconds(1850.0), 7.1, 0.3);
+    EXPECT_NEAR(delta_t_seconds(1880.0), -5.4, 0.4);
+    EXPECT_NEAR(delta_t_seconds(1900.0), -2.7, 0.3);
+    for (double y : {1860.0, 1900.0}) EXPECT_NEAR(delta_t_seconds(y - 1e-9), delta_t_seconds(y), 0.2) << y;
 }
 
 // NREL SPA (Reda & Andreas 2004, NREL/TP-560-34302) reference case: 2003-10-17 12:30:30 at UTC-7,
