@@ -2,6 +2,7 @@
 
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -49,6 +50,24 @@ double window_luminance(const Image& im, int x, int y, int r = 2) {
     return sum / std::max(n, 1);
 }
 
+// A diverging colormap for cv::applyColorMap (256 x 1 BGR): ColorBrewer's RdBu from dark blue (0:
+// the cloudy sky darker) through white (128: no change) to dark red (255: brighter). The cyclic
+// TWILIGHT_SHIFTED used before ended in the same dark purple at -3 and +3 stops.
+cv::Mat diverging_colormap() {
+    static const int rgb[11][3] = {{5, 48, 97},     {33, 102, 172},  {67, 147, 195},  {146, 197, 222},
+                                   {209, 229, 240}, {247, 247, 247}, {253, 219, 199}, {244, 165, 130},
+                                   {214, 96, 77},   {178, 24, 43},   {103, 0, 31}};
+    cv::Mat lut(256, 1, CV_8UC3);
+    for (int k = 0; k < 256; ++k) {
+        const double x = k / 255.0 * 10;
+        const int a = std::min(int(x), 9);
+        const double f = x - a;
+        for (int c = 0; c < 3; ++c)
+            lut.at<cv::Vec3b>(k, 0)[2 - c] = uint8_t(std::lround((1 - f) * rgb[a][c] + f * rgb[a + 1][c]));
+    }
+    return lut;
+}
+
 // The difference image (BGR, 8 bit) with its colour bar below it: the colormap from -3 to +3 stops
 // with labelled ticks. An image under 240 px wide is first enlarged by a whole factor (nearest
 // pixel), so the bar's labels and title fit (at 64 px they ran into each other and the title was cut).
@@ -61,7 +80,7 @@ cv::Mat with_colour_bar(const cv::Mat& image) {
     for (int x = 0; x < ramp.cols; ++x)
         ramp.at<uint8_t>(0, x) = uint8_t(std::lround(255.0 * x / std::max(1, ramp.cols - 1)));
     cv::Mat ramp_rgb;
-    cv::applyColorMap(ramp, ramp_rgb, cv::COLORMAP_TWILIGHT_SHIFTED);
+    cv::applyColorMap(ramp, ramp_rgb, diverging_colormap());
     cv::Mat panel(panel_h, w, CV_8UC3, cv::Scalar(255, 255, 255));
     for (int y = 4; y < 4 + bar_h; ++y) ramp_rgb.row(0).copyTo(panel(cv::Rect(margin, y, ramp.cols, 1)));
     const double scale = 0.4;
@@ -141,8 +160,24 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
                     "so the clear sky knows where the sun is");
     LoadedScene scene = load_scene(o.scene, float(w) / h);
     check_outputs_are_not_inputs(outputs, scene.scene.source_files);  // a texture beside the scene
+    // Each output writable before any rendering (a folder in the way was found after it all).
+    for (size_t k = 1; k < outputs.size(); ++k) check_output_file(outputs[k]);
     const OutputFolder folder(o.out);  // removed again if this run fails before writing anything
     const int sky_n = cloudy.step(0)->resolution;
+    // A sky in units of its own is compared with the clear sky brought to its scale: its figures
+    // are then not lux. Said, as is a sky that does not say what its units are.
+    if (!reports_silenced() && cloudy.step(0)->units != kAbsoluteRadiance) {
+        if (cloudy.radiance_scale() != 1.0)
+            std::fprintf(stderr,
+                         "dynsky: note: the clear sky is given the cloudy sky's scale (x %.3g): the illuminance "
+                         "figures are 683 x its units, not lux\n",
+                         cloudy.radiance_scale());
+        else
+            std::fprintf(stderr,
+                         "dynsky: note: %s does not record its units: its pixels are taken as W m^-2 sr^-1 (they are "
+                         "within 1.5 x the clear-sky model's)\n",
+                         so.sky.c_str());
+    }
     auto clear_at = [&](double t) {
         ClearSkyParams p;
         p.sun_direction = *cloudy.sun_direction_at(t);
@@ -208,7 +243,7 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
             ratio8.at<uint8_t>(y, x) = uint8_t(std::lround(std::clamp(128.0 + stops / 3.0 * 127.0, 0.0, 255.0)));
         }
     cv::Mat coloured;
-    cv::applyColorMap(ratio8, coloured, cv::COLORMAP_TWILIGHT_SHIFTED);
+    cv::applyColorMap(ratio8, coloured, diverging_colormap());
     cv::Mat with_bar = with_colour_bar(coloured);
     diff.width = with_bar.cols, diff.height = with_bar.rows;
     diff.pixels.assign(size_t(diff.width) * diff.height * 3, 0.0f);
@@ -219,13 +254,14 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
         }
     write_image((fs::path(o.out) / "side_by_side.png").string(), side);
     write_image((fs::path(o.out) / "difference.png").string(), diff);
+    const char* lux = cloudy.radiance_scale() != 1.0 ? "(683 x the sky's units)" : "lx";
     if (!reports_silenced())
         std::fprintf(
             stderr,
             "wrote %s/side_by_side.png (clear | cloudy, same exposure %.2f EV) and difference.png (log2 cloudy/clear, "
-            "-3..+3 stops, colormap TWILIGHT_SHIFTED: mid = no change, colour bar below)\n"
-            "global horizontal illuminance at t=0: clear %.0f lx, cloudy %.0f lx\n",
-            o.out.c_str(), ev, 683.0 * luminance(e_clear), 683.0 * luminance(e_cloudy));
+            "-3..+3 stops: blue darker under the clouds, white no change, red brighter; colour bar below)\n"
+            "global horizontal illuminance at t=0: clear %.0f %s, cloudy %.0f %s\n",
+            o.out.c_str(), ev, 683.0 * luminance(e_clear), lux, 683.0 * luminance(e_cloudy), lux);
 
     // Illuminance over time at the chosen points, under both skies (the sun follows the clock).
     std::string csv = (fs::path(o.out) / "illuminance.csv").string();

@@ -1,6 +1,7 @@
 #include "frame/scene_spec.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "renderer/builtin_scene.h"
@@ -25,7 +26,7 @@ LoadedScene load_scene(const SceneSpec& o, float aspect_ratio, bool print_warnin
         if (print_warnings)
             for (const std::string& w : out.scene.warnings) std::fprintf(stderr, "dynsky: warning: %s\n", w.c_str());
     }
-    choose_camera(o, aspect_ratio, &out);
+    choose_camera(o, aspect_ratio, &out, print_warnings);
     return out;
 }
 
@@ -37,11 +38,11 @@ LoadedScene pose_scene(const SceneSpec& o, AnimatedGltf& file, const std::string
     out.scene = file.pose(std::max(0.0, o.animation_time));
     if (print_warnings)
         for (const std::string& w : out.scene.warnings) std::fprintf(stderr, "dynsky: warning: %s\n", w.c_str());
-    choose_camera(o, aspect_ratio, &out);
+    choose_camera(o, aspect_ratio, &out, print_warnings);
     return out;
 }
 
-void choose_camera(const SceneSpec& o, float aspect_ratio, LoadedScene* loaded) {
+void choose_camera(const SceneSpec& o, float aspect_ratio, LoadedScene* loaded, bool print_warnings) {
     LoadedScene& out = *loaded;
     if (out.scene.instances.empty()) throw Error(o.scene + ": the scene has no triangles to render");
     if (out.scene.cameras.empty() && o.camera == 0) {
@@ -70,6 +71,21 @@ void choose_camera(const SceneSpec& o, float aspect_ratio, LoadedScene* loaded) 
                         "') is not placed on any node of the scene, or was skipped (see the warnings): nothing "
                         "says where it looks from");
         out.camera = *it;
+    }
+    // The file's camera frames another aspect than the image: its vertical extent is kept (glTF's
+    // yfov, ymag), so the image shows more or less to the sides than the camera frames. Said, with
+    // the size that frames it as the file does (the camera's aspectRatio and xmag were silently
+    // ignored).
+    if (print_warnings && o.look_at.empty() && out.camera.aspect_ratio > 0 && aspect_ratio > 0 &&
+        std::abs(out.camera.aspect_ratio / aspect_ratio - 1) > 0.01) {
+        const int height = std::max(1, int(std::lround(960 / out.camera.aspect_ratio)));
+        std::fprintf(stderr,
+                     "dynsky: warning: camera '%s' frames an aspect of %.3g (%s) but the image's is %.3g: its "
+                     "vertical extent is kept, so the image shows %s to the sides than the camera; give --res "
+                     "960x%d (or any size of aspect %.3g) to frame it as the file does\n",
+                     out.camera.name.c_str(), out.camera.aspect_ratio,
+                     out.camera.orthographic ? "xmag / ymag" : "aspectRatio", aspect_ratio,
+                     aspect_ratio > out.camera.aspect_ratio ? "more" : "less", height, out.camera.aspect_ratio);
     }
     if (!o.look_at.empty() && o.look_at.size() != 6)
         throw Error("--look-at takes 6 numbers, eye_x,eye_y,eye_z,target_x,target_y,target_z (got " +

@@ -45,6 +45,6 @@ LoadedScene pose_scene(const SceneSpec& spec, AnimatedGltf& file, const std::str
 
 // The camera of a loaded scene as the spec asks (its glTF camera, one framing the bounds, the
 // look-at and field-of-view overrides); throws for a scene without triangles or a bad camera.
-void choose_camera(const SceneSpec& spec, float aspect_ratio, LoadedScene* loaded);
+void choose_camera(const SceneSpec& spec, float aspect_ratio, LoadedScene* loaded, bool print_warnings = true);
 
 }  // namespace dynsky

@@ -172,7 +172,21 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
         }
         input.time_seconds = 0;
         if (input.source.empty()) input.source = sky_file;
-        scale = bring_to_model_scale(&input, &motion.previous);
+        std::optional<Vec3d> clock_sun;
+        if (clock) clock_sun = compute_sun_position(clock->start, clock->where).direction();
+        // The clock's sun replaces the one the file records (SkyTimeline): said where they are far
+        // apart, a photograph's --time given without its --lat/--lon (Paris by default) lit the
+        // clear sky from the west while the photograph's light came from the east.
+        if (clock_sun && input.sun_direction && clock_sun->y() > 0) {
+            const double apart = std::acos(std::clamp(clock_sun->dot(input.sun_direction->cast<double>()), -1.0, 1.0)) *
+                                 180 / kPiD;
+            if (apart > 3 && !reports_silenced())
+                std::fprintf(stderr,
+                             "dynsky: warning: %s records its sun %.0f degrees from where --time, --lat and --lon put "
+                             "it: the clock's sun is used (give the place and time the sky was taken at)\n",
+                             sky_file.c_str(), apart);
+        }
+        scale = bring_to_model_scale(&input, &motion.previous, clock_sun);
         if (scale.apply && !reports_silenced())
             std::fprintf(stderr,
                          "dynsky: note: %s is %s: its clouds are moved at the model's scale and its frames given "

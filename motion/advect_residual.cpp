@@ -639,10 +639,20 @@ void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3
         cv::Mat weight3;
         cv::merge(std::vector<cv::Mat>{weight, weight, weight}, weight3);
         masked = start_.mul(weight3);
-        const double sigma = 20.0 / 180.0 * start_.rows;
+        // Blurred at most at 256 px and brought back up (a 20-degree blur holds nothing finer): at
+        // the sky's own size the blur's cost grew as N^3, and one step of a 4096 px overcast did
+        // not end in 5 minutes.
+        const int small = std::min(start_.rows, 256);
+        const cv::Size small_size(small, small);
+        if (small < start_.rows) {
+            cv::resize(masked, masked, small_size, 0, 0, cv::INTER_AREA);
+            cv::resize(weight3, weight3, small_size, 0, 0, cv::INTER_AREA);
+        }
+        const double sigma = 20.0 / 180.0 * small;
         cv::GaussianBlur(masked, blurred, cv::Size(), sigma, sigma, cv::BORDER_CONSTANT);
         cv::GaussianBlur(weight3, spread, cv::Size(), sigma, sigma, cv::BORDER_CONSTANT);
         cv::divide(blurred, cv::max(spread, 1e-6), background);
+        if (small < start_.rows) cv::resize(background, background, start_.size(), 0, 0, cv::INTER_LINEAR);
         background.setTo(cv::Scalar::all(0), ~disc_big_);
     } else if (!given.empty()) {
         // Where the model's clear sky clips (the sun's aureole) the start was filled in too: there

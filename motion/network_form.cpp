@@ -39,6 +39,7 @@ SkyImage from_network_form(const cv::Mat& image, const SkyImage& like, const Net
     out.time_seconds = like.time_seconds;
     out.sun_direction = like.sun_direction;
     out.source = like.source;
+    out.units = like.units;
     return out;
 }
 

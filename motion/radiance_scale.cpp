@@ -82,8 +82,22 @@ void scale_radiance(SkyImage* sky, double factor) {
     for (float& v : sky->rgb) v *= f;
 }
 
-RadianceScale bring_to_model_scale(SkyImage* sky, std::shared_ptr<const SkyImage>* previous) {
-    const RadianceScale scale = measure_radiance_scale(*sky);
+RadianceScale bring_to_model_scale(SkyImage* sky, std::shared_ptr<const SkyImage>* previous,
+                                   const std::optional<Vec3d>& sun_if_unrecorded) {
+    RadianceScale scale;
+    if (!sky->sun_direction && sun_if_unrecorded) {
+        SkyImage with_sun = *sky;
+        with_sun.sun_direction = sun_if_unrecorded->cast<float>();
+        scale = measure_radiance_scale(with_sun);
+    } else {
+        scale = measure_radiance_scale(*sky);
+    }
+    // Measured on its clear pixels the scale holds whatever the file says (a sky scaled by hand keeps
+    // its attributes); on an overcast's mean it does not: a dark overcast is 0.3 x the clear-sky
+    // model's radiance because it is dark, and moved at the model's scale it read as a thinner cloud
+    // (`compare` darkened its clear sky to match). A sky that says it is W m^-2 sr^-1 and shows
+    // little clear sky is taken at its word.
+    if (sky->units == kAbsoluteRadiance && scale.clear_weight < 0.5) scale.apply = false;
     if (!scale.apply) return scale;
     scale_radiance(sky, 1 / scale.factor);
     if (*previous) {  // the same units as the sky: one factor for both

@@ -20,6 +20,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "sky/hdr_recovery.h"
@@ -50,8 +51,11 @@ RadianceScale measure_radiance_scale(const SkyImage& sky, const RadianceScalePar
 void scale_radiance(SkyImage* sky, double factor);
 
 // What `sky predict` and the timeline do with the sky they move and its previous frame (if any):
-// measures the sky's scale and, when it is to be applied, divides both by it. The caller gives the
-// results back multiplied by the returned factor.
-RadianceScale bring_to_model_scale(SkyImage* sky, std::shared_ptr<const SkyImage>* previous);
+// measures the sky's scale (against `sun_if_unrecorded` when the sky records no sun: a clock's)
+// and, when it is to be applied, divides both by it. Not for a sky in kAbsoluteRadiance units measured
+// mostly on its mean (an overcast: dark because it is dark). The
+// caller gives the results back multiplied by the returned factor.
+RadianceScale bring_to_model_scale(SkyImage* sky, std::shared_ptr<const SkyImage>* previous,
+                                   const std::optional<Vec3d>& sun_if_unrecorded = std::nullopt);
 
 }  // namespace dynsky

@@ -14,7 +14,10 @@
 
 #include "motion/advection.h"
 #include "motion/radiance_scale.h"
+#include "motion/network_form.h"
+#include "sky/clear_sky.h"
 #include "sky/fisheye.h"
+#include "util/progress.h"
 #include "util/error.h"
 
 namespace dynsky {
@@ -156,6 +159,57 @@ const SunPatch& SkyTimeline::covered_input_sun(int n) {
     return clear_sun_;
 }
 
+Color SkyTimeline::relight_to_clock(double t, SkyImage* out) {
+    if (!clock_ || model_->makes_own_sun() || !(t > 0)) return Color::Ones();
+    const Vec3d start = *sun_direction_at(0.0), now = *sun_direction_at(t);
+    const int n = out->resolution;
+    ClearSkyParams p;
+    p.sun_disc = false;
+    // The background of a sky without a disc: pixel centres only (as make_clear_sky), no warning
+    // per frame for a sun below the horizon (said once below).
+    auto background = [&](const Vec3d& sun) {
+        p.sun_direction = sun;
+        const ClearSkyModel model(p, false);
+        std::vector<float> rgb(size_t(n) * n * 3, 0.0f);
+        tbb::parallel_for(0, n, [&](int j) {
+            for (int i = 0; i < n; ++i) {
+                const Vec2 uv = fisheye::pixel_center_uv(i, j, n);
+                if (uv.squaredNorm() > 1.0f) continue;
+                const Color c = model.sky_radiance(fisheye::direction_from_uv(double(uv.x()), double(uv.y())));
+                for (int k = 0; k < 3; ++k) rgb[(size_t(j) * n + i) * 3 + k] = c[k];
+            }
+        });
+        return rgb;
+    };
+    if (relight_n_ != n) {
+        relight_turbidity_ = clear_sky_turbidity(*step(0), start);
+        p.turbidity = relight_turbidity_;
+        relight_start_ = background(start);
+        p.sun_direction = start, p.sun_disc = true;
+        relight_sun_start_ = ClearSkyModel(p, false).sun_irradiance();
+        p.sun_disc = false;
+        relight_n_ = n;
+    }
+    p.turbidity = relight_turbidity_;
+    const std::vector<float> later = background(now);
+    for (size_t k = 0; k < later.size(); ++k)
+        if (relight_start_[k] > 0) out->rgb[k] *= std::clamp(later[k] / relight_start_[k], 0.01f, 100.0f);
+    p.sun_direction = now, p.sun_disc = true;
+    const ClearSkyModel at_t(p, false);
+    if (!relight_warned_ && now.y() < 0) {
+        relight_warned_ = true;
+        if (!reports_silenced())
+            std::fprintf(stderr,
+                         "dynsky: warning: the sun sets %.0f s into the sky timeline: the clear-sky model holds it "
+                         "at the horizon from there (twilight and night are outside it)\n",
+                         t);
+    }
+    Color factor = Color::Ones();
+    for (int k = 0; k < 3; ++k)
+        factor[k] = relight_sun_start_[k] > 0 ? at_t.sun_irradiance()[k] / relight_sun_start_[k] : 1.0f;
+    return factor;
+}
+
 std::optional<Vec3d> SkyTimeline::sun_direction_at(double t) const {
     if (clock_) return compute_sun_position(add_seconds(clock_->start, t), clock_->where).direction();
     return input_sun_;
@@ -187,7 +241,11 @@ std::shared_ptr<const SkyImage> SkyTimeline::step(int i) {
         auto t0 = std::chrono::steady_clock::now();
         double t_next = double(steps_.size()) * dt_;
         auto sun = sun_direction_at(t_next);
-        if (sun) model_->set_sun_direction(*sun);
+        // A model moving the input's sky keeps the input's sun (its clear background): the clock's
+        // change is put on every frame by relight_to_clock. Given the clock's sun, the model read
+        // the input's glow, left where it was, as cloud beside the moved background and carried
+        // white crescents off the sun's side after ten minutes of a clear sky.
+        if (sun) model_->set_sun_direction(model_->makes_own_sun() ? *sun : *sun_direction_at(0.0));
         SkyImage next = model_->step(steps_, dt_);
         if (next.resolution != steps_[0]->resolution)
             throw Error("sky timeline: model '" + model_->name() + "' changed the sky's resolution");
@@ -288,6 +346,12 @@ void SkyTimeline::sky_at(double t, SkyImage* out) {
     out->time_seconds = input_time_ + t;
     auto sun = sun_direction_at(t);
     last_sun_weight_ = 1.0;
+    const Color sun_factor = relight_to_clock(t, out);
+    auto relit = [&](const SunPatch& patch) {
+        SunPatch p = patch;
+        for (Color& e : p.excess) e *= sun_factor;
+        return p;
+    };
     if (sun) {
         out->sun_direction = sun->cast<float>();
         // A model that moves the input's clouds over the sun dims it (models with their own sun
@@ -307,7 +371,7 @@ void SkyTimeline::sky_at(double t, SkyImage* out) {
             // Where the input's cover at the sun reads as its share (the usual case) this is
             // t_frame itself.
             last_sun_weight_ = std::clamp(input_sun_share() + t_frame - covered_input_transmittance_, 0.0, 1.0);
-            insert_sun(out, clear_sun_, *sun, last_sun_weight_);
+            insert_sun(out, relit(clear_sun_), *sun, last_sun_weight_);
         } else {
             if (!model_->makes_own_sun() && !at_input && !suns_[0].empty()) {
                 last_sun_weight_ = relative_transmittance(estimate_sun_transmittance(*out, *sun),
@@ -316,8 +380,8 @@ void SkyTimeline::sky_at(double t, SkyImage* out) {
                 // over the sun when either says so.
                 if (auto w = model_sun_weight(i, s, *sun)) last_sun_weight_ = std::min(last_sun_weight_, *w);
             }
-            insert_sun(out, suns_[size_t(i)], *sun, (1.0 - s) * last_sun_weight_);
-            if (s > 0) insert_sun(out, suns_[size_t(i) + 1], *sun, s * last_sun_weight_);
+            insert_sun(out, relit(suns_[size_t(i)]), *sun, (1.0 - s) * last_sun_weight_);
+            if (s > 0) insert_sun(out, relit(suns_[size_t(i) + 1]), *sun, s * last_sun_weight_);
         }
     }
     if (radiance_scale_ != 1.0) scale_radiance(out, radiance_scale_);  // back to the input's units

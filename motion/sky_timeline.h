@@ -173,6 +173,19 @@ class SkyTimeline {
     std::optional<double> input_sun_share_;
     double input_sun_share();
     double input_time_ = 0;
+    // With a clock, the clear sky under the clouds follows the sun: a frame at t is the moved sky
+    // times the Hosek-Wilkie background (no sun, the input's turbidity) at the clock's sun at t
+    // over the one at t = 0, pixel by pixel and channel by channel, and its sun is put back times
+    // the model's solar irradiance at t over at 0 (the models move the t = 0 sky: an animation
+    // through sunset kept the afternoon's sky, 4 x too bright, and its sun). Not for models that
+    // make their own sky (procedural). Returns the sun's factor; the start's background is kept
+    // per resolution.
+    Color relight_to_clock(double t, SkyImage* out);
+    int relight_n_ = 0;
+    std::vector<float> relight_start_;
+    double relight_turbidity_ = 3;
+    Color relight_sun_start_ = Color::Ones();
+    bool relight_warned_ = false;
     SkyTimelineTimings timings_;
     std::string stored_folder_;  // a loaded timeline's folder (steps and flows read from there)
     int stored_last_step_ = -1;

@@ -27,7 +27,8 @@ struct SunPatch {
 };
 
 // Finds the sun near sky.sun_direction (pixels within 1 degree + 2 px brighter than 20x the
-// surrounding median), inpaints them (cv::inpaint, per channel on log radiance) and returns the
+// surrounding median), fills them with the clear sky's background of that sun times the sky's median
+// ratio to it around them (so the fill keeps the aureole's peak) and returns the
 // cut-out. No sun direction, or no bright pixels there: an empty patch and the sky unchanged.
 SunPatch remove_sun(SkyImage* sky);
 

@@ -116,7 +116,8 @@ struct Camera {
     float yfov = 0.8f;                                              // radians (perspective)
     float aspect_ratio = 0.0f;                                      // 0: take it from the image resolution
     // glTF orthographic camera: parallel rays along -Z over a view half ymag metres tall (the
-    // image's aspect decides the width, as it does for perspective cameras; glTF's xmag is ignored).
+    // image's aspect decides the width, as it does for perspective cameras; an xmag / ymag other than
+    // the image's aspect is warned about: frame/scene_spec.cpp choose_camera).
     bool orthographic = false;
     float ymag = 1.0f;
     int file_index = -1;  // its index in the glTF file's cameras array (-1: not from a file)

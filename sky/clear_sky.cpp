@@ -138,6 +138,7 @@ SkyImage make_clear_sky(const ClearSkyParams& params, int resolution) {
     source << "hosek-wilkie turbidity=" << params.turbidity << " albedo=" << params.ground_albedo
            << (params.sun_disc ? "" : " no-sun");
     sky.source = source.str();
+    sky.units = kAbsoluteRadiance;
     return sky;
 }
 

@@ -539,6 +539,7 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     }
     out.sun_direction = rep.used_sun.cast<float>();
     out.source = in.source + " (hdr: " + rep.method + ")";
+    out.units = kAbsoluteRadiance;
     if (report_out) *report_out = rep;
     return out;
 }

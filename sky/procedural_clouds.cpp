@@ -407,6 +407,7 @@ struct ProceduralSky::Impl {
         out.time_seconds = time_s;
         out.sun_direction = sun.cast<float>();
         out.source = "procedural";
+        out.units = kAbsoluteRadiance;
         if (flow_out) {
             *flow_out = Image(n, n, 3);
             flow_out->metadata.numbers["dynsky:time"] = time_s;

@@ -62,6 +62,7 @@ void write_sky_metadata(const SkyImage& sky, ImageMetadata* m) {
         m->numbers["dynsky:sun_z"] = sky.sun_direction->z();
     }
     if (!sky.source.empty()) m->strings["dynsky:source"] = sky.source;
+    if (!sky.units.empty()) m->strings["dynsky:units"] = sky.units;
 }
 
 Image sky_to_image(const SkyImage& sky) {
@@ -94,6 +95,7 @@ void read_sky_metadata(const ImageMetadata& metadata, const std::string& name, S
         sky.sun_direction = d.normalized().cast<float>();
     }
     if (auto it = metadata.strings.find("dynsky:source"); it != metadata.strings.end()) sky.source = it->second;
+    if (auto it = metadata.strings.find("dynsky:units"); it != metadata.strings.end()) sky.units = it->second;
 }
 
 std::array<int, 3> rgb_channel_indices(const Image& image, const std::string& name) {

@@ -11,6 +11,8 @@
 
 namespace dynsky {
 
+inline constexpr const char* kAbsoluteRadiance = "W m^-2 sr^-1";
+
 struct SkyImage {
     int resolution = 0;                 // N: the image is N x N
     std::vector<float> rgb;             // N * N * 3, row-major, row 0 at the top (north); 0 outside the disc
@@ -18,6 +20,10 @@ struct SkyImage {
     bool has_clock = false;             // time_seconds was read from the file (dynsky:time), 0 included
     std::optional<Vec3> sun_direction;  // world frame, unit, if known
     std::string source;                 // what made it ("hosek-wilkie", "photo:FILE", "procedural", ...)
+    // kAbsoluteRadiance where what made it says the pixels are W m^-2 sr^-1 (the clear and procedural
+    // skies, a calibrated import; "dynsky:units"), else "": units unknown (an HDRI, an uncalibrated
+    // photograph), measured against the clear-sky model where it matters (motion/radiance_scale.h).
+    std::string units;
 
     SkyImage() = default;
     explicit SkyImage(int n) : resolution(n), rgb(size_t(n) * n * 3, 0.0f) {}

@@ -144,6 +144,7 @@ TEST(OutputsCli, AnUnwritableOutputIsRefusedBeforeAnyWork) {
     std::ofstream(dir + "/afile") << "x\n";
     fs::create_directories(dir + "/taken.exr");
     fs::create_directories(dir + "/report.md");
+    fs::create_directories(dir + "/cmp/illuminance.png");  // compare found it after all its rendering
     struct Case {
         std::string args, message;
     } cases[] = {
@@ -151,6 +152,8 @@ TEST(OutputsCli, AnUnwritableOutputIsRefusedBeforeAnyWork) {
         {"render builtin --res 16x9 --spp 1 -q -o " + dir + "/taken.exr", "a folder of that name is in the way"},
         {"sky evaluate --model advect --no-paper --sequence arm-clear --limit 1 --res 64 --horizons 1 -q -o " + dir +
              "/report.md",
+         "a folder of that name is in the way"},
+        {"compare builtin --res 16x9 --spp 1 --chart-res 8x4 --chart-spp 1 -q -o " + dir + "/cmp",
          "a folder of that name is in the way"},
     };
     for (const Case& c : cases) {
@@ -160,6 +163,7 @@ TEST(OutputsCli, AnUnwritableOutputIsRefusedBeforeAnyWork) {
     }
     EXPECT_FALSE(fs::exists(dir + "/report.csv"));  // nothing of the report written beside it
     EXPECT_FALSE(fs::exists(dir + "/report_64.csv"));
+    EXPECT_FALSE(fs::exists(dir + "/cmp/clear.exr"));  // nothing rendered
     fs::remove_all(dir);
 }
 

@@ -89,7 +89,8 @@ TEST(ReadmeCommands, AnimateFromAnotherFolder) {
 
 TEST(ReadmeCommands, SkyProceduralAndImport) {
     const std::string dir = test::temp_dir("readme_sky");
-    auto r = in_folder(dir, "sky procedural --cloud-seed 1 --coverage 0.5 --duration 60 --dt 10 --sky-res 512 --out clouds/");
+    auto r = in_folder(
+        dir, "sky procedural --cloud-seed 1 --coverage 0.5 --duration 60 --dt 10 --sky-res 512 --out clouds/");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_TRUE(fs::exists(fs::path(dir) / "clouds"));
     if (!test::shared_available()) GTEST_SKIP() << "../shared missing: no photograph to import";

@@ -164,6 +164,28 @@ TEST(RenderCli, APlaceWithoutASkyMakesTheClearSkyThere) {
     fs::remove_all(dir);
 }
 
+// A file's camera framing another aspect than the image (glTF aspectRatio, xmag / ymag) had it
+// silently ignored: the image showed 3.6 m across where the file's camera frames 2 m. Its vertical
+// extent is still kept (as viewers do), now with a warning naming the size that frames it as the file
+// does; none where the aspects agree.
+TEST(RenderCli, ACameraOfAnotherAspectIsToldWithTheSizeThatFramesIt) {
+    DYNSKY_REQUIRE_SHARED();
+    const std::string dir = test::temp_dir("render_aspect");
+    const std::string scene = test::shared_path("scenes/Cameras/Cameras.gltf");
+    for (const std::string& camera : {"0", "1"}) {  // perspective aspectRatio 1, orthographic xmag = ymag
+        auto r = test::run_command(exe() + " render " + scene + " --camera " + camera + " --res 32x18 --spp 1 --out " +
+                                   dir + "/wide.exr 2>&1");
+        ASSERT_EQ(r.exit_code, 0) << r.output;
+        EXPECT_NE(r.output.find("frames an aspect of 1 "), std::string::npos) << camera << "\n" << r.output;
+        EXPECT_NE(r.output.find("--res 960x960"), std::string::npos) << r.output;
+        r = test::run_command(exe() + " render " + scene + " --camera " + camera + " --res 24x24 --spp 1 --out " + dir +
+                              "/square.exr 2>&1");
+        ASSERT_EQ(r.exit_code, 0) << r.output;
+        EXPECT_EQ(r.output.find("frames an aspect"), std::string::npos) << r.output;
+    }
+    fs::remove_all(dir);
+}
+
 TEST(RenderCli, WritesExrWithMetadataAndPng) {
     std::string dir = test::temp_dir("render");
     Outcome o = render("builtin --seed 5", dir + "/plaza.exr");

@@ -155,6 +155,24 @@ TEST(SkyModelCli, PredictTakesALatLongHdriAsRenderDoes) {
 // A sky in other units than the models' (an EXR scaled by hand, a relative HDRI) moves as the same
 // sky at scale does and keeps its units: a clear sky x 3 lost its sun in one step and x 1e-6 came out
 // 1400 times too bright (motion/radiance_scale.h). Also through animate's timeline.
+// A sky file's --time given without its place (Paris by default), or of another day, moved the sun
+// the file records to the clock's without a word: the clear sky lit from the west while the
+// photograph's light came from the east. Said where they are more than 3 degrees apart.
+TEST(SkyModelCli, ASunTheClockMovesFarFromTheFilesIsTold) {
+    const std::string dir = test::temp_dir("sun_conflict");
+    auto r = test::run_command(dynsky(
+        "sky clear --lat 48.8566 --lon 2.3522 --time 2026-06-21T16:00:00Z --sky-res 32 -q -o " + dir + "/paris.exr"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const std::string timeline = "sky timeline --sky " + dir + "/paris.exr --duration 30 --model advect -o " + dir;
+    r = test::run_command(dynsky(timeline + "/a --time 2026-06-21T08:00:00Z 2>&1"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("records its sun"), std::string::npos) << r.output;
+    r = test::run_command(dynsky(timeline + "/b --time 2026-06-21T16:00:00Z 2>&1"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(r.output.find("records its sun"), std::string::npos) << r.output;
+    fs::remove_all(dir);
+}
+
 TEST(SkyModelCli, SkiesInOtherUnitsMoveAsAtScaleAndKeepTheirUnits) {
     const std::string dir = test::temp_dir("predict_units");
     auto r = test::run_command(

@@ -53,6 +53,23 @@ TEST(RadianceScale, SkiesAtScaleMeasureOneOthersTheirFactor) {
     const RadianceScale o = measure_radiance_scale(overcast);
     EXPECT_LT(o.clear_weight, 1.0);
     EXPECT_NEAR(measure_radiance_scale(scaled(overcast, 1e-4)).factor / 1e-4, o.factor, 1e-3 * o.factor);
+    // An overcast that says it is W m^-2 sr^-1 is dark because it is dark: taken at its word (moved
+    // at the model's scale it read as a thinner cloud, and `compare` darkened its clear sky by the
+    // same factor). A clear sky scaled by hand keeps its attributes, but its clear pixels measure
+    // the scale: moved at the model's scale still.
+    ASSERT_EQ(overcast.units, kAbsoluteRadiance);
+    for (const bool says : {true, false}) {
+        SkyImage dark = scaled(overcast, 0.3);
+        if (!says) dark.units.clear();
+        std::shared_ptr<const SkyImage> none;
+        EXPECT_EQ(bring_to_model_scale(&dark, &none).apply, !says) << says;
+    }
+    {
+        SkyImage bright = scaled(clear_sky(35), 3);
+        ASSERT_EQ(bright.units, kAbsoluteRadiance);
+        std::shared_ptr<const SkyImage> none;
+        EXPECT_TRUE(bring_to_model_scale(&bright, &none).apply);
+    }
     // No sun to compare with (below the horizon, or unknown and not visible): not measured.
     SkyImage night = clear_sky(10);
     night.sun_direction = Vec3(0.0f, -0.5f, 0.866f);
