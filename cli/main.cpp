@@ -5,9 +5,12 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <filesystem>
 #include <functional>
 #include <new>
 #include <string>
+
+#include <opencv2/core.hpp>
 
 #include "cli/commands.h"
 #include "cli/exit_codes.h"
@@ -18,6 +21,30 @@
 #include "util/progress.h"
 
 namespace {
+
+// Out of memory: what the command was asked to hold, so the message says what to make smaller. The
+// command's input files with their sizes (a scene, a sky, photographs), and the options that size
+// its images.
+void out_of_memory(int argc, char** argv) {
+    std::string command = argc > 1 ? argv[1] : "dynsky", inputs;
+    if (argc > 2 && (command == "sky" || command == "bench") && argv[2][0] != '-')
+        command += std::string(" ") + argv[2];
+    for (int i = 2; i < argc; ++i) {
+        std::error_code ec;
+        const std::string word = argv[i];
+        if (word.empty() || word[0] == '-' || !std::filesystem::is_regular_file(word, ec)) continue;
+        const auto bytes = std::filesystem::file_size(word, ec);
+        if (ec) continue;
+        char size[32];
+        std::snprintf(size, sizeof size, " (%.3g MB)", double(bytes) / 1e6);
+        inputs += (inputs.empty() ? "" : ", ") + word + size;
+    }
+    std::fprintf(stderr,
+                 "dynsky: error: out of memory in '%s': what it was asked for does not fit in the memory this "
+                 "process may use (the machine's, or a limit: ulimit -v, a container's)%s%s; ask for less: "
+                 "smaller images (--res, --sky-res, --width), a smaller scene or sky file, fewer textures\n",
+                 command.c_str(), inputs.empty() ? "" : "; its inputs: ", inputs.c_str());
+}
 
 // SIGINT/SIGTERM/SIGHUP: remove the output being written (nothing half-written stays; an animation's
 // frames written so far are kept and resume) and exit with kInterrupted.
@@ -101,9 +128,13 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "dynsky: %s: %s\n", code == dynsky::cli::kUsageError ? "usage error" : "error", e.what());
         return code;
     } catch (const std::bad_alloc&) {
-        std::fprintf(stderr,
-                     "dynsky: error: out of memory: the images asked for (--res, --sky-res, --width, the scene's "
-                     "textures) do not fit in this machine's memory; ask for smaller ones\n");
+        out_of_memory(argc, argv);
+        return dynsky::cli::kRuntimeError;
+    } catch (const cv::Exception& e) {
+        // OpenCV's allocations fail with its own exception, not bad_alloc: its raw text named no
+        // input and no option.
+        if (e.code == cv::Error::StsNoMem) out_of_memory(argc, argv);
+        else std::fprintf(stderr, "dynsky: error: OpenCV failed: %s\n", e.err.c_str());
         return dynsky::cli::kRuntimeError;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "dynsky: error: %s\n", e.what());

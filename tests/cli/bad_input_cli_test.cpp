@@ -929,5 +929,26 @@ TEST(BadInputCli, FourthAuditsTinyMovingSkiesAndMaskPhotosAreRefusedFirst) {
     fs::remove_all(dir);
 }
 
+// Out of memory (a memory limit, ulimit -v, as a farm node or container sets): OpenCV's failed
+// allocation came through as its raw text ("OpenCV(4.6.0) ./modules/core/src/alloc.cpp:73: error:
+// (-4:Insufficient memory)..."), naming no input; bad_alloc's message listed options the command
+// does not have. Now one message naming the command, its input files and sizes, and what to make
+// smaller. Not under the sanitizers (their shadow memory needs terabytes of address space).
+TEST(BadInputCli, OutOfMemorySaysWhatItWasAskedToHold) {
+    if (test::small_run()) GTEST_SKIP() << "ulimit -v and the sanitizers' shadow memory do not mix";
+    const std::string dir = test::temp_dir("oom");
+    auto r = dynsky("sky clear --lat 48.85 --lon 2.35 --time 2026-06-21T12:00:00Z --sky-res 2048 -q -o " + dir +
+                    "/big.exr");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    r = test::run_command("ulimit -v 900000; timeout 120 " + std::string(DYNSKY_EXE) + " sky predict --sky " + dir +
+                          "/big.exr --steps 1 -q -o " + dir + "/p 2>&1");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("out of memory in 'sky predict'"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("big.exr ("), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("OpenCV("), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/p/step_0001.exr"));
+    fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace dynsky
