@@ -307,6 +307,10 @@ AnimationReport render_animation(const AnimationSettings& o) {
     int rendered = 0, skipped = 0;
     std::shared_ptr<SkyImage> sky_buffers[2];
     bool warned_black = false;
+    // Time left, on terminals and in logs alike (a farm's log said nothing for minutes).
+    int to_render = 0;
+    for (int k = first; k <= last; ++k) to_render += keep[size_t(k)] ? 0 : 1;
+    const auto loop_start = std::chrono::steady_clock::now();
     for (int k = first; k <= last; ++k) {
         if (keep[size_t(k)]) {
             ++skipped;
@@ -377,9 +381,14 @@ AnimationReport render_animation(const AnimationSettings& o) {
         keep[size_t(k)] = 1;
 
         sum_sky += sky_s, sum_build += light.last_build_seconds(), sum_render += result.stats.seconds, ++rendered;
-        if (!o.quiet)
-            std::fprintf(stderr, "frame %d/%d t=%.3f s: sky %.1f ms, distribution %.1f ms, render %.1f ms\n", k,
-                         total - 1, t, sky_s * 1e3, light.last_build_seconds() * 1e3, result.stats.seconds * 1e3);
+        if (!o.quiet) {
+            const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
+            std::fprintf(stderr,
+                         "frame %d/%d t=%.3f s: sky %.1f ms, distribution %.1f ms, render %.1f ms; %d of %d rendered, "
+                         "%.0f s elapsed, about %.0f s left\n",
+                         k, total - 1, t, sky_s * 1e3, light.last_build_seconds() * 1e3, result.stats.seconds * 1e3,
+                         rendered, to_render, elapsed, elapsed / rendered * (to_render - rendered));
+        }
     }
     // An earlier, longer run's rows past this animation's last frame go (none rendered: no rewrite yet).
     if (!farm_task && fs::exists(timings)) record_timing(timings, -1, "", false, total);

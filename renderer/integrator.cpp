@@ -598,13 +598,16 @@ RenderResult PathIntegrator::render(const Camera& camera) const {
     const bool keep_extra = !result.relative_error.empty() || aovs.any();  // the pixels' PixelExtra
     // tan(yfov / 2) for perspective cameras, the half height for orthographic ones.
     const float tan_half = camera.orthographic ? camera.ymag : std::tan(camera.yfov / 2);
-    const float aspect = float(w) / h;  // the image decides; glTF aspectRatio only matters to rasterisers
+    // The image decides; a glTF aspectRatio other than the image's is warned about when the camera
+    // is chosen (frame/scene_spec.cpp), its vertical field of view kept.
+    const float aspect = float(w) / h;
     const int tiles_x = (rw + ts - 1) / ts, tiles_y = (rh + ts - 1) / ts, tiles = tiles_x * tiles_y;
     // Rounds of samples when a pixel may stop early (adaptive) or the clock may stop the render.
     const bool by_rounds = adaptive || settings_.time_limit_seconds > 0;
     const int round_spp = by_rounds ? std::max(1, std::min(settings_.round_spp, settings_.spp)) : settings_.spp;
     const int max_rounds = (settings_.spp + round_spp - 1) / round_spp;
     ProgressBar progress(tiles * max_rounds, "render", settings_.quiet);
+    progress.set_time_limit(settings_.time_limit_seconds);
     std::atomic<uint64_t> camera_rays{0}, extension_rays{0}, shadow_rays{0};
     auto start = std::chrono::steady_clock::now();
     const uint64_t pixel_seed = mix_bits(settings_.seed * 0x9E3779B97F4A7C15ULL + 1);

@@ -54,14 +54,20 @@ void ProgressBar::finish() {
     draw(done_.load(), true);
 }
 
-std::string format_progress(const std::string& label, double fraction, double elapsed) {
+std::string format_progress(const std::string& label, double fraction, double elapsed, double time_limit) {
     double frac = std::clamp(fraction, 0.0, 1.0);
     const int width = 30;
     int filled = int(frac * width);
     std::string bar(size_t(filled), '#');
     bar += std::string(size_t(width - filled), '.');
     char left[32] = "?";
-    if (frac > 0) std::snprintf(left, sizeof left, "%.1fs", elapsed * (1 - frac) / frac);
+    if (frac > 0) {
+        double seconds = elapsed * (1 - frac) / frac;
+        if (time_limit > 0) seconds = std::min(seconds, std::max(0.0, time_limit - elapsed));
+        std::snprintf(left, sizeof left, "%.1fs", seconds);
+    } else if (time_limit > 0) {
+        std::snprintf(left, sizeof left, "at most %.1fs", std::max(0.0, time_limit - elapsed));
+    }
     char line[256];
     std::snprintf(line, sizeof line, "%s [%s] %5.1f%%  %.1fs elapsed, %s left", label.c_str(), bar.c_str(), 100 * frac,
                   elapsed, left);
@@ -70,7 +76,7 @@ std::string format_progress(const std::string& label, double fraction, double el
 
 void ProgressBar::draw(long long done, bool final) {
     last_drawn_ = done;
-    std::string line = format_progress(label_, double(done) / double(total_), elapsed_seconds());
+    std::string line = format_progress(label_, double(done) / double(total_), elapsed_seconds(), time_limit_);
     if (tty_) std::fprintf(stderr, "\r%s%s", line.c_str(), final ? "\n" : "   ");
     else std::fprintf(stderr, "%s\n", line.c_str());
     std::fflush(stderr);

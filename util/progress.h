@@ -10,8 +10,9 @@
 namespace dynsky {
 
 // One progress line: label, bar, percentage, time elapsed and left (estimated from the rate so
-// far; "?" before any progress).
-std::string format_progress(const std::string& label, double fraction, double elapsed_seconds);
+// far; "?" before any progress), at most what a time limit (> 0) leaves.
+std::string format_progress(const std::string& label, double fraction, double elapsed_seconds,
+                            double time_limit_seconds = 0);
 
 // The program-wide -q (cli/main.cpp sets it for every command, with or without a --quiet of its
 // own): progress bars and reports on stderr stay silent (warnings and errors are still said).
@@ -27,12 +28,15 @@ class ProgressBar {
     void advance(long long n = 1);
     void finish();
     double elapsed_seconds() const;
+    // Work that stops at a time limit (render --time-limit): the time left is at most what it leaves.
+    void set_time_limit(double seconds) { time_limit_ = seconds; }
 
   private:
     void draw(long long done, bool final);
     long long total_;
     std::string label_;
     bool quiet_, finished_ = false, tty_;
+    double time_limit_ = 0;
     std::atomic<long long> done_{0};
     long long last_drawn_ = -1;
     std::mutex mutex_;

@@ -70,6 +70,25 @@ ino_t inode(const std::string& path) {
     return st.st_ino;
 }
 
+// Each frame's line says how many of the frames to render are done and the time left (a farm's
+// log showed nothing of it; frames kept from an earlier run are not counted as work left).
+TEST(AnimateCli, FrameLinesSayTheTimeLeft) {
+    const std::string dir = test::temp_dir("animate_eta");
+    const std::string run = std::string(DYNSKY_EXE) +
+                            " animate builtin --sky-res 32 --res 16x9 --spp 1 --duration 1 --fps 2 --no-video --out " +
+                            dir + "/a 2>&1";
+    auto r = test::run_command(run);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("1 of 2 rendered"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("2 of 2 rendered"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("s left"), std::string::npos) << r.output;
+    fs::remove(dir + "/a/frame_0001.exr");  // one frame to render again: one of one
+    r = test::run_command(run);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("1 of 1 rendered"), std::string::npos) << r.output;
+    fs::remove_all(dir);
+}
+
 TEST(AnimateCli, KilledRunResumesToTheSameFrames) {
     std::string dir = test::temp_dir("animate_kill");
     std::string full = dir + "/full", killed = dir + "/killed";

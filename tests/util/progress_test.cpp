@@ -18,6 +18,10 @@ TEST(Progress, NoEstimateBeforeAnyProgressAndNoneLeftAtTheEnd) {
     EXPECT_NE(format_progress("x", 0.0, 3.0).find("? left"), std::string::npos);
     EXPECT_NE(format_progress("x", 1.0, 3.0).find("0.0s left"), std::string::npos);
     EXPECT_NE(format_progress("x", 1.7, 3.0).find("100.0%"), std::string::npos);  // clamped
+    // A render stopping at --time-limit 15 said "85.7s left" 10 s in: at most what the limit leaves.
+    EXPECT_NE(format_progress("render", 0.1, 10.0, 15.0).find("5.0s left"), std::string::npos);
+    EXPECT_NE(format_progress("render", 0.9, 9.0, 15.0).find("1.0s left"), std::string::npos);  // the rate's
+    EXPECT_NE(format_progress("render", 0.0, 2.0, 15.0).find("at most 13.0s left"), std::string::npos);
 }
 
 }  // namespace
