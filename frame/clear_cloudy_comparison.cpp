@@ -68,6 +68,38 @@ cv::Mat diverging_colormap() {
     return lut;
 }
 
+// The side-by-side image (BGR, 8 bit; halves half_width wide, 8 px apart) with "clear" and "cloudy"
+// under its halves, enlarged (nearest pixel) as the difference image is when a half is under 240 px,
+// so the captions fit (at 64 px it was 136 x 36 pixels without a word).
+cv::Mat with_captions(const cv::Mat& side, int half_width) {
+    cv::Mat big = side;
+    const int k = (240 + half_width - 1) / std::max(1, half_width);
+    if (k > 1) cv::resize(side, big, cv::Size(), k, k, cv::INTER_NEAREST);
+    cv::Mat out(big.rows + 22, big.cols, CV_8UC3, cv::Scalar(255, 255, 255));
+    big.copyTo(out(cv::Rect(0, 0, big.cols, big.rows)));
+    const int half = half_width * std::max(k, 1), gap = 8 * std::max(k, 1);
+    const char* names[2] = {"clear", "cloudy"};
+    for (int i = 0; i < 2; ++i) {
+        int baseline = 0;
+        const cv::Size size = cv::getTextSize(names[i], cv::FONT_HERSHEY_SIMPLEX, 0.45, 1, &baseline);
+        const int centre = i == 0 ? half / 2 : half + gap + half / 2;
+        cv::putText(out, names[i], cv::Point(centre - size.width / 2, big.rows + 16), cv::FONT_HERSHEY_SIMPLEX, 0.45,
+                    cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    }
+    return out;
+}
+
+// An 8-bit BGR picture as a display Image (0..1 RGB), for write_image.
+Image image_of_bgr(const cv::Mat& bgr) {
+    Image out(bgr.cols, bgr.rows, 3);
+    for (int y = 0; y < bgr.rows; ++y)
+        for (int x = 0; x < bgr.cols; ++x) {
+            const cv::Vec3b p = bgr.at<cv::Vec3b>(y, x);
+            for (int c = 0; c < 3; ++c) out.pixels[(size_t(y) * bgr.cols + x) * 3 + c] = p[2 - c] / 255.0f;
+        }
+    return out;
+}
+
 // The difference image (BGR, 8 bit) with its colour bar below it: the colormap from -3 to +3 stops
 // with labelled ticks. An image under 240 px wide is first enlarged by a whole factor (nearest
 // pixel), so the bar's labels and title fit (at 64 px they ran into each other and the title was cut).
@@ -244,15 +276,14 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
         }
     cv::Mat coloured;
     cv::applyColorMap(ratio8, coloured, diverging_colormap());
-    cv::Mat with_bar = with_colour_bar(coloured);
-    diff.width = with_bar.cols, diff.height = with_bar.rows;
-    diff.pixels.assign(size_t(diff.width) * diff.height * 3, 0.0f);
-    for (int y = 0; y < diff.height; ++y)
-        for (int x = 0; x < diff.width; ++x) {
-            cv::Vec3b p = with_bar.at<cv::Vec3b>(y, x);  // BGR
-            for (int c = 0; c < 3; ++c) diff.pixels[(size_t(y) * diff.width + x) * 3 + c] = p[2 - c] / 255.0f;
-        }
-    write_image((fs::path(o.out) / "side_by_side.png").string(), side);
+    diff = image_of_bgr(with_colour_bar(coloured));
+    cv::Mat side_bgr(h, side.width, CV_8UC3);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < side.width; ++x)
+            for (int c = 0; c < 3; ++c)
+                side_bgr.at<cv::Vec3b>(y, x)[2 - c] = uint8_t(
+                    std::lround(255.0 * std::clamp(side.pixels[(size_t(y) * side.width + x) * 3 + c], 0.0f, 1.0f)));
+    write_image((fs::path(o.out) / "side_by_side.png").string(), image_of_bgr(with_captions(side_bgr, w)));
     write_image((fs::path(o.out) / "difference.png").string(), diff);
     const char* lux = cloudy.radiance_scale() != 1.0 ? "(683 x the sky's units)" : "lx";
     if (!reports_silenced())

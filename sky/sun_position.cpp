@@ -137,9 +137,10 @@ std::string format_utc_time(const UtcTime& t) {
     char buf[64];
     double whole;
     double frac = std::modf(t.second, &whole);
+    // Milliseconds cut, not rounded: 23:59:59.9996 printed as 23:59:60.000, a second that day has not.
     if (frac > 1e-9)
         std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%06.3fZ", t.year, t.month, t.day, t.hour, t.minute,
-                      t.second);
+                      std::floor(t.second * 1000) / 1000);
     else
         std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02dZ", t.year, t.month, t.day, t.hour, t.minute,
                       int(whole));

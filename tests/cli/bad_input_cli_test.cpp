@@ -864,6 +864,10 @@ TEST(BadInputCli, ThirdAuditsWindsEmptyValuesAndOtherCamerasAreRefused) {
         EXPECT_EQ(im.metadata.numbers["dynsky:spp"], 1) << name;
         EXPECT_GT(im.metadata.numbers["dynsky:sun_y"], 0) << name;
     }
+    // The side-by-side enlarged (8 x for 32 px halves) with a caption strip under it.
+    const Image side = read_image(dir + "/cmp_ll/side_by_side.png");
+    EXPECT_EQ(side.width, (2 * 32 + 8) * 8);
+    EXPECT_EQ(side.height, 18 * 8 + 22);
     fs::remove_all(dir);
 }
 

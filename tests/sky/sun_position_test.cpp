@@ -61,6 +61,11 @@ TEST(SunPosition, RejectsBadTimes) {
     }
 }
 
+TEST(SunPosition, FormattedTimesCutMilliseconds) {
+    EXPECT_EQ(format_utc_time(parse_utc_time("2026-12-31T23:59:59.9996Z")), "2026-12-31T23:59:59.999Z");
+    EXPECT_EQ(format_utc_time(parse_utc_time("2026-06-21T12:00:00.25Z")), "2026-06-21T12:00:00.250Z");
+}
+
 TEST(SunPosition, JulianDates) {
     // J2000.0 and Meeus example 7.a (1957 October 4.81 = JD 2436116.31).
     EXPECT_DOUBLE_EQ(julian_date(parse_utc_time("2000-01-01T12:00:00Z")), 2451545.0);
