@@ -375,9 +375,17 @@ AnimationReport render_animation(const AnimationSettings& o) {
         timings_start_over = false;
         // The EXR last: it carries the settings a resumed run keeps a frame by, so PNGs of an
         // earlier run never stay beside it (a run stopped between the files renders the frame again).
-        write_image(store.frame_png(k), tonemap_to_display(image, ev));
-        write_image(store.sky_png(k), tonemap_to_display(sky_to_image(*sky), sky_ev));
-        write_image(store.frame_exr(k), aovs.any() ? render_layers(result) : image);
+        // A frame's files go together: a write failing (a full disk) removes those of this frame
+        // already written (a frame_0005.png stayed without its EXR).
+        try {
+            write_image(store.frame_png(k), tonemap_to_display(image, ev));
+            write_image(store.sky_png(k), tonemap_to_display(sky_to_image(*sky), sky_ev));
+            write_image(store.frame_exr(k), aovs.any() ? render_layers(result) : image);
+        } catch (...) {
+            std::error_code ec;
+            for (const std::string& f : {store.frame_png(k), store.sky_png(k)}) fs::remove(f, ec);
+            throw;
+        }
         keep[size_t(k)] = 1;
 
         sum_sky += sky_s, sum_build += light.last_build_seconds(), sum_render += result.stats.seconds, ++rendered;

@@ -112,6 +112,15 @@ TEST(OutputsCli, FullDiskFailsCleanlyForEveryFormat) {
     expect_clean_failure(r, anim + "/contact_sheet.png", dir);
     r = run_with_full_disk("temporal " + anim);
     expect_clean_failure(r, anim + "/temporal.png", dir);
+    // A frame's PNG written, its sky's not (a tiny frame, a large sky): the frame's PNG goes too (it
+    // stayed without its EXR).
+    const std::string tiny = dir + "/tiny";
+    r = run_with_full_disk(
+        "animate builtin --sky procedural:3 --model procedural --sky-res 256 --res 8x6 --spp 1 --duration 0.1 --fps 8 "
+        "--no-video --quiet --out " +
+        tiny);
+    expect_clean_failure(r, tiny + "/sky_0000.png", dir);
+    EXPECT_FALSE(fs::exists(tiny + "/frame_0000.png"));
     fs::remove_all(dir);
 }
 
