@@ -189,10 +189,15 @@ void register_sky_clear_commands(CLI::App& sky) {
         "(VSOP87 truncated, nutation, aberration, parallax), ~0.001 deg over 1950-2050; refraction by\n"
         "Saemundsson's formula unless --no-refraction.");
     add_sun_options(sun, sun_opts.get());
-    sun->callback([sun_opts] {
+    // Its output is the answer: -q (which silences every other command's report) prints it bare, for
+    // scripts: `elevation azimuth` in degrees on one line (it printed nothing at all).
+    auto sun_bare = std::make_shared<bool>(false);
+    sun->add_flag("-q,--quiet", *sun_bare, "Print only the elevation and azimuth (degrees), on one line");
+    sun->callback([sun_opts, sun_bare] {
         UtcTime t;
         SunPosition s = sun_from(*sun_opts, &t);
-        print_sun(s, t, *sun_opts);
+        if (*sun_bare) std::printf("%.6f %.6f\n", s.elevation_deg(), s.azimuth_deg);
+        else print_sun(s, t, *sun_opts);
     });
 
     auto ll_opts = std::make_shared<LatLongOptions>();

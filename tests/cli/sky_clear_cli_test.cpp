@@ -28,6 +28,12 @@ TEST(SkyClearCli, SunPrintsTheNrelSpaCase) {
     EXPECT_TRUE(contains(r.output, "zenith     50.1116")) << r.output;  // SPA: 50.11162
     EXPECT_TRUE(contains(r.output, "azimuth    194.340")) << r.output;  // SPA: 194.34024
     EXPECT_TRUE(contains(r.output, "2003-10-17T19:30:30Z")) << r.output;
+    // -q: the answer bare, for scripts (it printed nothing).
+    r = dynsky(
+        "sky sun -q --lat 39.742476 --lon -105.1786 --elevation 1830.14 --time 2003-10-17T12:30:30-07:00 "
+        "--pressure 820 --temperature 11");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_TRUE(contains(r.output, "39.888") && contains(r.output, " 194.340")) << r.output;
 }
 
 TEST(SkyClearCli, ClearWritesASkyAndPreview) {
