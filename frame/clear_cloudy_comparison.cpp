@@ -16,6 +16,7 @@
 #include "renderer/integrator.h"
 #include "util/progress.h"
 #include "util/image.h"
+#include "motion/network_form.h"
 #include "motion/radiance_scale.h"
 #include "sky/clear_sky.h"
 #include "util/atomic_file.h"
@@ -210,10 +211,14 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
                          "within 1.5 x the clear-sky model's)\n",
                          so.sky.c_str());
     }
+    // The clear sky of the cloudy one's haze: a Hosek-Wilkie sky of another turbidity keeps its own
+    // (a cloudless turbidity-6 sky came out brighter than "clear" at 3), photographs and cloudy skies
+    // 3 (motion/network_form.h clear_sky_turbidity), as the moving sky's own background.
+    const double turbidity = clear_sky_turbidity(*cloudy.step(0), *cloudy.sun_direction_at(0.0));
     auto clear_at = [&](double t) {
         ClearSkyParams p;
         p.sun_direction = *cloudy.sun_direction_at(t);
-        p.turbidity = 3;
+        p.turbidity = turbidity;
         auto s = std::make_shared<SkyImage>(make_clear_sky(p, sky_n));
         // In the cloudy sky's units (a sky in other units than the models' comes back in its own:
         // motion/radiance_scale.h), so the two are compared like for like.
