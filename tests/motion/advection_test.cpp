@@ -45,6 +45,16 @@ void blob_moments(const SkyImage& sky, Vec3d* centroid, double* integral) {
     *integral = total;
 }
 
+// n x n uniform noise (seed) blurred over sigma pixels and stretched to [lo, hi].
+cv::Mat smooth_noise(int n, int seed, double sigma, double lo, double hi) {
+    cv::Mat noise(n, n, CV_32FC1);
+    cv::RNG rng(seed);
+    rng.fill(noise, cv::RNG::UNIFORM, 0.0, 1.0);
+    cv::GaussianBlur(noise, noise, cv::Size(0, 0), sigma);
+    cv::normalize(noise, noise, lo, hi, cv::NORM_MINMAX);
+    return noise;
+}
+
 double angle_deg(const Vec3d& a, const Vec3d& b) {
     return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180 / kPiD;
 }
@@ -153,11 +163,7 @@ TEST(Advection, HighResolutionSkyMovesToTheAnalyticPlace) {
 TEST(Advection, AFractionalMoveKeepsFineDetail) {
     const int n = 256;
     SkyImage sky(n);
-    cv::Mat noise(n, n, CV_32FC1);
-    cv::RNG rng(3);
-    rng.fill(noise, cv::RNG::UNIFORM, 0.0, 1.0);
-    cv::GaussianBlur(noise, noise, cv::Size(0, 0), 0.8);
-    cv::normalize(noise, noise, 1.0, 3.0, cv::NORM_MINMAX);
+    const cv::Mat noise = smooth_noise(n, 3, 0.8, 1.0, 3.0);
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) sky.set_pixel(i, j, Color::Constant(noise.at<float>(j, i)));
     clear_outside_disc(&sky);
@@ -190,11 +196,7 @@ TEST(Advection, AFractionalMoveKeepsFineDetail) {
 TEST(Advection, FlowEstimateMatchesKnownRotationAndFillsHoles) {
     const int n = 256;
     SkyImage sky(n);
-    cv::Mat noise(n, n, CV_32FC1);
-    cv::RNG rng(7);
-    rng.fill(noise, cv::RNG::UNIFORM, 0.0, 1.0);
-    cv::GaussianBlur(noise, noise, cv::Size(0, 0), 2.5);
-    cv::normalize(noise, noise, 0.2, 5.0, cv::NORM_MINMAX);
+    const cv::Mat noise = smooth_noise(n, 7, 2.5, 0.2, 5.0);
     const int hi = 150, hj = 110, hr = 22;  // the featureless hole
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
