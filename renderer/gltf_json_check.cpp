@@ -224,6 +224,11 @@ class Checker {
             error(at + ".matrix has the bottom row (" + number_text(m[3]) + ", " + number_text(m[7]) + ", " +
                   number_text(m[11]) + ", " + number_text(m[15]) +
                   "), not (0, 0, 0, 1): glTF node matrices are affine (translation, rotation, scale)");
+        // The spec forbids both: the matrix was used without a word.
+        if (m.size() == 16 && (n.contains("translation") || n.contains("rotation") || n.contains("scale")))
+            warn(at +
+                 " has both a matrix and translation / rotation / scale (glTF allows one or the other): the "
+                 "matrix is used");
     }
 
     void texture_info(const Json& parent, const char* key, const std::string& at) {

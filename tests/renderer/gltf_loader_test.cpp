@@ -1099,6 +1099,9 @@ TEST(GltfLoader, ValuesOfTheWrongTypeOrOutsideTheSpecAreNamedByTheirPath) {
     EXPECT_NE(notes[0].find("bufferViews[1].byteStride is 0"), std::string::npos) << notes[0];
     ASSERT_EQ(p.meshes.size(), 1u);
     EXPECT_EQ(p.meshes[0].primitives[0].positions[2], Vec3(1, 1, 0));  // read as tightly packed
+    // A node with both a matrix and TRS (the spec forbids it): the matrix, said.
+    warned("matrix_and_trs", with_node("\"matrix\":[1,0,0,0,0,1,0,0,0,0,1,0,2,0,0,1],\"translation\":[0,5,0]"),
+           "nodes[0] has both a matrix and translation / rotation / scale");
     // A texture on a UV set the primitive lacks.
     write_png(dir, "t.png");
     warned("uv1_missing",
