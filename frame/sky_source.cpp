@@ -177,7 +177,7 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
         // The clock's sun replaces the one the file records (SkyTimeline): said where they are far
         // apart, a photograph's --time given without its --lat/--lon (Paris by default) lit the
         // clear sky from the west while the photograph's light came from the east.
-        if (clock_sun && input.sun_direction && clock_sun->y() > 0) {
+        if (clock_sun && input.sun_direction) {
             const double apart = std::acos(std::clamp(clock_sun->dot(input.sun_direction->cast<double>()), -1.0, 1.0)) *
                                  180 / kPiD;
             if (apart > 3 && !reports_silenced())
@@ -287,6 +287,10 @@ FrameSettings sky_timeline_settings(const SkySourceSpec& o, const StepModelSpec&
     s["model"] = m.model + cloud_model_files(m.model);
     s["dt"] = number(m.dt);
     s["drift"] = number(m.drift_deg_per_s);
+    // What the moving sky is, when its steps or frames change meaning: frames and stored timelines of
+    // another revision are made again (the 21st session's relight to the clock: resumed frames of the
+    // revision before jumped 17 % in blue at the first new frame).
+    s["sky_revision"] = "2 (relit to the clock)";
     return s;
 }
 

@@ -200,13 +200,24 @@ Color SkyTimeline::relight_to_clock(double t, SkyImage* out) {
         relight_warned_ = true;
         if (!reports_silenced())
             std::fprintf(stderr,
-                         "dynsky: warning: the sun sets %.0f s into the sky timeline: the clear-sky model holds it "
-                         "at the horizon from there (twilight and night are outside it)\n",
+                         "dynsky: warning: the sun is below the horizon %.0f s into the sky timeline: the clear-sky "
+                         "model holds it at the horizon there (twilight and night are outside it)\n",
                          t);
     }
+    // The patch holds radiance: put at a pixel of another solid angle it carries that much more or
+    // less light (a sun climbing 11 degrees gained 5 % in an hour): its irradiance kept.
+    auto solid_angle_at = [&](const Vec3d& sun) {
+        double x = 0, y = 0;
+        fisheye::pixel_from_direction(sun, n, &x, &y);
+        const int i = std::clamp(int(std::lround(x)), 0, n - 1), j = std::clamp(int(std::lround(y)), 0, n - 1);
+        return fisheye::pixel_solid_angle(i, j, n);
+    };
+    const double omega_start = solid_angle_at(start), omega_now = solid_angle_at(now);
+    const double moved = omega_start > 0 && omega_now > 0 ? omega_start / omega_now : 1.0;
     Color factor = Color::Ones();
     for (int k = 0; k < 3; ++k)
-        factor[k] = relight_sun_start_[k] > 0 ? at_t.sun_irradiance()[k] / relight_sun_start_[k] : 1.0f;
+        factor[k] = float(moved) *
+                    (relight_sun_start_[k] > 0 ? at_t.sun_irradiance()[k] / relight_sun_start_[k] : 1.0f);
     return factor;
 }
 

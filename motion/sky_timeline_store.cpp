@@ -38,7 +38,8 @@ void check_values(const NpyArray& a, const std::string& file, const std::string&
     }
 }
 
-constexpr const char* kFormat = "dynsky sky timeline 1";
+// 2: the steps keep the input's sun and frames are relit to the clock (SkyTimeline::relight_to_clock).
+constexpr const char* kFormat = "dynsky sky timeline 2";
 
 std::string numbered(const std::string& folder, const char* prefix, int i, const char* ext) {
     char name[64];

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <new>
 #include <optional>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/xphoto.hpp>
@@ -1108,6 +1109,9 @@ ImportedPhoto import_photo_image(const Image& photo, const std::string& name, co
     try {
         return import_checked_photo(photo, name, params, extra_not_sky);
     } catch (const cv::Exception& e) {
+        // Out of memory is said as every command says it (cli/main.cpp: the inputs and what to make
+        // smaller).
+        if (e.code == cv::Error::StsNoMem) throw std::bad_alloc();
         // Any other OpenCV failure still names the file instead of surfacing as a raw assertion.
         throw_file_error(name, "OpenCV failed on this " + std::to_string(photo.width) + " x " +
                                    std::to_string(photo.height) + " photograph: " + e.err);
@@ -1479,7 +1483,7 @@ std::string time_from_file_name(const std::string& path, double utc_offset_hours
         // sgptsiskyimageC1.a1.20170524.163000.jpg), optional Z.
         std::regex("(?:^|\\D)(\\d{4})(\\d{2})(\\d{2})[T_.\\-]?(\\d{2})(\\d{2})(\\d{2})(Z?)(?!\\d)"),
         // Compact without seconds: date, a separator, 4 digits.
-        std::regex("(?:^|\\D)(\\d{4})(\\d{2})(\\d{2})[T_.\\-](\\d{2})(\\d{2})()()(?!\\d)"),
+        std::regex("(?:^|\\D)(\\d{4})(\\d{2})(\\d{2})[T_\\-](\\d{2})(\\d{2})()()(?!\\d)"),
     };
     for (const std::regex& re : patterns) {
         for (auto it = std::sregex_iterator(file.begin(), file.end(), re); it != std::sregex_iterator(); ++it) {

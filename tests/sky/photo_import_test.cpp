@@ -932,6 +932,7 @@ TEST(PhotoImport, PresetsFileNamesAndTimes) {
     EXPECT_EQ(time_from_file_name("holiday.jpg"), "");
     // ARM's archive names: date and time apart.
     EXPECT_EQ(time_from_file_name("sgptsiskyimageC1.a1.20170524.163000.jpg"), "2017-05-24T16:30:00+00:00");
+    EXPECT_EQ(time_from_file_name("cam.20170524.0001.jpg"), "");  // a date and a frame counter
     EXPECT_EQ(time_from_file_name("sgptsiskyimageC1.a1.20170524.163000.jpg.20170524163000.jpg"),
               "2017-05-24T16:30:00+00:00");
     // Other cameras' names: ISO-like with or without a zone, compact with a separator.
