@@ -163,39 +163,27 @@ Color SkyTimeline::relight_to_clock(double t, SkyImage* out) {
     if (!clock_ || model_->makes_own_sun() || !(t > 0)) return Color::Ones();
     const Vec3d start = *sun_direction_at(0.0), now = *sun_direction_at(t);
     const int n = out->resolution;
+    // The clear sky's background (no disc) and its sun's irradiance for a sun; no warning per frame
+    // for a sun below the horizon (said once below).
     ClearSkyParams p;
-    p.sun_disc = false;
-    // The background of a sky without a disc: pixel centres only (as make_clear_sky), no warning
-    // per frame for a sun below the horizon (said once below).
     auto background = [&](const Vec3d& sun) {
-        p.sun_direction = sun;
-        const ClearSkyModel model(p, false);
-        std::vector<float> rgb(size_t(n) * n * 3, 0.0f);
-        tbb::parallel_for(0, n, [&](int j) {
-            for (int i = 0; i < n; ++i) {
-                const Vec2 uv = fisheye::pixel_center_uv(i, j, n);
-                if (uv.squaredNorm() > 1.0f) continue;
-                const Color c = model.sky_radiance(fisheye::direction_from_uv(double(uv.x()), double(uv.y())));
-                for (int k = 0; k < 3; ++k) rgb[(size_t(j) * n + i) * 3 + k] = c[k];
-            }
-        });
-        return rgb;
+        p.sun_direction = sun, p.sun_disc = false;
+        return make_clear_sky(p, n, false).rgb;
+    };
+    auto sun_irradiance = [&](const Vec3d& sun) {
+        p.sun_direction = sun, p.sun_disc = true;
+        return ClearSkyModel(p, false).sun_irradiance();
     };
     if (relight_n_ != n) {
-        relight_turbidity_ = clear_sky_turbidity(*step(0), start);
-        p.turbidity = relight_turbidity_;
+        p.turbidity = relight_turbidity_ = clear_sky_turbidity(*step(0), start);
         relight_start_ = background(start);
-        p.sun_direction = start, p.sun_disc = true;
-        relight_sun_start_ = ClearSkyModel(p, false).sun_irradiance();
-        p.sun_disc = false;
+        relight_sun_start_ = sun_irradiance(start);
         relight_n_ = n;
     }
     p.turbidity = relight_turbidity_;
     const std::vector<float> later = background(now);
     for (size_t k = 0; k < later.size(); ++k)
         if (relight_start_[k] > 0) out->rgb[k] *= std::clamp(later[k] / relight_start_[k], 0.01f, 100.0f);
-    p.sun_direction = now, p.sun_disc = true;
-    const ClearSkyModel at_t(p, false);
     if (!relight_warned_ && now.y() < 0) {
         relight_warned_ = true;
         if (!reports_silenced())
@@ -214,10 +202,10 @@ Color SkyTimeline::relight_to_clock(double t, SkyImage* out) {
     };
     const double omega_start = solid_angle_at(start), omega_now = solid_angle_at(now);
     const double moved = omega_start > 0 && omega_now > 0 ? omega_start / omega_now : 1.0;
+    const Color irradiance_now = sun_irradiance(now);
     Color factor = Color::Ones();
     for (int k = 0; k < 3; ++k)
-        factor[k] = float(moved) *
-                    (relight_sun_start_[k] > 0 ? at_t.sun_irradiance()[k] / relight_sun_start_[k] : 1.0f);
+        factor[k] = float(moved) * (relight_sun_start_[k] > 0 ? irradiance_now[k] / relight_sun_start_[k] : 1.0f);
     return factor;
 }
 

@@ -112,10 +112,10 @@ void ClearSkyModel::splat_sun_disc(int n, const std::function<void(int, int, con
     }
 }
 
-SkyImage make_clear_sky(const ClearSkyParams& params, int resolution) {
+SkyImage make_clear_sky(const ClearSkyParams& params, int resolution, bool warn) {
     if (resolution < 1 || resolution > 32768)
         throw Error("sky resolution " + std::to_string(resolution) + " is not in 1..32768 pixels");
-    ClearSkyModel model(params);
+    ClearSkyModel model(params, warn);
     const int n = resolution;
     SkyImage sky(n);
 

@@ -68,7 +68,9 @@ class ClearSkyModel {
 // Pixels hold the sky at their centre; the disc is splatted conserving its energy: the sum over
 // pixels of radiance * fisheye::pixel_solid_angle equals the disc's irradiance (the part above
 // the horizon). Rows run in parallel (oneTBB). Throws dynsky::Error on bad parameters.
-SkyImage make_clear_sky(const ClearSkyParams& params, int resolution);
+// warn: print the model's warning for a sun below the horizon (ClearSkyModel); callers making a
+// sky per frame say it once themselves.
+SkyImage make_clear_sky(const ClearSkyParams& params, int resolution, bool warn = true);
 
 // Radiance of one direction: sky + sun disc (0 below the horizon). Builds the model each call; for
 // many lookups use ClearSkyModel. The below-horizon warning is printed once per process.

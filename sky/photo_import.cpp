@@ -684,17 +684,27 @@ std::vector<unsigned char> load_not_sky_mask(const std::string& path, MaskLayout
     return out;
 }
 
+namespace {
+
+// A shadow band's direction in the photo (unit, from the circle's centre): where a direction at the
+// sun's azimuth lands (this follows the preset's north, mirroring and tilt without restating them);
+// none when it lands outside the lens's field.
+std::optional<cv::Point2d> band_direction(const PhotoGeometry& geometry, double azimuth_deg) {
+    double x = 0, y = 0;
+    if (!geometry.project(fisheye::direction_from_angles(45 * kDeg, azimuth_deg * kDeg), &x, &y)) return std::nullopt;
+    const cv::Point2d along(x - geometry.circle.center_x, y - geometry.circle.center_y);
+    return along / std::max(cv::norm(along), 1e-9);
+}
+
+}  // namespace
+
 std::vector<unsigned char> shadow_band_mask(const ShadowBand& band, const PhotoGeometry& geometry, int photo_width,
                                             int photo_height) {
-    // The band's direction in the photo: where a direction at the sun's azimuth lands (this follows
-    // the preset's north, mirroring and tilt without restating them).
-    double x = 0, y = 0;
     const SkyCircle& c = geometry.circle;
-    if (!geometry.project(fisheye::direction_from_angles(45 * kDeg, band.azimuth_deg * kDeg), &x, &y))
+    const std::optional<cv::Point2d> direction = band_direction(geometry, band.azimuth_deg);
+    if (!direction)
         throw Error("shadow band: azimuth " + fmt(band.azimuth_deg) + " deg does not project into the photo");
-    const cv::Point2d centre(c.center_x, c.center_y);
-    cv::Point2d along(x - c.center_x, y - c.center_y);
-    along /= std::max(cv::norm(along), 1e-9);
+    const cv::Point2d centre(c.center_x, c.center_y), along = *direction;
     const cv::Point2d across(-along.y, along.x);
     const double reach = 2 * c.radius + photo_width + photo_height;  // beyond the rim
     const cv::Point2d corners[4] = {centre + band.start_px * along - band.half_width_px * across,
@@ -738,12 +748,9 @@ std::optional<ShadowBandFound> find_shadow_band(const Image& encoded_photo, cons
     // photo as shadow_band_mask finds it); medians, so the sun's glare on the band does not count.
     std::vector<float> in, beside;
     auto contrast = [&](double azimuth_deg, int step) {
-        double x = 0, y = 0;
-        if (!geometry.project(fisheye::direction_from_angles(45 * kDeg, azimuth_deg * kDeg), &x, &y)) return 1.0;
-        double ux = x - c.center_x, uy = y - c.center_y;
-        const double len = std::hypot(ux, uy);
-        if (!(len > 0)) return 1.0;
-        ux /= len, uy /= len;
+        const std::optional<cv::Point2d> direction = band_direction(geometry, azimuth_deg);
+        if (!direction) return 1.0;
+        const double ux = direction->x, uy = direction->y;
         in.clear(), beside.clear();
         for (size_t k = 0; k < samples.size(); k += size_t(step)) {
             const Sample& s = samples[k];
