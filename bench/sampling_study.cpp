@@ -21,7 +21,7 @@
 
 #include "bench/sampling_study.h"
 #include "util/progress.h"
-#include "util/shell.h"
+#include "util/child_process.h"
 #include "renderer/builtin_scene.h"
 #include "renderer/gltf_loader.h"
 #include "renderer/integrator.h"
@@ -102,7 +102,7 @@ ErrorStats compare(const Image& img, const Image& ref, const std::vector<char>& 
         }
         se += e;
         pixel_se[q] = e;
-        float lum = 0.2126f * img.pixels[3 * p] + 0.7152f * img.pixels[3 * p + 1] + 0.0722f * img.pixels[3 * p + 2];
+        float lum = luminance(img.pixels[3 * p], img.pixels[3 * p + 1], img.pixels[3 * p + 2]);
         by_brightness[q] = {lum, e};
     }
     size_t top = std::max<size_t>(1, pixels / 1000);
@@ -700,9 +700,9 @@ int run_sampling_study(const SamplingStudyOptions& o) {
 
     // ---- Charts ----
     std::string script = data_path("bench/sampling_charts.py");
-    std::string cmd = "/usr/bin/python3 " + shell_quote(script) + " " + shell_quote(out.string()) + " 2>&1";
-    int rc = std::system(cmd.c_str());
-    if (rc != 0) notes += "- chart script failed (exit " + std::to_string(rc) + "); tables are complete\n";
+    const ChildResult charts = run_program({"/usr/bin/python3", script, out.string()});
+    if (!charts.exited || charts.exit_code != 0)
+        notes += "- chart script failed (exit " + std::to_string(charts.exit_code) + "); tables are complete\n";
 
     // ---- Recommendation: fastest median time to plain cdf's error over all cases ----
     auto med = [](std::vector<double> v) { return v.empty() ? 0.0 : middle_mean(std::move(v)); };

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "sky/sky_image.h"
 #include "sky/sun_position.h"
 #include "util/error.h"
 #include "util/parse.h"
@@ -163,7 +164,7 @@ void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {
 
 void add_generated_sky_options(CLI::App* cmd, SkySourceSpec* o) {
     cmd->add_option("--sky-res", o->sky_resolution, "Resolution N of skies made here (procedural, clear)")
-        ->check(CLI::Range(16, 8192))
+        ->check(CLI::Range(kMinSkyResolution, kMaxSkyResolution))
         ->capture_default_str();
     cmd->add_option(
            "--time", o->time,

@@ -91,8 +91,7 @@ void run_clear(const ClearOptions& o) {
     // Check everything before computing, so a bad run writes nothing.
     check_extension("--out", o.out, ".exr");
     if (!o.preview.empty()) check_extension("--preview", o.preview, ".png");
-    if (o.resolution < 16 || o.resolution > 16384)
-        throw Error("--res " + std::to_string(o.resolution) + ": the fisheye must be 16..16384 pixels wide");
+    check_sky_resolution(o.resolution);
     validate_hosek_wilkie_range(o.turbidity, o.albedo);
     UtcTime t;
     SunPosition sun = sun_from(o.sun, &t);
@@ -174,9 +173,8 @@ void register_sky_clear_commands(CLI::App& sky) {
         ->check(finite_in(0, 1));
     clear->add_flag("--no-sun", clear_opts->no_sun, "Leave the solar disc out (sky only)");
     clear->add_option("--sky-res", clear_opts->resolution, "Fisheye size N in pixels (N x N), 16..16384")
-        ->check(CLI::Range(16, 16384))
+        ->check(CLI::Range(kMinSkyResolution, kMaxSkyResolution))
         ->capture_default_str();
-    add_hidden_alias(clear, "--res", &clear_opts->resolution);
     clear->add_option("--out,-o", clear_opts->out, "Output sky, .exr")->required();
     clear->add_option("--preview", clear_opts->preview, "Also write a tone-mapped .png preview (auto exposure)");
     clear->callback([clear_opts] { run_clear(*clear_opts); });

@@ -10,6 +10,7 @@
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "sky/cloud_mask_job.h"
+#include "sky/sky_image.h"
 #include "sky/photo_import.h"
 #include "sky/photo_import_job.h"
 #include "util/error.h"
@@ -198,9 +199,8 @@ void register_sky_import_commands(CLI::App& sky) {
     imp->add_option("--turbidity", io->turbidity, "Clear-sky model turbidity for the calibration (default 3)")
         ->check(finite_in(1, 10));
     imp->add_option("--sky-res", io->resolution, "Output fisheye size N (N x N pixels), 16..16384")
-        ->check(CLI::Range(16, 16384))
+        ->check(CLI::Range(kMinSkyResolution, kMaxSkyResolution))
         ->capture_default_str();
-    add_hidden_alias(imp, "--res", &io->resolution);
     imp->add_option("--out,-o", io->out,
                     "Output sky, .exr; for several photographs a folder (STEM.exr, STEM.png, STEM.filled.png each)")
         ->required();
@@ -218,9 +218,9 @@ void register_sky_import_commands(CLI::App& sky) {
         "0.46; on WSISEG's human labels 0.75 agrees far better (docs/sky-import.md).");
     mask->add_option("input", mo->input, "Photograph (JPEG/PNG) or canonical sky (.exr)")->required();
     mask->add_option("--out,-o", mo->out, "Output mask, .png")->required();
-    mask->add_option("--threshold", mo->threshold, "Rule threshold (default 0.46, the paper's r/b)")
+    mask->add_option("--cloud-threshold", mo->threshold, "Rule threshold (default 0.46, the paper's r/b)")
         ->check(finite_in(-1e6, 1e6));
-    mask->add_option("--rule", mo->rule,
+    mask->add_option("--cloud-rule", mo->rule,
                      "rb: cloud if r/b > threshold (default); nbr: cloud if (b-r)/(b+r) < threshold")
         ->check(parsed_by([](const std::string& s) { parse_cloud_rule(s); }, "RULE"));
     mask->add_option("--preset", mo->preset, "Camera preset for the sky circle and non-sky mask (" + presets + ")")

@@ -58,7 +58,7 @@ void register_sky_model_commands(CLI::App& sky) {
                         "CSV of per-step statistics (mean luminance, mean/min/max of the [0,1] form, cloud\n"
                         "coverage, high-frequency energy, mean luminance without the start's sun pixels,\n"
                         "non-finite pixel count), step 0 = the input");
-        cmd->add_flag("--preview", o->preview,
+        cmd->add_flag("--previews", o->preview,
                       "Also write tone-mapped PNGs beside the EXRs (the input's auto exposure)");
         cmd->add_flag("--quiet,-q", o->quiet, "No progress bar or summary");
         cmd->callback([o]() {
@@ -93,14 +93,15 @@ void register_sky_model_commands(CLI::App& sky) {
             "Start frames A-B to score (default: the model's held-out part of a sequence it was trained on,\n"
             "else every frame)");
         cmd->add_option("--horizons", o->horizons, "Steps ahead to score, comma-separated")->capture_default_str();
-        cmd->add_option("--res", o->resolutions,
+        cmd->add_option("--resolutions", o->resolutions,
                         "Resolutions N to score at, comma-separated (each divides --import-res)")
             ->capture_default_str();
         cmd->add_option(
             "--shared", o->shared,
             "The shared data folder (default: ../shared beside the source tree dynsky was built from, else beside the working folder)");
-        cmd->add_option("--report,-o", o->report, "Markdown file to write (a .csv and charts beside it)")
+        cmd->add_option("--out,-o", o->report, "Markdown file to write (a .csv and charts beside it)")
             ->capture_default_str();
+        add_hidden_alias(cmd, "--report", &o->report);
         cmd->add_option("--import-res", o->import_resolution, "Resolution the photographs are imported at")
             ->capture_default_str();
         cmd->add_option("--limit", o->limit, "Score only the first K start frames (0: all; for quick checks)")
@@ -123,7 +124,6 @@ void register_sky_model_commands(CLI::App& sky) {
             "--shared", o->shared,
             "The shared data folder (default: ../shared beside the source tree dynsky was built from, else beside the working folder)");
         cmd->add_option("--sky-res", o->resolution, "Resolution N of the training images")->capture_default_str();
-        add_hidden_alias(cmd, "--res", &o->resolution);
         cmd->add_option("--import-res", o->import_resolution,
                         "Resolution frames are imported (and Farneback flow computed) at; a multiple of --sky-res")
             ->capture_default_str();

@@ -8,6 +8,7 @@
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "sky/procedural_sequence.h"
+#include "sky/sky_image.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
 #include "util/parse.h"
@@ -49,10 +50,9 @@ void register_sky_procedural_command(CLI::App& sky) {
                     "animate's --dt); the span of each flow field")
         ->check(finite_above(0, 86400))
         ->capture_default_str();
-    cmd->add_option("--sky-res", o->resolution, "Resolution N of the N x N fisheye images (8..16384)")
-        ->check(CLI::Range(8, 16384))
+    cmd->add_option("--sky-res", o->resolution, "Resolution N of the N x N fisheye images (16..16384)")
+        ->check(CLI::Range(kMinSkyResolution, kMaxSkyResolution))
         ->capture_default_str();
-    add_hidden_alias(cmd, "--res", &o->resolution);
     cmd->add_option("--out,-o", o->out, "Output folder (created if missing; files in it are overwritten)")->required();
     cmd->add_option("--layers", o->layers, "Cloud layers, comma-separated: cumulus, cirrus")
         ->delimiter(',')
@@ -122,7 +122,7 @@ void register_sky_procedural_command(CLI::App& sky) {
     cmd->add_option("--visibility", o->visibility, "Distance in metres over which far clouds fade into the sky (1/e)")
         ->check(finite_above(0, 1e9))
         ->capture_default_str();
-    cmd->add_flag("--preview", o->preview,
+    cmd->add_flag("--previews", o->preview,
                   "Also write tone-mapped PNGs: frame_NNNN.png and flow_NNNN.png (colour-coded)");
     cmd->add_flag("--quiet,-q", o->quiet, "No progress bar or summary");
     cmd->callback([o, other, elevation, azimuth, path_tracer_seed, wind_pair, wind_from, wind_speed]() {

@@ -46,7 +46,7 @@ double window_luminance(const Image& im, int x, int y, int r = 2) {
     for (int j = std::max(0, y - r); j <= std::min(im.height - 1, y + r); ++j)
         for (int i = std::max(0, x - r); i <= std::min(im.width - 1, x + r); ++i) {
             const float* p = &im.pixels[(size_t(j) * im.width + i) * im.channels];
-            sum += 683.0 * luminance(Color(p[0], p[1], p[2])), ++n;
+            sum += kLumensPerWatt * luminance(Color(p[0], p[1], p[2])), ++n;
         }
     return sum / std::max(n, 1);
 }
@@ -297,7 +297,7 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
             "wrote %s/side_by_side.png (clear | cloudy, same exposure %.2f EV) and difference.png (log2 cloudy/clear, "
             "-3..+3 stops: blue darker under the clouds, white no change, red brighter; colour bar below)\n"
             "global horizontal illuminance at t=0: clear %.0f %s, cloudy %.0f %s\n",
-            o.out.c_str(), ev, 683.0 * luminance(e_clear), lux, 683.0 * luminance(e_cloudy), lux);
+            o.out.c_str(), ev, kLumensPerWatt * luminance(e_clear), lux, kLumensPerWatt * luminance(e_cloudy), lux);
 
     // Illuminance over time at the chosen points, under both skies (the sun follows the clock).
     std::string csv = (fs::path(o.out) / "illuminance.csv").string();
@@ -310,10 +310,10 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
         for (int k = 0; k < o.chart_frames; ++k) {
             double t = o.duration * k / (o.chart_frames - 1);
             Image ic = render_frame(accel, light, scene.camera, clear_at(t), cw, ch, o.chart_spp, o.seed);
-            double ec = 683.0 * luminance(light.sky_irradiance());
+            double ec = kLumensPerWatt * luminance(light.sky_irradiance());
             Image iy = render_frame(accel, light, scene.camera, std::make_shared<const SkyImage>(cloudy.sky_at(t)), cw,
                                     ch, o.chart_spp, o.seed);
-            double ey = 683.0 * luminance(light.sky_irradiance());
+            double ey = kLumensPerWatt * luminance(light.sky_irradiance());
             f << t << ',' << ec / 100 << ',' << ey / 100;
             for (auto [px, py] : points) {
                 int x = std::min(cw - 1, int(px * cw)), y = std::min(ch - 1, int(py * ch));

@@ -57,7 +57,7 @@ bool is_generated_sky(const std::string& sky) { return sky == "clear" || sky.rfi
 SkyImage make_generated_sky(const SkySourceSpec& o) {
     if (!is_generated_sky(o.sky))
         throw Error("--sky '" + o.sky + "': not a sky made here (expected 'clear' or 'procedural[:SEED]')");
-    if (o.sky_resolution < 16 || o.sky_resolution > 8192) throw Error("--sky-res must be 16..8192");
+    check_sky_resolution(o.sky_resolution);
     if (!(o.coverage >= 0 && o.coverage <= 1)) throw Error("--coverage must be in [0, 1]");
     const GeoLocation where{o.latitude, o.longitude, 0};
     validate_location(where);
@@ -85,7 +85,7 @@ SkyImage make_generated_sky(const SkySourceSpec& o) {
 SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     if (!(m.dt >= 0)) throw Error("--dt must be positive (or 0: automatic)");
     const GammaKind gamma = parse_gamma(m.gamma);
-    if (o.sky_resolution < 16 || o.sky_resolution > 8192) throw Error("--sky-res must be 16..8192");
+    check_sky_resolution(o.sky_resolution);
     if (!(o.coverage >= 0 && o.coverage <= 1)) throw Error("--coverage must be in [0, 1]");
     GeoLocation where{o.latitude, o.longitude, 0};
     std::optional<SunClock> clock;
@@ -101,7 +101,7 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     if (fs::is_directory(o.sky)) {
         std::vector<std::string> exrs, others;
         for (const auto& e : fs::directory_iterator(o.sky)) {
-            if (!e.is_regular_file()) continue;
+            if (!e.is_regular_file() || is_hidden_file(e.path().string())) continue;
             const std::string ext = file_extension(e.path().string());
             // `sky procedural`'s flow_NNNN.exr beside its frames hold motion, not skies (at the
             // frames' times: ordered by time, one was taken for the previous frame).

@@ -16,9 +16,8 @@ namespace dynsky {
 namespace {
 
 constexpr double kHalfPi = 1.5707963267948966;
-constexpr double kMaxZenith = 88.0 * kHalfPi / 90.0;  // as motion/flow.h wind_flow
 
-inline double zenith_of(double u, double v) { return std::min(std::hypot(u, v) * kHalfPi, kMaxZenith); }
+inline double zenith_of(double u, double v) { return std::min(std::hypot(u, v) * kHalfPi, kMaxLayerZenith); }
 
 }  // namespace
 
@@ -72,9 +71,9 @@ CloudLayerPaths::CloudLayerPaths(int n, const cv::Vec2d& step, const CloudLayerP
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x) {
             const double u = 2.0 * (x + 0.5) / n - 1.0, v = 2.0 * (y + 0.5) / n - 1.0;
-            const double trigger = std::min(std::acos(std::cos(zenith_of(u, v)) / root_stretch), kMaxZenith);
+            const double trigger = std::min(std::acos(std::cos(zenith_of(u, v)) / root_stretch), kMaxLayerZenith);
             trigger_radius_.at<double>(y, x) = std::max(tile_radius_, std::tan(trigger));
-            beyond_[size_t(y) * n + x] = std::hypot(u, v) * kHalfPi > kMaxZenith;
+            beyond_[size_t(y) * n + x] = std::hypot(u, v) * kHalfPi > kMaxLayerZenith;
             points_.at<cv::Vec2d>(y, x) = layer_point(x, y, n);
         }
 }

@@ -57,8 +57,11 @@ struct CloudLayerPathsParams {
     double seam_edge_band = 0.5;
 };
 
+// Zenith angles beyond it see the layer too far off to follow (tan grows without bound): 88 deg.
+inline constexpr double kMaxLayerZenith = 88.0 * 3.14159265358979323846 / 180.0;
+
 // The layer point seen at continuous pixel position (x, y) of an n x n fisheye (units of the layer
-// height; image axes; zenith angles beyond 88 degrees are taken at 88), and back.
+// height; image axes; zenith angles beyond kMaxLayerZenith are taken at it), and back.
 cv::Vec2d layer_point(double x, double y, int n);
 cv::Vec2d pixel_of_layer_point(const cv::Vec2d& p, int n);
 

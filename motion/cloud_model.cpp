@@ -119,19 +119,6 @@ NetworkStep CloudModel::step_network(const cv::Mat& image) {
     return s;
 }
 
-cv::Mat CloudModel::decode_flow(const cv::Mat& encoded) const {
-    cv::Mat out(encoded.size(), CV_32FC2);
-    const float full = float(info_.flow_scale * info_.resolution);
-    for (int y = 0; y < encoded.rows; ++y)
-        for (int x = 0; x < encoded.cols; ++x) {
-            cv::Vec3f e = encoded.at<cv::Vec3f>(y, x);
-            float norm = std::max(std::hypot(e[0], e[1]), 1e-6f);
-            float m = std::clamp(e[2], 0.0f, 1.0f) * full / norm;
-            out.at<cv::Vec2f>(y, x) = cv::Vec2f(e[0] * m, e[1] * m);
-        }
-    return out;
-}
-
 SkyImage CloudModel::step(const SkyImage& sky) {
     SkyImage out;
     rollout(sky, 1, [&](int, const SkyImage& s) { out = s; });

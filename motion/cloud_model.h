@@ -66,9 +66,6 @@ class CloudModel {
     // the [0, 1] form between steps, so nothing is lost to repeated HDR round trips).
     void rollout(const SkyImage& sky, int steps, const std::function<void(int, const SkyImage&)>& on_step);
 
-    // Decodes FlowNet's output into a CV_32FC2 displacement in pixels at N (+x right, +y down).
-    cv::Mat decode_flow(const cv::Mat& encoded) const;
-
   private:
     CloudModelInfo info_;
     cv::dnn::Net flownet_, cloudnet_;

@@ -140,13 +140,13 @@ TrainedFrames model_training_frames(const PhotoSequence& seq, const std::string&
 
 EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
     std::vector<int> horizons = parse_int_list(o.horizons, "--horizons");
-    const std::vector<int> resolutions = parse_int_list(o.resolutions, "--res");
+    const std::vector<int> resolutions = parse_int_list(o.resolutions, "--resolutions");
     int hmax = horizons.back();
     if (o.limit < 0) throw Error("--limit: must be >= 0");
     if (o.import_resolution < 16 || o.import_resolution > 2048) throw Error("--import-res: must be 16..2048");
     for (int r : resolutions)
         if (r > o.import_resolution || o.import_resolution % r != 0)
-            throw Error("--res " + std::to_string(r) + ": must divide --import-res " +
+            throw Error("--resolutions " + std::to_string(r) + ": must divide --import-res " +
                         std::to_string(o.import_resolution));
     if (o.sequence.empty() == o.photos.empty())
         throw Error(
@@ -164,6 +164,10 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
             "first, under one sky circle ('dynsky sky import " +
             o.photos + " --lat DEG --lon DEG --utc-offset H --detect-obstructions -o SKIES/'), then --photos SKIES/");
     const std::string shared = o.shared.empty() && !o.sequence.empty() ? default_shared_dir() : o.shared;
+    // A folder that is not there yet (`-o out/`): an existing one is refused by the checks below.
+    if (o.report.empty() || (o.report.back() == '/' && !fs::exists(o.report)))
+        throw Error("--out " + o.report + ": a folder; give the report's file (" +
+                    (fs::path(o.report) / "eval.md").lexically_normal().string() + "; a .csv and charts beside it)");
     {
         // The report and what is written beside it must not replace an input or land in an input
         // folder (the photographs, the shared data of a named sequence, a model folder).
@@ -192,6 +196,22 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
         }
     }
     const NetworkFormParams& form = model.info().form;
+    // The paper's model steps its own Delta t: as many steps per frame as fit the folder's cadence
+    // (one step per 60 s Mobotix frame scored it on half the motion), else it is left out.
+    int paper_steps = 1;
+    if (paper && paper->info().dt > 0) {
+        const double k = seq.dt / paper->info().dt;
+        paper_steps = int(std::lround(k));
+        if (paper_steps < 1 || std::abs(k - paper_steps) > 0.1 * k) {
+            if (!o.quiet)
+                std::fprintf(
+                    stderr,
+                    "dynsky: note: the paper's model steps %g s, which does not divide the photographs' cadence "
+                    "of %g s: not scored\n",
+                    paper->info().dt, seq.dt);
+            paper.reset();
+        }
+    }
 
     // Which start frames: the held-out part of a sequence the model was trained on, else all.
     const int count = int(seq.photos.size());
@@ -367,7 +387,10 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
             model.rollout_network_form(start, CloudFlow::from_wind(wind), hmax, collect("model+wind"), bg);
             if (paper && r == paper->info().resolution) {
                 cv::Mat s = start;
-                for (int h = 1; h <= hmax; ++h) pred["paper"].push_back(s = paper->step_network(s).next);
+                for (int h = 1; h <= hmax; ++h) {
+                    for (int j = 0; j < paper_steps; ++j) s = paper->step_network(s).next;
+                    pred["paper"].push_back(s);
+                }
             }
             const cv::Mat sat_t = saturated_mask(at(t).image);
             for (int h : horizons) {
@@ -401,7 +424,11 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
        << ". "
           "PSNR/SSIM: means of per-frame values. farneback = the previous pair's flow applied h times (one warp by h F, "
           "with the rim extended so it never pulls in black); "
-          "model+wind = from one frame with the wind fitted to the following pair's measured motion.\n\n";
+          "model+wind = from one frame with the wind fitted to the following pair's measured motion"
+       << (paper ? "; paper = the paper's FlowNet + CloudNet, " + std::to_string(paper_steps) + " step(s) of " +
+                       fmt("%g", paper->info().dt) + " s per frame"
+                 : std::string())
+       << ".\n\n";
     for (int r : resolutions) {
         md << "## " << r << " px\n\n| horizon | ahead |";
         for (const std::string& m : result.methods)
@@ -454,7 +481,10 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
         md << "![PSNR against horizon at " << r << " px](" << fs::path(base + ".png").filename().string() << ")\n\n";
     }
     // The paper's table: MSE, PSNR and SSIM one step ahead.
-    md << "## One step ahead (the paper's table)\n\n| resolution | method | MSE | PSNR | SSIM |\n|---:|---|---:|---:|---:|\n";
+    md << "## One step ahead (the paper's table)\n\n";
+    if (std::find(horizons.begin(), horizons.end(), 1) == horizons.end())
+        md << "Not scored: horizon 1 is not among --horizons (" << o.horizons << ").\n";
+    else md << "| resolution | method | MSE | PSNR | SSIM |\n|---:|---|---:|---:|---:|\n";
     for (int r : resolutions)
         for (const std::string& m : result.methods)
             if (result.scores[r].count(1) && result.scores[r][1].count(m)) {

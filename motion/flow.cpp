@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "motion/cloud_layer_paths.h"
 #include "sky/fisheye.h"
 #include "util/error.h"
 #include "util/parse.h"
@@ -90,8 +91,7 @@ cv::Mat estimate_sky_flow(const SkyImage& from, const SkyImage& to, const SkyFlo
         for (int j = 0; j < w; ++j)
             for (int i = 0; i < w; ++i) {
                 cv::Vec3f p = small.at<cv::Vec3f>(j, i);
-                lum.at<float>(j,
-                              i) = std::log(std::max(0.2126f * p[0] + 0.7152f * p[1] + 0.0722f * p[2], 0.0f) + 1e-3f);
+                lum.at<float>(j, i) = std::log(std::max(luminance(p[0], p[1], p[2]), 0.0f) + 1e-3f);
             }
         return lum;
     };
@@ -232,25 +232,20 @@ cv::Mat flow_at_resolution(const cv::Mat& flow, int n) {
 
 namespace {
 
-// Flow of a layer displacement w (image axes, units of the layer's height) by destination.
+// Flow of a layer displacement w (image axes, units of the layer's height) by destination: the
+// point on the layer seen at each pixel, and the pixel its cloud was seen at; none beyond
+// kMaxLayerZenith.
 cv::Mat layer_flow(int n, double wx, double wy) {
     cv::Mat flow(n, n, CV_32FC2);
-    const double theta_max = 88.0 * kPiD / 180.0;
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
             const double u = 2.0 * (i + 0.5) / n - 1.0, v = 2.0 * (j + 0.5) / n - 1.0;
-            const double r = std::max(std::sqrt(u * u + v * v), 1e-6);
-            const double theta = r * kPiD / 2;
-            if (theta > theta_max) {
+            if (std::hypot(u, v) * kPiD / 2 > kMaxLayerZenith) {
                 flow.at<cv::Vec2f>(j, i) = cv::Vec2f(0, 0);
                 continue;
             }
-            // The point on the layer seen at x (image axes, units of height), and where its cloud was.
-            const double rho = std::tan(theta), px = rho * u / r, py = rho * v / r;
-            const double sx = px - wx, sy = py - wy, rs = std::max(std::hypot(sx, sy), 1e-9);
-            const double r_src = std::atan(rs) / (kPiD / 2);
-            const double us = r_src * sx / rs, vs = r_src * sy / rs;
-            flow.at<cv::Vec2f>(j, i) = cv::Vec2f(float((u - us) * n / 2), float((v - vs) * n / 2));
+            const cv::Vec2d source = pixel_of_layer_point(layer_point(i, j, n) - cv::Vec2d(wx, wy), n);
+            flow.at<cv::Vec2f>(j, i) = cv::Vec2f(float(i - source[0]), float(j - source[1]));
         }
     return flow;
 }

@@ -58,7 +58,9 @@ PhotoSequence named_photo_sequence(const std::string& name, const std::string& s
             if (!line.empty()) s.photos.push_back((fs::path(s.folder) / line.substr(0, line.find(','))).string());
     } else if (fs::is_directory(fs::path(s.folder) / "images")) {
         for (const auto& e : fs::directory_iterator(fs::path(s.folder) / "images"))
-            if (e.path().extension() == ".jpg" || e.path().extension() == ".png") s.photos.push_back(e.path().string());
+            if ((e.path().extension() == ".jpg" || e.path().extension() == ".png") &&
+                !is_hidden_file(e.path().string()))
+                s.photos.push_back(e.path().string());
         std::sort(s.photos.begin(), s.photos.end());
     } else {
         throw_file_error(s.folder, "sequence folder not found (give the shared data folder with --shared)");
@@ -103,7 +105,7 @@ PhotoSequence photo_sequence_from_folder(const std::string& folder, const std::s
     const fs::path dir = frames_folder(folder);
     std::vector<std::pair<double, std::string>> timed;
     for (const auto& e : fs::directory_iterator(dir)) {
-        if (!e.is_regular_file()) continue;
+        if (!e.is_regular_file() || is_hidden_file(e.path().string())) continue;
         const std::string ext = file_extension(e.path().string());
         if (skies && (ext == ".jpg" || ext == ".jpeg" || ext == ".png")) {
             // Another photograph would be left out of the sequence unseen.
@@ -139,12 +141,15 @@ PhotoSequence photo_sequence_from_folder(const std::string& folder, const std::s
     std::vector<double> gaps;
     for (size_t k = 1; k < timed.size(); ++k) gaps.push_back(timed[k].first - timed[k - 1].first);
     const double cadence = median(gaps);
+    // Names carry whole seconds and timer-driven cameras jitter by one: a gap within 10 % of the
+    // cadence (at least 1.5 s, under half of it) is the cadence; a missing frame doubles it.
+    const double tolerance = std::min(std::max(1.5, 0.1 * cadence), 0.45 * cadence);
     for (size_t k = 1; k < timed.size(); ++k) {
         const double gap = timed[k].first - timed[k - 1].first;
         if (gap < 0.5)
             throw_file_error(timed[k].second,
                              "has the same time as " + fs::path(timed[k - 1].second).filename().string());
-        if (std::abs(gap - cadence) > std::max(1.0, 0.02 * cadence))
+        if (std::abs(gap - cadence) > tolerance)
             throw_file_error(timed[k].second,
                              "comes " + std::to_string(long(std::lround(gap))) + " s after " +
                                  fs::path(timed[k - 1].second).filename().string() + ", but the cadence is " +
@@ -156,7 +161,7 @@ PhotoSequence photo_sequence_from_folder(const std::string& folder, const std::s
     if (s.name.empty()) s.name = fs::path(folder).parent_path().filename().string();
     s.preset = preset;
     s.folder = folder;
-    s.dt = std::round(cadence);
+    s.dt = std::round((timed.back().first - timed.front().first) / double(timed.size() - 1));  // the mean gap
     for (auto& [t, p] : timed) s.photos.push_back(p), s.utc.push_back(t);
     return s;
 }

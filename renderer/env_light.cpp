@@ -64,7 +64,7 @@ RowSums weigh_row_checked(const float* rgb, const uint16_t* jt, int n, float* w)
         s.bad += (r != r0) | (g != g0) | (b != b0);  // NaN != NaN too
         const int at = 2 * (i & ~3) + (i & 3);
         float jac = float(jt[at]), cjac = float(jt[at + 4]);
-        w[i] = (0.2126f * r + 0.7152f * g + 0.0722f * b) * jac;
+        w[i] = luminance(r, g, b) * jac;
         s.w += w[i];
         s.er += r * cjac, s.eg += g * cjac, s.eb += b * cjac;
     }
@@ -83,7 +83,7 @@ bool weigh_row_fast(const float* rgb, const uint16_t* jt, int n, float* w, RowSu
 #if defined(__SSE2__)
     {
         // Four pixels a step: three loads deinterleaved by shuffles into R, G and B lanes.
-        const __m128 kr = _mm_set1_ps(0.2126f), kg = _mm_set1_ps(0.7152f), kb = _mm_set1_ps(0.0722f);
+        const __m128 kr = _mm_set1_ps(kLuminanceR), kg = _mm_set1_ps(kLuminanceG), kb = _mm_set1_ps(kLuminanceB);
         const __m128i zero = _mm_setzero_si128();
         __m128 vw = _mm_setzero_ps(), vr = vw, vg = vw, vb = vw, vsign = vw;
         for (; i + 4 <= n; i += 4) {
@@ -115,7 +115,7 @@ bool weigh_row_fast(const float* rgb, const uint16_t* jt, int n, float* w, RowSu
         float r = rgb[3 * i], g = rgb[3 * i + 1], b = rgb[3 * i + 2];
         const int at = 2 * (i & ~3) + (i & 3);
         float jac = float(jt[at]), cjac = float(jt[at + 4]);
-        w[i] = (0.2126f * r + 0.7152f * g + 0.0722f * b) * jac;
+        w[i] = luminance(r, g, b) * jac;
         s.w += w[i];
         s.er += r * cjac, s.eg += g * cjac, s.eb += b * cjac;
         lowest = std::min({lowest, r, g, b});

@@ -68,14 +68,12 @@ class EnvLight {
     float ground_albedo() const { return ground_albedo_; }
     // The ground model's radiance, or the ground image's mean (solid-angle weighted).
     Color ground_radiance() const { return ground_radiance_; }
-    bool has_ground_image() const { return ground_image_ != nullptr; }
     Color sky_irradiance() const { return sky_irradiance_; }  // on a horizontal plane, W m^-2 per channel
     float sky_probability() const { return sky_probability_; }
     const SkyImage& sky() const { return *sky_; }
     // The CDF of the "cdf" sampler (an empty one for other samplers).
     const Distribution2D& distribution() const;
     const SkySampler& sampler() const { return *sampler_; }
-    const SkySamplerOptions& sampler_options() const { return sampler_options_; }
     // Pixels treated as black because they were NaN, infinite or negative in the last sky.
     size_t bad_pixel_count() const { return bad_pixels_; }
     // Bytes held for sampling: weights, solid-angle table and the sampler's own tables.

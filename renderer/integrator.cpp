@@ -541,7 +541,7 @@ void PathIntegrator::sample_tile(const Camera& camera, float tan_half, float asp
             st->sum += cd;
             if (PixelExtra* e = st->extra) {
                 e->sum2 += cd * cd;
-                double lum = 0.2126 * cd[0] + 0.7152 * cd[1] + 0.0722 * cd[2];
+                double lum = luminance(cd[0], cd[1], cd[2]);
                 e->lum_sum += lum, e->lum_sum2 += lum * lum;
                 if (features && first.surface) {
                     e->albedo += first.albedo.cast<double>();

@@ -136,9 +136,6 @@ struct Bounds3 {
     Vec3 diagonal() const { return hi - lo; }
 };
 
-// Luminous efficacy of the sky's units: luminance in cd m^-2 is 683 x Y of its radiance (glossary).
-inline constexpr double kLumensPerWatt = 683.0;
-
 // A KHR_lights_punctual light, in world space and radiometric units (the sky's: W, m, sr). glTF
 // gives candela (point, spot) and lux (directional) for its linear RGB colour, so radiometric =
 // colour x photometric / kLumensPerWatt (Blender's glTF exporter converts with the same 683).

@@ -14,7 +14,7 @@ double time_streaming_floor(const SkyImage& sky, std::vector<float>* out) {
         for (int j = rows.begin(); j != rows.end(); ++j) {
             const float* p = &sky.rgb[size_t(j) * n * 3];
             float* o = &(*out)[size_t(j) * n];
-            for (int i = 0; i < n; ++i) o[i] = 0.2126f * p[3 * i] + 0.7152f * p[3 * i + 1] + 0.0722f * p[3 * i + 2];
+            for (int i = 0; i < n; ++i) o[i] = luminance(p[3 * i], p[3 * i + 1], p[3 * i + 2]);
         }
     });
     // Keep the compiler from dropping the pass: the result is observable through out.

@@ -12,10 +12,10 @@ run() {
     local EXE=$1 OUT=$2 S=../shared
     rm -rf "$OUT"; mkdir -p "$OUT"
     "$EXE" render builtin --spp 4 --res 96x64 --out "$OUT/builtin.exr" -q
-    "$EXE" sky clear --lat 48.85 --lon 2.35 --time 2026-06-21T12:00:00Z --res 128 --out "$OUT/clear.exr" >/dev/null
+    "$EXE" sky clear --lat 48.85 --lon 2.35 --time 2026-06-21T12:00:00Z --sky-res 128 --out "$OUT/clear.exr" >/dev/null
     "$EXE" render scenes/house/house.gltf --sky "$OUT/clear.exr" --spp 4 --res 96x64 --out "$OUT/house.exr" -q
-    "$EXE" sky procedural --cloud-seed 1 --coverage 0.5 --duration 20 --dt 10 --res 128 --out "$OUT/proc" --quiet
-    "$EXE" sky import $S/skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524160000Z.jpg --preset arm-tsi --res 128 \
+    "$EXE" sky procedural --cloud-seed 1 --coverage 0.5 --duration 20 --dt 10 --sky-res 128 --out "$OUT/proc" --quiet
+    "$EXE" sky import $S/skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524160000Z.jpg --preset arm-tsi --sky-res 128 \
         --out "$OUT/import.exr" >/dev/null
     "$EXE" sky predict --model networks/models/arm_tsi --steps 3 --in "$OUT/import.exr" --out "$OUT/pred" --quiet
     for m in auto flow procedural; do
@@ -24,7 +24,7 @@ run() {
     done
     "$EXE" compare scenes/tower/tower.gltf --spp 2 --res 64x36 --sky-res 128 --out "$OUT/cmp" \
         --time 2026-06-21T16:00:00Z >/dev/null 2>&1
-    "$EXE" sky evaluate --model networks/models/arm_tsi --sequence arm-tsi --horizons 1,2 --report "$OUT/eval.md" \
+    "$EXE" sky evaluate --model networks/models/arm_tsi --sequence arm-tsi --horizons 1,2 --out "$OUT/eval.md" \
         --histogram "$OUT/hist.png" --quiet
 }
 run "$OLD" "$WORK/old" 2>"$WORK/old.log"

@@ -49,8 +49,7 @@ class ClearSkyModel {
     // Calls add(i, j, radiance) per sector above the horizon (a pixel may come several times).
     void splat_sun_disc(int n, const std::function<void(int, int, const Color&)>& add) const;
 
-    const Vec3d& sun_direction() const { return sun_; }              // true sun, unit
-    const Vec3d& model_sun_direction() const { return model_sun_; }  // raised to the horizon if below
+    const Vec3d& sun_direction() const { return sun_; }  // true sun, unit
     bool elevation_clamped() const { return clamped_; }
     std::string clamp_warning() const;  // "" when not clamped
     const HosekWilkieSky& model() const { return model_; }

@@ -41,7 +41,7 @@ void run_cloud_mask(const CloudMaskJob& o) {
     check_extension("--out", o.out, ".png");
     check_outputs_are_not_inputs({o.out}, {o.input, o.mask});
     const CloudMaskParams& mp = o.params;
-    if (!std::isfinite(mp.threshold)) throw Error("--threshold must be a finite number");
+    if (!std::isfinite(mp.threshold)) throw Error("--cloud-threshold must be a finite number");
     Image encoded, mask;
     std::vector<unsigned char> sky;
     if (file_extension(o.input) == ".exr") {

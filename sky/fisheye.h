@@ -43,7 +43,6 @@ double pixel_solid_angle(int i, int j, int n);
 
 // Densities: p_w = p_uv * 4 theta / (pi^2 sin theta), p_uv per unit area of [-1, 1]^2.
 inline double pdf_solid_angle_from_uv(double pdf_uv, double theta) { return pdf_uv / solid_angle_jacobian(theta); }
-inline double pdf_uv_from_solid_angle(double pdf_w, double theta) { return pdf_w * solid_angle_jacobian(theta); }
 
 // Direction <-> continuous pixel coordinates of an N x N fisheye, for any direction (below the
 // horizon gives r > 1). Double precision, for image warps and the motion code.

@@ -123,7 +123,7 @@ void split_band(double wavelength_nm, int* band, double* frac) {
 // A low sun's spectrum lies outside the Rec.709 gamut (negative blue). Desaturate towards the
 // grey of equal luminance just enough to reach the gamut: luminance, so photometric energy, is kept.
 Eigen::Array3d desaturate_into_gamut(const Eigen::Array3d& rgb) {
-    double y = 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
+    double y = luminance(rgb[0], rgb[1], rgb[2]);
     if (!(y > 0)) return Eigen::Array3d::Zero();
     double lowest = rgb.minCoeff();
     if (lowest >= 0) return rgb;

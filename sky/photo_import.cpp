@@ -599,6 +599,7 @@ SkyCircle find_sky_circle(const Image& photo, const std::string& name, double mi
 std::vector<unsigned char> load_not_sky_mask(const std::string& path, MaskLayout layout, int photo_width,
                                              int photo_height) {
     Image mask = read_image(path);
+    apply_orientation(mask);  // as the photograph is turned: a mask is seen as the viewer shows it
     std::vector<unsigned char> out(size_t(photo_width) * photo_height, 0);
     auto value = [&](int x, int y, int c) { return mask.at(x, y, std::min(c, mask.channels - 1)); };
     if (layout == MaskLayout::PhotoBlackIsNotSky || layout == MaskLayout::TsiCloudMask) {
@@ -1289,6 +1290,17 @@ ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, 
         double brightest = 0;
         cv::minMaxLoc(cv::max(cv::max(ch[0], ch[1]), ch[2]), nullptr, &brightest, nullptr, nullptr, seen_sky);
         if (!(brightest > 0)) throw_file_error(name, "the sky it shows is black everywhere: nothing to import");
+        // Its twin: white everywhere (a frame blown out by the sun, a blank file) holds no sky
+        // either; calibrated on its mean it came out a flat grey sky, scored and moved as real.
+        const double clipped = double(cv::countNonZero((sky_clipped > 0.25f) & seen_sky)) /
+                               std::max(1, cv::countNonZero(seen_sky));
+        if (clipped > 0.95) {
+            char text[160];
+            std::snprintf(text, sizeof text,
+                          "%.1f%% of the sky it shows is clipped (saturated): overexposed, no sky to import",
+                          100.0 * clipped);
+            throw_file_error(name, text);
+        }
     }
     out.not_sky.assign(size_t(n) * n, 0);
     out.clipped.assign(size_t(n) * n, 0);

@@ -10,6 +10,7 @@
 #include "sky/preset_import.h"
 #include "sky/sky_image.h"
 #include "sky/sun_position.h"
+#include "util/image_input.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
 #include "util/exposure.h"
@@ -52,8 +53,7 @@ ImportPlan plan_import(const OnePhoto& o, bool verbose) {
     if (!o.preview.empty() && !o.filled_mask.empty() &&
         std::filesystem::weakly_canonical(o.preview) == std::filesystem::weakly_canonical(o.filled_mask))
         throw Error("--filled-mask " + o.filled_mask + ": the same file as --preview (one would replace the other)");
-    if (o.resolution < 16 || o.resolution > 16384)
-        throw Error("--res " + std::to_string(o.resolution) + ": the fisheye must be 16..16384 pixels wide");
+    check_sky_resolution(o.resolution);
     if (o.hdr != "auto" && o.hdr != "none" && o.hdr != "calibrated")
         throw Error("--hdr '" + o.hdr + "': use none, calibrated or auto");
 
@@ -245,6 +245,12 @@ void import_one(const OnePhoto& o, bool verbose) {
             // calibrated sky records it (the moving sky and the frame stage look for it there).
             const SunPosition sun = compute_sun_position(utc, where);
             if (sun.elevation_deg() > 0) sky.sun_direction = sun.direction().cast<float>();
+            if (o.hdr == "calibrated")  // asked for, not done: say so even with -q
+                std::fprintf(stderr,
+                             "dynsky: warning: %s: --hdr calibrated: its values are linear (an HDR file, or --encoding "
+                             "linear) and are kept at their own scale; calibration against the clear sky is for "
+                             "display-encoded photographs\n",
+                             o.photo.c_str());
             if (verbose)
                 std::printf(
                     "HDR input: kept at its own scale (no calibration); time %s, sun at azimuth %.1f deg, "
@@ -307,12 +313,34 @@ void refuse_mixed_times(const PhotoImportJob& o, const std::vector<std::string>&
                 "order. Give --utc-offset HOURS (the camera clock's offset from UTC), or import them apart");
 }
 
+// Every photograph's encoding, before anything is written: HDR files (float pixels: their own
+// linear scale) among display-encoded photographs (calibrated against the sun) gave skies 100 x
+// apart in one sequence, without a word. Unreadable files are named by their own import.
+void refuse_mixed_encodings(const std::vector<std::string>& photos) {
+    std::string linear, encoded;
+    for (const std::string& p : photos) {
+        ImageFileInput in(p);
+        if (!in) continue;
+        const OIIO::TypeDesc t = in->spec().format;
+        std::string& kind = t == OIIO::TypeDesc::HALF || t == OIIO::TypeDesc::FLOAT || t == OIIO::TypeDesc::DOUBLE
+                                ? linear
+                                : encoded;
+        if (kind.empty()) kind = p;
+        if (!linear.empty() && !encoded.empty())
+            throw Error(linear + " holds linear (HDR) pixels and " + encoded +
+                        " display-encoded ones: their skies would be in different units in one sequence (the "
+                        "HDR file's own scale beside skies calibrated against the sun). Import them apart");
+    }
+}
+
 // The image files of a folder, in name order (a sequence's frames are named by their time).
 std::vector<std::string> photos_in_folder(const std::string& folder) {
     std::vector<std::string> out;
     for (const auto& e : std::filesystem::directory_iterator(folder)) {
         const std::string path = e.path().string(), ext = file_extension(path);
-        if (!e.is_regular_file() || (path.size() >= 11 && path.compare(path.size() - 11, 11, ".filled.png") == 0))
+        if (!e.is_regular_file() || is_hidden_file(path) ||
+            (path.size() >= 11 && path.compare(path.size() - 11, 11, ".filled.png") == 0) ||
+            e.path().filename() == kSequenceObstructionsName)
             continue;
         for (const char* known : {".jpg", ".jpeg", ".png", ".tif", ".tiff", ".exr", ".hdr", ".heic", ".heif", ".webp"})
             if (ext == known) out.push_back(path);
@@ -373,6 +401,7 @@ void run_photo_import(const PhotoImportJob& o) {
                             " (the same name): rename one");
     check_outputs_are_not_inputs(outputs, photos);
     refuse_mixed_times(o, photos, outputs);
+    refuse_mixed_encodings(photos);
     std::error_code ec;
     fs::create_directories(o.out, ec);
     if (ec || !fs::is_directory(o.out)) throw_file_error(o.out, "cannot create this output folder: " + ec.message());
@@ -413,7 +442,7 @@ void run_photo_import(const PhotoImportJob& o) {
                 if (std::hypot(x - circle.center_x, y - circle.center_y) <= circle.radius)
                     ++in_circle, hidden_in_circle += hidden[p];
             }
-        const std::string mask_path = (fs::path(o.out) / "obstructions.png").string();
+        const std::string mask_path = (fs::path(o.out) / kSequenceObstructionsName).string();
         write_image(mask_path, mask);
         std::printf(
             "obstructions: found once for the sequence, on the 80th percentile of %zu photographs spread over "

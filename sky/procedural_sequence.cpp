@@ -76,8 +76,7 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
     double steps = std::floor(o.duration / o.dt + 1e-9);
     if (steps + 1 > 100000) throw Error("--duration / --dt: more than 100000 frames; use a larger --dt");
     const int frames = int(steps) + 1;
-    if (o.resolution < 8 || o.resolution > 16384)
-        throw Error("--res: must be in [8, 16384], got " + std::to_string(o.resolution));
+    check_sky_resolution(o.resolution);
     if (!std::isfinite(o.sun_elevation) || o.sun_elevation < -90 || o.sun_elevation > 90)
         throw Error("--sun-elevation: must be in [-90, 90] degrees");
     if (!std::isfinite(o.sun_azimuth)) throw Error("--sun-azimuth: must be a finite angle in degrees");

@@ -18,6 +18,12 @@ bool SkyImage::in_disc(int i, int j) const {
     return uv.squaredNorm() <= 1.0f;
 }
 
+void check_sky_resolution(int n) {
+    if (n < kMinSkyResolution || n > kMaxSkyResolution)
+        throw Error("--sky-res " + std::to_string(n) + ": the fisheye must be " + std::to_string(kMinSkyResolution) +
+                    ".." + std::to_string(kMaxSkyResolution) + " pixels wide");
+}
+
 void validate_sky(const SkyImage& sky, const std::string& name) {
     int n = sky.resolution;
     if (n <= 0 || sky.rgb.size() != size_t(n) * n * 3) throw_file_error(name, "sky image has no pixels");
@@ -270,7 +276,7 @@ double horizontal_illuminance(const SkyImage& sky) {
             if (sky.in_disc(i, j))
                 e += luminance(sky.pixel(i, j)) * fisheye::direction_from_pixel(i, j, sky.resolution).y() *
                      fisheye::pixel_solid_angle(i, j, sky.resolution);
-    return 683.0 * e;
+    return kLumensPerWatt * e;
 }
 
 std::optional<double> sky_recorded_utc_seconds(const SkyImage& sky) {
@@ -289,6 +295,7 @@ std::optional<double> sky_recorded_utc_seconds(const SkyImage& sky) {
 bool written_beside_a_sky(const std::string& path) {
     const std::filesystem::path p(path);
     if (file_extension(path) != ".png") return false;
+    if (p.filename() == kSequenceObstructionsName) return true;
     std::filesystem::path stem = p.stem();
     if (stem.extension() == ".filled") stem = stem.stem();
     std::error_code ec;

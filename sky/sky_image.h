@@ -13,6 +13,12 @@ namespace dynsky {
 
 inline constexpr const char* kAbsoluteRadiance = "W m^-2 sr^-1";
 
+// The fisheye sizes N (N x N) every command makes, imports or renders with (`--sky-res`).
+inline constexpr int kMinSkyResolution = 16, kMaxSkyResolution = 16384;
+
+// Throws a usage error naming --sky-res unless kMinSkyResolution <= n <= kMaxSkyResolution.
+void check_sky_resolution(int n);
+
 struct SkyImage {
     int resolution = 0;                 // N: the image is N x N
     std::vector<float> rgb;             // N * N * 3, row-major, row 0 at the top (north); 0 outside the disc
@@ -82,8 +88,11 @@ std::vector<std::string> skies_in_time_order(std::vector<std::string> files);
 
 // A preview or filled mask written beside a sky (STEM.png or STEM.filled.png next to STEM.exr, as
 // `sky import` and `sky procedural` write them): part of that sky, not a photograph left out of a
-// folder of skies.
+// folder of skies; also the obstruction mask of a folder (kSequenceObstructionsName).
 bool written_beside_a_sky(const std::string& path);
+
+// The not-sky mask `sky import --detect-obstructions` writes once into a folder of skies.
+inline constexpr const char* kSequenceObstructionsName = "obstructions.png";
 
 // A sky's own metadata in an image header: dynsky:time, dynsky:sun_x/y/z (when known) and
 // dynsky:source (when set). Every sky file writer uses it; load_sky reads it back.

@@ -1,17 +1,15 @@
 #include "util/chart.h"
 
 #include <cctype>
-
-#include <sys/wait.h>
-
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
 #include "util/atomic_file.h"
+#include "util/child_process.h"
 #include "util/error.h"
-#include "util/shell.h"
 
 namespace dynsky {
 
@@ -48,21 +46,15 @@ void make_line_chart(const std::string& csv, const std::string& png, const std::
                      const std::string& xlabel, const std::string& ylabel, bool logy) {
     // The script goes on the command line (python3 -c): no script file to leave behind.
     TemporaryFile tmp(png);
-    std::string cmd = "/usr/bin/python3 -c " + shell_quote(kChartScript) + " " + shell_quote(csv) + " " +
-                      shell_quote(tmp.path()) + " " + shell_quote(title) + " " + shell_quote(xlabel) + " " +
-                      shell_quote(ylabel) + (logy ? " 1" : " 0");
     // Its messages are kept: on failure the last line says why (a full disk, no matplotlib), not a
-    // traceback on the terminal.
+    // traceback on the terminal. Run directly (no shell), so an interrupt stops it too.
     std::string said;
-    int status = -1;
-    if (FILE* pipe = popen((cmd + " 2>&1").c_str(), "r")) {
-        char buffer[4096];
-        size_t got;
-        while ((got = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) said.append(buffer, got);
-        status = pclose(pipe);
-    }
-    if (status != 0) {
-        int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    const ChildResult run = run_program({"/usr/bin/python3", "-c", kChartScript, csv, tmp.path(), title, xlabel, ylabel,
+                                         logy ? "1" : "0"},
+                                        &said);
+    if (!run.exited || run.exit_code != 0) {
+        const int code = run.exited ? run.exit_code : -1;
+        if (!run.started) said = "not started: " + std::string(std::strerror(run.spawn_error));
         // The last line that says something: trailing blank lines and spaces dropped first.
         while (!said.empty() && std::isspace(static_cast<unsigned char>(said.back()))) said.pop_back();
         const size_t newline = said.rfind('\n');

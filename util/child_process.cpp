@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <cerrno>
+#include <string>
 
 extern char** environ;
 
@@ -22,7 +23,7 @@ void stop_active_child() noexcept {
     if (child > 0) ::kill(child, SIGTERM);
 }
 
-ChildResult run_program(const std::vector<std::string>& argv) {
+ChildResult run_program(const std::vector<std::string>& argv, std::string* output) {
     ChildResult result;
     if (argv.empty()) {
         result.spawn_error = EINVAL;
@@ -34,15 +35,36 @@ ChildResult run_program(const std::vector<std::string>& argv) {
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+    int pipe_fds[2] = {-1, -1};
+    if (output) {
+        if (::pipe2(pipe_fds, O_CLOEXEC) != 0) {
+            result.spawn_error = errno;
+            posix_spawn_file_actions_destroy(&actions);
+            return result;
+        }
+        posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], 1);
+        posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], 2);
+    }
     pid_t pid = 0;
     const int err = ::posix_spawnp(&pid, args[0], &actions, nullptr, args.data(), environ);
     posix_spawn_file_actions_destroy(&actions);
+    if (output) ::close(pipe_fds[1]);
     if (err != 0) {
+        if (output) ::close(pipe_fds[0]);
         result.spawn_error = err;
         return result;
     }
     result.started = true;
     g_child = pid;
+    if (output) {
+        char buffer[4096];
+        for (;;) {
+            const ssize_t got = ::read(pipe_fds[0], buffer, sizeof buffer);
+            if (got > 0) output->append(buffer, size_t(got));
+            else if (got == 0 || errno != EINTR) break;
+        }
+        ::close(pipe_fds[0]);
+    }
     int status = 0;
     while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {}
     g_child = 0;

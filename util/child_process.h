@@ -17,8 +17,9 @@ struct ChildResult {
     int exit_code = -1;
 };
 
-// Runs argv[0] (looked up on PATH) with argv[1..]; returns when it has ended.
-ChildResult run_program(const std::vector<std::string>& argv);
+// Runs argv[0] (looked up on PATH) with argv[1..]; returns when it has ended. With `output`, what
+// it writes to stdout and stderr is collected there instead of reaching the terminal.
+ChildResult run_program(const std::vector<std::string>& argv, std::string* output = nullptr);
 
 // Async-signal-safe: sends SIGTERM to the active child, if any (called by the interrupt handler).
 void stop_active_child() noexcept;

@@ -12,7 +12,7 @@ float exposure_log_average(const Image& linear) {
     size_t count = 0;
     for (size_t p = 0; p < size_t(linear.width) * linear.height; ++p) {
         const float* c = &linear.pixels[p * linear.channels];
-        float y = 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
+        float y = luminance(c[0], c[1], c[2]);
         if (!(y > 0) || !std::isfinite(y)) continue;
         sum_log += std::log(double(y) + 1e-6);
         ++count;

@@ -30,6 +30,11 @@ std::string file_extension(const std::string& path) {
     return ext;
 }
 
+bool is_hidden_file(const std::string& path) {
+    const std::string name = fs::path(path).filename().string();
+    return !name.empty() && name[0] == '.';
+}
+
 int Image::channel_index(const std::string& name) const {
     for (size_t i = 0; i < channel_names.size(); ++i)
         if (channel_names[i] == name) return int(i);
@@ -252,6 +257,16 @@ Image read_image(const std::string& path, DataWindow part) {
         }
     }
     in->close();
+    // Radiance files record in EXPOSURE what was multiplied into their pixels (pfilt, hdrgen's
+    // exposure changes): the radiance is the pixel over it.
+    if (image.file_format == "hdr") {
+        const auto e = image.metadata.numbers.find("hdr:exposure");
+        if (e != image.metadata.numbers.end() && std::isfinite(e->second) && e->second > 0 && e->second != 1) {
+            const float inverse = float(1.0 / e->second);
+            for (float& v : image.pixels) v *= inverse;
+            e->second = 1;
+        }
+    }
     return image;
 }
 

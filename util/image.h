@@ -107,6 +107,10 @@ Image tonemap_to_display(const Image& linear, float exposure_ev = 0.0f);
 // Lower-cased extension with the dot (".exr"), or "" if none.
 std::string file_extension(const std::string& path);
 
+// A dot-file (.DS_Store, the ._NAME.jpg resource forks macOS leaves on shared drives, editors'
+// lock files): never one of a folder's photographs or skies.
+bool is_hidden_file(const std::string& path);
+
 // Throws naming path unless it ends in ext (".exr", ".png"); option names the flag in the message,
 // which starts with it (a usage error, exit 2: docs/exit-codes.md).
 void check_extension(const std::string& option, const std::string& path, const std::string& ext);

@@ -50,11 +50,16 @@ ImageFileInput::~ImageFileInput() { in_.reset(); }
 void ImageFileInput::reopen() {
     in_.reset();
     error_.clear();
+    // Colour as the file stores it: OpenImageIO would multiply unassociated alpha (PNG, most
+    // TIFFs) into RGB, so a sky or photograph with alpha 0.5 came in at half its light. Alpha is
+    // never radiance here; it stays a channel of its own.
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
     if (proxy_) {
         proxy_->seek(0);
         // By content, whatever the file's name: a JPEG named sky.exr is still read as a JPEG.
         in_ = OIIO::ImageInput::create("jpeg");
-        OIIO::ImageSpec spec, config;
+        OIIO::ImageSpec spec;
         void* proxy = proxy_.get();
         config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
         if (in_ && !(in_->set_ioproxy(proxy_.get()) && in_->open(path_, spec, config))) {
@@ -62,7 +67,7 @@ void ImageFileInput::reopen() {
             in_.reset();
         }
     } else {
-        in_ = OIIO::ImageInput::open(path_);
+        in_ = OIIO::ImageInput::open(path_, &config);
     }
     if (!in_ && error_.empty()) error_ = OIIO::geterror();
     (void)OIIO::geterror();

@@ -42,7 +42,17 @@ T quantile(std::vector<T> v, double q) {
     return v[k];
 }
 
-inline float luminance(const Color& c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
+// Rec. 709 luminance Y of linear RGB: the one place its weights are written (SIMD code loads them).
+inline constexpr float kLuminanceR = 0.2126f, kLuminanceG = 0.7152f, kLuminanceB = 0.0722f;
+template <typename T>
+inline T luminance(T r, T g, T b) {
+    return T(0.2126) * r + T(0.7152) * g + T(0.0722) * b;
+}
+inline float luminance(const Color& c) { return luminance(c[0], c[1], c[2]); }
+
+// Luminous efficacy of the sky's units: luminance in cd m^-2 (illuminance in lx) is 683 x Y of the
+// radiance (irradiance) in W m^-2 sr^-1 (W m^-2); glossary.
+inline constexpr double kLumensPerWatt = 683.0;
 
 template <typename T>
 inline T clamp(T x, T lo, T hi) {

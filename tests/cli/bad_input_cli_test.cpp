@@ -751,7 +751,7 @@ TEST(BadInputCli, OutOfRangeNumericOptionsAreRefusedNamingTheOption) {
         {i + "--radius -5 --center 32,24", "--radius"},
         {i + "--tilt inf", "--tilt"},
         {i + "--sky-res 3", "--sky-res"},
-        {"sky mask " + photo + " -o " + dir + "/m.png --threshold nan", "--threshold"},
+        {"sky mask " + photo + " -o " + dir + "/m.png --cloud-threshold nan", "--cloud-threshold"},
         {"compare builtin --sky clear -o " + dir + "/cmp --chart-frames 1", "--chart-frames"},
     };
     for (const Case& k : cases) bad.add(k.args, {k.option}, false);
@@ -770,7 +770,7 @@ TEST(BadInputCli, NamesNotOnAnOptionsListAreUsageErrors) {
         {"sky import " + photo + " -o " + dir + "/s.exr --encoding rec709", "--encoding"},
         {"sky import " + photo + " -o " + dir + "/s.exr --preset gopro", "--preset"},
         {"sky import " + photo + " -o " + dir + "/s.exr --mask-layout tsi", "--mask"},
-        {"sky mask " + photo + " -o " + dir + "/m.png --rule blue", "--rule"},
+        {"sky mask " + photo + " -o " + dir + "/m.png --cloud-rule blue", "--cloud-rule"},
         {"sky mask " + photo + " -o " + dir + "/m.png --preset gopro", "--preset"},
         {"sky evaluate --photos " + dir + " --preset gopro", "--preset"},
         {"sky training-data --sequence arm-tsi --out " + dir + "/td --cloud-rule blue", "--cloud-rule"},

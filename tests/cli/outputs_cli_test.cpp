@@ -86,7 +86,7 @@ TEST(OutputsCli, FullDiskFailsCleanlyForEveryFormat) {
     r = run_with_full_disk("sky latlong " + dir + "/clear.exr --out " + dir + "/ll.exr");
     expect_clean_failure(r, dir + "/ll.exr", dir);
     // A folder of outputs: procedural frames, flows, manifest.json.
-    r = run_with_full_disk("sky procedural --duration 10 --dt 10 --sky-res 64 --preview --out " + dir + "/proc");
+    r = run_with_full_disk("sky procedural --duration 10 --dt 10 --sky-res 64 --previews --out " + dir + "/proc");
     EXPECT_EQ(r.exit_code, 1) << r.output;
     EXPECT_NE(r.output.find(dir + "/proc/"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(dir + "/proc/manifest.json"));
@@ -159,8 +159,8 @@ TEST(OutputsCli, AnUnwritableOutputIsRefusedBeforeAnyWork) {
     } cases[] = {
         {"render builtin --res 16x9 --spp 1 -q -o " + dir + "/afile/x.exr", "is a file"},
         {"render builtin --res 16x9 --spp 1 -q -o " + dir + "/taken.exr", "a folder of that name is in the way"},
-        {"sky evaluate --model advect --no-paper --sequence arm-clear --limit 1 --res 64 --horizons 1 -q -o " + dir +
-             "/report.md",
+        {"sky evaluate --model advect --no-paper --sequence arm-clear --limit 1 --resolutions 64 --horizons 1 -q -o " +
+             dir + "/report.md",
          "a folder of that name is in the way"},
         {"compare builtin --res 16x9 --spp 1 --chart-res 8x4 --chart-spp 1 -q -o " + dir + "/cmp",
          "a folder of that name is in the way"},
@@ -286,10 +286,10 @@ TEST(OutputsCli, CompareBenchAndEvaluateRefuseAnOutputThatIsAnInput) {
          "is inside the input folder"},
         {" bench sampling --quick --shared " + dir + "/shared --out " + dir + "/r --cache " + dir + "/shared/scenes",
          "is inside the input folder"},
-        {" sky evaluate --photos " + dir + "/photos --preset arm-tsi --report " + dir + "/photos/eval.md",
+        {" sky evaluate --photos " + dir + "/photos --preset arm-tsi --out " + dir + "/photos/eval.md",
          "is inside the input folder"},
-        {" sky evaluate --photos " + dir + "/photos --preset arm-tsi --report " + dir + "/photos", "is also an input"},
-        {" sky evaluate --sequence arm-tsi --shared " + dir + "/shared --report " + dir + "/shared/eval.md",
+        {" sky evaluate --photos " + dir + "/photos --preset arm-tsi --out " + dir + "/photos", "is also an input"},
+        {" sky evaluate --sequence arm-tsi --shared " + dir + "/shared --out " + dir + "/shared/eval.md",
          "is inside the input folder"},
     };
     for (const Case& c : cases) {

@@ -112,7 +112,8 @@ TEST(ReadmeCommands, SkyProceduralAndImport) {
     r = in_folder(dir, "sky import PHOTOS/ --lat 48.85 --lon=2.35 --utc-offset 2 -o SKIES/ --sky-res 64");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("imported 8 of 8 photographs into SKIES/ "), std::string::npos) << r.output;
-    r = in_folder(dir, "sky evaluate --photos SKIES/ --report eval/eval.md --import-res 64 --res 64 --horizons 1,2 -q");
+    r = in_folder(dir,
+                  "sky evaluate --photos SKIES/ --out eval/eval.md --import-res 64 --resolutions 64 --horizons 1,2 -q");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_TRUE(non_empty(fs::path(dir) / "eval" / "eval.md"));
 }

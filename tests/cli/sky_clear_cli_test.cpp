@@ -40,7 +40,7 @@ TEST(SkyClearCli, ClearWritesASkyAndPreview) {
     std::string dir = test::temp_dir("skyclear");
     std::string out = dir + "/sky.exr", png = dir + "/sky.png";
     auto r = dynsky(
-        "sky clear --lat 48.8566 --lon 2.3522 --time 2026-06-21T12:00:00Z --turbidity 2.5 --albedo 0.2 --res 64 --out " +
+        "sky clear --lat 48.8566 --lon 2.3522 --time 2026-06-21T12:00:00Z --turbidity 2.5 --albedo 0.2 --sky-res 64 --out " +
         out + " --preview " + png);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_TRUE(contains(r.output, "azimuth")) << r.output;
@@ -58,7 +58,7 @@ TEST(SkyClearCli, ClearWritesASkyAndPreview) {
     // --no-sun: same sky without the disc: the brightest pixel is far dimmer.
     std::string out2 = dir + "/nosun.exr";
     r = dynsky(
-        "sky clear --lat 48.8566 --lon 2.3522 --time 2026-06-21T12:00:00Z --turbidity 2.5 --albedo 0.2 --no-sun --res 64 --out " +
+        "sky clear --lat 48.8566 --lon 2.3522 --time 2026-06-21T12:00:00Z --turbidity 2.5 --albedo 0.2 --no-sun --sky-res 64 --out " +
         out2);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     SkyImage nosun = load_sky(out2);
@@ -70,7 +70,7 @@ TEST(SkyClearCli, ClearWritesASkyAndPreview) {
 
 TEST(SkyClearCli, NightSunWarnsAndStillWrites) {
     std::string dir = test::temp_dir("skyclear");
-    auto r = dynsky("sky clear --lat 48.8566 --lon 2.3522 --time 2026-06-21T23:00:00Z --res 32 --out " + dir +
+    auto r = dynsky("sky clear --lat 48.8566 --lon 2.3522 --time 2026-06-21T23:00:00Z --sky-res 32 --out " + dir +
                     "/night.exr");
     EXPECT_EQ(r.exit_code, 0) << r.output;
     EXPECT_TRUE(contains(r.output, "below the horizon")) << r.output;
@@ -81,7 +81,7 @@ TEST(SkyClearCli, NightSunWarnsAndStillWrites) {
 TEST(SkyClearCli, BadInputFailsAndWritesNothing) {
     std::string dir = test::temp_dir("skyclear");
     std::string out = dir + "/sky.exr";
-    const std::string base = "sky clear --lat 10 --lon 20 --res 32 ";
+    const std::string base = "sky clear --lat 10 --lon 20 --sky-res 32 ";
     struct Case {
         std::string args, message;
     };
@@ -91,8 +91,8 @@ TEST(SkyClearCli, BadInputFailsAndWritesNothing) {
         {base + "--time 2026-06-21T12:00:00Z --turbidity 12 --out " + out, "turbidity"},
         {base + "--time 2026-06-21T12:00:00Z --albedo -1 --out " + out, "albedo"},
         {base + "--time 2026-06-21T12:00:00Z --out " + dir + "/sky.png", "sky.png"},
-        {"sky clear --lat 95 --lon 20 --res 32 --time 2026-06-21T12:00:00Z --out " + out, "--lat"},
-        {"sky clear --lat 10 --lon 20 --res 0 --time 2026-06-21T12:00:00Z --out " + out, "--res"},
+        {"sky clear --lat 95 --lon 20 --sky-res 32 --time 2026-06-21T12:00:00Z --out " + out, "--lat"},
+        {"sky clear --lat 10 --lon 20 --sky-res 0 --time 2026-06-21T12:00:00Z --out " + out, "--sky-res"},
     };
     // The program starts in ~0.5 s of CPU (shared libraries): run the cases side by side.
     std::vector<std::future<test::CommandResult>> runs;
@@ -111,7 +111,7 @@ TEST(SkyClearCli, BadInputFailsAndWritesNothing) {
 TEST(SkyClearCli, LatLongConvertsASky) {
     std::string dir = test::temp_dir("skyclear");
     std::string sky = dir + "/sky.exr", ll = dir + "/ll.exr";
-    ASSERT_EQ(dynsky("sky clear --lat 0 --lon 0 --time 2026-03-20T09:00:00Z --res 48 --out " + sky).exit_code, 0);
+    ASSERT_EQ(dynsky("sky clear --lat 0 --lon 0 --time 2026-03-20T09:00:00Z --sky-res 48 --out " + sky).exit_code, 0);
     auto r = dynsky("sky latlong " + sky + " --out " + ll + " --preview " + dir + "/ll.png --ground 0.1,0.2,0.3");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     Image image = read_image(ll);

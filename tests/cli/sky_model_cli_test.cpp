@@ -299,7 +299,7 @@ TEST(SkyModelCli, EvaluateScoresAnyFolderOfPhotosWithEveryMethod) {
     const std::string dir = test::temp_dir("evaluate");
     const std::string photos = photo_folder(dir + "/photos", 6);
     auto r = test::run_command(dynsky("sky evaluate --quiet --model advect --no-paper --photos " + photos +
-                                      " --preset arm-tsi --horizons 1,2 --res 64 --report " + dir + "/eval.md"));
+                                      " --preset arm-tsi --horizons 1,2 --resolutions 64 --out " + dir + "/eval.md"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     const std::string md = read_text(dir + "/eval.md");
     EXPECT_NE(md.find("| 1 | 30 s |"), std::string::npos) << md;
@@ -339,7 +339,7 @@ TEST(SkyModelCli, EvaluateScoresAFolderOfImportedSkiesAsItsPhotographs) {
                                           ".filled.png"));
         ASSERT_EQ(r.exit_code, 0) << r.output;
     }
-    const std::string common = " --quiet --model advect --no-paper --horizons 1,2 --res 64,256 --report ";
+    const std::string common = " --quiet --model advect --no-paper --horizons 1,2 --resolutions 64,256 --out ";
     auto r = test::run_command(dynsky("sky evaluate --photos " + photos + " --preset arm-tsi" + common + dir +
                                       "/photos.md"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -380,7 +380,7 @@ TEST(SkyModelCli, EvaluateScoresAFolderOfImportedSkiesAsItsPhotographs) {
     r = test::run_command(dynsky("sky procedural --quiet --sky-res 64 --duration 20 -o " + dir + "/procedural"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     r = test::run_command(dynsky("sky evaluate --photos " + dir +
-                                 "/procedural --import-res 64 --res 64 --quiet --model advect --report " + dir +
+                                 "/procedural --import-res 64 --resolutions 64 --quiet --model advect --out " + dir +
                                  "/procedural.md 2>&1"));
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.output.find("carries no time"), std::string::npos) << r.output;
@@ -393,7 +393,7 @@ TEST(SkyModelCli, EvaluateScoresAFolderOfImportedSkiesAsItsPhotographs) {
 TEST(SkyModelCli, EvaluateNeverScoresTheModelsTrainingFramesAsHeldOut) {
     DYNSKY_REQUIRE_SHARED();
     const std::string dir = test::temp_dir("evaluate_trained");
-    const std::string common = " --quiet --no-paper --preset arm-tsi --horizons 1 --res 64 --report ";
+    const std::string common = " --quiet --no-paper --preset arm-tsi --horizons 1 --resolutions 64 --out ";
     for (const char* name : {"/arm_dusk", "/mine"}) {
         const std::string photos = photo_folder(dir + name, 5);  // ARM day frames 100-104: trained on
         auto r = test::run_command(dynsky("sky evaluate --photos " + photos + common + dir + "/t.md 2>&1"));
@@ -438,16 +438,16 @@ TEST(SkyModelCli, EvaluateRejectsFoldersWithoutOneRegularSequence) {
     };
     for (const Case& c : cases) {
         auto r = test::run_command(dynsky("sky evaluate --quiet --model advect --photos " + c.folder +
-                                          " --preset arm-tsi --report " + dir + "/eval.md 2>&1"));
+                                          " --preset arm-tsi --out " + dir + "/eval.md 2>&1"));
         EXPECT_EQ(r.exit_code, 1) << c.folder;
         EXPECT_NE(r.output.find(c.message), std::string::npos) << c.folder << ": " << r.output;
         EXPECT_FALSE(fs::exists(dir + "/eval.md")) << c.folder;
     }
     // Five photographs: the default horizons 1, 2, 6 do not fit; 1 and 2 are scored, with a note.
     {
-        auto r = test::run_command(dynsky("sky evaluate --model advect --no-paper --res 64 --import-res 64 --photos " +
-                                          photo_folder(dir + "/five", 5) + " --preset arm-tsi --report " + dir +
-                                          "/five.md 2>&1"));
+        auto r = test::run_command(
+            dynsky("sky evaluate --model advect --no-paper --resolutions 64 --import-res 64 --photos " +
+                   photo_folder(dir + "/five", 5) + " --preset arm-tsi --out " + dir + "/five.md 2>&1"));
         EXPECT_EQ(r.exit_code, 0) << r.output;
         EXPECT_NE(r.output.find("holds 5 frames, too few for horizon(s) 6 (h + 2 frames each): scoring 1, 2"),
                   std::string::npos)
@@ -460,9 +460,9 @@ TEST(SkyModelCli, EvaluateRejectsFoldersWithoutOneRegularSequence) {
         // saying which can be scored ("too few frames" before); partly outside is clipped, said.
         for (const std::string& frames : {"3-1", "-1", "7-9", "1-2x"}) {
             auto bad = test::run_command(
-                dynsky("sky evaluate --model advect --no-paper --res 64 --import-res 64 "
+                dynsky("sky evaluate --model advect --no-paper --resolutions 64 --import-res 64 "
                        "--horizons 1 --photos " +
-                       dir + "/five --preset arm-tsi --frames " + frames + " --report " + dir + "/frames.md 2>&1"));
+                       dir + "/five --preset arm-tsi --frames " + frames + " --out " + dir + "/frames.md 2>&1"));
             EXPECT_EQ(bad.exit_code, 2) << frames << ": " << bad.output;
             EXPECT_NE(bad.output.find("--frames '" + frames + "'"), std::string::npos) << bad.output;
             if (frames != "-1" && frames != "1-2x")
@@ -470,9 +470,9 @@ TEST(SkyModelCli, EvaluateRejectsFoldersWithoutOneRegularSequence) {
             EXPECT_FALSE(fs::exists(dir + "/frames.md"));
         }
         auto clipped =
-            test::run_command(dynsky("sky evaluate --model advect --no-paper --res 64 --import-res 64 "
+            test::run_command(dynsky("sky evaluate --model advect --no-paper --resolutions 64 --import-res 64 "
                                      "--horizons 1 --photos " +
-                                     dir + "/five --preset arm-tsi --frames 0-99 --report " + dir + "/frames.md 2>&1"));
+                                     dir + "/five --preset arm-tsi --frames 0-99 --out " + dir + "/frames.md 2>&1"));
         EXPECT_EQ(clipped.exit_code, 0) << clipped.output;
         EXPECT_NE(clipped.output.find("--frames 0-99 scores 1-3"), std::string::npos) << clipped.output;
     }
@@ -504,9 +504,19 @@ TEST(SkyModelCli, EvaluateRejectsBadArguments) {
         EXPECT_NE(r.output.find("--preset"), std::string::npos) << r.output;
         fs::remove_all(photos);
     }
-    r = test::run_command(dynsky("sky evaluate --model advect --sequence arm-tsi --res 100"));
+    r = test::run_command(dynsky("sky evaluate --model advect --sequence arm-tsi --resolutions 100"));
     EXPECT_EQ(r.exit_code, 2);  // a bad option value: usage error
-    EXPECT_NE(r.output.find("--res 100"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("--resolutions 100"), std::string::npos) << r.output;
+    {
+        // A report asked into a folder (`-o out/`) failed after the whole scoring, with charts
+        // left in the folder: refused first.
+        const std::string dir = test::temp_dir("evaluate_out_folder");
+        r = test::run_command(dynsky("sky evaluate --model advect --sequence arm-tsi -o " + dir + "/out/"));
+        EXPECT_EQ(r.exit_code, 2) << r.output;
+        EXPECT_NE(r.output.find("a folder; give the report's file"), std::string::npos) << r.output;
+        EXPECT_FALSE(fs::exists(dir + "/out"));
+        fs::remove_all(dir);
+    }
 }
 
 TEST(SkyModelCli, TrainingDataImportsExactlyAsSkyImport) {
@@ -516,8 +526,8 @@ TEST(SkyModelCli, TrainingDataImportsExactlyAsSkyImport) {
     DYNSKY_REQUIRE_SHARED();
     const std::string dir = test::temp_dir("import_same");
     const std::string photo = test::shared_path("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg");
-    auto r = test::run_command(dynsky("sky import --preset arm-tsi --fill smooth --res 64 " + photo + " --out " + dir +
-                                      "/cli.exr"));
+    auto r = test::run_command(dynsky("sky import --preset arm-tsi --fill smooth --sky-res 64 " + photo + " --out " +
+                                      dir + "/cli.exr"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     SkyImage cli = load_sky(dir + "/cli.exr");
     SkyImage lib = import_preset_photo(photo, "arm-tsi", 64);

@@ -23,8 +23,8 @@ test::CommandResult procedural(const std::string& args) {
 TEST(SkyProceduralCli, WritesFramesFlowsAndManifest) {
     std::string dir = test::temp_dir("procedural_cli") + "/seq";
     auto r = procedural(
-        "--cloud-seed 3 --coverage 0.4 --duration 20 --dt 10 --res 48 --wind-speed 12 --wind-from 250 "
-        "--layers cumulus,cirrus --preview --out " +
+        "--cloud-seed 3 --coverage 0.4 --duration 20 --dt 10 --sky-res 48 --wind-speed 12 --wind-from 250 "
+        "--layers cumulus,cirrus --previews --out " +
         dir);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     for (int k = 0; k < 3; ++k) {
@@ -76,7 +76,7 @@ TEST(SkyProceduralCli, BadArgumentsLeaveNoOutput) {
     int k = 0;
     for (const Case& c : cases) {
         std::string dir = base + "/out" + std::to_string(k++);
-        auto r = procedural("--duration 10 --dt 5 --res 32 " + c.args + " --out " + dir);
+        auto r = procedural("--duration 10 --dt 5 --sky-res 32 " + c.args + " --out " + dir);
         EXPECT_NE(r.exit_code, 0) << c.args;
         EXPECT_NE(r.output.find(c.expect), std::string::npos) << c.args << ": " << r.output;
         EXPECT_FALSE(fs::exists(dir)) << c.args;
@@ -86,7 +86,7 @@ TEST(SkyProceduralCli, BadArgumentsLeaveNoOutput) {
 TEST(SkyProceduralCli, SunFromPlaceAndTime) {
     std::string dir = test::temp_dir("procedural_cli_sun") + "/seq";
     auto r = procedural(
-        "--lat 39.74 --lon -105.18 --time 2024-06-21T18:00:00Z --duration 600 --dt 600 --res 32 --out " + dir);
+        "--lat 39.74 --lon -105.18 --time 2024-06-21T18:00:00Z --duration 600 --dt 600 --sky-res 32 --out " + dir);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     // Denver near solar noon in June: the sun is high in the south, and moves over 10 minutes.
     SkyImage a = load_sky(dir + "/frame_0000.exr"), b = load_sky(dir + "/frame_0001.exr");
@@ -145,7 +145,7 @@ TEST(SkyProceduralCli, HelpDescribesOptions) {
     auto r = test::run_command(std::string(DYNSKY_EXE) + " sky procedural --help");
     EXPECT_EQ(r.exit_code, 0);
     for (const char* option : {"--cloud-seed", "--coverage", "--duration", "--dt", "--sky-res", "--out", "--wind",
-                               "--mask-image", "--sun-elevation", "--lat", "--preview"})
+                               "--mask-image", "--sun-elevation", "--lat", "--previews"})
         EXPECT_NE(r.output.find(option), std::string::npos) << option;
 }
 

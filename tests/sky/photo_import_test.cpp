@@ -1002,6 +1002,27 @@ TEST(PhotoImport, PhotoTimeFallsBackToExif) {
     }
 }
 
+// A mask is seen as a viewer shows it, as the photograph is: one stored turned with an EXIF
+// orientation hid the wrong pixels (a strip on the left filled along the bottom instead).
+TEST(PhotoImport, AMasksOrientationIsAppliedAsThePhotographs) {
+    const std::string dir = test::temp_dir("mask_orientation");
+    const int w = 64, h = 48;  // as shown: black (not sky) where x < 16
+    const std::string path = dir + "/mask.tif";
+    auto out = OIIO::ImageOutput::create(path);
+    OIIO::ImageSpec spec(h, w, 1, OIIO::TypeDesc::UINT8);  // stored 48 x 64, shown turned 90 degrees clockwise
+    spec.attribute("Orientation", 6);
+    std::vector<unsigned char> stored(size_t(w) * h);
+    for (int sy = 0; sy < w; ++sy)
+        for (int sx = 0; sx < h; ++sx) stored[size_t(sy) * h + sx] = (w - 1 - sy) < 16 ? 0 : 255;  // shown x = 63 - sy
+    ASSERT_TRUE(out->open(path, spec) && out->write_image(OIIO::TypeDesc::UINT8, stored.data()));
+    out->close();
+    const std::vector<unsigned char> m = load_not_sky_mask(path, MaskLayout::PhotoBlackIsNotSky, w, h);
+    ASSERT_EQ(m.size(), size_t(w) * h);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) ASSERT_EQ(m[size_t(y) * w + x], x < 16 ? 1 : 0) << x << "," << y;
+    std::filesystem::remove_all(dir);
+}
+
 TEST(PhotoImport, BadInputGivesErrorsNamingTheFile) {
     std::string dir = test::temp_dir("photo-import");
     auto expect_error = [](const std::string& path, const std::string& words, const PhotoImportParams& p) {
@@ -1028,6 +1049,16 @@ TEST(PhotoImport, BadInputGivesErrorsNamingTheFile) {
     std::string grey_path = dir + "/grey.png";
     write_image(grey_path, grey);
     expect_error(grey_path, "no sky circle found", p);
+
+    // White everywhere (blown out, a blank frame): no sky, as black everywhere has none. It was
+    // calibrated on its mean into a flat grey sky, scored and moved as real.
+    Image white(320, 240, 3);
+    std::fill(white.pixels.begin(), white.pixels.end(), 1.0f);
+    const std::string white_path = dir + "/white.png";
+    write_image(white_path, white);
+    p.circle = SkyCircle{160, 120, 100};
+    expect_error(white_path, "clipped (saturated)", p);
+    p.circle.reset();
 
     // NaN in an HDR photo.
     Image hdr(64, 64, 3);

@@ -210,5 +210,49 @@ TEST(ImageIo, ExifOrientationTurnsThePixelsAsViewersShowThem) {
     fs::remove_all(dir);
 }
 
+// Alpha is never radiance: OpenImageIO multiplied a PNG's or TIFF's unassociated alpha into its
+// colour, so a sky or photograph with alpha 0.5 came in at half its light (0 read black).
+TEST(ImageIo, AlphaDoesNotScaleTheColour) {
+    const std::string dir = test::temp_dir("alpha");
+    for (const char* name : {"sky.png", "sky.tif"}) {
+        const std::string path = dir + "/" + name;
+        auto out = OIIO::ImageOutput::create(path);
+        OIIO::ImageSpec spec(4, 2, 4, OIIO::TypeDesc::UINT8);
+        spec.alpha_channel = 3;
+        spec.attribute("oiio:UnassociatedAlpha", 1);
+        std::vector<unsigned char> bytes;
+        for (int p = 0; p < 8; ++p) bytes.insert(bytes.end(), {200, 100, 50, (unsigned char)(p < 4 ? 128 : 0)});
+        ASSERT_TRUE(out->open(path, spec) && out->write_image(OIIO::TypeDesc::UINT8, bytes.data())) << name;
+        out->close();
+        const Image image = read_image(path);
+        ASSERT_EQ(image.channels, 4) << name;
+        for (int y = 0; y < 2; ++y)
+            for (int x = 0; x < 4; ++x) {
+                EXPECT_NEAR(image.at(x, y, 0), 200 / 255.0f, 1e-6f) << name << " " << x << "," << y;
+                EXPECT_NEAR(image.at(x, y, 2), 50 / 255.0f, 1e-6f) << name << " " << x << "," << y;
+            }
+    }
+    fs::remove_all(dir);
+}
+
+// A Radiance file's EXPOSURE says what was multiplied into its pixels: radiance is pixel / EXPOSURE.
+TEST(ImageIo, RadianceExposureIsDividedOut) {
+    const std::string dir = test::temp_dir("hdr_exposure");
+    auto write_hdr = [&](const std::string& path, const char* exposure_line) {
+        std::ofstream f(path, std::ios::binary);
+        f << "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n" << exposure_line << "\n-Y 2 +X 2\n";
+        for (int p = 0; p < 4; ++p) f.write("\x80\x80\x80\x81", 4);  // 0.5 * 2^1 = 1.0 per channel
+    };
+    write_hdr(dir + "/plain.hdr", "");
+    write_hdr(dir + "/exposed.hdr", "EXPOSURE=2.0\n");
+    const Image plain = read_image(dir + "/plain.hdr"), exposed = read_image(dir + "/exposed.hdr");
+    ASSERT_EQ(plain.pixels.size(), exposed.pixels.size());
+    for (size_t k = 0; k < plain.pixels.size(); ++k) {
+        EXPECT_NEAR(plain.pixels[k], 1.0f, 1e-6f) << k;
+        EXPECT_NEAR(exposed.pixels[k], 0.5f, 1e-6f) << k;
+    }
+    fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace dynsky
