@@ -82,6 +82,16 @@ SkyImage make_generated_sky(const SkySourceSpec& o) {
     return input;
 }
 
+SkyImage make_builtin_clear_sky(int resolution) {
+    SkySourceSpec clear;  // the place, time and turbidity of `--sky clear` everywhere
+    clear.sky = "clear";
+    clear.sky_resolution = resolution;  // --sky-res, as for 'clear'
+    SkyImage sky = make_generated_sky(clear);
+    sky.source = std::string("builtin: clear sky, Paris ") + default_sky::kStartTime + ", turbidity " +
+                 number_text(default_sky::kTurbidity);
+    return sky;
+}
+
 SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     if (!(m.dt >= 0)) throw Error("--dt must be positive (or 0: automatic)");
     const GammaKind gamma = parse_gamma(m.gamma);

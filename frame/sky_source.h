@@ -62,6 +62,10 @@ bool is_generated_sky(const std::string& sky);
 // the option at fault.
 SkyImage make_generated_sky(const SkySourceSpec& sky);
 
+// render's sky when none is given: a clear afternoon over Paris at the summer solstice (the place,
+// time and turbidity of `--sky clear` everywhere), N x N.
+SkyImage make_builtin_clear_sky(int resolution);
+
 // Validates everything (files, ranges) before any step is computed.
 SkyTimeline make_sky_timeline(const SkySourceSpec& sky, const StepModelSpec& model);
 

@@ -77,4 +77,24 @@ Camera look_at_camera(const Vec3& eye, const Vec3& target, float yfov) {
     return cam;
 }
 
+// Every surface a Lambertian of its base colour (textures and vertex colours kept), as
+// tools/cycles/render_cycles.py --override-material lambert does in Cycles: the two renderers then
+// share an exact BRDF, which separates geometry and lighting from material models. Emission goes
+// too, as it does there.
+void override_materials_lambert(Scene* scene) {
+    int white = -1;
+    for (MeshGroup& group : scene->meshes)
+        for (TriangleMesh& mesh : group.primitives)
+            if (mesh.material < 0) {
+                if (white < 0) {
+                    scene->materials.push_back(Scene::default_material());
+                    white = int(scene->materials.size()) - 1;
+                }
+                mesh.material = white;
+            }
+    for (Material& m : scene->materials)
+        m.metallic = 0, m.specular = 0, m.transmission = 0,
+        m.emissive = Color::Zero();  // glass too: as Cycles' diffuse
+}
+
 }  // namespace dynsky

@@ -170,6 +170,10 @@ struct Scene {
     const Material& material(int index) const { return index < 0 ? default_material() : materials[size_t(index)]; }
 };
 
+// Every surface a Lambertian of its base colour (textures and vertex colours kept; no emission), as
+// tools/cycles/render_cycles.py --override-material lambert does in Cycles (render --override-material).
+void override_materials_lambert(Scene* scene);
+
 // A camera that frames the scene's bounds from the south-east, above (used when a file has none).
 Camera frame_bounds_camera(const Bounds3& bounds, float aspect_ratio);
 
