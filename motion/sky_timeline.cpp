@@ -190,7 +190,7 @@ Color SkyTimeline::relight_to_clock(double t, SkyImage* out) {
     float* r = ratio.ptr<float>();
     for (size_t k = 0; k < later.size(); ++k)
         if (relight_start_[k] > 0)
-            r[k] = std::clamp(later[k] / relight_start_[k], 0.01f, 100.0f), inside.ptr<float>()[k / 3] = 1;
+            r[k] = std::clamp(later[k] / relight_start_[k], 1e-8f, 1e8f), inside.ptr<float>()[k / 3] = 1;
     if (w != n) {
         // Upsampled from the disc's pixels alone (normalised by their share of each footprint): the
         // horizon at sunset is 3 x darker than an hour before, and footprints reaching past the rim
@@ -217,7 +217,7 @@ Color SkyTimeline::relight_to_clock(double t, SkyImage* out) {
                 if (r2 > 1.0 || r2 < band * band) continue;
                 const Vec3d d = fisheye::direction_from_uv(double(uv.x()), double(uv.y()));
                 const Color a = model_start.sky_radiance(d), b = model_now.sky_radiance(d);
-                for (int c = 0; c < 3; ++c) row[i][c] = a[c] > 0 ? std::clamp(b[c] / a[c], 0.01f, 100.0f) : 1.0f;
+                for (int c = 0; c < 3; ++c) row[i][c] = a[c] > 0 ? std::clamp(b[c] / a[c], 1e-8f, 1e8f) : 1.0f;
             }
         });
     }
@@ -226,10 +226,11 @@ Color SkyTimeline::relight_to_clock(double t, SkyImage* out) {
     if (!relight_warned_ && now.y() < 0) {
         relight_warned_ = true;
         if (!reports_silenced())
-            std::fprintf(stderr,
-                         "dynsky: warning: the sun is below the horizon %.0f s into the sky timeline: the clear-sky "
-                         "model holds it at the horizon there (twilight and night are outside it)\n",
-                         t);
+            std::fprintf(
+                stderr,
+                "dynsky: warning: the sun is below the horizon %.0f s into the sky timeline: the clear-sky "
+                "sky is the sunset's dimmed for twilight there (clear_sky.h twilight_factor; no stars or moon)\n",
+                t);
     }
     // The patch holds radiance: put at a pixel of another solid angle it carries that much more or
     // less light (a sun climbing 11 degrees gained 5 % in an hour): its irradiance kept.

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <iomanip>
 #include <sstream>
 
 #include "sky/fisheye.h"
@@ -31,6 +32,11 @@ void validate_clear_sky_params(const ClearSkyParams& params) {
     if (!s.allFinite() || !(s.norm() > 1e-9)) throw Error("the sun direction must be a finite, non-zero vector");
 }
 
+double twilight_factor(double depression_deg) {
+    const double d = std::clamp(depression_deg, 0.0, 18.0);
+    return std::pow(10.0, d <= 12 ? -0.43 * d : -0.43 * 12 - 0.175 * (d - 12));
+}
+
 double ClearSkyModel::model_elevation(const Vec3d& sun) { return std::asin(std::clamp(sun.y(), 0.0, 1.0)); }
 
 ClearSkyModel::ClearSkyModel(const ClearSkyParams& params, bool warn)
@@ -39,6 +45,7 @@ ClearSkyModel::ClearSkyModel(const ClearSkyParams& params, bool warn)
       model_sun_(raise_to_horizon(sun_)),
       clamped_(sun_.y() < 0),
       model_(params.turbidity, params.ground_albedo, model_elevation(sun_)) {
+    if (clamped_) twilight_ = float(twilight_factor(-std::asin(sun_.y()) * 180 / kPiD));
     // Said once per run: compare and animate make a clear sky per frame (the same line 4-5 times).
     static std::atomic<bool> said{false};
     if (warn && clamped_ && !said.exchange(true))
@@ -50,8 +57,9 @@ std::string ClearSkyModel::clamp_warning() const {
     std::ostringstream s;
     s.precision(3);
     s << std::fixed << "the sun is " << -std::asin(sun_.y()) * 180 / kPiD
-      << " deg below the horizon, outside the Hosek-Wilkie model's 0..90 deg: the sky is computed with the sun at the horizon "
-         "(a sunset sky, not a twilight or night sky)";
+      << " deg below the horizon, outside the Hosek-Wilkie model's 0..90 deg: the sky is the sunset's (the sun at the "
+         "horizon) dimmed for twilight by "
+      << std::scientific << std::setprecision(1) << twilight_ << " (its colours stay the sunset's; no stars or moon)";
     return s.str();
 }
 
@@ -61,7 +69,7 @@ Color ClearSkyModel::sky_radiance(const Vec3d& w_in) const {
     Vec3d w = w_in / n;
     if (w.y() < 0) return Color::Zero();
     double cos_gamma = std::clamp(w.dot(model_sun_), -1.0, 1.0);
-    return model_.sky_radiance_rgb(w.y(), std::acos(cos_gamma), cos_gamma);
+    return twilight_ * model_.sky_radiance_rgb(w.y(), std::acos(cos_gamma), cos_gamma);
 }
 
 Color ClearSkyModel::sun_radiance(const Vec3d& w_in) const {

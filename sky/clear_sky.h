@@ -5,9 +5,11 @@
 // share it. See sky/hosek_wilkie.h and docs/sky.md.
 //
 // Sun below the horizon: the model holds for sun elevations 0..90 degrees only. A lower sun is
-// clamped: the sky is evaluated with the sun raised to the horizon (same azimuth), a warning goes
-// to stderr, and the disc stays at its true place (so it is hidden once fully below the horizon).
-// The result is a sunset sky, not a twilight or night sky.
+// clamped: the sky is evaluated with the sun raised to the horizon (same azimuth), dimmed by
+// twilight_factor (the clear sky's illuminance through twilight: a decade per 2.3 degrees to
+// nautical dusk, then slower to a starlit floor at 18 degrees), a warning goes to stderr, and the
+// disc stays at its true place (so it is hidden once fully below the horizon). The colours stay
+// the sunset's: no twilight blue, no stars.
 #pragma once
 
 #include <functional>
@@ -28,6 +30,12 @@ struct ClearSkyParams {
 
 // Throws dynsky::Error for out-of-range turbidity/albedo or a zero / non-finite sun direction.
 void validate_clear_sky_params(const ClearSkyParams& params);
+
+// The sky's brightness with the sun `depression_deg` below the horizon, relative to the sunset's:
+// 1 at 0; log10 falls 0.43 per degree to 12 degrees (sunset ~10^3 lx, civil dusk at 6 degrees a
+// few lux, nautical at 12 ~10^-2 lx: the US Naval Observatory's clear-sky table), 0.175 per degree
+// to 18, then stays (starlight, ~10^-3 lx). A sky held at sunset lit a night scene at 2400 lx.
+double twilight_factor(double depression_deg);
 
 // The model configured once for many lookups (thread-safe to read).
 class ClearSkyModel {
@@ -60,6 +68,7 @@ class ClearSkyModel {
     ClearSkyParams params_;
     Vec3d sun_, model_sun_;
     bool clamped_ = false;
+    float twilight_ = 1;  // twilight_factor of a sun below the horizon
     HosekWilkieSky model_;
 };
 

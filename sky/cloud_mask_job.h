@@ -6,7 +6,7 @@
 // Parameters (defaults as `sky mask` gives them):
 //   input         a photograph (JPEG/PNG/...) or a canonical sky (.exr) (required)
 //   out           the mask, .png (required)
-//   params        the rule and its threshold (rb, 0.46: the paper's)
+//   params        the rule and its threshold (`sky mask`: rb 0.75, kWsisegBestRedBlueThreshold)
 //   preset        "" or a camera preset: its sky circle and not-sky mask (its mask file beside the
 //                 photo, else its own obstruction geometry)
 //   circle        the sky circle in photo pixels (none: the preset's, else found)

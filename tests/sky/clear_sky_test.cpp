@@ -183,14 +183,43 @@ TEST(ClearSky, SunBelowHorizonIsClampedWithAWarning) {
     SkyImage low = make_clear_sky(params, 64);
     std::string err = testing::internal::GetCapturedStderr();
     EXPECT_NE(err.find("below the horizon"), std::string::npos) << err;
-    // Same as the sky with the sun on the horizon (the disc, 3 deg down, is hidden).
+    // The sky with the sun on the horizon (the disc, 3 deg down, is hidden) dimmed for twilight.
     ClearSkyParams horizon = params;
     horizon.sun_direction = Vec3d(params.sun_direction.x(), 0.0, params.sun_direction.z()).normalized();
     horizon.sun_disc = false;
     SkyImage ref = make_clear_sky(horizon, 64);
-    for (size_t k = 0; k < low.rgb.size(); ++k) EXPECT_NEAR(low.rgb[k], ref.rgb[k], 1e-5 * std::abs(ref.rgb[k]) + 1e-7);
+    const float dim = float(twilight_factor(3.0));
+    for (size_t k = 0; k < low.rgb.size(); ++k)
+        EXPECT_NEAR(low.rgb[k], dim * ref.rgb[k], 1e-5 * std::abs(dim * ref.rgb[k]) + 1e-9);
     EXPECT_LT(low.sun_direction->y(), 0.0f);  // the true sun is recorded
     EXPECT_NO_THROW(validate_sky(low, "low"));
+}
+
+// Through twilight the sky darkens as a clear evening does (horizontal illuminance, US Naval
+// Observatory's table: sunset ~10^3 lx, civil dusk (6 deg) a few lx, nautical (12 deg) ~10^-2, night
+// ~10^-3), continuously: it stayed at the sunset's 2400 lx all night.
+TEST(ClearSky, TwilightDarkensToANightSky) {
+    auto illuminance = [](double elevation_deg) {
+        ClearSkyParams p;
+        p.sun_direction = sun_at(elevation_deg, 250);
+        const SkyImage s = make_clear_sky(p, 64, false);
+        double e = 0;
+        for (int j = 0; j < 64; ++j)
+            for (int i = 0; i < 64; ++i)
+                if (const double omega = fisheye::pixel_solid_angle(i, j, 64); omega > 0)
+                    e += luminance(s.pixel(i, j)) * omega * fisheye::direction_from_pixel(i, j, 64).y();
+        return 683 * e;
+    };
+    const double sunset = illuminance(-0.3);
+    EXPECT_GT(sunset, 300);
+    EXPECT_NEAR(illuminance(-0.31) / sunset, 1.0, 0.01);  // no jump
+    EXPECT_GT(illuminance(-6), 0.5);
+    EXPECT_LT(illuminance(-6), 20);
+    EXPECT_GT(illuminance(-12), 1e-3);
+    EXPECT_LT(illuminance(-12), 0.1);
+    EXPECT_LT(illuminance(-40), 1e-2);
+    EXPECT_EQ(illuminance(-40), illuminance(-18));
+    EXPECT_DOUBLE_EQ(twilight_factor(0), 1.0);
 }
 
 TEST(ClearSky, RejectsBadParameters) {
