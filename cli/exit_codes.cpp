@@ -79,6 +79,32 @@ std::string suggestion(CLI::App& app, int argc, char** argv) {
 
 }  // namespace
 
+std::string missing_option_value(CLI::App& app, int argc, char** argv) {
+    CLI::App* cmd = &app;
+    for (int i = 1; i < argc; ++i) {
+        const std::string word = argv[i];
+        if (word == "--") break;
+        if (word.empty()) continue;
+        if (word[0] != '-') {
+            for (CLI::App* sub : cmd->get_subcommands([](const CLI::App*) { return true; }))
+                if (sub->check_name(word)) {
+                    cmd = sub;
+                    break;
+                }
+            continue;
+        }
+        if (word.find('=') != std::string::npos || i + 1 >= argc) continue;
+        const CLI::Option* opt = cmd->get_option_no_throw(word);
+        if (opt == nullptr || opt->get_expected_min() == 0) continue;  // unknown (said by the parse), a flag
+        const std::string next = argv[i + 1];
+        // A negative number is a value; another option's name (or anything spelt like one) is not.
+        const bool is_option = next.rfind("--", 0) == 0 ||
+                               (next.size() == 2 && next[0] == '-' && std::isalpha((unsigned char)next[1]));
+        if (is_option) return word + ": its value is missing (the next word, " + next + ", is an option)";
+    }
+    return "";
+}
+
 std::string plain_parse_message(const std::string& message) {
     std::smatch m;
     // CLI11: "Could not convert: --steps = 1e308" (a value its type cannot hold or read).

@@ -25,6 +25,10 @@ int exit_code_of(const Error& e);
 // of this option ..."); other messages unchanged.
 std::string plain_parse_message(const std::string& message);
 
+// An option that takes a value given an option instead ("--sky --spp 2": values may start with '-',
+// so that --lon -105 works, and --sky took "--spp"): "--sky: its value is missing ...", else "".
+std::string missing_option_value(CLI::App& app, int argc, char** argv);
+
 // Prints a CLI11 parse error with a "did you mean" for a misspelt command or option, and returns
 // kUsageError (kSuccess for --help).
 int report_parse_error(CLI::App& app, const CLI::ParseError& e, int argc, char** argv);

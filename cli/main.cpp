@@ -114,6 +114,10 @@ int main(int argc, char** argv) {
                      option.c_str());
         return dynsky::cli::kUsageError;
     }
+    if (const std::string missing = dynsky::cli::missing_option_value(app, argc, argv); !missing.empty()) {
+        std::fprintf(stderr, "dynsky: usage error: %s\n", missing.c_str());
+        return dynsky::cli::kUsageError;
+    }
     // -q silences the libraries' reports and progress too (notes, bars, "wrote ..."), for the
     // commands with their own --quiet as for the others.
     for (int i = 1; i < argc; ++i)

@@ -169,8 +169,9 @@ void add_generated_sky_options(CLI::App* cmd, SkySourceSpec* o) {
     cmd->add_option(
            "--time", o->time,
            "UTC time of t = 0, ISO 8601 (e.g. 2026-06-21T16:00:00Z): the sun follows the clock from there.\n"
-           "Default for 'procedural' and 'clear': 2026-06-21T16:00:00Z (at --lat, --lon: Paris); for an EXR: the sun\n"
-           "stays where the file has it")
+           "Default for 'procedural' and 'clear': 2026-06-21T16:00:00Z (at --lat, --lon: Paris). For an EXR: without\n"
+           "--time the sun stays where the file has it; with it, animate, compare and sky timeline start the clock\n"
+           "there and move the file's sun to it (a warning when the file records another), render refuses it")
         ->check(utc_time());
     cmd->add_option("--lat", o->latitude, "Latitude of the place, degrees north (with --time)")
         ->check(finite_in(-90, 90))

@@ -148,13 +148,11 @@ void write_prediction(const PredictionOptions& o) {
     };
     int stale = 0;
     for (const auto& e : fs::directory_iterator(o.out)) {
-        const std::string name = e.path().filename().string(), ext = e.path().extension().string();
-        if (!e.is_regular_file() || name.rfind("step_", 0) != 0 || (ext != ".exr" && ext != ".png")) continue;
+        const std::string ext = e.path().extension().string();
+        const std::optional<int> index = numbered_index(e.path().string(), "step");
+        if (!e.is_regular_file() || !index || (ext != ".exr" && ext != ".png")) continue;
         if (is_input(e.path())) continue;
-        const std::string digits = e.path().stem().string().substr(5);
-        if (digits.size() < 4 || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos)
-            continue;
-        const int k = std::stoi(digits);
+        const int k = *index;
         if (k >= 1 && k <= o.steps && (k % o.every == 0 || k == o.steps) && (ext == ".exr" || o.preview)) continue;
         fs::remove(e.path()), ++stale;
     }

@@ -195,6 +195,18 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
         progress.advance();
     }
     progress.finish();
+    // Frames and flows of an earlier, longer sequence (or its previews) would read as this one's:
+    // `animate --sky FOLDER` took the last of them as its input.
+    int stale = 0;
+    for (const auto& e : fs::directory_iterator(o.out)) {
+        const std::string path = e.path().string(), ext = file_extension(path);
+        if (!e.is_regular_file() || (ext != ".exr" && ext != ".png")) continue;
+        for (const char* prefix : {"frame", "flow"})
+            if (const std::optional<int> k = numbered_index(path, prefix))
+                if (*k >= frames || (ext == ".png" && !o.preview)) fs::remove(e.path()), ++stale;
+    }
+    if (stale && !o.quiet)
+        std::fprintf(stderr, "dynsky: note: removed %d file(s) of an earlier sequence from %s\n", stale, o.out.c_str());
     manifest["frames"] = frame_list;
     // Written last: a manifest means the sequence is complete.
     write_file_atomic((fs::path(o.out) / "manifest.json").string(), manifest.dump(2) + "\n");

@@ -3,6 +3,7 @@
 // frames, "flow" for a procedural sequence's flow fields, "step" for medium steps of a prediction.
 #pragma once
 
+#include <optional>
 #include <string>
 
 namespace dynsky {
@@ -10,6 +11,9 @@ namespace dynsky {
 // "frame", 7, ".exr" -> "frame_0007.exr"; with a folder, the path inside it.
 std::string numbered_name(const std::string& prefix, int k, const std::string& ext);
 std::string numbered_path(const std::string& folder, const std::string& prefix, int k, const std::string& ext);
+
+// The number k of such a name (a file name or path: "frame_0007.exr" -> 7), none for any other.
+std::optional<int> numbered_index(const std::string& name, const std::string& prefix);
 
 // The printf pattern of those names ("frame_%04d.png"), for ffmpeg.
 std::string numbered_pattern(const std::string& prefix, const std::string& ext);

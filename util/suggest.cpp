@@ -24,12 +24,20 @@ std::string closest_name(const std::string& word, const std::vector<std::string>
     const int allowed = word.size() <= 4 ? 1 : word.size() <= 8 ? 2 : 3;
     std::string best;
     int best_distance = allowed + 1;
+    size_t best_shared = 0;  // among equals, the name sharing the longer start with the word
     for (const std::string& name : names) {
         int d = edit_distance(word, name);
+        size_t shared = 0;
         if (word.size() >= 3 && name.rfind(word, 0) == 0) d = std::min(d, 1);
-        // A name the word starts with ("--outdir" for --out): a longer spelling of it.
-        else if (name.size() >= 5 && word.rfind(name, 0) == 0) d = std::min(d, allowed);
-        if (d < best_distance) best = name, best_distance = d;
+        // A name the word starts with ("--outdir" for --out, "--sky-resolution" for --sky-res): a
+        // longer spelling of it; the longest such name.
+        else if (name.size() >= 5 && word.rfind(name, 0) == 0) d = std::min(d, allowed), shared = name.size();
+        // A name ending in the word's own ("--sky-res" for --res): the same thing, qualified.
+        else if (word.size() >= 5 && word.rfind("--", 0) == 0 && name.size() > word.size() &&
+                 name.compare(name.size() - (word.size() - 1), word.size() - 1, word, 1) == 0)
+            d = std::min(d, 1);
+        if (d < best_distance || (d == best_distance && shared > best_shared))
+            best = name, best_distance = d, best_shared = shared;
     }
     return best;
 }

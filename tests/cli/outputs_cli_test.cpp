@@ -348,6 +348,12 @@ TEST(OutputsCli, ExitCodesAndDidYouMean) {
              {"render builtin extra words", 2, "not expected"},  // CLI11's 109
              {"render builtin --spp 0", 2, "--spp: '0' is not a number in 1 .. "},
              {"render builtin --sky " + dir + "/missing.exr", 1, dir + "/missing.exr"},
+             // A value left out: the next option was taken for it ("2: no such file", exit 1).
+             {"render --sky --spp 2", 2, "--sky: its value is missing (the next word, --spp, is an option)"},
+             {"animate --sky --spp 2", 2, "--sky: its value is missing"},
+             {"render builtin -o -q", 2, "-o: its value is missing"},
+             {"sky import x.jpg --res 64 -o y.exr", 2, "did you mean --sky-res?"},  // --lens
+             {"render --sky-resolution 64", 2, "did you mean --sky-res?"},         // --sky
          }) {
         auto r = test::run_command(kExe + " " + c.args);
         EXPECT_EQ(r.exit_code, c.code) << "dynsky " << c.args << ": " << r.output;

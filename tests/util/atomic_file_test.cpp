@@ -195,6 +195,10 @@ TEST(Suggest, ClosestNames) {
     EXPECT_EQ(closest_name("xyzzy", commands), "");
     EXPECT_EQ(closest_name("--sppp", {"--spp", "--seed", "--sky"}), "--spp");
     EXPECT_EQ(closest_name("--outdir", {"--out", "--steps", "--in"}), "--out");  // a longer spelling
+    // The qualified name of the same thing, and the longest name a longer spelling starts with
+    // (they suggested --lens and --sky).
+    EXPECT_EQ(closest_name("--res", {"--lens", "--sky-res", "--out"}), "--sky-res");
+    EXPECT_EQ(closest_name("--sky-resolution", {"--sky", "--sky-res", "--spp"}), "--sky-res");
     EXPECT_EQ(closest_name("--output-file", {"--out", "--steps"}), "--out");
     EXPECT_EQ(closest_name("skyfall", {"sky", "render"}), "");  // too short a name to say so
 }
