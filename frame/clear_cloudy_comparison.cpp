@@ -231,10 +231,14 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
     EnvLight light(o.scene.ground_albedo, path_tracer_sky_sampler());  // as render's default (cdf+mis)
     auto clear0 = clear_at(0.0);
     auto cloudy0 = std::make_shared<const SkyImage>(cloudy.sky_at(0.0));
+    // Progress with time left: the two frames, then the chart's pairs.
+    ProgressBar frames_progress(2, "compare: the clear and the cloudy frame");
     Image a = render_frame(accel, light, scene.camera, clear0, w, h, o.spp, o.seed);
+    frames_progress.advance();
     float ev = exposure_for_irradiance(light.sky_irradiance());
     Color e_clear = light.sky_irradiance();
     Image b = render_frame(accel, light, scene.camera, cloudy0, w, h, o.spp, o.seed);
+    frames_progress.finish();
     Color e_cloudy = light.sky_irradiance();
     if (is_black_everywhere(a) && is_black_everywhere(b))
         std::fprintf(stderr, "dynsky: warning: the clear and the cloudy image are black: each %s\n", kBlackRenderHint);
@@ -307,6 +311,7 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
         for (size_t p = 0; p < points.size(); ++p)
             f << ",cloudy point " << p + 1 << " (cd/m2),clear point " << p + 1 << " (cd/m2)";
         f << '\n';
+        ProgressBar chart_progress(o.chart_frames, "compare: chart frames");
         for (int k = 0; k < o.chart_frames; ++k) {
             double t = o.duration * k / (o.chart_frames - 1);
             Image ic = render_frame(accel, light, scene.camera, clear_at(t), cw, ch, o.chart_spp, o.seed);
@@ -320,8 +325,9 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
                 f << ',' << window_luminance(iy, x, y) << ',' << window_luminance(ic, x, y);
             }
             f << '\n';
-            if (!reports_silenced()) std::fprintf(stderr, "chart frame %d/%d (t = %.1f s)\n", k + 1, o.chart_frames, t);
+            chart_progress.advance();
         }
+        chart_progress.finish();
         write_file_atomic(csv, f.str());
     }
     make_line_chart(csv, (fs::path(o.out) / "illuminance.png").string(),
