@@ -104,7 +104,18 @@ void add_scene_options(CLI::App* cmd, SceneSpec* o) {
         ->capture_default_str();
 }
 
+void warn_options_of_generated_skies(const CLI::App* cmd, const std::string& sky) {
+    if (sky.empty() || is_generated_sky(sky)) return;
+    for (const char* name : {"--sky-res", "--coverage"})
+        if (const CLI::Option* opt = cmd->get_option_no_throw(name); opt && opt->count() > 0)
+            std::fprintf(stderr,
+                         "dynsky: warning: %s shapes the skies made here ('clear', 'procedural'); %s is a file "
+                         "and keeps its own: %s is ignored\n",
+                         name, sky.c_str(), name);
+}
+
 void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {
+    cmd->parse_complete_callback([cmd, o] { warn_options_of_generated_skies(cmd, o->sky); });
     cmd->add_option(
            "--sky", o->sky,
            "Input sky at t = 0: 'procedural[:SEED]' (cumulus over a clear sky, known motion), 'clear' (Hosek-Wilkie),\n"

@@ -51,4 +51,8 @@ void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m);
 // add_sky_source_options; `render` takes them alone).
 void add_generated_sky_options(CLI::App* cmd, SkySourceSpec* o);
 
+// Warns (stderr, even with -q) for each of the options given that only shape a sky made here
+// (--sky-res, --coverage) when `sky` is a file: they were ignored without a word.
+void warn_options_of_generated_skies(const CLI::App* cmd, const std::string& sky);
+
 }  // namespace dynsky::cli

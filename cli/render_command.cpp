@@ -87,7 +87,10 @@ void register_render_command(CLI::App& app) {
         ->check(CLI::IsMember({"none", "lambert"}))
         ->capture_default_str();
     cmd->add_flag("--quiet,-q", o->quiet, "No progress bar or summary");
-    cmd->callback([o] { run_render_job(*o); });
+    cmd->callback([o, cmd] {
+        warn_options_of_generated_skies(cmd, o->sky);
+        run_render_job(*o);
+    });
 }
 
 }  // namespace dynsky::cli

@@ -56,6 +56,27 @@ TEST(RenderCli, HelpDescribesEveryOption) {
         EXPECT_NE(r.output.find(opt), std::string::npos) << opt;
 }
 
+// Options that shape only the skies made here, given with a sky file, are said to be ignored
+// (they were ignored without a word).
+TEST(RenderCli, OptionsOfGeneratedSkiesWithASkyFileAreSaidToBeIgnored) {
+    const std::string dir = test::temp_dir("render_ignored");
+    ASSERT_EQ(test::run_command(exe() + " sky clear --lat 40 --lon 0 --time 2026-06-21T12:00:00Z --sky-res 16 -q -o " +
+                                dir + "/s.exr")
+                  .exit_code,
+              0);
+    auto r = test::run_command(exe() + " render builtin --sky " + dir +
+                               "/s.exr --sky-res 128 --res 8x6 --spp 1 -q -o " + dir + "/r.exr");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("--sky-res is ignored"), std::string::npos) << r.output;
+    r = test::run_command(exe() + " animate builtin --sky " + dir + "/s.exr --coverage 0.9 --duration 1 --fps 1 " +
+                          "--res 8x6 --spp 1 --no-video -q -o " + dir + "/a");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("--coverage is ignored"), std::string::npos) << r.output;
+    r = test::run_command(exe() + " render builtin --sky clear --sky-res 16 --res 8x6 --spp 1 -q -o " + dir + "/c.exr");
+    EXPECT_EQ(r.output.find("ignored"), std::string::npos) << r.output;
+    fs::remove_all(dir);
+}
+
 TEST(RenderCli, MissingSceneFile) {
     std::string dir = test::temp_dir("render");
     expect_clean_failure(render(dir + "/nope.glb", dir + "/out.exr"), "nope.glb");
