@@ -336,6 +336,7 @@ TEST(OutputsCli, ExitCodesAndDidYouMean) {
     const std::string dir = test::temp_dir("outputs_exit");
     for (const Case& c : std::vector<Case>{
              {"--help", 0, "Exit codes: 0 done; 1 runtime error"},
+             {"--version", 0, "dynsky 0."},
              {"", 2, "needs a command: render, sky"},
              {"rendr", 2, "did you mean 'render'?"},
              {"animte --out x", 2, "did you mean 'animate'?"},
