@@ -122,8 +122,10 @@ std::string plain_parse_message(const std::string& message) {
 int report_parse_error(CLI::App& app, const CLI::ParseError& e, int argc, char** argv) {
     if (e.get_exit_code() == int(CLI::ExitCodes::Success)) return app.exit(e);  // --help, --help-all
     std::string hint = suggestion(app, argc, argv);
-    std::fprintf(stderr, "dynsky: usage error: %s\n", plain_parse_message(e.what()).c_str());
-    if (!hint.empty()) std::fprintf(stderr, "dynsky: %s\n", hint.c_str());
+    // The hint names what is wrong ("'rendr' is not a command ...; did you mean 'render'?"), where
+    // CLI11's own line said "A subcommand is required": the hint alone then.
+    std::fprintf(stderr, "dynsky: usage error: %s\n",
+                 hint.empty() ? plain_parse_message(e.what()).c_str() : hint.c_str());
     std::fprintf(stderr, "Run with --help for more information.\n");
     return kUsageError;
 }

@@ -198,9 +198,11 @@ Color SkyTimeline::relight_to_clock(double t, SkyImage* out) {
         cv::Mat share;
         cv::resize(ratio, ratio, cv::Size(n, n), 0, 0, cv::INTER_LINEAR);
         cv::resize(inside, share, cv::Size(n, n), 0, 0, cv::INTER_LINEAR);
-        cv::Mat share3;
-        cv::merge(std::vector<cv::Mat>{share, share, share}, share3);
-        cv::divide(ratio, cv::max(share3, 1e-6), ratio);
+        tbb::parallel_for(0, n, [&](int j) {  // in place: no n x n temporaries beside the two
+            cv::Vec3f* row = ratio.ptr<cv::Vec3f>(j);
+            const float* s = share.ptr<float>(j);
+            for (int i = 0; i < n; ++i) row[i] *= 1.0f / std::max(s[i], 1e-6f);
+        });
         // Within a few degrees of the horizon the model changes faster than 256 px follow (at sunset
         // the last half degree 40 % off): there the ratio is the models' own, pixel by pixel.
         p.sun_disc = false;
@@ -226,11 +228,10 @@ Color SkyTimeline::relight_to_clock(double t, SkyImage* out) {
     if (!relight_warned_ && now.y() < 0) {
         relight_warned_ = true;
         if (!reports_silenced())
-            std::fprintf(
-                stderr,
-                "dynsky: warning: the sun is below the horizon %.0f s into the sky timeline: the clear-sky "
-                "sky is the sunset's dimmed for twilight there (clear_sky.h twilight_factor; no stars or moon)\n",
-                t);
+            std::fprintf(stderr,
+                         "dynsky: warning: the sun is below the horizon %.0f s into the sky timeline: the clear sky "
+                         "there is the sunset's, dimmed for twilight (no stars or moon)\n",
+                         t);
     }
     // The patch holds radiance: put at a pixel of another solid angle it carries that much more or
     // less light (a sun climbing 11 degrees gained 5 % in an hour): its irradiance kept.

@@ -92,7 +92,7 @@ def main(argv=None):
     if not (os.path.isfile(args.dynsky) and os.access(args.dynsky, os.X_OK)):
         sys.exit(f"{args.dynsky}: no dynsky program there (build it, or give --dynsky PATH)")
     os.makedirs(args.out, exist_ok=True)
-    common = ["--res", str(args.res), "--import-res", str(args.import_res), "--quiet"]
+    common = ["--sky-res", str(args.res), "--import-res", str(args.import_res), "--quiet"]
     only = set(a for a in args.only.split(",") if a)
     names = []
     for name, cli, folder in REAL:
@@ -115,7 +115,7 @@ def main(argv=None):
             continue
         tmp = os.path.join(args.out, "_frames_" + name)
         run([args.dynsky, "sky", "procedural", "--cloud-seed", str(seed), "--dt", "30", "--duration", str(30 * (frames - 1)),
-             "--res", str(args.import_res), "--quiet", "--out", tmp] + extra)
+             "--sky-res", str(args.import_res), "--quiet", "--out", tmp] + extra)
         run([args.dynsky, "sky", "training-data", "--procedural", tmp, "--out", dest] + common)
         shutil.rmtree(tmp)
     split = {}

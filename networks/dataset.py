@@ -60,7 +60,7 @@ def main(argv=None):
     if not os.path.exists(args.dynsky):
         sys.exit(f"{args.dynsky}: dynsky not found (build it, or give --dynsky)")
     os.makedirs(args.out, exist_ok=True)
-    common = ["--res", str(args.res), "--import-res", str(args.import_res), "--quiet"]
+    common = ["--sky-res", str(args.res), "--import-res", str(args.import_res), "--quiet"]
     sequences = {}
     run([args.dynsky, "sky", "training-data", "--sequence", "arm-tsi", "--shared", args.shared, "--out",
          os.path.join(args.out, "arm_tsi")] + common)
@@ -69,7 +69,7 @@ def main(argv=None):
         for name, seed, extra in PROCEDURAL:
             frames = os.path.join(args.out, "frames_" + name)
             run([args.dynsky, "sky", "procedural", "--cloud-seed", str(seed), "--dt", "30", "--duration",
-                 str(30 * (args.procedural_frames - 1)), "--res", str(args.import_res), "--quiet", "--out", frames] + extra)
+                 str(30 * (args.procedural_frames - 1)), "--sky-res", str(args.import_res), "--quiet", "--out", frames] + extra)
             run([args.dynsky, "sky", "training-data", "--procedural", frames, "--out", os.path.join(args.out, name)] + common)
             if not args.keep_frames:
                 shutil.rmtree(frames)

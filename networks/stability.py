@@ -56,10 +56,10 @@ def main(argv=None):
     tmp = tempfile.mkdtemp(prefix="dynsky-stability-")
     real = os.path.join(tmp, "real.exr")
     photo = os.path.join(args.shared, "skies", "arm_tsi_sgp_20170524", args.photo)
-    subprocess.run([args.dynsky, "sky", "import", "--preset", "arm-tsi", "--res", str(args.res), photo, "--out", real],
+    subprocess.run([args.dynsky, "sky", "import", "--preset", "arm-tsi", "--sky-res", str(args.res), photo, "--out", real],
                    check=True, stdout=subprocess.DEVNULL)
     proc_dir = os.path.join(tmp, "proc")
-    subprocess.run([args.dynsky, "sky", "procedural", "--cloud-seed", "7", "--coverage", "0.5", "--duration", "0", "--res",
+    subprocess.run([args.dynsky, "sky", "procedural", "--cloud-seed", "7", "--coverage", "0.5", "--duration", "0", "--sky-res",
                     str(args.res), "--sun-elevation", "50", "--sun-azimuth", "200", "--quiet", "--out", proc_dir], check=True)
     inputs = {"real (ARM TSI, held-out frame)": real, "procedural (seed 7)": os.path.join(proc_dir, "frame_0000.exr")}
     results = {}

@@ -43,27 +43,6 @@ Eigen::Matrix3d world_to_camera(double tilt_deg, double tilt_azimuth_deg) {
     return Eigen::Quaterniond::FromTwoVectors(axis, Vec3d::UnitY()).toRotationMatrix();
 }
 
-// Whether a photograph's values are display-encoded (sRGB) rather than linear. auto goes by what the
-// file holds, not its name: integer pixels (8- and 16-bit JPEG, PNG, TIFF: what cameras and editors
-// write) are display-encoded unless the header calls them linear (oiio:ColorSpace, as a raw
-// converter's linear TIFF may); float pixels (EXR, HDR, PFM, float TIFF) are linear. An image made
-// in memory (no file type) goes by the name's extension.
-bool is_display_encoded(const Image& photo, const std::string& path, const std::string& encoding) {
-    if (encoding == "srgb") return true;
-    if (encoding == "linear") return false;
-    if (encoding != "auto") throw Error("unknown input encoding '" + encoding + "' (use auto, srgb or linear)");
-    const std::string& type = photo.file_pixel_type;
-    if (type == "half" || type == "float" || type == "double") return false;
-    if (!type.empty()) {
-        auto it = photo.metadata.strings.find("oiio:ColorSpace");
-        std::string space = it == photo.metadata.strings.end() ? "" : it->second;
-        std::transform(space.begin(), space.end(), space.begin(), [](unsigned char c) { return std::tolower(c); });
-        return space.find("linear") == std::string::npos && space.rfind("lin_", 0) != 0;
-    }
-    std::string ext = file_extension(path);
-    return !(ext == ".exr" || ext == ".hdr" || ext == ".pfm" || ext == ".tif" || ext == ".tiff");
-}
-
 constexpr float kMaxPhotoValue = 1e15f;
 
 // RGB float image (3 channels, RGB order) from any channel count.
@@ -365,6 +344,23 @@ void inpaint_texture(cv::Mat& rgb, const cv::Mat& fill) {
 }
 
 }  // namespace
+
+bool is_display_encoded(const Image& photo, const std::string& path, const std::string& encoding) {
+    if (encoding == "srgb") return true;
+    if (encoding == "linear") return false;
+    if (encoding != "auto") throw Error("unknown input encoding '" + encoding + "' (use auto, srgb or linear)");
+    const std::string& type = photo.file_pixel_type;
+    if (type == "half" || type == "float" || type == "double") return false;
+    if (!type.empty()) {
+        auto it = photo.metadata.strings.find("oiio:ColorSpace");
+        std::string space = it == photo.metadata.strings.end() ? "" : it->second;
+        std::transform(space.begin(), space.end(), space.begin(), [](unsigned char c) { return std::tolower(c); });
+        return space.find("linear") == std::string::npos && space.rfind("lin_", 0) != 0;
+    }
+    std::string ext = file_extension(path);
+    return !(ext == ".exr" || ext == ".hdr" || ext == ".pfm" || ext == ".tif" || ext == ".tiff");
+}
+
 
 LensLaw parse_lens_law(const std::string& name) {
     if (name == "equidistant") return LensLaw::Equidistant;

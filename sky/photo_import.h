@@ -214,6 +214,14 @@ SkyCircle find_sky_circle(const Image& photo, const std::string& name, double mi
 // the last among them): what the sequence-wide searches below look at.
 size_t spread_index(int k, int tries, int count);
 
+// Whether a photograph's values are display-encoded (sRGB) rather than linear. auto goes by what the
+// file holds, not its name: integer pixels (8- and 16-bit JPEG, PNG, TIFF: what cameras and editors
+// write) are display-encoded unless the header calls them linear (oiio:ColorSpace, as a raw
+// converter's linear TIFF may); float pixels (EXR, HDR, PFM, float TIFF) are linear. An image made
+// in memory (no file type) goes by the name's extension.
+// encoding: "auto", "srgb" or "linear" (PhotoImportParams::encoding).
+bool is_display_encoded(const Image& photo, const std::string& path, const std::string& encoding);
+
 // The sky circle of one photograph file as import_photo finds it (turned by its EXIF orientation,
 // HDR files tone-mapped first), with params' search range and encoding; *size: the photo's width
 // and height as turned.

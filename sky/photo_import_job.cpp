@@ -316,15 +316,17 @@ void refuse_mixed_times(const PhotoImportJob& o, const std::vector<std::string>&
 // Every photograph's encoding, before anything is written: HDR files (float pixels: their own
 // linear scale) among display-encoded photographs (calibrated against the sun) gave skies 100 x
 // apart in one sequence, without a word. Unreadable files are named by their own import.
-void refuse_mixed_encodings(const std::vector<std::string>& photos) {
+void refuse_mixed_encodings(const std::vector<std::string>& photos, const std::string& encoding) {
+    if (encoding != "auto") return;  // one encoding for all, as asked
     std::string linear, encoded;
     for (const std::string& p : photos) {
         ImageFileInput in(p);
         if (!in) continue;
-        const OIIO::TypeDesc t = in->spec().format;
-        std::string& kind = t == OIIO::TypeDesc::HALF || t == OIIO::TypeDesc::FLOAT || t == OIIO::TypeDesc::DOUBLE
-                                ? linear
-                                : encoded;
+        // As the import decides it (is_display_encoded), from the header alone.
+        Image header;
+        header.file_pixel_type = in->spec().format.c_str();
+        header.metadata.strings["oiio:ColorSpace"] = in->spec().get_string_attribute("oiio:ColorSpace");
+        std::string& kind = is_display_encoded(header, p, encoding) ? encoded : linear;
         if (kind.empty()) kind = p;
         if (!linear.empty() && !encoded.empty())
             throw Error(linear + " holds linear (HDR) pixels and " + encoded +
@@ -401,7 +403,7 @@ void run_photo_import(const PhotoImportJob& o) {
                             " (the same name): rename one");
     check_outputs_are_not_inputs(outputs, photos);
     refuse_mixed_times(o, photos, outputs);
-    refuse_mixed_encodings(photos);
+    refuse_mixed_encodings(photos, o.encoding);
     std::error_code ec;
     fs::create_directories(o.out, ec);
     if (ec || !fs::is_directory(o.out)) throw_file_error(o.out, "cannot create this output folder: " + ec.message());

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <set>
+#include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
 
@@ -159,6 +161,20 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
     nlohmann::ordered_json frame_list = nlohmann::ordered_json::array();
     double max_speed = 0.0;
     Vec3d current_sun = params.clear_sky.sun_direction;
+    // The files of an earlier sequence in the folder, as its manifest lists them: those this run
+    // does not write again are removed at the end (a longer sequence's later frames read as this
+    // one's). Only a procedural sequence's own: other files named frame_NNNN (an animation's) stay.
+    std::vector<std::string> earlier;
+    try {
+        std::ifstream in(fs::path(o.out) / "manifest.json");
+        const nlohmann::json old = in ? nlohmann::json::parse(in) : nlohmann::json();
+        if (old.is_object() && old.value("generator", "") == "dynsky sky procedural" && old.contains("frames"))
+            for (const auto& f : old.at("frames"))
+                for (const char* key : {"image", "flow", "preview", "flow_preview"})
+                    if (f.contains(key) && f.at(key).is_string()) earlier.push_back(f.at(key).get<std::string>());
+    } catch (const std::exception&) {
+        earlier.clear();  // not a manifest of ours: nothing is removed
+    }
     // An earlier sequence's manifest goes before any of its frames is replaced: a run that stops
     // midway must not leave it describing this run's frames.
     remove_stale_marker((fs::path(o.out) / "manifest.json").string());
@@ -197,13 +213,16 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
     progress.finish();
     // Frames and flows of an earlier, longer sequence (or its previews) would read as this one's:
     // `animate --sky FOLDER` took the last of them as its input.
+    std::set<std::string> written;
+    for (const auto& f : frame_list)
+        for (const char* key : {"image", "flow", "preview", "flow_preview"})
+            if (f.contains(key)) written.insert(f.at(key).get<std::string>());
     int stale = 0;
-    for (const auto& e : fs::directory_iterator(o.out)) {
-        const std::string path = e.path().string(), ext = file_extension(path);
-        if (!e.is_regular_file() || (ext != ".exr" && ext != ".png")) continue;
-        for (const char* prefix : {"frame", "flow"})
-            if (const std::optional<int> k = numbered_index(path, prefix))
-                if (*k >= frames || (ext == ".png" && !o.preview)) fs::remove(e.path()), ++stale;
+    for (const std::string& name : earlier) {
+        std::error_code ec;
+        const fs::path path = fs::path(o.out) / name;
+        if (fs::path(name).has_parent_path() || written.count(name) || !fs::is_regular_file(path, ec)) continue;
+        if (fs::remove(path, ec)) ++stale;
     }
     if (stale && !o.quiet)
         std::fprintf(stderr, "dynsky: note: removed %d file(s) of an earlier sequence from %s\n", stale, o.out.c_str());

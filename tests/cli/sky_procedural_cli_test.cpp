@@ -83,17 +83,20 @@ TEST(SkyProceduralCli, BadArgumentsLeaveNoOutput) {
     }
 }
 
-// A shorter sequence into the folder of a longer one: the frames and flows it did not write are
-// removed (the manifest said 2 frames beside 4 frames' files).
+// A shorter sequence into the folder of a longer one: the frames and flows it did not write, as the
+// earlier manifest lists them, are removed (the manifest said 2 frames beside 4 frames' files);
+// files the earlier sequence did not write stay.
 TEST(SkyProceduralCli, ASecondRunIntoItsFolderLeavesOnlyItsOwnFrames) {
     std::string dir = test::temp_dir("procedural_cli_again") + "/seq";
     ASSERT_EQ(procedural("--duration 30 --dt 10 --sky-res 16 --previews --out " + dir).exit_code, 0);
     ASSERT_TRUE(fs::exists(dir + "/frame_0003.exr"));
+    std::ofstream(dir + "/frame_0099.png") << "not the sequence's: its manifest does not list it";
     auto r = procedural("--duration 10 --dt 10 --sky-res 16 --out " + dir);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     int files = 0;
     for (const auto& e : fs::directory_iterator(dir)) ++files, (void)e;
-    EXPECT_EQ(files, 5) << "frame_0000/1.exr, flow_0000/1.exr and manifest.json";
+    EXPECT_EQ(files, 6) << "frame_0000/1.exr, flow_0000/1.exr, manifest.json and frame_0099.png";
+    EXPECT_TRUE(fs::exists(dir + "/frame_0099.png"));
     EXPECT_FALSE(fs::exists(dir + "/frame_0002.exr"));
     EXPECT_FALSE(fs::exists(dir + "/frame_0000.png"));
     fs::remove_all(fs::path(dir).parent_path());
