@@ -161,7 +161,8 @@ void write_prediction(const PredictionOptions& o) {
                      o.out.c_str());
     if (!o.stats.empty()) write_file_atomic(o.stats, csv.str());
     if (!o.quiet)
-        std::printf("wrote %d predicted skies (Delta t = %g s, %d steps) to %s\n", written, dt, o.steps, o.out.c_str());
+        std::printf("wrote %d predicted sk%s (Delta t = %g s, %d step%s) to %s\n", written, written == 1 ? "y" : "ies",
+                    dt, o.steps, o.steps == 1 ? "" : "s", o.out.c_str());
 }
 
 }  // namespace dynsky

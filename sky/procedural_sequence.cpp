@@ -229,7 +229,9 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
     manifest["frames"] = frame_list;
     // Written last: a manifest means the sequence is complete.
     write_file_atomic((fs::path(o.out) / "manifest.json").string(), manifest.dump(2) + "\n");
-    if (!o.quiet) std::printf("wrote %d frames, their flows and manifest.json to %s\n", frames, o.out.c_str());
+    if (!o.quiet)
+        std::printf("wrote %d frame%s, %s flow%s and manifest.json to %s\n", frames, frames == 1 ? "" : "s",
+                    frames == 1 ? "its" : "their", frames == 1 ? "" : "s", o.out.c_str());
 }
 
 }  // namespace dynsky
