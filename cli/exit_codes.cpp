@@ -1,5 +1,6 @@
 #include "cli/exit_codes.h"
 
+#include <cctype>
 #include <cstdio>
 #include <regex>
 #include <string>
