@@ -102,7 +102,9 @@ void build_training_sequence(const TrainingSetOptions& o) {
         progress.finish();
     }
     const size_t count = frames_big.size();
-    if (count < 2) throw Error("the sequence has fewer than two frames");
+    if (count < 2)
+        throw_file_error(o.procedural.empty() ? o.sequence : o.procedural,
+                         "the sequence has " + std::to_string(count) + " frame(s): a training pair needs two");
     std::vector<cv::Mat> images, valid, cloud, flows;
     std::vector<double> times;
     std::vector<cv::Mat> backgrounds;

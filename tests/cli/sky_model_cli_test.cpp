@@ -519,6 +519,19 @@ TEST(SkyModelCli, EvaluateRejectsBadArguments) {
     }
 }
 
+// A procedural folder of one frame holds no training pair: said naming the folder (it said only "the
+// sequence has fewer than two frames").
+TEST(SkyModelCli, TrainingDataFromOneFrameNamesTheFolder) {
+    const std::string dir = test::temp_dir("training_one_frame");
+    ASSERT_EQ(test::run_command(dynsky("sky procedural --duration 0 --sky-res 64 -q -o " + dir + "/one")).exit_code, 0);
+    auto r = test::run_command(dynsky("sky training-data --procedural " + dir +
+                                      "/one --import-res 64 --sky-res 16 -q -o " + dir + "/td"));
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find(dir + "/one: the sequence has 1 frame(s)"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/td/manifest.json"));
+    fs::remove_all(dir);
+}
+
 TEST(SkyModelCli, TrainingDataImportsExactlyAsSkyImport) {
     // The dataset builder imports in-process (it needs the not-sky mask); the sky it sees must be
     // the one `dynsky sky import --preset arm-tsi --fill smooth` writes (sequences are filled
