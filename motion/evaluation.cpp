@@ -157,18 +157,19 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
         if (!fs::is_directory(o.photos, ec))
             throw_file_error(o.photos, "not a folder (--photos takes a folder of photographs or of imported skies)");
     }
-    // The skies' folder the hint suggests: beside the photographs' (SKIES/ was the photographs' own
-    // name when they were in a folder called so).
-    fs::path photos_folder = fs::path(o.photos).lexically_normal();
-    if (photos_folder.filename().empty()) photos_folder = photos_folder.parent_path();  // "DIR/"
-    const std::string skies_folder = photos_folder.string() + "_skies/";
-    if (!o.photos.empty() && o.preset.empty() && !folder_holds_skies(o.photos))
+    if (!o.photos.empty() && o.preset.empty() && !folder_holds_skies(o.photos)) {
+        // The skies' folder the hint suggests: beside the photographs' (SKIES/ was the photographs' own
+        // name when they were in a folder called so).
+        fs::path photos_folder = fs::path(o.photos).lexically_normal();
+        if (photos_folder.filename().empty()) photos_folder = photos_folder.parent_path();  // "DIR/"
+        const std::string skies_folder = photos_folder.string() + "_skies/";
         throw Error(
             "--photos needs --preset (arm-tsi or mobotix) for photographs; a folder of skies imported with "
             "'dynsky sky import' (.exr, any camera) needs none: for another camera's photographs, import them "
             "first, under one sky circle ('dynsky sky import " +
             o.photos + " --lat DEG --lon DEG --utc-offset H --detect-obstructions -o " + skies_folder +
             "'), then --photos " + skies_folder);
+    }
     const std::string shared = o.shared.empty() && !o.sequence.empty() ? default_shared_dir() : o.shared;
     // A folder that is not there yet (`-o out/`): an existing one is refused by the checks below.
     if (o.report.empty() || (o.report.back() == '/' && !fs::exists(o.report)))

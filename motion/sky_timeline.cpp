@@ -191,40 +191,37 @@ Color SkyTimeline::relight_to_clock(double t, SkyImage* out) {
     for (size_t k = 0; k < later.size(); ++k)
         if (relight_start_[k] > 0)
             r[k] = std::clamp(later[k] / relight_start_[k], 1e-8f, 1e8f), inside.ptr<float>()[k / 3] = 1;
+    // Upsampled from the disc's pixels alone (normalised by their share of each footprint): the
+    // horizon at sunset is 3 x darker than an hour before, and footprints reaching past the rim
+    // brightened it 2.4 x. Within a few degrees of the horizon the model changes faster than 256 px
+    // follow (at sunset the last half degree 40 % off): there the ratio is the models' own.
+    cv::Mat share = inside;
     if (w != n) {
-        // Upsampled from the disc's pixels alone (normalised by their share of each footprint): the
-        // horizon at sunset is 3 x darker than an hour before, and footprints reaching past the rim
-        // brightened it 2.4 x.
-        cv::Mat share;
         cv::resize(ratio, ratio, cv::Size(n, n), 0, 0, cv::INTER_LINEAR);
         cv::resize(inside, share, cv::Size(n, n), 0, 0, cv::INTER_LINEAR);
-        tbb::parallel_for(0, n, [&](int j) {  // in place: no n x n temporaries beside the two
-            cv::Vec3f* row = ratio.ptr<cv::Vec3f>(j);
-            const float* s = share.ptr<float>(j);
-            for (int i = 0; i < n; ++i) row[i] *= 1.0f / std::max(s[i], 1e-6f);
-        });
-        // Within a few degrees of the horizon the model changes faster than 256 px follow (at sunset
-        // the last half degree 40 % off): there the ratio is the models' own, pixel by pixel.
-        p.sun_disc = false;
-        p.sun_direction = start;
-        const ClearSkyModel model_start(p, false);
-        p.sun_direction = now;
-        const ClearSkyModel model_now(p, false);
-        const double band = 1.0 - 8.0 / w;
-        tbb::parallel_for(0, n, [&](int j) {
-            cv::Vec3f* row = ratio.ptr<cv::Vec3f>(j);
-            for (int i = 0; i < n; ++i) {
-                const Vec2 uv = fisheye::pixel_center_uv(i, j, n);
-                const double r2 = double(uv.squaredNorm());
-                if (r2 > 1.0 || r2 < band * band) continue;
+    }
+    p.sun_disc = false;
+    p.sun_direction = start;
+    const ClearSkyModel model_start(p, false);
+    p.sun_direction = now;
+    const ClearSkyModel model_now(p, false);
+    const double band = w == n ? 2.0 : 1.0 - 8.0 / w;  // none when computed at the sky's own size
+    tbb::parallel_for(0, n, [&](int j) {
+        const cv::Vec3f* row = ratio.ptr<cv::Vec3f>(j);
+        const float* s = share.ptr<float>(j);
+        float* px = &out->rgb[size_t(j) * n * 3];
+        for (int i = 0; i < n; ++i) {
+            cv::Vec3f f = row[i] * (1.0f / std::max(s[i], 1e-6f));
+            const Vec2 uv = fisheye::pixel_center_uv(i, j, n);
+            const double r2 = double(uv.squaredNorm());
+            if (r2 <= 1.0 && r2 >= band * band) {
                 const Vec3d d = fisheye::direction_from_uv(double(uv.x()), double(uv.y()));
                 const Color a = model_start.sky_radiance(d), b = model_now.sky_radiance(d);
-                for (int c = 0; c < 3; ++c) row[i][c] = a[c] > 0 ? std::clamp(b[c] / a[c], 1e-8f, 1e8f) : 1.0f;
+                for (int c = 0; c < 3; ++c) f[c] = a[c] > 0 ? std::clamp(b[c] / a[c], 1e-8f, 1e8f) : 1.0f;
             }
-        });
-    }
-    r = ratio.ptr<float>();
-    for (size_t k = 0; k < out->rgb.size(); ++k) out->rgb[k] *= r[k];
+            for (int c = 0; c < 3; ++c) px[3 * i + c] *= f[c];
+        }
+    });
     if (!relight_warned_ && now.y() < 0) {
         relight_warned_ = true;
         if (!reports_silenced())

@@ -361,7 +361,6 @@ bool is_display_encoded(const Image& photo, const std::string& path, const std::
     return !(ext == ".exr" || ext == ".hdr" || ext == ".pfm" || ext == ".tif" || ext == ".tiff");
 }
 
-
 LensLaw parse_lens_law(const std::string& name) {
     if (name == "equidistant") return LensLaw::Equidistant;
     if (name == "equisolid") return LensLaw::Equisolid;
