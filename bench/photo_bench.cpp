@@ -6,11 +6,11 @@
 // Photographs come from ../shared/skies (DYNSKY_SHARED_DIR); without them the benchmarks skip.
 #include <benchmark/benchmark.h>
 
-#include <ctime>
 #include <filesystem>
 
 #include "sky/hdr_recovery.h"
 #include "sky/photo_import.h"
+#include "util/cpu_time.h"
 
 namespace dynsky {
 namespace {
@@ -23,12 +23,6 @@ const Camera kCameras[] = {
     {"arm-tsi", "skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg"},    // 480 x 640
     {"mobotix", "skies/mobotix_sophia_20200812_morning/images/2020-08-12_12_00.jpg"},  // 1280 x 960
 };
-
-double process_cpu_seconds() {
-    timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
 
 void import_bench(benchmark::State& state, const Camera& cam, bool hdr) {
     std::string path = std::string(DYNSKY_SHARED_DIR) + "/" + cam.photo;

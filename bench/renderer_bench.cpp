@@ -11,7 +11,6 @@
 #include <tbb/parallel_for.h>
 
 #include <chrono>
-#include <ctime>
 #include <filesystem>
 
 #include "renderer/gltf_loader.h"
@@ -19,17 +18,12 @@
 #include "renderer/streaming_floor.h"
 #include "sky/clear_sky.h"
 #include "sky/fisheye.h"
+#include "util/cpu_time.h"
 
 namespace dynsky {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-// CPU seconds of this process (all threads): immune to other processes sharing the machine.
-double process_cpu_seconds() {
-    timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 std::shared_ptr<SkyImage> bench_sky(int n) {

@@ -40,6 +40,13 @@ std::string join(const std::vector<std::string>& names) {
     return s;
 }
 
+// The subcommand of cmd called word, or null.
+CLI::App* subcommand_named(CLI::App* cmd, const std::string& word) {
+    for (CLI::App* sub : cmd->get_subcommands([](const CLI::App*) { return true; }))
+        if (sub->check_name(word)) return sub;
+    return nullptr;
+}
+
 // "dynsky sky" for the command a word belongs to.
 std::string command_path(const CLI::App* app) {
     std::string s;
@@ -65,10 +72,10 @@ std::string suggestion(CLI::App& app, int argc, char** argv) {
         if (word[0] == '-') continue;
         std::vector<std::string> commands = command_names(cmd);
         if (commands.empty()) continue;  // a value or a positional argument of a leaf command
-        bool found = false;
-        for (CLI::App* sub : cmd->get_subcommands([](const CLI::App*) { return true; }))
-            if (sub->check_name(word)) cmd = sub, found = true;
-        if (found) continue;
+        if (CLI::App* sub = subcommand_named(cmd, word)) {
+            cmd = sub;
+            continue;
+        }
         std::string best = closest_name(word, commands);
         return "'" + word + "' is not a command of " + command_path(cmd) +
                (best.empty() ? "" : "; did you mean '" + best + "'?") + " Commands: " + join(commands);
@@ -80,6 +87,23 @@ std::string suggestion(CLI::App& app, int argc, char** argv) {
 
 }  // namespace
 
+bool print_help_if_asked(CLI::App& app, int argc, char** argv) {
+    CLI::App* cmd = &app;
+    for (int i = 1; i < argc; ++i) {
+        const std::string word = argv[i];
+        if (word == "--") break;
+        if (word == "-h" || word == "--help" || word == "--help-all") {
+            // The command the words before it named; usage names it as typed: "dynsky sky clear".
+            const auto mode = word == "--help-all" ? CLI::AppFormatMode::All : CLI::AppFormatMode::Normal;
+            if (cmd->get_parent() == nullptr) cmd->name("dynsky");
+            std::fputs(cmd->help(cmd->get_parent() ? command_path(cmd->get_parent()) : "", mode).c_str(), stdout);
+            return true;
+        }
+        if (CLI::App* sub = subcommand_named(cmd, word)) cmd = sub;
+    }
+    return false;
+}
+
 std::string missing_option_value(CLI::App& app, int argc, char** argv) {
     CLI::App* cmd = &app;
     for (int i = 1; i < argc; ++i) {
@@ -87,11 +111,7 @@ std::string missing_option_value(CLI::App& app, int argc, char** argv) {
         if (word == "--") break;
         if (word.empty()) continue;
         if (word[0] != '-') {
-            for (CLI::App* sub : cmd->get_subcommands([](const CLI::App*) { return true; }))
-                if (sub->check_name(word)) {
-                    cmd = sub;
-                    break;
-                }
+            if (CLI::App* sub = subcommand_named(cmd, word)) cmd = sub;
             continue;
         }
         if (word.find('=') != std::string::npos || i + 1 >= argc) continue;

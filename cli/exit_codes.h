@@ -25,6 +25,11 @@ int exit_code_of(const Error& e);
 // of this option ..."); other messages unchanged.
 std::string plain_parse_message(const std::string& message);
 
+// -h, --help or --help-all anywhere on the line: prints the help of the command named before it and
+// returns true, even where an option before it lacks its value ("render --sky --help", where
+// CLI11 would take "--help" for the sky file).
+bool print_help_if_asked(CLI::App& app, int argc, char** argv);
+
 // An option that takes a value given an option instead ("--sky --spp 2": values may start with '-',
 // so that --lon -105 works, and --sky took "--spp"): "--sky: its value is missing ...", else "".
 std::string missing_option_value(CLI::App& app, int argc, char** argv);

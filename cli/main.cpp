@@ -116,6 +116,7 @@ int main(int argc, char** argv) {
                      option.c_str());
         return dynsky::cli::kUsageError;
     }
+    if (dynsky::cli::print_help_if_asked(app, argc, argv)) return 0;
     if (const std::string missing = dynsky::cli::missing_option_value(app, argc, argv); !missing.empty()) {
         std::fprintf(stderr, "dynsky: usage error: %s\n", missing.c_str());
         return dynsky::cli::kUsageError;

@@ -4,30 +4,19 @@
 
 #include <cmath>
 #include <cstdio>
-#include <ctime>
 #include <filesystem>
 #include <memory>
 
 #include "renderer/integrator.h"
 #include "sky/latlong.h"
 #include "util/atomic_file.h"
+#include "util/cpu_time.h"
 #include "util/error.h"
 #include "util/exposure.h"
 #include "util/image.h"
 #include "util/parse.h"
 
 namespace dynsky {
-
-namespace {
-
-// CPU seconds of this process, all threads together.
-double process_cpu_seconds() {
-    timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
-}
-
-}  // namespace
 
 void run_render_job(const RenderJob& o) {
     // Everything that can be wrong with the input is checked before any pixel is traced, so a

@@ -26,8 +26,15 @@
 
 namespace dynsky {
 
+// The built-in plaza with the default camera options: render's default scene.
+inline SceneSpec builtin_scene() {
+    SceneSpec spec;
+    spec.scene = "builtin";
+    return spec;
+}
+
 struct RenderJob {
-    SceneSpec scene = SceneSpec{"builtin"};  // the scene and camera options every command shares; the built-in plaza
+    SceneSpec scene = builtin_scene();  // the scene and camera options every command shares
     std::string sky;
     std::string out = "render.exr";
     std::string resolution = "960x540";

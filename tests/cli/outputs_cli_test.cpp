@@ -353,8 +353,9 @@ TEST(OutputsCli, ExitCodesAndDidYouMean) {
              {"render --sky --spp 2", 2, "--sky: its value is missing (the next word, --spp, is an option)"},
              {"animate --sky --spp 2", 2, "--sky: its value is missing"},
              {"render builtin -o -q", 2, "-o: its value is missing"},
+             {"render --sky --help", 0, "Render a glTF 2.0 scene"},                 // help asked is shown
              {"sky import x.jpg --res 64 -o y.exr", 2, "did you mean --sky-res?"},  // --lens
-             {"render --sky-resolution 64", 2, "did you mean --sky-res?"},         // --sky
+             {"render --sky-resolution 64", 2, "did you mean --sky-res?"},          // --sky
          }) {
         auto r = test::run_command(kExe + " " + c.args);
         EXPECT_EQ(r.exit_code, c.code) << "dynsky " << c.args << ": " << r.output;
