@@ -572,14 +572,24 @@ cv::Mat circumsolar_share(int n, const std::optional<Vec3d>& sun) {
 
 }  // namespace
 
+cv::Mat filled_mask(const SkyImage& sky) {
+    const int n = sky.resolution;
+    if (sky.filled.size() != size_t(n) * n) return cv::Mat();
+    cv::Mat mask(n, n, CV_8UC1);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) mask.at<unsigned char>(j, i) = sky.is_filled(i, j) ? 255 : 0;
+    return mask;
+}
+
 CloudRollout::CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start, const CloudFlow& flow,
                            const cv::Mat& background, const cv::Mat& unseen, const std::optional<Vec3d>& sun,
-                           bool sun_seen_whole)
+                           bool sun_seen_whole, const cv::Mat& filled)
     : network_(network),
       flow_(flow),
       start_(start.clone()),
       state_(start.clone()),
       unseen_(unseen),
+      filled_(filled),
       sun_seen_whole_(sun_seen_whole) {
     keep_large_allocations();  // each step's full-sky temporaries would page-fault in again
     const int n = network->info().resolution, big = start.rows;
@@ -702,6 +712,7 @@ void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3
         // the sun shone on at full strength, up to 200 % over the truth (docs/animation.md).
         cv::Mat unknown = clipped.empty() ? cv::Mat() : clipped.clone();
         if (!unseen_.empty()) unknown = unknown.empty() ? unseen_.clone() : (unknown | unseen_);
+        if (!filled_.empty()) unknown = unknown.empty() ? filled_.clone() : (unknown | filled_);
         if (!unknown.empty()) fill_from_around(&alpha, unknown & disc_big_, disc_big_);
         // A cloud lit by forward scattering can look as clear as the aureole: the sun it dimmed says
         // more. Its opacity goes on the cut and (nearly all of it) kSunCoverSpreadDeg around it, so
@@ -999,7 +1010,7 @@ void AdvectResidualNetwork::rollout(const SkyImage& given, const CloudFlow& flow
     // Around the sun, recorded or estimated, the clouds' look says nothing (glare, aureole): a
     // sunset HDRI without metadata had its glow judged cloud and dragged across the sky.
     CloudRollout rollout(this, state, flow, background, at ? sun_unseen_mask(sky.resolution, *at) : cv::Mat(), at,
-                         share >= 0.5);
+                         share >= 0.5, filled_mask(sky));
     const double start_look = has_sun && at ? estimate_sun_transmittance(sky, *at) : 1.0;
     for (int k = 1; k <= steps; ++k) {
         SkyImage next = from_network_form(rollout.advance(), sky, info_.form);
@@ -1023,8 +1034,14 @@ MeasuredMotion network_form_flow(const SkyImage& previous, const SkyImage& curre
     const int w = std::min(256, current.resolution);
     cv::Mat a = to_network_form(resampled.resolution > 0 ? resampled : previous, form, w),
             b = to_network_form(current, form, w);
-    const cv::Mat clipped = fill_saturated_pixels(&a) | fill_saturated_pixels(&b);
-    return measured_motion(a, b, sky_disc_mask(w) & ~clipped).at_resolution(n);
+    cv::Mat untrusted = fill_saturated_pixels(&a) | fill_saturated_pixels(&b);
+    // Nor where an import filled either frame: a filled camera arm or band does not move.
+    for (const SkyImage* sky : {&previous, &current})
+        if (cv::Mat filled = filled_mask(*sky); !filled.empty()) {
+            cv::resize(filled, filled, cv::Size(w, w), 0, 0, cv::INTER_AREA);
+            untrusted |= filled > 0;
+        }
+    return measured_motion(a, b, sky_disc_mask(w) & ~untrusted).at_resolution(n);
 }
 
 CloudFlow AdvectResidualNetwork::motion_flow(const SkyImage& sky, const CloudMotion& motion, double dt, int n) const {
@@ -1144,6 +1161,7 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
         const cv::Mat unseen = unseen_sun ? sun_unseen_mask(input.resolution, unseen_sun->cast<double>()) : cv::Mat();
         rollout_ = std::make_unique<CloudRollout>(&network_, start, flow_, cv::Mat(), unseen);
         rollout_->set_unseen_opacity(sun_cover_);
+        rollout_->set_filled(filled_mask(input));
         background_ = cv::Mat();  // the new rollout needs its background (and opacity)
         rollout_input_ = history.front().get();
         turbidity_.reset();

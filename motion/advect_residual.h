@@ -170,6 +170,9 @@ constexpr double kUnknownScaleMedian = 20.0;
 double model_scale(const SkyImage& sky);
 SkyImage scaled_sky(const SkyImage& sky, double factor);
 
+// SkyImage::filled as a mask (CV_8UC1, 255 = filled) at the sky's resolution; empty when none.
+cv::Mat filled_mask(const SkyImage& sky);
+
 // One rollout in progress on the network form, semi-Lagrangian: the clouds are always read from the
 // start image along their accumulated paths, not re-warped from the last step's image, so hours of
 // steps do not blur them away. With a wind (CloudFlow::recycle) the paths are the layer's
@@ -184,10 +187,11 @@ class CloudRollout {
     // out and the sky around it, motion/sun_patch.h sun_unseen_mask); they count as clear in
     // opacity(). sun: the background's (see set_background).
     // sun_seen_whole: the start shows its sun whole (sun_patch_share >= 0.5), so it is not overcast
-    // whatever its colours (set_background).
+    // whatever its colours (set_background). filled: see set_filled.
     CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start, const CloudFlow& flow,
                  const cv::Mat& background = cv::Mat(), const cv::Mat& unseen = cv::Mat(),
-                 const std::optional<Vec3d>& sun = std::nullopt, bool sun_seen_whole = false);
+                 const std::optional<Vec3d>& sun = std::nullopt, bool sun_seen_whole = false,
+                 const cv::Mat& filled = cv::Mat());
     void set_sun_seen_whole(bool whole) { sun_seen_whole_ = whole; }  // for the next set_background
     const cv::Mat& advance();                                         // the next step's state
     int steps() const { return steps_; }
@@ -200,6 +204,12 @@ class CloudRollout {
     // half of them at least 0.9 of it, from the next set_background (the input's sun was dimmed by
     // a cloud there, however clear the sky around it looks).
     void set_unseen_opacity(double a) { unseen_opacity_ = a; }
+    // Pixels an import filled (CV_8UC1 at the state's resolution, may be empty: SkyImage::filled):
+    // like the unseen ones they take the opacity of the clouds around them, from the next
+    // set_background. A TSI's shadow band runs through the sun, and its smooth fill, as bright
+    // and white as the glare it crosses, read as cloud over the sun: a sun the next photographs
+    // show went out on the first step.
+    void set_filled(const cv::Mat& filled) { filled_ = filled; }
     // How opaque the clouds each pixel shows are (CV_32FC1, 0 clear .. 1 cloud): measured on the
     // start against the background (motion/sun_patch.h cloudiness) and carried with the clouds (the
     // network's corrections not included). The start's before the first step; empty without a
@@ -227,7 +237,7 @@ class CloudRollout {
     cv::Mat opacity_ext_;                // the start's a x background_, a, share_ (CV_32FC(5))
     cv::Mat cloud_own_ext_;              // a x the cloud's own radiance, a (CV_32FC4): what the tile carries
     cv::Mat opacity_, carried_opacity_;  // a at the start, and where the clouds have taken it
-    cv::Mat unseen_;
+    cv::Mat unseen_, filled_;
     bool sun_seen_whole_ = false;
     double unseen_opacity_ = 0;
     cv::Mat share_;             // circumsolar share (where a cloud hides the background)

@@ -115,16 +115,7 @@ NetworkFrame network_frame_from_photo(const std::string& path, const std::string
         throw_file_error(path, "is a " + std::to_string(sky.resolution) + " px sky, smaller than --import-res " +
                                    std::to_string(import_resolution) +
                                    " (import it larger or give a smaller --import-res)");
-    const fs::path filled = fs::path(path).replace_extension(".filled.png");
-    if (fs::exists(filled)) {
-        const Image m = read_image(filled.string());
-        if (m.width != sky.resolution || m.height != sky.resolution)
-            throw_file_error(filled.string(), "the filled-pixel mask is " + std::to_string(m.width) + "x" +
-                                                  std::to_string(m.height) + ", its sky " +
-                                                  std::to_string(sky.resolution) + " px square");
-        not_sky.resize(size_t(sky.resolution) * sky.resolution);
-        for (size_t p = 0; p < not_sky.size(); ++p) not_sky[p] = m.pixels[p * size_t(m.channels)] > 0.5f;
-    }
+    not_sky = sky.filled;  // load_sky read the mask its import wrote beside it
     // At the import resolution first (area-averaged), then as above: as a photograph imported there.
     NetworkFrame at_import = network_frame(sky, not_sky, import_resolution, form);
     return resolution == import_resolution ? at_import : resample_frame(at_import, resolution);

@@ -203,6 +203,19 @@ Image read_sky_file(const std::string& path) {
     return image;
 }
 
+std::vector<unsigned char> filled_mask_beside(const std::string& sky_path, int n) {
+    const std::filesystem::path filled = std::filesystem::path(sky_path).replace_extension(".filled.png");
+    if (!std::filesystem::exists(filled)) return {};
+    const Image m = read_image(filled.string());
+    if (m.width != n || m.height != n)
+        throw_file_error(filled.string(), "the filled-pixel mask is " + std::to_string(m.width) + "x" +
+                                              std::to_string(m.height) + ", its sky " + std::to_string(n) +
+                                              " px square (remove it, or import the sky again)");
+    std::vector<unsigned char> mask(size_t(n) * n);
+    for (size_t p = 0; p < mask.size(); ++p) mask[p] = m.pixels[p * size_t(m.channels)] > 0.5f;
+    return mask;
+}
+
 SkyImage load_sky(const std::string& path) { return sky_from_radiance_file(read_sky_file(path), path); }
 
 void require_radiance_pixels(const Image& image, const std::string& path) {
@@ -219,6 +232,7 @@ SkyImage sky_from_radiance_file(const Image& image, const std::string& path) {
     SkyImage sky = sky_from_image(image, path);
     validate_sky(sky, path);
     if (sky.source.empty()) sky.source = path;
+    sky.filled = filled_mask_beside(path, sky.resolution);
     return sky;
 }
 
@@ -254,6 +268,13 @@ SkyImage resampled_sky(const SkyImage& sky, int n) {
     SkyImage r = sky;
     r.resolution = n;
     r.rgb.assign(size_t(n) * n * 3, 0.0f);
+    if (!sky.filled.empty()) {  // a pixel is filled where any pixel under it was
+        cv::Mat mask(m, m, CV_8UC1, const_cast<unsigned char*>(sky.filled.data())), small;
+        cv::resize(mask * 255, small, cv::Size(n, n), 0, 0, n > m ? cv::INTER_NEAREST : cv::INTER_AREA);
+        r.filled.assign(size_t(n) * n, 0);
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) r.filled[size_t(j) * n + i] = small.at<unsigned char>(j, i) > 0;
+    }
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i)
             if (r.in_disc(i, j)) {

@@ -30,6 +30,11 @@ struct SkyImage {
     // skies, a calibrated import; "dynsky:units"), else "": units unknown (an HDRI, an uncalibrated
     // photograph), measured against the clear-sky model where it matters (motion/radiance_scale.h).
     std::string units;
+    // N * N, 1 where the import filled what the camera could not see (arm, shadow band, masts), as
+    // the STEM.filled.png beside the file says (load_sky reads it); empty: every pixel seen. A moving
+    // sky neither measures motion nor judges cloud there: a smooth fill through the sun's glare reads
+    // as cloud over the sun.
+    std::vector<unsigned char> filled;
 
     SkyImage() = default;
     explicit SkyImage(int n) : resolution(n), rgb(size_t(n) * n * 3, 0.0f) {}
@@ -41,6 +46,9 @@ struct SkyImage {
     void set_pixel(int i, int j, const Color& c) {
         float* p = &rgb[(size_t(j) * resolution + i) * 3];
         p[0] = c[0], p[1] = c[1], p[2] = c[2];
+    }
+    bool is_filled(int i, int j) const {
+        return filled.size() == size_t(resolution) * resolution && filled[size_t(j) * resolution + i] != 0;
     }
     // True for pixels whose centre lies inside the unit disc (above the horizon).
     bool in_disc(int i, int j) const;
@@ -62,11 +70,17 @@ void validate_sky(const SkyImage& sky, const std::string& name);
 // display-encoded values, whatever the file's name) where linear radiance is wanted.
 void require_radiance_pixels(const Image& image, const std::string& path);
 
+// The filled-pixel mask an import wrote beside a sky file (STEM.filled.png next to STEM.exr), as
+// SkyImage::filled for an N x N sky; empty when there is none. A mask of another size is refused,
+// naming it.
+std::vector<unsigned char> filled_mask_beside(const std::string& sky_path, int n);
+
 // EXR in, validated. A file of integer pixels (8-bit JPEG/PNG, 16-bit PNG: display-encoded values,
-// whatever its name) is refused: photographs are made skies by `dynsky sky import`. Reads the "dynsky:time" and "dynsky:sun_*" attributes when present.
+// whatever its name) is refused: photographs are made skies by `dynsky sky import`. Reads the
+// "dynsky:time" and "dynsky:sun_*" attributes when present.
 SkyImage load_sky(const std::string& path);
 // The same for an image already read from `path` (read_radiance_image): one read where the caller
-// looked at the image first (sky/latlong.h load_sky_or_latlong).
+// looked at the image first (sky/latlong.h load_sky_or_latlong). Both read the filled mask beside it.
 SkyImage sky_from_radiance_file(const Image& image, const std::string& path);
 
 // EXR out (atomic), with time, sun direction and source as attributes. If preview_png is

@@ -251,6 +251,45 @@ TEST(AdvectResidual, AClearHdriWithoutItsSunMovesAsWithIt) {
     }
 }
 
+// The pixels an import filled (SkyImage::filled: a TSI's shadow band, which runs through the sun)
+// say nothing of the clouds: they take the opacity of the clouds around them. A smooth fill through
+// the sun's glare, whiter and brighter than the sky, was judged cloud at the sun, and a sun the next
+// photographs of the ARM day showed went out on the first step (`sky predict` from 17:28:30Z: mean
+// luminance 44.2 -> 28.4). Here a clear sky with such a white band through its sun: the clouds the
+// model sees at the sun (the opacity the sun's weight is judged by) are clear when the band is
+// marked filled, and cloud when it is not.
+TEST(AdvectResidual, AFilledBandThroughTheSunIsNotCloudOverIt) {
+    ClearSkyParams p;
+    p.sun_direction = fisheye::direction_from_angles(40 * kPiD / 180, 0.9);
+    SkyImage sky = make_clear_sky(p, 128);
+    const int n = sky.resolution;
+    double sx, sy;
+    fisheye::pixel_from_direction(p.sun_direction, n, &sx, &sy);
+    const double len = std::hypot(sx - n / 2.0, sy - n / 2.0), ux = (sx - n / 2.0) / len, uy = (sy - n / 2.0) / len;
+    const cv::Mat cut = sun_cut_mask(n, p.sun_direction);
+    sky.filled.assign(size_t(n) * n, 0);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const double x = i + 0.5 - n / 2.0, y = j + 0.5 - n / 2.0;
+            if (!sky.in_disc(i, j) || x * ux + y * uy < 0 || std::abs(x * uy - y * ux) > 4 || cut.at<uint8_t>(j, i))
+                continue;
+            sky.filled[size_t(j) * n + i] = 1;
+            sky.set_pixel(i, j, Color::Constant(1.6f * luminance(sky.pixel(i, j))));  // a white fill
+        }
+    for (const bool marked : {true, false}) {
+        auto start = std::make_shared<SkyImage>(sky);
+        if (!marked) start->filled.clear();
+        CloudMotion motion;
+        motion.wind = Wind{};
+        AdvectResidualStepModel model(AdvectResidualNetwork::load(shipped()), motion);
+        model.step({start}, 30.0);
+        const double t = sun_transmittance_of_opacity(model.input_cloud_opacity(), p.sun_direction);
+        std::printf("band %s: transmittance of the clouds at the sun %.3f\n", marked ? "marked filled" : "unmarked", t);
+        if (marked) EXPECT_GT(t, 0.95);
+        else EXPECT_LT(t, 0.5) << "the white band no longer reads as cloud: the test shows nothing";
+    }
+}
+
 // An overcast stays overcast under the default wind: a grey overcast at dusk (the sun 2 degrees up
 // in the west-north-west, the grey brighter towards it) and, with the shared data, the ARM overcast
 // dusk photograph. Its grey was added to the model's clear sky as broken cloud is, and carried from

@@ -4,6 +4,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -105,6 +106,37 @@ TEST(SkyImage, WithoutSunOrSourceTheLoadedSkyHasNoSunAndNamesItsFile) {
     EXPECT_FALSE(back.sun_direction.has_value());
     EXPECT_EQ(back.source, path);
     EXPECT_FALSE(fs::exists(dir + "/plain.png")) << "no preview was asked for";
+    fs::remove_all(dir);
+}
+
+// The mask of the pixels an import filled (STEM.filled.png beside STEM.exr) comes with the sky,
+// through either loader, and follows it to another resolution (filled wherever any pixel under a
+// new one was); one of another size is refused naming it.
+TEST(SkyImage, TheFilledMaskBesideASkyIsLoadedWithIt) {
+    const std::string dir = test::temp_dir("sky_filled");
+    const SkyImage sky = awkward_sky(16);
+    save_sky(dir + "/s.exr", sky);
+    EXPECT_TRUE(load_sky(dir + "/s.exr").filled.empty());
+    Image mask(16, 16, 1);
+    mask.pixels[size_t(5) * 16 + 7] = 1.0f;  // one filled pixel: (7, 5)
+    write_image(dir + "/s.filled.png", mask);
+    std::shared_ptr<SkyImage> ground;
+    for (const SkyImage& back : {load_sky(dir + "/s.exr"), load_sky_or_latlong(dir + "/s.exr", &ground)}) {
+        ASSERT_EQ(back.filled.size(), 256u);
+        EXPECT_TRUE(back.is_filled(7, 5));
+        EXPECT_FALSE(back.is_filled(8, 5));
+        const SkyImage half = resampled_sky(back, 8);
+        ASSERT_EQ(half.filled.size(), 64u);
+        EXPECT_TRUE(half.is_filled(3, 2));
+        EXPECT_EQ(std::count(half.filled.begin(), half.filled.end(), 1), 1);
+    }
+    write_image(dir + "/s.filled.png", Image(8, 8, 1));
+    try {
+        load_sky(dir + "/s.exr");
+        ADD_FAILURE() << "a mask of another size was taken";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("s.filled.png"), std::string::npos) << e.what();
+    }
     fs::remove_all(dir);
 }
 
