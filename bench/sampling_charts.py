@@ -13,6 +13,20 @@ import matplotlib.pyplot as plt  # noqa: E402
 out = sys.argv[1]
 
 
+def save(fig, name):
+    """Writes the chart under a temporary name and renames it: a failed write (a full disk) leaves
+    no partial PNG, and an earlier run's chart stays as it was."""
+    path = os.path.join(out, name)
+    temporary = os.path.join(out, ".tmp-%d-%s" % (os.getpid(), name))
+    try:
+        fig.savefig(temporary, dpi=90)
+        os.replace(temporary, path)
+    except BaseException:
+        if os.path.exists(temporary):
+            os.remove(temporary)
+        raise
+
+
 def rows_of(name):
     path = os.path.join(out, name)
     if not os.path.exists(path):
@@ -58,7 +72,7 @@ for (scene, sky), by in groups.items():
     axes[1].legend(fontsize=6, ncol=2)
     fig.suptitle("%s scene, %s sky (error bars: one standard deviation over seeds)" % (scene, sky))
     fig.tight_layout()
-    fig.savefig(os.path.join(out, "rmse_%s_%s.png" % (scene, sky)), dpi=90)
+    save(fig, "rmse_%s_%s.png" % (scene, sky))
     plt.close(fig)
 
 rows = rows_of("rebuild.csv")
@@ -80,7 +94,7 @@ if rows:
         axes[k].grid(True, which="both", alpha=0.3)
     axes[1].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(os.path.join(out, "rebuild.png"), dpi=90)
+    save(fig, "rebuild.png")
     plt.close(fig)
 
 rows = rows_of("failures.csv")
@@ -103,5 +117,5 @@ if rows:
     axes[0].set_yscale("log")
     axes[1].legend(fontsize=6, ncol=2)
     fig.tight_layout()
-    fig.savefig(os.path.join(out, "failures.png"), dpi=90)
+    save(fig, "failures.png")
     plt.close(fig)

@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -700,9 +701,12 @@ int run_sampling_study(const SamplingStudyOptions& o) {
 
     // ---- Charts ----
     std::string script = data_path("bench/sampling_charts.py");
-    const ChildResult charts = run_program({"/usr/bin/python3", script, out.string()});
-    if (!charts.exited || charts.exit_code != 0)
-        notes += "- chart script failed (exit " + std::to_string(charts.exit_code) + "); tables are complete\n";
+    std::string chart_output;
+    const ChildResult charts = run_program({"/usr/bin/python3", script, out.string()}, &chart_output);
+    const bool charts_failed = !charts.exited || charts.exit_code != 0;
+    if (charts_failed)
+        notes += "- the charts were NOT all written (" + script + " exit " + std::to_string(charts.exit_code) +
+                 "); the tables and CSV files are complete\n";
 
     // ---- Recommendation: fastest median time to plain cdf's error over all cases ----
     auto med = [](std::vector<double> v) { return v.empty() ? 0.0 : middle_mean(std::move(v)); };
@@ -811,6 +815,17 @@ int run_sampling_study(const SamplingStudyOptions& o) {
     write_file_atomic((out / "README.md").string(), md.str());
     if (!reports_silenced())
         std::fprintf(stderr, "wrote %s (%.0f s)\n", (out / "README.md").c_str(), seconds_since(start));
+    if (charts_failed) {
+        // The tables stand; the run is not done until its charts are (a full disk, no matplotlib).
+        // Its last line says why ("OSError: [Errno 28] No space left on device"), the traceback not.
+        std::string why = chart_output;
+        while (!why.empty() && std::isspace((unsigned char)why.back())) why.pop_back();
+        why = why.substr(why.find_last_of('\n') == std::string::npos ? 0 : why.find_last_of('\n') + 1);
+        throw_file_error(out.string(), "the charts were not written: python3 " + script + " failed (exit " +
+                                           std::to_string(charts.exit_code) + ": " + why +
+                                           "). The tables and CSV files are complete; run the command again to "
+                                           "make the charts (measurements are kept in its cache)");
+    }
     return 0;
 }
 

@@ -38,6 +38,17 @@ TEST(BenchSamplingCli, FinishedCasesAreKeptAndReused) {
     std::string csv2 = read_text(dir + "/accuracy.csv");
     EXPECT_EQ(std::count(csv1.begin(), csv1.end(), '\n'), 1 + 2 * 3 * 2);
     EXPECT_EQ(csv1, csv2);
+    // Charts that cannot be written (files limited to 40 KB: a full disk) fail the run, naming why;
+    // the chart of the earlier run stays whole and no temporary is left.
+    const std::string chart = dir + "/rmse_diffuse_clear.png", before = read_text(chart);
+    ASSERT_GT(before.size(), 41000u) << "the chart is too small for this test's limit";
+    auto third = test::run_command("bash -c 'ulimit -f 40; " + cmd + "'");
+    EXPECT_EQ(third.exit_code, 1) << third.output;
+    EXPECT_NE(third.output.find("the charts were not written"), std::string::npos) << third.output;
+    EXPECT_NE(third.output.find("File too large"), std::string::npos) << third.output;
+    EXPECT_EQ(read_text(chart), before);
+    for (const auto& e : fs::directory_iterator(dir))
+        EXPECT_NE(e.path().filename().string().rfind(".tmp-", 0), 0u) << e.path();
     fs::remove_all(dir);
 }
 
