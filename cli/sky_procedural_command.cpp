@@ -148,6 +148,7 @@ void register_sky_procedural_command(CLI::App& sky) {
         if (o->evolution > 0 && o->evolution < 1)
             throw Error("--evolution: " + number_text(o->evolution) + " s: give 0 (frozen shapes) or at least 1 s");
         check_outputs_are_not_inputs({o->out}, {o->mask_image});
+        check_numbered_outputs_spare(o->out, {"frame", "flow"}, {o->mask_image});
         remove_stale_temporaries(o->out);  // of a killed run into the same folder
         write_procedural_sequence(*o);
     });

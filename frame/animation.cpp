@@ -151,6 +151,7 @@ void check_animation_settings(const AnimationSettings& o, bool inputs_exist) {
         throw Error("--timeline " + o.timeline + " is the frames' folder --out: give it a folder of its own, e.g. " +
                     (fs::path(o.out) / "timeline").string());
     check_outputs_are_not_inputs({o.out}, {o.sky.sky, o.sky.previous, o.scene.scene, o.timeline});
+    check_numbered_outputs_spare(o.out, {"frame", "sky"}, {o.sky.sky, o.sky.previous, o.scene.scene});
     if (!inputs_exist) return;
     // What a farm script checks before queueing anything (--count-frames): the files named exist
     // and the model is one there is (their contents are read by the stages).

@@ -23,6 +23,7 @@
 #include "util/atomic_file.h"
 #include "util/chart.h"
 #include "util/error.h"
+#include "util/image.h"
 #include "util/json_file.h"
 #include "util/parse.h"
 #include "util/progress.h"
@@ -175,6 +176,10 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
     if (o.report.empty() || (o.report.back() == '/' && !fs::exists(o.report)))
         throw Error("--out " + o.report + ": a folder; give the report's file (" +
                     (fs::path(o.report) / "eval.md").lexically_normal().string() + "; a .csv and charts beside it)");
+    if (const std::string ext = file_extension(o.report); ext == ".csv" || ext == ".png")
+        throw Error("--out " + o.report + ": the report is Markdown, and its table (.csv) and charts (.png) are " +
+                    "written beside it under its name: give a .md name, e.g. " +
+                    fs::path(o.report).replace_extension(".md").string());
     {
         // The report and what is written beside it must not replace an input or land in an input
         // folder (the photographs, the shared data of a named sequence, a model folder).

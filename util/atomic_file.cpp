@@ -13,6 +13,7 @@
 #include <regex>
 
 #include "util/error.h"
+#include "util/frame_names.h"
 
 namespace dynsky {
 
@@ -246,6 +247,24 @@ void check_outputs_are_not_inputs(const std::vector<std::string>& outputs, const
                     throw_file_error(out, "is inside the input folder " + in + "; refusing to write there");
             }
         }
+    }
+}
+
+void check_numbered_outputs_spare(const std::string& folder, const std::vector<std::string>& prefixes,
+                                  const std::vector<std::string>& files) {
+    std::error_code ec;
+    const fs::path out = fs::weakly_canonical(fs::absolute(folder), ec).lexically_normal();
+    for (const std::string& file : files) {
+        if (file.empty()) continue;
+        const fs::path path = fs::weakly_canonical(fs::absolute(file), ec);
+        fs::path parent = path.parent_path().lexically_normal();
+        if (parent != out && !(fs::exists(parent, ec) && fs::exists(out, ec) && fs::equivalent(parent, out, ec)))
+            continue;
+        for (const std::string& prefix : prefixes)
+            if (numbered_index(path.filename().string(), prefix))
+                throw_file_error(file, "has the name of one of the files this command writes into " + folder + " (" +
+                                           prefix +
+                                           "_NNNN); refusing to overwrite it: move it or choose another --out");
     }
 }
 

@@ -687,6 +687,22 @@ TEST(BadInputCli, AuditedInputsAreRefusedClearly) {
     fs::create_directories(dir + "/busy/out.png");
     bad.add("render builtin --res 8x6 --spp 1 -q -o " + dir + "/busy/out.exr",
             {"out.png", "a folder of that name is in the way"});
+    // An input (or the --stats CSV) named as one of the numbered files the command writes into
+    // --out: it was overwritten (full-disk audit).
+    fs::create_directories(dir + "/named");
+    const std::string step = sky_exr(dir + "/named/step_0001.exr"), frame = sky_exr(dir + "/named/frame_0000.exr");
+    const std::string named = "has the name of one of the files this command writes into";
+    bad.add("sky predict --sky " + step + " --steps 1 -q -o " + dir + "/named", {step, named, "(step_NNNN)"});
+    bad.add("sky predict --sky " + frame + " --steps 2 -q -o " + dir + "/p --stats " + dir + "/p/step_0002.csv",
+            {"step_0002.csv", named});
+    bad.add("animate builtin --sky " + frame + " --res 8x6 --spp 1 --duration 1 --fps 1 -q --no-video -o " + dir +
+                "/named",
+            {frame, named, "(frame_NNNN)"});
+    bad.add("sky procedural --sky-res 32 --duration 10 --mask-image " + frame + " -q -o " + dir + "/named",
+            {frame, named});
+    // The report and its CSV would be one file.
+    bad.add("sky evaluate --photos " + dir + "/named --resolutions 64 -o " + dir + "/ev.csv",
+            {"the report is Markdown", "ev.md"});
     const std::vector<std::string> outputs = bad.check();
     EXPECT_NE(outputs[7].find("usage error"), std::string::npos) << outputs[7];
     EXPECT_FALSE(fs::exists(dir + "/busy/out.exr"));
