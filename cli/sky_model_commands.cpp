@@ -63,7 +63,7 @@ void register_sky_model_commands(CLI::App& sky) {
         cmd->add_flag("--quiet,-q", o->quiet, "No progress bar or summary");
         cmd->callback([o]() {
             check_outputs_are_not_inputs({o->out, o->stats}, {o->in, o->previous});
-            check_numbered_outputs_spare(o->out, {"step"}, {o->in, o->previous, o->stats});
+            check_numbered_outputs_spare(o->out, {"step"}, {o->stats});
             remove_stale_temporaries(o->out);  // of a killed run into the same folder
             write_prediction(*o);
         });

@@ -79,6 +79,35 @@ void write_prediction(const PredictionOptions& o) {
     };
     const cv::Mat disc = sky_disc_mask(n);
     const OutputFolder out_folder(o.out);  // removed again if this run fails before writing anything
+    // Steps of an earlier run into the same folder are removed before the first is written: those
+    // this run does not write (more steps, another --every) would read as this sky's future
+    // (`animate --sky` took a stale one as its last frame), and a run stopped midway left the
+    // earlier run's later steps after its own, and its --stats. Never this run's inputs (a
+    // prediction continued from its own last step into its folder); one it would overwrite is refused.
+    auto is_input = [&](const fs::path& p) {
+        std::error_code ec;
+        for (const std::string& input : {o.in, o.previous})
+            if (!input.empty() && fs::exists(input, ec) && fs::equivalent(p, input, ec)) return true;
+        return false;
+    };
+    std::vector<fs::path> stale;
+    for (const auto& e : fs::directory_iterator(o.out)) {
+        const std::string ext = e.path().extension().string();
+        const std::optional<int> k = numbered_index(e.path().string(), "step");
+        if (!e.is_regular_file() || !k || (ext != ".exr" && ext != ".png")) continue;
+        const bool written = *k >= 1 && *k <= o.steps && (*k % o.every == 0 || *k == o.steps) &&
+                             (ext == ".exr" || o.preview);
+        if (!is_input(e.path())) stale.push_back(e.path());
+        else if (written)
+            throw_file_error(e.path().string(), "is an input of this prediction and one of the steps it writes into " +
+                                                    o.out +
+                                                    "; refusing to overwrite it: move it or choose another --out");
+    }
+    for (const fs::path& p : stale) fs::remove(p);
+    if (!o.stats.empty()) remove_stale_marker(o.stats);
+    if (!stale.empty() && !o.quiet)
+        std::fprintf(stderr, "dynsky: note: removed %zu step file(s) of an earlier prediction from %s\n", stale.size(),
+                     o.out.c_str());
     std::ostringstream csv;
     csv << "step,time_s,mean_luminance,mean_unit,min_unit,max_unit,cloud_coverage,hf_energy,"
            "mean_luminance_without_sun,nonfinite\n";
@@ -137,28 +166,6 @@ void write_prediction(const PredictionOptions& o) {
         progress.advance();
     });
     progress.finish();
-    // Steps of an earlier run into the same folder that this one did not write (more steps, another
-    // --every) would read as this sky's future: `animate --sky` took a stale one as its last frame.
-    // Never this run's inputs (a prediction continued from its own last step into its folder).
-    auto is_input = [&](const fs::path& p) {
-        std::error_code ec;
-        for (const std::string& input : {o.in, o.previous})
-            if (!input.empty() && fs::exists(input, ec) && fs::equivalent(p, input, ec)) return true;
-        return false;
-    };
-    int stale = 0;
-    for (const auto& e : fs::directory_iterator(o.out)) {
-        const std::string ext = e.path().extension().string();
-        const std::optional<int> index = numbered_index(e.path().string(), "step");
-        if (!e.is_regular_file() || !index || (ext != ".exr" && ext != ".png")) continue;
-        if (is_input(e.path())) continue;
-        const int k = *index;
-        if (k >= 1 && k <= o.steps && (k % o.every == 0 || k == o.steps) && (ext == ".exr" || o.preview)) continue;
-        fs::remove(e.path()), ++stale;
-    }
-    if (stale && !o.quiet)
-        std::fprintf(stderr, "dynsky: note: removed %d step file(s) of an earlier prediction from %s\n", stale,
-                     o.out.c_str());
     if (!o.stats.empty()) write_file_atomic(o.stats, csv.str());
     if (!o.quiet)
         std::printf("wrote %d predicted sk%s (Delta t = %g s, %d step%s) to %s\n", written, written == 1 ? "y" : "ies",

@@ -692,7 +692,8 @@ TEST(BadInputCli, AuditedInputsAreRefusedClearly) {
     fs::create_directories(dir + "/named");
     const std::string step = sky_exr(dir + "/named/step_0001.exr"), frame = sky_exr(dir + "/named/frame_0000.exr");
     const std::string named = "has the name of one of the files this command writes into";
-    bad.add("sky predict --sky " + step + " --steps 1 -q -o " + dir + "/named", {step, named, "(step_NNNN)"});
+    bad.add("sky predict --sky " + step + " --steps 1 -q -o " + dir + "/named",
+            {step, "is an input of this prediction and one of the steps it writes"});
     bad.add("sky predict --sky " + frame + " --steps 2 -q -o " + dir + "/p --stats " + dir + "/p/step_0002.csv",
             {"step_0002.csv", named});
     bad.add("animate builtin --sky " + frame + " --res 8x6 --spp 1 --duration 1 --fps 1 -q --no-video -o " + dir +
