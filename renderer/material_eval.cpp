@@ -2,6 +2,24 @@
 
 namespace dynsky {
 
+Vec3 lifted_shading_normal(const Vec3& ng, const Vec3& wo, const Vec3& ns) {
+    const float threshold = std::min(0.9f * ng.dot(wo), 0.01f);
+    auto valid = [&](const Vec3& n) {
+        const float cos_o = n.dot(wo);
+        return cos_o > 1e-4f && ng.dot(2 * cos_o * n - wo) >= threshold;
+    };
+    if (valid(ns)) return ns;
+    // Along the arc from ns to ng (ng itself is valid: its reflection leaves at ng.wo), the
+    // normal nearest ns that is, by bisection.
+    auto between = [&](float s) { return Vec3((1 - s) * ns + s * ng).normalized(); };
+    float lo = 0, hi = 1;
+    for (int k = 0; k < 20; ++k) {
+        const float mid = 0.5f * (lo + hi);
+        (valid(between(mid)) ? hi : lo) = mid;
+    }
+    return between(hi);
+}
+
 ShadingPoint evaluate_material(const Scene& scene, const SurfaceHit& hit, const Vec3& wo) {
     const Material& m = *hit.material;
     ShadingPoint sp;
@@ -75,9 +93,7 @@ ShadingPoint evaluate_material(const Scene& scene, const SurfaceHit& hit, const 
             if (n.dot(ng) > 0) ns = n;  // a mapped normal facing away from the surface is ignored
         }
     }
-    // The shading normal must see the viewer, or the BRDF is zero everywhere (black speckles):
-    // fall back to the geometric normal then.
-    if (ns.dot(wo) <= 1e-4f) ns = ng;
+    ns = lifted_shading_normal(ng, wo, ns);
     sp.geometric_normal = ng;
     sp.normal = ns;
     sp.tangent = (t - ns * ns.dot(t));

@@ -32,6 +32,14 @@ inline Vec2 texture_uv(const TextureSlot& slot, const SurfaceHit& hit) {
     return Vec2(t.x(), t.y());
 }
 
+// The shading normal ns (on ng's side) bent towards the geometric normal ng just enough that wo's
+// mirror reflection about it leaves the surface (at least min(0.9 ng.wo, 0.01) above it), as Cycles
+// bends it: a normal tilted far from the geometric one (smooth shading of coarse meshes, strong
+// normal maps) reflected glossy paths below the surface, which ended there, and mirror-like rims
+// rendered black (NormalTangentMirrorTest: a black ring over half of each normal-mapped dome). ns
+// unchanged where it is valid.
+Vec3 lifted_shading_normal(const Vec3& ng, const Vec3& wo, const Vec3& ns);
+
 // wo: world direction towards the viewer (unit).
 ShadingPoint evaluate_material(const Scene& scene, const SurfaceHit& hit, const Vec3& wo);
 

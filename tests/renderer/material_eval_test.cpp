@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -105,6 +106,28 @@ TEST(MaterialEval, TexturesAreLookedUpThroughTheirUvSetAndTransform) {
     expect_color(evaluate_material(scene, hit, kUp).base_color, Color(0, 0, 1));
 }
 
+// A shading normal whose mirror reflection of the viewer goes below the true surface is bent
+// towards the geometric normal just enough to lift it out (and no further); one that is fine stays.
+TEST(MaterialEval, AShadingNormalIsBentOnlyAsFarAsItsReflectionNeeds) {
+    const Vec3 ng(0, 0, 1);
+    const Vec3 wo = Vec3(-0.8f, 0, 0.6f).normalized();
+    const Vec3 mild = Vec3(0.1f, 0, 1).normalized();
+    EXPECT_TRUE(lifted_shading_normal(ng, wo, mild).isApprox(mild));
+    for (const float tilt_deg : {50.0f, 70.0f, 85.0f}) {
+        const float a = tilt_deg * float(kPi) / 180;
+        const Vec3 ns(std::sin(a), 0, std::cos(a));  // tilted away from the viewer
+        const Vec3 r0 = 2 * ns.dot(wo) * ns - wo;
+        ASSERT_LT(ng.dot(r0), 0) << tilt_deg << ": the test's reflection should start below the surface";
+        const Vec3 n = lifted_shading_normal(ng, wo, ns);
+        const Vec3 r = 2 * n.dot(wo) * n - wo;
+        EXPECT_NEAR(n.norm(), 1, 1e-5f);
+        EXPECT_GE(ng.dot(r), 0.01f - 1e-4f) << tilt_deg;
+        EXPECT_LT(ng.dot(r), 0.02f) << tilt_deg << ": bent further than needed";
+        EXPECT_GT(n.dot(wo), 0) << tilt_deg;
+        EXPECT_NEAR(n.y(), 0, 1e-6f) << "stays in the plane of ns and ng";
+    }
+}
+
 TEST(MaterialEval, BothNormalsTurnToTheViewersSide) {
     Scene scene;
     Material m;
@@ -157,20 +180,22 @@ TEST(MaterialEval, NormalMapIsIgnoredWithoutTangentsOrWhenItFacesAway) {
     expect_vec3(evaluate_material(scene, hit, kUp).normal, kUp);
 }
 
-TEST(MaterialEval, AShadingNormalThatCannotSeeTheViewerFallsBackToTheGeometricOne) {
+TEST(MaterialEval, AShadingNormalThatCannotSeeTheViewerIsBentUntilItDoes) {
     Scene scene;
     Material m;
     SurfaceHit hit = flat_hit(&m);
     // Interpolated normal tilted 60 degrees towards +x; a viewer at grazing angle on the -x side
-    // is above the surface but behind the shading normal.
+    // is above the surface but behind the shading normal: bent towards the geometric normal until
+    // it sees the viewer and reflects it above the surface (lifted_shading_normal).
     hit.shading_normal = Vec3(std::sqrt(0.75f), 0, 0.5f);
     Vec3 wo = Vec3(-0.95f, 0, 0.1f).normalized();
     ASSERT_LT(hit.shading_normal.dot(wo), 0);
     ShadingPoint sp = evaluate_material(scene, hit, wo);
-    expect_vec3(sp.normal, kUp);
+    EXPECT_GT(sp.normal.dot(wo), 0);
+    EXPECT_GE(kUp.dot(2 * sp.normal.dot(wo) * sp.normal - wo), std::min(0.9f * kUp.dot(wo), 0.01f) - 1e-4f);
     expect_vec3(sp.geometric_normal, kUp);
     // Seen from where it faces, the interpolated normal is kept.
-    sp = evaluate_material(scene, hit, Vec3(0, 0, 1));
+    sp = evaluate_material(scene, hit, hit.shading_normal);
     expect_vec3(sp.normal, hit.shading_normal);
     EXPECT_NEAR(sp.tangent.dot(sp.normal), 0.0f, 1e-6f);
     EXPECT_NEAR(sp.bitangent.dot(sp.normal), 0.0f, 1e-6f);
