@@ -17,11 +17,21 @@ static float schlick_weight(float cos_theta) {
 
 namespace {
 
-// Bilinear interpolation in a table over (mu, roughness) in [0, 1]^2 with kSize nodes each way;
-// e(i, j) is the value at mu node i and roughness node j.
+// The mu of node i of the albedo tables below: uniform in sqrt(mu), so that nodes crowd towards
+// grazing, where a smooth lobe's albedo falls steeply (over mu < 2 alpha). Spaced uniformly in mu,
+// the first cell (mu < 1/31, 88.2 degrees) read a smooth dielectric's albedo as 0.83 where it is
+// 0.96, and the base under it, weighted by 1 - E, reflected up to 9 % more than came in.
+template <int kSize>
+float table_mu(int i) {
+    const float t = float(i) / (kSize - 1);
+    return std::max(t * t, 1e-4f);
+}
+
+// Bilinear interpolation in a table over (sqrt(mu), roughness) in [0, 1]^2 with kSize nodes each
+// way; e(i, j) is the value at mu node i (table_mu) and roughness node j.
 template <int kSize, class Value>
 float bilinear_over_mu_and_roughness(float mu, float roughness, const Value& e) {
-    float x = clamp(mu, 0.0f, 1.0f) * (kSize - 1), y = clamp(roughness, 0.0f, 1.0f) * (kSize - 1);
+    float x = std::sqrt(clamp(mu, 0.0f, 1.0f)) * (kSize - 1), y = clamp(roughness, 0.0f, 1.0f) * (kSize - 1);
     int x0 = std::min(int(x), kSize - 2), y0 = std::min(int(y), kSize - 2);
     float fx = x - x0, fy = y - y0;
     return (1 - fy) * ((1 - fx) * e(x0, y0) + fx * e(x0 + 1, y0)) +
@@ -37,7 +47,7 @@ float bilinear_over_mu_and_roughness(float mu, float roughness, const Value& e) 
 // KHR_materials_ior) is their mix: E = F0 E[G1] + (1 - F0) E[w G1].
 class SpecularAlbedoTable {
   public:
-    static constexpr int kSize = 32;
+    static constexpr int kSize = 64;  // fine in roughness too: near grazing E falls at mu ~ 2 alpha
     static const SpecularAlbedoTable& get() {
         static const SpecularAlbedoTable table;
         return table;
@@ -68,7 +78,7 @@ class SpecularAlbedoTable {
             float alpha = std::max(roughness * roughness, kMinAlpha);
             double avg_g = 0, avg_wg = 0;
             for (int i = 0; i < kSize; ++i) {
-                float mu = std::max(float(i) / (kSize - 1), 1e-3f);
+                const float mu = table_mu<kSize>(i);
                 Vec3 wo(safe_sqrt(1 - mu * mu), 0, mu);
                 double sum_g = 0, sum_wg = 0;
                 for (int a = 0; a < strata; ++a)
@@ -84,7 +94,7 @@ class SpecularAlbedoTable {
             }
             // E_avg = 2 * integral of E(mu) mu dmu (trapezoid over the table's mu nodes).
             for (int i = 0; i + 1 < kSize; ++i) {
-                float m0 = float(i) / (kSize - 1), m1 = float(i + 1) / (kSize - 1);
+                const float m0 = i == 0 ? 0.0f : table_mu<kSize>(i), m1 = table_mu<kSize>(i + 1);
                 const Moments &e0 = albedo_[j * kSize + i], &e1 = albedo_[j * kSize + i + 1];
                 avg_g += 0.5 * (e0.g * m0 + e1.g * m1) * (m1 - m0);
                 avg_wg += 0.5 * (e0.wg * m0 + e1.wg * m1) * (m1 - m0);
@@ -135,7 +145,7 @@ class SheenAlbedoTable {
         for (int j = 0; j < kSize; ++j) {
             const float roughness = float(j) / (kSize - 1);
             for (int i = 0; i < kSize; ++i) {
-                const float mu = std::max(float(i) / (kSize - 1), 1e-3f);
+                const float mu = table_mu<kSize>(i);
                 const Vec3 wo(safe_sqrt(1 - mu * mu), 0, mu);
                 double sum = 0;
                 for (int a = 0; a < n; ++a)
