@@ -202,7 +202,7 @@ std::optional<NorthFromSun> north_from_seen_sun(const ImportedPhoto& photo, cons
     return out;
 }
 
-ConsensusNorth consensus_north(const std::vector<double>& norths_deg) {
+ConsensusNorth consensus_north(const std::vector<double>& norths_deg, int tries) {
     if (norths_deg.empty()) throw Error("no north found to agree on");
     auto apart = [](double a, double b) { return std::abs(std::remainder(a - b, 360.0)); };
     ConsensusNorth out;
@@ -215,6 +215,7 @@ ConsensusNorth consensus_north(const std::vector<double>& norths_deg) {
     for (double a : norths_deg)
         if (apart(a, out.north_deg) <= 10)
             ++out.near, out.spread_deg = std::max(out.spread_deg, apart(a, out.north_deg));
+    out.agreed = 2 * out.near > int(norths_deg.size()) && (out.near >= 2 || tries <= 1);
     return out;
 }
 

@@ -122,13 +122,17 @@ std::optional<NorthFromSun> north_from_seen_sun(const ImportedPhoto& photo, cons
 // One north from those found on several photographs of a sequence (north_from_seen_sun on each):
 // the one with the least summed angular distance to the others (a median on the circle: a photo
 // whose glare was taken for the sun does not pull it), how many lie within 10 degrees of it and
-// the farthest of those. Throws dynsky::Error for none.
+// the farthest of those, and whether they agree: more than half of them near it, and at least two
+// unless only one photograph was looked at (`tries`). Glare or a bright cloud taken for the sun
+// scatters the norths: on an ARM sequence imported as an unknown camera, 1 of 10 put north 140
+// degrees off. Throws dynsky::Error for none.
 struct ConsensusNorth {
     double north_deg = 0;
     int near = 0;
     double spread_deg = 0;
+    bool agreed = false;
 };
-ConsensusNorth consensus_north(const std::vector<double>& norths_deg);
+ConsensusNorth consensus_north(const std::vector<double>& norths_deg, int tries = 1);
 
 // Absolute radiance from an imported LDR photo (throws dynsky::Error if the photo was not
 // display-referred: HDR input already has its own scale). Sets sun_direction on the result.

@@ -507,8 +507,12 @@ void run_photo_import(const PhotoImportJob& o) {
                 "dynsky: warning: --find-north: none of %d photographs spread over the sequence shows a clipped "
                 "sun at the computed sun's height: north stays %.1f deg\n",
                 tries, o.north_deg.value_or(0.0));
+        } else if (const ConsensusNorth north = consensus_north(norths, tries); !north.agreed) {
+            std::fprintf(stderr,
+                         "dynsky: warning: --find-north: the photographs disagree on north (%d of the %zu that show "
+                         "a clipped sun within 10 deg of %.1f deg): north stays %.1f deg; give --north DEG\n",
+                         north.near, norths.size(), north.north_deg, o.north_deg.value_or(0.0));
         } else {
-            const ConsensusNorth north = consensus_north(norths);
             std::printf(
                 "north: %.1f deg clockwise from the photos' top, found from the clipped sun on %zu of %d "
                 "photographs spread over the sequence (%d within %.1f deg of it); used for every photograph\n",

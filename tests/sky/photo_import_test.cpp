@@ -358,6 +358,12 @@ TEST(PhotoImport, ASequenceAgreesOnOneNorthAcrossZero) {
     EXPECT_DOUBLE_EQ(n.north_deg, 2.0);
     EXPECT_EQ(n.near, 4);
     EXPECT_DOUBLE_EQ(n.spread_deg, 4.0);
+    EXPECT_TRUE(n.agreed);
+    // Glare taken for the sun: scattered norths, one photograph's alone, are no finding.
+    EXPECT_FALSE(consensus_north({220.4, 95.0, 199.0, 150.0, 30.0, 300.0, 260.0, 120.0, 60.0, 330.0}, 25).agreed);
+    EXPECT_FALSE(consensus_north({220.4}, 25).agreed);
+    EXPECT_TRUE(consensus_north({220.4}, 1).agreed);                     // a single photograph imported alone
+    EXPECT_FALSE(consensus_north({10.0, 12.0, 200.0, 90.0}, 4).agreed);  // half is no majority
     EXPECT_THROW(consensus_north({}), Error);
 }
 
