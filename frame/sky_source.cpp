@@ -179,6 +179,8 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
                                                     previous_file);
             if (motion.previous_dt == 0 && !reports_silenced())
                 std::fputs(unknown_previous_gap_note(sky_file, previous_file).c_str(), stderr);
+            if (!reports_silenced())
+                std::fputs(long_previous_gap_warning(motion.previous_dt, sky_file, previous_file).c_str(), stderr);
         }
         input.time_seconds = 0;
         if (input.source.empty()) input.source = sky_file;

@@ -1089,6 +1089,18 @@ std::string unknown_previous_gap_note(const std::string& sky_name, const std::st
            "--prev-dt SECONDS if they are not\n";
 }
 
+std::string long_previous_gap_warning(double gap_seconds, const std::string& sky_name,
+                                      const std::string& previous_name) {
+    if (!(gap_seconds > kLongPreviousGapSeconds)) return "";
+    char gap[32];
+    std::snprintf(gap, sizeof gap, "%.0f s", gap_seconds);
+    return "dynsky: warning: the previous frame " + previous_name + " is " + gap + " before " + sky_name +
+           ": over more than " + std::to_string(int(kLongPreviousGapSeconds)) +
+           " s clouds change shape and the motion measured between the two comes out slow (on the ARM day about "
+           "half of it at 120 s, none at 300 s): give a frame closer to it, or the wind (--wind-from, "
+           "--wind-speed)\n";
+}
+
 double model_scale(const SkyImage& sky) {
     if (sky.sun_direction) return 1.0;
     if (const RadianceScale measured = measure_radiance_scale(sky); measured.measured)

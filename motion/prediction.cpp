@@ -53,6 +53,7 @@ void write_prediction(const PredictionOptions& o) {
         motion.previous_dt = previous_frame_gap(sky, *motion.previous, o.previous_dt, o.in, o.previous);
         if (motion.previous_dt == 0 && !o.quiet)
             std::fputs(unknown_previous_gap_note(o.in, o.previous).c_str(), stderr);
+        if (!o.quiet) std::fputs(long_previous_gap_warning(motion.previous_dt, o.in, o.previous).c_str(), stderr);
     }
     // A sky in other units than the models' (motion/radiance_scale.h) moves divided by its scale; every
     // step is written multiplied back.

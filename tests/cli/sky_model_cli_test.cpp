@@ -238,6 +238,27 @@ TEST(SkyModelCli, SkiesInOtherUnitsMoveAsAtScaleAndKeepTheirUnits) {
     fs::remove_all(dir);
 }
 
+// A previous frame minutes before the sky measures too little motion (the clouds changed shape in
+// between): said, with what to give instead; a frame 30 s before is not.
+TEST(SkyModelCli, APreviousFrameMinutesBeforeIsWarnedAbout) {
+    const std::string dir = test::temp_dir("predict_gap");
+    for (const char* t : {"12:00:00", "12:04:30", "12:05:00"})
+        ASSERT_EQ(test::run_command(dynsky(std::string("sky clear --lat 36.6 --lon -97.5 --time 2026-06-21T") + t +
+                                           "Z --sky-res 32 -q -o " + dir + "/" + std::string(t).substr(3, 2) + ".exr"))
+                      .exit_code,
+                  0);
+    auto r = test::run_command(dynsky("sky predict --model advect --in " + dir + "/05.exr --prev " + dir +
+                                      "/00.exr --steps 1 --out " + dir + "/a"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("is 300 s before"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("--wind-from"), std::string::npos) << r.output;
+    r = test::run_command(dynsky("sky predict --model advect --in " + dir + "/05.exr --prev " + dir +
+                                 "/04.exr --steps 1 --out " + dir + "/b"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(r.output.find("warning"), std::string::npos) << r.output;
+    fs::remove_all(dir);
+}
+
 TEST(SkyModelCli, PredictBadInputsFailClearlyAndWriteNothing) {
     const std::string dir = test::temp_dir("predict_bad");
     const std::string in = small_sky(dir, 32);
