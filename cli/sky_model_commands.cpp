@@ -49,7 +49,8 @@ void register_sky_model_commands(CLI::App& sky) {
         cmd->add_option(
             "--sky", o->in,
             "Input sky (canonical fisheye EXR, any resolution; or a 2:1 lat-long HDRI, whose upper half is\n"
-            "taken, as render does)");
+            "taken, as render does; or a folder of skies, a captured sequence: on from its last, the one\n"
+            "before it the previous frame, as animate takes one)");
         add_hidden_alias(cmd, "--in", &o->in);
         cmd->add_option("--out,-o", o->out, "Output folder (created if missing)")->required();
         cmd->add_option("--steps", o->steps, "Number of medium steps K (1..100000)")->capture_default_str();

@@ -109,31 +109,15 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     // the previous frame.
     std::string sky_file = o.sky, previous_file = o.previous;
     if (fs::is_directory(o.sky)) {
-        std::vector<std::string> exrs, others;
-        for (const auto& e : fs::directory_iterator(o.sky)) {
-            if (!e.is_regular_file() || is_hidden_file(e.path().string())) continue;
-            const std::string ext = file_extension(e.path().string());
-            // `sky procedural`'s flow_NNNN.exr beside its frames hold motion, not skies (at the
-            // frames' times: ordered by time, one was taken for the previous frame).
-            if (ext == ".exr" && !image_header_number(e.path().string(), "dynsky:flow_dt")) {
-                exrs.push_back(e.path().string());
-            } else if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".hdr" || ext == ".tif") {
-                if (written_beside_a_sky(e.path().string())) continue;
-                others.push_back(e.path().filename().string());
-            }
-        }
-        exrs = skies_in_time_order(exrs);
-        if (!others.empty()) {  // a photograph among the skies, not imported: said, not silently skipped
-            std::sort(others.begin(), others.end());
-            std::fprintf(stderr,
-                         "dynsky: warning: %s: %zu image(s) that are not sky EXRs ignored (%s%s); the sequence is its "
-                         ".exr files (import photographs with 'dynsky sky import')\n",
-                         o.sky.c_str(), others.size(), others[0].c_str(), others.size() > 1 ? ", ..." : "");
-        }
-        if (exrs.empty())
-            throw_file_error(o.sky, "a folder without sky EXRs (give a captured sequence of canonical fisheyes)");
+        const std::vector<std::string> exrs = sky_sequence_files(o.sky);
         sky_file = exrs.back();
-        if (exrs.size() >= 2 && previous_file.empty()) previous_file = exrs[exrs.size() - 2];
+        const bool chosen = exrs.size() >= 2 && previous_file.empty();
+        if (chosen) previous_file = exrs[exrs.size() - 2];
+        if (!reports_silenced())
+            std::fprintf(stderr, "dynsky: note: %s: moving on from its last sky, %s%s%s\n", o.sky.c_str(),
+                         fs::path(sky_file).filename().c_str(),
+                         chosen ? ", with the one before it as the previous frame: " : "",
+                         chosen ? fs::path(previous_file).filename().c_str() : "");
     }
     // A 2:1 lat-long HDRI's upper half, as `render` and `sky predict` take one; the moving sky has no
     // ground of its own, so below the horizon is the ground model.

@@ -313,6 +313,33 @@ std::optional<double> sky_recorded_utc_seconds(const SkyImage& sky) {
     }
 }
 
+std::vector<std::string> sky_sequence_files(const std::string& folder) {
+    std::vector<std::string> exrs, others;
+    for (const auto& e : std::filesystem::directory_iterator(folder)) {
+        if (!e.is_regular_file() || is_hidden_file(e.path().string())) continue;
+        const std::string ext = file_extension(e.path().string());
+        // `sky procedural`'s flow_NNNN.exr beside its frames hold motion, not skies (at the
+        // frames' times: ordered by time, one was taken for the previous frame).
+        if (ext == ".exr" && !image_header_number(e.path().string(), "dynsky:flow_dt")) {
+            exrs.push_back(e.path().string());
+        } else if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".hdr" || ext == ".tif") {
+            if (written_beside_a_sky(e.path().string())) continue;
+            others.push_back(e.path().filename().string());
+        }
+    }
+    exrs = skies_in_time_order(exrs);
+    if (!others.empty()) {  // a photograph among the skies, not imported: said, not silently skipped
+        std::sort(others.begin(), others.end());
+        std::fprintf(stderr,
+                     "dynsky: warning: %s: %zu image(s) that are not sky EXRs ignored (%s%s); the sequence is its "
+                     ".exr files (import photographs with 'dynsky sky import')\n",
+                     folder.c_str(), others.size(), others[0].c_str(), others.size() > 1 ? ", ..." : "");
+    }
+    if (exrs.empty())
+        throw_file_error(folder, "a folder without sky EXRs (give a captured sequence of canonical fisheyes)");
+    return exrs;
+}
+
 bool written_beside_a_sky(const std::string& path) {
     const std::filesystem::path p(path);
     if (file_extension(path) != ".png") return false;

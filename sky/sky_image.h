@@ -100,6 +100,12 @@ std::optional<double> sky_recorded_utc_seconds(const SkyImage& sky);
 // wrong frame.)
 std::vector<std::string> skies_in_time_order(std::vector<std::string> files);
 
+// The skies of a captured or imported sequence given as a folder: its sky EXRs in the order they
+// were taken (skies_in_time_order; `sky procedural`'s flow_NNNN.exr are motion, not skies). Other
+// images in it (a photograph not imported) are warned about, naming the folder; a folder without
+// sky EXRs is refused naming it.
+std::vector<std::string> sky_sequence_files(const std::string& folder);
+
 // A preview or filled mask written beside a sky (STEM.png or STEM.filled.png next to STEM.exr, as
 // `sky import` and `sky procedural` write them): part of that sky, not a photograph left out of a
 // folder of skies; also the obstruction mask of a folder (kSequenceObstructionsName).

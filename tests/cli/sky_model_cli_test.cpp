@@ -240,7 +240,7 @@ TEST(SkyModelCli, SkiesInOtherUnitsMoveAsAtScaleAndKeepTheirUnits) {
 
 // A previous frame minutes before the sky measures too little motion (the clouds changed shape in
 // between): said, with what to give instead; a frame 30 s before is not.
-TEST(SkyModelCli, APreviousFrameMinutesBeforeIsWarnedAbout) {
+TEST(SkyModelCli, APreviousFrameMinutesBeforeIsWarnedAboutAFolderIsASequence) {
     const std::string dir = test::temp_dir("predict_gap");
     for (const char* t : {"12:00:00", "12:04:30", "12:05:00"})
         ASSERT_EQ(test::run_command(dynsky(std::string("sky clear --lat 36.6 --lon -97.5 --time 2026-06-21T") + t +
@@ -256,6 +256,16 @@ TEST(SkyModelCli, APreviousFrameMinutesBeforeIsWarnedAbout) {
                                  "/04.exr --steps 1 --out " + dir + "/b"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_EQ(r.output.find("warning"), std::string::npos) << r.output;
+    // The folder of the three, as animate takes a captured sequence: on from its last sky with the
+    // one before it (it was "is a directory, not an image").
+    r = test::run_command(dynsky("sky predict --model advect --in " + dir + " --steps 1 --out " + dir + "_c"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(
+        r.output.find("moving on from its last sky, 05.exr, with the one before it as the previous frame: 04.exr"),
+        std::string::npos)
+        << r.output;
+    EXPECT_EQ(load_sky(dir + "_c/step_0001.exr").rgb, load_sky(dir + "/b/step_0001.exr").rgb);
+    fs::remove_all(dir + "_c");
     fs::remove_all(dir);
 }
 
