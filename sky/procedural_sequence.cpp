@@ -121,7 +121,7 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
     float preview_ev = 0.0f;
     if (o.preview) preview_ev = exposure_median(sky_to_image(make_clear_sky(params.clear_sky, 64)), 0.2f);
 
-    fs::create_directories(o.out);
+    const OutputFolder out_folder(o.out);  // removed again if this run fails before writing anything
     nlohmann::ordered_json manifest;
     manifest["generator"] = "dynsky sky procedural";
     manifest["seed"] = o.cloud_seed;
