@@ -229,13 +229,6 @@ void import_one(const OnePhoto& o, bool verbose) {
         std::printf("not-sky pixels filled: %.1f%% of the disc%s%s\n", disc ? 100.0 * filled / disc : 0.0,
                     obstructions.empty() ? "" : (" (" + obstructions + ")").c_str(),
                     params.inpaint ? "" : " (left black: --no-inpaint)");
-    if (!o.filled_mask.empty()) {
-        // 255 where the import filled the sky in (arm, band, masts, unseen), 0 elsewhere: what
-        // evaluations and training leave out.
-        Image m(o.resolution, o.resolution, 1);
-        for (size_t p = 0; p < imported.not_sky.size(); ++p) m.pixels[p] = imported.not_sky[p] ? 1.0f : 0.0f;
-        write_image(o.filled_mask, m);
-    }
 
     SkyImage sky = imported.sky;
     std::string unit = "relative linear units (decoded photo values)";
@@ -280,6 +273,21 @@ void import_one(const OnePhoto& o, bool verbose) {
     if (!time.empty()) source << " time=" << time;
     sky.source = source.str();
     save_sky(o.out, sky);
+    if (!o.filled_mask.empty()) {
+        // 255 where the import filled the sky in (arm, band, masts, unseen), 0 elsewhere: what
+        // evaluations, training and the moving sky leave out. Written after the sky, and the sky
+        // removed when it cannot be: a photograph that failed left its mask alone, and a sky without
+        // its mask reads as seen everywhere.
+        Image m(o.resolution, o.resolution, 1);
+        for (size_t p = 0; p < imported.not_sky.size(); ++p) m.pixels[p] = imported.not_sky[p] ? 1.0f : 0.0f;
+        try {
+            write_image(o.filled_mask, m);
+        } catch (const Error&) {
+            std::error_code ec;
+            std::filesystem::remove(o.out, ec);
+            throw;
+        }
+    }
     if (verbose) std::printf("wrote %s (%dx%d fisheye, %s)\n", o.out.c_str(), o.resolution, o.resolution, unit.c_str());
     if (!o.preview.empty()) write_display_preview(o.preview, sky_to_image(sky), verbose);
 }
