@@ -138,21 +138,8 @@ void run_render_job(const RenderJob& o) {
         // A render is its two files: both are written under temporary names first and renamed only
         // when both are, so a PNG that cannot be written (a full disk) leaves neither, and an
         // earlier render's pair under these names stays as it was.
-        TemporaryFile exr_file(o.out), png_file(png_beside);
-        auto write = [](const TemporaryFile& file, const std::string& name, const Image& pixels) {
-            try {
-                write_image(file.path(), pixels);
-            } catch (const Error& e) {  // named as the user named it, not by its temporary
-                std::string what = e.what();
-                for (size_t at; (at = what.find(file.path())) != std::string::npos;)
-                    what.replace(at, file.path().size(), name);
-                throw Error(what);
-            }
-        };
-        write(exr_file, o.out, settings.aovs.any() ? render_layers(result) : image);
-        write(png_file, png_beside, tonemap_to_display(image, ev));
-        exr_file.commit("the render");
-        png_file.commit("the render");
+        write_files_atomic({{o.out, encode_image(o.out, settings.aovs.any() ? render_layers(result) : image)},
+                            {png_beside, encode_image(png_beside, tonemap_to_display(image, ev))}});
         if (!o.quiet) std::fprintf(stderr, "wrote %s and %s\n", o.out.c_str(), png_beside.c_str());
     } else {
         write_image(o.out, tonemap_to_display(image, ev));

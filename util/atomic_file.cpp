@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <memory>
 #include <regex>
 
 #include "util/error.h"
@@ -76,28 +77,53 @@ void rename_into_place(const fs::path& tmp, const fs::path& target) {
     sync_path(target.parent_path().empty() ? fs::path(".") : target.parent_path(), O_RDONLY | O_DIRECTORY);
 }
 
-// The temporary being written now, for remove_active_temporary (one at a time: outputs are
-// written one after another; a second writer at the same moment is simply not registered).
-char g_active[4096];
-std::atomic<bool> g_active_set{false}, g_active_busy{false};
+// The temporaries being written now, for remove_active_temporary: a few slots (a render writes its
+// EXR and PNG side by side, committed together); a writer finding none free is simply not
+// registered.
+constexpr int kActiveSlots = 4;
+char g_active[kActiveSlots][4096];
+std::atomic<bool> g_active_set[kActiveSlots], g_active_busy[kActiveSlots];
 
-bool register_active(const std::string& path) {
-    bool expected = false;
-    if (path.size() >= sizeof g_active || !g_active_busy.compare_exchange_strong(expected, true)) return false;
-    std::memcpy(g_active, path.c_str(), path.size() + 1);
-    g_active_set = true;
-    return true;
+int register_active(const std::string& path) {
+    if (path.size() >= sizeof g_active[0]) return -1;
+    for (int k = 0; k < kActiveSlots; ++k) {
+        bool expected = false;
+        if (!g_active_busy[k].compare_exchange_strong(expected, true)) continue;
+        std::memcpy(g_active[k], path.c_str(), path.size() + 1);
+        g_active_set[k] = true;
+        return k;
+    }
+    return -1;
 }
 
-void unregister_active() {
-    g_active_set = false;
-    g_active_busy = false;
+void unregister_active(int k) {
+    g_active_set[k] = false;
+    g_active_busy[k] = false;
+}
+
+// Writes bytes into a temporary made for `path` (named after it in errors), synced; not committed.
+void fill_temporary(const TemporaryFile& tmp, const std::string& path, const std::string& bytes) {
+    int fd = ::open(tmp.path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    if (fd < 0) throw_file_error(path, "could not write the file: " + errno_text(errno));
+    int err = 0;
+    for (size_t done = 0; done < bytes.size() && !err;) {
+        ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+        if (n > 0) done += size_t(n);
+        else if (n < 0 && errno != EINTR) err = errno;
+        else if (n == 0) err = EIO;
+    }
+    if (!err && ::fsync(fd) != 0 && errno != EINVAL) err = errno;
+    if (::close(fd) != 0 && !err) err = errno;
+    if (err)
+        throw_file_error(path,
+                         "could not write the file (" + std::to_string(bytes.size()) + " bytes): " + errno_text(err));
 }
 
 }  // namespace
 
 void remove_active_temporary() noexcept {
-    if (g_active_set) ::unlink(g_active);
+    for (int k = 0; k < kActiveSlots; ++k)
+        if (g_active_set[k]) ::unlink(g_active[k]);
 }
 
 // The temporary lies beside the file written (a link's target), named after the name given: its
@@ -108,13 +134,13 @@ TemporaryFile::TemporaryFile(std::string target)
       target_(output_target(target)),
       path_((fs::path(target_).parent_path() / fs::path(temporary_path(given_)).filename()).string()) {
     make_parent(fs::path(target_));
-    registered_ = register_active(path_);
+    slot_ = register_active(path_);
 }
 
 TemporaryFile::~TemporaryFile() {
     std::error_code ec;
     if (!committed_) fs::remove(path_, ec);
-    if (registered_) unregister_active();
+    if (slot_ >= 0) unregister_active(slot_);
 }
 
 void TemporaryFile::commit(const std::string& what, bool may_be_empty) {
@@ -180,23 +206,15 @@ void remove_stale_marker(const std::string& path) {
                                    (ec ? ": " + ec.message() : std::string()));
 }
 
-void write_file_atomic(const std::string& path, const std::string& bytes) {
-    TemporaryFile tmp(path);
-    int fd = ::open(tmp.path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
-    if (fd < 0) throw_file_error(path, "could not write the file: " + errno_text(errno));
-    int err = 0;
-    for (size_t done = 0; done < bytes.size() && !err;) {
-        ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-        if (n > 0) done += size_t(n);
-        else if (n < 0 && errno != EINTR) err = errno;
-        else if (n == 0) err = EIO;
+void write_file_atomic(const std::string& path, const std::string& bytes) { write_files_atomic({{path, bytes}}); }
+
+void write_files_atomic(const std::vector<std::pair<std::string, std::string>>& files) {
+    std::vector<std::unique_ptr<TemporaryFile>> temporaries;
+    for (const auto& [path, bytes] : files) {
+        temporaries.push_back(std::make_unique<TemporaryFile>(path));
+        fill_temporary(*temporaries.back(), path, bytes);
     }
-    if (!err && ::fsync(fd) != 0 && errno != EINVAL) err = errno;
-    if (::close(fd) != 0 && !err) err = errno;
-    if (err)
-        throw_file_error(path,
-                         "could not write the file (" + std::to_string(bytes.size()) + " bytes): " + errno_text(err));
-    tmp.commit("the write", bytes.empty());
+    for (size_t k = 0; k < files.size(); ++k) temporaries[k]->commit("the write", files[k].second.empty());
 }
 
 namespace {

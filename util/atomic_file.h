@@ -17,6 +17,11 @@ namespace dynsky {
 // temporary removed, nothing under path changed).
 void write_file_atomic(const std::string& path, const std::string& bytes);
 
+// Several files that belong together (a render's EXR and its PNG): every one is written to its
+// temporary before any is renamed into place, so a write failing (a full disk) changes none of
+// them, and an earlier run's set stays whole.
+void write_files_atomic(const std::vector<std::pair<std::string, std::string>>& files);
+
 // Removes a file that says a folder's contents are complete (a timeline.json, a manifest.json)
 // before a run replaces any of them, so that a run stopped midway never leaves it describing
 // files it did not write. Nothing when absent; throws dynsky::Error naming path if it stays.
@@ -41,7 +46,8 @@ class TemporaryFile {
 
   private:
     std::string given_, target_, path_;  // the name given, the file written (through links), the temporary
-    bool committed_ = false, registered_ = false;
+    bool committed_ = false;
+    int slot_ = -1;  // in the interrupt handler's list, or -1
 };
 
 // An output folder made for a command's files: created (with its missing parents) on

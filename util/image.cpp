@@ -291,7 +291,9 @@ int apply_orientation(Image& image) {
     return orientation;
 }
 
-void write_image(const std::string& path, const Image& image) {
+void write_image(const std::string& path, const Image& image) { write_file_atomic(path, encode_image(path, image)); }
+
+std::string encode_image(const std::string& path, const Image& image) {
     if (image.empty()) throw_file_error(path, "refusing to write an empty image");
     std::string ext = file_extension(path);
     bool is_exr = ext == ".exr";
@@ -347,7 +349,7 @@ void write_image(const std::string& path, const Image& image) {
     std::string why = out->geterror();
     if (!ok || encoded.empty())
         throw_file_error(path, "could not encode the image" + (why.empty() ? std::string() : ": " + why));
-    write_file_atomic(path, std::string(reinterpret_cast<const char*>(encoded.data()), encoded.size()));
+    return std::string(reinterpret_cast<const char*>(encoded.data()), encoded.size());
 }
 
 Image tonemap_to_display(const Image& linear, float exposure_ev) {

@@ -99,6 +99,9 @@ inline constexpr const char* kBlackRenderHint =
 // Writes by extension: .exr (linear float, metadata as header attributes), .png/.jpg (8-bit,
 // values taken as already display-encoded in [0, 1]). Atomic (temporary name, then rename).
 void write_image(const std::string& path, const Image& image);
+// The bytes write_image would write to `path` (its format from the extension), for writers that
+// write several files together (util/atomic_file.h write_files_atomic).
+std::string encode_image(const std::string& path, const Image& image);
 
 // Linear radiance to an 8-bit-ready display image: exposure (2^ev), ACES filmic, sRGB encode.
 // The exposure policies (which ev) are util/exposure.h.

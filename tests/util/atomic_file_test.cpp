@@ -88,6 +88,27 @@ TEST(AtomicFile, FailedWritesLeaveNothingAndNameTheFile) {
     fs::remove_all(dir);
 }
 
+// Files written together (a render's EXR and PNG): the second failing (over the size limit) leaves
+// the first as an earlier run wrote it, and no temporary (it replaced the earlier EXR, then deleted
+// it when its PNG failed).
+void write_pair(const std::string& dir) {
+    write_files_atomic({{dir + "/r.exr", "small"}, {dir + "/r.png", std::string(100000, 'x')}});
+}
+TEST(AtomicFile, FilesWrittenTogetherChangeNoneWhenOneFails) {
+    const std::string dir = test::temp_dir("atomic_pair");
+    write_file_atomic(dir + "/r.exr", "earlier");
+    EXPECT_EQ(write_under_size_limit(8192, dir, write_pair), 0);  // the error names the PNG, under dir
+    std::ifstream f(dir + "/r.exr");
+    std::string back((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(back, "earlier");
+    EXPECT_FALSE(fs::exists(dir + "/r.png"));
+    EXPECT_EQ(count_entries(dir), 1) << "a temporary was left";
+    EXPECT_EQ(write_under_size_limit(RLIM_INFINITY, dir, write_pair), 1);
+    EXPECT_EQ(fs::file_size(dir + "/r.exr"), 5u);
+    EXPECT_EQ(fs::file_size(dir + "/r.png"), 100000u);
+    fs::remove_all(dir);
+}
+
 TEST(AtomicFile, WritesExactBytesAndEmptyFiles) {
     const std::string dir = test::temp_dir("atomic_bytes");
     std::string bytes("a\0b\nc", 5);
