@@ -272,17 +272,24 @@ void check_numbered_outputs_spare(const std::string& folder, const std::vector<s
                                   const std::vector<std::string>& files) {
     std::error_code ec;
     const fs::path out = fs::weakly_canonical(fs::absolute(folder), ec).lexically_normal();
+    auto refuse = [&](const std::string& file, const std::string& prefix) {
+        throw_file_error(file, "has the name of one of the files this command writes into " + folder + " (" + prefix +
+                                   "_NNNN); refusing to overwrite it: move it or choose another --out");
+    };
     for (const std::string& file : files) {
         if (file.empty()) continue;
-        const fs::path path = fs::weakly_canonical(fs::absolute(file), ec);
-        fs::path parent = path.parent_path().lexically_normal();
-        if (parent != out && !(fs::exists(parent, ec) && fs::exists(out, ec) && fs::equivalent(parent, out, ec)))
-            continue;
-        for (const std::string& prefix : prefixes)
-            if (numbered_index(path.filename().string(), prefix))
-                throw_file_error(file, "has the name of one of the files this command writes into " + folder + " (" +
-                                           prefix +
-                                           "_NNNN); refusing to overwrite it: move it or choose another --out");
+        // The name as given, in its folder (a link named frame_0000.exr is written through).
+        const fs::path given = fs::absolute(file);
+        const fs::path parent = fs::weakly_canonical(given.parent_path(), ec).lexically_normal();
+        if (parent == out || (fs::exists(parent, ec) && fs::exists(out, ec) && fs::equivalent(parent, out, ec)))
+            for (const std::string& prefix : prefixes)
+                if (numbered_index(given.filename().string(), prefix)) refuse(file, prefix);
+        // And any numbered name in the folder that is this file (a link to it, a hard link).
+        if (!fs::exists(file, ec) || !fs::is_directory(out, ec)) continue;
+        for (const auto& e : fs::directory_iterator(out, ec))
+            for (const std::string& prefix : prefixes)
+                if (numbered_index(e.path().filename().string(), prefix) && fs::equivalent(e.path(), file, ec))
+                    refuse(e.path().string() + " (" + file + ")", prefix);
     }
 }
 

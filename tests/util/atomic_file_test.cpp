@@ -109,6 +109,23 @@ TEST(AtomicFile, FilesWrittenTogetherChangeNoneWhenOneFails) {
     fs::remove_all(dir);
 }
 
+// A file the command reads that one of its numbered outputs would overwrite is refused: named so in
+// the output folder, a link there named so (written through), or named so by a link to it.
+TEST(AtomicFile, NumberedOutputsSpareTheInputsWhateverTheirLinks) {
+    const std::string dir = test::temp_dir("atomic_numbered");
+    fs::create_directories(dir + "/out");
+    write_file_atomic(dir + "/sky.exr", "sky");
+    EXPECT_NO_THROW(check_numbered_outputs_spare(dir + "/out", {"frame"}, {dir + "/sky.exr"}));
+    write_file_atomic(dir + "/out/frame_0001.exr", "a frame");
+    EXPECT_NO_THROW(check_numbered_outputs_spare(dir + "/out", {"frame"}, {dir + "/sky.exr"}));
+    EXPECT_THROW(check_numbered_outputs_spare(dir + "/out", {"frame"}, {dir + "/out/frame_0001.exr"}), Error);
+    EXPECT_NO_THROW(check_numbered_outputs_spare(dir + "/out", {"step"}, {dir + "/out/frame_0001.exr"}));
+    fs::create_symlink("../sky.exr", dir + "/out/frame_0000.exr");
+    EXPECT_THROW(check_numbered_outputs_spare(dir + "/out", {"frame"}, {dir + "/out/frame_0000.exr"}), Error);
+    EXPECT_THROW(check_numbered_outputs_spare(dir + "/out", {"frame"}, {dir + "/sky.exr"}), Error);
+    fs::remove_all(dir);
+}
+
 TEST(AtomicFile, WritesExactBytesAndEmptyFiles) {
     const std::string dir = test::temp_dir("atomic_bytes");
     std::string bytes("a\0b\nc", 5);
