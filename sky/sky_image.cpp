@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <opencv2/imgproc.hpp>
 
@@ -10,6 +11,7 @@
 #include "sky/sun_position.h"
 #include "util/error.h"
 #include "util/parse.h"
+#include "util/progress.h"
 
 namespace dynsky {
 
@@ -207,10 +209,16 @@ std::vector<unsigned char> filled_mask_beside(const std::string& sky_path, int n
     const std::filesystem::path filled = std::filesystem::path(sky_path).replace_extension(".filled.png");
     if (!std::filesystem::exists(filled)) return {};
     const Image m = read_image(filled.string());
-    if (m.width != n || m.height != n)
-        throw_file_error(filled.string(), "the filled-pixel mask is " + std::to_string(m.width) + "x" +
-                                              std::to_string(m.height) + ", its sky " + std::to_string(n) +
-                                              " px square (remove it, or import the sky again)");
+    if (m.width != n || m.height != n) {
+        // Not this sky's (left beside a sky of another size): ignored, said; only the moving sky
+        // and evaluations use a mask, and a render must not fail on one.
+        if (!reports_silenced())
+            std::fprintf(stderr,
+                         "dynsky: warning: %s: a filled-pixel mask of %dx%d beside a %d px sky: not its mask, "
+                         "ignored (every pixel counts as seen)\n",
+                         filled.c_str(), m.width, m.height, n);
+        return {};
+    }
     std::vector<unsigned char> mask(size_t(n) * n);
     for (size_t p = 0; p < mask.size(); ++p) mask[p] = m.pixels[p * size_t(m.channels)] > 0.5f;
     return mask;
@@ -240,6 +248,9 @@ void save_sky(const std::string& path, const SkyImage& sky, const std::string& p
     if (file_extension(path) != ".exr") throw_file_error(path, "sky images are written as OpenEXR: use a .exr name");
     Image image = sky_to_image(sky);
     write_image(path, image);
+    // A filled mask beside the sky replaced belonged to that one (an import's), not to this.
+    std::error_code ec;
+    std::filesystem::remove(std::filesystem::path(path).replace_extension(".filled.png"), ec);
     if (!preview_png.empty()) write_image(preview_png, tonemap_to_display(image));
 }
 

@@ -71,8 +71,8 @@ void validate_sky(const SkyImage& sky, const std::string& name);
 void require_radiance_pixels(const Image& image, const std::string& path);
 
 // The filled-pixel mask an import wrote beside a sky file (STEM.filled.png next to STEM.exr), as
-// SkyImage::filled for an N x N sky; empty when there is none. A mask of another size is refused,
-// naming it.
+// SkyImage::filled for an N x N sky; empty when there is none, or when it is of another size (not
+// this sky's: a warning names it).
 std::vector<unsigned char> filled_mask_beside(const std::string& sky_path, int n);
 
 // EXR in, validated. A file of integer pixels (8-bit JPEG/PNG, 16-bit PNG: display-encoded values,
@@ -84,7 +84,8 @@ SkyImage load_sky(const std::string& path);
 SkyImage sky_from_radiance_file(const Image& image, const std::string& path);
 
 // EXR out (atomic), with time, sun direction and source as attributes. If preview_png is
-// non-empty, also writes a tone-mapped PNG there.
+// non-empty, also writes a tone-mapped PNG there. A STEM.filled.png beside it is removed: it was the
+// replaced sky's (an import writes its own after the sky).
 void save_sky(const std::string& path, const SkyImage& sky, const std::string& preview_png = "");
 
 // The UTC time a sky shows, in seconds on one absolute scale (Julian date x 86400), as its source

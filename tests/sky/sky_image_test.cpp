@@ -130,13 +130,12 @@ TEST(SkyImage, TheFilledMaskBesideASkyIsLoadedWithIt) {
         EXPECT_TRUE(half.is_filled(3, 2));
         EXPECT_EQ(std::count(half.filled.begin(), half.filled.end(), 1), 1);
     }
+    // Another sky saved under the name: the mask was the earlier sky's.
+    save_sky(dir + "/s.exr", sky);
+    EXPECT_FALSE(fs::exists(dir + "/s.filled.png"));
+    // One of another size is not this sky's: ignored.
     write_image(dir + "/s.filled.png", Image(8, 8, 1));
-    try {
-        load_sky(dir + "/s.exr");
-        ADD_FAILURE() << "a mask of another size was taken";
-    } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find("s.filled.png"), std::string::npos) << e.what();
-    }
+    EXPECT_TRUE(load_sky(dir + "/s.exr").filled.empty());
     fs::remove_all(dir);
 }
 
