@@ -153,9 +153,11 @@ void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {
                     "Where the wind at the clouds blows from, degrees clockwise from north (moves the procedural\n"
                     "sky and, for any input sky, the clouds of the models that take a motion)")
         ->check(finite_in(-360, 360))
+        ->each([o](const std::string&) { o->wind_given = true; })
         ->capture_default_str();
     cmd->add_option("--wind-speed", o->wind_speed_mps, "Wind speed at the clouds, m/s")
         ->check(finite_in(0, 300))
+        ->each([o](const std::string&) { o->wind_given = true; })
         ->capture_default_str();
     cmd->add_option(
            "--cloud-height", o->cloud_height_m,

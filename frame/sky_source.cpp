@@ -108,16 +108,10 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     // A captured sequence (a folder of sky EXRs): the last in time is the input, the one before it
     // the previous frame.
     std::string sky_file = o.sky, previous_file = o.previous;
+    if (!o.previous.empty() && o.wind_given)
+        throw Error("--prev and --wind-from/--wind-speed: give one source of motion, not both");
     if (fs::is_directory(o.sky)) {
-        const std::vector<std::string> exrs = sky_sequence_files(o.sky);
-        sky_file = exrs.back();
-        const bool chosen = exrs.size() >= 2 && previous_file.empty();
-        if (chosen) previous_file = exrs[exrs.size() - 2];
-        if (!reports_silenced())
-            std::fprintf(stderr, "dynsky: note: %s: moving on from its last sky, %s%s%s\n", o.sky.c_str(),
-                         fs::path(sky_file).filename().c_str(),
-                         chosen ? ", with the one before it as the previous frame: " : "",
-                         chosen ? fs::path(previous_file).filename().c_str() : "");
+        sky_file = sequence_start(o.sky, previous_file.empty() && !o.wind_given, &previous_file, reports_silenced());
     }
     // A 2:1 lat-long HDRI's upper half, as `render` and `sky predict` take one; the moving sky has no
     // ground of its own, so below the horizon is the ground model.

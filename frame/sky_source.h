@@ -34,6 +34,9 @@ struct SkySourceSpec {
     double coverage = default_sky::kCoverage;
     double wind_from_deg = default_sky::kWindFromDeg, wind_speed_mps = default_sky::kWindSpeedMps;
     double cloud_height_m = default_sky::kCloudHeightM;
+    // --wind-from or --wind-speed was given: the clouds of an input sky move with that wind, not with
+    // the previous frame of a captured sequence (a folder); given with --prev, refused.
+    bool wind_given = false;
     std::string previous;
     double previous_dt = 0.0;
 };

@@ -31,16 +31,7 @@ void write_prediction(const PredictionOptions& given) {
     // A captured or imported sequence (a folder of skies), as animate and compare take one: on from
     // its last sky, the one before it the previous frame (unless --prev or a wind is given).
     if (fs::is_directory(o.in)) {
-        const std::vector<std::string> skies = sky_sequence_files(o.in);
-        const std::string folder = o.in;
-        o.in = skies.back();
-        const bool chosen = o.previous.empty() && !o.wind && skies.size() >= 2;
-        if (chosen) o.previous = skies[skies.size() - 2];
-        if (!o.quiet)
-            std::fprintf(stderr, "dynsky: note: %s: moving on from its last sky, %s%s%s\n", folder.c_str(),
-                         fs::path(o.in).filename().c_str(),
-                         chosen ? ", with the one before it as the previous frame: " : "",
-                         chosen ? fs::path(o.previous).filename().c_str() : "");
+        o.in = sequence_start(o.in, o.previous.empty() && !o.wind, &o.previous, o.quiet);
     }
     if (o.out.empty()) throw Error("--out: an output folder is required");
     if (o.steps < 1 || o.steps > 100000) throw Error("--steps: must be in 1..100000");

@@ -351,6 +351,18 @@ std::vector<std::string> sky_sequence_files(const std::string& folder) {
     return exrs;
 }
 
+std::string sequence_start(const std::string& folder, bool previous_wanted, std::string* previous, bool quiet) {
+    const std::vector<std::string> skies = sky_sequence_files(folder);
+    const bool chosen = previous_wanted && skies.size() >= 2;
+    if (chosen) *previous = skies[skies.size() - 2];
+    if (!quiet)
+        std::fprintf(stderr, "dynsky: note: %s: moving on from its last sky, %s%s%s\n", folder.c_str(),
+                     std::filesystem::path(skies.back()).filename().c_str(),
+                     chosen ? ", with the one before it as the previous frame: " : "",
+                     chosen ? std::filesystem::path(*previous).filename().c_str() : "");
+    return skies.back();
+}
+
 bool written_beside_a_sky(const std::string& path) {
     const std::filesystem::path p(path);
     if (file_extension(path) != ".png") return false;

@@ -107,6 +107,11 @@ std::vector<std::string> skies_in_time_order(std::vector<std::string> files);
 // sky EXRs is refused naming it.
 std::vector<std::string> sky_sequence_files(const std::string& folder);
 
+// Where a moving sky given a sequence folder starts: its last sky and, when the run takes its motion
+// from the sequence (no --prev, no wind given) and it has two, the one before it as the previous
+// frame (*previous; left as it is otherwise). Says which, unless `quiet`.
+std::string sequence_start(const std::string& folder, bool previous_wanted, std::string* previous, bool quiet);
+
 // A preview or filled mask written beside a sky (STEM.png or STEM.filled.png next to STEM.exr, as
 // `sky import` and `sky procedural` write them): part of that sky, not a photograph left out of a
 // folder of skies; also the obstruction mask of a folder (kSequenceObstructionsName).

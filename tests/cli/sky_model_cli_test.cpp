@@ -265,6 +265,18 @@ TEST(SkyModelCli, APreviousFrameMinutesBeforeIsWarnedAboutAFolderIsASequence) {
         std::string::npos)
         << r.output;
     EXPECT_EQ(load_sky(dir + "_c/step_0001.exr").rgb, load_sky(dir + "/b/step_0001.exr").rgb);
+    // With a wind given, animate (as predict) moves the folder's last sky with it, not with the
+    // previous frame (the wind was dropped without a word); with --prev as well, refused.
+    const std::string tiny = " --res 8x6 --spp 1 --duration 1 --fps 1 --no-video -o " + dir + "_d";
+    r = test::run_command(dynsky("animate builtin --sky " + dir + " --wind-from 200 --wind-speed 10" + tiny));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("moving on from its last sky, 05.exr"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("previous frame"), std::string::npos) << r.output;
+    r = test::run_command(dynsky("animate builtin --sky " + dir + "/05.exr --prev " + dir + "/04.exr --wind-speed 3" +
+                                 tiny));
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("give one source of motion"), std::string::npos) << r.output;
+    fs::remove_all(dir + "_d");
     fs::remove_all(dir + "_c");
     fs::remove_all(dir);
 }
