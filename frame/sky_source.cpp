@@ -264,15 +264,23 @@ FrameSettings sky_timeline_settings(const SkySourceSpec& o, const StepModelSpec&
         std::snprintf(buf, sizeof buf, "%.17g", v);
         return std::string(buf);
     };
+    // A sky file's filled mask beside it changes its motion (SkyImage::filled); a folder's are in
+    // its description already.
+    auto with_mask = [](const std::string& file) {
+        std::error_code ec;
+        const fs::path mask = fs::path(file).replace_extension(".filled.png");
+        if (file.empty() || fs::is_directory(file, ec) || !fs::exists(mask, ec)) return describe_input(file);
+        return describe_input(file) + " filled " + describe_input(mask.string());
+    };
     FrameSettings s;
-    s["sky"] = describe_input(o.sky);
+    s["sky"] = with_mask(o.sky);
     s["sky_res"] = std::to_string(o.sky_resolution);
     s["time"] = o.time;
     s["lat"] = number(o.latitude), s["lon"] = number(o.longitude);
     s["coverage"] = number(o.coverage);
     s["wind_from"] = number(o.wind_from_deg), s["wind_speed"] = number(o.wind_speed_mps);
     s["cloud_height"] = number(o.cloud_height_m);
-    s["prev"] = o.previous.empty() ? "" : describe_input(o.previous);
+    s["prev"] = o.previous.empty() ? "" : with_mask(o.previous);
     s["prev_dt"] = number(o.previous_dt);
     s["model"] = m.model + cloud_model_files(m.model);
     s["dt"] = number(m.dt);
@@ -280,7 +288,7 @@ FrameSettings sky_timeline_settings(const SkySourceSpec& o, const StepModelSpec&
     // What the moving sky is, when its steps or frames change meaning: frames and stored timelines of
     // another revision are made again (the 21st session's relight to the clock: resumed frames of the
     // revision before jumped 17 % in blue at the first new frame).
-    s["sky_revision"] = "2 (relit to the clock)";
+    s["sky_revision"] = "3 (an import's filled pixels neither move nor cover the sun)";
     return s;
 }
 

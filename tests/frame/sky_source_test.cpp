@@ -3,7 +3,13 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
+#include "sky/clear_sky.h"
+#include "sky/sky_image.h"
+#include "tests/test_support.h"
 #include "util/error.h"
+#include "util/image.h"
 
 namespace dynsky {
 namespace {
@@ -13,6 +19,19 @@ SkySourceSpec small_sky(const std::string& sky) {
     s.sky = sky;
     s.sky_resolution = 32;
     return s;
+}
+
+// An import's filled mask beside the input sky changes its motion (SkyImage::filled), so it is part
+// of the settings that decide whether an animation's earlier frames or a stored timeline are kept.
+TEST(SkySource, TheFilledMaskBesideTheSkyIsPartOfItsSettings) {
+    const std::string dir = test::temp_dir("sky_source_mask");
+    ClearSkyParams p;
+    save_sky(dir + "/s.exr", make_clear_sky(p, 16));
+    StepModelSpec m;
+    const std::string without = canonical_settings(sky_timeline_settings(small_sky(dir + "/s.exr"), m));
+    write_image(dir + "/s.filled.png", Image(16, 16, 1));
+    EXPECT_NE(canonical_settings(sky_timeline_settings(small_sky(dir + "/s.exr"), m)), without);
+    std::filesystem::remove_all(dir);
 }
 
 TEST(SkySource, ProceduralInputWithItsOwnMotion) {
