@@ -65,7 +65,8 @@ void register_sky_model_commands(CLI::App& sky) {
         cmd->callback([o]() {
             check_outputs_are_not_inputs({o->out, o->stats}, {o->in, o->previous});
             check_numbered_outputs_spare(o->out, {"step"}, {o->stats});
-            remove_stale_temporaries(o->out);  // of a killed run into the same folder
+            if (!o->stats.empty()) check_output_file(o->stats);  // a folder there was removed, an empty one
+            remove_stale_temporaries(o->out);                    // of a killed run into the same folder
             write_prediction(*o);
         });
     }

@@ -515,6 +515,12 @@ void run_photo_import(const PhotoImportJob& o) {
                 "dynsky: warning: --find-north: none of %d photographs spread over the sequence shows a clipped "
                 "sun at the computed sun's height: north stays %.1f deg\n",
                 tries, o.north_deg.value_or(0.0));
+        } else if (norths.size() == 1 && tries > 1) {
+            std::fprintf(stderr,
+                         "dynsky: warning: --find-north: only 1 of %d photographs spread over the sequence shows a "
+                         "clipped sun at the computed sun's height: too little to trust (glare can look like it); "
+                         "north stays %.1f deg; give --north DEG\n",
+                         tries, o.north_deg.value_or(0.0));
         } else if (const ConsensusNorth north = consensus_north(norths, tries); !north.agreed) {
             std::fprintf(stderr,
                          "dynsky: warning: --find-north: the photographs disagree on north (%d of the %zu that show "
