@@ -3,6 +3,7 @@
 as the only argument and writes PNGs beside them. Parts that were not run are skipped."""
 import csv
 import os
+import signal
 import sys
 
 import matplotlib
@@ -11,13 +12,16 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 out = sys.argv[1]
+# An interrupt (the bench sends SIGTERM to its child) unwinds through save()'s clean-up.
+signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
 
 
 def save(fig, name):
     """Writes the chart under a temporary name and renames it: a failed write (a full disk) leaves
     no partial PNG, and an earlier run's chart stays as it was."""
     path = os.path.join(out, name)
-    temporary = os.path.join(out, ".tmp-%d-%s" % (os.getpid(), name))
+    stem, ext = os.path.splitext(name)
+    temporary = os.path.join(out, ".tmp-%s-%d%s" % (stem, os.getpid(), ext))  # the project's naming
     try:
         fig.savefig(temporary, dpi=90)
         os.replace(temporary, path)

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -818,7 +819,8 @@ int run_sampling_study(const SamplingStudyOptions& o) {
     if (charts_failed) {
         // The tables stand; the run is not done until its charts are (a full disk, no matplotlib).
         // Its last line says why ("OSError: [Errno 28] No space left on device"), the traceback not.
-        std::string why = chart_output;
+        std::string why = charts.started ? chart_output
+                                         : "could not start it: " + std::string(std::strerror(charts.spawn_error));
         while (!why.empty() && std::isspace((unsigned char)why.back())) why.pop_back();
         why = why.substr(why.find_last_of('\n') == std::string::npos ? 0 : why.find_last_of('\n') + 1);
         throw_file_error(out.string(), "the charts were not written: python3 " + script + " failed (exit " +
