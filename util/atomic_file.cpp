@@ -276,6 +276,11 @@ void check_numbered_outputs_spare(const std::string& folder, const std::vector<s
         throw_file_error(file, "has the name of one of the files this command writes into " + folder + " (" + prefix +
                                    "_NNNN); refusing to overwrite it: move it or choose another --out");
     };
+    // Every numbered output is an image: PREFIX_NNNN.exr or .png.
+    auto numbered = [&](const fs::path& name, const std::string& prefix) {
+        const std::string ext = name.extension().string();
+        return (ext == ".exr" || ext == ".png") && numbered_index(name.filename().string(), prefix).has_value();
+    };
     for (const std::string& file : files) {
         if (file.empty()) continue;
         // The name as given, in its folder (a link named frame_0000.exr is written through).
@@ -283,12 +288,12 @@ void check_numbered_outputs_spare(const std::string& folder, const std::vector<s
         const fs::path parent = fs::weakly_canonical(given.parent_path(), ec).lexically_normal();
         if (parent == out || (fs::exists(parent, ec) && fs::exists(out, ec) && fs::equivalent(parent, out, ec)))
             for (const std::string& prefix : prefixes)
-                if (numbered_index(given.filename().string(), prefix)) refuse(file, prefix);
+                if (numbered(given, prefix)) refuse(file, prefix);
         // And any numbered name in the folder that is this file (a link to it, a hard link).
         if (!fs::exists(file, ec) || !fs::is_directory(out, ec)) continue;
         for (const auto& e : fs::directory_iterator(out, ec))
             for (const std::string& prefix : prefixes)
-                if (numbered_index(e.path().filename().string(), prefix) && fs::equivalent(e.path(), file, ec))
+                if (numbered(e.path(), prefix) && fs::equivalent(e.path(), file, ec))
                     refuse(e.path().string() + " (" + file + ")", prefix);
     }
 }

@@ -85,8 +85,8 @@ void check_output_file(const std::string& path);
 // by canonical path; an output inside an input folder counts too). Empty names are ignored.
 void check_outputs_are_not_inputs(const std::vector<std::string>& outputs, const std::vector<std::string>& inputs);
 
-// The same for the numbered files a command writes into `folder` (PREFIX_NNNN.EXT of each prefix,
-// util/frame_names.h): a file named (an input, or another output such as a --stats CSV) that lies
+// The same for the numbered images a command writes into `folder` (PREFIX_NNNN.exr and .png of each
+// prefix, util/frame_names.h): a file named (an input, or another output such as a --stats CSV) that lies
 // in that folder under such a name is refused. Empty names are ignored.
 void check_numbered_outputs_spare(const std::string& folder, const std::vector<std::string>& prefixes,
                                   const std::vector<std::string>& files);

@@ -694,8 +694,8 @@ TEST(BadInputCli, AuditedInputsAreRefusedClearly) {
     const std::string named = "has the name of one of the files this command writes into";
     bad.add("sky predict --sky " + step + " --steps 1 -q -o " + dir + "/named",
             {step, "is an input of this prediction and one of the steps it writes"});
-    bad.add("sky predict --sky " + frame + " --steps 2 -q -o " + dir + "/p --stats " + dir + "/p/step_0002.csv",
-            {"step_0002.csv", named});
+    bad.add("sky predict --sky " + frame + " --steps 2 -q -o " + dir + "/p --stats " + dir + "/p/step_0002.png",
+            {"step_0002.png", named});
     bad.add("animate builtin --sky " + frame + " --res 8x6 --spp 1 --duration 1 --fps 1 -q --no-video -o " + dir +
                 "/named",
             {frame, named, "(frame_NNNN)"});

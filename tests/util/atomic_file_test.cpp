@@ -120,6 +120,8 @@ TEST(AtomicFile, NumberedOutputsSpareTheInputsWhateverTheirLinks) {
     EXPECT_NO_THROW(check_numbered_outputs_spare(dir + "/out", {"frame"}, {dir + "/sky.exr"}));
     EXPECT_THROW(check_numbered_outputs_spare(dir + "/out", {"frame"}, {dir + "/out/frame_0001.exr"}), Error);
     EXPECT_NO_THROW(check_numbered_outputs_spare(dir + "/out", {"step"}, {dir + "/out/frame_0001.exr"}));
+    // Not one of the names written (a scene, a CSV named so): nothing to spare.
+    EXPECT_NO_THROW(check_numbered_outputs_spare(dir + "/out", {"frame"}, {dir + "/out/frame_0001.glb"}));
     fs::create_symlink("../sky.exr", dir + "/out/frame_0000.exr");
     EXPECT_THROW(check_numbered_outputs_spare(dir + "/out", {"frame"}, {dir + "/out/frame_0000.exr"}), Error);
     EXPECT_THROW(check_numbered_outputs_spare(dir + "/out", {"frame"}, {dir + "/sky.exr"}), Error);
