@@ -7,11 +7,9 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -818,13 +816,9 @@ int run_sampling_study(const SamplingStudyOptions& o) {
         std::fprintf(stderr, "wrote %s (%.0f s)\n", (out / "README.md").c_str(), seconds_since(start));
     if (charts_failed) {
         // The tables stand; the run is not done until its charts are (a full disk, no matplotlib).
-        // Its last line says why ("OSError: [Errno 28] No space left on device"), the traceback not.
-        std::string why = charts.started ? chart_output
-                                         : "could not start it: " + std::string(std::strerror(charts.spawn_error));
-        while (!why.empty() && std::isspace((unsigned char)why.back())) why.pop_back();
-        why = why.substr(why.find_last_of('\n') == std::string::npos ? 0 : why.find_last_of('\n') + 1);
         throw_file_error(out.string(), "the charts were not written: python3 " + script + " failed (exit " +
-                                           std::to_string(charts.exit_code) + ": " + why +
+                                           std::to_string(charts.exit_code) + ": " +
+                                           child_failure_reason(charts, chart_output) +
                                            "). The tables and CSV files are complete; run the command again to "
                                            "make the charts (measurements are kept in its cache)");
     }

@@ -268,9 +268,9 @@ FrameSettings sky_timeline_settings(const SkySourceSpec& o, const StepModelSpec&
     // its description already.
     auto with_mask = [](const std::string& file) {
         std::error_code ec;
-        const fs::path mask = fs::path(file).replace_extension(".filled.png");
+        const std::string mask = filled_mask_path(file);
         if (file.empty() || fs::is_directory(file, ec) || !fs::exists(mask, ec)) return describe_input(file);
-        return describe_input(file) + " filled " + describe_input(mask.string());
+        return describe_input(file) + " filled " + describe_input(mask);
     };
     FrameSettings s;
     s["sky"] = with_mask(o.sky);

@@ -575,10 +575,7 @@ cv::Mat circumsolar_share(int n, const std::optional<Vec3d>& sun) {
 cv::Mat filled_mask(const SkyImage& sky) {
     const int n = sky.resolution;
     if (sky.filled.size() != size_t(n) * n) return cv::Mat();
-    cv::Mat mask(n, n, CV_8UC1);
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) mask.at<unsigned char>(j, i) = sky.is_filled(i, j) ? 255 : 0;
-    return mask;
+    return cv::Mat(n, n, CV_8UC1, const_cast<unsigned char*>(sky.filled.data())) * 255;  // a copy
 }
 
 CloudRollout::CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start, const CloudFlow& flow,

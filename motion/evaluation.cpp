@@ -324,8 +324,7 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
     std::string filled_note;
     if (seq.preset.empty()) {
         int with_mask = 0;
-        for (int k = first - 1; k <= last + hmax; ++k)
-            with_mask += fs::exists(fs::path(seq.photos[size_t(k)]).replace_extension(".filled.png"));
+        for (int k = first - 1; k <= last + hmax; ++k) with_mask += fs::exists(filled_mask_path(seq.photos[size_t(k)]));
         const int used = last + hmax - first + 2;
         filled_note = with_mask == used ? "every sky's filled pixels (STEM.filled.png) left out"
                       : with_mask == 0

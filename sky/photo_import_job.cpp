@@ -541,7 +541,7 @@ void run_photo_import(const PhotoImportJob& o) {
         each.photo = photos[i];
         each.out = outputs[i];
         each.preview = (fs::path(o.out) / (fs::path(photos[i]).stem().string() + ".png")).string();
-        each.filled_mask = (fs::path(o.out) / (fs::path(photos[i]).stem().string() + ".filled.png")).string();
+        each.filled_mask = filled_mask_path(outputs[i]);
         try {
             // The first says what it found and did, as a single import does; the rest as it.
             import_one(each, i == 0);

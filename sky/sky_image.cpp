@@ -205,8 +205,12 @@ Image read_sky_file(const std::string& path) {
     return image;
 }
 
+std::string filled_mask_path(const std::string& sky_path) {
+    return std::filesystem::path(sky_path).replace_extension(".filled.png").string();
+}
+
 std::vector<unsigned char> filled_mask_beside(const std::string& sky_path, int n) {
-    const std::filesystem::path filled = std::filesystem::path(sky_path).replace_extension(".filled.png");
+    const std::filesystem::path filled = filled_mask_path(sky_path);
     if (!std::filesystem::exists(filled)) return {};
     const Image m = read_image(filled.string());
     if (m.width != n || m.height != n) {
@@ -250,7 +254,7 @@ void save_sky(const std::string& path, const SkyImage& sky, const std::string& p
     write_image(path, image);
     // A filled mask beside the sky replaced belonged to that one (an import's), not to this.
     std::error_code ec;
-    std::filesystem::remove(std::filesystem::path(path).replace_extension(".filled.png"), ec);
+    std::filesystem::remove(filled_mask_path(path), ec);
     if (!preview_png.empty()) write_image(preview_png, tonemap_to_display(image));
 }
 

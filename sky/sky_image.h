@@ -70,6 +70,10 @@ void validate_sky(const SkyImage& sky, const std::string& name);
 // display-encoded values, whatever the file's name) where linear radiance is wanted.
 void require_radiance_pixels(const Image& image, const std::string& path);
 
+// Where an import writes the filled-pixel mask of the sky file at sky_path: STEM.filled.png beside
+// STEM.exr.
+std::string filled_mask_path(const std::string& sky_path);
+
 // The filled-pixel mask an import wrote beside a sky file (STEM.filled.png next to STEM.exr), as
 // SkyImage::filled for an N x N sky; empty when there is none, or when it is of another size (not
 // this sky's: a warning names it).

@@ -1,9 +1,7 @@
 #include "util/chart.h"
 
-#include <cctype>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -54,11 +52,7 @@ void make_line_chart(const std::string& csv, const std::string& png, const std::
                                         &said);
     if (!run.exited || run.exit_code != 0) {
         const int code = run.exited ? run.exit_code : -1;
-        if (!run.started) said = "not started: " + std::string(std::strerror(run.spawn_error));
-        // The last line that says something: trailing blank lines and spaces dropped first.
-        while (!said.empty() && std::isspace(static_cast<unsigned char>(said.back()))) said.pop_back();
-        const size_t newline = said.rfind('\n');
-        const std::string last = newline == std::string::npos ? said : said.substr(newline + 1);
+        const std::string last = child_failure_reason(run, said);
         throw_file_error(png, "could not write the chart: python3 with matplotlib failed (exit " +
                                   std::to_string(code) + (last.empty() ? "" : ": " + last) + "); the data is in " +
                                   csv);

@@ -7,6 +7,8 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cstring>
+#include <cctype>
 #include <cerrno>
 #include <string>
 
@@ -21,6 +23,13 @@ std::atomic<pid_t> g_child{0};
 void stop_active_child() noexcept {
     const pid_t child = g_child.load();
     if (child > 0) ::kill(child, SIGTERM);
+}
+
+std::string child_failure_reason(const ChildResult& result, std::string output) {
+    if (!result.started) return "not started: " + std::string(std::strerror(result.spawn_error));
+    while (!output.empty() && std::isspace(static_cast<unsigned char>(output.back()))) output.pop_back();
+    const size_t newline = output.rfind('\n');
+    return newline == std::string::npos ? output : output.substr(newline + 1);
 }
 
 ChildResult run_program(const std::vector<std::string>& argv, std::string* output) {

@@ -21,6 +21,11 @@ struct ChildResult {
 // it writes to stdout and stderr is collected there instead of reaching the terminal.
 ChildResult run_program(const std::vector<std::string>& argv, std::string* output = nullptr);
 
+// Why a program run with `output` collected failed, in one line: "not started: REASON" when it could
+// not be run, else the last line it wrote that says something (Python's "OSError: [Errno 28] No
+// space left on device", not its traceback).
+std::string child_failure_reason(const ChildResult& result, std::string output);
+
 // Async-signal-safe: sends SIGTERM to the active child, if any (called by the interrupt handler).
 void stop_active_child() noexcept;
 
