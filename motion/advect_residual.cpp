@@ -941,7 +941,7 @@ const cv::Mat& CloudRollout::advance() {
         if (!compensation_n.empty()) base += compensation_n;
         cv::Mat correction = network_->step_network(small, f_n, compensation_n) - base, up = correction;
         if (big != n) cv::resize(correction, up, cv::Size(big, big), 0, 0, cv::INTER_LINEAR);
-        moved += up;
+        moved += up * (k == 1 ? flow_.correction_gain : 1.0);
     }
     cv::min(cv::max(moved, 0.0), 1.0, state_);
     state_.setTo(cv::Scalar::all(0), ~disc_big_);
@@ -1023,32 +1023,68 @@ void AdvectResidualNetwork::rollout(const SkyImage& given, const CloudFlow& flow
     }
 }
 
-MeasuredMotion network_form_flow(const SkyImage& previous, const SkyImage& current, const NetworkFormParams& form,
-                                 int n) {
+NetworkFormPair network_form_pair(const SkyImage& previous, const SkyImage& current, const NetworkFormParams& form) {
     // A previous frame of another resolution is resampled to the sky's: only its motion is read.
     const SkyImage resampled = previous.resolution != current.resolution ? resampled_sky(previous, current.resolution)
                                                                          : SkyImage();
     const int w = std::min(256, current.resolution);
-    cv::Mat a = to_network_form(resampled.resolution > 0 ? resampled : previous, form, w),
-            b = to_network_form(current, form, w);
-    cv::Mat untrusted = fill_saturated_pixels(&a) | fill_saturated_pixels(&b);
+    NetworkFormPair pair{to_network_form(resampled.resolution > 0 ? resampled : previous, form, w),
+                         to_network_form(current, form, w), cv::Mat()};
+    cv::Mat untrusted = fill_saturated_pixels(&pair.previous) | fill_saturated_pixels(&pair.current);
     // Nor where an import filled either frame: a filled camera arm or band does not move.
     for (const SkyImage* sky : {&previous, &current})
         if (cv::Mat filled = filled_mask(*sky); !filled.empty()) {
             cv::resize(filled, filled, cv::Size(w, w), 0, 0, cv::INTER_AREA);
             untrusted |= filled > 0;
         }
-    return measured_motion(a, b, sky_disc_mask(w) & ~untrusted).at_resolution(n);
+    pair.seen = sky_disc_mask(w) & ~untrusted;
+    return pair;
 }
 
-CloudFlow AdvectResidualNetwork::motion_flow(const SkyImage& sky, const CloudMotion& motion, double dt, int n) const {
+MeasuredMotion network_form_flow(const SkyImage& previous, const SkyImage& current, const NetworkFormParams& form,
+                                 int n) {
+    const NetworkFormPair pair = network_form_pair(previous, current, form);
+    return measured_motion(pair.previous, pair.current, pair.seen).at_resolution(n);
+}
+
+double AdvectResidualNetwork::correction_gain(const cv::Mat& previous, const cv::Mat& current, const cv::Mat& seen,
+                                              const cv::Mat& flow) {
+    if (!has_network()) return 1.0;
+    const int n = info_.resolution;
+    cv::Mat p = previous, c = current, s = seen;
+    if (previous.rows != n) {
+        cv::resize(previous, p, cv::Size(n, n), 0, 0, cv::INTER_AREA);
+        cv::resize(current, c, cv::Size(n, n), 0, 0, cv::INTER_AREA);
+        cv::resize(seen, s, cv::Size(n, n), 0, 0, cv::INTER_AREA);
+        s = s == 255;  // seen wholly
+    }
+    s &= sky_disc_mask(n);
+    const cv::Mat f = flow_at_resolution(flow, n), warped = warp_in_disc(p, f);
+    const cv::Mat correction = step_network(p, f) - warped, missed = c - warped;
+    double along = 0, norm = 0;
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x)
+            if (s.at<uchar>(y, x)) {
+                const cv::Vec3f a = correction.at<cv::Vec3f>(y, x), b = missed.at<cv::Vec3f>(y, x);
+                along += a.dot(b), norm += a.dot(a);
+            }
+    return norm > 0 ? std::clamp(along / norm, 0.0, 1.0) : 1.0;
+}
+
+CloudFlow AdvectResidualNetwork::motion_flow(const SkyImage& sky, const CloudMotion& motion, double dt, int n) {
     if (motion.previous) {
         double gap = motion.previous_dt > 0 ? motion.previous_dt : dt;
         const double scale = model_scale(sky);  // both frames alike
-        MeasuredMotion m = network_form_flow(scaled_sky(*motion.previous, scale), scaled_sky(sky, scale), info_.form,
-                                             n);
+        const SkyImage previous = scaled_sky(*motion.previous, scale), current = scaled_sky(sky, scale);
+        const NetworkFormPair pair = network_form_pair(previous, current, info_.form);
+        const MeasuredMotion measured = measured_motion(pair.previous, pair.current, pair.seen);
+        const double gain = correction_gain(pair.previous, pair.current, pair.seen,
+                                            measured.confirmed.empty() ? measured.smoothed : measured.confirmed);
+        MeasuredMotion m = measured.at_resolution(n);
         m.smoothed *= dt / gap, m.confirmed *= dt / gap;
-        return CloudFlow::from_measured(m, dt);
+        CloudFlow flow = CloudFlow::from_measured(m, dt);
+        flow.correction_gain = gain;
+        return flow;
     }
     return CloudFlow::from_wind(wind_flow(n, motion.wind ? *motion.wind : Wind{}, dt));
 }

@@ -96,6 +96,9 @@ struct CloudFlow {
     // wind)). The rest, the smoothed flow's departure from the wind where the flow measured back
     // agrees, is kept for several steps (CloudRollout).
     cv::Mat detail;
+    // How much of the network's correction a rollout adds (0..1): 1 unless a previous frame says
+    // otherwise (AdvectResidualNetwork::correction_gain).
+    double correction_gain = 1.0;
     cv::Mat at(int k) const;  // the flow of step k = 1, 2, ...
     CloudFlow resized(int n) const;
     static CloudFlow from_wind(const cv::Mat& flow) { return CloudFlow{flow, cv::Mat(), 0.0, true, true, cv::Mat()}; }
@@ -157,7 +160,18 @@ class AdvectResidualNetwork {
                               const cv::Mat& background = cv::Mat());
 
     // The flow per step of length dt at resolution n for a sky and its motion (see CloudMotion).
-    CloudFlow motion_flow(const SkyImage& sky, const CloudMotion& motion, double dt, int n) const;
+    // With a previous frame, its correction_gain is measured on the pair (correction_gain).
+    CloudFlow motion_flow(const SkyImage& sky, const CloudMotion& motion, double dt, int n);
+
+    // How much of the network's correction this camera's sky takes, measured on the one pair a
+    // previous frame gives: the share s in [0, 1] of the correction C = net(P, F) - warp(P, F)
+    // that best explains what the warp alone misses of the current frame, argmin |warp + s C -
+    // current|^2 over the pixels seen in both. The network was trained on a few days of two
+    // cameras; on a camera or a light it has not seen its correction can cost more than it gives
+    // (held-out overcast Mobotix morning, one step ahead), and the pair in hand says which.
+    // previous, current: the network form (R x R CV_32FC3, R >= N, saturated pixels filled); seen:
+    // CV_8UC1 at R; flow: previous -> current at R (the confirmed one). 1 without a network.
+    double correction_gain(const cv::Mat& previous, const cv::Mat& current, const cv::Mat& seen, const cv::Mat& flow);
 
   private:
     AdvectResidualInfo info_;
@@ -260,6 +274,13 @@ class CloudRollout {
 // frames). A previous frame of another resolution is resampled to the sky's first.
 MeasuredMotion network_form_flow(const SkyImage& previous, const SkyImage& current, const NetworkFormParams& form,
                                  int n);
+// The two frames that motion is measured on: the network form at min(256, N_sky) px, saturated
+// pixels filled, and the pixels seen in both (in the disc, clipped in neither, filled by an import
+// in neither).
+struct NetworkFormPair {
+    cv::Mat previous, current, seen;
+};
+NetworkFormPair network_form_pair(const SkyImage& previous, const SkyImage& current, const NetworkFormParams& form);
 
 // The step model: "network:FOLDER" for a folder of kind advect-residual, or "advect".
 class AdvectResidualStepModel : public MediumStepModel {

@@ -227,6 +227,18 @@ cv::Mat sample_exact(const cv::Mat& image, const cv::Mat& positions) {
     return remap_exact(src, positions);
 }
 
+cv::Mat traced_flow(const cv::Mat& flow, int steps) {
+    if (flow.type() != CV_32FC2 || flow.rows != flow.cols)
+        throw Error("traced_flow: the flow must be CV_32FC2 and square");
+    const cv::Mat extended = extend_past_rim_exact(flow);
+    cv::Mat identity(flow.size(), CV_32FC2), position;
+    for (int y = 0; y < flow.rows; ++y)
+        for (int x = 0; x < flow.cols; ++x) identity.at<cv::Vec2f>(y, x) = cv::Vec2f(float(x), float(y));
+    position = identity.clone();
+    for (int k = 0; k < steps; ++k) position -= k == 0 ? flow : sample_exact(extended, position);
+    return identity - position;
+}
+
 cv::Mat warp_in_disc(const cv::Mat& image, const cv::Mat& flow) {
     if (flow.type() != CV_32FC2 || flow.size() != image.size() || image.rows != image.cols)
         throw Error("warp_in_disc: the flow must be CV_32FC2 of the (square) image's size");

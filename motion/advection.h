@@ -44,6 +44,13 @@ cv::Mat extend_past_rim_exact(const cv::Mat& image);
 // in full float precision (cv::remap rounds positions to 1/32 pixel).
 cv::Mat sample_exact(const cv::Mat& image, const cv::Mat& positions);
 
+// The flow applied `steps` times, as one displacement: D with x - D(x) the point `steps` steps
+// upstream along the flow's streamline through x (x_k = x_{k-1} - F(x_{k-1}), F read bilinearly
+// from the rim-extended flow, so a path that leaves the disc keeps the rim's motion). warp_in_disc
+// by D moves an image along the flow's curved paths with one interpolation; a warp by steps x F
+// moves it in a straight line with the motion at the destination.
+cv::Mat traced_flow(const cv::Mat& flow, int steps);
+
 // Advects an image along a flow field for `steps` steps at constant velocity:
 // out(x) = image(x - steps * flow(x)) (bilinear; outside the image reads 0). The backward lookup
 // through the flow at the destination is the usual first-order stand-in for forward splatting.

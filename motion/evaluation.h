@@ -3,9 +3,11 @@
 // later, at several resolutions, in the network form (motion/network_form.h):
 //
 //   persistence     the frame itself
-//   farneback       the frame advected by h times the Farneback flow of the previous pair (the
-//                   stronger, iterated form of two-frame extrapolation), in one warp with the rim
-//                   extended (motion/advection.h warp_in_disc), so it never pulls in black
+//   farneback       the frame advected along the Farneback flow of the previous pair applied h times
+//                   along its streamlines (motion/advection.h traced_flow: the iterated form of
+//                   two-frame extrapolation), in one warp with the rim extended (warp_in_disc), so it
+//                   never pulls in black
+//   farneback-linear the same flow in one straight warp by h F; verdicts take the better of the two
 //   advect+prev     pure advection along the models' motion estimate of the previous pair (that flow
 //                   smoothed where the flow measured back does not confirm it: motion/flow.h
 //                   consistent_motion), stepped h times, over the clear background of the frame's
@@ -13,13 +15,17 @@
 //   model+prev      the advect-residual model given the previous frame (that motion, fixed)
 //   model+wind      the same model from one frame and the true wind: the uniform wind fitted to the
 //                   measured motion of the following pair (an oracle for "the wind is known")
+//   advect+wind     that wind with no network (what the oracle wind alone is worth)
 //   paper           the paper's FlowNet + CloudNet from one frame (at its own 64 px only)
 //
 // Frames are imported with the camera preset (sky/preset_import.h) at the import resolution and
 // area-averaged to each resolution; scored pixels: seen in both frames (not the arm, band or masts)
 // and not saturated in either (the sun, which every model puts back from the input). PSNR and SSIM
 // are means of per-frame values (motion/metrics.h). Which frames: the model's held-out part
-// (split.json) for a sequence it was trained on, else every frame, or --frames.
+// (split.json) for a sequence it was trained on, else every frame, or --frames; frames whose next
+// 20 minutes of the same camera the model was trained on (another sequence) are not held out.
+// model+prev takes the share of the network's correction its previous pair supports
+// (AdvectResidualNetwork::correction_gain), as `sky predict --prev` and `animate` do.
 #pragma once
 
 #include <map>

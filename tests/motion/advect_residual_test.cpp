@@ -549,6 +549,45 @@ TEST(AdvectResidual, AMeasuredFlowKeepsOnlyItsAgreedDepartureAfterTheFirstStep) 
     EXPECT_LT(cv::norm(g.measured - g.detail, m.smoothed, cv::NORM_INF), 1e-5);
 }
 
+// The previous pair says how much of the network's correction this sky takes: the least-squares
+// share of it that explains what the warp alone missed, in [0, 1]; a rollout takes that share on
+// its first step (later steps take it whole).
+TEST(AdvectResidual, APreviousPairSaysHowMuchOfTheCorrectionToTake) {
+    AdvectResidualNetwork net = AdvectResidualNetwork::load(shipped());
+    const int n = net.info().resolution;
+    Image exact;
+    const SkyImage sky = procedural(5, 250, 12, n, 30, &exact);
+    cv::Mat previous = to_network_form(sky, net.info().form);
+    fill_saturated_pixels(&previous);
+    cv::Mat flow = wind_flow(n, Wind{250, 12, 1500}, 30);
+    const cv::Mat warped = warp_in_disc(previous, flow), correction = net.step_network(previous, flow) - warped;
+    ASSERT_GT(cv::norm(correction), 0.05);  // the network changes something here
+    const cv::Mat seen = sky_disc_mask(n);
+    for (double share : {0.0, 0.3, 0.7}) {
+        const cv::Mat current = warped + correction * share;
+        EXPECT_NEAR(net.correction_gain(previous, current, seen, flow), share, 1e-3) << share;
+    }
+    EXPECT_EQ(net.correction_gain(previous, warped - correction, seen, flow), 0.0);      // against it: none
+    EXPECT_EQ(net.correction_gain(previous, warped + correction * 3, seen, flow), 1.0);  // at most all
+    // Pixels not seen in both frames say nothing: a wrong current there changes nothing.
+    cv::Mat half = seen.clone(), current = warped + correction * 0.3;
+    half(cv::Rect(0, 0, n / 2, n)) = 0;
+    current(cv::Rect(0, 0, n / 2, n)) = warped(cv::Rect(0, 0, n / 2, n)) - correction(cv::Rect(0, 0, n / 2, n));
+    EXPECT_NEAR(net.correction_gain(previous, current, half, flow), 0.3, 1e-3);
+    EXPECT_EQ(AdvectResidualNetwork::pure_advection().correction_gain(previous, current, seen, flow), 1.0);
+
+    // A rollout's first step takes the share: none of it is pure advection's step.
+    CloudFlow none = CloudFlow::constant(flow), all = none;
+    none.correction_gain = 0.0;
+    AdvectResidualNetwork advect = AdvectResidualNetwork::pure_advection(n);
+    cv::Mat with_none, with_all, advected;
+    net.rollout_network_form(previous, none, 1, [&](int, const cv::Mat& s) { with_none = s.clone(); });
+    net.rollout_network_form(previous, all, 1, [&](int, const cv::Mat& s) { with_all = s.clone(); });
+    advect.rollout_network_form(previous, all, 1, [&](int, const cv::Mat& s) { advected = s.clone(); });
+    EXPECT_LT(cv::norm(with_none, advected, cv::NORM_INF), 1e-5);
+    EXPECT_GT(cv::norm(with_all, advected, cv::NORM_INF), 0.01);
+}
+
 TEST(AdvectResidual, BadModelFoldersFailClearly) {
     const std::string dir = test::temp_dir("advect_bad");
     EXPECT_THROW(AdvectResidualNetwork::load(dir + "/missing"), Error);

@@ -228,4 +228,37 @@ TEST(Advection, FlowEstimateMatchesKnownRotationAndFillsHoles) {
 }
 
 }  // namespace
+// The Farneback baseline applies a flow h times along its streamlines: for a rotation about the
+// centre (a curved path), the traced displacement lands on the circle where a straight warp by
+// h F drifts outwards; for a uniform flow both are h F.
+TEST(Advection, ATracedFlowFollowsCurvedPaths) {
+    const int n = 65;
+    const double c = (n - 1) / 2.0, w = 0.05;  // radians per step
+    cv::Mat rotation(n, n, CV_32FC2), uniform(n, n, CV_32FC2, cv::Scalar(1.5f, -0.5f));
+    // By destination: x - F(x) is x rotated back by w.
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            const double dx = x - c, dy = y - c;
+            const double sx = c + std::cos(w) * dx + std::sin(w) * dy, sy = c - std::sin(w) * dx + std::cos(w) * dy;
+            rotation.at<cv::Vec2f>(y, x) = cv::Vec2f(float(x - sx), float(y - sy));
+        }
+    const int h = 6;
+    const cv::Mat traced = traced_flow(rotation, h);
+    double worst_traced = 0, worst_linear = 0;
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            const double dx = x - c, dy = y - c;
+            if (std::hypot(dx, dy) > 20 || std::hypot(dx, dy) < 10) continue;
+            const double sx = c + std::cos(h * w) * dx + std::sin(h * w) * dy,
+                         sy = c - std::sin(h * w) * dx + std::cos(h * w) * dy;
+            const cv::Vec2f t = traced.at<cv::Vec2f>(y, x), f = rotation.at<cv::Vec2f>(y, x) * float(h);
+            worst_traced = std::max(worst_traced, std::hypot(x - t[0] - sx, y - t[1] - sy));
+            worst_linear = std::max(worst_linear, std::hypot(x - f[0] - sx, y - f[1] - sy));
+        }
+    EXPECT_LT(worst_traced, 0.05);  // bilinear reads of a smooth flow
+    EXPECT_GT(worst_linear, 0.5);   // a straight line cuts the corner
+    EXPECT_LT(cv::norm(traced_flow(uniform, h), uniform * double(h), cv::NORM_INF), 1e-4);
+    EXPECT_LT(cv::norm(traced_flow(rotation, 1), rotation, cv::NORM_INF), 1e-4);  // float round-off of x - (x - F)
+}
+
 }  // namespace dynsky
