@@ -74,11 +74,14 @@ def export_onnx(model, n, path):
 
 
 @torch.no_grad()
-def write_reference(model, image, flow, folder):
-    """image (1, 3, N, N), flow (1, 2, N, N)."""
+def write_reference(model, image, flow, folder, background=None):
+    """image (1, 3, N, N), flow (1, 2, N, N); background (1, 3, N, N) for a model trained on the
+    compensated warp (its input is then warp(I) + B - warp(B), as the C++ side builds it)."""
     model.eval()
-    x = A.network_input(image, flow)
+    x = A.network_input(image, flow, A.compensation(background, flow) if background is not None else None)
     y = model(x)
+    if background is not None:
+        np.save(os.path.join(folder, "reference_background.npy"), background.numpy().astype(np.float32))
     np.save(os.path.join(folder, "reference_image.npy"), image.numpy().astype(np.float32))
     np.save(os.path.join(folder, "reference_flow.npy"), flow.numpy().astype(np.float32))
     np.save(os.path.join(folder, "reference_input.npy"), x.numpy().astype(np.float32))
@@ -228,8 +231,21 @@ def main(argv=None):
     n = src.n
     ops = export_onnx(model, n, os.path.join(args.out, "model.onnx"))
     k = split[src.name]["heldout"][0] + 1
-    write_reference(model, AD.t_img(src.images[k:k + 1]), AD.t_img(src.flow[k - 1:k]), args.out)
+    compensated = bool(targs.get("compensated"))
+    if compensated and src.background is None:
+        sys.exit(f"{args.data}/{reference}: no background.npy, which a model trained with --compensated needs for its "
+                 "reference pair (rebuild the data set with networks/build_dataset_v2.py)")
+    for stale in ("reference_background.npy",):
+        if os.path.exists(os.path.join(args.out, stale)):
+            os.remove(os.path.join(args.out, stale))
+    write_reference(model, AD.t_img(src.images[k:k + 1]), AD.t_img(src.flow[k - 1:k]), args.out,
+                    AD.t_img(src.background[k:k + 1]) if compensated else None)
     extra = json.load(open(args.extra)) if args.extra else {}
+    # What the C++ side must do for this checkpoint (motion/advect_residual.cpp reads "base"): a model
+    # trained on the compensated warp run on the plain one moves the sky's gradient with the clouds.
+    extra.setdefault("base", "compensated" if compensated else "warp")
+    if targs.get("smooth"):
+        extra.setdefault("previous_frame_flow", "smoothed (Gaussian sigma N / 32)")
     names = [s for s in (targs.get("sources") or "").split(",") if s] or sorted(split)
     ex = set((targs.get("exclude") or "").split(","))
     used = {s: split[s] for s in names if s not in ex}

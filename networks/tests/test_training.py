@@ -282,6 +282,41 @@ class AdvectResidualTest(unittest.TestCase):
             dims = [d.dim_value for d in m.graph.input[0].type.tensor_type.shape.dim]
             self.assertEqual(dims, [1, 8, n, n])
 
+    def test_export_of_a_compensated_checkpoint_says_so(self):
+        """A checkpoint trained on the compensated warp exports a model.json that tells the C++ side
+        ("base": "compensated"; without it the sky's gradient moved with the clouds), and a
+        reference pair built with the background."""
+        import advect as A
+        import export_advect as X
+        import train_advect as TA
+        n = 32
+        write_dataset(self.tmp, frames=24, n=n)
+        seq = os.path.join(self.tmp, "synthetic")
+        images = np.load(os.path.join(seq, "images.npy"))
+        yy = np.linspace(0.3, 0.6, n, dtype=np.float32)[None, :, None, None]
+        np.save(os.path.join(seq, "background.npy"), np.broadcast_to(yy, images.shape).astype(np.float32))
+        with open(os.path.join(self.tmp, "split.json")) as f:
+            split = json.load(f)
+        split["synthetic"].update({"fit": [0, 16], "val": [16, 19]})
+        with open(os.path.join(self.tmp, "split.json"), "w") as f:
+            json.dump(split, f)
+        run = os.path.join(self.tmp, "run")
+        TA.main(["--data", self.tmp, "--widths", "4,8", "--compensated", "--smooth", "--gate", "--epochs", "1",
+                 "--steps-per-epoch", "2", "--batch", "2", "--unroll", "1", "--eval-every", "5", "--out", run])
+        out = os.path.join(self.tmp, "model")
+        X.main(["--checkpoint", os.path.join(run, "final.pt"), "--data", self.tmp, "--out", out])
+        with open(os.path.join(out, "model.json")) as f:
+            info = json.load(f)
+        self.assertEqual(info["base"], "compensated")
+        self.assertIn("smoothed", info["previous_frame_flow"])
+        image = torch.from_numpy(np.load(os.path.join(out, "reference_image.npy")))
+        flow = torch.from_numpy(np.load(os.path.join(out, "reference_flow.npy")))
+        background = torch.from_numpy(np.load(os.path.join(out, "reference_background.npy")))
+        x = np.load(os.path.join(out, "reference_input.npy"))
+        expected = A.network_input(image, flow, A.compensation(background, flow)).numpy()
+        self.assertLess(float(np.abs(x - expected).max()), 1e-6)
+        self.assertGreater(float(np.abs(x - A.network_input(image, flow).numpy()).max()), 1e-3)
+
 
 if __name__ == "__main__":
     unittest.main()
