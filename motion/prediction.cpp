@@ -78,6 +78,11 @@ void write_prediction(const PredictionOptions& given) {
     const SkyImage& stepped = work.resolution > 0 ? work : sky;
     CloudFlow flow;
     if (advect) flow = advect->motion_flow(stepped, motion, dt, stepped.resolution);
+    if (advect && advect->has_network() && motion.previous && !o.quiet)
+        std::fprintf(stderr,
+                     "dynsky: note: the pair %s -> %s supports %.0f %% of the network's correction; the first step "
+                     "takes that much (docs/networks-advect-residual.md)\n",
+                     o.previous.c_str(), o.in.c_str(), 100 * flow.correction_gain);
     auto rollout = [&](const std::function<void(int, const SkyImage&)>& on_step) {
         if (!advect) return paper->rollout(sky, o.steps, on_step);
         advect->rollout(stepped, flow, o.steps, [&](int k, const SkyImage& s) {

@@ -99,6 +99,16 @@ TEST(SkyModelCli, PredictWritesStepsAndStats) {
     EXPECT_NE(r.output.find("says when it was taken (no clock, no recorded time): taken one medium step"),
               std::string::npos)
         << r.output;
+    // With the network, what share of its correction the pair supports is said (a sky that did not
+    // change supports next to none of it).
+    r = test::run_command(dynsky("sky predict --model " + data_path("networks/models/advect_residual") + " --in " + in +
+                                 " --prev " + in + " --steps 1 --out " + dir + "/prevnet"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const size_t said = r.output.find(" % of the network's correction; the first step takes that much");
+    ASSERT_NE(said, std::string::npos) << r.output;
+    const size_t number = r.output.rfind("supports ", said);
+    ASSERT_NE(number, std::string::npos) << r.output;
+    EXPECT_LT(std::stod(r.output.substr(number + 9, said - number - 9)), 10.0) << r.output;
     fs::remove_all(dir);
 }
 
