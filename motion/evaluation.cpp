@@ -143,8 +143,9 @@ TrainedFrames model_training_frames(const PhotoSequence& seq, const std::string&
                 }
         }
         if (ahead > 0)
-            r.matched += (r.matched.empty() ? "" : "; ") + std::to_string(ahead) + " frames up to 20 minutes before " +
-                         name + "'s frames trained on (the same clouds, later)";
+            r.matched += (r.matched.empty() ? "" : "; ") + std::to_string(ahead) + " frames up to " +
+                         std::to_string(int(kSeenAheadSeconds / 60)) + " minutes before " + name +
+                         "'s frames trained on (the same clouds, later)";
         if (lo >= 0)
             r.matched += (r.matched.empty() ? "" : "; ") + name + " frames " + std::to_string(lo) + "-" +
                          std::to_string(hi) + " trained on" +
@@ -330,9 +331,9 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
                         "these anyway");
         first = best_first, last = best_first + best_len - 1;
         part =
-            "the frames the model was never trained on, held out (last in time; some settings of the rollout "
-            "were chosen looking at them: docs/networks-advect-residual.md, 'What the held-out parts were used "
-            "for'): " +
+            "the frames the model was never trained on, held out (last in time; for the shipped model some "
+            "settings of the rollout were chosen looking at them: docs/networks-advect-residual.md, 'What the "
+            "held-out parts were used for'): " +
             trained.matched;
     }
     if (o.limit > 0) last = std::min(last, first + o.limit - 1);
