@@ -767,7 +767,9 @@ int run_sampling_study(const SamplingStudyOptions& o) {
               "the tiny sun through a glossy bounce, which no sky sampler helps, decide the whole error; the untrimmed RMSE "
               "and the fireflies' share are in the tables and CSV files). Time to error = that cost at the spp where the "
               "sampler's mean error (over seeds) reaches plain cdf's mean error at its highest spp; speed-up = cdf's time / that "
-              "time; the bracket is the range of the same speed-up computed from each seed's curves and timings alone, so it shows the timing noise too. The spp gain is "
+              "time; the bracket is the range of the same speed-up computed from each seed's curves and timings alone, so it shows the timing noise too "
+              "(it need not contain the figure before it: the mean of the seeds' error curves crosses cdf's mean error "
+              "at another spp than any one seed's curve crosses its own). The spp gain is "
               "the same ratio at equal samples per pixel.\n\n"
               "| sampler | median speed-up | sunny (clear) median | sunny per-seed range | median spp gain | sunny spp gain |\n"
               "|---|---|---|---|---|---|\n";
