@@ -507,51 +507,79 @@ cv::Mat glare_plateau(const cv::Mat& start, const Vec3d& sun) {
     return plateau;
 }
 
-// Within kGlareHaloDeg of a sun whose camera clipped around it (glare_plateau), the background is
-// at least the start's lower quartile at that distance from the sun (per channel, 1-degree rings):
-// the camera's glare falls off with the distance alone, a cloud stands out of its ring. The glare
-// is then neither cloud nor moved: on a clear all-sky photograph (WSISEG 077) it was read as cloud
-// next to the sun, carried onto it by the wind and put it out for 14 of 40 steps, and moved as a
-// hard white blob.
+// Within kGlareHaloDeg of a sun whose camera clipped around it (glare_plateau), or that the start
+// shows whole, the start's glow beyond the model's background is measured once, at the start's sun:
+// per channel and 1-degree ring, the lower quartile of start - background (at least 0, never more
+// than the ring inside: a glow falls off away from the sun, a cloud stands out of its ring). It is
+// added to the background around the sun of every step (halo_background), so the glow is neither
+// cloud nor moved, and goes with the sun as the clock moves it. On a clear all-sky photograph
+// (WSISEG 077) the camera's clipped glare was read as cloud next to the sun, carried onto it by the
+// wind and put it out for 14 of 40 steps; a hazy sky's or a downloaded HDRI's aureole, brighter and
+// whiter than the model's, was torn off the sun (a white crescent downwind, a pink hole at the sun),
+// and a cloud then moved onto the sun did not dim it (the start's sun counted as covered already).
 constexpr double kGlareHaloDeg = 35.0;
-void raise_to_glare_halo(const cv::Mat& start, const Vec3d& sun, cv::Mat* background) {
-    const int n = start.rows, rings = int(kGlareHaloDeg);
+
+// Angle from the sun (degrees) of each pixel of an n x n sky, -1 outside the disc or beyond the halo.
+cv::Mat halo_angles(int n, const Vec3d& sun) {
     const Vec3d s = sun.normalized();
     cv::Mat angle(n, n, CV_32FC1, cv::Scalar(-1));
-    std::vector<std::array<std::vector<float>, 3>> values;
-    values.resize(size_t(rings));
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x) {
             if (fisheye::pixel_center_uv(x, y, n).squaredNorm() > 1) continue;
             const double a = std::acos(std::clamp(fisheye::direction_from_pixel(double(x), double(y), n).dot(s), -1.0,
                                                   1.0)) *
                              180 / kPiD;
-            if (a >= kGlareHaloDeg) continue;
-            angle.at<float>(y, x) = float(a);
-            const cv::Vec3f v = start.at<cv::Vec3f>(y, x);
-            for (int k = 0; k < 3; ++k) values[size_t(a)][size_t(k)].push_back(v[k]);
+            if (a < kGlareHaloDeg) angle.at<float>(y, x) = float(a);
         }
-    std::vector<cv::Vec3f> profile(size_t(rings), cv::Vec3f(0, 0, 0));
+    return angle;
+}
+
+// Per ring, in radiance (a glow adds light; the network form is logarithmic, and an added glow's
+// share of it changes with the sky under it around the ring).
+std::vector<cv::Vec3f> halo_excess(const cv::Mat& start, const cv::Mat& background, const Vec3d& sun,
+                                   const UnitMapParams& unit) {
+    const int n = start.rows, rings = int(kGlareHaloDeg);
+    const cv::Mat angle = halo_angles(n, sun);
+    std::vector<std::array<std::vector<float>, 3>> values(static_cast<size_t>(rings));
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x)
+            if (const float a = angle.at<float>(y, x); a >= 0) {
+                const cv::Vec3f s = start.at<cv::Vec3f>(y, x), b = background.at<cv::Vec3f>(y, x);
+                for (int k = 0; k < 3; ++k)
+                    values[size_t(a)][size_t(k)].push_back(unit_to_radiance(s[k], unit) - unit_to_radiance(b[k], unit));
+            }
+    std::vector<cv::Vec3f> excess(size_t(rings), cv::Vec3f(0, 0, 0));
     for (int r = 0; r < rings; ++r)
         for (int k = 0; k < 3; ++k) {
             std::vector<float>& v = values[size_t(r)][size_t(k)];
-            if (v.empty()) continue;
+            if (v.empty()) {  // beyond the horizon: the ring inside
+                if (r > 0) excess[size_t(r)][k] = excess[size_t(r) - 1][k];
+                continue;
+            }
             std::nth_element(v.begin(), v.begin() + long(v.size() / 4), v.end());
-            profile[size_t(r)][k] = v[v.size() / 4];
+            excess[size_t(r)][k] = std::max(0.0f, v[v.size() / 4]);
+            if (r > 0) excess[size_t(r)][k] = std::min(excess[size_t(r)][k], excess[size_t(r) - 1][k]);
         }
-    for (int r = 1; r < rings; ++r)  // empty rings (beyond the horizon) take the one inside
-        if (profile[size_t(r)] == cv::Vec3f(0, 0, 0)) profile[size_t(r)] = profile[size_t(r) - 1];
+    return excess;
+}
+
+void halo_background(const std::vector<cv::Vec3f>& excess, const Vec3d& sun, const UnitMapParams& unit,
+                     cv::Mat* background) {
+    const int n = background->rows, rings = int(excess.size());
+    if (rings == 0) return;
+    const cv::Mat angle = halo_angles(n, sun);
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x) {
             const float a = angle.at<float>(y, x);
             if (a < 0) continue;
-            // Linear between ring centres, fading into the model's background over the last 5 degrees.
+            // Linear between ring centres, fading out over the last 5 degrees.
             const float f = std::clamp(a - 0.5f, 0.0f, float(rings - 1));
             const int r0 = int(f), r1 = std::min(rings - 1, r0 + 1);
-            const cv::Vec3f p = (1 - (f - r0)) * profile[size_t(r0)] + (f - r0) * profile[size_t(r1)];
+            const cv::Vec3f e = (1 - (f - r0)) * excess[size_t(r0)] + (f - r0) * excess[size_t(r1)];
             const float fade = std::clamp((float(kGlareHaloDeg) - a) / 5.0f, 0.0f, 1.0f);
             cv::Vec3f& b = background->at<cv::Vec3f>(y, x);
-            for (int k = 0; k < 3; ++k) b[k] = std::max(b[k], b[k] + fade * (p[k] - b[k]));
+            for (int k = 0; k < 3; ++k)
+                if (e[k] > 0) b[k] = radiance_to_unit(unit_to_radiance(b[k], unit) + fade * e[k], unit);
         }
 }
 
@@ -674,12 +702,19 @@ void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3
         cv::split(given, ch);
         clipped = (ch[0] >= 0.999f) | (ch[1] >= 0.999f) | (ch[2] >= 0.999f);
         cv::dilate(clipped, clipped, cv::Mat(), cv::Point(-1, -1), 2);
-        // A photograph's clipped glare around its sun stays with it, as does its halo.
-        if (sun_)
-            if (const cv::Mat glare = glare_plateau(start_, *sun_); !glare.empty()) {
-                raise_to_glare_halo(start_, *sun_, &background);
-                clipped |= glare;
+        // A photograph's clipped glare around its sun stays with it, as does its halo; so does the
+        // glow around a sun the start shows whole (no cloud on it): halo_excess.
+        if (sun_) {
+            const cv::Mat glare = glare_plateau(start_, *sun_);
+            if (!halo_measured_) {
+                halo_measured_ = true;
+                if (!glare.empty() || sun_seen_whole_)
+                    halo_excess_ = halo_excess(start_, given, *sun_, network_->info().form.unit_map);
             }
+            halo_background(halo_excess_, *sun_, network_->info().form.unit_map, &background);
+            cv::min(background, 1.0, background);
+            if (!glare.empty()) clipped |= glare;
+        }
         start_.copyTo(background, clipped);
     }
     background_ = background.empty() ? cv::Mat() : background * background_weight_;
@@ -694,7 +729,14 @@ void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3
         // (circumsolar_share): over the whole sky it darkened a 3-hour rollout of the ARM photograph
         // to 0.78 of its start (0.82 additively; tests/motion/advect_residual_test.cpp).
         share_ = circumsolar_share(start_.rows, sun_);
-        cv::Mat alpha = background_opacity(start_, background, network_->info().form, share_, given);
+        // Judged against the model with the start's glow (halo_excess): a glow the model lacks is
+        // not cloud near the sun either.
+        cv::Mat model = given;
+        if (!halo_excess_.empty() && sun_) {
+            model = given.clone();
+            halo_background(halo_excess_, *sun_, network_->info().form.unit_map, &model);
+        }
+        cv::Mat alpha = background_opacity(start_, background, network_->info().form, share_, model);
         if (overcast) {
             // Its clouds are opaque (they cover the sun), and compose additively over its own light
             // everywhere (nothing of the model's aureole to hide).

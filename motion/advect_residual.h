@@ -261,7 +261,9 @@ class CloudRollout {
     cv::Mat unseen_, filled_;
     bool sun_seen_whole_ = false;
     double unseen_opacity_ = 0;
-    cv::Mat share_;             // circumsolar share (where a cloud hides the background)
+    cv::Mat share_;                       // circumsolar share (where a cloud hides the background)
+    std::vector<cv::Vec3f> halo_excess_;  // the start's glow beyond the background, per ring (halo_excess)
+    bool halo_measured_ = false;
     std::optional<Vec3d> sun_;  // the background's
     double background_weight_ = 1.0;
     int steps_ = 0;

@@ -148,8 +148,15 @@ double clear_sky_turbidity(const SkyImage& sky, const Vec3d& sun_direction) {
     };
     const double at_three = departure(3.0);
     double best = 3.0, best_departure = at_three;
-    for (double t : {1.5, 2.0, 2.5, 3.5, 4.0, 5.0, 6.0, 8.0, 10.0})
+    // Every half step of the model's range, then the best one's neighbourhood by tenths: a sky of
+    // turbidity 7 or 9 (`sky clear --turbidity 7`) lay between the candidates, fell back to 3, and
+    // its aureole read as cloud and was torn off the sun by the wind.
+    for (double t = 1.5; t <= 10.0; t += 0.5)
         if (const double d = departure(t); d < best_departure) best = t, best_departure = d;
+    const double coarse = best;
+    for (double t = coarse - 0.4; t <= coarse + 0.4 + 1e-9; t += 0.1)
+        if (t >= 1.5 && t <= 10.0)
+            if (const double d = departure(t); d < best_departure) best = t, best_departure = d;
     return best_departure < 0.02 && best_departure < 0.5 * at_three ? best : 3.0;
 }
 

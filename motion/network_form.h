@@ -48,8 +48,8 @@ struct NetworkFrame {
 cv::Mat clear_background(const Vec3d& sun_direction, int n, const NetworkFormParams& form, double turbidity = 3.0);
 
 // The turbidity of the background for a sky: 3, unless the sky is a Hosek-Wilkie clear sky of
-// another turbidity (1.5..10): one whose median departure from that model, in log luminance and
-// log red/blue, is under 0.02 and under half its departure from turbidity 3 (a clear sky made by
+// another turbidity (1.5..10, found to a tenth): one whose median departure from that model, in log
+// luminance and log red/blue, is under 0.02 and under half its departure from turbidity 3 (a clear sky made by
 // `dynsky sky clear --turbidity 2`). A photograph or a cloudy sky keeps 3. Against turbidity 3 a
 // turbidity-2 sky at sunrise read as cloud near the sun, which went out for 11-14 minutes.
 double clear_sky_turbidity(const SkyImage& sky, const Vec3d& sun_direction);
