@@ -18,6 +18,7 @@
 #include "util/image.h"
 #include "motion/network_form.h"
 #include "motion/radiance_scale.h"
+#include "motion/sun_patch.h"
 #include "sky/clear_sky.h"
 #include "util/atomic_file.h"
 #include "util/chart.h"
@@ -215,6 +216,23 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
     // (a cloudless turbidity-6 sky came out brighter than "clear" at 3), photographs and cloudy skies
     // 3 (motion/network_form.h clear_sky_turbidity), as the moving sky's own background.
     const double turbidity = clear_sky_turbidity(*cloudy.step(0), *cloudy.sun_direction_at(0.0));
+    // The clear sky's sun is the cloudy sky's own when its first sky shows it whole: a downloaded
+    // HDRI's sun is rarely the model's (a cloudless one's sun came out 2.7 x weaker than its own
+    // in the clear sky, and clouds far from the sun "brightened" the scene 1.5 stops).
+    SunPatch own_sun;
+    {
+        SkyImage first = cloudy.sky_at(0.0);
+        first.sun_direction = cloudy.sun_direction_at(0.0)->cast<float>();
+        SunPatch cut = remove_sun(&first);
+        const double share = sun_patch_share(cut, sky_n, *cloudy.sun_direction_at(0.0), turbidity) /
+                             std::max(cloudy.radiance_scale(), 1e-30);
+        if (share >= 0.5) own_sun = std::move(cut);
+        if (!own_sun.empty() && !reports_silenced() && std::abs(share - 1) > 0.1)
+            std::fprintf(stderr,
+                         "dynsky: note: the clear sky takes %s's own sun (%.2f x the clear-sky model's at that "
+                         "height)\n",
+                         so.sky.c_str(), share);
+    }
     auto clear_at = [&](double t) {
         ClearSkyParams p;
         p.sun_direction = *cloudy.sun_direction_at(t);
@@ -223,6 +241,11 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
         // In the cloudy sky's units (a sky in other units than the models' comes back in its own:
         // motion/radiance_scale.h), so the two are compared like for like.
         if (cloudy.radiance_scale() != 1.0) scale_radiance(s.get(), cloudy.radiance_scale());
+        if (!own_sun.empty()) {
+            s->sun_direction = p.sun_direction.cast<float>();
+            remove_sun(s.get());
+            insert_sun(s.get(), own_sun, p.sun_direction);
+        }
         s->time_seconds = t;
         return s;
     };

@@ -10,6 +10,7 @@
 #include "motion/flow.h"
 #include "motion/procedural_step_model.h"
 #include "motion/radiance_scale.h"
+#include "motion/sun_patch.h"
 #include "sky/clear_sky.h"
 #include "sky/latlong.h"
 #include "util/data_path.h"
@@ -175,6 +176,19 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
                              "dynsky: warning: %s records its sun %.0f degrees from where --time, --lat and --lon put "
                              "it: the clock's sun is used (give the place and time the sky was taken at)\n",
                              sky_file.c_str(), apart);
+        } else if (clock_sun && !reports_silenced()) {
+            // A sky that records no sun (a downloaded HDRI) but shows one: its sun moved to the clock's
+            // while its glow and light stayed (65 degrees apart, said only as a note).
+            if (const std::optional<Vec3d> shown = sun_from_brightest_pixels(input)) {
+                const double apart = std::acos(std::clamp(clock_sun->dot(*shown), -1.0, 1.0)) * 180 / kPiD;
+                if (apart > 3)
+                    std::fprintf(stderr,
+                                 "dynsky: warning: %s records no sun but shows one %.0f degrees from where --time, "
+                                 "--lat and --lon put it: the sun is moved there and the sky's glow stays where it "
+                                 "is (leave --time out to keep the sky's own sun, or give the place and time it was "
+                                 "taken at)\n",
+                                 sky_file.c_str(), apart);
+            }
         }
         scale = bring_to_model_scale(&input, &motion.previous, clock_sun);
         if (scale.apply && !reports_silenced())

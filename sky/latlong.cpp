@@ -201,8 +201,10 @@ LatlongEnvironment latlong_environment(const Image& image, const std::string& pa
             for (int c = 0; c < 3; ++c) {
                 float v = image.at(x, y, c);
                 if (!(v >= 0 && std::isfinite(v)))
-                    throw Error(path + ": pixel (" + std::to_string(x) + ", " + std::to_string(y) +
-                                ") is negative, infinite or NaN; not a radiance image");
+                    throw Error(path + ": pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") of the " +
+                                (2 * y < image.height ? "sky (upper half)" : "ground (lower half)") + " is " +
+                                (std::isnan(v) ? std::string("NaN") : number_text(v, 3)) +
+                                ": not a radiance image (radiance is finite and at least 0)");
                 // The ground half too: it lights the scene from below (1e30 there rendered as 1e30).
                 if (v > kMaxSkyRadiance)
                     throw_file_error(path, "pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") of the " +

@@ -182,6 +182,19 @@ TEST(SkyModelCli, ASunTheClockMovesFarFromTheFilesIsTold) {
     r = test::run_command(dynsky(timeline + "/b --time 2026-06-21T16:00:00Z 2>&1"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_EQ(r.output.find("records its sun"), std::string::npos) << r.output;
+    // A sky that records no sun but shows one (a downloaded HDRI): its sun moved 65 degrees to the
+    // clock's with only a note; now a warning, as for a recorded sun.
+    SkyImage bare = load_sky(dir + "/paris.exr");
+    bare.sun_direction.reset();
+    bare.has_clock = false;
+    save_sky(dir + "/bare.exr", bare);
+    const std::string bare_timeline = "sky timeline --sky " + dir + "/bare.exr --duration 30 --model advect -o " + dir;
+    r = test::run_command(dynsky(bare_timeline + "/c --time 2026-06-21T08:00:00Z 2>&1"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("records no sun but shows one"), std::string::npos) << r.output;
+    r = test::run_command(dynsky(bare_timeline + "/d --time 2026-06-21T16:00:00Z 2>&1"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(r.output.find("records no sun but shows one"), std::string::npos) << r.output;
     fs::remove_all(dir);
 }
 

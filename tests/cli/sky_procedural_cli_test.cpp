@@ -7,6 +7,9 @@
 #include <nlohmann/json.hpp>
 
 #include "frame/sky_source.h"
+#include "motion/sun_patch.h"
+#include "sky/clear_sky.h"
+#include "sky/fisheye.h"
 #include "sky/sky_image.h"
 #include "tests/test_support.h"
 #include "util/image.h"
@@ -133,6 +136,34 @@ TEST(SkyProceduralCli, ACloudlessHazySkyComparesEqualToItsClearSky) {
     ASSERT_EQ(std::sscanf(r.output.c_str() + at, "illuminance at t=0: clear %lf lx, cloudy %lf lx", &clear, &cloudy), 2)
         << r.output;
     EXPECT_NEAR(cloudy / clear, 1.0, 0.01) << r.output;
+    fs::remove_all(dir);
+}
+
+// A cloudless sky whose sun is not the model's (a downloaded HDRI's, here 3 x as bright) compares
+// equal to its clear sky: the clear sky takes the sky's own sun. Given the model's, a cloudless
+// HDRI "was" 2.8 x brighter than clear.
+TEST(SkyProceduralCli, AClearSkyWithItsOwnSunComparesEqualToItsClearSky) {
+    const std::string dir = test::temp_dir("compare_own_sun");
+    ClearSkyParams p;
+    p.sun_direction = fisheye::direction_from_angles(0.8, 2.0);
+    SkyImage sky = make_clear_sky(p, 64);
+    SkyImage cut = sky;
+    const SunPatch sun = remove_sun(&cut);
+    ASSERT_FALSE(sun.empty());
+    insert_sun(&cut, sun, p.sun_direction, 3.0);
+    save_sky(dir + "/bright_sun.exr", cut);
+    auto r = test::run_command(std::string(DYNSKY_EXE) + " compare builtin --sky " + dir +
+                               "/bright_sun.exr --res 16x9 --spp 1 --chart-frames 2 --chart-res 8x4 --duration 10 "
+                               "--out " +
+                               dir + "/cmp 2>&1");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("own sun (3.00 x the clear-sky model's"), std::string::npos) << r.output;
+    const size_t at = r.output.find("illuminance at t=0: clear ");
+    ASSERT_NE(at, std::string::npos) << r.output;
+    double clear = 0, cloudy = 0;
+    ASSERT_EQ(std::sscanf(r.output.c_str() + at, "illuminance at t=0: clear %lf lx, cloudy %lf lx", &clear, &cloudy), 2)
+        << r.output;
+    EXPECT_NEAR(cloudy / clear, 1.0, 0.02) << r.output;
     fs::remove_all(dir);
 }
 

@@ -221,6 +221,19 @@ TEST(SkyImage, LossyCompressionRingingReadsAsZeroRealNegativesAreRefused) {
         EXPECT_NE(std::string(e.what()).find("negative.exr: sky pixel (9, 8) is negative"), std::string::npos)
             << e.what();
     }
+    // Ringing lies beside the bright pixel: a negative far from it, however small against the sun, is
+    // refused (against the whole image's brightest, a -500 pixel 70 degrees from a 2e6 sun read as 0).
+    SkyImage far(64);
+    for (float& v : far.rgb) v = 3.0f;
+    far.set_pixel(50, 50, Color(2e6f, 2e6f, 2e6f));
+    far.set_pixel(12, 30, Color(-500.0f, 3.0f, 3.0f));
+    write_image(dir + "/far.exr", sky_to_image(far));
+    try {
+        load_sky(dir + "/far.exr");
+        ADD_FAILURE() << "a sky with a -500 pixel far from its sun loaded";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("sky pixel (12, 30) is negative"), std::string::npos) << e.what();
+    }
     fs::remove_all(dir);
 }
 
