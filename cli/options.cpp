@@ -167,7 +167,8 @@ void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {
         ->capture_default_str();
     cmd->add_option(
         "--prev", o->previous,
-        "A previous frame of the input sky (canonical fisheye EXR): the clouds' motion is measured from it");
+        "A previous frame of the input sky (canonical fisheye EXR): the clouds' motion is measured from it, and "
+        "the share of the network's first correction the pair supports");
     cmd->add_option("--prev-dt", o->previous_dt, kPrevDtHelp)->check(finite_in(0, 86400))->capture_default_str();
     cmd->add_option("--drift", m->drift_deg_per_s,
                     "Flow model: first-step drift of a single input sky, degrees per second")

@@ -41,7 +41,8 @@ void register_sky_model_commands(CLI::App& sky) {
                                       "Height of the cloud layer the wind moves, metres (default 1500: cumulus)")
                           ->check(finite_in(10, 1e5));
         cmd->add_option("--prev", o->previous,
-                        "A previous frame of the same sky (EXR): the motion is measured from it (previous -> --sky)");
+                        "A previous frame of the same sky (EXR): the motion is measured from it (previous -> --sky), "
+                        "and the share of the network's first correction the pair supports");
         cmd->add_option("--prev-dt", o->previous_dt, kPrevDtHelp)->check(finite_in(0, 86400));
         cmd->parse_complete_callback([o, wind, from, speed, height] {
             if (from->count() || speed->count() || height->count()) o->wind = *wind;
