@@ -193,6 +193,8 @@ Image read_radiance_image(const std::string& path) {
     // Lossy compression's ringing beside a bright pixel reads as 0: a negative within 1e-3 of the
     // brightest value in its 33 x 33 neighbourhood (DWA's blocks are 8 x 8 / 32 lines). Measured
     // against the whole image's brightest, a -500 pixel 70 degrees from a 2e6 sun read as 0 silently.
+    // Most files have no negative at all: only then is the neighbourhood's brightest found.
+    if (std::none_of(image.pixels.begin(), image.pixels.end(), [](float v) { return v < 0; })) return image;
     cv::Mat top(image.height, image.width, CV_32FC1, cv::Scalar(0));
     for (int y = 0; y < image.height; ++y)
         for (int x = 0; x < image.width; ++x)
