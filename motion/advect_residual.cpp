@@ -560,14 +560,15 @@ std::vector<cv::Vec3f> halo_excess(const cv::Mat& start, const cv::Mat& backgrou
             excess[size_t(r)][k] = std::max(0.0f, v[v.size() / 4]);
             if (r > 0) excess[size_t(r)][k] = std::min(excess[size_t(r)][k], excess[size_t(r) - 1][k]);
         }
+    // None (a sky the model explains, as its own clear skies): nothing to add at any step.
+    if (excess.front() == cv::Vec3f(0, 0, 0)) return {};
     return excess;
 }
 
-void halo_background(const std::vector<cv::Vec3f>& excess, const Vec3d& sun, const UnitMapParams& unit,
+// angle: halo_angles of the background's size and the sun it is added around.
+void halo_background(const std::vector<cv::Vec3f>& excess, const cv::Mat& angle, const UnitMapParams& unit,
                      cv::Mat* background) {
     const int n = background->rows, rings = int(excess.size());
-    if (rings == 0) return;
-    const cv::Mat angle = halo_angles(n, sun);
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x) {
             const float a = angle.at<float>(y, x);
@@ -652,7 +653,7 @@ CloudRollout::CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start,
 
 void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3d>& sun) {
     sun_ = sun;
-    cv::Mat background, clipped;
+    cv::Mat background, clipped, halo_angle;  // halo_angle: halo_angles of the sun, where a halo is added
     // An overcast start (the networks' cloud rule finds cloud on at least 90 % of the disc) shows no
     // clear sky: what stays where it is while its clouds move is its own light, the large-scale
     // brightening towards the sun, not the model's clear sky. Over the model's clear sky the grey
@@ -711,8 +712,11 @@ void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3
                 if (!glare.empty() || sun_seen_whole_)
                     halo_excess_ = halo_excess(start_, given, *sun_, network_->info().form.unit_map);
             }
-            halo_background(halo_excess_, *sun_, network_->info().form.unit_map, &background);
-            cv::min(background, 1.0, background);
+            if (!halo_excess_.empty()) {
+                halo_angle = halo_angles(background.rows, *sun_);
+                halo_background(halo_excess_, halo_angle, network_->info().form.unit_map, &background);
+                cv::min(background, 1.0, background);
+            }
             if (!glare.empty()) clipped |= glare;
         }
         start_.copyTo(background, clipped);
@@ -732,9 +736,9 @@ void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3
         // Judged against the model with the start's glow (halo_excess): a glow the model lacks is
         // not cloud near the sun either.
         cv::Mat model = given;
-        if (!halo_excess_.empty() && sun_) {
+        if (!halo_angle.empty()) {
             model = given.clone();
-            halo_background(halo_excess_, *sun_, network_->info().form.unit_map, &model);
+            halo_background(halo_excess_, halo_angle, network_->info().form.unit_map, &model);
         }
         cv::Mat alpha = background_opacity(start_, background, network_->info().form, share_, model);
         if (overcast) {
