@@ -168,27 +168,25 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
         // The clock's sun replaces the one the file records (SkyTimeline): said where they are far
         // apart, a photograph's --time given without its --lat/--lon (Paris by default) lit the
         // clear sky from the west while the photograph's light came from the east.
-        if (clock_sun && input.sun_direction) {
-            const double apart = std::acos(std::clamp(clock_sun->dot(input.sun_direction->cast<double>()), -1.0, 1.0)) *
-                                 180 / kPiD;
-            if (apart > 3 && !reports_silenced())
+        // So is a sky that records no sun but shows one (a downloaded HDRI): its sun moved to the
+        // clock's while its glow and light stayed (65 degrees apart, said only as a note).
+        if (clock_sun && !reports_silenced()) {
+            const std::optional<Vec3d> own = input.sun_direction
+                                                 ? std::optional<Vec3d>(input.sun_direction->cast<double>())
+                                                 : sun_from_brightest_pixels(input);
+            const double apart = own ? std::acos(std::clamp(clock_sun->dot(*own), -1.0, 1.0)) * 180 / kPiD : 0;
+            if (apart > 3 && input.sun_direction)
                 std::fprintf(stderr,
                              "dynsky: warning: %s records its sun %.0f degrees from where --time, --lat and --lon put "
                              "it: the clock's sun is used (give the place and time the sky was taken at)\n",
                              sky_file.c_str(), apart);
-        } else if (clock_sun && !reports_silenced()) {
-            // A sky that records no sun (a downloaded HDRI) but shows one: its sun moved to the clock's
-            // while its glow and light stayed (65 degrees apart, said only as a note).
-            if (const std::optional<Vec3d> shown = sun_from_brightest_pixels(input)) {
-                const double apart = std::acos(std::clamp(clock_sun->dot(*shown), -1.0, 1.0)) * 180 / kPiD;
-                if (apart > 3)
-                    std::fprintf(stderr,
-                                 "dynsky: warning: %s records no sun but shows one %.0f degrees from where --time, "
-                                 "--lat and --lon put it: the sun is moved there and the sky's glow stays where it "
-                                 "is (leave --time out to keep the sky's own sun, or give the place and time it was "
-                                 "taken at)\n",
-                                 sky_file.c_str(), apart);
-            }
+            else if (apart > 3)
+                std::fprintf(stderr,
+                             "dynsky: warning: %s records no sun but shows one %.0f degrees from where --time, "
+                             "--lat and --lon put it: the sun is moved there and the sky's glow stays where it is "
+                             "(leave --time out to keep the sky's own sun, or give the place and time it was taken "
+                             "at)\n",
+                             sky_file.c_str(), apart);
         }
         scale = bring_to_model_scale(&input, &motion.previous, clock_sun);
         if (scale.apply && !reports_silenced())
