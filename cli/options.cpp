@@ -106,7 +106,7 @@ void add_scene_options(CLI::App* cmd, SceneSpec* o) {
 
 void warn_options_of_generated_skies(const CLI::App* cmd, const std::string& sky) {
     if (sky.empty() || is_generated_sky(sky)) return;
-    for (const char* name : {"--sky-res", "--coverage"})
+    for (const char* name : {"--coverage"})
         if (const CLI::Option* opt = cmd->get_option_no_throw(name); opt && opt->count() > 0)
             std::fprintf(stderr,
                          "dynsky: warning: %s shapes the skies made here ('clear', 'procedural'); %s is a file "
@@ -177,9 +177,9 @@ void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {
 }
 
 void add_generated_sky_options(CLI::App* cmd, SkySourceSpec* o) {
-    cmd->add_option("--sky-res", o->sky_resolution, "Resolution N of skies made here (procedural, clear)")
+    cmd->add_option("--sky-res", o->sky_resolution, kSkyResHelp)
         ->check(CLI::Range(kMinSkyResolution, kMaxSkyResolution))
-        ->capture_default_str();
+        ->each([o](const std::string&) { o->sky_resolution_given = true; });
     cmd->add_option(
            "--time", o->time,
            "UTC time of t = 0, ISO 8601 (e.g. 2026-06-21T16:00:00Z): the sun follows the clock from there.\n"

@@ -36,6 +36,12 @@ constexpr int kMaxDepth = 1024;
 inline constexpr const char* kPrevDtHelp =
     "Seconds between --prev and the input sky (default 0: the frames' dynsky:time difference, else the photograph "
     "times their imports recorded, else one medium step)";
+// --sky-res's help, the same wherever a sky is taken (`render`, `animate`, `compare`, `sky timeline`,
+// `sky predict`).
+inline constexpr const char* kSkyResHelp =
+    "Resolution N of the sky (N x N fisheye): skies made here (procedural, clear) are made at N (default 1024);\n"
+    "given with a sky file, the file is taken at N (resampled; a 2:1 lat-long converted at N). Without it a\n"
+    "fisheye keeps its own size and a lat-long its height, at most 2048 where the sky moves";
 
 // An old spelling of an option, kept working but left out of --help (glossary: one name per thing).
 template <typename T>

@@ -10,6 +10,7 @@
 #include "motion/training_set.h"
 #include "sky/cloud_mask.h"
 #include "sky/photo_import.h"
+#include "sky/sky_image.h"
 #include "util/atomic_file.h"
 
 namespace dynsky::cli {
@@ -53,6 +54,8 @@ void register_sky_model_commands(CLI::App& sky) {
             "taken, as render does; or a folder of skies, a captured sequence: on from its last, the one\n"
             "before it the previous frame, as animate takes one)");
         add_hidden_alias(cmd, "--in", &o->in);
+        cmd->add_option("--sky-res", o->resolution, kSkyResHelp)
+            ->check(CLI::Range(kMinSkyResolution, kMaxSkyResolution));
         cmd->add_option("--out,-o", o->out, "Output folder (created if missing)")->required();
         cmd->add_option("--steps", o->steps, "Number of medium steps K (1..100000)")->capture_default_str();
         cmd->add_option("--every", o->every, "Write only every M-th step (and the last)")->capture_default_str();

@@ -116,9 +116,10 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     }
     // A 2:1 lat-long HDRI's upper half, as `render` and `sky predict` take one; the moving sky has no
     // ground of its own, so below the horizon is the ground model.
-    auto load_input_sky = [](const std::string& file) {
+    auto load_input_sky = [&o](const std::string& file) {
         std::shared_ptr<SkyImage> ground;
-        SkyImage s = load_sky_or_latlong(file, &ground);
+        SkyImage s = load_sky_or_latlong(file, &ground, o.sky_resolution_given ? o.sky_resolution : 0,
+                                         kMovingLatlongLimit);
         // Checked before anything is rendered: the flow between steps is measured on the sky itself
         // (a 4 x 4 sky failed after animate and compare had written their first outputs).
         if (s.resolution < 8)
@@ -127,9 +128,9 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
                                        "measured on it)");
         if (ground && !reports_silenced())
             std::fprintf(stderr,
-                         "dynsky: note: %s is a lat-long sky: its upper half moves, as a fisheye; below the horizon "
-                         "is the ground model (--ground-albedo)\n",
-                         file.c_str());
+                         "dynsky: note: %s is a lat-long sky: its upper half moves, as a %d x %d fisheye (--sky-res: "
+                         "another size); below the horizon is the ground model (--ground-albedo)\n",
+                         file.c_str(), s.resolution, s.resolution);
         return s;
     };
     if (!previous_file.empty()) {
@@ -286,7 +287,7 @@ FrameSettings sky_timeline_settings(const SkySourceSpec& o, const StepModelSpec&
     };
     FrameSettings s;
     s["sky"] = with_mask(o.sky);
-    s["sky_res"] = std::to_string(o.sky_resolution);
+    s["sky_res"] = is_generated_sky(o.sky) || o.sky_resolution_given ? std::to_string(o.sky_resolution) : "the file's";
     s["time"] = o.time;
     s["lat"] = number(o.latitude), s["lon"] = number(o.longitude);
     s["coverage"] = number(o.coverage);

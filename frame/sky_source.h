@@ -16,7 +16,10 @@ namespace dynsky {
 // The input sky S_0. Parameters (defaults):
 //   sky             "procedural"  procedural[:SEED] (cumulus over a clear sky, known motion), clear
 //                                 (Hosek-Wilkie), or a canonical fisheye .exr
-//   sky_resolution  1024          N of skies made here (procedural, clear)
+//   sky_resolution  1024          N of skies made here (procedural, clear); given for a sky file
+//                                 (sky_resolution_given), the file is resampled to N x N, else a
+//                                 fisheye keeps its own and a lat-long its height, at most
+//                                 kMovingLatlongLimit (sky/latlong.h)
 //   time            ""            ISO 8601 UTC of t = 0; the sun follows the clock from there.
 //                                 Default 2026-06-21T16:00:00Z for skies made here; an EXR keeps its sun
 //   latitude, longitude  48.8566, 2.3522 (Paris)
@@ -29,6 +32,7 @@ namespace dynsky {
 struct SkySourceSpec {
     std::string sky = "procedural";
     int sky_resolution = 1024;
+    bool sky_resolution_given = false;  // --sky-res was given: a sky file too is taken at N
     std::string time;
     double latitude = default_sky::kLatitudeDeg, longitude = default_sky::kLongitudeDeg;
     double coverage = default_sky::kCoverage;

@@ -20,6 +20,8 @@ namespace dynsky {
 struct PredictionOptions {
     std::string model, in, out, stats;
     int steps = 1, every = 1;
+    int resolution = 0;  // --sky-res: the input (and --prev) taken at N x N; 0: its own (a lat-long's height,
+                         // at most kMovingLatlongLimit)
     bool preview = false, quiet = false;
     std::string previous;
     double previous_dt = 0;

@@ -176,15 +176,21 @@ LatlongEnvironment load_latlong_environment(const std::string& path, int resolut
     return latlong_environment(image, path, resolution);
 }
 
-SkyImage load_sky_or_latlong(const std::string& path, std::shared_ptr<SkyImage>* ground) {
+SkyImage load_sky_or_latlong(const std::string& path, std::shared_ptr<SkyImage>* ground, int resolution,
+                             int latlong_limit) {
     *ground = nullptr;
+    if (resolution != 0) check_sky_resolution(resolution);
     Image image = read_sky_file(path);
-    if (!is_latlong_shape(image.width, image.height)) return sky_from_radiance_file(image, path);  // read once
+    if (!is_latlong_shape(image.width, image.height)) {
+        SkyImage sky = sky_from_radiance_file(image, path);  // read once
+        return resolution > 0 ? resampled_sky(sky, resolution) : sky;
+    }
     require_radiance_pixels(image, path);
     if (image.height < 4)
         throw_file_error(path, "lat-long sky is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
                                    " pixels: too small to hold a sky (at least 8 x 4)");
-    LatlongEnvironment env = latlong_environment(image, path);
+    if (resolution == 0 && latlong_limit > 0 && image.height > latlong_limit) resolution = latlong_limit;
+    LatlongEnvironment env = latlong_environment(image, path, resolution);
     read_sky_metadata(image.metadata, path, &env.sky);  // `sky latlong` keeps the sky's time and sun
     *ground = std::make_shared<SkyImage>(std::move(env.ground));
     return std::move(env.sky);

@@ -63,7 +63,16 @@ LatlongEnvironment load_latlong_environment(const std::string& path, int resolut
 LatlongEnvironment latlong_environment(const Image& image, const std::string& name, int resolution = 0);
 
 // A sky file as --sky takes it: a canonical fisheye (load_sky; *ground = nullptr), or a lat-long
-// environment, whose sky is returned and whose ground goes to *ground.
-SkyImage load_sky_or_latlong(const std::string& path, std::shared_ptr<SkyImage>* ground);
+// environment, whose sky is returned and whose ground goes to *ground. resolution > 0 (--sky-res):
+// both come back N x N (a fisheye resampled, area-averaged; a lat-long converted at N). 0: a fisheye
+// keeps its own; a lat-long converts at its height, at most latlong_limit when that is positive.
+SkyImage load_sky_or_latlong(const std::string& path, std::shared_ptr<SkyImage>* ground, int resolution = 0,
+                             int latlong_limit = 0);
+
+// The largest fisheye a lat-long HDRI becomes, unasked, when the sky moves: every medium step
+// works on many full-size fields (an 8192 x 4096 HDRI taken at its height, 4096 px: 4 GB and 16 s
+// per step; 16384 x 8192 would need 16 GB), and the clouds' motion and the networks' correction are
+// measured far coarser. `render` converts at the height (the sun's sharpness in still frames).
+inline constexpr int kMovingLatlongLimit = 2048;
 
 }  // namespace dynsky

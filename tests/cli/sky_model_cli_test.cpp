@@ -161,6 +161,11 @@ TEST(SkyModelCli, PredictTakesALatLongHdriAsRenderDoes) {
     const SkyImage a = load_sky(dir + "/ll_out/step_0002.exr"), b = load_sky(dir + "/upper_out/step_0002.exr");
     ASSERT_EQ(a.resolution, b.resolution);
     EXPECT_EQ(a.rgb, b.rgb);
+    // --sky-res: the HDRI moves at the size asked for, and says so.
+    r = test::run_command(dynsky("sky predict --in " + dir + "/ll.exr --sky-res 80 --steps 1 --out " + dir + "/at80"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("moves, as a 80 x 80 fisheye"), std::string::npos) << r.output;
+    EXPECT_EQ(load_sky(dir + "/at80/step_0001.exr").resolution, 80);
     fs::remove_all(dir);
 }
 

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <random>
 
 #include "sky/clear_sky.h"
@@ -279,6 +280,33 @@ TEST(LatLong, FilesAreReadByChannelNameAndOrientation) {
     sky = load_sky_or_latlong(dir + "/turned.exr", &ground);
     EXPECT_NEAR(sky.pixel(sky.resolution / 2, sky.resolution / 2)[0], 2.0f, 1e-4f);
     EXPECT_NEAR(ground->pixel(ground->resolution / 2, ground->resolution / 2)[0], 0.5f, 1e-4f);
+}
+
+// --sky-res with a sky file: the file is taken at N (a fisheye resampled, a lat-long converted at
+// N), each keeping its hemisphere's integral; unasked, a lat-long converts at its height, at most the
+// limit a moving sky sets (an 8192 x 4096 HDRI made a 4096 px moving sky: 4 GB per step).
+TEST(LatLong, SkyFilesAreTakenAtTheResolutionAsked) {
+    const std::string dir = test::temp_dir("latlong_asked");
+    const SkyImage fine = sky_from_function(128, synthetic);
+    write_image(dir + "/ll.exr", sky_to_latlong(fine, 256, Color(0.1f, 0.2f, 0.3f)));  // 256 x 128
+    save_sky(dir + "/fish.exr", fine);
+    const Eigen::Array3d exact = synthetic_integral();
+    std::shared_ptr<SkyImage> ground;
+    struct Case {
+        std::string file;
+        int asked, limit, want;
+    };
+    for (const Case& c : {Case{"ll", 0, 0, 128}, Case{"ll", 0, 64, 64}, Case{"ll", 0, 512, 128}, Case{"ll", 48, 64, 48},
+                          Case{"fish", 0, 64, 128}, Case{"fish", 48, 0, 48}, Case{"fish", 200, 0, 200}}) {
+        const SkyImage sky = load_sky_or_latlong(dir + "/" + c.file + ".exr", &ground, c.asked, c.limit);
+        EXPECT_EQ(sky.resolution, c.want) << c.file << " asked " << c.asked << " limit " << c.limit;
+        EXPECT_EQ(bool(ground), c.file == "ll");
+        if (ground) EXPECT_EQ(ground->resolution, c.want) << "the ground is taken at the sky's size";
+        const Eigen::Array3d got = fisheye_integral(sky);
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(got[k], exact[k], 1.5e-2 * exact[k]) << c.file << " at " << c.want;
+    }
+    EXPECT_THROW(load_sky_or_latlong(dir + "/fish.exr", &ground, 4), Error);  // under the 16 px floor
+    std::filesystem::remove_all(dir);
 }
 
 // The sky fisheye reads only the upper half's rows, the ground only the lower half's: a bright
