@@ -233,7 +233,7 @@ MetalRoughBsdf shading_bsdf(const ShadingPoint& sp, float roughness, float coat_
 }  // namespace
 
 Color PathIntegrator::transmittance(const Ray& shadow_ray, RenderStats* stats) const {
-    if (observer_) observer_(shadow_ray, true);
+    if (observer_) observer_(shadow_ray, RayKind::Shadow);
     ++stats->shadow_rays;
     // Most shadow rays reach the sky unblocked: one any-hit query settles those, also in scenes
     // with alpha or glass; only blocked rays walk the surfaces to see what lets them through.
@@ -359,7 +359,7 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
         SurfaceHit hit;
         bool found = false;
         for (int layer = 0; layer < 64; ++layer) {
-            if (observer_) observer_(ray, false);
+            if (observer_) observer_(ray, primary ? RayKind::Camera : RayKind::Continuation);
             found = primary ? accel_.surface_hit(ray, *primary, &hit, false) : accel_.intersect(ray, &hit, false);
             primary = nullptr;  // the camera ray's first intersection only
             if (!found || !passes_through(hit, rng.uniform(), camera_path)) break;
@@ -530,7 +530,7 @@ void PathIntegrator::sample_tile(const Camera& camera, float tan_half, float asp
             const Ray& ray = rays[p];
             Color c;
             if (primary[p].hit.geomID == RTC_INVALID_GEOMETRY_ID) {
-                if (observer_) observer_(ray, false);
+                if (observer_) observer_(ray, RayKind::Camera);
                 c = *sky++;
             } else {
                 c = sobol ? trace_path(ray, zsobol[size_t(p)], stats, fh, &primary[p])

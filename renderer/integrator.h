@@ -127,8 +127,10 @@ struct FirstHit {
     Vec3 normal = Vec3::Zero(), position = Vec3::Zero();
 };
 
-// Optional observer of every ray traced (benchmarks replay them through plain Embree).
-using RayObserver = std::function<void(const Ray&, bool shadow)>;
+// Optional observer of every ray traced (benchmarks replay them through plain Embree, each kind
+// as the path tracer traces it: camera rays in coherent batches, the rest one by one).
+enum class RayKind { Camera, Continuation, Shadow };
+using RayObserver = std::function<void(const Ray&, RayKind)>;
 
 class PathIntegrator {
   public:
