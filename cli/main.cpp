@@ -19,6 +19,7 @@
 #include "util/child_process.h"
 #include "util/error.h"
 #include "util/progress.h"
+#include "util/version.h"
 
 namespace {
 
@@ -78,8 +79,7 @@ int main(int argc, char** argv) {
         "Sky images are equidistant fisheye EXRs of the upper hemisphere, north up, east left."};
     app.require_subcommand(1);
     app.set_help_all_flag("--help-all", "Show help for every subcommand");
-    app.set_version_flag("--version", std::string("dynsky ") + DYNSKY_VERSION +
-                                          (std::string(DYNSKY_COMMIT).empty() ? "" : " (commit " DYNSKY_COMMIT ")"));
+    app.set_version_flag("--version", dynsky::dynsky_version());
     app.footer(dynsky::cli::exit_codes_help());
 
     dynsky::cli::register_render_command(app);

@@ -27,7 +27,8 @@ void register_render_command(CLI::App& app) {
         ->capture_default_str();
     cmd->add_option("--res", o->resolution, "Image size WIDTHxHEIGHT")->capture_default_str();
     cmd->add_option("--spp", o->spp, "Samples per pixel")->check(CLI::Range(1, kMaxSpp))->capture_default_str();
-    cmd->add_option("--seed", o->seed, "Random seed: the same seed gives the same image on any thread count")
+    cmd->add_option("--seed", o->seed,
+                    "Random seed: the same seed gives the same image on any thread count (not with --time-limit)")
         ->check(non_negative_whole())
         ->capture_default_str();
     cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")
@@ -64,7 +65,9 @@ void register_render_command(CLI::App& app) {
            "pixel takes")
         ->capture_default_str();
     cmd->add_option("--time-limit", o->time_limit,
-                    "Seconds of rendering after which no new round of 16 samples starts (0: none); --spp still caps")
+                    "Seconds of rendering after which no new round of 16 samples starts (0: none); --spp still caps.\n"
+                    "The only option whose image varies from run to run (the rounds done depend on the machine): the\n"
+                    "EXR records them (dynsky:rounds), and --spp 16 x rounds without a time limit renders it again")
         ->capture_default_str();
     cmd->add_option(
            "--clamp-indirect", o->clamp_indirect,

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "frame/frame_metadata.h"
 #include "renderer/integrator.h"
 #include "sky/latlong.h"
 #include "util/atomic_file.h"
@@ -111,6 +112,15 @@ void run_render_job(const RenderJob& o) {
     image.metadata.numbers["dynsky:time"] = sky->time_seconds;  // frame time (glossary)
     image.metadata.strings["dynsky:sky"] = sky->source;
     image.metadata.strings["dynsky:scene"] = o.scene.scene;
+    // Which files, exactly (path as found, size, hash): a sky file's own source names what made it,
+    // not the file, and a relative scene name is looked up from the working folder first, then among
+    // the shipped scenes, so one command gave different images on two nodes with identical headers.
+    auto record_file = [&image](const std::string& key, const std::string& path) {
+        image.metadata.strings[key] = std::filesystem::absolute(path).lexically_normal().string();
+        image.metadata.strings[key + "_contents"] = describe_scene_input(path);  // sizes and hashes
+    };
+    if (o.scene.scene != "builtin") record_file("dynsky:scene_file", loaded.path);
+    if (!o.sky.empty() && !is_generated_sky(o.sky)) record_file("dynsky:sky_file", o.sky);
     image.metadata.strings["dynsky:camera"] = camera.name;
     if (!settings.region.empty())
         image.metadata.strings["dynsky:region"] = o.region;  // x0,y0,x1,y1 of the full --res image

@@ -19,6 +19,7 @@
 #include "util/color.h"
 #include "util/error.h"
 #include "util/image_input.h"
+#include "util/version.h"
 
 namespace dynsky {
 
@@ -323,6 +324,7 @@ std::string encode_image(const std::string& path, const Image& image) {
     }
     for (const auto& [name, value] : image.metadata.numbers) spec.attribute(name, OIIO::TypeDesc::DOUBLE, &value);
     for (const auto& [name, value] : image.metadata.strings) spec.attribute(name, value);
+    spec.attribute("Software", dynsky_version());  // the build that wrote it (util/version.h)
 
     // Encoded in memory, then written by the one checked atomic writer (util/atomic_file.h): the
     // image libraries do not all report a short write (libpng through OIIO does not), so they never

@@ -34,6 +34,13 @@ TEST(ReadmeCommands, RenderAndClearSkyFromAnotherFolder) {
     r = in_folder(dir, "render scenes/tower/tower.gltf --sky sky.exr --spp 2 --res 64x36 --out frame.exr");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_TRUE(non_empty(fs::path(dir) / "frame.exr"));
+    // The header says which Tower was found (the shipped one, not a folder's own copy) and its files.
+    const Image frame = read_image((fs::path(dir) / "frame.exr").string());
+    const std::string found = frame.metadata.strings.at("dynsky:scene_file");
+    EXPECT_TRUE(fs::path(found).is_absolute() &&
+                fs::equivalent(found, fs::path(DYNSKY_SOURCE_DIR) / "scenes/tower/tower.gltf"))
+        << found;
+    EXPECT_NE(frame.metadata.strings.at("dynsky:scene_file_contents").find("tower.bin ("), std::string::npos);
     r = in_folder(dir, "render builtin --res 48x27 --spp 2");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_TRUE(non_empty(fs::path(dir) / "render.exr"));

@@ -64,8 +64,8 @@ TEST(RenderCli, OptionsOfGeneratedSkiesWithASkyFileAreSaidToBeIgnored) {
                                 dir + "/s.exr")
                   .exit_code,
               0);
-    auto r = test::run_command(exe() + " render builtin --sky " + dir +
-                               "/s.exr --sky-res 128 --res 8x6 --spp 1 -o " + dir + "/r.exr");
+    auto r = test::run_command(exe() + " render builtin --sky " + dir + "/s.exr --sky-res 128 --res 8x6 --spp 1 -o " +
+                               dir + "/r.exr");
     EXPECT_EQ(r.exit_code, 0) << r.output;
     EXPECT_EQ(r.output.find("is ignored"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("(128x128)"), std::string::npos) << "the 16 px sky taken at 128: " << r.output;
@@ -261,6 +261,17 @@ TEST(RenderCli, LatlongSkyIsConvertedAndItsGroundUsed) {
     EXPECT_NEAR(a.at(16, 12, 1), 2.0f, 1e-3f);  // the sky half
     EXPECT_NEAR(b.at(16, 12, 1), 0.5f, 1e-3f);  // the ground half, not the ground model
     EXPECT_NE(a.metadata.strings["dynsky:sky"].find("latlong"), std::string::npos);
+    // Which file lit it, and which build rendered it: a sky file's own source names what made it,
+    // not the file (two skies of one procedural sequence had identical headers).
+    EXPECT_EQ(a.metadata.strings["dynsky:sky_file"], fs::absolute(dir + "/hdri.exr").lexically_normal().string());
+    EXPECT_NE(a.metadata.strings["dynsky:sky_file_contents"].find("hdri.exr (" +
+                                                                  std::to_string(fs::file_size(dir + "/hdri.exr")) +
+                                                                  " bytes, fnv1a "),
+              std::string::npos)
+        << a.metadata.strings["dynsky:sky_file_contents"];
+    EXPECT_EQ(a.metadata.strings["Software"], read_image(dir + "/hdri.exr").metadata.strings["Software"]);
+    EXPECT_EQ(a.metadata.strings["Software"].rfind("dynsky 0.", 0), 0u) << a.metadata.strings["Software"];
+    EXPECT_EQ(a.metadata.strings.count("dynsky:scene_file"), 0u);  // the built-in scene is no file
 }
 
 TEST(RenderCli, AovsRegionAndCameraOptions) {
