@@ -327,6 +327,24 @@ TEST(OutputsCli, ASceneTextureIsNeverOverwritten) {
     fs::remove_all(dir);
 }
 
+// --version names the commit the sources are at (it once named the commit of the first configure,
+// 60 commits stale), as does the Software field of every image (util/version.h). Built from a git
+// checkout (CI's and the README's): the commit is known.
+TEST(OutputsCli, VersionNamesTheCommitBuilt) {
+    const auto git = test::run_command("git -C '" + std::string(DYNSKY_SOURCE_DIR) + "' rev-parse --short HEAD 2>&1");
+    if (git.exit_code != 0) GTEST_SKIP() << "not a git checkout: " << git.output;
+    const std::string head = git.output.substr(0, git.output.find_first_of("\r\n"));
+    const auto r = test::run_command(kExe + " --version");
+    EXPECT_NE(r.output.find("(commit " + head), std::string::npos) << r.output << " at " << head << " (rebuilt since?)";
+    const std::string dir = test::temp_dir("outputs_version");
+    ASSERT_EQ(test::run_command(kExe + " sky clear --lat 40 --lon 0 --time 2026-06-21T12:00:00Z --sky-res 16 -q -o " +
+                                dir + "/s.exr")
+                  .exit_code,
+              0);
+    EXPECT_EQ(read_image(dir + "/s.exr").metadata.strings["Software"] + "\n", r.output);
+    fs::remove_all(dir);
+}
+
 TEST(OutputsCli, ExitCodesAndDidYouMean) {
     struct Case {
         std::string args;
