@@ -456,11 +456,15 @@ bool imager_says_covered(const std::string& mask_png, const PhotoGeometry& g, co
     return count > 0 && cloud / count > 0.5;
 }
 
+// Imported as users import (no mask files beside the photos: issue 11's case; the imager's masks
+// serve only as the truth), scored by balanced accuracy too: 60 of the 75 frames are covered, so
+// always answering "covered" scores 80 % agreement but a balanced accuracy of 50 %. The thresholds
+// were chosen on these frames (docs/animation.md): an in-sample figure.
 TEST(SunTransmittance, AgreesWithTheImagersMasksOnTheArmDay) {
     const fs::path folder = fs::path(default_shared_dir()) / "skies" / "arm_tsi_sgp_20170524";
     if (!fs::exists(folder / "frames.csv")) GTEST_SKIP() << folder << " is absent";
     PhotoSequence seq = photo_sequence_from_folder(folder.string(), "arm-tsi");
-    int agree = 0, total = 0, covered = 0;
+    int agree = 0, total = 0, covered = 0, covered_right = 0, clear_right = 0;
     // Every 4th frame; every 8th under DYNSKY_TEST_SMALL (the sanitizer run), half the imports.
     const size_t every = test::run_size<size_t>(4, 8);
     for (size_t k = 0; k < seq.photos.size(); k += every) {
@@ -468,7 +472,7 @@ TEST(SunTransmittance, AgreesWithTheImagersMasksOnTheArmDay) {
         std::string stamp = fs::path(photo).stem().string().substr(std::string("tsi_sgpC1_").size());
         fs::path mask = folder / "tsi_cloudmask" / ("tsicldmask_sgpC1_" + stamp + ".png");
         if (!fs::exists(mask)) continue;
-        PresetImportPlan plan = plan_preset_import("arm-tsi", photo, 128);
+        PresetImportPlan plan = plan_preset_import("arm-tsi", photo, 128, "", /*look_for_mask=*/false);
         ImportedPhoto imported = import_photo(photo, plan.params);
         HdrCalibrationReport report;
         SkyImage sky = recover_hdr(imported, hdr_calibration_params(plan), &report);
@@ -478,11 +482,18 @@ TEST(SunTransmittance, AgreesWithTheImagersMasksOnTheArmDay) {
         double t = estimate_sun_transmittance(sky, report.computed_sun);
         bool estimated_covered = t < 0.5;
         agree += estimated_covered == truth_covered, ++total, covered += truth_covered;
+        (truth_covered ? covered_right : clear_right) += estimated_covered == truth_covered;
     }
     ASSERT_GT(total, int(160 / every));
-    std::printf("direct-sun visibility agrees with the imager's masks in %d of %d frames (%.1f %%; %d covered)\n",
-                agree, total, 100.0 * agree / total, covered);
+    ASSERT_GE(covered, 5) << "both answers must occur, or the test says nothing";
+    ASSERT_GE(total - covered, 5) << "both answers must occur, or the test says nothing";
+    const double balanced = 0.5 * (double(covered_right) / covered + double(clear_right) / (total - covered));
+    std::printf(
+        "direct-sun visibility agrees with the imager's masks in %d of %d frames (%.1f %%; %d covered: %d "
+        "right; %d clear: %d right; balanced accuracy %.1f %%)\n",
+        agree, total, 100.0 * agree / total, covered, covered_right, total - covered, clear_right, 100.0 * balanced);
     EXPECT_GE(double(agree) / total, 0.85);
+    EXPECT_GE(balanced, 0.85);
 }
 
 }  // namespace

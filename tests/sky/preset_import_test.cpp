@@ -64,6 +64,9 @@ double angle_deg(const Vec3d& a, const Vec3d& b) { return std::atan2(a.cross(b).
 // arm, the housing and the band at the sun's azimuth. The filled share lies within the issue's
 // 13-15 % (the mask-based import's range is printed beside it), the filled pixels agree with the
 // mask-based import's (IoU), and the restored sun is the computed one, not the band's glare.
+// In-sample: the geometry was measured on every 5th mask of these same three sets (no other TSI
+// day is shared), so the IoU bounds sit just under what that fit reached (0.958 mean, 0.947 worst):
+// they catch a geometry or band that drifted, not a new day's.
 TEST(PresetImport, TsiWithoutMasksFillsArmHousingAndBandOnEveryFrame) {
     DYNSKY_REQUIRE_SHARED();
     const int n = 256;
@@ -116,8 +119,8 @@ TEST(PresetImport, TsiWithoutMasksFillsArmHousingAndBandOnEveryFrame) {
             set.c_str(), photos.size(), 100 * lo, 100 * hi, 100 * mask_lo, 100 * mask_hi, compared,
             compared ? iou_sum / compared : 0.0, iou_min, sun_worst, suns);
         if (compared) {
-            EXPECT_GT(iou_sum / compared, 0.85) << set;
-            EXPECT_GT(iou_min, 0.75) << set;
+            EXPECT_GT(iou_sum / compared, 0.95) << set;
+            EXPECT_GT(iou_min, 0.93) << set;
         }
         EXPECT_LT(sun_worst, 0.5) << set << ": the sun must be restored where it is computed, not on the glare";
     }
