@@ -104,7 +104,10 @@ void run_clear(const ClearOptions& o) {
     params.sun_disc = !o.no_sun;
     SkyImage sky = make_clear_sky(params, o.resolution);
     std::ostringstream source;
-    source << sky.source << " time=" << format_utc_time(t) << " lat=" << o.sun.lat << " lon=" << o.sun.lon;
+    source << sky.source << " time=" << format_utc_time(t) << " lat=" << o.sun.lat << " lon=" << o.sun.lon
+           << " elevation_m=" << o.sun.elevation_m;  // all that places the sun (it was left out)
+    if (o.sun.no_refraction) source << " refraction=off";
+    else source << " pressure_mbar=" << o.sun.pressure_mbar << " temperature_c=" << o.sun.temperature_c;
     sky.source = source.str();
     save_sky(o.out, sky);
     std::printf("wrote %s (%dx%d fisheye, linear Rec.709 radiance in W m^-2 sr^-1; luminance = 683 Y cd/m^2)\n",

@@ -74,11 +74,9 @@ SkyImage make_generated_sky(const SkySourceSpec& o) {
         input = make_clear_sky(p, o.sky_resolution);
         input.source = "clear sky (Hosek-Wilkie, turbidity " + number_text(p.turbidity) + ")" + made;
     } else {
-        const uint64_t seed = procedural_seed(o.sky);
-        input = render_procedural_sky(procedural_params(o, seed, sun), 0.0, o.sky_resolution);
-        input.source = "procedural (seed " + std::to_string(seed) + ", coverage " + number_text(o.coverage) +
-                       ", wind " + number_text(o.wind_speed_mps) + " m/s from " + number_text(o.wind_from_deg) +
-                       " deg at " + number_text(o.cloud_height_m) + " m)" + made;
+        const ProceduralSkyParams params = procedural_params(o, procedural_seed(o.sky), sun);
+        input = render_procedural_sky(params, 0.0, o.sky_resolution);
+        input.source = describe_procedural_sky(params) + made;
     }
     return input;
 }

@@ -19,6 +19,7 @@
 #include "util/error.h"
 #include "util/exposure.h"
 #include "util/frame_names.h"
+#include "util/parse.h"
 #include "util/progress.h"
 
 namespace dynsky {
@@ -168,6 +169,19 @@ void write_prediction(const PredictionOptions& given) {
     if (!o.stats.empty()) stats_row(0, sky);
     // One exposure for every preview (the input's), so they do not flicker.
     const float preview_ev = exposure_log_average(sky_to_image(sky));
+    // What made each step, for its dynsky:source (the steps of two models had identical headers).
+    std::string motion_text = "its own motion";
+    if (advect) {
+        char wind[160];
+        const Wind w = o.wind.value_or(Wind{});
+        std::snprintf(wind, sizeof wind, "%s wind %g m/s from %g deg at %g m", o.wind ? "a" : "the default",
+                      w.speed_mps, w.from_deg, w.cloud_height_m);
+        motion_text = motion.previous
+                          ? "the motion from " + o.previous + " (" + number_text(motion.previous_dt) + " s before)"
+                          : std::string(wind);
+    }
+    const std::string made_by = "dynsky sky predict from " + o.in + " (" + sky.source + "), model " + folder +
+                                ", Delta t " + number_text(dt) + " s, " + motion_text + ", step ";
     ProgressBar progress(o.steps, "predict", o.quiet);
     int written = 0;
     rollout([&](int k, const SkyImage& s) {
@@ -175,6 +189,7 @@ void write_prediction(const PredictionOptions& given) {
             std::string base = numbered_path(o.out, "step", k, "");
             // In the input's units (the statistics stay at the models' scale, where the form is defined).
             SkyImage given = s;
+            given.source = made_by + std::to_string(k) + " of " + std::to_string(o.steps);
             if (scale.apply) scale_radiance(&given, scale.factor);
             save_sky(base + ".exr", given);
             if (o.preview) write_image(base + ".png", tonemap_to_display(sky_to_image(s), preview_ev));

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
 
 #include "sky/fisheye.h"
 #include "sky/noise.h"
@@ -185,6 +186,20 @@ CloudLayer cirrus_layer() {
     c.gain = 0.6;
     c.billow_from = c.octaves;  // plain fBm: fibrous, not lumpy
     return c;
+}
+
+std::string describe_procedural_sky(const ProceduralSkyParams& p) {
+    std::ostringstream s;
+    s << "procedural (seed " << p.seed << ", coverage " << p.coverage << ", turbidity " << p.clear_sky.turbidity
+      << ", visibility " << p.visibility_m << " m";
+    for (const CloudLayer& l : p.layers) {
+        s << "; " << (l.type == CloudType::Cumulus ? "cumulus" : "cirrus") << " at " << l.altitude_m << " m";
+        if (l.coverage) s << ", coverage " << *l.coverage;
+        s << ", wind " << l.wind_speed_mps << " m/s from " << l.wind_from_deg << " deg, evolution "
+          << l.evolution_time_s << " s";
+        if (l.mask) s << ", drawn mask over " << l.mask_extent_m << " m, detail " << l.mask_detail;
+    }
+    return s.str() + ")";
 }
 
 void validate_procedural_params(const ProceduralSkyParams& p) {

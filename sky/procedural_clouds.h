@@ -67,6 +67,12 @@ struct ProceduralSkyParams {
 // Throws dynsky::Error naming the bad parameter.
 void validate_procedural_params(const ProceduralSkyParams& params);
 
+// What made a procedural sky, for its file's dynsky:source: "procedural (seed 5, coverage 0.5,
+// turbidity 3, visibility 40000 m; cumulus at 1500 m, wind 12 m/s from 270 deg, evolution 900 s)"
+// (a layer's coverage when its own, "drawn mask" for a mask). Two skies of other settings had
+// the same header ("procedural").
+std::string describe_procedural_sky(const ProceduralSkyParams& params);
+
 // Reads a grey or grey+alpha image as a cloud density mask (1 channel, [0, 1]): the alpha channel
 // when there is one (2 or 4 channels) that is not opaque everywhere, else the mean of the colour
 // channels, as encoded (8-bit files are not sRGB-decoded: the drawing's grey is the density). Throws

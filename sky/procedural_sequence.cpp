@@ -1,5 +1,7 @@
 #include "sky/procedural_sequence.h"
 
+#include "util/parse.h"
+
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -178,6 +180,11 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
     // An earlier sequence's manifest goes before any of its frames is replaced: a run that stops
     // midway must not leave it describing this run's frames.
     remove_stale_marker((fs::path(o.out) / "manifest.json").string());
+    const std::string described = describe_procedural_sky(params),
+                      sun_text = use_location ? "a clock from " + o.time_iso + " at " + number_text(o.latitude) +
+                                                    " N " + number_text(o.longitude) + " E"
+                                              : "a sun fixed at elevation " + number_text(o.sun_elevation) +
+                                                    " deg, azimuth " + number_text(o.sun_azimuth) + " deg";
     ProgressBar progress(frames, "procedural sky", o.quiet);
     for (int k = 0; k < frames; ++k) {
         double t = k * o.dt;
@@ -187,6 +194,7 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
         }
         Image flow;
         SkyImage frame = sky.render(t, o.resolution, &flow, o.dt);
+        frame.source = described + " at t = " + number_text(t) + " s of " + sun_text;  // what re-makes it
         std::string image_name = numbered_name("frame", k, ".exr"), flow_name = numbered_name("flow", k, ".exr");
         save_sky((fs::path(o.out) / image_name).string(), frame);
         write_image((fs::path(o.out) / flow_name).string(), flow);

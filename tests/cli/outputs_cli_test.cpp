@@ -345,6 +345,39 @@ TEST(OutputsCli, VersionNamesTheCommitBuilt) {
     fs::remove_all(dir);
 }
 
+// A sky file's header says what re-makes it: two procedural skies of other seeds and coverage, the
+// steps of two models, and clear skies placed at other heights had identical headers.
+TEST(OutputsCli, SkyFilesSayWhatMadeThem) {
+    const std::string dir = test::temp_dir("outputs_sky_source");
+    auto source = [&](const std::string& args, const std::string& file) {
+        const auto r = test::run_command(kExe + " " + args + " -q");
+        EXPECT_EQ(r.exit_code, 0) << args << "\n" << r.output;
+        return read_image(dir + "/" + file).metadata.strings["dynsky:source"];
+    };
+    const std::string clear = "sky clear --lat 48.85 --lon 2.35 --time 2026-06-21T19:30:00Z --sky-res 16 ";
+    EXPECT_NE(source(clear + "--elevation 3000 -o " + dir + "/c.exr", "c.exr").find("elevation_m=3000"),
+              std::string::npos);
+    EXPECT_NE(source(clear + "--no-refraction -o " + dir + "/c.exr", "c.exr").find("refraction=off"),
+              std::string::npos);
+    const std::string p5 = source("sky procedural --sky-res 32 --duration 10 --cloud-seed 5 --coverage 0.8 -o " + dir +
+                                      "/p5",
+                                  "p5/frame_0001.exr");
+    const std::string p6 = source("sky procedural --sky-res 32 --duration 0 --cloud-seed 6 --coverage 0.3 -o " + dir +
+                                      "/p6",
+                                  "p6/frame_0000.exr");
+    EXPECT_NE(p5.find("seed 5, coverage 0.8"), std::string::npos) << p5;
+    EXPECT_NE(p5.find("at t = 10 s"), std::string::npos) << p5;
+    EXPECT_NE(p6.find("seed 6, coverage 0.3"), std::string::npos) << p6;
+    const std::string step = source("sky predict --model advect --sky " + dir + "/p5/frame_0001.exr --prev " + dir +
+                                        "/p5/frame_0000.exr --steps 2 -o " + dir + "/pr",
+                                    "pr/step_0002.exr");
+    EXPECT_NE(step.find("model advect"), std::string::npos) << step;
+    EXPECT_NE(step.find("the motion from " + dir + "/p5/frame_0000.exr"), std::string::npos) << step;
+    EXPECT_NE(step.find("step 2 of 2"), std::string::npos) << step;
+    EXPECT_NE(step.find("seed 5"), std::string::npos) << "the input's own source: " << step;
+    fs::remove_all(dir);
+}
+
 TEST(OutputsCli, ExitCodesAndDidYouMean) {
     struct Case {
         std::string args;
