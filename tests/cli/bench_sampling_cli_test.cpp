@@ -30,7 +30,7 @@ TEST(BenchSamplingCli, FinishedCasesAreKeptAndReused) {
     auto first = test::run_command(cmd);
     ASSERT_EQ(first.exit_code, 0) << first.output;
     EXPECT_EQ(first.output.find("finished earlier"), std::string::npos) << first.output;
-    std::string csv1 = read_text(dir + "/accuracy.csv");
+    std::string csv1 = read_text(dir + "/accuracy.csv"), summary1 = read_text(dir + "/accuracy_summary.csv");
     auto second = test::run_command(cmd);
     ASSERT_EQ(second.exit_code, 0) << second.output;
     EXPECT_NE(second.output.find("finished earlier"), std::string::npos) << second.output;
@@ -38,6 +38,8 @@ TEST(BenchSamplingCli, FinishedCasesAreKeptAndReused) {
     std::string csv2 = read_text(dir + "/accuracy.csv");
     EXPECT_EQ(std::count(csv1.begin(), csv1.end(), '\n'), 1 + 2 * 3 * 2);
     EXPECT_EQ(csv1, csv2);
+    // And the summary made from them: the cache once kept six digits, and 64 summary numbers moved.
+    EXPECT_EQ(summary1, read_text(dir + "/accuracy_summary.csv"));
     // Charts that cannot be written (files limited to 40 KB: a full disk) fail the run, naming why;
     // the chart of the earlier run stays whole and no temporary is left.
     const std::string chart = dir + "/rmse_diffuse_clear.png", before = read_text(chart);
