@@ -105,7 +105,13 @@ void add_scene_options(CLI::App* cmd, SceneSpec* o) {
 }
 
 void warn_options_of_generated_skies(const CLI::App* cmd, const std::string& sky) {
-    if (sky.empty() || is_generated_sky(sky)) return;
+    if (sky.empty() || is_generated_sky(sky)) {
+        if (const CLI::Option* turn = cmd->get_option_no_throw("--sky-turn"); turn && turn->count() > 0)
+            throw Error("--sky-turn turns a sky file; " +
+                        std::string(sky.empty() ? "the built-in sky" : "'" + sky + "'") +
+                        " is made here with its sun where --time, --lat and --lon put it");
+        return;
+    }
     for (const char* name : {"--coverage"})
         if (const CLI::Option* opt = cmd->get_option_no_throw(name); opt && opt->count() > 0)
             std::fprintf(stderr,
@@ -180,6 +186,7 @@ void add_generated_sky_options(CLI::App* cmd, SkySourceSpec* o) {
     cmd->add_option("--sky-res", o->sky_resolution, kSkyResHelp)
         ->check(CLI::Range(kMinSkyResolution, kMaxSkyResolution))
         ->each([o](const std::string&) { o->sky_resolution_given = true; });
+    cmd->add_option("--sky-turn", o->sky_turn_deg, kSkyTurnHelp)->check(finite_in(-360, 360));
     cmd->add_option(
            "--time", o->time,
            "UTC time of t = 0, ISO 8601 (e.g. 2026-06-21T16:00:00Z): the sun follows the clock from there.\n"

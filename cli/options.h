@@ -43,6 +43,11 @@ inline constexpr const char* kSkyResHelp =
     "given with a sky file, the file is taken at N (resampled; a 2:1 lat-long converted at N). Without it a\n"
     "fisheye keeps its own size and a lat-long its height, at most 2048 where the sky moves";
 
+inline constexpr const char* kSkyTurnHelp =
+    "Turn a sky file about the zenith: every azimuth (from north towards east) plus DEG, its sun too, e.g.\n"
+    "to put a downloaded HDRI's sun where the scene needs it (a lat-long turns exactly; a fisheye through a\n"
+    "lat-long, keeping the sun's energy)";
+
 // An old spelling of an option, kept working but left out of --help (glossary: one name per thing).
 template <typename T>
 CLI::Option* add_hidden_alias(CLI::App* cmd, const std::string& old_name, T* variable) {

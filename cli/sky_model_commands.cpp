@@ -54,6 +54,7 @@ void register_sky_model_commands(CLI::App& sky) {
             "taken, as render does; or a folder of skies, a captured sequence: on from its last, the one\n"
             "before it the previous frame, as animate takes one)");
         add_hidden_alias(cmd, "--in", &o->in);
+        cmd->add_option("--sky-turn", o->turn_deg, kSkyTurnHelp)->check(finite_in(-360, 360));
         cmd->add_option("--sky-res", o->resolution, kSkyResHelp)
             ->check(CLI::Range(kMinSkyResolution, kMaxSkyResolution));
         cmd->add_option("--out,-o", o->out, "Output folder (created if missing)")->required();

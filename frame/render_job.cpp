@@ -69,8 +69,7 @@ void run_render_job(const RenderJob& o) {
         throw Error(std::string(placed ? "--lat and --lon place" : "--time places") +
                     " the sun of a sky made here (--sky clear or procedural); " + o.sky + " keeps the sun it has");
     } else {
-        const int n = o.generated.sky_resolution_given ? o.generated.sky_resolution : 0;
-        sky = std::make_shared<SkyImage>(load_sky_or_latlong(o.sky, &ground, n));
+        sky = std::make_shared<SkyImage>(load_sky_or_latlong(o.sky, &ground, sky_file_options(o.generated)));
     }
 
     Accel accel(scene);

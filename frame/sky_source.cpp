@@ -55,6 +55,11 @@ uint64_t procedural_seed(const std::string& sky) {
 
 bool is_generated_sky(const std::string& sky) { return sky == "clear" || sky.rfind("procedural", 0) == 0; }
 
+SkyFileOptions sky_file_options(const SkySourceSpec& o, int latlong_limit) {
+    if (!std::isfinite(o.sky_turn_deg)) throw Error("--sky-turn must be a finite number of degrees");
+    return {o.sky_resolution_given ? o.sky_resolution : 0, latlong_limit, o.sky_turn_deg};
+}
+
 SkyImage make_generated_sky(const SkySourceSpec& o) {
     if (!is_generated_sky(o.sky))
         throw Error("--sky '" + o.sky + "': not a sky made here (expected 'clear' or 'procedural[:SEED]')");
@@ -116,8 +121,7 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     // ground of its own, so below the horizon is the ground model.
     auto load_input_sky = [&o](const std::string& file) {
         std::shared_ptr<SkyImage> ground;
-        SkyImage s = load_sky_or_latlong(file, &ground, o.sky_resolution_given ? o.sky_resolution : 0,
-                                         kMovingLatlongLimit);
+        SkyImage s = load_sky_or_latlong(file, &ground, sky_file_options(o, kMovingLatlongLimit));
         // Checked before anything is rendered: the flow between steps is measured on the sky itself
         // (a 4 x 4 sky failed after animate and compare had written their first outputs).
         if (s.resolution < 8)
@@ -286,6 +290,8 @@ FrameSettings sky_timeline_settings(const SkySourceSpec& o, const StepModelSpec&
     FrameSettings s;
     s["sky"] = with_mask(o.sky);
     s["sky_res"] = is_generated_sky(o.sky) || o.sky_resolution_given ? std::to_string(o.sky_resolution) : "the file's";
+    if (o.sky_turn_deg != 0)
+        s["sky_turn"] = number(o.sky_turn_deg);  // only when given: older folders keep their frames
     s["time"] = o.time;
     s["lat"] = number(o.latitude), s["lon"] = number(o.longitude);
     s["coverage"] = number(o.coverage);

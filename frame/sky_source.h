@@ -9,6 +9,7 @@
 #include "frame/frame_metadata.h"
 #include "motion/sky_timeline.h"
 #include "sky/default_sky.h"
+#include "sky/latlong.h"
 #include "sky/sun_position.h"
 
 namespace dynsky {
@@ -20,6 +21,8 @@ namespace dynsky {
 //                                 (sky_resolution_given), the file is resampled to N x N, else a
 //                                 fisheye keeps its own and a lat-long its height, at most
 //                                 kMovingLatlongLimit (sky/latlong.h)
+//   sky_turn_deg    0             a sky file's azimuths plus this (its sun too): a downloaded HDRI's
+//                                 sun put where the scene wants it; refused for skies made here
 //   time            ""            ISO 8601 UTC of t = 0; the sun follows the clock from there.
 //                                 Default 2026-06-21T16:00:00Z for skies made here; an EXR keeps its sun
 //   latitude, longitude  48.8566, 2.3522 (Paris)
@@ -33,6 +36,7 @@ struct SkySourceSpec {
     std::string sky = "procedural";
     int sky_resolution = 1024;
     bool sky_resolution_given = false;  // --sky-res was given: a sky file too is taken at N
+    double sky_turn_deg = 0;            // --sky-turn: a sky file turned about the zenith (sky/latlong.h)
     std::string time;
     double latitude = default_sky::kLatitudeDeg, longitude = default_sky::kLongitudeDeg;
     double coverage = default_sky::kCoverage;
@@ -63,6 +67,10 @@ struct StepModelSpec {
 
 // True for the skies made here: 'clear' and 'procedural[:SEED]'.
 bool is_generated_sky(const std::string& sky);
+
+// How a sky file of this spec is taken (--sky-res when given, --sky-turn; sky/latlong.h), a
+// lat-long at most latlong_limit px unasked (0: its height).
+SkyFileOptions sky_file_options(const SkySourceSpec& spec, int latlong_limit = 0);
 
 // The sky made here at t = 0 ('clear' or 'procedural[:SEED]'; the sun of start_time at the spec's
 // place): what `render --sky clear` shows and the timeline's input. Throws dynsky::Error naming

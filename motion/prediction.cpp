@@ -50,7 +50,8 @@ void write_prediction(const PredictionOptions& given) {
     // A 2:1 lat-long (a downloaded HDRI) is taken as render takes it: its upper half (the ground
     // does not move).
     std::shared_ptr<SkyImage> unused_ground;
-    SkyImage sky = load_sky_or_latlong(o.in, &unused_ground, o.resolution, kMovingLatlongLimit);
+    const SkyFileOptions taken{o.resolution, kMovingLatlongLimit, o.turn_deg};
+    SkyImage sky = load_sky_or_latlong(o.in, &unused_ground, taken);
     if (unused_ground && !o.quiet)
         std::fprintf(stderr,
                      "dynsky: note: %s is a lat-long sky: its upper half moves, as a %d x %d fisheye (--sky-res: "
@@ -61,8 +62,7 @@ void write_prediction(const PredictionOptions& given) {
     motion.previous_dt = o.previous_dt;
     if (!o.previous.empty()) {
         if (o.wind) throw Error("--prev and --wind-*: give one source of motion, not both");
-        motion.previous = std::make_shared<const SkyImage>(load_sky_or_latlong(o.previous, &unused_ground, o.resolution,
-                                                                               kMovingLatlongLimit));
+        motion.previous = std::make_shared<const SkyImage>(load_sky_or_latlong(o.previous, &unused_ground, taken));
         motion.previous_dt = previous_frame_gap(sky, *motion.previous, o.previous_dt, o.in, o.previous);
         if (motion.previous_dt == 0 && !o.quiet)
             std::fputs(unknown_previous_gap_note(o.in, o.previous).c_str(), stderr);

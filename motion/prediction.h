@@ -20,8 +20,9 @@ namespace dynsky {
 struct PredictionOptions {
     std::string model, in, out, stats;
     int steps = 1, every = 1;
-    int resolution = 0;  // --sky-res: the input (and --prev) taken at N x N; 0: its own (a lat-long's height,
-                         // at most kMovingLatlongLimit)
+    int resolution = 0;   // --sky-res: the input (and --prev) taken at N x N; 0: its own (a lat-long's height,
+                          // at most kMovingLatlongLimit)
+    double turn_deg = 0;  // --sky-turn: the input (and --prev) turned about the zenith
     bool preview = false, quiet = false;
     std::string previous;
     double previous_dt = 0;

@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <cmath>
+#include <algorithm>
 #include <cstdint>
 #include <utility>
 
@@ -176,22 +177,75 @@ LatlongEnvironment load_latlong_environment(const std::string& path, int resolut
     return latlong_environment(image, path, resolution);
 }
 
-SkyImage load_sky_or_latlong(const std::string& path, std::shared_ptr<SkyImage>* ground, int resolution,
-                             int latlong_limit) {
+void turn_latlong(Image* latlong, double degrees) {
+    if (!std::isfinite(degrees)) throw Error("the sky's turn must be a finite number of degrees");
+    const int W = latlong->width;
+    // Azimuth grows to the right: the pixel at column c goes to c + shift.
+    const long shift = ((std::lround(degrees / 360.0 * W) % W) + W) % W;
+    if (shift == 0) return;
+    const size_t row = size_t(W) * latlong->channels;
+    for (int y = 0; y < latlong->height; ++y) {
+        float* r = latlong->pixels.data() + size_t(y) * row;
+        std::rotate(r, r + row - size_t(shift) * latlong->channels, r + row);
+    }
+}
+
+namespace {
+
+Vec3d turned_direction(const Vec3d& w, double degrees) {
+    return fisheye::direction_from_angles(fisheye::zenith_angle(w.normalized()),
+                                          fisheye::azimuth(w.normalized()) + degrees * kPiD / 180);
+}
+
+}  // namespace
+
+SkyImage turned_about_zenith(const SkyImage& sky, double degrees) {
+    Image ll = sky_to_latlong(sky, 4 * sky.resolution);
+    turn_latlong(&ll, degrees);
+    SkyImage out = sky;  // its time, units, source and the rest as they were
+    out.rgb = latlong_to_fisheye(ll, sky.resolution).rgb;
+    if (sky.sun_direction)
+        out.sun_direction = turned_direction(sky.sun_direction->cast<double>(), degrees).cast<float>();
+    if (!sky.filled.empty()) {  // nearest: a pixel is filled where the pixel it came from was
+        const int n = sky.resolution;
+        out.filled.assign(size_t(n) * n, 0);
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                const Vec2 uv = fisheye::pixel_center_uv(i, j, n);
+                if (uv.squaredNorm() > 1) continue;
+                const Vec3d from = turned_direction(fisheye::direction_from_uv(double(uv.x()), double(uv.y())),
+                                                    -degrees);
+                double x, y;
+                fisheye::pixel_from_direction(from, n, &x, &y);
+                out.filled[size_t(j) * n + i] = sky.is_filled(std::clamp(int(std::lround(x)), 0, n - 1),
+                                                              std::clamp(int(std::lround(y)), 0, n - 1));
+            }
+    }
+    return out;
+}
+
+SkyImage load_sky_or_latlong(const std::string& path, std::shared_ptr<SkyImage>* ground,
+                             const SkyFileOptions& options) {
     *ground = nullptr;
+    int resolution = options.resolution;
     if (resolution != 0) check_sky_resolution(resolution);
     Image image = read_sky_file(path);
     if (!is_latlong_shape(image.width, image.height)) {
         SkyImage sky = sky_from_radiance_file(image, path);  // read once
-        return resolution > 0 ? resampled_sky(sky, resolution) : sky;
+        if (resolution > 0) sky = resampled_sky(sky, resolution);
+        return options.turn_deg != 0 ? turned_about_zenith(sky, options.turn_deg) : sky;
     }
     require_radiance_pixels(image, path);
     if (image.height < 4)
         throw_file_error(path, "lat-long sky is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
                                    " pixels: too small to hold a sky (at least 8 x 4)");
-    if (resolution == 0 && latlong_limit > 0 && image.height > latlong_limit) resolution = latlong_limit;
+    if (resolution == 0 && options.latlong_limit > 0 && image.height > options.latlong_limit)
+        resolution = options.latlong_limit;
+    turn_latlong(&image, options.turn_deg);
     LatlongEnvironment env = latlong_environment(image, path, resolution);
     read_sky_metadata(image.metadata, path, &env.sky);  // `sky latlong` keeps the sky's time and sun
+    if (env.sky.sun_direction && options.turn_deg != 0)
+        env.sky.sun_direction = turned_direction(env.sky.sun_direction->cast<double>(), options.turn_deg).cast<float>();
     *ground = std::make_shared<SkyImage>(std::move(env.ground));
     return std::move(env.sky);
 }

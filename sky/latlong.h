@@ -62,12 +62,31 @@ struct LatlongEnvironment {
 LatlongEnvironment load_latlong_environment(const std::string& path, int resolution = 0);
 LatlongEnvironment latlong_environment(const Image& image, const std::string& name, int resolution = 0);
 
+// A sky turned about the zenith: every azimuth (from north towards east) plus `degrees`, its sun
+// and filled mask with it. A lat-long turns exactly (its columns roll, to the nearest column); a
+// fisheye turns through a lat-long of 4N columns and back, both conversions keeping the
+// hemisphere's integral and the sun's energy (a bilinear image rotation loses up to half of a
+// one-pixel sun), at the cost of a little blur.
+void turn_latlong(Image* latlong, double degrees);
+SkyImage turned_about_zenith(const SkyImage& sky, double degrees);
+
+// How --sky takes a sky file (`render`, `animate`, `compare`, `sky timeline`, `sky predict`):
+//   resolution     0  N (--sky-res): both sky and ground come back N x N (a fisheye resampled,
+//                     area-averaged; a lat-long converted at N). 0: a fisheye keeps its own; a
+//                     lat-long converts at its height, at most latlong_limit when that is positive
+//   latlong_limit  0  see above (kMovingLatlongLimit where the sky moves)
+//   turn_deg       0  --sky-turn: turned about the zenith (turned_about_zenith), e.g. to put a
+//                     downloaded HDRI's sun where the scene wants it
+struct SkyFileOptions {
+    int resolution = 0;
+    int latlong_limit = 0;
+    double turn_deg = 0;
+};
+
 // A sky file as --sky takes it: a canonical fisheye (load_sky; *ground = nullptr), or a lat-long
-// environment, whose sky is returned and whose ground goes to *ground. resolution > 0 (--sky-res):
-// both come back N x N (a fisheye resampled, area-averaged; a lat-long converted at N). 0: a fisheye
-// keeps its own; a lat-long converts at its height, at most latlong_limit when that is positive.
-SkyImage load_sky_or_latlong(const std::string& path, std::shared_ptr<SkyImage>* ground, int resolution = 0,
-                             int latlong_limit = 0);
+// environment, whose sky is returned and whose ground goes to *ground.
+SkyImage load_sky_or_latlong(const std::string& path, std::shared_ptr<SkyImage>* ground,
+                             const SkyFileOptions& options = {});
 
 // The largest fisheye a lat-long HDRI becomes, unasked, when the sky moves: every medium step
 // works on many full-size fields (an 8192 x 4096 HDRI taken at its height, 4096 px: 4 GB and 16 s

@@ -187,6 +187,27 @@ TEST(AnimateCli, KilledAtRandomMomentsResumesToTheSameFrames) {
     fs::remove_all(dir);
 }
 
+// A sky file turned (--sky-turn) is another sky: its frames are not kept from the unturned run.
+TEST(AnimateCli, ATurnedSkyFileIsOtherSettings) {
+    const std::string dir = test::temp_dir("animate_turn");
+    ASSERT_EQ(test::run_command(std::string(DYNSKY_EXE) + " sky procedural --sky-res 64 --duration 0 -q -o " + dir +
+                                "/p")
+                  .exit_code,
+              0);
+    const std::string cmd = std::string(DYNSKY_EXE) + " animate builtin --sky " + dir +
+                            "/p/frame_0000.exr --model advect --res 32x18 --spp 1 --duration 1 --fps 2 --no-video "
+                            "--out " +
+                            dir + "/a ";
+    auto r = test::run_command(cmd + "-q");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const Image unturned = read_image(frame(dir + "/a", 1));
+    r = test::run_command(cmd + "--sky-turn 90 2>&1");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("sky_turn (none) -> 90)"), std::string::npos) << r.output;
+    EXPECT_NE(read_image(frame(dir + "/a", 1)).pixels, unturned.pixels);
+    fs::remove_all(dir);
+}
+
 // Resume keeps only frames that are whole and made with the same settings, and says why it renders
 // the others again; --force renders every frame again.
 TEST(AnimateCli, ResumeRerendersDamagedFramesAndFramesOfOtherSettings) {

@@ -274,6 +274,34 @@ TEST(RenderCli, LatlongSkyIsConvertedAndItsGroundUsed) {
     EXPECT_EQ(a.metadata.strings.count("dynsky:scene_file"), 0u);  // the built-in scene is no file
 }
 
+// --sky-turn turns a sky file about the zenith (a lat-long exactly: the same image as the file rolled
+// by hand, its ground too), and is refused for a sky made here, whose sun --time places.
+TEST(RenderCli, SkyTurnTurnsASkyFile) {
+    std::string dir = test::temp_dir("render_turn");
+    Image ll(64, 32, 3), rolled(64, 32, 3);
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 64; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const float v = 0.5f + float(x % 13) * (y < 16 ? 0.3f : 0.1f) + 0.1f * c;
+                ll.at(x, y, c) = v, rolled.at((x + 16) % 64, y, c) = v;  // a quarter turn: 16 columns right
+            }
+    write_image(dir + "/ll.exr", ll);
+    write_image(dir + "/rolled.exr", rolled);
+    Outcome a = render("builtin --sky " + dir + "/ll.exr --sky-turn 90", dir + "/a.exr");
+    Outcome b = render("builtin --sky " + dir + "/rolled.exr", dir + "/b.exr");
+    Outcome c = render("builtin --sky " + dir + "/ll.exr", dir + "/c.exr");
+    ASSERT_EQ(a.result.exit_code, 0) << a.result.output;
+    ASSERT_EQ(b.result.exit_code, 0) << b.result.output;
+    ASSERT_EQ(c.result.exit_code, 0) << c.result.output;
+    EXPECT_EQ(read_image(dir + "/a.exr").pixels, read_image(dir + "/b.exr").pixels);
+    EXPECT_NE(read_image(dir + "/a.exr").pixels, read_image(dir + "/c.exr").pixels);
+    Outcome refused = render("builtin --sky clear --sky-turn 90", dir + "/d.exr");
+    EXPECT_NE(refused.result.exit_code, 0);
+    EXPECT_NE(refused.result.output.find("--sky-turn turns a sky file"), std::string::npos) << refused.result.output;
+    EXPECT_FALSE(fs::exists(dir + "/d.exr"));
+    fs::remove_all(dir);
+}
+
 TEST(RenderCli, AovsRegionAndCameraOptions) {
     std::string dir = test::temp_dir("render");
     Outcome o = render("builtin --aovs albedo,normal,depth,alpha,samples --region 4,2,20,14", dir + "/aov.exr");

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <random>
@@ -298,14 +299,70 @@ TEST(LatLong, SkyFilesAreTakenAtTheResolutionAsked) {
     };
     for (const Case& c : {Case{"ll", 0, 0, 128}, Case{"ll", 0, 64, 64}, Case{"ll", 0, 512, 128}, Case{"ll", 48, 64, 48},
                           Case{"fish", 0, 64, 128}, Case{"fish", 48, 0, 48}, Case{"fish", 200, 0, 200}}) {
-        const SkyImage sky = load_sky_or_latlong(dir + "/" + c.file + ".exr", &ground, c.asked, c.limit);
+        const SkyImage sky = load_sky_or_latlong(dir + "/" + c.file + ".exr", &ground, {c.asked, c.limit});
         EXPECT_EQ(sky.resolution, c.want) << c.file << " asked " << c.asked << " limit " << c.limit;
         EXPECT_EQ(bool(ground), c.file == "ll");
         if (ground) EXPECT_EQ(ground->resolution, c.want) << "the ground is taken at the sky's size";
         const Eigen::Array3d got = fisheye_integral(sky);
         for (int k = 0; k < 3; ++k) EXPECT_NEAR(got[k], exact[k], 1.5e-2 * exact[k]) << c.file << " at " << c.want;
     }
-    EXPECT_THROW(load_sky_or_latlong(dir + "/fish.exr", &ground, 4), Error);  // under the 16 px floor
+    EXPECT_THROW(load_sky_or_latlong(dir + "/fish.exr", &ground, {4}), Error);  // under the 16 px floor
+    std::filesystem::remove_all(dir);
+}
+
+// --sky-turn: a clear sky with its sun at azimuth 100 degrees, turned by 50 (a fisheye, through a
+// lat-long) or taken from a lat-long turned by 50 (its columns rolled), is the clear sky of a sun at
+// 150: the sun where that one's is, with its energy, the rest within a few per cent, its recorded
+// sun turned; a fisheye's filled mask turns with it.
+TEST(LatLong, ASkyTurnedAboutTheZenithIsTheSkyOfTheTurnedSun) {
+    const std::string dir = test::temp_dir("latlong_turned");
+    ClearSkyParams params;
+    params.sun_direction = fisheye::direction_from_angles(40 * kDeg, 100 * kDeg);
+    SkyImage start = make_clear_sky(params, 128);
+    start.filled.assign(size_t(128) * 128, 0);
+    for (int j = 10; j < 30; ++j) start.filled[size_t(j) * 128 + 64] = 1;  // a line north of the zenith
+    params.sun_direction = fisheye::direction_from_angles(40 * kDeg, 150 * kDeg);
+    const SkyImage want = make_clear_sky(params, 128);
+    save_sky(dir + "/fish.exr", start);
+    write_image(dir + "/ll.exr", sky_to_latlong(start, 512));
+    std::shared_ptr<SkyImage> ground;
+    const SkyImage direct = turned_about_zenith(start, 50);
+    for (const SkyImage& got : {direct, load_sky_or_latlong(dir + "/fish.exr", &ground, {0, 0, 50}),
+                                load_sky_or_latlong(dir + "/ll.exr", &ground, {128, 0, 50})}) {
+        ASSERT_TRUE(got.sun_direction);
+        EXPECT_LT((got.sun_direction->cast<double>() - want.sun_direction->cast<double>()).norm(), 1e-5);
+        const Eigen::Array3d a = fisheye_integral(got), b = fisheye_integral(want);
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(a[k], b[k], 0.01 * b[k]) << "channel " << k;
+        int bi = 0, bj = 0, wi = 0, wj = 0;
+        std::vector<double> rel;
+        for (int j = 0; j < 128; ++j)
+            for (int i = 0; i < 128; ++i) {
+                if (got.pixel(i, j)[1] > got.pixel(bi, bj)[1]) bi = i, bj = j;
+                if (want.pixel(i, j)[1] > want.pixel(wi, wj)[1]) wi = i, wj = j;
+                if (!want.in_disc(i, j) || std::hypot(i - 63.5, j - 63.5) > 60) continue;
+                rel.push_back(std::abs(got.pixel(i, j)[1] / want.pixel(i, j)[1] - 1));
+            }
+        EXPECT_LE(std::abs(bi - wi) + std::abs(bj - wj), 2) << "the sun at (" << bi << ", " << bj << ")";
+        std::sort(rel.begin(), rel.end());
+        EXPECT_LT(rel[rel.size() / 2], 0.01) << "median pixel";
+        EXPECT_LT(rel[rel.size() * 95 / 100], 0.05) << "95th percentile pixel (the sun's neighbours apart)";
+    }
+    // The filled line north of the zenith (azimuth 0) now lies at azimuth 50: north-east, towards the
+    // upper left of the image (east is left).
+    ASSERT_EQ(direct.filled.size(), size_t(128) * 128);
+    int filled = 0, upper_left = 0;
+    for (int j = 0; j < 128; ++j)
+        for (int i = 0; i < 128; ++i)
+            if (direct.is_filled(i, j)) ++filled, upper_left += i < 64 && j < 64;
+    EXPECT_GT(filled, 10);
+    EXPECT_EQ(upper_left, filled);
+    // An exact roll of a lat-long: a quarter turn moves a column W / 4 to the right.
+    Image ll(16, 8, 3);
+    ll.at(3, 2, 0) = 7;
+    turn_latlong(&ll, 90);
+    EXPECT_EQ(ll.at(7, 2, 0), 7.0f);
+    turn_latlong(&ll, -450);  // -360 - 90: back
+    EXPECT_EQ(ll.at(3, 2, 0), 7.0f);
     std::filesystem::remove_all(dir);
 }
 
