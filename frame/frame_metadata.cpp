@@ -13,41 +13,14 @@
 
 #include <nlohmann/json.hpp>
 
+#include "util/file_hash.h"
 #include "util/image.h"
 #include "util/parse.h"
+#include "util/version.h"
 
 namespace dynsky {
 
 namespace fs = std::filesystem;
-
-namespace {
-
-constexpr uint64_t kFnvOffset = 0xcbf29ce484222325ull, kFnvPrime = 0x100000001b3ull;
-
-uint64_t fnv1a(const char* data, size_t n, uint64_t h = kFnvOffset) {
-    for (size_t i = 0; i < n; ++i) h = (h ^ uint64_t(static_cast<unsigned char>(data[i]))) * kFnvPrime;
-    return h;
-}
-
-std::string hex64(uint64_t h) {
-    char buf[17];
-    std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
-    return buf;
-}
-
-std::string describe_file(const fs::path& p) {
-    std::ifstream f(p, std::ios::binary);
-    std::vector<char> buf(1 << 16);
-    uint64_t h = kFnvOffset, size = 0;
-    while (f) {
-        f.read(buf.data(), std::streamsize(buf.size()));
-        size_t n = size_t(f.gcount());
-        h = fnv1a(buf.data(), n, h), size += n;
-    }
-    return p.filename().string() + " (" + std::to_string(size) + " bytes, fnv1a " + hex64(h) + ")";
-}
-
-}  // namespace
 
 std::string canonical_settings(const FrameSettings& settings) {
     std::string s;
@@ -175,6 +148,7 @@ void FrameMetadata::write_to(ImageMetadata* m) const {
     m->numbers["dynsky:medium_step_seconds"] = medium_step_seconds;
     m->numbers["dynsky:png_exposure_ev"] = png_exposure_ev;
     m->strings["dynsky:sky"] = sky;
+    m->strings["Software"] = dynsky_version();  // the build (util/version.h): a mixed farm shows in its frames
     m->strings["dynsky:sky_model"] = sky_model;
     m->strings["dynsky:gamma"] = gamma;
     m->strings["dynsky:scene"] = scene;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <iomanip>
 #include <sstream>
 
 #include "sky/hdr_recovery.h"
@@ -14,12 +15,16 @@
 #include "util/atomic_file.h"
 #include "util/error.h"
 #include "util/exposure.h"
+#include "util/file_hash.h"
 #include "util/image.h"
 #include "util/progress.h"
 
 namespace dynsky {
 
 namespace {
+
+// The header key that records what made a sequence's sky (import_settings_key).
+constexpr const char* kImportSettingsKey = "dynsky:import_settings";
 
 // One photograph's import: the job, and what a sequence found for all its photographs.
 struct OnePhoto : PhotoImportJob {
@@ -138,9 +143,62 @@ ImportPlan plan_import(const OnePhoto& o, bool verbose) {
     return plan;
 }
 
+// What decides one photograph's sky, for a sequence import that resumes: every option, what the
+// sequence found (circle, north, obstruction mask, colour shading), and the photograph and the
+// masks it reads by content, as a hash. A field added to PhotoImportJob or OnePhoto belongs here.
+std::string import_settings_key(const OnePhoto& o) {
+    std::ostringstream s;
+    s << std::setprecision(17);
+    auto number = [&](const char* name, const std::optional<double>& v) {
+        s << name << '=';
+        if (v) s << *v;
+        s << ';';
+    };
+    s << "preset=" << o.preset << ";auto_circle=" << o.auto_circle << ";mirror=" << o.mirror
+      << ";flatten_colour=" << o.flatten_colour << ";find_north=" << o.find_north
+      << ";no_preset_mask=" << o.no_preset_mask << ";detect_obstructions=" << o.detect_obstructions
+      << ";keep_thin_objects=" << o.keep_thin_objects << ";no_inpaint=" << o.no_inpaint
+      << ";fill=" << (o.fill ? int(*o.fill) : -1) << ";encoding=" << o.encoding << ";time=" << o.time
+      << ";hdr=" << o.hdr << ";keep_colours=" << o.keep_colours << ";turbidity=" << o.turbidity
+      << ";resolution=" << o.resolution << ";lens=" << (o.lens ? lens_law_name(*o.lens) : "")
+      << ";mask_layout=" << int(o.mask_layout) << ";circle_origin=" << o.circle_origin << ";";
+    if (o.circle) s << "circle=" << o.circle->center_x << ',' << o.circle->center_y << ',' << o.circle->radius << ';';
+    if (o.circle_photo_size)
+        s << "circle_photo=" << (*o.circle_photo_size)[0] << 'x' << (*o.circle_photo_size)[1] << ';';
+    if (o.colour_shading) {
+        const auto& c = *o.colour_shading;
+        s << "shading=" << c.rg2 << ',' << c.rg4 << ',' << c.bg2 << ',' << c.bg4 << ',' << c.max_radius << ';';
+    }
+    number("north", o.north_deg), number("north_found", o.north_found), number("tilt", o.tilt_deg);
+    number("tilt_azimuth", o.tilt_azimuth_deg), number("utc_offset", o.utc_offset_hours);
+    number("lat", o.latitude_deg), number("lon", o.longitude_deg), number("elevation", o.elevation_m);
+    s << "photo=" << describe_file(o.photo) << ';';
+    if (!o.mask.empty()) s << "mask=" << describe_file(o.mask) << ';';
+    const ImportPlan plan = plan_import(o, false);  // a preset's mask file beside the photo, the time it reads
+    if (!plan.params.mask_path.empty() && plan.params.mask_path != o.mask)
+        s << "photo_mask=" << describe_file(plan.params.mask_path) << ';';
+    s << "photo_time=" << plan.time;
+    const std::string text = s.str();
+    return hex64(fnv1a(text.data(), text.size()));
+}
+
+// The sky, filled mask and preview of a sequence's photograph are there, whole (each file is written
+// whole or not at all, util/atomic_file.h) and made from the same photograph with the same settings.
+bool imported_earlier(const OnePhoto& o, const std::string& key) {
+    std::error_code ec;
+    for (const std::string& f : {o.out, o.filled_mask, o.preview})
+        if (!std::filesystem::is_regular_file(f, ec)) return false;
+    try {
+        return image_header_strings(o.out, {kImportSettingsKey}).front() == key;
+    } catch (const Error&) {
+        return false;  // unreadable: imported again
+    }
+}
+
 // One photograph into one sky (o.photo, o.out, o.preview, o.filled_mask); `verbose`: the lines
-// saying what was found and done (a sequence's import says it once for all).
-void import_one(const OnePhoto& o, bool verbose) {
+// saying what was found and done (a sequence's import says it once for all). settings_key (a
+// sequence's): recorded in the sky's header, so a resumed import knows it.
+void import_one(const OnePhoto& o, bool verbose, const std::string& settings_key = "") {
     ImportPlan plan = plan_import(o, verbose);
     PhotoImportParams& params = plan.params;
     const bool calibrate = plan.calibrate;
@@ -272,7 +330,9 @@ void import_one(const OnePhoto& o, bool verbose) {
     source << sky.source;
     if (!time.empty()) source << " time=" << time;
     sky.source = source.str();
-    save_sky(o.out, sky);
+    ImageMetadata extra;
+    if (!settings_key.empty()) extra.strings[kImportSettingsKey] = settings_key;
+    save_sky(o.out, sky, "", extra);
     if (!o.filled_mask.empty()) {
         // 255 where the import filled the sky in (arm, band, masts, unseen), 0 elsewhere: what
         // evaluations, training and the moving sky leave out. Written after the sky, and the sky
@@ -536,6 +596,8 @@ void run_photo_import(const PhotoImportJob& o) {
         each.find_north = false;
     }
     std::vector<std::string> failed;
+    size_t kept = 0;
+    bool said = false;
     ProgressBar progress((long long)photos.size(), "importing " + std::to_string(photos.size()) + " photographs");
     for (size_t i = 0; i < photos.size(); ++i) {
         each.photo = photos[i];
@@ -543,8 +605,17 @@ void run_photo_import(const PhotoImportJob& o) {
         each.preview = (fs::path(o.out) / (fs::path(photos[i]).stem().string() + ".png")).string();
         each.filled_mask = filled_mask_path(outputs[i]);
         try {
-            // The first says what it found and did, as a single import does; the rest as it.
-            import_one(each, i == 0);
+            // A stopped import goes on where it stopped: a sky made from the same photograph with the
+            // same settings is kept (long sequences lost every finished sky to an interruption).
+            const std::string key = import_settings_key(each);
+            if (imported_earlier(each, key)) {
+                ++kept;
+                progress.advance();
+                continue;
+            }
+            // The first imported says what it found and did, as a single import does; the rest as it.
+            import_one(each, !said, key);
+            said = true;
         } catch (const Error& e) {
             // One unreadable frame does not lose the others: reported, the run exits 1 at the end.
             std::fprintf(stderr, "dynsky: error: %s\n", e.what());
@@ -553,8 +624,13 @@ void run_photo_import(const PhotoImportJob& o) {
         progress.advance();
     }
     progress.finish();
-    std::printf("imported %zu of %zu photographs into %s%s (STEM.exr, STEM.png, STEM.filled.png)\n",
-                photos.size() - failed.size(), photos.size(), o.out.c_str(), o.out.back() == '/' ? "" : "/");
+    std::printf("imported %zu of %zu photographs into %s%s (STEM.exr, STEM.png, STEM.filled.png)%s\n",
+                photos.size() - failed.size(), photos.size(), o.out.c_str(), o.out.back() == '/' ? "" : "/",
+                kept ? (": " + std::to_string(kept) +
+                        " of them kept from an earlier run with the same photographs and "
+                        "settings (remove them to import them again)")
+                           .c_str()
+                     : "");
     if (!failed.empty())
         throw Error(std::to_string(failed.size()) + " of " + std::to_string(photos.size()) +
                     " photographs not imported (each named above), the first " + failed.front());

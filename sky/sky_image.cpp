@@ -263,9 +263,12 @@ SkyImage sky_from_radiance_file(const Image& image, const std::string& path) {
     return sky;
 }
 
-void save_sky(const std::string& path, const SkyImage& sky, const std::string& preview_png) {
+void save_sky(const std::string& path, const SkyImage& sky, const std::string& preview_png,
+              const ImageMetadata& extra) {
     if (file_extension(path) != ".exr") throw_file_error(path, "sky images are written as OpenEXR: use a .exr name");
     Image image = sky_to_image(sky);
+    for (const auto& [name, value] : extra.numbers) image.metadata.numbers[name] = value;
+    for (const auto& [name, value] : extra.strings) image.metadata.strings[name] = value;
     write_image(path, image);
     // A filled mask beside the sky replaced belonged to that one (an import's), not to this.
     std::error_code ec;

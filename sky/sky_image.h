@@ -87,10 +87,11 @@ SkyImage load_sky(const std::string& path);
 // looked at the image first (sky/latlong.h load_sky_or_latlong). Both read the filled mask beside it.
 SkyImage sky_from_radiance_file(const Image& image, const std::string& path);
 
-// EXR out (atomic), with time, sun direction and source as attributes. If preview_png is
-// non-empty, also writes a tone-mapped PNG there. A STEM.filled.png beside it is removed: it was the
-// replaced sky's (an import writes its own after the sky).
-void save_sky(const std::string& path, const SkyImage& sky, const std::string& preview_png = "");
+// EXR out (atomic), with time, sun direction and source as attributes (and `extra`'s). If preview_png
+// is non-empty, also writes a tone-mapped PNG there. A STEM.filled.png beside it is removed: it was
+// the replaced sky's (an import writes its own after the sky).
+void save_sky(const std::string& path, const SkyImage& sky, const std::string& preview_png = "",
+              const ImageMetadata& extra = {});
 
 // The UTC time a sky shows, in seconds on one absolute scale (Julian date x 86400), as its source
 // records it ("... time=2017-05-24T17:29:30Z ...": `dynsky sky import` and `sky clear` write it);

@@ -255,6 +255,26 @@ TEST(SkyImportCli, SequenceFolderImportsEveryFrameUnderOneCircle) {
     for (const char* t : {"072000", "080000", "120000", "134000"})
         for (const char* ext : {".exr", ".png", ".filled.png"})
             EXPECT_TRUE(fs::exists(dir + "/skies/IMG_20200812_" + t + ext)) << t << ext;
+    // Run again (an interrupted long import): the finished skies are kept, not made again; a sky
+    // missing its preview is made again; other settings make every sky again.
+    const std::string noon_sky = dir + "/skies/IMG_20200812_120000.exr";
+    const auto noon_time = fs::last_write_time(noon_sky);
+    const Image noon_before = read_image(noon_sky);
+    fs::remove(dir + "/skies/IMG_20200812_072000.png");
+    r = test::run_command(exe() + " sky import " + dir + "/photos" + common + " -o " + dir + "/skies");
+    EXPECT_EQ(r.exit_code, 1) << r.output;  // the damaged frame still is
+    EXPECT_NE(r.output.find("imported 4 of 5 photographs into " + dir +
+                            "/skies/ (STEM.exr, STEM.png, STEM.filled.png): "
+                            "3 of them kept from an earlier run"),
+              std::string::npos)
+        << r.output;
+    EXPECT_EQ(fs::last_write_time(noon_sky), noon_time);
+    EXPECT_TRUE(fs::exists(dir + "/skies/IMG_20200812_072000.png"));
+    r = test::run_command(exe() + " sky import " + dir + "/photos" + common + " --turbidity 4 -o " + dir + "/skies");
+    EXPECT_EQ(r.output.find("kept from an earlier run"), std::string::npos) << r.output;
+    EXPECT_NE(read_image(noon_sky).pixels, noon_before.pixels);
+    r = test::run_command(exe() + " sky import " + dir + "/photos" + common + " -o " + dir + "/skies");  // back
+    EXPECT_EQ(read_image(noon_sky).pixels, noon_before.pixels);
 
     // The circle used, given to a single import of the dawn frame, gives its sky bit for bit.
     const size_t at = r.output.find("sky circle: centre (");
