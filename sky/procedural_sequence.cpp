@@ -1,7 +1,5 @@
 #include "sky/procedural_sequence.h"
 
-#include "util/parse.h"
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -10,7 +8,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <memory>
+#include <sstream>
 #include <nlohmann/json.hpp>
 #include <set>
 
@@ -21,8 +21,10 @@
 #include "util/atomic_file.h"
 #include "util/error.h"
 #include "util/exposure.h"
+#include "util/file_hash.h"
 #include "util/frame_names.h"
 #include "util/image.h"
+#include "util/parse.h"
 #include "util/progress.h"
 
 namespace dynsky {
@@ -66,6 +68,27 @@ CloudLayer make_layer(const std::string& name, const ProceduralSequenceSettings&
     }
     throw Error("--layers: unknown layer '" + name + "' (use cumulus, cirrus or both: cumulus,cirrus)");
 }
+
+// What decides frame k of a sequence (all settings but its length, --preview and -q; the mask by
+// content), as a hash recorded in each frame's header: a run stopped midway keeps the frames it
+// finished when run again. A setting added to ProceduralSequenceSettings belongs here.
+std::string frame_settings_key(const ProceduralSequenceSettings& o) {
+    std::ostringstream s;
+    s << std::setprecision(17) << "seed=" << o.cloud_seed << ";coverage=" << o.coverage << ";dt=" << o.dt
+      << ";resolution=" << o.resolution << ";wind=" << o.wind_from_deg << ',' << o.wind_speed_mps << ','
+      << o.cloud_height_m << ";evolution=" << o.evolution << ";mask_extent=" << o.mask_extent
+      << ";mask_detail=" << o.mask_detail << ";fixed_sun=" << o.fixed_sun << ";sun=" << o.sun_elevation << ','
+      << o.sun_azimuth << ";place=" << o.latitude << ',' << o.longitude << ";time=" << o.time_iso
+      << ";turbidity=" << o.turbidity << ";visibility=" << o.visibility << ";layers=";
+    for (const std::string& l : o.layers) s << l << ',';
+    s << ";cirrus_wind=";
+    for (double v : o.cirrus_wind) s << v << ',';
+    if (!o.mask_image.empty()) s << ";mask=" << describe_file(o.mask_image);
+    const std::string text = s.str();
+    return hex64(fnv1a(text.data(), text.size()));
+}
+
+constexpr const char* kFrameSettingsKey = "dynsky:procedural_settings";
 
 }  // namespace
 
@@ -185,6 +208,22 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
                                                     " N " + number_text(o.longitude) + " E"
                                               : "a sun fixed at elevation " + number_text(o.sun_elevation) +
                                                     " deg, azimuth " + number_text(o.sun_azimuth) + " deg";
+    // Frames of an earlier run of the same settings are kept (all their files there, each written
+    // whole or not at all): a long sequence stopped midway goes on where it stopped.
+    const std::string key = frame_settings_key(o);
+    ImageMetadata recorded;
+    recorded.strings[kFrameSettingsKey] = key;
+    int kept = 0;
+    auto made_earlier = [&](const std::vector<fs::path>& files) {
+        std::error_code ec;
+        for (const fs::path& f : files)
+            if (!fs::is_regular_file(f, ec)) return false;
+        try {
+            return image_header_strings(files.front().string(), {kFrameSettingsKey}).front() == key;
+        } catch (const Error&) {
+            return false;
+        }
+    };
     ProgressBar progress(frames, "procedural sky", o.quiet);
     for (int k = 0; k < frames; ++k) {
         double t = k * o.dt;
@@ -192,12 +231,22 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
             Vec3d s = sun_at(t);
             if (s != current_sun) sky.set_sun_direction(s), current_sun = s;
         }
-        Image flow;
-        SkyImage frame = sky.render(t, o.resolution, &flow, o.dt);
-        frame.source = described + " at t = " + number_text(t) + " s of " + sun_text;  // what re-makes it
         std::string image_name = numbered_name("frame", k, ".exr"), flow_name = numbered_name("flow", k, ".exr");
-        save_sky((fs::path(o.out) / image_name).string(), frame);
-        write_image((fs::path(o.out) / flow_name).string(), flow);
+        const std::string png = numbered_name("frame", k, ".png"), flow_png = numbered_name("flow", k, ".png");
+        std::vector<fs::path> files = {fs::path(o.out) / image_name, fs::path(o.out) / flow_name};
+        if (o.preview) files.push_back(fs::path(o.out) / png), files.push_back(fs::path(o.out) / flow_png);
+        const bool keep = made_earlier(files);
+        Image flow;
+        SkyImage frame;
+        if (keep) {
+            ++kept;
+            if (o.preview && k == 0) flow = read_image(files[1].string());  // the previews' speed scale
+        } else {
+            frame = sky.render(t, o.resolution, &flow, o.dt);
+            frame.source = described + " at t = " + number_text(t) + " s of " + sun_text;  // what re-makes it
+            save_sky(files[0].string(), frame, "", recorded);
+            write_image(files[1].string(), flow);
+        }
         nlohmann::ordered_json entry;
         entry["index"] = k;
         entry["time_s"] = t;
@@ -206,12 +255,13 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
         entry["sun_direction"] = {current_sun.x(), current_sun.y(), current_sun.z()};
         entry["sun_transmittance"] = sky.sun_transmittance(t);
         if (o.preview) {
-            std::string png = numbered_name("frame", k, ".png"), flow_png = numbered_name("flow", k, ".png");
-            write_image((fs::path(o.out) / png).string(), tonemap_to_display(sky_to_image(frame), preview_ev));
             if (k == 0)
-                for (size_t p = 0; p < flow.pixels.size(); p += 3)
+                for (size_t p = 0; p + 1 < flow.pixels.size(); p += 3)
                     max_speed = std::max(max_speed, std::hypot(double(flow.pixels[p]), double(flow.pixels[p + 1])));
-            write_image((fs::path(o.out) / flow_png).string(), flow_preview(flow, max_speed));
+            if (!keep) {
+                write_image(files[2].string(), tonemap_to_display(sky_to_image(frame), preview_ev));
+                write_image(files[3].string(), flow_preview(flow, max_speed));
+            }
             entry["preview"] = png;
             entry["flow_preview"] = flow_png;
         }
@@ -238,8 +288,11 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
     // Written last: a manifest means the sequence is complete.
     write_file_atomic((fs::path(o.out) / "manifest.json").string(), manifest.dump(2) + "\n");
     if (!o.quiet)
-        std::printf("wrote %d frame%s, %s flow%s and manifest.json to %s\n", frames, frames == 1 ? "" : "s",
-                    frames == 1 ? "its" : "their", frames == 1 ? "" : "s", o.out.c_str());
+        std::printf(
+            "wrote %d frame%s, %s flow%s and manifest.json to %s%s\n", frames, frames == 1 ? "" : "s",
+            frames == 1 ? "its" : "their", frames == 1 ? "" : "s", o.out.c_str(),
+            kept ? (" (" + std::to_string(kept) + " of them kept from an earlier run of the same settings)").c_str()
+                 : "");
 }
 
 }  // namespace dynsky

@@ -105,6 +105,37 @@ TEST(SkyProceduralCli, ASecondRunIntoItsFolderLeavesOnlyItsOwnFrames) {
     fs::remove_all(fs::path(dir).parent_path());
 }
 
+// A sequence stopped midway (here: a frame's preview missing, as after a kill) goes on where it
+// stopped: the finished frames are kept, the manifest is that of one whole run; other settings
+// render every frame again.
+TEST(SkyProceduralCli, AStoppedSequenceKeepsItsFinishedFrames) {
+    const std::string dir = test::temp_dir("procedural_cli_resume") + "/seq";
+    const std::string args = "--duration 30 --dt 10 --sky-res 24 --previews --out " + dir;
+    ASSERT_EQ(procedural(args).exit_code, 0);
+    const auto read = [](const std::string& f) {
+        std::ifstream in(f);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    const std::string manifest = read(dir + "/manifest.json");
+    const auto first_time = fs::last_write_time(dir + "/frame_0000.exr");
+    const Image third = read_image(dir + "/frame_0002.exr");
+    fs::remove(dir + "/frame_0002.png");
+    fs::remove(dir + "/manifest.json");
+    auto r = test::run_command(std::string(DYNSKY_EXE) + " sky procedural " + args);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("(3 of them kept from an earlier run of the same settings)"), std::string::npos)
+        << r.output;
+    EXPECT_EQ(fs::last_write_time(dir + "/frame_0000.exr"), first_time);
+    EXPECT_TRUE(fs::exists(dir + "/frame_0002.png"));
+    EXPECT_EQ(read_image(dir + "/frame_0002.exr").pixels, third.pixels);
+    EXPECT_EQ(read(dir + "/manifest.json"), manifest);
+    r = test::run_command(std::string(DYNSKY_EXE) + " sky procedural --coverage 0.7 " + args);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(r.output.find("kept from an earlier run"), std::string::npos) << r.output;
+    EXPECT_NE(read_image(dir + "/frame_0002.exr").pixels, third.pixels);
+    fs::remove_all(fs::path(dir).parent_path());
+}
+
 TEST(SkyProceduralCli, SunFromPlaceAndTime) {
     std::string dir = test::temp_dir("procedural_cli_sun") + "/seq";
     auto r = procedural(
