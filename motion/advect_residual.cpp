@@ -1058,6 +1058,9 @@ void AdvectResidualNetwork::rollout(const SkyImage& given, const CloudFlow& flow
     for (int k = 1; k <= steps; ++k) {
         SkyImage next = from_network_form(rollout.advance(), sky, info_.form);
         next.time_seconds = sky.time_seconds + k * info_.dt;
+        // The sun estimated for a sky that did not record one is recorded in its steps: a prediction
+        // continued from a step, whose sun a cloud may dim, looked for it again and lost it.
+        if (!next.sun_direction && at) next.sun_direction = at->cast<float>();
         // What was cut out comes back dimmed by the cloud the rollout moved over the sun (as the
         // step model does).
         if (has_sun) {

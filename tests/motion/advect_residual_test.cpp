@@ -509,6 +509,14 @@ TEST(AdvectResidual, ASkyOfUnknownScaleMovesTheSameInAnyUnits) {
     EXPECT_GT(r.mean_min, 0.8 * r.mean0);
     EXPECT_LT(r.mean_max, 1.2 * r.mean0);
     EXPECT_LT(r.cover_max, r.cover0 + 0.065);  // +0.049 (+0.083 at the sky's own scale)
+    // Each step records the sun estimated on the start (a prediction continued from a step, a cloud
+    // dimming its sun, looked for it again and lost it).
+    const std::optional<Vec3d> found = sun_from_brightest_pixels(scaled_sky(sky, 1.0 / 5));
+    ASSERT_TRUE(found);
+    for (const SkyImage& s : {bright.front(), bright.back()}) {
+        ASSERT_TRUE(s.sun_direction);
+        EXPECT_LT((s.sun_direction->cast<double>() - *found).norm(), 1e-6);
+    }
 }
 
 // --prev: the gap comes from the frames' clocks unless given; a "previous" frame from after the sky,
