@@ -402,7 +402,8 @@ int run_sampling_study(const SamplingStudyOptions& o) {
                 std::string sampler_list;
                 for (const std::string& name : samplers) sampler_list += name + ";";
                 key += "_" + std::to_string(std::hash<std::string>{}(sampler_list) % 1000000007ULL);
-                const fs::path case_file = cache / ("runs_" + key + ".csv");
+                // runs2_: every digit (runs_ files kept six, and a summary made from them moved).
+                const fs::path case_file = cache / ("runs2_" + key + ".csv");
                 std::ostringstream case_csv;
                 bool resumed = false;
                 if (fs::exists(case_file)) {

@@ -64,10 +64,11 @@ void register_render_command(CLI::App& app) {
            "samples missed a small light keeps sampling while its neighbours see it); --spp is then the most a\n"
            "pixel takes")
         ->capture_default_str();
-    cmd->add_option("--time-limit", o->time_limit,
-                    "Seconds of rendering after which no new round of 16 samples starts (0: none); --spp still caps.\n"
-                    "The only option whose image varies from run to run (the rounds done depend on the machine): the\n"
-                    "EXR records them (dynsky:rounds), and --spp 16 x rounds without a time limit renders it again")
+    cmd->add_option(
+           "--time-limit", o->time_limit,
+           "Seconds of rendering after which no new round of 16 samples starts (0: none); --spp still caps.\n"
+           "The only option whose image varies from run to run (the rounds done depend on the machine): the\n"
+           "EXR records them (dynsky:rounds): --spp min(spp, 16 x rounds) without a time limit renders it again")
         ->capture_default_str();
     cmd->add_option(
            "--clamp-indirect", o->clamp_indirect,

@@ -1,6 +1,7 @@
 // dynsky sky clear | sun | latlong: analytic clear skies (Hosek-Wilkie), the sun's position, and
 // lat-long export of any sky for Blender / Unreal.
 #include <algorithm>
+#include <iomanip>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -104,7 +105,8 @@ void run_clear(const ClearOptions& o) {
     params.sun_disc = !o.no_sun;
     SkyImage sky = make_clear_sky(params, o.resolution);
     std::ostringstream source;
-    source << sky.source << " time=" << format_utc_time(t) << " lat=" << o.sun.lat << " lon=" << o.sun.lon
+    source << std::setprecision(10) << sky.source << " time=" << format_utc_time(t) << " lat=" << o.sun.lat
+           << " lon=" << o.sun.lon
            << " elevation_m=" << o.sun.elevation_m;  // all that places the sun (it was left out)
     if (o.sun.no_refraction) source << " refraction=off";
     else source << " pressure_mbar=" << o.sun.pressure_mbar << " temperature_c=" << o.sun.temperature_c;

@@ -51,11 +51,13 @@ void register_sky_model_commands(CLI::App& sky) {
         cmd->add_option(
             "--sky", o->in,
             "Input sky (canonical fisheye EXR, any resolution; or a 2:1 lat-long HDRI, whose upper half is\n"
-            "taken, as render does; or a folder of skies, a captured sequence: on from its last, the one\n"
-            "before it the previous frame, as animate takes one)");
+            "taken, at most 2048 px unless --sky-res says; or a folder of skies, a captured sequence: on from\n"
+            "its last, the one before it the previous frame, as animate takes one)");
         add_hidden_alias(cmd, "--in", &o->in);
         cmd->add_option("--sky-turn", o->turn_deg, kSkyTurnHelp)->check(finite_in(-360, 360));
-        cmd->add_option("--sky-res", o->resolution, kSkyResHelp)
+        cmd->add_option("--sky-res", o->resolution,
+                        "Take the input sky (and --prev) at N x N (resampled; a 2:1 lat-long converted at N). "
+                        "Default: a fisheye's own size, a lat-long's height, at most 2048")
             ->check(CLI::Range(kMinSkyResolution, kMaxSkyResolution));
         cmd->add_option("--out,-o", o->out, "Output folder (created if missing)")->required();
         cmd->add_option("--steps", o->steps, "Number of medium steps K (1..100000)")->capture_default_str();

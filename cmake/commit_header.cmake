@@ -4,7 +4,12 @@
 # written name the build that made them (the commit was once taken at configure time and went stale).
 execute_process(COMMAND git -C "${SRC}" rev-parse --short HEAD OUTPUT_VARIABLE commit
                 OUTPUT_STRIP_TRAILING_WHITESPACE ERROR_QUIET RESULT_VARIABLE failed)
-if(failed)
+# Only the sources' own repository: a tarball unpacked inside another checkout is not at its commit.
+execute_process(COMMAND git -C "${SRC}" rev-parse --show-toplevel OUTPUT_VARIABLE top
+                OUTPUT_STRIP_TRAILING_WHITESPACE ERROR_QUIET)
+get_filename_component(top "${top}" REALPATH)
+get_filename_component(src "${SRC}" REALPATH)
+if(failed OR NOT top STREQUAL src)
   set(commit "")
 endif()
 if(commit)

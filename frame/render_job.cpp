@@ -16,6 +16,7 @@
 #include "util/exposure.h"
 #include "util/image.h"
 #include "util/parse.h"
+#include "util/version.h"
 
 namespace dynsky {
 
@@ -109,6 +110,7 @@ void run_render_job(const RenderJob& o) {
     image.metadata.numbers["dynsky:sky_distribution_seconds"] = light.last_build_seconds();
     image.metadata.numbers["dynsky:ground_albedo"] = o.scene.ground_albedo;
     image.metadata.numbers["dynsky:time"] = sky->time_seconds;  // frame time (glossary)
+    image.metadata.strings["Software"] = dynsky_version();      // the build (util/version.h)
     image.metadata.strings["dynsky:sky"] = sky->source;
     image.metadata.strings["dynsky:scene"] = o.scene.scene;
     // Which files, exactly (path as found, size, hash): a sky file's own source names what made it,
@@ -119,6 +121,9 @@ void run_render_job(const RenderJob& o) {
         image.metadata.strings[key + "_contents"] = describe_scene_input(path);  // sizes and hashes
     };
     if (o.scene.scene != "builtin") record_file("dynsky:scene_file", loaded.path);
+    if (o.generated.sky_turn_deg != 0) image.metadata.numbers["dynsky:sky_turn_deg"] = o.generated.sky_turn_deg;
+    if (o.generated.sky_resolution_given && !o.sky.empty() && !is_generated_sky(o.sky))
+        image.metadata.numbers["dynsky:sky_res"] = o.generated.sky_resolution;  // the file taken at it
     if (!o.sky.empty() && !is_generated_sky(o.sky)) record_file("dynsky:sky_file", o.sky);
     image.metadata.strings["dynsky:camera"] = camera.name;
     if (!settings.region.empty())

@@ -289,9 +289,13 @@ FrameSettings sky_timeline_settings(const SkySourceSpec& o, const StepModelSpec&
     };
     FrameSettings s;
     s["sky"] = with_mask(o.sky);
-    s["sky_res"] = is_generated_sky(o.sky) || o.sky_resolution_given ? std::to_string(o.sky_resolution) : "the file's";
-    if (o.sky_turn_deg != 0)
-        s["sky_turn"] = number(o.sky_turn_deg);  // only when given: older folders keep their frames
+    // A file taken at --sky-res is said so: before, --sky-res with a file was ignored but recorded as N,
+    // and the frames of such a folder, made at the file's own size, were kept.
+    s["sky_res"] = is_generated_sky(o.sky)  ? std::to_string(o.sky_resolution)
+                   : o.sky_resolution_given ? std::to_string(o.sky_resolution) + " (the file taken at it)"
+                                            : "the file's";
+    // Only when given (older folders keep their frames); a whole turn is none.
+    if (const double turn = std::remainder(o.sky_turn_deg, 360.0); turn != 0) s["sky_turn"] = number(turn);
     s["time"] = o.time;
     s["lat"] = number(o.latitude), s["lon"] = number(o.longitude);
     s["coverage"] = number(o.coverage);

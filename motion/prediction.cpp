@@ -180,8 +180,11 @@ void write_prediction(const PredictionOptions& given) {
                           ? "the motion from " + o.previous + " (" + number_text(motion.previous_dt) + " s before)"
                           : std::string(wind);
     }
-    const std::string made_by = "dynsky sky predict from " + o.in + " (" + sky.source + "), model " + folder +
-                                ", Delta t " + number_text(dt) + " s, " + motion_text + ", step ";
+    std::string taken_as;  // how the input was taken, when not as it is
+    if (o.resolution > 0) taken_as += ", taken at " + std::to_string(o.resolution) + " px";
+    if (o.turn_deg != 0) taken_as += ", turned " + number_text(o.turn_deg, 10) + " deg about the zenith";
+    const std::string made_by = "dynsky sky predict from " + o.in + taken_as + " (" + sky.source + "), model " +
+                                folder + ", Delta t " + number_text(dt) + " s, " + motion_text + ", step ";
     ProgressBar progress(o.steps, "predict", o.quiet);
     int written = 0;
     rollout([&](int k, const SkyImage& s) {

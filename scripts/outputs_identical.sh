@@ -2,8 +2,8 @@
 # Checks that two builds of dynsky make the same outputs (a refactoring must not change them):
 #   scripts/outputs_identical.sh OLD/dynsky NEW/dynsky [WORK_DIR]
 # Runs render, sky clear/procedural/import/predict/evaluate, animate (network, flow and procedural
-# models) and compare with small settings in each build, then compares EXR pixels (idiff), PNG
-# bytes and reports (paths normalised; timings.csv skipped: it holds wall-clock times). Needs
+# models) and compare with small settings in each build, then compares EXR and PNG pixels (idiff)
+# and reports (paths normalised; timings.csv skipped: it holds wall-clock times). Needs
 # ../shared for the import and evaluation. Exit 0 when everything is identical.
 set -u
 cd "$(dirname "$0")/.."
@@ -38,7 +38,8 @@ done
 for f in $(cd "$WORK/old" && find . -type f | sort); do
     [ -f "$WORK/new/$f" ] || { echo "missing in new: $f"; bad=1; continue; }
     case "$f" in
-        *.exr) idiff -q -fail 0 -failpercent 0 "$WORK/old/$f" "$WORK/new/$f" >/dev/null 2>&1 || { echo "differs: $f"; bad=1; } ;;
+        # Images by their pixels: their headers name the build (Software) and the input files' paths.
+        *.exr|*.png) idiff -q -fail 0 -failpercent 0 "$WORK/old/$f" "$WORK/new/$f" >/dev/null 2>&1 || { echo "differs: $f"; bad=1; } ;;
         *timings.csv) ;;
         *.md) cmp -s <(sed "s#$WORK/old##g" "$WORK/old/$f") <(sed "s#$WORK/new##g" "$WORK/new/$f") || { echo "differs: $f"; bad=1; } ;;
         *) cmp -s "$WORK/old/$f" "$WORK/new/$f" || { echo "differs: $f"; bad=1; } ;;

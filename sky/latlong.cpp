@@ -177,17 +177,18 @@ LatlongEnvironment load_latlong_environment(const std::string& path, int resolut
     return latlong_environment(image, path, resolution);
 }
 
-void turn_latlong(Image* latlong, double degrees) {
+double turn_latlong(Image* latlong, double degrees) {
     if (!std::isfinite(degrees)) throw Error("the sky's turn must be a finite number of degrees");
     const int W = latlong->width;
     // Azimuth grows to the right: the pixel at column c goes to c + shift.
-    const long shift = ((std::lround(degrees / 360.0 * W) % W) + W) % W;
-    if (shift == 0) return;
+    const long columns = std::lround(degrees / 360.0 * W), shift = ((columns % W) + W) % W;
+    if (shift == 0) return 0;
     const size_t row = size_t(W) * latlong->channels;
     for (int y = 0; y < latlong->height; ++y) {
         float* r = latlong->pixels.data() + size_t(y) * row;
         std::rotate(r, r + row - size_t(shift) * latlong->channels, r + row);
     }
+    return 360.0 * double(columns) / W;
 }
 
 namespace {
@@ -201,8 +202,9 @@ Vec3d turned_direction(const Vec3d& w, double degrees) {
 
 SkyImage turned_about_zenith(const SkyImage& sky, double degrees) {
     Image ll = sky_to_latlong(sky, 4 * sky.resolution);
-    turn_latlong(&ll, degrees);
-    SkyImage out = sky;  // its time, units, source and the rest as they were
+    degrees = turn_latlong(&ll, degrees);  // what the pixels turn by: the sun and mask the same
+    if (degrees == 0) return sky;          // a whole turn, or less than a column: no round trip's blur
+    SkyImage out = sky;                    // its time, units, source and the rest as they were
     out.rgb = latlong_to_fisheye(ll, sky.resolution).rgb;
     if (sky.sun_direction)
         out.sun_direction = turned_direction(sky.sun_direction->cast<double>(), degrees).cast<float>();
@@ -241,19 +243,18 @@ SkyImage load_sky_or_latlong(const std::string& path, std::shared_ptr<SkyImage>*
                                    " pixels: too small to hold a sky (at least 8 x 4)");
     if (resolution == 0 && options.latlong_limit > 0 && image.height > options.latlong_limit)
         resolution = options.latlong_limit;
-    turn_latlong(&image, options.turn_deg);
+    // Checked before the turn, so that an error names the file's own pixel.
+    if (options.turn_deg != 0) check_latlong_pixels(image, path);
+    const double turned = turn_latlong(&image, options.turn_deg);
     LatlongEnvironment env = latlong_environment(image, path, resolution);
     read_sky_metadata(image.metadata, path, &env.sky);  // `sky latlong` keeps the sky's time and sun
-    if (env.sky.sun_direction && options.turn_deg != 0)
-        env.sky.sun_direction = turned_direction(env.sky.sun_direction->cast<double>(), options.turn_deg).cast<float>();
+    if (env.sky.sun_direction && turned != 0)
+        env.sky.sun_direction = turned_direction(env.sky.sun_direction->cast<double>(), turned).cast<float>();
     *ground = std::make_shared<SkyImage>(std::move(env.ground));
     return std::move(env.sky);
 }
 
-LatlongEnvironment latlong_environment(const Image& image, const std::string& path, int resolution) {
-    if (!is_latlong_shape(image.width, image.height))
-        throw Error(path + ": a lat-long (equirect) environment must be twice as wide as it is high, not " +
-                    std::to_string(image.width) + "x" + std::to_string(image.height));
+void check_latlong_pixels(const Image& image, const std::string& path) {
     if (image.channels < 3)
         throw Error(path + ": lat-long environment has " + std::to_string(image.channels) + " channel(s), want RGB");
     for (int y = 0; y < image.height; ++y)
@@ -273,6 +274,13 @@ LatlongEnvironment latlong_environment(const Image& image, const std::string& pa
                                                " W m^-2 sr^-1, above the limit of 1e9 (the sun is about 2e7): a "
                                                "corrupt or mis-scaled environment");
             }
+}
+
+LatlongEnvironment latlong_environment(const Image& image, const std::string& path, int resolution) {
+    if (!is_latlong_shape(image.width, image.height))
+        throw Error(path + ": a lat-long (equirect) environment must be twice as wide as it is high, not " +
+                    std::to_string(image.width) + "x" + std::to_string(image.height));
+    check_latlong_pixels(image, path);
     const int n = resolution > 0 ? resolution : std::max(16, image.height + (image.height & 1));
     LatlongEnvironment env;
     env.sky = latlong_to_fisheye(image, n, false);

@@ -61,18 +61,22 @@ struct LatlongEnvironment {
 };
 LatlongEnvironment load_latlong_environment(const std::string& path, int resolution = 0);
 LatlongEnvironment latlong_environment(const Image& image, const std::string& name, int resolution = 0);
+// The checks latlong_environment makes of the pixels (RGB, finite, at least 0, at most 1e9), naming
+// the file and the pixel.
+void check_latlong_pixels(const Image& image, const std::string& name);
 
 // A sky turned about the zenith: every azimuth (from north towards east) plus `degrees`, its sun
 // and filled mask with it. A lat-long turns exactly (its columns roll, to the nearest column); a
 // fisheye turns through a lat-long of 4N columns and back, both conversions keeping the
 // hemisphere's integral and the sun's energy (a bilinear image rotation loses up to half of a
 // one-pixel sun), at the cost of a little blur.
-void turn_latlong(Image* latlong, double degrees);
+// Returns the turn done (degrees rounded to whole columns: 360 / W).
+double turn_latlong(Image* latlong, double degrees);
 SkyImage turned_about_zenith(const SkyImage& sky, double degrees);
 
 // How --sky takes a sky file (`render`, `animate`, `compare`, `sky timeline`, `sky predict`):
-//   resolution     0  N (--sky-res): both sky and ground come back N x N (a fisheye resampled,
-//                     area-averaged; a lat-long converted at N). 0: a fisheye keeps its own; a
+//   resolution     0  N (--sky-res): both sky and ground come back N x N (a fisheye resampled:
+//                     area-averaged down, bilinear up; a lat-long converted at N). 0: a fisheye keeps its own; a
 //                     lat-long converts at its height, at most latlong_limit when that is positive
 //   latlong_limit  0  see above (kMovingLatlongLimit where the sky moves)
 //   turn_deg       0  --sky-turn: turned about the zenith (turned_about_zenith), e.g. to put a
@@ -89,8 +93,8 @@ SkyImage load_sky_or_latlong(const std::string& path, std::shared_ptr<SkyImage>*
                              const SkyFileOptions& options = {});
 
 // The largest fisheye a lat-long HDRI becomes, unasked, when the sky moves: every medium step
-// works on many full-size fields (an 8192 x 4096 HDRI taken at its height, 4096 px: 4 GB and 16 s
-// per step; 16384 x 8192 would need 16 GB), and the clouds' motion and the networks' correction are
+// works on many full-size fields (an 8192 x 4096 HDRI taken at its height, 4096 px: 4 GB and 30 s
+// for one `sky predict` step, the conversion included; 16384 x 8192 would need 16 GB), and the clouds' motion and the networks' correction are
 // measured far coarser. `render` converts at the height (the sun's sharpness in still frames).
 inline constexpr int kMovingLatlongLimit = 2048;
 

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <iomanip>
 #include <sstream>
 
 #include "sky/fisheye.h"
@@ -190,8 +191,8 @@ CloudLayer cirrus_layer() {
 
 std::string describe_procedural_sky(const ProceduralSkyParams& p) {
     std::ostringstream s;
-    s << "procedural (seed " << p.seed << ", coverage " << p.coverage << ", turbidity " << p.clear_sky.turbidity
-      << ", visibility " << p.visibility_m << " m";
+    s << std::setprecision(10) << "procedural (seed " << p.seed << ", coverage " << p.coverage << ", turbidity "
+      << p.clear_sky.turbidity << ", visibility " << p.visibility_m << " m";
     for (const CloudLayer& l : p.layers) {
         s << "; " << (l.type == CloudType::Cumulus ? "cumulus" : "cirrus") << " at " << l.altitude_m << " m";
         if (l.coverage) s << ", coverage " << *l.coverage;

@@ -19,7 +19,6 @@
 #include "util/color.h"
 #include "util/error.h"
 #include "util/image_input.h"
-#include "util/version.h"
 
 namespace dynsky {
 
@@ -324,7 +323,6 @@ std::string encode_image(const std::string& path, const Image& image) {
     }
     for (const auto& [name, value] : image.metadata.numbers) spec.attribute(name, OIIO::TypeDesc::DOUBLE, &value);
     for (const auto& [name, value] : image.metadata.strings) spec.attribute(name, value);
-    spec.attribute("Software", dynsky_version());  // the build that wrote it (util/version.h)
 
     // Encoded in memory, then written by the one checked atomic writer (util/atomic_file.h): the
     // image libraries do not all report a short write (libpng through OIIO does not), so they never

@@ -310,9 +310,9 @@ TEST(LatLong, SkyFilesAreTakenAtTheResolutionAsked) {
     std::filesystem::remove_all(dir);
 }
 
-// --sky-turn: a clear sky with its sun at azimuth 100 degrees, turned by 50 (a fisheye, through a
-// lat-long) or taken from a lat-long turned by 50 (its columns rolled), is the clear sky of a sun at
-// 150: the sun where that one's is, with its energy, the rest within a few per cent, its recorded
+// --sky-turn: a clear sky with its sun at azimuth 100 degrees, turned by 45 (a fisheye, through a
+// lat-long) or taken from a lat-long turned by 45 (its columns rolled: 64 of 512), is the clear sky of
+// a sun at 145: the sun where that one's is, with its energy, the rest within a few per cent, its recorded
 // sun turned; a fisheye's filled mask turns with it.
 TEST(LatLong, ASkyTurnedAboutTheZenithIsTheSkyOfTheTurnedSun) {
     const std::string dir = test::temp_dir("latlong_turned");
@@ -321,14 +321,14 @@ TEST(LatLong, ASkyTurnedAboutTheZenithIsTheSkyOfTheTurnedSun) {
     SkyImage start = make_clear_sky(params, 128);
     start.filled.assign(size_t(128) * 128, 0);
     for (int j = 10; j < 30; ++j) start.filled[size_t(j) * 128 + 64] = 1;  // a line north of the zenith
-    params.sun_direction = fisheye::direction_from_angles(40 * kDeg, 150 * kDeg);
+    params.sun_direction = fisheye::direction_from_angles(40 * kDeg, 145 * kDeg);
     const SkyImage want = make_clear_sky(params, 128);
     save_sky(dir + "/fish.exr", start);
     write_image(dir + "/ll.exr", sky_to_latlong(start, 512));
     std::shared_ptr<SkyImage> ground;
-    const SkyImage direct = turned_about_zenith(start, 50);
-    for (const SkyImage& got : {direct, load_sky_or_latlong(dir + "/fish.exr", &ground, {0, 0, 50}),
-                                load_sky_or_latlong(dir + "/ll.exr", &ground, {128, 0, 50})}) {
+    const SkyImage direct = turned_about_zenith(start, 45);
+    for (const SkyImage& got : {direct, load_sky_or_latlong(dir + "/fish.exr", &ground, {0, 0, 45}),
+                                load_sky_or_latlong(dir + "/ll.exr", &ground, {128, 0, 45})}) {
         ASSERT_TRUE(got.sun_direction);
         EXPECT_LT((got.sun_direction->cast<double>() - want.sun_direction->cast<double>()).norm(), 1e-5);
         const Eigen::Array3d a = fisheye_integral(got), b = fisheye_integral(want);
@@ -347,7 +347,7 @@ TEST(LatLong, ASkyTurnedAboutTheZenithIsTheSkyOfTheTurnedSun) {
         EXPECT_LT(rel[rel.size() / 2], 0.01) << "median pixel";
         EXPECT_LT(rel[rel.size() * 95 / 100], 0.05) << "95th percentile pixel (the sun's neighbours apart)";
     }
-    // The filled line north of the zenith (azimuth 0) now lies at azimuth 50: north-east, towards the
+    // The filled line north of the zenith (azimuth 0) now lies at azimuth 45: north-east, towards the
     // upper left of the image (east is left).
     ASSERT_EQ(direct.filled.size(), size_t(128) * 128);
     int filled = 0, upper_left = 0;
@@ -359,10 +359,16 @@ TEST(LatLong, ASkyTurnedAboutTheZenithIsTheSkyOfTheTurnedSun) {
     // An exact roll of a lat-long: a quarter turn moves a column W / 4 to the right.
     Image ll(16, 8, 3);
     ll.at(3, 2, 0) = 7;
-    turn_latlong(&ll, 90);
+    EXPECT_EQ(turn_latlong(&ll, 90), 90);
     EXPECT_EQ(ll.at(7, 2, 0), 7.0f);
-    turn_latlong(&ll, -450);  // -360 - 90: back
+    EXPECT_EQ(turn_latlong(&ll, -450), -450);  // -360 - 90: back
     EXPECT_EQ(ll.at(3, 2, 0), 7.0f);
+    // To whole columns (22.5 degrees here), said, so the sun turns as far as the pixels; less than half
+    // a column, or a whole turn, is none (and a fisheye is then not sent through a lat-long's blur).
+    EXPECT_EQ(turn_latlong(&ll, 100), 90);
+    EXPECT_EQ(turn_latlong(&ll, 10), 0);
+    EXPECT_EQ(turned_about_zenith(start, 360).rgb, start.rgb);
+    EXPECT_EQ(turned_about_zenith(start, 0.1).rgb, start.rgb);
     std::filesystem::remove_all(dir);
 }
 
