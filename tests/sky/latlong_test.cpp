@@ -369,6 +369,16 @@ TEST(LatLong, ASkyTurnedAboutTheZenithIsTheSkyOfTheTurnedSun) {
     EXPECT_EQ(turn_latlong(&ll, 10), 0);
     EXPECT_EQ(turned_about_zenith(start, 360).rgb, start.rgb);
     EXPECT_EQ(turned_about_zenith(start, 0.1).rgb, start.rgb);
+    // A bad pixel is named where the file has it, not where the turn put it.
+    Image bad(16, 8, 3);
+    bad.at(3, 2, 1) = std::nanf("");
+    write_image(dir + "/bad.exr", bad);
+    try {
+        load_sky_or_latlong(dir + "/bad.exr", &ground, {0, 0, 90});
+        ADD_FAILURE() << "a NaN pixel was taken";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("pixel (3, 2)"), std::string::npos) << e.what();
+    }
     std::filesystem::remove_all(dir);
 }
 
