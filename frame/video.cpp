@@ -59,7 +59,15 @@ std::string mp4_problem(const std::string& path) {
 void make_video(const std::string& dir, const std::string& prefix, int frames, double fps, const std::string& out,
                 bool quiet) {
     TemporaryFile tmp(out);
-    std::string pattern = (fs::path(dir) / numbered_pattern(prefix, ".png")).string();
+    // ffmpeg reads a '%' in the input pattern as its own (only the frame number's may be one) and a
+    // path starting with '-' or 'word:' as an option or a protocol ("100% cover/", "-take2/",
+    // "shot:2/" lost the videos after the render): both paths absolute, the folder's '%' doubled.
+    std::string folder;
+    for (char c : fs::absolute(dir).lexically_normal().string())
+        folder += c == '%' ? std::string("%%") : std::string(1, c);
+    if (!folder.empty() && folder.back() != '/') folder += '/';
+    const std::string pattern = folder + numbered_pattern(prefix, ".png");
+    const std::string output = fs::absolute(tmp.path()).lexically_normal().string();
     char rate[32];
     std::snprintf(rate, sizeof rate, "%g", fps);
     // Frames 0 .. frames - 1 only: an earlier, longer run's frames after them in the folder are not this
@@ -84,7 +92,7 @@ void make_video(const std::string& dir, const std::string& prefix, int frames, d
                                          "yuv420p",
                                          "-crf",
                                          "18",
-                                         tmp.path()});
+                                         output});
     if (!run.started)
         throw_file_error(out, "could not write the video: ffmpeg " +
                                   (run.spawn_error == ENOENT

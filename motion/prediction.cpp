@@ -109,20 +109,36 @@ void write_prediction(const PredictionOptions& given) {
             if (!input.empty() && fs::exists(input, ec) && fs::equivalent(p, input, ec)) return true;
         return false;
     };
-    std::vector<fs::path> stale;
+    // Only the skies and previews dynsky wrote (their header's dynsky:layout): files of the user's that
+    // happen to be named step_NNNN (notes, holiday photos in `-o .`) were deleted too.
+    auto is_sky_of_ours = [](const fs::path& p) {
+        return !image_header_strings(p.string(), {"dynsky:layout"}).front().empty();
+    };
+    std::vector<fs::path> stale, foreign;
     for (const auto& e : fs::directory_iterator(o.out)) {
         const std::string ext = e.path().extension().string();
         const std::optional<int> k = numbered_index(e.path().string(), "step");
         if (!e.is_regular_file() || !k || (ext != ".exr" && ext != ".png")) continue;
         const bool written = *k >= 1 && *k <= o.steps && (*k % o.every == 0 || *k == o.steps) &&
                              (ext == ".exr" || o.preview);
-        if (!is_input(e.path())) stale.push_back(e.path());
+        if (!is_input(e.path()) && !is_sky_of_ours(e.path())) {
+            if (written)
+                throw_file_error(e.path().string(),
+                                 "is not a sky dynsky wrote, and this prediction would write over "
+                                 "it: move it or choose another --out");
+            foreign.push_back(e.path());
+        } else if (!is_input(e.path())) stale.push_back(e.path());
         else if (written)
             throw_file_error(e.path().string(), "is an input of this prediction and one of the steps it writes into " +
                                                     o.out +
                                                     "; refusing to overwrite it: move it or choose another --out");
     }
     for (const fs::path& p : stale) fs::remove(p);
+    for (const fs::path& p : foreign)
+        if (!o.quiet)
+            std::fprintf(stderr,
+                         "dynsky: warning: %s is named as a step but is not a sky dynsky wrote: left as it is\n",
+                         p.string().c_str());
     if (!o.stats.empty()) remove_stale_marker(o.stats);
     if (!stale.empty() && !o.quiet)
         std::fprintf(stderr, "dynsky: note: removed %zu step file(s) of an earlier prediction from %s\n", stale.size(),

@@ -16,6 +16,7 @@
 #include "util/error.h"
 #include "util/exposure.h"
 #include "util/file_hash.h"
+#include "util/frame_names.h"
 #include "util/image.h"
 #include "util/progress.h"
 
@@ -403,7 +404,8 @@ void refuse_mixed_encodings(const std::vector<std::string>& photos, const std::s
     }
 }
 
-// The image files of a folder, in name order (a sequence's frames are named by their time).
+// The image files of a folder, in name order as people number them (a sequence's frames are named
+// by their time; "img 9" before "img 10").
 std::vector<std::string> photos_in_folder(const std::string& folder) {
     std::vector<std::string> out;
     for (const auto& e : std::filesystem::directory_iterator(folder)) {
@@ -415,7 +417,7 @@ std::vector<std::string> photos_in_folder(const std::string& folder) {
         for (const char* known : {".jpg", ".jpeg", ".png", ".tif", ".tiff", ".exr", ".hdr", ".heic", ".heif", ".webp"})
             if (ext == known) out.push_back(path);
     }
-    std::sort(out.begin(), out.end());
+    std::sort(out.begin(), out.end(), natural_less);
     if (out.empty())
         throw_file_error(folder,
                          "no photographs in this folder (.jpg, .jpeg, .png, .tif, .tiff, .exr, .hdr, .heic, .webp)");

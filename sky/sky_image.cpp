@@ -10,6 +10,7 @@
 #include "sky/fisheye.h"
 #include "sky/sun_position.h"
 #include "util/error.h"
+#include "util/frame_names.h"
 #include "util/parse.h"
 #include "util/progress.h"
 
@@ -396,7 +397,7 @@ bool written_beside_a_sky(const std::string& path) {
 }
 
 std::vector<std::string> skies_in_time_order(std::vector<std::string> files) {
-    std::sort(files.begin(), files.end());
+    std::sort(files.begin(), files.end(), natural_less);  // "sky 9" before "sky 10" when no time says
     std::vector<double> clocks, utc;
     bool all_clocks = true, all_utc = true, any_clock_set = false;
     for (const std::string& f : files) {

@@ -27,4 +27,27 @@ std::optional<int> numbered_index(const std::string& name, const std::string& pr
 
 std::string numbered_pattern(const std::string& prefix, const std::string& ext) { return prefix + "_%04d" + ext; }
 
+bool natural_less(const std::string& a, const std::string& b) {
+    auto digit = [](char c) { return c >= '0' && c <= '9'; };
+    size_t i = 0, j = 0;
+    while (i < a.size() && j < b.size()) {
+        if (digit(a[i]) && digit(b[j])) {
+            size_t ei = i, ej = j;
+            while (ei < a.size() && digit(a[ei])) ++ei;
+            while (ej < b.size() && digit(b[ej])) ++ej;
+            size_t zi = i, zj = j;  // past the leading zeros
+            while (zi + 1 < ei && a[zi] == '0') ++zi;
+            while (zj + 1 < ej && b[zj] == '0') ++zj;
+            if (ei - zi != ej - zj) return ei - zi < ej - zj;  // fewer significant digits: smaller
+            if (const int c = a.compare(zi, ei - zi, b, zj, ej - zj); c != 0) return c < 0;
+            if (ei - i != ej - j) return ei - i > ej - j;  // the same number: more zeros first
+            i = ei, j = ej;
+        } else {
+            if (a[i] != b[j]) return static_cast<unsigned char>(a[i]) < static_cast<unsigned char>(b[j]);
+            ++i, ++j;
+        }
+    }
+    return a.size() - i < b.size() - j;
+}
+
 }  // namespace dynsky

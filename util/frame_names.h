@@ -18,4 +18,9 @@ std::optional<int> numbered_index(const std::string& name, const std::string& pr
 // The printf pattern of those names ("frame_%04d.png"), for ffmpeg.
 std::string numbered_pattern(const std::string& prefix, const std::string& ext);
 
+// Names in the order people number them: runs of digits compared as numbers ("img 9" before
+// "img 10", "sky (2)" before "sky (11)"), the rest byte by byte; equal numbers with more leading
+// zeros first, so the order is total. For folders of frames whose files say no time.
+bool natural_less(const std::string& a, const std::string& b);
+
 }  // namespace dynsky

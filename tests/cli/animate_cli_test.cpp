@@ -401,6 +401,24 @@ TEST(AnimateCli, FrameRangesEqualOneRun) {
     fs::remove_all(dir);
 }
 
+// Output folders with ordinary names ffmpeg reads as its own syntax ('%' as a pattern, a leading
+// '-' as an option, 'word:' as a protocol) get their videos and contact sheet: they lost them after
+// the render.
+TEST(AnimateCli, VideosOfFoldersWithPercentDashOrColonNames) {
+    const std::string dir = test::temp_dir("animate_odd_names");
+    for (const std::string name : {"100% cover", "-take2", "shot:2"}) {
+        const std::string cmd = std::string(DYNSKY_EXE) +
+                                " animate builtin --sky procedural:3 --model procedural --sky-res 32 --res 16x10 "
+                                "--spp 1 --duration 0.5 --fps 4 --threads 2 -q --out='" +
+                                name + "'";
+        auto r = test::run_command("cd '" + dir + "' && " + cmd);
+        EXPECT_EQ(r.exit_code, 0) << name << "\n" << r.output;
+        for (const char* f : {"/animation.mp4", "/sky.mp4", "/contact_sheet.png"})
+            EXPECT_TRUE(fs::exists(dir + "/" + name + f)) << name << f;
+    }
+    fs::remove_all(dir);
+}
+
 // A shorter animation rendered into the folder of a longer one: its videos hold its own frames
 // only (the 8 of the first run were encoded as well), and its timings.csv rows; frames numbered
 // from 10000 on count for `temporal` (it read only four-digit names).

@@ -67,19 +67,34 @@ TEST(SkyModelCli, PredictWritesStepsAndStats) {
     EXPECT_EQ(rows, 5);  // step 0 (the input) and 4 steps
 
     // A shorter prediction into the same folder leaves none of the earlier one's steps (they read
-    // as this sky's future: `animate --sky` took the stale step 4 as its last frame).
-    std::ofstream(dir + "/out/step_0003.png") << "a stale preview";
+    // as this sky's future: `animate --sky` took the stale step 4 as its last frame); a file of the
+    // user's that happens to be named as a step is left, said (it was deleted too).
+    std::ofstream(dir + "/out/step_0003.png") << "my holiday photo";
     std::ofstream(dir + "/out/steps.txt") << "not a step";
     r = test::run_command(dynsky("sky predict --model advect --in " + in + " --steps 2 --out " + dir + "/out"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_TRUE(fs::exists(dir + "/out/step_0001.exr"));
     EXPECT_TRUE(fs::exists(dir + "/out/step_0002.exr"));
-    EXPECT_FALSE(fs::exists(dir + "/out/step_0003.png"));
+    EXPECT_TRUE(fs::exists(dir + "/out/step_0003.png"));
+    EXPECT_NE(r.output.find("step_0003.png is named as a step but is not a sky dynsky wrote: left as it is"),
+              std::string::npos)
+        << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/out/step_0003.exr"));
     EXPECT_FALSE(fs::exists(dir + "/out/step_0004.exr"));
     EXPECT_TRUE(fs::exists(dir + "/out/steps.txt"));
-    // (All three of its step files go before the first step is written: a run stopped midway
-    // left the earlier run's later steps after its own.)
-    EXPECT_NE(r.output.find("removed 3 step file(s) of an earlier prediction"), std::string::npos) << r.output;
+    // (Both of its step files go before the first step is written: a run stopped midway left the
+    // earlier run's later steps after its own.)
+    EXPECT_NE(r.output.find("removed 2 step file(s) of an earlier prediction"), std::string::npos) << r.output;
+    // One this run would write over is refused, untouched.
+    std::ofstream(dir + "/out/step_0001.exr") << "my notes";
+    r = test::run_command(dynsky("sky predict --model advect --in " + in + " --steps 2 --out " + dir + "/out"));
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("step_0001.exr: is not a sky dynsky wrote"), std::string::npos) << r.output;
+    std::ifstream notes(dir + "/out/step_0001.exr");
+    std::string kept;
+    std::getline(notes, kept);
+    EXPECT_EQ(kept, "my notes");
+    fs::remove(dir + "/out/step_0001.exr");
 
     // Continued from its own last step into the same folder: its inputs stay (they were removed
     // as stale steps), the rest of the earlier run's steps go.

@@ -264,6 +264,17 @@ TEST(SkyImage, ResampledUpOrDownKeepsTheRimAndTheMetadata) {
     }
 }
 
+// A folder of skies that say no time is taken in the order people number them: "s 11" is the last,
+// "s 10" the one before it (plain string order made "s 9" the last and measured the motion backwards).
+TEST(SkyImage, ASequenceWithoutTimesIsInNumberOrder) {
+    const std::string dir = test::temp_dir("sky_sequence_numbers");
+    for (const char* name : {"s 9.exr", "s 10.exr", "s 11.exr"}) save_sky(dir + "/" + name, SkyImage(16));
+    std::string previous;
+    EXPECT_EQ(std::filesystem::path(sequence_start(dir, true, &previous, true)).filename(), "s 11.exr");
+    EXPECT_EQ(std::filesystem::path(previous).filename(), "s 10.exr");
+    std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace dynsky
 
