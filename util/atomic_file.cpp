@@ -15,6 +15,7 @@
 
 #include "util/error.h"
 #include "util/frame_names.h"
+#include "util/file_hash.h"
 
 namespace dynsky {
 
@@ -159,9 +160,19 @@ void TemporaryFile::commit(const std::string& what, bool may_be_empty) {
 
 std::string temporary_path(const std::string& path) {
     fs::path target(path);
-    return (target.parent_path() /
-            (".tmp-" + target.stem().string() + "-" + std::to_string(::getpid()) + target.extension().string()))
-        .string();
+    std::string stem = target.stem().string();
+    const std::string pid = std::to_string(::getpid()), ext = target.extension().string();
+    // A name may have 255 bytes: the temporary's 6 + pid more made valid long names (82 CJK
+    // characters) fail after the whole render. Too long, the stem is cut at a character's start and
+    // a hash of the whole keeps temporaries of different names apart.
+    constexpr size_t kNameMax = 255;
+    const size_t room = kNameMax - std::min(kNameMax, 6 + pid.size() + ext.size());
+    if (stem.size() > room && room > 9) {
+        size_t cut = room - 9;
+        while (cut > 0 && (static_cast<unsigned char>(stem[cut]) & 0xC0) == 0x80) --cut;
+        stem = stem.substr(0, cut) + "~" + hex64(fnv1a(stem.data(), stem.size())).substr(0, 8);
+    }
+    return (target.parent_path() / (".tmp-" + stem + "-" + pid + ext)).string();
 }
 
 OutputFolder::OutputFolder(const std::string& path) {

@@ -138,6 +138,16 @@ TEST(AtomicFile, WritesExactBytesAndEmptyFiles) {
     write_file_atomic(dir + "/empty.csv", "");
     EXPECT_EQ(fs::file_size(dir + "/empty.csv"), 0u);
     EXPECT_THROW(write_file_atomic(dir + "/empty.csv/inside", "x"), Error);  // a file is no folder
+    // Names up to the 255 bytes a file name may have: 82 CJK characters failed (the temporary's name
+    // was 11 bytes longer); two long names alike but at their end stay apart.
+    std::string long_name;
+    for (int k = 0; k < 41; ++k) long_name += "\u65e5\u672c";  // 246 bytes
+    for (const char* end : {"x.exr", "y.exr"}) {
+        write_file_atomic(dir + "/" + long_name + end, end);
+        EXPECT_EQ(fs::file_size(dir + "/" + long_name + end), 5u) << end;
+        EXPECT_LE(fs::path(temporary_path(dir + "/" + long_name + end)).filename().string().size(), 255u);
+    }
+    EXPECT_NE(temporary_path(dir + "/" + long_name + "x.exr"), temporary_path(dir + "/" + long_name + "y.exr"));
     fs::remove_all(dir);
 }
 
