@@ -32,6 +32,23 @@ namespace dynsky {
 
 namespace {
 
+// A file name as a Markdown link's target: what CommonMark or a URL reads as syntax (a space ends
+// the target, '#' starts a fragment, '%' an escape, parentheses and angle brackets the link) is
+// percent-encoded; "my report_64.png" showed no chart.
+std::string link_target(const std::string& name) {
+    std::string out;
+    for (const char c : name) {
+        if (std::string(" #%()<>[]\\").find(c) == std::string::npos) {
+            out += c;
+        } else {
+            char hex[4];
+            std::snprintf(hex, sizeof hex, "%%%02X", static_cast<unsigned char>(c));
+            out += hex;
+        }
+    }
+    return out;
+}
+
 namespace fs = std::filesystem;
 
 struct Accumulator {
@@ -550,7 +567,7 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
                         seq.name + ", " + std::to_string(r) + " px: PSNR over the Farneback baseline", "steps ahead",
                         "PSNR minus Farneback's (dB)", false);
         md << "![PSNR over the Farneback baseline against horizon at " << r << " px]("
-           << fs::path(base + ".png").filename().string() << ")\n\n";
+           << link_target(fs::path(base + ".png").filename().string()) << ")\n\n";
     }
     // The paper's table: MSE, PSNR and SSIM one step ahead.
     md << "## One step ahead (the paper's table)\n\n";

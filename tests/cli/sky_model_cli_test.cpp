@@ -451,8 +451,13 @@ TEST(SkyModelCli, EvaluateScoresAFolderOfImportedSkiesAsItsPhotographs) {
     // Without the masks of filled pixels the filled arm and band are scored too: not the same.
     for (const auto& e : fs::directory_iterator(dir + "/skies"))
         if (e.path().string().find(".filled.png") != std::string::npos) fs::remove(e.path());
-    r = test::run_command(dynsky("sky evaluate --photos " + dir + "/skies" + common + dir + "/unmasked.md"));
+    // (A report named with a space and a '#': its chart links are encoded, the charts beside it.)
+    r = test::run_command(dynsky("sky evaluate --photos " + dir + "/skies" + common + "'" + dir + "/un masked#.md'"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(read_text(dir + "/un masked#.md").find("](un%20masked%23_64.png)"), std::string::npos);
+    EXPECT_TRUE(fs::exists(dir + "/un masked#_64.png"));
+    fs::rename(dir + "/un masked#.md", dir + "/unmasked.md");
+    fs::rename(dir + "/un masked#.csv", dir + "/unmasked.csv");
     EXPECT_NE(evaluation_psnr(dir + "/unmasked.csv").at("256/1/persistence"), from_photos.at("256/1/persistence"));
     EXPECT_NE(read_text(dir + "/unmasked.md").find("no STEM.filled.png beside the skies"), std::string::npos);
     // A photograph among the skies would be left out unseen: refused, named.
