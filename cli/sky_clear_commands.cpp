@@ -92,6 +92,9 @@ void run_clear(const ClearOptions& o) {
     // Check everything before computing, so a bad run writes nothing.
     check_extension("--out", o.out, ".exr");
     if (!o.preview.empty()) check_extension("--preview", o.preview, ".png");
+    // Every output before any work (a folder named as --preview failed after the sky was written).
+    for (const std::string& f : {o.out, o.preview})
+        if (!f.empty()) check_output_file(f);
     check_sky_resolution(o.resolution);
     validate_hosek_wilkie_range(o.turbidity, o.albedo);
     UtcTime t;
@@ -142,6 +145,8 @@ void run_latlong(const LatLongOptions& o) {
     check_extension("--out", o.out, ".exr");
     if (!o.preview.empty()) check_extension("--preview", o.preview, ".png");
     check_outputs_are_not_inputs({o.out, o.preview}, {o.sky});
+    for (const std::string& f : {o.out, o.preview})
+        if (!f.empty()) check_output_file(f);
     Color ground = parse_ground(o.ground);
     SkyImage sky = load_sky(o.sky);
     // At most what dynsky reads back (kMaxImageSide), the default too.

@@ -648,8 +648,11 @@ class GltfLoader {
                     size_t colon = l.find(':');
                     std::string missing = colon == std::string::npos ? l : l.substr(colon + 1);
                     size_t a = missing.find_first_not_of(' ');
+                    // Where it was looked for, as the missing texture's error says: a scene given
+                    // through a link to the file resolves its buffers beside the link.
                     fail("missing file " + in_quotes(a == std::string::npos ? missing : missing.substr(a)) +
-                         " (a buffer referenced by the glTF)");
+                         " (a buffer referenced by the glTF, looked for in " +
+                         in_quotes(fs::absolute(folder).lexically_normal().string()) + ")");
                 }
             fail("cannot load glTF: " + (text.empty() ? std::string("tinygltf failed without a message") : text));
         }

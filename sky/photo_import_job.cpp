@@ -56,6 +56,8 @@ ImportPlan plan_import(const OnePhoto& o, bool verbose) {
     if (!o.preview.empty()) check_extension("--preview", o.preview, ".png");
     if (!o.filled_mask.empty()) check_extension("--filled-mask", o.filled_mask, ".png");
     check_outputs_are_not_inputs({o.out, o.preview, o.filled_mask}, {o.photo, o.mask});
+    for (const std::string& f : {o.out, o.preview, o.filled_mask})  // before any work, not after the sky
+        if (!f.empty()) check_output_file(f);
     if (!o.preview.empty() && !o.filled_mask.empty() &&
         std::filesystem::weakly_canonical(o.preview) == std::filesystem::weakly_canonical(o.filled_mask))
         throw Error("--filled-mask " + o.filled_mask + ": the same file as --preview (one would replace the other)");

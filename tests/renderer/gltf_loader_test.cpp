@@ -829,6 +829,13 @@ TEST(GltfLoader, UrisWithAPlusReadTheFileWithThePlus) {
     std::string e = load_error(path);
     EXPECT_NE(e.find("missing texture file"), std::string::npos) << e;
     EXPECT_NE(e.find("t+1.png"), std::string::npos) << e;
+    // A missing buffer says where it was looked for too.
+    fs::remove(dir + "/a+b.bin");
+    e = load_error(path);
+    EXPECT_NE(e.find("missing file 'a+b.bin' (a buffer referenced by the glTF, looked for in '" +
+                     fs::absolute(dir).lexically_normal().string() + "')"),
+              std::string::npos)
+        << e;
     fs::remove_all(dir);
 }
 
