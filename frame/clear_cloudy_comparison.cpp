@@ -278,6 +278,7 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
         if (!model.empty()) m.strings["dynsky:sky_model"] = model;
         m.strings["dynsky:scene"] = o.scene.scene;
         m.strings["dynsky:camera"] = scene.camera.name;
+        record_image_inputs(&m, scene.path, o.sky);     // the build, the files, how the sky file was taken
         m.strings["DateTime"] = "    :  :     :  :  ";  // EXIF's unknown: not the time of writing
     };
     describe(&a, *clear0, "");

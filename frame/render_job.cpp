@@ -16,7 +16,6 @@
 #include "util/exposure.h"
 #include "util/image.h"
 #include "util/parse.h"
-#include "util/version.h"
 
 namespace dynsky {
 
@@ -110,21 +109,11 @@ void run_render_job(const RenderJob& o) {
     image.metadata.numbers["dynsky:sky_distribution_seconds"] = light.last_build_seconds();
     image.metadata.numbers["dynsky:ground_albedo"] = o.scene.ground_albedo;
     image.metadata.numbers["dynsky:time"] = sky->time_seconds;  // frame time (glossary)
-    image.metadata.strings["Software"] = dynsky_version();      // the build (util/version.h)
     image.metadata.strings["dynsky:sky"] = sky->source;
     image.metadata.strings["dynsky:scene"] = o.scene.scene;
-    // Which files, exactly (path as found, size, hash): a sky file's own source names what made it,
-    // not the file, and a relative scene name is looked up from the working folder first, then among
-    // the shipped scenes, so one command gave different images on two nodes with identical headers.
-    auto record_file = [&image](const std::string& key, const std::string& path) {
-        image.metadata.strings[key] = std::filesystem::absolute(path).lexically_normal().string();
-        image.metadata.strings[key + "_contents"] = describe_scene_input(path);  // sizes and hashes
-    };
-    if (o.scene.scene != "builtin") record_file("dynsky:scene_file", loaded.path);
-    if (o.generated.sky_turn_deg != 0) image.metadata.numbers["dynsky:sky_turn_deg"] = o.generated.sky_turn_deg;
-    if (o.generated.sky_resolution_given && !o.sky.empty() && !is_generated_sky(o.sky))
-        image.metadata.numbers["dynsky:sky_res"] = o.generated.sky_resolution;  // the file taken at it
-    if (!o.sky.empty() && !is_generated_sky(o.sky)) record_file("dynsky:sky_file", o.sky);
+    SkySourceSpec taken = o.generated;
+    taken.sky = o.sky;
+    record_image_inputs(&image.metadata, loaded.path, taken);
     image.metadata.strings["dynsky:camera"] = camera.name;
     if (!settings.region.empty())
         image.metadata.strings["dynsky:region"] = o.region;  // x0,y0,x1,y1 of the full --res image

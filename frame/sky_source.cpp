@@ -19,6 +19,7 @@
 #include "util/progress.h"
 #include "util/parse.h"
 #include "util/image.h"
+#include "util/version.h"
 
 namespace dynsky {
 
@@ -54,6 +55,21 @@ uint64_t procedural_seed(const std::string& sky) {
 }  // namespace
 
 bool is_generated_sky(const std::string& sky) { return sky == "clear" || sky.rfind("procedural", 0) == 0; }
+
+void record_image_inputs(ImageMetadata* m, const std::string& scene_path, const SkySourceSpec& o) {
+    m->strings["Software"] = dynsky_version();  // the build (util/version.h)
+    auto record_file = [m](const std::string& key, const std::string& path) {
+        m->strings[key] = fs::absolute(path).lexically_normal().string();
+        m->strings[key + "_contents"] = describe_scene_input(path);  // sizes and hashes
+    };
+    if (!scene_path.empty() && scene_path != "builtin") record_file("dynsky:scene_file", scene_path);
+    if (o.sky.empty() || is_generated_sky(o.sky)) return;
+    std::error_code ec;
+    if (fs::is_directory(o.sky, ec)) m->strings["dynsky:sky_folder"] = fs::absolute(o.sky).lexically_normal().string();
+    else record_file("dynsky:sky_file", o.sky);
+    if (o.sky_turn_deg != 0) m->numbers["dynsky:sky_turn_deg"] = o.sky_turn_deg;
+    if (o.sky_resolution_given) m->numbers["dynsky:sky_res"] = o.sky_resolution;  // the file taken at it
+}
 
 SkyFileOptions sky_file_options(const SkySourceSpec& o, int latlong_limit) {
     if (!std::isfinite(o.sky_turn_deg)) throw Error("--sky-turn must be a finite number of degrees");
@@ -161,8 +177,8 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
                                                     previous_file);
             if (motion.previous_dt == 0 && !reports_silenced())
                 std::fputs(unknown_previous_gap_note(sky_file, previous_file).c_str(), stderr);
-            if (!reports_silenced())
-                std::fputs(long_previous_gap_warning(motion.previous_dt, sky_file, previous_file).c_str(), stderr);
+            // A warning, said under -q too (the glossary's -q silences reports, not warnings).
+            std::fputs(long_previous_gap_warning(motion.previous_dt, sky_file, previous_file).c_str(), stderr);
         }
         input.time_seconds = 0;
         if (input.source.empty()) input.source = sky_file;
@@ -172,8 +188,9 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
         // apart, a photograph's --time given without its --lat/--lon (Paris by default) lit the
         // clear sky from the west while the photograph's light came from the east.
         // So is a sky that records no sun but shows one (a downloaded HDRI): its sun moved to the
-        // clock's while its glow and light stayed (65 degrees apart, said only as a note).
-        if (clock_sun && !reports_silenced()) {
+        // clock's while its glow and light stayed (65 degrees apart, said only as a note). Warnings:
+        // said under -q too (farm runs use -q).
+        if (clock_sun) {
             const std::optional<Vec3d> own = input.sun_direction
                                                  ? std::optional<Vec3d>(input.sun_direction->cast<double>())
                                                  : sun_from_brightest_pixels(input);
@@ -181,15 +198,16 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
             if (apart > 3 && input.sun_direction)
                 std::fprintf(stderr,
                              "dynsky: warning: %s records its sun %.0f degrees from where --time, --lat and --lon put "
-                             "it: the clock's sun is used (give the place and time the sky was taken at)\n",
-                             sky_file.c_str(), apart);
+                             "it: the clock's sun is used (give the place and time the sky was taken at, or leave "
+                             "--time out to keep the sky's own sun%s)\n",
+                             sky_file.c_str(), apart, o.sky_turn_deg != 0 ? ", turned by --sky-turn" : "");
             else if (apart > 3)
                 std::fprintf(stderr,
                              "dynsky: warning: %s records no sun but shows one %.0f degrees from where --time, "
                              "--lat and --lon put it: the sun is moved there and the sky's glow stays where it is "
-                             "(leave --time out to keep the sky's own sun, or give the place and time it was taken "
-                             "at)\n",
-                             sky_file.c_str(), apart);
+                             "(leave --time out to keep the sky's own sun%s, or give the place and time it was "
+                             "taken at)\n",
+                             sky_file.c_str(), apart, o.sky_turn_deg != 0 ? ", turned by --sky-turn" : "");
         }
         scale = bring_to_model_scale(&input, &motion.previous, clock_sun);
         if (scale.apply && !reports_silenced())

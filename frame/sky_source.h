@@ -68,6 +68,14 @@ struct StepModelSpec {
 // True for the skies made here: 'clear' and 'procedural[:SEED]'.
 bool is_generated_sky(const std::string& sky);
 
+// What a rendered image was made from beyond its settings (`render`, `compare`): the build
+// (Software), the scene and sky files as found, with their contents' sizes and hashes
+// (dynsky:scene_file, dynsky:sky_file and their _contents; a relative scene name is looked up from
+// the working folder first, then among the shipped scenes, so one command gave different images on
+// two nodes with identical headers), and how the sky file was taken (dynsky:sky_turn_deg,
+// dynsky:sky_res). scene_path: the file loaded ("builtin": none).
+void record_image_inputs(ImageMetadata* m, const std::string& scene_path, const SkySourceSpec& sky);
+
 // How a sky file of this spec is taken (--sky-res when given, --sky-turn; sky/latlong.h), a
 // lat-long at most latlong_limit px unasked (0: its height).
 SkyFileOptions sky_file_options(const SkySourceSpec& spec, int latlong_limit = 0);

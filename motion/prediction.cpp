@@ -66,7 +66,7 @@ void write_prediction(const PredictionOptions& given) {
         motion.previous_dt = previous_frame_gap(sky, *motion.previous, o.previous_dt, o.in, o.previous);
         if (motion.previous_dt == 0 && !o.quiet)
             std::fputs(unknown_previous_gap_note(o.in, o.previous).c_str(), stderr);
-        if (!o.quiet) std::fputs(long_previous_gap_warning(motion.previous_dt, o.in, o.previous).c_str(), stderr);
+        std::fputs(long_previous_gap_warning(motion.previous_dt, o.in, o.previous).c_str(), stderr);  // under -q too
     }
     // A sky in other units than the models' (motion/radiance_scale.h) moves divided by its scale; every
     // step is written multiplied back.
@@ -134,11 +134,9 @@ void write_prediction(const PredictionOptions& given) {
                                                     "; refusing to overwrite it: move it or choose another --out");
     }
     for (const fs::path& p : stale) fs::remove(p);
-    for (const fs::path& p : foreign)
-        if (!o.quiet)
-            std::fprintf(stderr,
-                         "dynsky: warning: %s is named as a step but is not a sky dynsky wrote: left as it is\n",
-                         p.string().c_str());
+    for (const fs::path& p : foreign)  // a warning: under -q too
+        std::fprintf(stderr, "dynsky: warning: %s is named as a step but is not a sky dynsky wrote: left as it is\n",
+                     p.string().c_str());
     if (!o.stats.empty()) remove_stale_marker(o.stats);
     if (!stale.empty() && !o.quiet)
         std::fprintf(stderr, "dynsky: note: removed %zu step file(s) of an earlier prediction from %s\n", stale.size(),

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
+#include <set>
 #include <sstream>
 
 #include "sky/hdr_recovery.h"
@@ -185,16 +186,19 @@ std::string import_settings_key(const OnePhoto& o) {
     return hex64(fnv1a(text.data(), text.size()));
 }
 
-// The sky, filled mask and preview of a sequence's photograph are there, whole (each file is written
-// whole or not at all, util/atomic_file.h) and made from the same photograph with the same settings.
+// The sky, filled mask and preview of a sequence's photograph are there, each decoding whole (a
+// folder half copied, a file cut short: read to the end, the sky finite), and the sky was made from
+// the same photograph with the same settings.
 bool imported_earlier(const OnePhoto& o, const std::string& key) {
-    std::error_code ec;
-    for (const std::string& f : {o.out, o.filled_mask, o.preview})
-        if (!std::filesystem::is_regular_file(f, ec)) return false;
     try {
-        return image_header_strings(o.out, {kImportSettingsKey}).front() == key;
+        const Image sky = read_image(o.out);
+        if (sky.metadata.strings.count(kImportSettingsKey) == 0 || sky.metadata.strings.at(kImportSettingsKey) != key ||
+            first_non_finite(sky) >= 0)
+            return false;
+        read_image(o.filled_mask), read_image(o.preview);
+        return true;
     } catch (const Error&) {
-        return false;  // unreadable: imported again
+        return false;  // missing, cut short or unreadable: imported again
     }
 }
 
@@ -635,6 +639,23 @@ void run_photo_import(const PhotoImportJob& o) {
                         "settings (remove them to import them again)")
                            .c_str()
                      : "");
+    // Skies an earlier import left for photographs no longer given: a folder read as a sequence takes
+    // them too (`sky predict --sky FOLDER` moved on from one). Said, not removed: they may be wanted.
+    std::vector<std::string> others;
+    std::set<std::string> ours;
+    for (const std::string& f : outputs) ours.insert(fs::path(f).filename().string());
+    for (const auto& e : fs::directory_iterator(o.out)) {
+        const std::string path = e.path().string(), name = e.path().filename().string();
+        if (file_extension(path) != ".exr" || ours.count(name)) continue;
+        if (!image_header_strings(path, {kImportSettingsKey}).front().empty()) others.push_back(name);
+    }
+    std::sort(others.begin(), others.end(), natural_less);
+    if (!others.empty())
+        std::fprintf(stderr,
+                     "dynsky: warning: %s also holds %zu sk%s an earlier import made from photographs not given this "
+                     "time (%s%s): a command that reads the folder as a sequence takes %s too\n",
+                     o.out.c_str(), others.size(), others.size() == 1 ? "y" : "ies", others.front().c_str(),
+                     others.size() > 1 ? ", ..." : "", others.size() == 1 ? "it" : "them");
     if (!failed.empty())
         throw Error(std::to_string(failed.size()) + " of " + std::to_string(photos.size()) +
                     " photographs not imported (each named above), the first " + failed.front());

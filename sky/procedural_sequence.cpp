@@ -214,12 +214,16 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
     ImageMetadata recorded;
     recorded.strings[kFrameSettingsKey] = key;
     int kept = 0;
+    // Each file decoding whole (a frame or flow cut short is made again), the frame finite and of
+    // these settings.
     auto made_earlier = [&](const std::vector<fs::path>& files) {
-        std::error_code ec;
-        for (const fs::path& f : files)
-            if (!fs::is_regular_file(f, ec)) return false;
         try {
-            return image_header_strings(files.front().string(), {kFrameSettingsKey}).front() == key;
+            const Image frame = read_image(files.front().string());
+            const auto it = frame.metadata.strings.find(kFrameSettingsKey);
+            if (it == frame.metadata.strings.end() || it->second != key || first_non_finite(frame) >= 0) return false;
+            for (size_t k = 1; k < files.size(); ++k)
+                if (first_non_finite(read_image(files[k].string())) >= 0) return false;
+            return true;
         } catch (const Error&) {
             return false;
         }

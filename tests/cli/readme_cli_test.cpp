@@ -76,6 +76,16 @@ TEST(ReadmeCommands, CompareWithItsDefaultsAndWithASkyExr) {
     r = in_folder(dir, "compare scenes/tower/tower.gltf --sky sky.exr --out cmp2/" + small);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_TRUE(non_empty(fs::path(dir) / "cmp2" / "illuminance.csv"));
+    // Its images say what made them, as render's do: the build, the files found, how the sky was taken.
+    for (const char* f : {"clear.exr", "cloudy.exr"}) {
+        const Image im = read_image((fs::path(dir) / "cmp2" / f).string());
+        EXPECT_EQ(im.metadata.strings.at("Software").rfind("dynsky ", 0), 0u) << f;
+        EXPECT_TRUE(fs::equivalent(im.metadata.strings.at("dynsky:sky_file"), fs::path(dir) / "sky.exr")) << f;
+        EXPECT_TRUE(fs::equivalent(im.metadata.strings.at("dynsky:scene_file"),
+                                   fs::path(DYNSKY_SOURCE_DIR) / "scenes/tower/tower.gltf"))
+            << f;
+        EXPECT_EQ(im.metadata.numbers.at("dynsky:sky_res"), 128) << f;
+    }
 }
 
 TEST(ReadmeCommands, AnimateFromAnotherFolder) {

@@ -275,6 +275,20 @@ TEST(SkyImportCli, SequenceFolderImportsEveryFrameUnderOneCircle) {
     EXPECT_NE(read_image(noon_sky).pixels, noon_before.pixels);
     r = test::run_command(exe() + " sky import " + dir + "/photos" + common + " -o " + dir + "/skies");  // back
     EXPECT_EQ(read_image(noon_sky).pixels, noon_before.pixels);
+    // A sky cut short (a folder half copied) is imported again, not kept.
+    const std::string dawn_sky = dir + "/skies/IMG_20200812_072000.exr";
+    fs::resize_file(dawn_sky, fs::file_size(dawn_sky) / 2);
+    r = test::run_command(exe() + " sky import " + dir + "/photos" + common + " -o " + dir + "/skies");
+    EXPECT_NE(r.output.find(": 3 of them kept from an earlier run"), std::string::npos) << r.output;
+    EXPECT_NO_THROW(read_image(dawn_sky));
+    // A photograph no longer given: its sky stays, said (a folder read as a sequence takes it too).
+    fs::rename(dir + "/photos/IMG_20200812_134000.jpg", dir + "/IMG_20200812_134000.jpg");
+    r = test::run_command(exe() + " sky import " + dir + "/photos" + common + " -o " + dir + "/skies");
+    EXPECT_NE(r.output.find("also holds 1 sky an earlier import made from photographs not given this time "
+                            "(IMG_20200812_134000.exr)"),
+              std::string::npos)
+        << r.output;
+    fs::rename(dir + "/IMG_20200812_134000.jpg", dir + "/photos/IMG_20200812_134000.jpg");
 
     // The circle used, given to a single import of the dawn frame, gives its sky bit for bit.
     const size_t at = r.output.find("sky circle: centre (");

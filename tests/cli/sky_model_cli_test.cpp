@@ -199,6 +199,10 @@ TEST(SkyModelCli, ASunTheClockMovesFarFromTheFilesIsTold) {
     r = test::run_command(dynsky(timeline + "/a --time 2026-06-21T08:00:00Z 2>&1"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("records its sun"), std::string::npos) << r.output;
+    // A warning, said under -q too (farm runs use -q; it was silenced with the reports).
+    r = test::run_command(dynsky(timeline + "/aq -q --time 2026-06-21T08:00:00Z 2>&1"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("records its sun"), std::string::npos) << r.output;
     r = test::run_command(dynsky(timeline + "/b --time 2026-06-21T16:00:00Z 2>&1"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_EQ(r.output.find("records its sun"), std::string::npos) << r.output;

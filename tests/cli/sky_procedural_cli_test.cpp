@@ -129,6 +129,12 @@ TEST(SkyProceduralCli, AStoppedSequenceKeepsItsFinishedFrames) {
     EXPECT_TRUE(fs::exists(dir + "/frame_0002.png"));
     EXPECT_EQ(read_image(dir + "/frame_0002.exr").pixels, third.pixels);
     EXPECT_EQ(read(dir + "/manifest.json"), manifest);
+    // A flow cut short is made again with its frame (flows are the known motion training reads).
+    fs::resize_file(dir + "/flow_0001.exr", 100);
+    r = test::run_command(std::string(DYNSKY_EXE) + " sky procedural " + args);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("(3 of them kept"), std::string::npos) << r.output;
+    EXPECT_NO_THROW(read_image(dir + "/flow_0001.exr"));
     r = test::run_command(std::string(DYNSKY_EXE) + " sky procedural --coverage 0.7 " + args);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_EQ(r.output.find("kept from an earlier run"), std::string::npos) << r.output;
