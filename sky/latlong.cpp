@@ -201,6 +201,32 @@ Vec3d turned_direction(const Vec3d& w, double degrees) {
 }  // namespace
 
 SkyImage turned_about_zenith(const SkyImage& sky, double degrees) {
+    // A quarter turn (90, 180, 270) is a permutation of the pixels, exact: the round trip below
+    // blurs (a cloudy sky lost about half its pixel-scale detail turned by 90, its sun's peak halved).
+    if (std::isfinite(degrees)) {
+        const double quarter = std::remainder(degrees, 360.0) / 90.0;
+        const long quarters = std::lround(quarter);
+        if (std::abs(quarter - double(quarters)) < 1e-9) {
+            const int turns = int(((quarters % 4) + 4) % 4);
+            if (turns == 0) return sky;
+            // Azimuth grows from north (top) towards east (left): counter-clockwise in the image.
+            const int code = turns == 1 ? cv::ROTATE_90_COUNTERCLOCKWISE : turns == 2 ? cv::ROTATE_180
+                                                                                     : cv::ROTATE_90_CLOCKWISE;
+            const int n = sky.resolution;
+            SkyImage out = sky;
+            cv::Mat in(n, n, CV_32FC3, const_cast<float*>(sky.rgb.data())), turned;
+            cv::rotate(in, turned, code);
+            out.rgb.assign(turned.ptr<float>(), turned.ptr<float>() + size_t(n) * n * 3);
+            if (!sky.filled.empty()) {
+                cv::Mat mask(n, n, CV_8UC1, const_cast<unsigned char*>(sky.filled.data())), turned_mask;
+                cv::rotate(mask, turned_mask, code);
+                out.filled.assign(turned_mask.ptr<unsigned char>(), turned_mask.ptr<unsigned char>() + size_t(n) * n);
+            }
+            if (sky.sun_direction)
+                out.sun_direction = turned_direction(sky.sun_direction->cast<double>(), 90.0 * turns).cast<float>();
+            return out;
+        }
+    }
     Image ll = sky_to_latlong(sky, 4 * sky.resolution);
     degrees = turn_latlong(&ll, degrees);  // what the pixels turn by: the sun and mask the same
     if (degrees == 0) return sky;          // a whole turn, or less than a column: no round trip's blur

@@ -67,9 +67,10 @@ void check_latlong_pixels(const Image& image, const std::string& name);
 
 // A sky turned about the zenith: every azimuth (from north towards east) plus `degrees`, its sun
 // and filled mask with it. A lat-long turns exactly (its columns roll, to the nearest column); a
-// fisheye turns through a lat-long of 4N columns and back, both conversions keeping the
-// hemisphere's integral and the sun's energy (a bilinear image rotation loses up to half of a
-// one-pixel sun), at the cost of a little blur.
+// fisheye by a quarter turn exactly (its pixels permuted), by other angles through a lat-long of
+// 4N columns and back, both conversions keeping the hemisphere's integral and the sun's energy (a
+// bilinear image rotation loses up to half of a one-pixel sun), at the cost of blur (about half the
+// pixel-scale detail).
 // Returns the turn done (degrees rounded to whole columns: 360 / W).
 double turn_latlong(Image* latlong, double degrees);
 SkyImage turned_about_zenith(const SkyImage& sky, double degrees);

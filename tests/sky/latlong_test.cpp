@@ -368,6 +368,21 @@ TEST(LatLong, ASkyTurnedAboutTheZenithIsTheSkyOfTheTurnedSun) {
     EXPECT_EQ(turn_latlong(&ll, 100), 90);
     EXPECT_EQ(turn_latlong(&ll, 10), 0);
     EXPECT_EQ(turned_about_zenith(start, 360).rgb, start.rgb);
+    // A quarter turn is exact: the pixels permuted (the sun's peak kept, not halved by a round trip),
+    // the line north of the zenith now east of it (left), the sun at azimuth 190.
+    const SkyImage quarter = turned_about_zenith(start, 90);
+    std::vector<float> a = start.rgb, b = quarter.rgb;
+    std::sort(a.begin(), a.end()), std::sort(b.begin(), b.end());
+    EXPECT_EQ(a, b);
+    int left = 0, filled_quarter = 0;
+    for (int j = 0; j < 128; ++j)
+        for (int i = 0; i < 128; ++i)
+            if (quarter.is_filled(i, j)) ++filled_quarter, left += i < 64 && j >= 63 && j <= 64;
+    EXPECT_EQ(filled_quarter, 20);
+    EXPECT_EQ(left, 20);
+    params.sun_direction = fisheye::direction_from_angles(40 * kDeg, 190 * kDeg);
+    EXPECT_LT((quarter.sun_direction->cast<double>() - params.sun_direction).norm(), 1e-6);
+    EXPECT_EQ(turned_about_zenith(start, -270).rgb, quarter.rgb);
     EXPECT_EQ(turned_about_zenith(start, 0.1).rgb, start.rgb);
     // A bad pixel is named where the file has it, not where the turn put it.
     Image bad(16, 8, 3);
