@@ -146,9 +146,10 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
                                        "measured on it)");
         if (ground && !reports_silenced())
             std::fprintf(stderr,
-                         "dynsky: note: %s is a lat-long sky: its upper half moves, as a %d x %d fisheye (--sky-res: "
-                         "another size); below the horizon is the ground model (--ground-albedo)\n",
-                         file.c_str(), s.resolution, s.resolution);
+                         "dynsky: note: %s is a lat-long sky: its upper half moves, as a %d x %d fisheye%s; below the "
+                         "horizon is the ground model (--ground-albedo)\n",
+                         file.c_str(), s.resolution, s.resolution,
+                         o.sky_resolution_given ? "" : " (--sky-res: another size)");
         return s;
     };
     if (!previous_file.empty()) {

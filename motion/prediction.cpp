@@ -53,10 +53,8 @@ void write_prediction(const PredictionOptions& given) {
     const SkyFileOptions taken{o.resolution, kMovingLatlongLimit, o.turn_deg};
     SkyImage sky = load_sky_or_latlong(o.in, &unused_ground, taken);
     if (unused_ground && !o.quiet)
-        std::fprintf(stderr,
-                     "dynsky: note: %s is a lat-long sky: its upper half moves, as a %d x %d fisheye (--sky-res: "
-                     "another size)\n",
-                     o.in.c_str(), sky.resolution, sky.resolution);
+        std::fprintf(stderr, "dynsky: note: %s is a lat-long sky: its upper half moves, as a %d x %d fisheye%s\n",
+                     o.in.c_str(), sky.resolution, sky.resolution, o.resolution ? "" : " (--sky-res: another size)");
     CloudMotion motion;
     motion.wind = o.wind;
     motion.previous_dt = o.previous_dt;
@@ -194,8 +192,9 @@ void write_prediction(const PredictionOptions& given) {
                           ? "the motion from " + o.previous + " (" + number_text(motion.previous_dt) + " s before)"
                           : std::string(wind);
     }
-    std::string taken_as;  // how the input was taken, when not as it is
-    if (o.resolution > 0) taken_as += ", taken at " + std::to_string(o.resolution) + " px";
+    std::string taken_as;                   // how the input was taken, when not as it is
+    if (o.resolution > 0 || unused_ground)  // asked, or a lat-long's own size (at most kMovingLatlongLimit)
+        taken_as += ", taken at " + std::to_string(sky.resolution) + " px";
     if (o.turn_deg != 0) taken_as += ", turned " + number_text(o.turn_deg, 10) + " deg about the zenith";
     const std::string made_by = "dynsky sky predict from " + o.in + taken_as + " (" + sky.source + "), model " +
                                 folder + ", Delta t " + number_text(dt) + " s, " + motion_text + ", step ";
