@@ -621,6 +621,10 @@ void run_photo_import(const PhotoImportJob& o) {
                 progress.advance();
                 continue;
             }
+            // The earlier sky's preview and mask go first: the sky is written first and carries the key,
+            // so a run stopped after it left the earlier import's preview beside it, kept on resume.
+            std::error_code gone;
+            fs::remove(each.preview, gone), fs::remove(each.filled_mask, gone);
             // The first imported says what it found and did, as a single import does; the rest as it.
             import_one(each, !said, key);
             said = true;
@@ -646,7 +650,8 @@ void run_photo_import(const PhotoImportJob& o) {
     for (const std::string& f : outputs) ours.insert(fs::path(f).filename().string());
     for (const auto& e : fs::directory_iterator(o.out)) {
         const std::string path = e.path().string(), name = e.path().filename().string();
-        if (file_extension(path) != ".exr" || ours.count(name)) continue;
+        if (!e.is_regular_file() || is_hidden_file(path) || file_extension(path) != ".exr" || ours.count(name))
+            continue;  // hidden: a temporary a stopped import left, never read as a sky
         if (!image_header_strings(path, {kImportSettingsKey}).front().empty()) others.push_back(name);
     }
     std::sort(others.begin(), others.end(), natural_less);

@@ -248,7 +248,6 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
         } else {
             frame = sky.render(t, o.resolution, &flow, o.dt);
             frame.source = described + " at t = " + number_text(t) + " s of " + sun_text;  // what re-makes it
-            save_sky(files[0].string(), frame, "", recorded);
             write_image(files[1].string(), flow);
         }
         nlohmann::ordered_json entry;
@@ -269,6 +268,10 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
             entry["preview"] = png;
             entry["flow_preview"] = flow_png;
         }
+        // The frame last: it carries the settings key, so a run stopped after it has every file of
+        // the frame made with those settings (written first, a stop left an earlier run's flow
+        // beside it, kept on resume).
+        if (!keep) save_sky(files[0].string(), frame, "", recorded);
         frame_list.push_back(entry);
         progress.advance();
     }
