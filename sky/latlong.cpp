@@ -198,33 +198,38 @@ Vec3d turned_direction(const Vec3d& w, double degrees) {
                                           fisheye::azimuth(w.normalized()) + degrees * kPiD / 180);
 }
 
+// A fisheye turned by `turns` quarter turns (1..3): its pixels permuted, exactly. Azimuth grows from
+// north (top) towards east (left): counter-clockwise in the image.
+SkyImage quarter_turned(const SkyImage& sky, int turns) {
+    const int code = turns == 1   ? cv::ROTATE_90_COUNTERCLOCKWISE
+                     : turns == 2 ? cv::ROTATE_180
+                                  : cv::ROTATE_90_CLOCKWISE;
+    const int n = sky.resolution;
+    SkyImage out = sky;
+    cv::Mat in(n, n, CV_32FC3, const_cast<float*>(sky.rgb.data())), turned;
+    cv::rotate(in, turned, code);
+    out.rgb.assign(turned.ptr<float>(), turned.ptr<float>() + size_t(n) * n * 3);
+    if (!sky.filled.empty()) {
+        cv::Mat mask(n, n, CV_8UC1, const_cast<unsigned char*>(sky.filled.data())), turned_mask;
+        cv::rotate(mask, turned_mask, code);
+        out.filled.assign(turned_mask.ptr<unsigned char>(), turned_mask.ptr<unsigned char>() + size_t(n) * n);
+    }
+    if (sky.sun_direction)
+        out.sun_direction = turned_direction(sky.sun_direction->cast<double>(), 90.0 * turns).cast<float>();
+    return out;
+}
+
 }  // namespace
 
 SkyImage turned_about_zenith(const SkyImage& sky, double degrees) {
-    // A quarter turn (90, 180, 270) is a permutation of the pixels, exact: the round trip below
-    // blurs (a cloudy sky lost about half its pixel-scale detail turned by 90, its sun's peak halved).
+    // A quarter turn (90, 180, 270) is exact; the round trip below blurs (a cloudy sky lost about
+    // half its pixel-scale detail turned by 90, its sun's peak halved).
     if (std::isfinite(degrees)) {
         const double quarter = std::remainder(degrees, 360.0) / 90.0;
         const long quarters = std::lround(quarter);
         if (std::abs(quarter - double(quarters)) < 1e-9) {
             const int turns = int(((quarters % 4) + 4) % 4);
-            if (turns == 0) return sky;
-            // Azimuth grows from north (top) towards east (left): counter-clockwise in the image.
-            const int code = turns == 1 ? cv::ROTATE_90_COUNTERCLOCKWISE : turns == 2 ? cv::ROTATE_180
-                                                                                     : cv::ROTATE_90_CLOCKWISE;
-            const int n = sky.resolution;
-            SkyImage out = sky;
-            cv::Mat in(n, n, CV_32FC3, const_cast<float*>(sky.rgb.data())), turned;
-            cv::rotate(in, turned, code);
-            out.rgb.assign(turned.ptr<float>(), turned.ptr<float>() + size_t(n) * n * 3);
-            if (!sky.filled.empty()) {
-                cv::Mat mask(n, n, CV_8UC1, const_cast<unsigned char*>(sky.filled.data())), turned_mask;
-                cv::rotate(mask, turned_mask, code);
-                out.filled.assign(turned_mask.ptr<unsigned char>(), turned_mask.ptr<unsigned char>() + size_t(n) * n);
-            }
-            if (sky.sun_direction)
-                out.sun_direction = turned_direction(sky.sun_direction->cast<double>(), 90.0 * turns).cast<float>();
-            return out;
+            return turns == 0 ? sky : quarter_turned(sky, turns);
         }
     }
     Image ll = sky_to_latlong(sky, 4 * sky.resolution);
