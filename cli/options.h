@@ -45,8 +45,8 @@ inline constexpr const char* kSkyResHelp =
 
 inline constexpr const char* kSkyTurnHelp =
     "Turn a sky file about the zenith: every azimuth (from north towards east) plus DEG, its sun too, e.g.\n"
-    "to put a downloaded HDRI's sun where the scene needs it (a lat-long turns exactly; a fisheye through a\n"
-    "lat-long, keeping the sun's energy)";
+    "to put a downloaded HDRI's sun where the scene needs it (a lat-long turns exactly, a fisheye exactly by\n"
+    "90, 180 or 270, by other angles through a lat-long: the sun's energy kept, the clouds a little blurred)";
 
 // An old spelling of an option, kept working but left out of --help (glossary: one name per thing).
 template <typename T>
