@@ -98,6 +98,12 @@ CloudMaskJob mask_job(const MaskOptions& o) {
     const double k = kWsisegBestRedBlueThreshold;
     job.params = CloudMaskParams{rule, o.threshold.value_or(rule == CloudRule::RedBlueRatio ? k : (1 - k) / (1 + k))};
     if (!o.center.empty()) job.circle = parse_center(o.center, o.radius);
+    else if (o.radius > 0) throw Error("--radius needs --center X,Y as well");  // as `sky import` (it was ignored)
+    if (o.whole_image && (!o.preset.empty() || job.circle || !o.mask.empty()))
+        throw Error(std::string("--whole-image classifies every pixel: it leaves no room for ") +
+                    (!o.preset.empty() ? "--preset (its sky circle and what hides the sky)"
+                     : job.circle      ? "--center/--radius"
+                                       : "--mask"));
     job.whole_image = o.whole_image;
     return job;
 }
@@ -223,7 +229,11 @@ void register_sky_import_commands(CLI::App& sky) {
         "Cloud mask of a photograph or a canonical sky (.exr) by the red/blue rule on camera-encoded values,\n"
         "written as a PNG: 255 cloud, 100 clear sky, 0 not sky (the WSISEG coding). Default r/b > 0.75: on\n"
         "WSISEG's human labels it agrees far better than the paper's 0.46 (docs/sky-import.md).");
-    mask->add_option("input", mo->input, "Photograph (JPEG/PNG) or canonical sky (.exr)")->required();
+    mask->add_option("input", mo->input,
+                     "Photograph (JPEG/PNG) or canonical sky (.exr: encoded as a camera would, its 99th-percentile\n"
+                     "luminance at white, so a cloudless sky's bright sun side can read as cloud: 27 % of a clear\n"
+                     "morning sky)")
+        ->required();
     mask->add_option("--out,-o", mo->out, "Output mask, .png")->required();
     mask->add_option("--cloud-threshold", mo->threshold,
                      "Rule threshold (default: rb 0.75, WSISEG's best, as imports and training data use; nbr the\n"

@@ -1,5 +1,6 @@
 #include "sky/cloud_mask_job.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -82,6 +83,10 @@ void run_cloud_mask(const CloudMaskJob& o) {
                 }
         }
     }
+    // A circle given off the photograph holds none of it: said so (it read as a black photograph).
+    if (std::find(sky.begin(), sky.end(), 1) == sky.end())
+        throw_file_error(o.input, "the sky circle holds none of the photograph's " + std::to_string(encoded.width) +
+                                      " x " + std::to_string(encoded.height) + " pixels: check --center and --radius");
     // A black photograph has no colour to judge (0 / 0 in the rule called half of it cloud).
     bool lit = false;
     for (size_t p = 0; p < sky.size() && !lit; ++p)

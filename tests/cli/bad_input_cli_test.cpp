@@ -910,6 +910,13 @@ TEST(BadInputCli, FourthAuditsTinyMovingSkiesAndMaskPhotosAreRefusedFirst) {
     bad.add("sky mask " + other_camera + " --preset arm-tsi -o " + dir + "/m1.png",
             {"other.jpg", "was measured on 480 x 640"});
     bad.add("sky mask " + small + " --preset arm-tsi -o " + dir + "/m2.png", {"small.jpg", "too small"});
+    // The smaller subcommands' audit: --radius alone was ignored, a circle off the photograph read as
+    // a black photograph, --whole-image silently dropped the preset's circle and masks.
+    bad.add("sky mask " + other_camera + " --radius 200 -o " + dir + "/m3.png", {"--radius needs --center"});
+    bad.add("sky mask " + other_camera + " --center 5000,5000 --radius 100 -o " + dir + "/m4.png",
+            {"other.jpg", "holds none of the photograph's 640 x 480 pixels"});
+    bad.add("sky mask " + other_camera + " --preset arm-tsi --whole-image -o " + dir + "/m5.png",
+            {"--whole-image classifies every pixel", "--preset"});
     bad.add("sky mask " + dir + "/black.png --preset arm-tsi -o " + dir + "/m3.png", {"black.png", "black everywhere"});
     bad.add("animate builtin --sky " + dir +
                 "/nowhere.exr --duration 10 --fps 0.2 --res 16x9 --spp 1 --no-video -q "
