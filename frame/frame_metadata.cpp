@@ -39,7 +39,7 @@ FrameSettings parse_settings(const std::string& canonical) {
     return s;
 }
 
-std::string settings_hash(const std::string& canonical) { return hex64(fnv1a(canonical.data(), canonical.size())); }
+std::string settings_hash(const std::string& canonical) { return hash_text(canonical); }
 
 namespace {
 

@@ -119,17 +119,21 @@ void write_prediction(const PredictionOptions& given) {
         if (!e.is_regular_file() || !k || (ext != ".exr" && ext != ".png")) continue;
         const bool written = *k >= 1 && *k <= o.steps && (*k % o.every == 0 || *k == o.steps) &&
                              (ext == ".exr" || o.preview);
-        if (!is_input(e.path()) && !is_sky_of_ours(e.path())) {
+        if (is_input(e.path())) {
+            if (written)
+                throw_file_error(e.path().string(),
+                                 "is an input of this prediction and one of the steps it writes "
+                                 "into " +
+                                     o.out + "; refusing to overwrite it: move it or choose another --out");
+        } else if (is_sky_of_ours(e.path())) {
+            stale.push_back(e.path());
+        } else {
             if (written)
                 throw_file_error(e.path().string(),
                                  "is not a sky dynsky wrote, and this prediction would write over "
                                  "it: move it or choose another --out");
             foreign.push_back(e.path());
-        } else if (!is_input(e.path())) stale.push_back(e.path());
-        else if (written)
-            throw_file_error(e.path().string(), "is an input of this prediction and one of the steps it writes into " +
-                                                    o.out +
-                                                    "; refusing to overwrite it: move it or choose another --out");
+        }
     }
     for (const fs::path& p : stale) fs::remove(p);
     for (const fs::path& p : foreign)  // a warning: under -q too

@@ -182,24 +182,7 @@ std::string import_settings_key(const OnePhoto& o) {
     if (!plan.params.mask_path.empty() && plan.params.mask_path != o.mask)
         s << "photo_mask=" << describe_file(plan.params.mask_path) << ';';
     s << "photo_time=" << plan.time;
-    const std::string text = s.str();
-    return hex64(fnv1a(text.data(), text.size()));
-}
-
-// The sky, filled mask and preview of a sequence's photograph are there, each decoding whole (a
-// folder half copied, a file cut short: read to the end, the sky finite), and the sky was made from
-// the same photograph with the same settings.
-bool imported_earlier(const OnePhoto& o, const std::string& key) {
-    try {
-        const Image sky = read_image(o.out);
-        if (sky.metadata.strings.count(kImportSettingsKey) == 0 || sky.metadata.strings.at(kImportSettingsKey) != key ||
-            first_non_finite(sky) >= 0)
-            return false;
-        read_image(o.filled_mask), read_image(o.preview);
-        return true;
-    } catch (const Error&) {
-        return false;  // missing, cut short or unreadable: imported again
-    }
+    return hash_text(s.str());
 }
 
 // One photograph into one sky (o.photo, o.out, o.preview, o.filled_mask); `verbose`: the lines
@@ -616,7 +599,8 @@ void run_photo_import(const PhotoImportJob& o) {
             // A stopped import goes on where it stopped: a sky made from the same photograph with the
             // same settings is kept (long sequences lost every finished sky to an interruption).
             const std::string key = import_settings_key(each);
-            if (imported_earlier(each, key)) {
+            // Its sky, filled mask and preview whole, the sky made from the same photograph and settings.
+            if (made_earlier_with({each.out, each.filled_mask, each.preview}, kImportSettingsKey, key)) {
                 ++kept;
                 progress.advance();
                 continue;

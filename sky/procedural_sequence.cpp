@@ -84,8 +84,7 @@ std::string frame_settings_key(const ProceduralSequenceSettings& o) {
     s << ";cirrus_wind=";
     for (double v : o.cirrus_wind) s << v << ',';
     if (!o.mask_image.empty()) s << ";mask=" << describe_file(o.mask_image);
-    const std::string text = s.str();
-    return hex64(fnv1a(text.data(), text.size()));
+    return hash_text(s.str());
 }
 
 constexpr const char* kFrameSettingsKey = "dynsky:procedural_settings";
@@ -214,20 +213,6 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
     ImageMetadata recorded;
     recorded.strings[kFrameSettingsKey] = key;
     int kept = 0;
-    // Each file decoding whole (a frame or flow cut short is made again), the frame finite and of
-    // these settings.
-    auto made_earlier = [&](const std::vector<fs::path>& files) {
-        try {
-            const Image frame = read_image(files.front().string());
-            const auto it = frame.metadata.strings.find(kFrameSettingsKey);
-            if (it == frame.metadata.strings.end() || it->second != key || first_non_finite(frame) >= 0) return false;
-            for (size_t k = 1; k < files.size(); ++k)
-                if (first_non_finite(read_image(files[k].string())) >= 0) return false;
-            return true;
-        } catch (const Error&) {
-            return false;
-        }
-    };
     ProgressBar progress(frames, "procedural sky", o.quiet);
     for (int k = 0; k < frames; ++k) {
         double t = k * o.dt;
@@ -237,18 +222,21 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
         }
         std::string image_name = numbered_name("frame", k, ".exr"), flow_name = numbered_name("flow", k, ".exr");
         const std::string png = numbered_name("frame", k, ".png"), flow_png = numbered_name("flow", k, ".png");
-        std::vector<fs::path> files = {fs::path(o.out) / image_name, fs::path(o.out) / flow_name};
-        if (o.preview) files.push_back(fs::path(o.out) / png), files.push_back(fs::path(o.out) / flow_png);
-        const bool keep = made_earlier(files);
+        std::vector<std::string> files = {(fs::path(o.out) / image_name).string(),
+                                          (fs::path(o.out) / flow_name).string()};
+        if (o.preview)
+            files.push_back((fs::path(o.out) / png).string()), files.push_back((fs::path(o.out) / flow_png).string());
+        // Kept: its frame, flow and previews whole, the frame made with these settings.
+        const bool keep = made_earlier_with(files, kFrameSettingsKey, key);
         Image flow;
         SkyImage frame;
         if (keep) {
             ++kept;
-            if (o.preview && k == 0) flow = read_image(files[1].string());  // the previews' speed scale
+            if (o.preview && k == 0) flow = read_image(files[1]);  // the previews' speed scale
         } else {
             frame = sky.render(t, o.resolution, &flow, o.dt);
             frame.source = described + " at t = " + number_text(t) + " s of " + sun_text;  // what re-makes it
-            write_image(files[1].string(), flow);
+            write_image(files[1], flow);
         }
         nlohmann::ordered_json entry;
         entry["index"] = k;
@@ -262,8 +250,8 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
                 for (size_t p = 0; p + 1 < flow.pixels.size(); p += 3)
                     max_speed = std::max(max_speed, std::hypot(double(flow.pixels[p]), double(flow.pixels[p + 1])));
             if (!keep) {
-                write_image(files[2].string(), tonemap_to_display(sky_to_image(frame), preview_ev));
-                write_image(files[3].string(), flow_preview(flow, max_speed));
+                write_image(files[2], tonemap_to_display(sky_to_image(frame), preview_ev));
+                write_image(files[3], flow_preview(flow, max_speed));
             }
             entry["preview"] = png;
             entry["flow_preview"] = flow_png;
@@ -271,7 +259,7 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
         // The frame last: it carries the settings key, so a run stopped after it has every file of
         // the frame made with those settings (written first, a stop left an earlier run's flow
         // beside it, kept on resume).
-        if (!keep) save_sky(files[0].string(), frame, "", recorded);
+        if (!keep) save_sky(files[0], frame, "", recorded);
         frame_list.push_back(entry);
         progress.advance();
     }

@@ -20,6 +20,8 @@ std::string hex64(uint64_t h) {
     return buf;
 }
 
+std::string hash_text(const std::string& text) { return hex64(fnv1a(text.data(), text.size())); }
+
 std::string describe_file(const std::string& path) {
     std::ifstream f(path, std::ios::binary);
     std::vector<char> buf(1 << 16);

@@ -14,6 +14,8 @@ inline constexpr uint64_t kFnvOffset = 0xcbf29ce484222325ull;
 uint64_t fnv1a(const void* data, size_t n, uint64_t h = kFnvOffset);
 // 16 lower-case hex digits.
 std::string hex64(uint64_t h);
+// hex64 of the FNV-1a 64 of a text (a canonical settings text, recorded as the key of resumable work).
+std::string hash_text(const std::string& text);
 // "NAME (BYTES bytes, fnv1a HASH)" of the file's whole contents (NAME: its file name only).
 std::string describe_file(const std::string& path);
 

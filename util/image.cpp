@@ -146,6 +146,22 @@ bool is_black_everywhere(const Image& image) {
     return std::all_of(image.pixels.begin(), image.pixels.end(), [](float v) { return v == 0.0f; });
 }
 
+bool made_earlier_with(const std::vector<std::string>& files, const std::string& key_name, const std::string& key) {
+    try {
+        for (size_t k = 0; k < files.size(); ++k) {
+            const Image image = read_image(files[k]);
+            if (k == 0) {
+                const auto it = image.metadata.strings.find(key_name);
+                if (it == image.metadata.strings.end() || it->second != key) return false;
+            }
+            if (first_non_finite(image) >= 0) return false;
+        }
+        return !files.empty();
+    } catch (const Error&) {
+        return false;  // missing, cut short or unreadable: made again
+    }
+}
+
 long first_non_finite(const Image& image) {
     for (size_t i = 0; i < image.pixels.size(); ++i)
         if (!std::isfinite(image.pixels[i])) return long(i);

@@ -87,6 +87,10 @@ std::optional<double> image_header_number(const std::string& path, const std::st
 // The index (in Image::pixels) of the first value that is NaN or infinite, or -1 when there is
 // none: what a renderer wrote is finite everywhere, so such a frame was damaged since.
 long first_non_finite(const Image& image);
+// Work a resumed run keeps: every file decodes to its end with finite values (a file cut short, a
+// folder half copied: false), and the first one's header holds `key` under `key_name` (the hash of
+// the settings that made it). A sequence import's skies and a procedural sequence's frames.
+bool made_earlier_with(const std::vector<std::string>& files, const std::string& key_name, const std::string& key);
 // "pixel (x, y) is NaN" (or "is infinite") for the value first_non_finite found at index i.
 std::string non_finite_pixel_text(const Image& image, long i);
 // True when every value is zero: a render that saw nothing lit (the camera inside closed

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <fstream>
 
 #include "tests/test_support.h"
@@ -35,6 +36,29 @@ TEST(ImageIo, ExrRoundTripKeepsPixelsAndMetadata) {
     int files = 0;
     for (auto& e : fs::directory_iterator(dir)) files += e.is_regular_file();
     EXPECT_EQ(files, 1);
+}
+
+TEST(ImageIo, WorkMadeEarlierIsKeptOnlyWholeFiniteAndOfTheSameSettings) {
+    std::string dir = test::temp_dir("image");
+    Image sky(4, 2, 3), other(3, 3, 3);
+    for (float& v : sky.pixels) v = 0.5f;
+    sky.metadata.strings["dynsky:key"] = "abc";
+    const std::string a = dir + "/a.exr", b = dir + "/b.exr";
+    write_image(a, sky), write_image(b, other);
+    EXPECT_TRUE(made_earlier_with({a, b}, "dynsky:key", "abc"));
+    EXPECT_FALSE(made_earlier_with({a, b}, "dynsky:key", "abd"));    // other settings
+    EXPECT_FALSE(made_earlier_with({a, b}, "dynsky:other", "abc"));  // no key
+    EXPECT_FALSE(made_earlier_with({b, a}, "dynsky:key", "abc"));    // the key is the first file's
+    EXPECT_FALSE(made_earlier_with({a, dir + "/missing.exr"}, "dynsky:key", "abc"));
+    EXPECT_FALSE(made_earlier_with({}, "dynsky:key", "abc"));
+    other.pixels[4] = std::numeric_limits<float>::quiet_NaN();
+    write_image(b, other);
+    EXPECT_FALSE(made_earlier_with({a, b}, "dynsky:key", "abc"));  // damaged since
+    // Cut short: a file that no longer decodes to its end.
+    write_image(b, Image(3, 3, 3));
+    const auto size = fs::file_size(b);
+    fs::resize_file(b, size / 2);
+    EXPECT_FALSE(made_earlier_with({a, b}, "dynsky:key", "abc"));
 }
 
 TEST(ImageIo, MissingAndBogusFilesNameTheFile) {
