@@ -37,12 +37,14 @@ SunPatch remove_sun(SkyImage* sky);
 cv::Mat sun_cut_mask(int n, const Vec3d& sun);
 
 // The pixels near the sun whose cloud the moving sky cannot judge by their look: the cut
-// (sun_cut_mask) and every pixel within kSunUnseenDeg of the sun. A cloud a few degrees from the sun
-// is lit by forward scattering as bright and nearly as blue as the aureole it hides, so its look
-// reads clear; the cut alone shrinks with the resolution (5.6 degrees at 128 px, 2.1 at 512), and
-// with it the part the clouds around fill in: at 512 px the suns of 20 procedural seeds were dimmed
-// with a mean error of 24 % against 10.6 % at 128 px (bench/sun_seeds).
-inline constexpr double kSunUnseenDeg = 5.5;
+// (sun_cut_mask) and every pixel within kSunUnseenDeg of the sun, so that at any resolution at
+// least the sun's glare (1 degree + 2 px at 1024 px: 1.35 degrees) is taken from the clouds around
+// it. Wider (5.5 degrees until 2026-12-06, when the look rule still read a forward-lit cloud near
+// the sun as clear) it hid the edge of the cloud that covers the sun, whose fill from around it
+// then held the sun covered or clear 10-25 s too long: in the main job's setting (`compare`
+// defaults, 1024 px, seeds 1-6) the sky's illuminance was 29 % off on average, now 11 %; bench/sun_seeds at
+// 512 px 8.1 % -> 6.7 % (docs/animation.md).
+inline constexpr double kSunUnseenDeg = 1.5;
 cv::Mat sun_unseen_mask(int n, const Vec3d& sun);
 
 // The clear sun of an n x n sky: the Hosek-Wilkie disc (turbidity as the clear sky compared with

@@ -61,8 +61,8 @@ std::optional<ProceduralSkyParams> cloud_crossing_the_sun(double duration, doubl
 }
 
 // What the moving sky cannot judge around the sun is the same part of the sky at any resolution:
-// every pixel within kSunUnseenDeg of the sun (the cut shrinks from 5.6 to 2.1 degrees between 128
-// and 512 px), the cut included, and nothing beyond the cut's reach or the disc's.
+// every pixel within kSunUnseenDeg of the sun (the cut shrinks from 5.6 to 1.35 degrees between 128
+// and 1024 px), the cut included, and nothing beyond the cut's reach or the disc's.
 TEST(SunTransmittance, UnseenSkyAroundTheSunIsTheSameAtAnyResolution) {
     const Vec3d sun = fisheye::direction_from_angles(0.8, 1.2);
     for (int n : {64, 128, 512, 1024}) {
