@@ -145,11 +145,8 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
                                        " sky: a moving sky needs at least 8 x 8 pixels (its clouds' motion is "
                                        "measured on it)");
         if (ground && !reports_silenced())
-            std::fprintf(stderr,
-                         "dynsky: note: %s is a lat-long sky: its upper half moves, as a %d x %d fisheye%s; below the "
-                         "horizon is the ground model (--ground-albedo)\n",
-                         file.c_str(), s.resolution, s.resolution,
-                         o.sky_resolution_given ? "" : " (--sky-res: another size)");
+            std::fprintf(stderr, "%s; below the horizon is the ground model (--ground-albedo)\n",
+                         moving_latlong_note(file, s.resolution, o.sky_resolution_given).c_str());
         return s;
     };
     if (!previous_file.empty()) {

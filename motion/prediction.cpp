@@ -53,8 +53,7 @@ void write_prediction(const PredictionOptions& given) {
     const SkyFileOptions taken{o.resolution, kMovingLatlongLimit, o.turn_deg};
     SkyImage sky = load_sky_or_latlong(o.in, &unused_ground, taken);
     if (unused_ground && !o.quiet)
-        std::fprintf(stderr, "dynsky: note: %s is a lat-long sky: its upper half moves, as a %d x %d fisheye%s\n",
-                     o.in.c_str(), sky.resolution, sky.resolution, o.resolution ? "" : " (--sky-res: another size)");
+        std::fprintf(stderr, "%s\n", moving_latlong_note(o.in, sky.resolution, o.resolution > 0).c_str());
     CloudMotion motion;
     motion.wind = o.wind;
     motion.previous_dt = o.previous_dt;

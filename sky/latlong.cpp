@@ -323,4 +323,9 @@ LatlongEnvironment latlong_environment(const Image& image, const std::string& pa
     return env;
 }
 
+std::string moving_latlong_note(const std::string& path, int n, bool size_given) {
+    return "dynsky: note: " + path + " is a lat-long sky: its upper half moves, as a " + std::to_string(n) + " x " +
+           std::to_string(n) + " fisheye" + (size_given ? "" : " (--sky-res: another size)");
+}
+
 }  // namespace dynsky

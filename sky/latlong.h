@@ -98,5 +98,9 @@ SkyImage load_sky_or_latlong(const std::string& path, std::shared_ptr<SkyImage>*
 // for one `sky predict` step, the conversion included; 16384 x 8192 would need 16 GB), and the clouds' motion and the networks' correction are
 // measured far coarser. `render` converts at the height (the sun's sharpness in still frames).
 inline constexpr int kMovingLatlongLimit = 2048;
+// The note a command moving a sky prints when it took a lat-long (`sky predict`, `animate`,
+// `compare`): its upper half moves as an n x n fisheye; `size_given`: --sky-res chose n (else the
+// note names it).
+std::string moving_latlong_note(const std::string& path, int n, bool size_given);
 
 }  // namespace dynsky

@@ -445,5 +445,15 @@ TEST(LatLong, SampleSkyIsBilinearInsideTheDisc) {
     EXPECT_NEAR(rim[1], synthetic(Vec3d(1, 0, 0))[1], 0.05);
 }
 
+// What `sky predict`, `animate` and `compare` say when they move a lat-long: its size, and how to
+// choose another only when --sky-res did not.
+TEST(LatLong, MovingNoteSaysTheSizeAndHowToChooseAnother) {
+    EXPECT_EQ(moving_latlong_note("hdri.exr", 2048, false),
+              "dynsky: note: hdri.exr is a lat-long sky: its upper half moves, as a 2048 x 2048 fisheye (--sky-res: "
+              "another size)");
+    EXPECT_EQ(moving_latlong_note("hdri.exr", 512, true),
+              "dynsky: note: hdri.exr is a lat-long sky: its upper half moves, as a 512 x 512 fisheye");
+}
+
 }  // namespace
 }  // namespace dynsky
