@@ -45,7 +45,7 @@ PhotoSequence named_photo_sequence(const std::string& name, const std::string& s
     PhotoSequence s;
     for (const Known& k : known)
         if (name == k.name || name == k.spelling)
-            s = {k.name, k.preset, (fs::path(shared_dir) / "skies" / k.folder).string(), k.dt, {}};
+            s = {k.name, k.preset, (fs::path(shared_dir) / "skies" / k.folder).string(), k.dt, {}, {}};
     if (s.name.empty())
         throw Error("--sequence: unknown sequence '" + name +
                     "' (known: arm-tsi, arm-clear, arm-dusk, mobotix; or give any folder with --photos and --preset)");

@@ -194,7 +194,7 @@ TEST(RenderCli, ACameraOfAnotherAspectIsToldWithTheSizeThatFramesIt) {
     DYNSKY_REQUIRE_SHARED();
     const std::string dir = test::temp_dir("render_aspect");
     const std::string scene = test::shared_path("scenes/Cameras/Cameras.gltf");
-    for (const std::string& camera : {"0", "1"}) {  // perspective aspectRatio 1, orthographic xmag = ymag
+    for (const char* camera : {"0", "1"}) {  // perspective aspectRatio 1, orthographic xmag = ymag
         auto r = test::run_command(exe() + " render " + scene + " --camera " + camera + " --res 32x18 --spp 1 --out " +
                                    dir + "/wide.exr 2>&1");
         ASSERT_EQ(r.exit_code, 0) << r.output;

@@ -569,15 +569,16 @@ TEST(SkyModelCli, EvaluateRejectsFoldersWithoutOneRegularSequence) {
         EXPECT_EQ(report.find("| 6 |"), std::string::npos) << report;
         // --frames as animate's: reversed, negative or outside the start frames is a usage error
         // saying which can be scored ("too few frames" before); partly outside is clipped, said.
-        for (const std::string& frames : {"3-1", "-1", "7-9", "1-2x"}) {
+        for (const std::string frames : {"3-1", "-1", "7-9", "1-2x"}) {
             auto bad = test::run_command(
                 dynsky("sky evaluate --model advect --no-paper --resolutions 64 --import-res 64 "
                        "--horizons 1 --photos " +
                        dir + "/five --preset arm-tsi --frames " + frames + " --out " + dir + "/frames.md 2>&1"));
             EXPECT_EQ(bad.exit_code, 2) << frames << ": " << bad.output;
             EXPECT_NE(bad.output.find("--frames '" + frames + "'"), std::string::npos) << bad.output;
-            if (frames != "-1" && frames != "1-2x")
+            if (frames != "-1" && frames != "1-2x") {
                 EXPECT_NE(bad.output.find("are 1-3 (5 frames, horizon 1)"), std::string::npos) << bad.output;
+            }
             EXPECT_FALSE(fs::exists(dir + "/frames.md"));
         }
         auto clipped =

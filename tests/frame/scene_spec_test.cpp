@@ -62,8 +62,8 @@ TEST(RenderCamera, LookAtOverrideEqualsTheEquivalentGltfCamera) {
     std::string dir = test::temp_dir("camera");
     const float yfov = 0.6f;
     std::string path = write_camera_gltf(dir, yfov, 1.5f);
-    SceneSpec file_camera{path, 0, 0.3f, {}, 0};
-    SceneSpec look_at{path, 0, 0.3f, {0, 2, 4, 0, 0, 0}, yfov * 180 / kPiD};
+    SceneSpec file_camera{path, 0, 0.3f, {}, 0, -1, ""};
+    SceneSpec look_at{path, 0, 0.3f, {0, 2, 4, 0, 0, 0}, yfov * 180 / kPiD, -1, ""};
     LoadedScene a = load_scene(file_camera, 1.0f), b = load_scene(look_at, 1.0f);
     EXPECT_LT((a.camera.camera_to_world.matrix() - b.camera.camera_to_world.matrix()).cwiseAbs().maxCoeff(), 1e-6f);
     EXPECT_NEAR(a.camera.yfov, b.camera.yfov, 1e-6f);
@@ -82,21 +82,21 @@ TEST(RenderCamera, LookAtOverrideEqualsTheEquivalentGltfCamera) {
     // The view is pitched down: the centre pixel sees the origin at the distance to the eye.
     EXPECT_NEAR(ra.depth.at(12, 12, 0), std::sqrt(20.0f), 0.2f);
     // --fov alone changes the field of view of the file's camera; bad overrides are errors.
-    SceneSpec fov_only{path, 0, 0.3f, {}, 30};
+    SceneSpec fov_only{path, 0, 0.3f, {}, 30, -1, ""};
     EXPECT_NEAR(load_scene(fov_only, 1.0f).camera.yfov, 30 * kPi / 180, 1e-6f);
-    EXPECT_THROW(load_scene(SceneSpec{path, 0, 0.3f, {0, 2, 4}, 0}, 1.0f), Error);
-    EXPECT_THROW(load_scene(SceneSpec{path, 0, 0.3f, {1, 1, 1, 1, 1, 1}, 0}, 1.0f), Error);
+    EXPECT_THROW(load_scene(SceneSpec{path, 0, 0.3f, {0, 2, 4}, 0, -1, ""}, 1.0f), Error);
+    EXPECT_THROW(load_scene(SceneSpec{path, 0, 0.3f, {1, 1, 1, 1, 1, 1}, 0, -1, ""}, 1.0f), Error);
     // An eye 1e19 m out made rays Embree aborted on (exit 134); 1e20 apart read as "the same point".
     for (const std::vector<double>& far : {std::vector<double>{0, 0, 1e19, 0, 0, 0}, {1e20, 0, 0, 0, 0, 0}}) {
         try {
-            load_scene(SceneSpec{path, 0, 0.3f, far, 0}, 1.0f);
+            load_scene(SceneSpec{path, 0, 0.3f, far, 0, -1, ""}, 1.0f);
             ADD_FAILURE() << "a look-at eye at " << far[0] + far[2] << " m was accepted";
         } catch (const Error& e) {
             EXPECT_NE(std::string(e.what()).find("within 1e+08 m"), std::string::npos) << e.what();
         }
     }
-    EXPECT_THROW(load_scene(SceneSpec{path, 0, 0.3f, {}, 180}, 1.0f), Error);
-    EXPECT_THROW(load_scene(SceneSpec{path, 1, 0.3f, {}, 40}, 1.0f), Error);  // --fov on an orthographic camera
+    EXPECT_THROW(load_scene(SceneSpec{path, 0, 0.3f, {}, 180, -1, ""}, 1.0f), Error);
+    EXPECT_THROW(load_scene(SceneSpec{path, 1, 0.3f, {}, 40, -1, ""}, 1.0f), Error);  // --fov on an orthographic camera
 }
 
 // --camera N is the file's N-th camera: with cameras A, B and C of which only B and C are placed
@@ -130,7 +130,7 @@ TEST(RenderCamera, CameraIndexIsTheFilesCamerasArray) {
                 "\"znear\": 0.1}}");
     std::ofstream(path) << json;
     // cameras = [A, C (perspective, on node 1), B (orthographic, on node 2), D]; placed: C, B.
-    SceneSpec spec{path, 1, 0.3f, {}, 0};
+    SceneSpec spec{path, 1, 0.3f, {}, 0, -1, ""};
     EXPECT_EQ(load_scene(spec, 1.0f).camera.name, "C");
     spec.camera = 2;
     EXPECT_EQ(load_scene(spec, 1.0f).camera.name, "B");
@@ -174,7 +174,7 @@ TEST(RenderCamera, LookAtUpTurnsSmoothlyThroughNearlyVerticalViews) {
 TEST(RenderCamera, OrthographicCameraSeesTheWallAtOneDepthAndItsTrueSize) {
     std::string dir = test::temp_dir("camera");
     const float ymag = 1.6f;  // the wall (half side 1) spans 1 / 1.6 of the half height
-    LoadedScene sc = load_scene(SceneSpec{write_camera_gltf(dir, 0.6f, ymag), 1, 0.3f, {}, 0}, 1.0f);
+    LoadedScene sc = load_scene(SceneSpec{write_camera_gltf(dir, 0.6f, ymag), 1, 0.3f, {}, 0, -1, ""}, 1.0f);
     ASSERT_TRUE(sc.camera.orthographic);
     Accel accel(sc.scene);
     EnvLight light(gradient_sky(64), 0.3f);

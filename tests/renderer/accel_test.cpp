@@ -63,7 +63,7 @@ TEST(Accel, MirroredInstancesKeepTheNormalMapsBitangentAlongV) {
     TriangleMesh m = unit_triangle();
     m.normals.assign(3, Vec3(0, 0, 1));
     m.tangents.assign(3, Vec4(1, 0, 0, 1));  // u along +x, v along +y: n x t = +y, w = 1
-    for (const Vec3 scale : {Vec3(1, 1, 1), Vec3(-1, 1, 1), Vec3(1, -1, 1), Vec3(1, 1, -1), Vec3(-1, -1, -1)}) {
+    for (const Vec3& scale : {Vec3(1, 1, 1), Vec3(-1, 1, 1), Vec3(1, -1, 1), Vec3(1, 1, -1), Vec3(-1, -1, -1)}) {
         Scene scene;
         Eigen::Affine3f transform = Eigen::Affine3f::Identity();
         transform.scale(scale);

@@ -302,7 +302,9 @@ TEST(LatLong, SkyFilesAreTakenAtTheResolutionAsked) {
         const SkyImage sky = load_sky_or_latlong(dir + "/" + c.file + ".exr", &ground, {c.asked, c.limit});
         EXPECT_EQ(sky.resolution, c.want) << c.file << " asked " << c.asked << " limit " << c.limit;
         EXPECT_EQ(bool(ground), c.file == "ll");
-        if (ground) EXPECT_EQ(ground->resolution, c.want) << "the ground is taken at the sky's size";
+        if (ground) {
+            EXPECT_EQ(ground->resolution, c.want) << "the ground is taken at the sky's size";
+        }
         const Eigen::Array3d got = fisheye_integral(sky);
         for (int k = 0; k < 3; ++k) EXPECT_NEAR(got[k], exact[k], 1.5e-2 * exact[k]) << c.file << " at " << c.want;
     }

@@ -36,7 +36,9 @@ TEST(FrameNames, NaturalOrderComparesNumbersAsNumbers) {
     for (const std::string& a : want) {
         EXPECT_FALSE(natural_less(a, a)) << a;
         for (const std::string& b : want)
-            if (a != b) EXPECT_NE(natural_less(a, b), natural_less(b, a)) << a << " / " << b;
+            if (a != b) {
+                EXPECT_NE(natural_less(a, b), natural_less(b, a)) << a << " / " << b;
+            }
     }
     // Timestamps with zero padding keep their plain order.
     EXPECT_TRUE(natural_less("tsi_sgpC1_20170524154000Z.jpg", "tsi_sgpC1_20170524154030Z.jpg"));

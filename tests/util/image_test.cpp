@@ -146,7 +146,9 @@ TEST(ImageIo, PngCutAnywhereIsRefusedNamingTheFile) {
         } catch (const Error& e) {
             const std::string what = e.what();
             EXPECT_NE(what.find("cut.png"), std::string::npos) << what;
-            if (keep > 8) EXPECT_NE(what.find("cut short"), std::string::npos) << keep << ": " << what;
+            if (keep > 8) {
+                EXPECT_NE(what.find("cut short"), std::string::npos) << keep << ": " << what;
+            }
         }
     }
     std::ofstream(dir + "/tail.png", std::ios::binary) << bytes << "bytes after IEND";
