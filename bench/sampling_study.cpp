@@ -327,6 +327,7 @@ int run_sampling_study(const SamplingStudyOptions& o) {
     check_outputs_are_not_inputs({o.out, o.cache}, {o.shared});
     fs::path out(o.out);
     const OutputFolder out_folder(o.out);  // removed again if the study fails before writing anything
+    remove_stale_temporaries(o.out);       // of a killed run into the same folder
     fs::path cache = o.cache.empty() ? out / "cache" : fs::path(o.cache);
     std::string notes;
 

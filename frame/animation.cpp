@@ -215,11 +215,13 @@ AnimationReport render_animation(const AnimationSettings& o) {
             scene = load_scene(spec, float(width) / height);
         }
     }
-    const OutputFolder folder(o.out);  // removed again if this run fails before writing anything
-    const FrameStore store(o.out);
     // A farm task writes only its own frames and timings, so it removes only their temporaries:
-    // the folder's others may be another task's, live on another machine.
+    // the folder's others may be another task's, live on another machine. Its tasks share the
+    // folder; any other run holds it alone.
     const bool farm_task = stage == "frames";
+    // Removed again if this run fails before writing anything.
+    const OutputFolder folder(o.out, farm_task ? FolderUse::shared : FolderUse::exclusive);
+    const FrameStore store(o.out);
     const std::string timings_name = farm_task
                                          ? "timings_" + std::to_string(first) + "-" + std::to_string(last) + ".csv"
                                          : "timings.csv";

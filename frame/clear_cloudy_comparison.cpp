@@ -197,6 +197,9 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
     // Each output writable before any rendering (a folder in the way was found after it all).
     for (size_t k = 1; k < outputs.size(); ++k) check_output_file(outputs[k]);
     const OutputFolder folder(o.out);  // removed again if this run fails before writing anything
+    remove_stale_temporaries(o.out);   // of a killed run into the same folder
+    // The earlier run's outputs go first: one stopped midway leaves no mix of two runs' files.
+    remove_earlier_outputs(std::vector<std::string>(outputs.begin() + 1, outputs.end()));
     const int sky_n = cloudy.step(0)->resolution;
     // A sky in units of its own is compared with the clear sky brought to its scale: its figures
     // are then not lux. Said, as is a sky that does not say what its units are.

@@ -216,13 +216,13 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
         throw Error("--out " + o.report + ": the report is Markdown, and its table (.csv) and charts (.png) are " +
                     "written beside it under its name: give a .md name, e.g. " +
                     fs::path(o.report).replace_extension(".md").string());
+    // The report and what is written beside it must not replace an input or land in an input
+    // folder (the photographs, the shared data of a named sequence, a model folder).
+    std::vector<std::string> outputs = {o.report, fs::path(o.report).replace_extension(".csv").string()};
+    for (int r : resolutions)
+        for (const char* ext : {".csv", ".png"})
+            outputs.push_back(fs::path(o.report).replace_extension("").string() + "_" + std::to_string(r) + ext);
     {
-        // The report and what is written beside it must not replace an input or land in an input
-        // folder (the photographs, the shared data of a named sequence, a model folder).
-        const std::string base = fs::path(o.report).replace_extension("").string();
-        std::vector<std::string> outputs = {o.report, base + ".csv"};
-        for (int r : resolutions)
-            for (const char* ext : {".csv", ".png"}) outputs.push_back(base + "_" + std::to_string(r) + ext);
         const bool model_folder = o.model != "auto" && o.model != "advect" && o.model != "paper";
         check_outputs_are_not_inputs(outputs, {o.photos, shared, model_folder ? o.model : ""});
         for (const std::string& out : outputs) check_output_file(out);  // before the scoring, not after
@@ -376,6 +376,9 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
     // Import the frames needed (first - 1 .. last + hmax) once, at the import resolution.
     const int big = o.import_resolution;
     std::vector<NetworkFrame> frames;
+    // An earlier report under this name goes once the inputs are known good: a run stopped midway
+    // left its new CSV beside the old report and charts.
+    remove_earlier_outputs(outputs);
     ProgressBar progress(last + hmax - first + 2, "import " + seq.name, o.quiet);
     for (int k = first - 1; k <= last + hmax; ++k) {
         frames.push_back(network_frame_from_photo(seq.photos[size_t(k)], seq.preset, big, big, form));

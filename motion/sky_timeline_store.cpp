@@ -81,6 +81,9 @@ std::optional<Vec3> vec_from(const json& j) {
 void SkyTimeline::save(const std::string& folder, int last_step, const std::string& settings) {
     if (last_step < 1) throw Error("sky timeline: a stored timeline holds at least steps 0 and 1");
     const OutputFolder made(folder);  // removed again if this fails before writing anything
+    // Found before the steps are computed (minutes for a long timeline), not at the first write.
+    check_output_file((fs::path(folder) / "timeline.json").string());
+    remove_stale_temporaries(folder);  // of a killed run into the same folder
     json steps = json::array(), flows = json::array();
     step(last_step);  // every step first: the input's cloud opacity comes with step 1
     // An earlier timeline's description goes before any of its steps is replaced: a run that stops

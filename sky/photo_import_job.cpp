@@ -463,9 +463,10 @@ void run_photo_import(const PhotoImportJob& o) {
     check_outputs_are_not_inputs(outputs, photos);
     refuse_mixed_times(o, photos, outputs);
     refuse_mixed_encodings(photos, o.encoding);
-    std::error_code ec;
-    fs::create_directories(o.out, ec);
-    if (ec || !fs::is_directory(o.out)) throw_file_error(o.out, "cannot create this output folder: " + ec.message());
+    // Held alone while it is written (two imports into one folder mixed their skies and previews).
+    const OutputFolder out_folder(o.out);
+    remove_stale_temporaries(o.out);  // of a killed run into the same folder
+    if (!fs::is_directory(o.out)) throw_file_error(o.out, "cannot create this output folder");
 
     OnePhoto each(o);
     // A sequence's hidden pixels are filled smoothly unless asked otherwise: the texture fill takes

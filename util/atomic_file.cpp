@@ -1,6 +1,7 @@
 #include "util/atomic_file.h"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -175,7 +176,7 @@ std::string temporary_path(const std::string& path) {
     return (target.parent_path() / (".tmp-" + stem + "-" + pid + ext)).string();
 }
 
-OutputFolder::OutputFolder(const std::string& path) {
+OutputFolder::OutputFolder(const std::string& path, FolderUse use) {
     std::vector<fs::path> missing;
     std::error_code ec;
     for (fs::path p = fs::absolute(path, ec).lexically_normal(); !p.empty() && !fs::exists(p, ec);
@@ -186,9 +187,22 @@ OutputFolder::OutputFolder(const std::string& path) {
     fs::create_directories(path, ec);
     if (ec) throw_file_error(path, "cannot create the output folder: " + ec.message());
     for (auto it = missing.rbegin(); it != missing.rend(); ++it) created_.push_back(it->string());
+    // Not inherited by children (ffmpeg, the chart script): a killed run's lock goes with it.
+    lock_fd_ = ::open(path.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (lock_fd_ >= 0 && ::flock(lock_fd_, (use == FolderUse::shared ? LOCK_SH : LOCK_EX) | LOCK_NB) != 0) {
+        const int err = errno;
+        ::close(lock_fd_);
+        lock_fd_ = -1;
+        if (err == EWOULDBLOCK)
+            throw_file_error(path,
+                             "another dynsky run is writing into this folder now: wait for it to finish, or "
+                             "choose another output folder");
+        // Anything else (a file system without such locks): written unheld, as before.
+    }
 }
 
 OutputFolder::~OutputFolder() {
+    if (lock_fd_ >= 0) ::close(lock_fd_);
     std::error_code ec;
     for (auto it = created_.rbegin(); it != created_.rend(); ++it)
         if (fs::is_directory(*it, ec) && fs::is_empty(*it, ec) && !ec) fs::remove(*it, ec);
@@ -207,6 +221,18 @@ void check_output_file(const std::string& path) {
         throw_file_error(path, "cannot create its folder: " + up.string() + " is a file");
     if (fs::is_directory(up, ec) && ::access(up.c_str(), W_OK) != 0)
         throw_file_error(path, "cannot write into " + up.string() + ": " + std::strerror(errno));
+}
+
+void remove_earlier_outputs(const std::vector<std::string>& files) {
+    for (const std::string& f : files) {
+        if (f.empty()) continue;
+        std::error_code ec;
+        const fs::file_status st = fs::symlink_status(f, ec);
+        if (!fs::exists(st) || fs::is_directory(st)) continue;
+        if (!fs::remove(f, ec) || ec)
+            throw_file_error(f, "could not remove the earlier run's file before writing this run's" +
+                                    (ec ? ": " + ec.message() : std::string()));
+    }
 }
 
 void remove_stale_marker(const std::string& path) {

@@ -50,19 +50,29 @@ class TemporaryFile {
     int slot_ = -1;  // in the interrupt handler's list, or -1
 };
 
+// How a run holds its output folder while it writes (an advisory lock on the folder, released
+// when the run ends or is killed): exclusive, so that a second run into the same folder is refused
+// at once (two runs each finished "successfully" with a folder of the other's files mixed into
+// theirs: frames of two seeds under one manifest, a preview of another size beside a sky); shared
+// for a render farm's frame tasks, which write disjoint frames of one animation side by side.
+enum class FolderUse { exclusive, shared };
+
 // An output folder made for a command's files: created (with its missing parents) on
 // construction, and removed again at destruction when this made it and it is still empty (the
 // command failed before writing anything: a full disk, a bad input found late), so a failure
-// leaves no empty folders behind. Folders that hold finished work are never touched.
+// leaves no empty folders behind. Folders that hold finished work are never touched. Held (FolderUse)
+// while it lives: another run holding it in a way that conflicts is an error naming the folder
+// (where the file system has no such locks, nothing is held).
 class OutputFolder {
   public:
-    explicit OutputFolder(const std::string& path);
+    explicit OutputFolder(const std::string& path, FolderUse use = FolderUse::exclusive);
     ~OutputFolder();
     OutputFolder(const OutputFolder&) = delete;
     OutputFolder& operator=(const OutputFolder&) = delete;
 
   private:
     std::vector<std::string> created_;  // deepest last
+    int lock_fd_ = -1;
 };
 
 // For the interrupt handler (cli/main.cpp): unlinks the temporary being written now, if any.
@@ -75,6 +85,12 @@ std::vector<std::string> remove_stale_temporaries(const std::string& folder);
 // a render farm's task cleans up after its own killed attempt, never the temporaries of another
 // task writing into the same folder from another machine (whose process ids mean nothing here).
 std::vector<std::string> remove_stale_temporaries(const std::string& folder, const std::vector<std::string>& stems);
+
+// Removes the files an earlier run left under these names before this run replaces any of them,
+// so that a run stopped midway (Ctrl-C, a full disk) leaves only its own outputs, never a mix of two
+// runs' (`compare`'s new images beside an earlier run's illuminance chart). Throws naming a file that
+// cannot be removed. Missing and empty names are skipped.
+void remove_earlier_outputs(const std::vector<std::string>& files);
 
 // Throws before any work if a file could not be written at `path` when the work is done: a folder
 // of that name is in the way, a file stands where one of its folders would be made, or its

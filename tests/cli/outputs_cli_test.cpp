@@ -11,6 +11,7 @@
 #include <fstream>
 
 #include "tests/test_support.h"
+#include "util/atomic_file.h"
 #include "util/data_path.h"
 #include "util/error.h"
 #include "util/image.h"
@@ -144,6 +145,51 @@ TEST(OutputsCli, AStoppedRunLeavesNoMarkerOverItsFiles) {
     r = run_with_full_disk("sky procedural --cloud-seed 7 --sky-res 64 --duration 20 -q -o " + proc);
     EXPECT_EQ(r.exit_code, 1) << r.output;
     EXPECT_FALSE(fs::exists(proc + "/manifest.json")) << "the old manifest stayed over new frames";
+    fs::remove_all(dir);
+}
+
+// A run holds its output folder: a second run into it while the first works is refused (exit 1,
+// naming the folder) before it touches anything there; two at once had each finished
+// "successfully" with the other's files mixed into theirs (frames of two seeds under one manifest,
+// compare's images of one run beside the other's illuminance chart).
+TEST(OutputsCli, ASecondRunIntoAFolderInUseIsRefused) {
+    const std::string dir = test::temp_dir("outputs_held"), out = dir + "/out";
+    ASSERT_EQ(test::run_command(kExe + " sky clear --sky-res 32 --lat 48 --lon 2 --time 2026-06-21T12:00Z -q -o " +
+                                dir + "/in.exr")
+                  .exit_code,
+              0);
+    const OutputFolder held(out);  // as the first run holds it
+    std::ofstream(out + "/frame_0000.exr") << "the first run's";
+    for (const std::string& args :
+         {"sky procedural --sky-res 32 --duration 10 -q -o " + out,
+          "sky timeline --sky-res 32 --duration 30 -q -o " + out,
+          "sky predict --model advect --in " + dir + "/in.exr --steps 1 -q --out " + out,
+          "compare builtin --res 16x9 --spp 1 --sky-res 32 --duration 10 -q -o " + out,
+          "animate builtin --res 16x9 --spp 1 --sky-res 32 --duration 1 --fps 1 -q --no-video --out " + out}) {
+        const auto r = test::run_command(kExe + " " + args + " 2>&1");
+        EXPECT_EQ(r.exit_code, 1) << args << ": " << r.output;
+        EXPECT_NE(r.output.find(out + ": another dynsky run is writing into this folder"), std::string::npos)
+            << args << ": " << r.output;
+    }
+    std::ifstream f(out + "/frame_0000.exr");
+    std::string kept((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(kept, "the first run's");
+    fs::remove_all(dir);
+}
+
+// compare is not resumable: a run that stops midway (here a full disk) leaves no earlier run's
+// outputs beside its own (its new images beside an old illuminance chart read as one result).
+TEST(OutputsCli, AStoppedCompareLeavesNoEarlierRunsFiles) {
+    const std::string dir = test::temp_dir("outputs_compare_mix"), out = dir + "/cmp";
+    ASSERT_EQ(test::run_command(kExe + " compare builtin --res 16x9 --spp 1 --sky-res 32 --duration 10 -q -o " + out)
+                  .exit_code,
+              0);
+    ASSERT_TRUE(fs::exists(out + "/illuminance.csv"));
+    const auto r = run_with_full_disk("compare builtin --res 160x90 --spp 1 --sky-res 64 --duration 10 -q -o " + out);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_FALSE(fs::exists(out + "/illuminance.csv")) << "the earlier run's chart data stayed: " << r.output;
+    EXPECT_FALSE(fs::exists(out + "/illuminance.png"));
+    expect_nothing_half_written(dir);
     fs::remove_all(dir);
 }
 

@@ -281,5 +281,46 @@ TEST(OutputFolder, RemovesOnlyTheEmptyFoldersItMade) {
     fs::remove_all(dir);
 }
 
+// Two runs writing one folder at once each finished "successfully" with the other's files mixed
+// into theirs: a run holds its folder, and a second is refused naming it while the first lives.
+// A farm's frame tasks share one; the folder is free again once its holder is gone.
+TEST(OutputFolder, IsHeldByOneRunAtATime) {
+    namespace fs = std::filesystem;
+    const std::string dir = test::temp_dir("output_folder_lock");
+    {
+        const OutputFolder first(dir + "/out");
+        try {
+            const OutputFolder second(dir + "/out");
+            FAIL() << "a second run into a held folder was let in";
+        } catch (const Error& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find(dir + "/out"), std::string::npos) << what;
+            EXPECT_NE(what.find("another dynsky run is writing into this folder"), std::string::npos) << what;
+        }
+        EXPECT_THROW(OutputFolder(dir + "/out", FolderUse::shared), Error);
+        EXPECT_NO_THROW(OutputFolder(dir + "/other"));  // another folder is free
+    }
+    {
+        const OutputFolder task1(dir + "/out", FolderUse::shared), task2(dir + "/out", FolderUse::shared);
+        EXPECT_THROW(OutputFolder(dir + "/out"), Error);  // a whole run waits for the farm's tasks
+    }
+    EXPECT_NO_THROW(OutputFolder(dir + "/out"));  // released
+    fs::remove_all(dir);
+}
+
+// An earlier run's outputs go before this run writes its own: files only, missing names skipped.
+TEST(AtomicFile, EarlierOutputsAreRemovedFilesOnly) {
+    namespace fs = std::filesystem;
+    const std::string dir = test::temp_dir("earlier_outputs");
+    std::ofstream(dir + "/a.png") << "old";
+    fs::create_directories(dir + "/sub");
+    std::ofstream(dir + "/kept.csv") << "not ours";
+    remove_earlier_outputs({dir + "/a.png", dir + "/missing.csv", dir + "/sub", ""});
+    EXPECT_FALSE(fs::exists(dir + "/a.png"));
+    EXPECT_TRUE(fs::is_directory(dir + "/sub"));
+    EXPECT_TRUE(fs::exists(dir + "/kept.csv"));
+    fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace dynsky
