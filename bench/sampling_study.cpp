@@ -364,7 +364,11 @@ int run_sampling_study(const SamplingStudyOptions& o) {
     // An input missing or bad (exit 1), not a usage error; nothing written yet.
     if (run_accuracy && skies.empty())
         throw_file_error(o.shared, "none of the selected skies (--skies) could be made:\n" + notes);
-    if (run_accuracy) fs::create_directories(cache);
+    if (run_accuracy) {
+        std::error_code ec;
+        fs::create_directories(cache, ec);
+        if (ec) throw_file_error(cache.string(), "cannot create the cache folder: " + ec.message());
+    }
 
     // ---- Accuracy against time ----
     std::vector<Run> runs;

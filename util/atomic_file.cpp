@@ -59,11 +59,19 @@ std::string output_target(const std::string& target) {
     return p.string();
 }
 
-void make_parent(const fs::path& target) {
-    if (target.parent_path().empty()) return;
+// Makes the target's folder; returns the folders it made, outermost first.
+std::vector<std::string> make_parent(const fs::path& target) {
+    std::vector<std::string> made;
+    if (target.parent_path().empty()) return made;
     std::error_code ec;
+    for (fs::path p = fs::absolute(target.parent_path(), ec).lexically_normal(); !p.empty() && !fs::exists(p, ec);
+         p = p.parent_path()) {
+        made.insert(made.begin(), p.string());
+        if (p == p.parent_path()) break;
+    }
     fs::create_directories(target.parent_path(), ec);
     if (ec) throw_file_error(target.string(), "cannot create its folder: " + ec.message());
+    return made;
 }
 
 // Renames a complete, synced temporary into place (and syncs the folder so the name survives a crash).
@@ -135,13 +143,20 @@ TemporaryFile::TemporaryFile(std::string target)
     : given_(target),
       target_(output_target(target)),
       path_((fs::path(target_).parent_path() / fs::path(temporary_path(given_)).filename()).string()) {
-    make_parent(fs::path(target_));
+    made_folders_ = make_parent(fs::path(target_));
     slot_ = register_active(path_);
 }
 
 TemporaryFile::~TemporaryFile() {
     std::error_code ec;
-    if (!committed_) fs::remove(path_, ec);
+    if (!committed_) {
+        fs::remove(path_, ec);
+        // And the folders made for it, where nothing else came into them: a write that failed (a
+        // full disk) left `render -o new/folder/x.exr`'s folders behind, empty.
+        for (auto it = made_folders_.rbegin(); it != made_folders_.rend(); ++it)
+            if (fs::is_directory(*it, ec) && fs::is_empty(*it, ec) && !ec) fs::remove(*it, ec);
+            else break;
+    }
     if (slot_ >= 0) unregister_active(slot_);
 }
 
@@ -247,11 +262,17 @@ void write_file_atomic(const std::string& path, const std::string& bytes) { writ
 
 void write_files_atomic(const std::vector<std::pair<std::string, std::string>>& files) {
     std::vector<std::unique_ptr<TemporaryFile>> temporaries;
-    for (const auto& [path, bytes] : files) {
-        temporaries.push_back(std::make_unique<TemporaryFile>(path));
-        fill_temporary(*temporaries.back(), path, bytes);
+    try {
+        for (const auto& [path, bytes] : files) {
+            temporaries.push_back(std::make_unique<TemporaryFile>(path));
+            fill_temporary(*temporaries.back(), path, bytes);
+        }
+        for (size_t k = 0; k < files.size(); ++k) temporaries[k]->commit("the write", files[k].second.empty());
+    } catch (...) {
+        // The last made first, so that the first's folders are empty when it goes.
+        while (!temporaries.empty()) temporaries.pop_back();
+        throw;
     }
-    for (size_t k = 0; k < files.size(); ++k) temporaries[k]->commit("the write", files[k].second.empty());
 }
 
 namespace {

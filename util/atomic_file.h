@@ -47,7 +47,8 @@ class TemporaryFile {
   private:
     std::string given_, target_, path_;  // the name given, the file written (through links), the temporary
     bool committed_ = false;
-    int slot_ = -1;  // in the interrupt handler's list, or -1
+    int slot_ = -1;                          // in the interrupt handler's list, or -1
+    std::vector<std::string> made_folders_;  // made for it (outermost first): removed with it when empty
 };
 
 // How a run holds its output folder while it writes (an advisory lock on the folder, released

@@ -88,6 +88,26 @@ TEST(AtomicFile, FailedWritesLeaveNothingAndNameTheFile) {
     fs::remove_all(dir);
 }
 
+// A failed write leaves no folders made for it (`render -o new/sub/x.exr` on a full disk left
+// new/sub behind, empty); folders that were there, or that hold a file written with it, stay.
+void write_pair_into_new_folders(const std::string& dir) {
+    write_files_atomic({{dir + "/new/sub/r.exr", "small"}, {dir + "/new/sub/r.png", std::string(100000, 'x')}});
+}
+TEST(AtomicFile, AFailedWriteLeavesNoFoldersItMade) {
+    const std::string dir = test::temp_dir("atomic_folders");
+    EXPECT_EQ(write_under_size_limit(8192, dir + "/a/b/report.csv", write_big_file), 0);
+    EXPECT_FALSE(fs::exists(dir + "/a"));
+    EXPECT_EQ(write_under_size_limit(8192, dir, write_pair_into_new_folders), 0);  // the second fails
+    EXPECT_FALSE(fs::exists(dir + "/new"));
+    EXPECT_EQ(count_entries(dir), 0);
+    fs::create_directories(dir + "/kept");
+    EXPECT_EQ(write_under_size_limit(8192, dir + "/kept/report.csv", write_big_file), 0);
+    EXPECT_TRUE(fs::is_directory(dir + "/kept"));
+    EXPECT_EQ(write_under_size_limit(RLIM_INFINITY, dir + "/a/b/report.csv", write_big_file), 1);
+    EXPECT_TRUE(fs::exists(dir + "/a/b/report.csv"));
+    fs::remove_all(dir);
+}
+
 // Files written together (a render's EXR and PNG): the second failing (over the size limit) leaves
 // the first as an earlier run wrote it, and no temporary (it replaced the earlier EXR, then deleted
 // it when its PNG failed).
