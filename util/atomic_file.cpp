@@ -243,7 +243,7 @@ void remove_earlier_outputs(const std::vector<std::string>& files) {
         if (f.empty()) continue;
         std::error_code ec;
         const fs::file_status st = fs::symlink_status(f, ec);
-        if (!fs::exists(st) || fs::is_directory(st)) continue;
+        if (!fs::is_regular_file(st)) continue;  // missing; a folder, link or device is the user's
         if (!fs::remove(f, ec) || ec)
             throw_file_error(f, "could not remove the earlier run's file before writing this run's" +
                                     (ec ? ": " + ec.message() : std::string()));

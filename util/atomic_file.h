@@ -90,7 +90,8 @@ std::vector<std::string> remove_stale_temporaries(const std::string& folder, con
 // Removes the files an earlier run left under these names before this run replaces any of them,
 // so that a run stopped midway (Ctrl-C, a full disk) leaves only its own outputs, never a mix of two
 // runs' (`compare`'s new images beside an earlier run's illuminance chart). Throws naming a file that
-// cannot be removed. Missing and empty names are skipped.
+// cannot be removed. Only plain files go: missing and empty names, folders, links (written through,
+// util/atomic_file.h) and devices are left as they are.
 void remove_earlier_outputs(const std::vector<std::string>& files);
 
 // Throws before any work if a file could not be written at `path` when the work is done: a folder

@@ -335,8 +335,12 @@ TEST(AtomicFile, EarlierOutputsAreRemovedFilesOnly) {
     std::ofstream(dir + "/a.png") << "old";
     fs::create_directories(dir + "/sub");
     std::ofstream(dir + "/kept.csv") << "not ours";
-    remove_earlier_outputs({dir + "/a.png", dir + "/missing.csv", dir + "/sub", ""});
+    std::ofstream(dir + "/target.exr") << "the user's";
+    fs::create_symlink(dir + "/target.exr", dir + "/link.exr");
+    remove_earlier_outputs({dir + "/a.png", dir + "/missing.csv", dir + "/sub", "", dir + "/link.exr"});
     EXPECT_FALSE(fs::exists(dir + "/a.png"));
+    EXPECT_TRUE(fs::is_symlink(dir + "/link.exr"));  // written through when replaced
+    EXPECT_TRUE(fs::exists(dir + "/target.exr"));
     EXPECT_TRUE(fs::is_directory(dir + "/sub"));
     EXPECT_TRUE(fs::exists(dir + "/kept.csv"));
     fs::remove_all(dir);
