@@ -198,8 +198,6 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
     for (size_t k = 1; k < outputs.size(); ++k) check_output_file(outputs[k]);
     const OutputFolder folder(o.out);  // removed again if this run fails before writing anything
     remove_stale_temporaries(o.out);   // of a killed run into the same folder
-    // The earlier run's outputs go first: one stopped midway leaves no mix of two runs' files.
-    remove_earlier_outputs(std::vector<std::string>(outputs.begin() + 1, outputs.end()));
     const int sky_n = cloudy.step(0)->resolution;
     // A sky in units of its own is compared with the clear sky brought to its scale: its figures
     // are then not lux. Said, as is a sky that does not say what its units are.
@@ -286,6 +284,10 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
     };
     describe(&a, *clear0, "");
     describe(&b, *cloudy0, cloudy.model().name());
+    // The earlier run's outputs go just before the first of this run's is written (stopped while
+    // rendering, the earlier results stay whole): one stopped while writing leaves no mix of two
+    // runs' files.
+    remove_earlier_outputs(std::vector<std::string>(outputs.begin() + 1, outputs.end()));
     write_image((fs::path(o.out) / "clear.exr").string(), a);
     write_image((fs::path(o.out) / "cloudy.exr").string(), b);
     Image da = tonemap_to_display(a, ev), db = tonemap_to_display(b, ev);

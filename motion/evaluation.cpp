@@ -376,9 +376,6 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
     // Import the frames needed (first - 1 .. last + hmax) once, at the import resolution.
     const int big = o.import_resolution;
     std::vector<NetworkFrame> frames;
-    // An earlier report under this name goes once the inputs are known good: a run stopped midway
-    // left its new CSV beside the old report and charts.
-    remove_earlier_outputs(outputs);
     ProgressBar progress(last + hmax - first + 2, "import " + seq.name, o.quiet);
     for (int k = first - 1; k <= last + hmax; ++k) {
         frames.push_back(network_frame_from_photo(seq.photos[size_t(k)], seq.preset, big, big, form));
@@ -501,6 +498,10 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
                        fmt("%g", paper->info().dt) + " s per frame"
                  : std::string())
        << ".\n\n";
+    // An earlier report under this name goes just before this one is written (after the scoring: a
+    // bad photograph, Ctrl-C or a failure during it keeps the earlier report whole): a run stopped
+    // midway through writing left its new CSV beside the old report and charts.
+    remove_earlier_outputs(outputs);
     for (int r : resolutions) {
         md << "## " << r << " px\n\n| horizon | ahead |";
         for (const std::string& m : result.methods)

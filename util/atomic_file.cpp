@@ -217,11 +217,12 @@ OutputFolder::OutputFolder(const std::string& path, FolderUse use) {
 }
 
 OutputFolder::~OutputFolder() {
-    if (lock_fd_ >= 0) ::close(lock_fd_);
     std::error_code ec;
     for (auto it = created_.rbegin(); it != created_.rend(); ++it)
         if (fs::is_directory(*it, ec) && fs::is_empty(*it, ec) && !ec) fs::remove(*it, ec);
         else break;
+    // Released last: a run let in before the empty folder went would write into a folder re-made unheld.
+    if (lock_fd_ >= 0) ::close(lock_fd_);
 }
 
 void check_output_file(const std::string& path) {

@@ -63,7 +63,8 @@ enum class FolderUse { exclusive, shared };
 // command failed before writing anything: a full disk, a bad input found late), so a failure
 // leaves no empty folders behind. Folders that hold finished work are never touched. Held (FolderUse)
 // while it lives: another run holding it in a way that conflicts is an error naming the folder
-// (where the file system has no such locks, nothing is held).
+// (where the file system has no such locks, nothing is held; on NFS the lock is seen only by runs
+// on the same machine, as Linux keeps locks on folders on the client).
 class OutputFolder {
   public:
     explicit OutputFolder(const std::string& path, FolderUse use = FolderUse::exclusive);

@@ -535,6 +535,35 @@ TEST(SkyModelCli, EvaluateNeverScoresTheModelsTrainingFramesAsHeldOut) {
     fs::remove_all(dir);
 }
 
+// A rerun replaces the earlier report whole, and only once it has scored: one that fails on a
+// photograph it reads midway (here one cut short) keeps the earlier report; it had been removed
+// before the photographs were read.
+TEST(SkyModelCli, EvaluateKeepsTheEarlierReportUntilItHasScored) {
+    const std::string dir = test::temp_dir("evaluate_keeps"), skies = dir + "/skies";
+    fs::create_directories(skies);
+    for (const char* s : {"00", "30"})
+        for (const char* m : {"00", "01", "02"}) {
+            const std::string at = std::string("2026-06-21T12:") + m + ":" + s + "Z";
+            auto r = test::run_command(dynsky("sky clear --sky-res 64 --lat 48 --lon 2 --time " + at + " -q -o " +
+                                              skies + "/s_2026062112" + m + s + "Z.exr"));
+            ASSERT_EQ(r.exit_code, 0) << r.output;
+        }
+    const std::string run = dynsky("sky evaluate --photos " + skies +
+                                   " --model advect --no-paper --resolutions 64 --import-res 64 --horizons 1 -q -o " +
+                                   dir + "/rep.md 2>&1");
+    auto r = test::run_command(run);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const std::string report = read_text(dir + "/rep.md");
+    const std::string last = skies + "/s_20260621120230Z.exr";
+    fs::resize_file(last, fs::file_size(last) / 2);
+    r = test::run_command(run);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("s_20260621120230Z.exr"), std::string::npos) << r.output;
+    EXPECT_EQ(read_text(dir + "/rep.md"), report);
+    for (const char* f : {"/rep.csv", "/rep_64.csv", "/rep_64.png"}) EXPECT_TRUE(fs::exists(dir + f)) << f;
+    fs::remove_all(dir);
+}
+
 TEST(SkyModelCli, EvaluateRejectsFoldersWithoutOneRegularSequence) {
     DYNSKY_REQUIRE_SHARED();
     const std::string dir = test::temp_dir("evaluate_bad");
