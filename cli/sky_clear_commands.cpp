@@ -12,6 +12,7 @@
 #include "cli/options.h"
 #include "util/exposure.h"
 #include "sky/clear_sky.h"
+#include "sky/default_sky.h"
 #include "sky/latlong.h"
 #include "sky/sky_image.h"
 #include "sky/sun_position.h"
@@ -23,9 +24,10 @@ namespace dynsky::cli {
 
 namespace {
 
+// The place and time default to every other command's (sky/default_sky.h: Paris, 2026-06-21T16:00Z).
 struct SunOptions {
-    double lat = 0, lon = 0, elevation_m = 0;
-    std::string time;
+    double lat = default_sky::kLatitudeDeg, lon = default_sky::kLongitudeDeg, elevation_m = 0;
+    std::string time = default_sky::kStartTime;
     bool no_refraction = false;
     double pressure_mbar = 1010, temperature_c = 10;
 };
@@ -47,15 +49,15 @@ struct LatLongOptions {
 void add_sun_options(CLI::App* cmd, SunOptions* o) {
     cmd->add_option("--lat", o->lat, "Latitude in degrees, north positive (-90..90)")
         ->check(finite_in(-90, 90))
-        ->required();
+        ->capture_default_str();
     cmd->add_option("--lon", o->lon,
                     "Longitude in degrees, EAST positive (-180..180, or 0..360); write --lon=-105.2 or --lon -105.2")
         ->check(finite_in(-360, 360))
-        ->required();
+        ->capture_default_str();
     cmd->add_option("--time", o->time,
                     "Date and time, ISO 8601 with a zone: 2026-06-21T12:00:00Z (UTC) or 2026-06-21T14:00:00+02:00")
         ->check(utc_time())
-        ->required();
+        ->capture_default_str();
     cmd->add_option("--elevation", o->elevation_m, "Height of the place above sea level in metres (default 0)")
         ->check(finite_in(-1000, 100000));
     cmd->add_flag("--no-refraction", o->no_refraction, "Geometric position: no atmospheric refraction");

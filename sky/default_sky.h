@@ -1,5 +1,6 @@
 // The sky every subcommand makes when the user names no place, time or weather: one definition,
-// so `render`, `animate`, `compare`, `sky timeline`, `sky predict` and `sky procedural` agree
+// so `render`, `animate`, `compare`, `sky timeline`, `sky predict`, `sky procedural`, `sky clear` and
+// `sky sun` agree
 // (an option means the same thing everywhere, with the same default).
 //
 // Defaults:

@@ -143,6 +143,25 @@ TEST(SkyClearCli, LatLongConvertsASky) {
     fs::remove_all(dir);
 }
 
+// Without a place and time, the sky every other command makes (sky/default_sky.h: Paris,
+// 2026-06-21T16:00Z), as `render --sky clear` does; they were required here alone.
+TEST(SkyClearCli, PlaceAndTimeDefaultAsEverywhereElse) {
+    const std::string dir = test::temp_dir("sky_clear_default");
+    auto r = dynsky("sky clear --sky-res 32 -q -o " + dir + "/default.exr");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    r = dynsky("sky clear --sky-res 32 --lat 48.8566 --lon 2.3522 --time 2026-06-21T16:00:00Z -q -o " + dir +
+               "/given.exr");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const SkyImage a = load_sky(dir + "/default.exr"), b = load_sky(dir + "/given.exr");
+    ASSERT_TRUE(a.sun_direction && b.sun_direction);
+    EXPECT_LT((*a.sun_direction - *b.sun_direction).norm(), 1e-6f);
+    EXPECT_EQ(a.time_seconds, b.time_seconds);
+    EXPECT_EQ(a.rgb, b.rgb);
+    r = dynsky("sky sun");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    fs::remove_all(dir);
+}
+
 TEST(SkyClearCli, HelpDescribesOptionsAndUnits) {
     auto r = dynsky("sky clear --help");
     EXPECT_EQ(r.exit_code, 0);
