@@ -360,8 +360,7 @@ int write_sky_timeline(const SkySourceSpec& sky, const StepModelSpec& model, dou
     if (!quiet)
         std::fprintf(stderr, "sky timeline: model %s, Delta t %g s, steps 0-%d (t <= %g s) into %s\n",
                      timeline.model().name().c_str(), timeline.dt(), last, last * timeline.dt(), folder.c_str());
-    remove_stale_temporaries(folder);
-    timeline.save(folder, last, settings);
+    timeline.save(folder, last, settings);  // which removes a killed run's temporaries first
     if (!quiet)
         std::fprintf(stderr, "sky timeline: %d medium step(s) in %.1f s\n", timeline.timings().medium_steps,
                      timeline.timings().medium_seconds);

@@ -466,7 +466,6 @@ void run_photo_import(const PhotoImportJob& o) {
     // Held alone while it is written (two imports into one folder mixed their skies and previews).
     const OutputFolder out_folder(o.out);
     remove_stale_temporaries(o.out);  // of a killed run into the same folder
-    if (!fs::is_directory(o.out)) throw_file_error(o.out, "cannot create this output folder");
 
     OnePhoto each(o);
     // A sequence's hidden pixels are filled smoothly unless asked otherwise: the texture fill takes

@@ -59,16 +59,32 @@ std::string output_target(const std::string& target) {
     return p.string();
 }
 
-// Makes the target's folder; returns the folders it made, outermost first.
-std::vector<std::string> make_parent(const fs::path& target) {
-    std::vector<std::string> made;
-    if (target.parent_path().empty()) return made;
+// The folders of `folder`'s path that do not exist yet, outermost first (what creating it makes).
+std::vector<std::string> missing_folders(const fs::path& folder) {
+    std::vector<std::string> missing;
     std::error_code ec;
-    for (fs::path p = fs::absolute(target.parent_path(), ec).lexically_normal(); !p.empty() && !fs::exists(p, ec);
+    for (fs::path p = fs::absolute(folder, ec).lexically_normal(); !p.empty() && !fs::exists(p, ec);
          p = p.parent_path()) {
-        made.insert(made.begin(), p.string());
+        missing.insert(missing.begin(), p.string());
         if (p == p.parent_path()) break;
     }
+    return missing;
+}
+
+// Removes the folders a failed command made (outermost first, as missing_folders lists them),
+// innermost first, while they are empty: a failure leaves no empty folders behind.
+void remove_empty_folders(const std::vector<std::string>& made) {
+    std::error_code ec;
+    for (auto it = made.rbegin(); it != made.rend(); ++it)
+        if (fs::is_directory(*it, ec) && fs::is_empty(*it, ec) && !ec) fs::remove(*it, ec);
+        else break;
+}
+
+// Makes the target's folder; returns the folders it made, outermost first.
+std::vector<std::string> make_parent(const fs::path& target) {
+    if (target.parent_path().empty()) return {};
+    std::vector<std::string> made = missing_folders(target.parent_path());
+    std::error_code ec;
     fs::create_directories(target.parent_path(), ec);
     if (ec) throw_file_error(target.string(), "cannot create its folder: " + ec.message());
     return made;
@@ -153,9 +169,7 @@ TemporaryFile::~TemporaryFile() {
         fs::remove(path_, ec);
         // And the folders made for it, where nothing else came into them: a write that failed (a
         // full disk) left `render -o new/folder/x.exr`'s folders behind, empty.
-        for (auto it = made_folders_.rbegin(); it != made_folders_.rend(); ++it)
-            if (fs::is_directory(*it, ec) && fs::is_empty(*it, ec) && !ec) fs::remove(*it, ec);
-            else break;
+        remove_empty_folders(made_folders_);
     }
     if (slot_ >= 0) unregister_active(slot_);
 }
@@ -192,16 +206,10 @@ std::string temporary_path(const std::string& path) {
 }
 
 OutputFolder::OutputFolder(const std::string& path, FolderUse use) {
-    std::vector<fs::path> missing;
+    created_ = missing_folders(path);
     std::error_code ec;
-    for (fs::path p = fs::absolute(path, ec).lexically_normal(); !p.empty() && !fs::exists(p, ec);
-         p = p.parent_path()) {
-        missing.push_back(p);
-        if (p == p.parent_path()) break;
-    }
     fs::create_directories(path, ec);
     if (ec) throw_file_error(path, "cannot create the output folder: " + ec.message());
-    for (auto it = missing.rbegin(); it != missing.rend(); ++it) created_.push_back(it->string());
     // Not inherited by children (ffmpeg, the chart script): a killed run's lock goes with it.
     lock_fd_ = ::open(path.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
     if (lock_fd_ >= 0 && ::flock(lock_fd_, (use == FolderUse::shared ? LOCK_SH : LOCK_EX) | LOCK_NB) != 0) {
@@ -217,10 +225,7 @@ OutputFolder::OutputFolder(const std::string& path, FolderUse use) {
 }
 
 OutputFolder::~OutputFolder() {
-    std::error_code ec;
-    for (auto it = created_.rbegin(); it != created_.rend(); ++it)
-        if (fs::is_directory(*it, ec) && fs::is_empty(*it, ec) && !ec) fs::remove(*it, ec);
-        else break;
+    remove_empty_folders(created_);
     // Released last: a run let in before the empty folder went would write into a folder re-made unheld.
     if (lock_fd_ >= 0) ::close(lock_fd_);
 }
