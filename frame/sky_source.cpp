@@ -347,6 +347,11 @@ int write_sky_timeline(const SkySourceSpec& sky, const StepModelSpec& model, dou
                                  old.stored_last_step(), duration);
                 return old.stored_last_step();
             }
+            if (stored == settings && !quiet)
+                std::fprintf(stderr,
+                             "%s: the stored timeline (steps 0-%d) covers %g s of the %g asked: made again from the "
+                             "start (a rollout cannot resume midway)\n",
+                             folder.c_str(), old.stored_last_step(), old.stored_last_step() * old.dt(), duration);
         } catch (const Error& e) {
             // Damaged or of another version: made again below.
             if (!quiet)
@@ -360,7 +365,7 @@ int write_sky_timeline(const SkySourceSpec& sky, const StepModelSpec& model, dou
     if (!quiet)
         std::fprintf(stderr, "sky timeline: model %s, Delta t %g s, steps 0-%d (t <= %g s) into %s\n",
                      timeline.model().name().c_str(), timeline.dt(), last, last * timeline.dt(), folder.c_str());
-    timeline.save(folder, last, settings);  // which removes a killed run's temporaries first
+    timeline.save(folder, last, settings, quiet);  // which removes a killed run's temporaries first
     if (!quiet)
         std::fprintf(stderr, "sky timeline: %d medium step(s) in %.1f s\n", timeline.timings().medium_steps,
                      timeline.timings().medium_seconds);

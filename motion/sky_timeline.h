@@ -102,10 +102,12 @@ class SkyTimeline {
     // The sun direction at t (the input's, or the clock's); nullopt when unknown.
     std::optional<Vec3d> sun_direction_at(double t) const;
 
-    // Writes steps 0..last_step and flows 0..last_step-1 (computing them first) into `folder`:
-    // step_NNNN.exr (float), flow_NNNN.npy and timeline.json, written last, with everything else
-    // (sun patches, clock, model, `settings`: what the caller checks on load). Every file atomic.
-    void save(const std::string& folder, int last_step, const std::string& settings);
+    // Writes steps 0..last_step and flows 0..last_step-1 into `folder`, each step as soon as it is
+    // computed: step_NNNN.exr (float), flow_NNNN.npy and timeline.json, rewritten after every step
+    // from step 1 on with everything else (sun patches, clock, model, `settings`: what the caller
+    // checks on load), so that a run stopped midway leaves a timeline of the steps it finished.
+    // Every file atomic. quiet: no progress bar.
+    void save(const std::string& folder, int last_step, const std::string& settings, bool quiet = true);
     // A timeline reading a saved folder (steps loaded when first needed). *settings gets the saved
     // settings. Throws dynsky::Error naming the folder when it is not a complete stored timeline.
     static SkyTimeline load(const std::string& folder, std::string* settings = nullptr);

@@ -19,6 +19,7 @@
 #include "util/error.h"
 #include "util/npy.h"
 #include "util/parse.h"
+#include "util/progress.h"
 
 namespace dynsky {
 
@@ -78,17 +79,30 @@ std::optional<Vec3> vec_from(const json& j) {
 
 }  // namespace
 
-void SkyTimeline::save(const std::string& folder, int last_step, const std::string& settings) {
+void SkyTimeline::save(const std::string& folder, int last_step, const std::string& settings, bool quiet) {
     if (last_step < 1) throw Error("sky timeline: a stored timeline holds at least steps 0 and 1");
     const OutputFolder made(folder);  // removed again if this fails before writing anything
     // Found before the steps are computed (minutes for a long timeline), not at the first write.
     check_output_file((fs::path(folder) / "timeline.json").string());
     remove_stale_temporaries(folder);  // of a killed run into the same folder
-    json steps = json::array(), flows = json::array();
-    step(last_step);  // every step first: the input's cloud opacity comes with step 1
+    step(1);                           // the input's cloud opacity comes with step 1
     // An earlier timeline's description goes before any of its steps is replaced: a run that stops
     // midway (a full disk, Ctrl-C) must not leave it describing this run's steps.
     remove_stale_marker((fs::path(folder) / "timeline.json").string());
+    json clock = nullptr;
+    if (clock_)
+        clock = {{"start",
+                  {clock_->start.year, clock_->start.month, clock_->start.day, clock_->start.hour, clock_->start.minute,
+                   clock_->start.second}},
+                 {"lat", clock_->where.latitude_deg},
+                 {"lon", clock_->where.longitude_deg},
+                 {"elevation", clock_->where.elevation_m}};
+    json steps = json::array(), flows = json::array(), suns = json::array();
+    // Each step is written as soon as it is computed, and the description after it: a run that
+    // stops midway (Ctrl-C, a killed job, a full disk) leaves a timeline of the steps it finished,
+    // which animate --timeline renders up to their end. Written only at the end, an hour of steps
+    // was lost with the last minute.
+    ProgressBar progress(last_step + 1, "sky timeline", quiet);
     for (int i = 0; i <= last_step; ++i) {
         auto s = step(i);
         const std::string file = numbered(folder, "step", i, ".exr");
@@ -108,46 +122,39 @@ void SkyTimeline::save(const std::string& folder, int last_step, const std::stri
                          {"sun", vec_json(s->sun_direction)},
                          {"source", s->source},
                          {"cloud_opacity", opacity}});
-        if (i == 0) continue;
-        cv::Mat f = flow(i - 1);
-        if (f.type() != CV_32FC2 || !f.isContinuous()) f = f.clone();
-        if (f.type() != CV_32FC2) throw Error("sky timeline: a flow is not 2-channel float");
-        const std::string flow_file = numbered(folder, "flow", i - 1, ".npy");
-        write_npy(flow_file, {size_t(f.rows), size_t(f.cols), 2}, f.ptr<float>());
-        flows.push_back(fs::path(flow_file).filename().string());
-    }
-    json suns = json::array();
-    for (const SunPatch& p : suns_) {
         json excess = json::array();
-        for (const Color& c : p.excess) excess.push_back({c[0], c[1], c[2]});
-        suns.push_back({{"di", p.di}, {"dj", p.dj}, {"excess", excess}});
+        for (const Color& c : suns_[size_t(i)].excess) excess.push_back({c[0], c[1], c[2]});
+        suns.push_back({{"di", suns_[size_t(i)].di}, {"dj", suns_[size_t(i)].dj}, {"excess", excess}});
+        if (i > 0) {
+            cv::Mat f = flow(i - 1);
+            if (f.type() != CV_32FC2 || !f.isContinuous()) f = f.clone();
+            if (f.type() != CV_32FC2) throw Error("sky timeline: a flow is not 2-channel float");
+            const std::string flow_file = numbered(folder, "flow", i - 1, ".npy");
+            write_npy(flow_file, {size_t(f.rows), size_t(f.cols), 2}, f.ptr<float>());
+            flows.push_back(fs::path(flow_file).filename().string());
+            json j = {{"format", kFormat},
+                      {"settings", settings},
+                      {"dt", dt_},
+                      {"last_step", i},
+                      {"model", model_->name()},
+                      {"model_makes_own_sun", model_->makes_own_sun()},
+                      {"model_native_dt", model_->native_dt()},
+                      {"input_time", input_time_},
+                      {"input_sun", input_sun_ ? json::array({(*input_sun_)[0], (*input_sun_)[1], (*input_sun_)[2]})
+                                               : json(nullptr)},
+                      {"input_look_transmittance", input_look_transmittance_},
+                      {"radiance_scale", radiance_scale_},
+                      {"clock", clock},
+                      {"steps", steps},
+                      {"flows", flows},
+                      {"suns", suns}};
+            // After the files it names: a folder without it (a killed keys job before step 1) is
+            // not a timeline, and one describes only steps that are whole.
+            write_file_atomic((fs::path(folder) / "timeline.json").string(), j.dump(1) + "\n");
+        }
+        progress.advance();
     }
-    json clock = nullptr;
-    if (clock_)
-        clock = {{"start",
-                  {clock_->start.year, clock_->start.month, clock_->start.day, clock_->start.hour, clock_->start.minute,
-                   clock_->start.second}},
-                 {"lat", clock_->where.latitude_deg},
-                 {"lon", clock_->where.longitude_deg},
-                 {"elevation", clock_->where.elevation_m}};
-    json j = {{"format", kFormat},
-              {"settings", settings},
-              {"dt", dt_},
-              {"last_step", last_step},
-              {"model", model_->name()},
-              {"model_makes_own_sun", model_->makes_own_sun()},
-              {"model_native_dt", model_->native_dt()},
-              {"input_time", input_time_},
-              {"input_sun",
-               input_sun_ ? json::array({(*input_sun_)[0], (*input_sun_)[1], (*input_sun_)[2]}) : json(nullptr)},
-              {"input_look_transmittance", input_look_transmittance_},
-              {"radiance_scale", radiance_scale_},
-              {"clock", clock},
-              {"steps", steps},
-              {"flows", flows},
-              {"suns", suns}};
-    // Written last: a folder without it (a killed keys job) is not a timeline.
-    write_file_atomic((fs::path(folder) / "timeline.json").string(), j.dump(1) + "\n");
+    progress.finish();
 }
 
 namespace {

@@ -503,6 +503,54 @@ TEST(SkyTimeline, SavedAndLoadedGivesTheSameSkiesBitForBit) {
     std::filesystem::remove_all(dir);
 }
 
+// A model that fails at one step (a killed job, a full disk midway through a long timeline).
+class FailingStepModel : public MediumStepModel {
+  public:
+    FailingStepModel(std::unique_ptr<MediumStepModel> inner, int fail_at)
+        : inner_(std::move(inner)), fail_at_(fail_at) {}
+    SkyImage step(const std::vector<std::shared_ptr<const SkyImage>>& history, double dt) override {
+        if (int(history.size()) == fail_at_) throw Error("stopped at step " + std::to_string(fail_at_));
+        return inner_->step(history, dt);
+    }
+    std::string name() const override { return inner_->name(); }
+    bool makes_own_sun() const override { return inner_->makes_own_sun(); }
+    void set_sun_direction(const Vec3d& d) override { inner_->set_sun_direction(d); }
+    double native_dt() const override { return inner_->native_dt(); }
+    cv::Mat last_cloud_opacity() const override { return inner_->last_cloud_opacity(); }
+    cv::Mat input_cloud_opacity() const override { return inner_->input_cloud_opacity(); }
+    void set_input_sun_cover(double c) override { inner_->set_input_sun_cover(c); }
+    void set_input_sun_share(double s) override { inner_->set_input_sun_share(s); }
+    bool dt_is_fixed() const override { return inner_->dt_is_fixed(); }
+    cv::Mat last_step_flow() const override { return inner_->last_step_flow(); }
+
+  private:
+    std::unique_ptr<MediumStepModel> inner_;
+    int fail_at_;
+};
+
+// Long runs never lose finished work: a timeline stopped midway keeps the steps it finished as a
+// timeline of their span, bit for bit those of a run that went on (they were all lost before).
+TEST(SkyTimeline, AStoppedSaveKeepsATimelineOfTheStepsItFinished) {
+    SunClock clock;
+    const SkyImage input = clocked_textured_sky(64, &clock);
+    const std::string dir = ::testing::TempDir() + "/dynsky_stopped_timeline";
+    std::filesystem::remove_all(dir);
+    SkyTimeline stopped(input,
+                        std::make_unique<FailingStepModel>(std::make_unique<FlowExtrapolationStepModel>(250.0, 0.4), 5),
+                        5.0, clock);
+    EXPECT_THROW(stopped.save(dir, 8, "settings"), Error);
+    std::string settings;
+    SkyTimeline loaded = SkyTimeline::load(dir, &settings);
+    EXPECT_EQ(settings, "settings");
+    EXPECT_EQ(loaded.stored_last_step(), 4);
+    EXPECT_NO_THROW(loaded.verify_stored());
+    SkyTimeline whole(input, std::make_unique<FlowExtrapolationStepModel>(250.0, 0.4), 5.0, clock);
+    loaded.set_gamma(GammaKind::constant), whole.set_gamma(GammaKind::constant);
+    for (double t : {0.0, 7.5, 20.0}) EXPECT_TRUE(loaded.sky_at(t).rgb == whole.sky_at(t).rgb) << "t = " << t;
+    EXPECT_THROW(loaded.sky_at(21.0), Error);  // needs step 5, never made
+    std::filesystem::remove_all(dir);
+}
+
 // A stored timeline damaged after it was written (a NaN or absurd flow, an opacity out of [0, 1])
 // is refused naming the file, not warped (a NaN flow crashed the warp); and a timeline never spans
 // more than kMaxSteps steps (a --dt of 1e-9 s ran for days).
