@@ -15,6 +15,7 @@
 #include "renderer/env_light.h"
 #include "renderer/integrator.h"
 #include "util/progress.h"
+#include "util/version.h"
 #include "util/image.h"
 #include "motion/network_form.h"
 #include "motion/radiance_scale.h"
@@ -321,7 +322,12 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
             for (int c = 0; c < 3; ++c)
                 side_bgr.at<cv::Vec3b>(y, x)[2 - c] = uint8_t(
                     std::lround(255.0 * std::clamp(side.pixels[(size_t(y) * side.width + x) * 3 + c], 0.0f, 1.0f)));
-    write_image((fs::path(o.out) / "side_by_side.png").string(), image_of_bgr(with_captions(side_bgr, w)));
+    // Like every picture the program renders, they say which build made them (a PNG text chunk).
+    Image side_by_side = image_of_bgr(with_captions(side_bgr, w));
+    side_by_side.metadata.strings["Software"] = diff.metadata.strings["Software"] = dynsky_version();
+    side_by_side.metadata.strings["ImageDescription"] = "dynsky compare: the clear sky's frame | the cloudy sky's";
+    diff.metadata.strings["ImageDescription"] = "dynsky compare: log2(cloudy / clear) luminance, -3..+3 stops";
+    write_image((fs::path(o.out) / "side_by_side.png").string(), side_by_side);
     write_image((fs::path(o.out) / "difference.png").string(), diff);
     const char* lux = cloudy.radiance_scale() != 1.0 ? "(683 x the sky's units)" : "lx";
     if (!reports_silenced())

@@ -86,6 +86,11 @@ TEST(ReadmeCommands, CompareWithItsDefaultsAndWithASkyExr) {
             << f;
         EXPECT_EQ(im.metadata.numbers.at("dynsky:sky_res"), 128) << f;
     }
+    for (const char* f : {"side_by_side.png", "difference.png"}) {  // and its pictures the build
+        const Image im = read_image((fs::path(dir) / "cmp2" / f).string());
+        ASSERT_TRUE(im.metadata.strings.count("Software")) << f;
+        EXPECT_EQ(im.metadata.strings.at("Software").rfind("dynsky ", 0), 0u) << f;
+    }
 }
 
 TEST(ReadmeCommands, AnimateFromAnotherFolder) {
