@@ -18,10 +18,16 @@ struct Ray {
     float tmin = 0, tmax = std::numeric_limits<float>::infinity();
 };
 
+// Float epsilons of |origin| + t |direction| bounding the error of a hit's position (accel.cpp).
+constexpr float kHitPositionErrorUlps = 32;
+
 // Everything the integrator needs at a hit, in world space.
 struct SurfaceHit {
     float t = 0;
     Vec3 position;
+    // A bound on the float error of `position` along each axis: rays leaving the surface start this
+    // far off it (offset_ray_origin), whatever the scene's size and distance from the origin.
+    float position_error = 0;
     Vec3 geometric_normal;            // unit, from the triangle's winding (front side per glTF CCW)
     Vec3 shading_normal;              // unit, interpolated vertex normal
     Vec4 tangent = Vec4(0, 0, 0, 0);  // xyz unit, w handedness; zero if the mesh has none

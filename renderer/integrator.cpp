@@ -14,10 +14,11 @@
 
 namespace dynsky {
 
-Vec3 offset_ray_origin(const Vec3& p, const Vec3& n, const Vec3& w) {
-    float scale = 1e-4f * std::max(1.0f, p.cwiseAbs().maxCoeff());
-    Vec3 offset = scale * n;
-    return n.dot(w) < 0 ? Vec3(p - offset) : Vec3(p + offset);
+Vec3 offset_ray_origin(const SurfaceHit& hit, const Vec3& n, const Vec3& w) {
+    // The least positive float keeps a hit at the origin itself off its surface.
+    const float d = std::max(hit.position_error * n.cwiseAbs().sum(), std::numeric_limits<float>::min());
+    const Vec3 offset = d * n;
+    return n.dot(w) < 0 ? Vec3(hit.position - offset) : Vec3(hit.position + offset);
 }
 
 AovSelection parse_aovs(const std::string& list) {
@@ -278,7 +279,7 @@ Color PathIntegrator::transmittance(const Ray& shadow_ray, RenderStats* stats) c
 }
 
 Color PathIntegrator::punctual_light(const ShadingPoint& sp, const MetalRoughBsdf& bsdf, const Vec3& wo,
-                                     const Vec3& position, RenderStats* stats) const {
+                                     const SurfaceHit& hit, RenderStats* stats) const {
     Color sum = Color::Zero();
     for (const PunctualLight& light : accel_.scene().lights) {
         Vec3 wi_world;
@@ -287,7 +288,7 @@ Color PathIntegrator::punctual_light(const ShadingPoint& sp, const MetalRoughBsd
         if (light.type == PunctualLight::Type::Directional) {
             wi_world = -light.direction;
         } else {
-            const Vec3 to_light = light.position - position;
+            const Vec3 to_light = light.position - hit.position;
             const float d2 = to_light.squaredNorm();
             if (!(d2 > 0)) continue;
             distance = std::sqrt(d2);
@@ -312,7 +313,7 @@ Color PathIntegrator::punctual_light(const ShadingPoint& sp, const MetalRoughBsd
         const Color f = bsdf.eval(wo, wi);
         if (!(f > 0).any()) continue;
         Ray shadow;
-        shadow.origin = offset_ray_origin(position, sp.geometric_normal, wi_world);
+        shadow.origin = offset_ray_origin(hit, sp.geometric_normal, wi_world);
         shadow.direction = wi_world;
         // Up to the light, not past it.
         if (std::isfinite(distance)) shadow.tmax = distance * (1 - 1e-4f);
@@ -442,7 +443,7 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
                 Color f = bsdf.eval(wo, wi);
                 if (wi.z() > 0 && (f > 0).any()) {
                     Ray shadow;
-                    shadow.origin = offset_ray_origin(hit.position, sp.geometric_normal, ls.wi);
+                    shadow.origin = offset_ray_origin(hit, sp.geometric_normal, ls.wi);
                     shadow.direction = ls.wi;
                     Color tr = transmittance(shadow, stats);
                     if (tr.maxCoeff() > 0) {
@@ -458,7 +459,7 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
         }
         // Punctual lights (KHR_lights_punctual): delta lights no BSDF sample can hit, each one
         // sampled every bounce, whatever the strategy (no random numbers: streams unchanged).
-        if (!accel_.scene().lights.empty()) add(beta * punctual_light(sp, bsdf, wo, hit.position, stats), depth + 1);
+        if (!accel_.scene().lights.empty()) add(beta * punctual_light(sp, bsdf, wo, hit, stats), depth + 1);
 
         // Continue the path by sampling the BSDF.
         float ulobe = rng.uniform();
@@ -479,7 +480,7 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
         }
         if (!(beta.maxCoeff() > 0) || !beta.allFinite()) break;
         if (use_bsdf_hits) light_.prefetch(wi_world);  // in cache by the time the ray escapes
-        ray.origin = offset_ray_origin(hit.position, sp.geometric_normal, wi_world);
+        ray.origin = offset_ray_origin(hit, sp.geometric_normal, wi_world);
         ray.direction = wi_world;
         ray.tmin = 0;
         ray.tmax = std::numeric_limits<float>::infinity();

@@ -168,7 +168,7 @@ class PathIntegrator {
     Color transmittance(const Ray& ray, RenderStats* stats) const;
     // Light reflected towards wo (local) from the scene's punctual lights at a shading point,
     // each light's shadow ray traced (Scene::lights; radiance, not yet times the path's weight).
-    Color punctual_light(const ShadingPoint& sp, const MetalRoughBsdf& bsdf, const Vec3& wo, const Vec3& position,
+    Color punctual_light(const ShadingPoint& sp, const MetalRoughBsdf& bsdf, const Vec3& wo, const SurfaceHit& hit,
                          RenderStats* stats) const;
     // Whether a hit is skipped: by alpha (MASK below cutoff, or BLEND chosen as transparent), or an
     // unlit surface met by a path that has scattered since the camera (camera_path false).
@@ -181,7 +181,9 @@ class PathIntegrator {
     RayObserver observer_;
 };
 
-// Offset for spawning rays off a surface: relative to the magnitude of the position.
-Vec3 offset_ray_origin(const Vec3& p, const Vec3& n, const Vec3& w);
+// Where a ray leaving a surface hit towards w starts: the hit's position moved off the surface along
+// the unit normal n, to w's side, by its error bound (SurfaceHit::position_error) projected on n
+// (pbrt-v4's OffsetRayOrigin), so the ray cannot hit the surface it leaves, at any scene scale.
+Vec3 offset_ray_origin(const SurfaceHit& hit, const Vec3& n, const Vec3& w);
 
 }  // namespace dynsky

@@ -34,7 +34,11 @@ Camera frame_bounds_camera(const Bounds3& bounds, float aspect_ratio) {
     cam.yfov = 0.7f;
     cam.aspect_ratio = aspect_ratio;
     Vec3 center = bounds.empty() ? Vec3::Zero() : bounds.center();
-    float radius = bounds.empty() ? 1.0f : std::max(0.5f * bounds.diagonal().norm(), 1e-3f);
+    // At least a micrometre (a scene of one point still gets a camera), not a millimetre: a model
+    // of a few millimetres was framed several times too far out.
+    float radius = bounds.empty() ? 1.0f
+                                  : std::max(0.5f * bounds.diagonal().norm(),
+                                             1e-6f * std::max(1.0f, center.cwiseAbs().maxCoeff()));
     // Look from the south-east and above, far enough that the bounding sphere fits the narrower fov.
     float fov = cam.yfov;
     if (aspect_ratio > 0 && aspect_ratio < 1) fov = 2 * std::atan(std::tan(fov / 2) * aspect_ratio);

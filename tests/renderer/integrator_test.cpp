@@ -368,5 +368,32 @@ TEST(PathIntegrator, SameSeedSameImageOnAnyThreadCount) {
     EXPECT_NE(0, std::memcmp(one.pixels.data(), other.pixels.data(), one.pixels.size() * sizeof(float)));
 }
 
+// Rays leave a surface by its position's error bound, not by a fixed share of the distance from
+// the origin: from inside a closed white sphere under a bright sky nothing can be seen, whether the
+// sphere is 2 m across at the origin, 50 micrometres across (a model authored in millimetres), or
+// 0.8 m across 10 km from the origin (georeferenced coordinates). With 1e-4 x max(1, |p|) the rays of
+// the far sphere started 1 m outside it, and those of the small one 0.1 mm outside it: both lit.
+TEST(PathIntegrator, NoLightLeaksIntoAClosedSphereAtAnyScaleOrDistanceFromTheOrigin) {
+    EnvLight light(uniform_sky(32, 10.0f), 1.0f);
+    for (const auto& [radius, offset] : {std::pair<float, float>{1.0f, 0.0f}, {2.5e-5f, 0.0f}, {0.4f, 1e4f}}) {
+        Scene scene;
+        Material white;
+        white.base_color = Color::Constant(0.9f), white.metallic = 0, white.roughness = 1;
+        scene.materials.push_back(white);
+        const Eigen::Affine3f place = Eigen::Translation3f(offset, 0.5f * offset, -offset) * Eigen::Scaling(radius);
+        add_mesh_instance(&scene, make_sphere_mesh(48, 24, 0), place, "sphere");
+        Accel accel(scene);
+        Camera cam;
+        cam.yfov = 1.5f;
+        cam.camera_to_world = Eigen::Translation3f(offset, 0.5f * offset, -offset) * Eigen::Matrix3f::Identity();
+        RenderSettings s;
+        s.width = 24, s.height = 16, s.spp = 16, s.max_depth = 6, s.quiet = true;
+        const Image im = PathIntegrator(accel, light, s).render(cam).color;
+        double sum = 0;
+        for (float v : im.pixels) sum += v;
+        EXPECT_LT(sum / double(im.pixels.size()), 1e-3) << "radius " << radius << " m, " << offset << " m away";
+    }
+}
+
 }  // namespace
 }  // namespace dynsky

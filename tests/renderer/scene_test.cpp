@@ -25,5 +25,18 @@ TEST(Scene, FramingCameraSeesTheWholeBoundingSphere) {
     EXPECT_NEAR(r.determinant(), 1.0f, 1e-5f);
 }
 
+// A model a few millimetres across (or a hundred micrometres) fills the view as a metre-sized one
+// does: the same framing scaled down, not the view of a 1 mm sphere around it.
+TEST(Scene, FramingCameraScalesWithTinyModels) {
+    for (float size : {1.0f, 4e-3f, 1e-4f}) {
+        Bounds3 b;
+        b.extend(Vec3(-size, 0, -size));
+        b.extend(Vec3(size, size, size));
+        const Camera cam = frame_bounds_camera(b, 1.5f);
+        const float distance = (cam.camera_to_world.translation() - b.center()).norm();
+        EXPECT_NEAR(distance / (0.5f * b.diagonal().norm()), 1.05f / std::sin(cam.yfov / 2), 1e-3f) << size;
+    }
+}
+
 }  // namespace
 }  // namespace dynsky
