@@ -179,13 +179,25 @@ cv::Mat CloudFlow::at(int k) const {
     return wind + (measured - wind) * a;
 }
 
-CloudFlow CloudFlow::from_measured(const MeasuredMotion& motion, double dt) {
+CloudFlow CloudFlow::from_measured(const MeasuredMotion& motion, double dt, const std::optional<Vec3d>& sun) {
     const int n = motion.smoothed.rows;
     CloudFlow f;
     f.measured = motion.confirmed.empty() ? motion.smoothed : motion.confirmed;
     // The wind that explains it, fitted inside 80 % of the radius (the rim is foreshortened).
     cv::Mat inner = cv::Mat::zeros(n, n, CV_8UC1);
     cv::circle(inner, cv::Point(n / 2, n / 2), int(0.4 * n), cv::Scalar(255), cv::FILLED);
+    // Nor within kWindFitSunDeg of the sun: its aureole and glare move with the sun, not the wind,
+    // and Farneback tracks them (on the clear ARM morning the wind fitted with them came out from
+    // 30-60 degrees off the clouds' own). Chosen on the validation frames: arm-tsi +0.09 to +0.32 dB
+    // over Farneback at 1-6 steps, the others +0.00 to +0.01 (docs/networks-advect-residual.md).
+    if (sun) {
+        const double cos_limit = std::cos(kWindFitSunDeg * kPiD / 180);
+        const Vec3d s = sun->normalized();
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x)
+                if (fisheye::direction_from_pixel(double(x), double(y), n).dot(s) > cos_limit)
+                    inner.at<uchar>(y, x) = 0;
+    }
     f.wind = wind_flow(n, fit_wind(motion.smoothed, inner, dt), dt);
     if (!motion.confirmed.empty()) {
         // The departure from the wind that the clouds keep for several steps: the smoothed flow's,
@@ -197,7 +209,9 @@ CloudFlow CloudFlow::from_measured(const MeasuredMotion& motion, double dt) {
         if (!motion.agreement.empty()) {
             cv::Mat a2;
             cv::merge(std::vector<cv::Mat>{motion.agreement, motion.agreement}, a2);
-            kept = f.wind + (motion.smoothed - f.wind).mul(a2);
+            // A new buffer: an expression assigned to the header of motion.smoothed is written
+            // into the caller's smoothed flow (OpenCV evaluates into a same-sized Mat in place).
+            kept = cv::Mat(f.wind + (motion.smoothed - f.wind).mul(a2));
         }
         f.detail = motion.confirmed - kept;
     }
@@ -1107,7 +1121,7 @@ double AdvectResidualNetwork::correction_gain(const cv::Mat& previous, const cv:
         cv::resize(seen, s, cv::Size(n, n), 0, 0, cv::INTER_AREA);
         s = s == 255;  // seen wholly
     }
-    s &= sky_disc_mask(n);
+    s = cv::Mat(s & sky_disc_mask(n));  // not &=: s may be the caller's `seen`
     const cv::Mat f = flow_at_resolution(flow, n), warped = warp_in_disc(p, f);
     const cv::Mat correction = step_network(p, f) - warped, missed = c - warped;
     double along = 0, norm = 0;
@@ -1130,8 +1144,11 @@ CloudFlow AdvectResidualNetwork::motion_flow(const SkyImage& sky, const CloudMot
         const double gain = correction_gain(pair.previous, pair.current, pair.seen,
                                             measured.confirmed.empty() ? measured.smoothed : measured.confirmed);
         MeasuredMotion m = measured.at_resolution(n);
-        m.smoothed *= dt / gap, m.confirmed *= dt / gap;
-        CloudFlow flow = CloudFlow::from_measured(m, dt);
+        // New buffers (not *=): at_resolution hands back `measured`'s own at this size.
+        m.smoothed = cv::Mat(m.smoothed * (dt / gap));
+        if (!m.confirmed.empty()) m.confirmed = cv::Mat(m.confirmed * (dt / gap));
+        CloudFlow flow = CloudFlow::from_measured(
+            m, dt, sky.sun_direction ? std::optional<Vec3d>(sky.sun_direction->cast<double>()) : std::nullopt);
         flow.correction_gain = gain;
         return flow;
     }

@@ -82,6 +82,9 @@ std::string long_previous_gap_warning(double gap_seconds, const std::string& sky
 // would otherwise shuffle its gradients (+0.7 dB one step ahead on the clear ARM morning), while an
 // overcast sky hides the background, and holding an assumed one there costs accuracy (-0.3 to
 // -2.4 dB on the overcast Mobotix and ARM dusk sequences).
+// The wind fitted to a measured flow leaves out the sun's aureole, where circumsolar_share ends.
+constexpr double kWindFitSunDeg = 30.0;
+
 struct CloudFlow {
     cv::Mat measured;              // CV_32FC2, pixels per step
     cv::Mat wind;                  // empty: `measured` throughout
@@ -105,8 +108,10 @@ struct CloudFlow {
     static CloudFlow from_wind(const cv::Mat& flow) { return CloudFlow{flow, cv::Mat(), 0.0, true, true, cv::Mat()}; }
     static CloudFlow constant(const cv::Mat& flow) { return CloudFlow{flow, cv::Mat(), 0.0, false, false, cv::Mat()}; }
     // A measured motion (per step of dt), relaxing to the wind fitted to its smoothed field (inside
-    // 80 % of the radius); the first step's flow is the confirmed one.
-    static CloudFlow from_measured(const MeasuredMotion& motion, double dt);
+    // 80 % of the radius, and more than kWindFitSunDeg from the sun when it is given); the first
+    // step's flow is the confirmed one.
+    static CloudFlow from_measured(const MeasuredMotion& motion, double dt,
+                                   const std::optional<Vec3d>& sun = std::nullopt);
 };
 
 struct AdvectResidualInfo {
