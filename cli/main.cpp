@@ -16,6 +16,7 @@
 #include "cli/exit_codes.h"
 #include "cli/options.h"
 #include "util/atomic_file.h"
+#include "util/interrupt.h"
 #include "util/child_process.h"
 #include "util/error.h"
 #include "util/progress.h"
@@ -48,8 +49,19 @@ void out_of_memory(int argc, char** argv) {
 }
 
 // SIGINT/SIGTERM/SIGHUP: remove the output being written (nothing half-written stays; an animation's
-// frames written so far are kept and resume) and exit with kInterrupted.
+// frames written so far are kept and resume) and exit with kInterrupted. Where work can stop at a
+// clean point (util/interrupt.h: a render between rounds of samples) the first one asks it to, and
+// the program writes what it has and exits with kInterrupted; the second stops at once.
 extern "C" void on_interrupt(int) {
+    if (dynsky::graceful_stop_allowed() && !dynsky::stop_requested()) {
+        dynsky::request_stop();
+        const char message[] =
+            "\ndynsky: interrupted: finishing this round of samples, then writing the image of the samples "
+            "taken (interrupt again to stop at once, writing nothing)\n";
+        ssize_t ignored = ::write(2, message, sizeof message - 1);
+        (void)ignored;
+        return;
+    }
     dynsky::stop_active_child();  // ffmpeg, writing the temporary removed next
     dynsky::remove_active_temporary();
     const char message[] = "dynsky: interrupted\n";
@@ -147,5 +159,7 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "dynsky: error: %s\n", e.what());
         return dynsky::cli::kRuntimeError;
     }
+    // Stopped early at a clean point, with what it had written (a render's image of fewer samples).
+    if (dynsky::stop_requested()) return dynsky::cli::kInterrupted;
     return dynsky::cli::kSuccess;
 }

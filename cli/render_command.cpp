@@ -11,7 +11,10 @@ namespace dynsky::cli {
 
 void register_render_command(CLI::App& app) {
     auto o = std::make_shared<RenderJob>();
-    CLI::App* cmd = app.add_subcommand("render", "Render a glTF 2.0 scene under a fisheye sky (path traced, CPU)");
+    CLI::App* cmd = app.add_subcommand(
+        "render",
+        "Render a glTF 2.0 scene under a fisheye sky (path traced, CPU). Interrupted (Ctrl-C, SIGTERM), a render of\n"
+        "more than 16 spp finishes its round of 16 samples and writes the image of the samples taken (exit 3).");
     add_scene_options(cmd, &o->scene);  // scene, --camera, --look-at, --fov, --ground-albedo
     cmd->add_option(
         "--sky", o->sky,

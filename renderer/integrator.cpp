@@ -10,6 +10,7 @@
 #include "renderer/material_eval.h"
 #include "renderer/sampling.h"
 #include "util/error.h"
+#include "util/interrupt.h"
 #include "util/progress.h"
 
 namespace dynsky {
@@ -604,7 +605,7 @@ RenderResult PathIntegrator::render(const Camera& camera) const {
     const float aspect = float(w) / h;
     const int tiles_x = (rw + ts - 1) / ts, tiles_y = (rh + ts - 1) / ts, tiles = tiles_x * tiles_y;
     // Rounds of samples when a pixel may stop early (adaptive) or the clock may stop the render.
-    const bool by_rounds = adaptive || settings_.time_limit_seconds > 0;
+    const bool by_rounds = adaptive || settings_.time_limit_seconds > 0 || settings_.stop_on_request;
     const int round_spp = by_rounds ? std::max(1, std::min(settings_.round_spp, settings_.spp)) : settings_.spp;
     const int max_rounds = (settings_.spp + round_spp - 1) / round_spp;
     ProgressBar progress(tiles * max_rounds, "render", settings_.quiet);
@@ -684,6 +685,10 @@ RenderResult PathIntegrator::render(const Camera& camera) const {
                 active = (long long)count_px;  // a time limit alone: every pixel takes every round
             }
             if (active == 0) break;
+            if (settings_.stop_on_request && stop_requested() && taken < settings_.spp) {
+                result.stopped = true;
+                break;
+            }
             if (settings_.time_limit_seconds > 0 &&
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >=
                     settings_.time_limit_seconds)

@@ -70,6 +70,9 @@ struct RenderSettings {
     float noise_threshold = 0;
     int round_spp = 16;
     double time_limit_seconds = 0;  // no new round starts after this much time (0: none); the first always runs
+    // An interrupt (util/interrupt.h stop_requested) ends the render after its round of samples, as
+    // the time limit does: the samples taken are kept (RenderResult::stopped). Samples in rounds.
+    bool stop_on_request = false;
     // Fireflies, both off (0) by default so references stay unbiased:
     float clamp_indirect = 0;  // light that scattered at two or more surfaces: sum of RGB at most this, per sample
     float filter_glossy = 0;   // Cycles' Filter Glossy: after the first bounce, roughen by the path's smallest pdf
@@ -113,7 +116,8 @@ struct RenderResult {
     // adaptive_error_estimates); else with compute_variance, its pixel_relative_error.
     Image relative_error;
     RenderStats stats;
-    int rounds = 0;  // sampling rounds run
+    int rounds = 0;        // sampling rounds run
+    bool stopped = false;  // an interrupt ended it early (RenderSettings::stop_on_request)
 };
 
 // One multi-channel image of the colour and its passes, channels named for the EXR: R, G, B

@@ -273,6 +273,35 @@ TEST(OutputsCli, InterruptedWhileEncodingStopsTheEncoderAndLeavesNothing) {
     fs::remove_all(dir);
 }
 
+// Long runs never lose finished work: an interrupted render (Ctrl-C, a farm's SIGTERM) finishes its
+// round of samples and writes the image of the samples taken, marked so, and exits 3. It wrote
+// nothing before, however many hours it had run.
+TEST(OutputsCli, AnInterruptedRenderWritesTheImageOfTheSamplesTaken) {
+    const std::string dir = test::temp_dir("outputs_render_interrupt");
+    for (const char* sig : {"INT", "TERM"}) {
+        const std::string out = dir + "/r_" + sig + ".exr", log = dir + "/log_" + sig;
+        // Interrupted once the render is under way (its progress line is out).
+        auto r = test::run_command(kExe + " render builtin --res 48x27 --sky-res 64 --spp 1000000 --out " + out +
+                                   " 2> " + log + " & p=$!; for i in $(seq 600); do grep -qF 'render [' " + log +
+                                   " && break; sleep 0.1; done; sleep 0.5; kill -" + sig +
+                                   " $p; wait $p; echo \"rc=$?\"; cat " + log);
+        EXPECT_NE(r.output.find("rc=3"), std::string::npos) << sig << ": " << r.output;
+        EXPECT_NE(r.output.find("writing the image of the"), std::string::npos) << sig << ": " << r.output;
+        ASSERT_TRUE(fs::exists(out)) << sig << ": " << r.output;
+        EXPECT_TRUE(fs::exists(dir + "/r_" + std::string(sig) + ".png")) << sig;
+        const Image im = read_image(out);
+        EXPECT_EQ(im.metadata.numbers.at("dynsky:interrupted"), 1.0) << sig;
+        EXPECT_GE(im.metadata.numbers.at("dynsky:spp_mean"), 16.0) << sig;  // whole rounds
+        EXPECT_LT(im.metadata.numbers.at("dynsky:spp_mean"), 1e6) << sig;
+        double sum = 0;
+        for (float v : im.pixels) sum += v;
+        EXPECT_GT(sum, 0.0) << sig;
+        for (const auto& e : fs::directory_iterator(dir))
+            EXPECT_NE(e.path().filename().string().rfind(".tmp-", 0), 0u) << sig << ": " << e.path();
+    }
+    fs::remove_all(dir);
+}
+
 TEST(OutputsCli, OutputThatIsAnInputIsRefusedBeforeAnyWork) {
     const std::string dir = test::temp_dir("outputs_same");
     ASSERT_EQ(test::run_command(kExe +

@@ -7,6 +7,7 @@
 #include "renderer/sampling.h"
 #include "renderer/shapes.h"
 #include "sky/fisheye.h"
+#include "util/interrupt.h"
 
 namespace dynsky {
 namespace {
@@ -366,6 +367,31 @@ TEST(PathIntegrator, SameSeedSameImageOnAnyThreadCount) {
     s.seed = 43;
     Image other = PathIntegrator(accel, light, s).render(cam).color;
     EXPECT_NE(0, std::memcmp(one.pixels.data(), other.pixels.data(), one.pixels.size() * sizeof(float)));
+}
+
+// A render asked to stop (an interrupt, util/interrupt.h) ends after its round of samples with the
+// image of those samples: the same pixels as a render of that many samples. (The request stays set
+// in this test process: other tests do not stop on request.)
+TEST(PathIntegrator, ARenderAskedToStopKeepsItsFirstRoundOfSamples) {
+    Material m;
+    m.base_color = Color(0.8f, 0.3f, 0.2f), m.metallic = 0.5f, m.roughness = 0.4f;
+    Scene scene = sphere_scene(m, true);
+    Accel accel(scene);
+    EnvLight light(soft_sun_sky(64), 0.3f);
+    RenderSettings s;
+    s.width = 24, s.height = 16, s.quiet = true, s.seed = 7, s.round_spp = 4;
+    const Camera cam = frame_bounds_camera(scene.world_bounds(), 1.5f);
+    s.spp = 4;
+    const RenderResult four = PathIntegrator(accel, light, s).render(cam);
+    EXPECT_FALSE(four.stopped);
+    s.spp = 1000, s.stop_on_request = true;
+    request_stop();
+    const RenderResult stopped = PathIntegrator(accel, light, s).render(cam);
+    EXPECT_TRUE(stopped.stopped);
+    EXPECT_EQ(stopped.rounds, 1);
+    ASSERT_EQ(stopped.color.pixels.size(), four.color.pixels.size());
+    EXPECT_EQ(0, std::memcmp(stopped.color.pixels.data(), four.color.pixels.data(),
+                             four.color.pixels.size() * sizeof(float)));
 }
 
 // Rays leave a surface by its position's error bound, not by a fixed share of the distance from

@@ -1,0 +1,24 @@
+// A stop asked for by an interrupt (Ctrl-C, SIGTERM, SIGHUP) that long work takes at a clean point
+// instead of losing what it has done: `render` finishes its round of samples and writes the image
+// of the samples taken. Only while a command allows it (AllowGracefulStop); elsewhere, and at the
+// second interrupt, the program stops at once (cli/main.cpp).
+#pragma once
+
+namespace dynsky {
+
+// True when work in progress can stop at a clean point; set by AllowGracefulStop.
+bool graceful_stop_allowed() noexcept;
+// Async-signal-safe (a lock-free atomic): the interrupt handler's request.
+void request_stop() noexcept;
+bool stop_requested() noexcept;
+
+// Allows a graceful stop while in scope.
+class AllowGracefulStop {
+  public:
+    AllowGracefulStop();
+    ~AllowGracefulStop();
+    AllowGracefulStop(const AllowGracefulStop&) = delete;
+    AllowGracefulStop& operator=(const AllowGracefulStop&) = delete;
+};
+
+}  // namespace dynsky
