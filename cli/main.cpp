@@ -53,8 +53,7 @@ void out_of_memory(int argc, char** argv) {
 // clean point (util/interrupt.h: a render between rounds of samples) the first one asks it to, and
 // the program writes what it has and exits with kInterrupted; the second stops at once.
 extern "C" void on_interrupt(int) {
-    if (dynsky::graceful_stop_allowed() && !dynsky::stop_requested()) {
-        dynsky::request_stop();
+    if (dynsky::graceful_stop_allowed() && !dynsky::request_stop()) {
         const char message[] =
             "\ndynsky: interrupted: finishing this round of samples, then writing the image of the samples "
             "taken (interrupt again to stop at once, writing nothing)\n";
@@ -160,6 +159,6 @@ int main(int argc, char** argv) {
         return dynsky::cli::kRuntimeError;
     }
     // Stopped early at a clean point, with what it had written (a render's image of fewer samples).
-    if (dynsky::stop_requested()) return dynsky::cli::kInterrupted;
+    if (dynsky::stopped_early()) return dynsky::cli::kInterrupted;
     return dynsky::cli::kSuccess;
 }

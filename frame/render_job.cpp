@@ -91,7 +91,11 @@ void run_render_job(const RenderJob& o) {
     // Ctrl-C (or a farm's SIGTERM) in a render of several rounds ends it after its round, and the
     // image of the samples taken is written: hours of a long render are not lost with the last
     // minute. Rounds keep every pixel's state (56 bytes each): up to 3840 x 2160 pixels.
-    settings.stop_on_request = o.spp > settings.round_spp && double(width) * height <= 3840.0 * 2160.0;
+    settings.stop_on_request = o.spp > settings.round_spp &&
+                               (settings.region.empty()
+                                    ? double(width) * height
+                                    : double(settings.region.x1 - settings.region.x0) *
+                                          (settings.region.y1 - settings.region.y0)) <= 3840.0 * 2160.0;
     PathIntegrator integrator(accel, light, settings);
     const double cpu_before = process_cpu_seconds();
     RenderResult result;
@@ -134,8 +138,12 @@ void run_render_job(const RenderJob& o) {
     if (o.time_limit > 0) image.metadata.numbers["dynsky:time_limit_seconds"] = o.time_limit;
     if (o.scene.animation_time >= 0) image.metadata.numbers["dynsky:anim_time"] = o.scene.animation_time;
     if (!o.scene.animation.empty()) image.metadata.strings["dynsky:animation"] = o.scene.animation;
-    image.metadata.numbers["dynsky:rounds"] = result.rounds;
+    // Rounds cut short by the error estimate, the clock or an interrupt (an interruptible render
+    // runs in rounds too, all of them when it is not interrupted).
+    if (o.noise_threshold > 0 || o.time_limit > 0 || result.stopped)
+        image.metadata.numbers["dynsky:rounds"] = result.rounds;
     if (result.stopped) {
+        note_stopped_early();                              // exit kInterrupted, after the image is written
         image.metadata.numbers["dynsky:interrupted"] = 1;  // fewer samples than dynsky:spp (dynsky:spp_mean)
         std::fprintf(stderr,
                      "dynsky: warning: interrupted after %d round(s): writing the image of the %.0f samples per "

@@ -69,6 +69,9 @@ inline constexpr double kLongPreviousGapSeconds = 90;
 std::string long_previous_gap_warning(double gap_seconds, const std::string& sky_name,
                                       const std::string& previous_name);
 
+// The wind fitted to a measured flow leaves out the sun's aureole, where circumsolar_share ends.
+constexpr double kWindFitSunDeg = 30.0;
+
 // The flow of one rollout, per step, at one resolution. A measured flow (from a previous frame) is
 // trusted for the first steps and relaxes to the uniform wind that best explains it
 // (motion/flow.h fit_wind): measured - wind decays as exp(-(k - 1) / relax_steps). A fixed
@@ -82,9 +85,6 @@ std::string long_previous_gap_warning(double gap_seconds, const std::string& sky
 // would otherwise shuffle its gradients (+0.7 dB one step ahead on the clear ARM morning), while an
 // overcast sky hides the background, and holding an assumed one there costs accuracy (-0.3 to
 // -2.4 dB on the overcast Mobotix and ARM dusk sequences).
-// The wind fitted to a measured flow leaves out the sun's aureole, where circumsolar_share ends.
-constexpr double kWindFitSunDeg = 30.0;
-
 struct CloudFlow {
     cv::Mat measured;              // CV_32FC2, pixels per step
     cv::Mat wind;                  // empty: `measured` throughout

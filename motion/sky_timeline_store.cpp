@@ -5,6 +5,7 @@
 // read back are the values computed; every double and float of the metadata goes through JSON,
 // whose numbers round-trip. A frame made from a loaded timeline therefore has the same bits as the
 // frame of a run that computed the steps itself.
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -79,6 +80,9 @@ std::optional<Vec3> vec_from(const json& j) {
 
 }  // namespace
 
+// How often a timeline being saved describes the steps written so far.
+constexpr std::chrono::seconds kDescriptionInterval{10};
+
 void SkyTimeline::save(const std::string& folder, int last_step, const std::string& settings, bool quiet) {
     if (last_step < 1) throw Error("sky timeline: a stored timeline holds at least steps 0 and 1");
     const OutputFolder made(folder);  // removed again if this fails before writing anything
@@ -103,56 +107,81 @@ void SkyTimeline::save(const std::string& folder, int last_step, const std::stri
     // which animate --timeline renders up to their end. Written only at the end, an hour of steps
     // was lost with the last minute.
     ProgressBar progress(last_step + 1, "sky timeline", quiet);
-    for (int i = 0; i <= last_step; ++i) {
-        auto s = step(i);
-        const std::string file = numbered(folder, "step", i, ".exr");
-        save_sky(file, *s);
-        // The model's cloud opacity (float .npy), when it gave one.
-        json opacity = nullptr;
-        if (size_t(i) < model_opacity_.size() && !model_opacity_[size_t(i)].empty()) {
-            cv::Mat o = model_opacity_[size_t(i)];
-            if (o.type() != CV_32FC1) throw Error("sky timeline: a cloud opacity map is not 1-channel float");
-            if (!o.isContinuous()) o = o.clone();
-            const std::string opacity_file = numbered(folder, "opacity", i, ".npy");
-            write_npy(opacity_file, {size_t(o.rows), size_t(o.cols)}, o.ptr<float>());
-            opacity = fs::path(opacity_file).filename().string();
+    auto described = std::chrono::steady_clock::now();
+    int described_step = 0, written_step = -1;
+    // timeline.json of steps 0..last (their files written), replaced atomically.
+    auto describe = [&](int last) {
+        auto first = [](const json& list, int n) {  // a step the error stopped midway is left out
+            json r = json::array();
+            for (int k = 0; k < n; ++k) r.push_back(list[size_t(k)]);
+            return r;
+        };
+        json j = {{"format", kFormat},
+                  {"settings", settings},
+                  {"dt", dt_},
+                  {"last_step", last},
+                  {"model", model_->name()},
+                  {"model_makes_own_sun", model_->makes_own_sun()},
+                  {"model_native_dt", model_->native_dt()},
+                  {"input_time", input_time_},
+                  {"input_sun",
+                   input_sun_ ? json::array({(*input_sun_)[0], (*input_sun_)[1], (*input_sun_)[2]}) : json(nullptr)},
+                  {"input_look_transmittance", input_look_transmittance_},
+                  {"radiance_scale", radiance_scale_},
+                  {"clock", clock},
+                  {"steps", first(steps, last + 1)},
+                  {"flows", first(flows, last)},
+                  {"suns", first(suns, last + 1)}};
+        write_file_atomic((fs::path(folder) / "timeline.json").string(), j.dump(1) + "\n");
+        described = std::chrono::steady_clock::now(), described_step = last;
+    };
+    try {
+        for (int i = 0; i <= last_step; ++i) {
+            auto s = step(i);
+            const std::string file = numbered(folder, "step", i, ".exr");
+            save_sky(file, *s);
+            // The model's cloud opacity (float .npy), when it gave one.
+            json opacity = nullptr;
+            if (size_t(i) < model_opacity_.size() && !model_opacity_[size_t(i)].empty()) {
+                cv::Mat o = model_opacity_[size_t(i)];
+                if (o.type() != CV_32FC1) throw Error("sky timeline: a cloud opacity map is not 1-channel float");
+                if (!o.isContinuous()) o = o.clone();
+                const std::string opacity_file = numbered(folder, "opacity", i, ".npy");
+                write_npy(opacity_file, {size_t(o.rows), size_t(o.cols)}, o.ptr<float>());
+                opacity = fs::path(opacity_file).filename().string();
+            }
+            steps.push_back({{"file", fs::path(file).filename().string()},
+                             {"time", s->time_seconds},
+                             {"sun", vec_json(s->sun_direction)},
+                             {"source", s->source},
+                             {"cloud_opacity", opacity}});
+            json excess = json::array();
+            for (const Color& c : suns_[size_t(i)].excess) excess.push_back({c[0], c[1], c[2]});
+            suns.push_back({{"di", suns_[size_t(i)].di}, {"dj", suns_[size_t(i)].dj}, {"excess", excess}});
+            if (i > 0) {
+                cv::Mat f = flow(i - 1);
+                if (f.type() != CV_32FC2 || !f.isContinuous()) f = f.clone();
+                if (f.type() != CV_32FC2) throw Error("sky timeline: a flow is not 2-channel float");
+                const std::string flow_file = numbered(folder, "flow", i - 1, ".npy");
+                write_npy(flow_file, {size_t(f.rows), size_t(f.cols), 2}, f.ptr<float>());
+                flows.push_back(fs::path(flow_file).filename().string());
+                // After the files it names: a folder without it (a killed keys job before step 1) is
+                // not a timeline, and one describes only steps that are whole. After step 1, every
+                // kDescriptionInterval, after the last step and when an error stops the run: written
+                // after every step, a long timeline of small steps wrote gigabytes of descriptions.
+                written_step = i;
+                if (i == last_step || i == 1 || std::chrono::steady_clock::now() - described >= kDescriptionInterval)
+                    describe(i);
+            }
+            progress.advance();
         }
-        steps.push_back({{"file", fs::path(file).filename().string()},
-                         {"time", s->time_seconds},
-                         {"sun", vec_json(s->sun_direction)},
-                         {"source", s->source},
-                         {"cloud_opacity", opacity}});
-        json excess = json::array();
-        for (const Color& c : suns_[size_t(i)].excess) excess.push_back({c[0], c[1], c[2]});
-        suns.push_back({{"di", suns_[size_t(i)].di}, {"dj", suns_[size_t(i)].dj}, {"excess", excess}});
-        if (i > 0) {
-            cv::Mat f = flow(i - 1);
-            if (f.type() != CV_32FC2 || !f.isContinuous()) f = f.clone();
-            if (f.type() != CV_32FC2) throw Error("sky timeline: a flow is not 2-channel float");
-            const std::string flow_file = numbered(folder, "flow", i - 1, ".npy");
-            write_npy(flow_file, {size_t(f.rows), size_t(f.cols), 2}, f.ptr<float>());
-            flows.push_back(fs::path(flow_file).filename().string());
-            json j = {{"format", kFormat},
-                      {"settings", settings},
-                      {"dt", dt_},
-                      {"last_step", i},
-                      {"model", model_->name()},
-                      {"model_makes_own_sun", model_->makes_own_sun()},
-                      {"model_native_dt", model_->native_dt()},
-                      {"input_time", input_time_},
-                      {"input_sun", input_sun_ ? json::array({(*input_sun_)[0], (*input_sun_)[1], (*input_sun_)[2]})
-                                               : json(nullptr)},
-                      {"input_look_transmittance", input_look_transmittance_},
-                      {"radiance_scale", radiance_scale_},
-                      {"clock", clock},
-                      {"steps", steps},
-                      {"flows", flows},
-                      {"suns", suns}};
-            // After the files it names: a folder without it (a killed keys job before step 1) is
-            // not a timeline, and one describes only steps that are whole.
-            write_file_atomic((fs::path(folder) / "timeline.json").string(), j.dump(1) + "\n");
-        }
-        progress.advance();
+    } catch (...) {
+        // Stopped by an error (a model's, a full disk): the steps written so far are described.
+        if (written_step > described_step) try {
+                describe(written_step);
+            } catch (...) {  // the error that stopped it is the one to report
+            }
+        throw;
     }
     progress.finish();
 }

@@ -79,6 +79,12 @@ Accel::Accel(const Scene& scene) : scene_(scene) {
             }
     }
 
+    std::vector<float> group_extent(scene.meshes.size(), 0.0f);
+    for (size_t g = 0; g < scene.meshes.size(); ++g)
+        for (const TriangleMesh& mesh : scene.meshes[g].primitives)
+            for (const Vec3& p : mesh.positions) group_extent[g] = std::max(group_extent[g], p.cwiseAbs().maxCoeff());
+    instance_extent_.resize(scene.instances.size());
+    instance_translation_.resize(scene.instances.size());
     top_ = rtcNewScene(device_);
     normal_matrices_.resize(scene.instances.size());
     handedness_.resize(scene.instances.size());
@@ -93,6 +99,9 @@ Accel::Accel(const Scene& scene) : scene_(scene) {
         rtcReleaseGeometry(geom);
         normal_matrices_[i] = inst.transform.linear().inverse().transpose();
         handedness_[i] = inst.transform.linear().determinant() < 0 ? -1.0f : 1.0f;
+        instance_extent_[i] = inst.transform.linear().cwiseAbs().rowwise().sum().maxCoeff() *
+                              group_extent[size_t(inst.mesh_group)];
+        instance_translation_[i] = inst.transform.translation();
     }
     rtcCommitScene(top_);
     RTCBounds b;
@@ -197,14 +206,21 @@ bool Accel::surface_hit(const Ray& ray, const RTCRayHit& rh, SurfaceHit* hit, bo
 
     hit->t = rh.ray.tfar;
     hit->position = ray.origin + hit->t * ray.direction;
-    // o + t d carries the rounding of t (Embree's, relative to the ray's own origin) and of the sum:
-    // a few float epsilons of |o| + t |d| along each axis. kHitPositionErrorUlps of them leave a
-    // wide margin (pbrt-v4 bounds the barycentric form by gamma(7), 7 epsilons) and stay far below
-    // any feature a scene's float positions resolve. A fixed 1e-4 x max(1, |p|) before started
+    // o + t d carries the rounding of t and of the sum: a few float epsilons of |o| + t |d| along
+    // each axis; Embree's t that of the vertices and the ray in the instance's own space, whose
+    // coordinates are |o - T|, |p - T| and the mesh's extent in world units (geometry stored 3 km
+    // out and placed back by its node, or a triangle a kilometre across: an audit's rays re-hit
+    // their own triangle 28 % of the time with |o| + t |d| alone). kHitPositionErrorUlps of the
+    // largest leave a wide margin (pbrt-v4 bounds the barycentric form by gamma(7), 7 epsilons)
+    // and stay far below any feature a scene's float positions resolve. A fixed 1e-4 x max(1, |p|) before started
     // shadow rays 1 m off the surface 10 km from the origin (shadows gone, a closed room lit from
     // outside) and 0.1 mm off a model authored in millimetres (contact shadows cut off).
+    const Vec3& translation = instance_translation_[size_t(inst)];
+    const float own = std::max({(ray.origin - translation).cwiseAbs().maxCoeff(),
+                                (hit->position - translation).cwiseAbs().maxCoeff(), instance_extent_[size_t(inst)]});
     hit->position_error = kHitPositionErrorUlps * std::numeric_limits<float>::epsilon() *
-                          (ray.origin.cwiseAbs().maxCoeff() + hit->t * ray.direction.cwiseAbs().maxCoeff());
+                          std::max(ray.origin.cwiseAbs().maxCoeff() + hit->t * ray.direction.cwiseAbs().maxCoeff(),
+                                   own);
     hit->instance = inst, hit->primitive = int(rh.hit.geomID), hit->triangle = int(tri);
     hit->material = &material;
 

@@ -18,7 +18,7 @@ struct Ray {
     float tmin = 0, tmax = std::numeric_limits<float>::infinity();
 };
 
-// Float epsilons of |origin| + t |direction| bounding the error of a hit's position (accel.cpp).
+// Float epsilons of the coordinates' magnitude bounding the error of a hit's position (accel.cpp).
 constexpr float kHitPositionErrorUlps = 32;
 
 // Everything the integrator needs at a hit, in world space.
@@ -76,6 +76,11 @@ class Accel {
     std::vector<RTCScene> mesh_scenes_;
     std::vector<Eigen::Matrix3f> normal_matrices_;  // per instance: inverse transpose of the linear part
     std::vector<float> handedness_;                 // per instance: -1 where it mirrors (det < 0), else 1
+    // Per instance: its translation, and the largest world-space size of its stored coordinates
+    // (|linear| x the mesh's largest |object-space coordinate|): what Embree's rounding in the
+    // instance's own space scales with (SurfaceHit::position_error).
+    std::vector<Vec3> instance_translation_;
+    std::vector<float> instance_extent_;
     // The three vertex normals of every triangle (9 floats, primitives of all meshes one after the
     // other; corner_first_[group][primitive] is a primitive's first triangle, -1 without normals):
     // a hit then reads one record instead of the index buffer and three scattered normals. On huge

@@ -8,9 +8,14 @@ namespace dynsky {
 
 // True when work in progress can stop at a clean point; set by AllowGracefulStop.
 bool graceful_stop_allowed() noexcept;
-// Async-signal-safe (a lock-free atomic): the interrupt handler's request.
-void request_stop() noexcept;
+// Async-signal-safe (a lock-free atomic): the interrupt handler's request; returns whether one
+// was made before (two interrupts at once: only one takes the graceful way).
+bool request_stop() noexcept;
 bool stop_requested() noexcept;
+// Work that stopped early at a request says so (the program then exits with kInterrupted); work
+// that finished anyway does not.
+void note_stopped_early() noexcept;
+bool stopped_early() noexcept;
 
 // Allows a graceful stop while in scope.
 class AllowGracefulStop {
