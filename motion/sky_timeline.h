@@ -103,8 +103,8 @@ class SkyTimeline {
     std::optional<Vec3d> sun_direction_at(double t) const;
 
     // Writes steps 0..last_step and flows 0..last_step-1 into `folder`, each step as soon as it is
-    // computed: step_NNNN.exr (float), flow_NNNN.npy and timeline.json, rewritten after every step
-    // from step 1 on with everything else (sun patches, clock, model, `settings`: what the caller
+    // computed: step_NNNN.exr (float), flow_NNNN.npy and timeline.json, rewritten after step 1,
+    // every 10 s, after the last step and when an error stops the run, with everything else (sun patches, clock, model, `settings`: what the caller
     // checks on load), so that a run stopped midway leaves a timeline of the steps it finished.
     // Every file atomic. quiet: no progress bar.
     void save(const std::string& folder, int last_step, const std::string& settings, bool quiet = true);
