@@ -95,8 +95,9 @@ void choose_camera(const SceneSpec& o, float aspect_ratio, LoadedScene* loaded, 
     if (!o.look_at.empty()) {
         const auto& v = o.look_at;
         float yfov = out.camera.orthographic ? Camera().yfov : out.camera.yfov;
-        out.camera = look_at_camera(Vec3(float(v[0]), float(v[1]), float(v[2])),
-                                    Vec3(float(v[3]), float(v[4]), float(v[5])), yfov);
+        const Eigen::Vector3d& shift = out.scene.origin_shift;  // in the file's coordinates
+        out.camera = look_at_camera(Vec3(float(v[0] - shift[0]), float(v[1] - shift[1]), float(v[2] - shift[2])),
+                                    Vec3(float(v[3] - shift[0]), float(v[4] - shift[1]), float(v[5] - shift[2])), yfov);
     }
     if (o.fov_deg != 0) {
         if (out.camera.orthographic) throw Error(o.scene + ": --fov given, but the camera is orthographic");

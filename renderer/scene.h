@@ -152,6 +152,9 @@ struct PunctualLight {
 
 struct Scene {
     std::string source;  // file it came from
+    // A file's coordinates are the scene's + origin_shift: a scene its nodes place far from the
+    // origin is moved near it when loaded (renderer/gltf_loader.cpp), by whole metres.
+    Eigen::Vector3d origin_shift = Eigen::Vector3d::Zero();
     std::vector<MeshGroup> meshes;
     std::vector<Instance> instances;
     std::vector<Material> materials;

@@ -360,6 +360,40 @@ std::string one_node_scene(const std::string& meshes, const std::string& extra =
            (extra.empty() ? "" : "," + extra);
 }
 
+// A scene its nodes place far from the origin (georeferenced site coordinates) is moved near it,
+// by whole metres, before its transforms are rounded to float: its camera with it. 1000 km out a
+// float resolves 6 cm, and a room rendered there was lit through its walls.
+TEST(GltfLoader, AScenePlacedFarOutByItsNodesIsMovedNearTheOrigin) {
+    std::string dir = test::temp_dir("gltf");
+    for (double far : {0.0, 2.5e6}) {
+        MiniGltf g;
+        const int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+        const int idx = g.accessor(g.view(std::vector<uint16_t>{0, 1, 2, 0, 2, 3}), kUShort, 6, "SCALAR");
+        const std::string mesh = "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) +
+                                 "},\"indices\":" + std::to_string(idx) + "}]}";
+        const std::string t = "[" + std::to_string(far + 0.25) + ",3," + std::to_string(-far) + "]";
+        const std::string json =
+            "\"scene\":0,\"scenes\":[{\"nodes\":[0,1]}],\"nodes\":[{\"mesh\":0,\"translation\":" + t +
+            "},{\"camera\":0,\"translation\":[" + std::to_string(far) + ",4," + std::to_string(-far + 5) +
+            "]}],\"cameras\":[{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.8,\"znear\":0.1}}],"
+            "\"meshes\":[" +
+            mesh + "]";
+        const Scene s = load_gltf(g.write(dir, "far", json));
+        const Eigen::Vector3d& shift = s.origin_shift;  // near the middle of the nodes, whole metres
+        if (far > 0) EXPECT_LT((shift - Eigen::Vector3d(far, 0, -far)).cwiseAbs().maxCoeff(), 10) << far;
+        else EXPECT_EQ(shift, Eigen::Vector3d::Zero());
+        EXPECT_EQ(shift, shift.array().round().matrix().eval());
+        ASSERT_EQ(s.instances.size(), 1u);
+        const Vec3 at = s.instances[0].transform.translation();
+        EXPECT_LT(at.cwiseAbs().maxCoeff(), 10) << far;
+        EXPECT_EQ(at.cast<double>() + shift, Eigen::Vector3d(far + 0.25, 3, -far)) << far;
+        ASSERT_EQ(s.cameras.size(), 1u);
+        const Vec3 eye = s.cameras[0].camera_to_world.translation();
+        // Exactly where it was relative to the camera: 0.25 m right of it, 1 m below, 5 m in front.
+        EXPECT_EQ(s.instances[0].transform.translation() - eye, Vec3(0.25f, -1, -5)) << far;
+    }
+}
+
 TEST(GltfLoader, StripsAndFansBecomeTriangleListsAndPointsAreSkipped) {
     std::string dir = test::temp_dir("gltf");
     MiniGltf g;
