@@ -114,8 +114,10 @@ void run_render_job(const RenderJob& o) {
                                         "directly, and the camera sees neither"
                                       : kBlackRenderHint);
     image.metadata.numbers["dynsky:spp"] = o.spp;  // the most asked for; what was taken (adaptive, --time-limit):
-    image.metadata.numbers["dynsky:spp_mean"] = double(result.stats.camera_rays) /
-                                                std::max<double>(1.0, double(image.width) * image.height);
+    // Samples per pixel taken (fewer than asked when adaptive, time-limited or interrupted).
+    const double spp_taken = double(result.stats.camera_rays) /
+                             std::max<double>(1.0, double(image.width) * image.height);
+    image.metadata.numbers["dynsky:spp_mean"] = spp_taken;
     image.metadata.numbers["dynsky:seed"] = double(o.seed);
     image.metadata.strings["dynsky:seed_exact"] = std::to_string(o.seed);  // a double holds 53 bits of it
     image.metadata.numbers["dynsky:render_seconds"] = result.stats.seconds;
@@ -148,7 +150,7 @@ void run_render_job(const RenderJob& o) {
         std::fprintf(stderr,
                      "dynsky: warning: interrupted after %d round(s): writing the image of the %.0f samples per "
                      "pixel taken (of %d)\n",
-                     result.rounds, double(result.stats.camera_rays) / (double(image.width) * image.height), o.spp);
+                     result.rounds, spp_taken, o.spp);
     }
     image.metadata.strings["dynsky:sampler_pattern"] = o.sampler_pattern;
     // Everything else that changes the image, so that it can be rendered again from its header.
@@ -177,14 +179,13 @@ void run_render_job(const RenderJob& o) {
     }
     if (!o.quiet && result.stopped)
         std::fprintf(stderr, "rendered %dx%d at %.0f of %d spp (interrupted) in %.2f s: %.2f M rays/s\n", width, height,
-                     double(result.stats.camera_rays) / (double(image.width) * image.height), o.spp,
-                     result.stats.seconds, result.stats.total_rays() / result.stats.seconds * 1e-6);
+                     spp_taken, o.spp, result.stats.seconds, result.stats.total_rays() / result.stats.seconds * 1e-6);
     else if (!o.quiet)
         std::fprintf(stderr, "rendered %dx%d at %d spp in %.2f s: %.2f M rays/s\n", width, height, o.spp,
                      result.stats.seconds, result.stats.total_rays() / result.stats.seconds * 1e-6);
     if (!o.quiet && result.rounds > 1 && (o.noise_threshold > 0 || o.time_limit > 0))
         std::fprintf(stderr, "adaptive sampling / time limit: %d round(s), %.1f samples per pixel on average\n",
-                     result.rounds, double(result.stats.camera_rays) / (double(image.width) * image.height));
+                     result.rounds, spp_taken);
 }
 
 }  // namespace dynsky

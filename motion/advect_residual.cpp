@@ -171,6 +171,9 @@ cv::Mat background_at(const Vec3& sun, int n, const NetworkFormParams& form, dou
     return up;
 }
 
+// How much of the sun's aureole each pixel is (defined below).
+cv::Mat circumsolar_share(int n, const std::optional<Vec3d>& sun);
+
 }  // namespace
 
 cv::Mat CloudFlow::at(int k) const {
@@ -186,18 +189,12 @@ CloudFlow CloudFlow::from_measured(const MeasuredMotion& motion, double dt, cons
     // The wind that explains it, fitted inside 80 % of the radius (the rim is foreshortened).
     cv::Mat inner = cv::Mat::zeros(n, n, CV_8UC1);
     cv::circle(inner, cv::Point(n / 2, n / 2), int(0.4 * n), cv::Scalar(255), cv::FILLED);
-    // Nor within kWindFitSunDeg of the sun: its aureole and glare move with the sun, not the wind,
-    // and Farneback tracks them (on the clear ARM morning the wind fitted with them came out from
-    // 30-60 degrees off the clouds' own). Chosen on the validation frames: arm-tsi +0.09 to +0.32 dB
-    // over Farneback at 1-6 steps, the others +0.00 to +0.01 (docs/networks-advect-residual.md).
-    if (sun) {
-        const double cos_limit = std::cos(kWindFitSunDeg * kPiD / 180);
-        const Vec3d s = sun->normalized();
-        for (int y = 0; y < n; ++y)
-            for (int x = 0; x < n; ++x)
-                if (fisheye::direction_from_pixel(double(x), double(y), n).dot(s) > cos_limit)
-                    inner.at<uchar>(y, x) = 0;
-    }
+    // Nor in the sun's aureole (circumsolar_share, out to 30 degrees): it and the glare move with
+    // the sun, not the wind, and Farneback tracks them (on the clear ARM morning the wind fitted
+    // with them came out from 30-60 degrees off the clouds' own). Chosen on the validation frames:
+    // arm-tsi +0.09 to +0.32 dB over Farneback at 1-6 steps, the others +0.00 to +0.01
+    // (docs/networks-advect-residual.md).
+    if (sun) inner.setTo(0, circumsolar_share(n, sun) > 0);
     f.wind = wind_flow(n, fit_wind(motion.smoothed, inner, dt), dt);
     if (!motion.confirmed.empty()) {
         // The departure from the wind that the clouds keep for several steps: the smoothed flow's,
@@ -1147,8 +1144,7 @@ CloudFlow AdvectResidualNetwork::motion_flow(const SkyImage& sky, const CloudMot
         // New buffers (not *=): at_resolution hands back `measured`'s own at this size.
         m.smoothed = cv::Mat(m.smoothed * (dt / gap));
         if (!m.confirmed.empty()) m.confirmed = cv::Mat(m.confirmed * (dt / gap));
-        CloudFlow flow = CloudFlow::from_measured(
-            m, dt, sky.sun_direction ? std::optional<Vec3d>(sky.sun_direction->cast<double>()) : std::nullopt);
+        CloudFlow flow = CloudFlow::from_measured(m, dt, to_double(sky.sun_direction));
         flow.correction_gain = gain;
         return flow;
     }

@@ -69,9 +69,6 @@ inline constexpr double kLongPreviousGapSeconds = 90;
 std::string long_previous_gap_warning(double gap_seconds, const std::string& sky_name,
                                       const std::string& previous_name);
 
-// The wind fitted to a measured flow leaves out the sun's aureole, where circumsolar_share ends.
-constexpr double kWindFitSunDeg = 30.0;
-
 // The flow of one rollout, per step, at one resolution. A measured flow (from a previous frame) is
 // trusted for the first steps and relaxes to the uniform wind that best explains it
 // (motion/flow.h fit_wind): measured - wind decays as exp(-(k - 1) / relax_steps). A fixed
@@ -108,7 +105,7 @@ struct CloudFlow {
     static CloudFlow from_wind(const cv::Mat& flow) { return CloudFlow{flow, cv::Mat(), 0.0, true, true, cv::Mat()}; }
     static CloudFlow constant(const cv::Mat& flow) { return CloudFlow{flow, cv::Mat(), 0.0, false, false, cv::Mat()}; }
     // A measured motion (per step of dt), relaxing to the wind fitted to its smoothed field (inside
-    // 80 % of the radius, and more than kWindFitSunDeg from the sun when it is given); the first
+    // 80 % of the radius, and outside the sun's aureole, 30 degrees, when it is given); the first
     // step's flow is the confirmed one.
     static CloudFlow from_measured(const MeasuredMotion& motion, double dt,
                                    const std::optional<Vec3d>& sun = std::nullopt);

@@ -432,10 +432,7 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
             // The clear background of the frame's sun: only the clouds move (motion/advect_residual.h).
             cv::Mat bg;
             if (at(t).sun_direction) bg = clear_background(at(t).sun_direction->cast<double>(), r, form);
-            CloudFlow motion = CloudFlow::from_measured(prev_motion, seq.dt,
-                                                        at(t).sun_direction
-                                                            ? std::optional<Vec3d>(at(t).sun_direction->cast<double>())
-                                                            : std::nullopt);
+            CloudFlow motion = CloudFlow::from_measured(prev_motion, seq.dt, to_double(at(t).sun_direction));
             {
                 // As motion_flow does: how much of the network's correction the previous pair takes.
                 cv::Mat previous = at(t - 1).image.clone();

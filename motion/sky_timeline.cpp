@@ -72,7 +72,7 @@ SkyTimeline::SkyTimeline(SkyImage input, std::unique_ptr<MediumStepModel> model,
     // in, the clouds' motion carried it off as a second sun beside the one put back.
     if (!input.sun_direction)
         if (const auto found = sun_from_brightest_pixels(input)) input.sun_direction = found->cast<float>();
-    input_sun_ = input.sun_direction ? std::optional<Vec3d>(input.sun_direction->cast<double>()) : std::nullopt;
+    input_sun_ = to_double(input.sun_direction);
     input_time_ = input.time_seconds;
     // The sun is cut out where the image has it; it is put back where the clock says.
     suns_.push_back(remove_sun(&input));

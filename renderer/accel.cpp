@@ -212,9 +212,9 @@ bool Accel::surface_hit(const Ray& ray, const RTCRayHit& rh, SurfaceHit* hit, bo
     // out and placed back by its node, or a triangle a kilometre across: an audit's rays re-hit
     // their own triangle 28 % of the time with |o| + t |d| alone). kHitPositionErrorUlps of the
     // largest leave a wide margin (pbrt-v4 bounds the barycentric form by gamma(7), 7 epsilons)
-    // and stay far below any feature a scene's float positions resolve. A fixed 1e-4 x max(1, |p|) before started
-    // shadow rays 1 m off the surface 10 km from the origin (shadows gone, a closed room lit from
-    // outside) and 0.1 mm off a model authored in millimetres (contact shadows cut off).
+    // and stay far below any feature a scene's float positions resolve. A fixed 1e-4 x max(1, |p|)
+    // before started shadow rays 1 m off the surface 10 km from the origin (shadows gone, a closed
+    // room lit from outside) and 0.1 mm off a model authored in millimetres (contact shadows cut).
     const Vec3& translation = instance_translation_[size_t(inst)];
     const float own = std::max({(ray.origin - translation).cwiseAbs().maxCoeff(),
                                 (hit->position - translation).cwiseAbs().maxCoeff(), instance_extent_[size_t(inst)]});

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <optional>
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -14,6 +15,11 @@ using Vec3 = Eigen::Vector3f;
 using Vec4 = Eigen::Vector4f;
 using Vec3d = Eigen::Vector3d;
 using Color = Eigen::Array3f;  // linear RGB, Rec.709 primaries
+
+// An optional direction in double precision (a sky's sun_direction, stored in float).
+inline std::optional<Vec3d> to_double(const std::optional<Vec3>& v) {
+    return v ? std::optional<Vec3d>(v->cast<double>()) : std::nullopt;
+}
 
 constexpr float kPi = 3.14159265358979323846f;
 constexpr double kPiD = 3.14159265358979323846;

@@ -50,6 +50,13 @@ Scene sphere_scene(const Material& m, bool with_ground) {
     return scene;
 }
 
+// A half-metallic reddish rough material: something of every lobe.
+Material copper_like() {
+    Material m;
+    m.base_color = Color(0.8f, 0.3f, 0.2f), m.metallic = 0.5f, m.roughness = 0.4f;
+    return m;
+}
+
 // Camera on +Z looking at the origin from far away with a narrow field of view (near-orthographic).
 Camera front_camera(float distance, float yfov) {
     Camera c;
@@ -345,9 +352,7 @@ TEST(PathIntegrator, PunctualLightsAddTheirAnalyticIrradiance) {
 }
 
 TEST(PathIntegrator, SameSeedSameImageOnAnyThreadCount) {
-    Material m;
-    m.base_color = Color(0.8f, 0.3f, 0.2f), m.metallic = 0.5f, m.roughness = 0.4f;
-    Scene scene = sphere_scene(m, true);
+    Scene scene = sphere_scene(copper_like(), true);
     Accel accel(scene);
     EnvLight light(soft_sun_sky(64), 0.3f);
     RenderSettings s;
@@ -406,9 +411,7 @@ TEST(PathIntegrator, ATiltedQuadStoredFarOutAndPlacedBackShowsItsAlbedo) {
 // image of those samples: the same pixels as a render of that many samples. (The request stays set
 // in this test process: other tests do not stop on request.)
 TEST(PathIntegrator, ARenderAskedToStopKeepsItsFirstRoundOfSamples) {
-    Material m;
-    m.base_color = Color(0.8f, 0.3f, 0.2f), m.metallic = 0.5f, m.roughness = 0.4f;
-    Scene scene = sphere_scene(m, true);
+    Scene scene = sphere_scene(copper_like(), true);
     Accel accel(scene);
     EnvLight light(soft_sun_sky(64), 0.3f);
     RenderSettings s;
