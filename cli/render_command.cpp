@@ -4,6 +4,7 @@
 
 #include "cli/commands.h"
 #include "cli/options.h"
+#include "cli/exit_codes.h"
 #include "frame/render_job.h"
 #include "renderer/sky_sampler.h"
 
@@ -11,10 +12,7 @@ namespace dynsky::cli {
 
 void register_render_command(CLI::App& app) {
     auto o = std::make_shared<RenderJob>();
-    CLI::App* cmd = app.add_subcommand(
-        "render",
-        "Render a glTF 2.0 scene under a fisheye sky (path traced, CPU). Interrupted (Ctrl-C, SIGTERM), a render of\n"
-        "more than 16 spp finishes its round of 16 samples and writes the image of the samples taken (exit 3).");
+    CLI::App* cmd = app.add_subcommand("render", "Render a glTF 2.0 scene under a fisheye sky (path traced, CPU)");
     add_scene_options(cmd, &o->scene);  // scene, --camera, --look-at, --fov, --ground-albedo
     cmd->add_option(
         "--sky", o->sky,
@@ -94,6 +92,10 @@ void register_render_command(CLI::App& app) {
         ->check(CLI::IsMember({"none", "lambert"}))
         ->capture_default_str();
     cmd->add_flag("--quiet,-q", o->quiet, "No progress bar or summary");
+    cmd->footer(  // before the exit codes every command shows
+        "Interrupted (Ctrl-C, SIGTERM), a render of more than 16 spp finishes its round of 16 samples and writes\n"
+        "the image of the samples taken (exit 3); a second interrupt stops at once.\n\n" +
+        exit_codes_help());
     cmd->callback([o, cmd] {
         warn_options_of_generated_skies(cmd, o->sky);
         run_render_job(*o);
