@@ -54,10 +54,11 @@ void out_of_memory(int argc, char** argv) {
 // the program writes what it has and exits with kInterrupted; the second stops at once.
 extern "C" void on_interrupt(int) {
     if (dynsky::graceful_stop_allowed() && !dynsky::request_stop()) {
-        const char message[] =
-            "\ndynsky: interrupted: finishing this round of samples, then writing the image of the samples "
-            "taken (interrupt again to stop at once, writing nothing)\n";
-        ssize_t ignored = ::write(2, message, sizeof message - 1);
+        const char head[] = "\ndynsky: interrupted: ", tail[] = " (interrupt again to stop at once, writing nothing)\n";
+        const char* action = dynsky::graceful_stop_action();
+        ssize_t ignored = ::write(2, head, sizeof head - 1);
+        ignored = ::write(2, action, std::strlen(action));  // async-signal-safe (POSIX.1-2017)
+        ignored = ::write(2, tail, sizeof tail - 1);
         (void)ignored;
         return;
     }

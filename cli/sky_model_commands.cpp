@@ -85,7 +85,9 @@ void register_sky_model_commands(CLI::App& sky) {
             "the same run (docs/networks.md): a named sequence or any folder of one camera's photographs, at\n"
             "several resolutions and horizons; the model given the previous frame, and from one frame with the\n"
             "true (fitted) wind; pure advection and the paper's model beside them. Writes a markdown report with\n"
-            "PSNR tables, the paper's one-step table (MSE, PSNR, SSIM), verdicts, a CSV and charts.");
+            "PSNR tables, the paper's one-step table (MSE, PSNR, SSIM), verdicts, a CSV and charts. A first\n"
+            "Ctrl-C or SIGTERM while scoring ends it after the start frame under way and writes the report of\n"
+            "the frames scored, saying so (exit 3); a second stops at once.");
         cmd->add_option("--model", o->model, "Model: auto, advect or a model folder (as for 'sky predict')")
             ->capture_default_str();
         cmd->add_option("--sequence", o->sequence,
@@ -118,7 +120,10 @@ void register_sky_model_commands(CLI::App& sky) {
             ->capture_default_str();
         cmd->add_flag("!--no-paper", o->paper, "Do not score the paper's model beside it");
         cmd->add_flag("--quiet,-q", o->quiet, "No progress bars; the report is still written");
-        cmd->callback([o]() { evaluate_cloud_model(*o); });
+        cmd->callback([o]() {
+            o->stop_on_request = true;
+            evaluate_cloud_model(*o);
+        });
     }
     {
         auto o = std::make_shared<TrainingSetOptions>();

@@ -101,7 +101,8 @@ void run_render_job(const RenderJob& o) {
     RenderResult result;
     {
         std::optional<AllowGracefulStop> graceful;
-        if (settings.stop_on_request) graceful.emplace();
+        if (settings.stop_on_request)
+            graceful.emplace("finishing this round of samples, then writing the image of the samples taken");
         result = integrator.render(camera);
     }
     const double render_cpu_seconds = process_cpu_seconds() - cpu_before;

@@ -24,6 +24,7 @@
 #include "util/chart.h"
 #include "util/error.h"
 #include "util/image.h"
+#include "util/interrupt.h"
 #include "util/json_file.h"
 #include "util/parse.h"
 #include "util/progress.h"
@@ -227,14 +228,22 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
         check_outputs_are_not_inputs(outputs, {o.photos, shared, model_folder ? o.model : ""});
         for (const std::string& out : outputs) check_output_file(out);  // before the scoring, not after
     }
-    PhotoSequence seq = o.sequence.empty() ? photo_sequence_from_folder(o.photos, o.preset)
-                                           : named_photo_sequence(o.sequence, shared);
-
     // The models.
     const std::string folder = resolve_cloud_model(o.model);
+    if (folder != "advect" && cloud_model_kind(folder) != "advect-residual")
+        throw Error("--model " + o.model + ": a " + cloud_model_kind(folder) +
+                    " model; the evaluation scores an advect-residual model (auto, advect or its folder) and the "
+                    "paper's FlowNet + CloudNet beside it in its own column (--no-paper leaves it out)");
     AdvectResidualNetwork model = folder == "advect" ? AdvectResidualNetwork::pure_advection()
                                                      : AdvectResidualNetwork::load(folder);
     AdvectResidualNetwork advect = AdvectResidualNetwork::pure_advection(model.info().resolution, model.info().dt);
+    for (int r : resolutions)  // said before the photographs are read, not at the first frame scored
+        if (r < model.info().resolution)
+            throw Error("--resolutions " + std::to_string(r) + ": below the " +
+                        std::to_string(model.info().resolution) + " px the model steps at (its smallest)");
+    PhotoSequence seq = o.sequence.empty() ? photo_sequence_from_folder(o.photos, o.preset)
+                                           : named_photo_sequence(o.sequence, shared);
+
     std::optional<CloudModel> paper;
     if (o.paper) {
         try {
@@ -413,9 +422,21 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
         }
         return it->second;
     };
+    // From here a first interrupt ends the scoring after the start frame under way (the import
+    // before it stops at once, as any command does).
+    std::optional<AllowGracefulStop> graceful;
+    if (o.stop_on_request)
+        graceful.emplace("finishing the start frame under way, then writing the report of the frames scored");
     ProgressBar progress2(long(last - first + 1) * long(resolutions.size()), "evaluate", o.quiet);
-    for (int r : resolutions) {
-        for (int t = first; t <= last; ++t) {
+    // Start frames outer, resolutions inner: a run stopped by an interrupt has scored every
+    // resolution of the frames it reached, and reports them.
+    int scored_last = last;
+    for (int t = first; t <= last; ++t) {
+        if (t > first && o.stop_on_request && stop_requested()) {
+            scored_last = t - 1;
+            break;
+        }
+        for (int r : resolutions) {
             std::vector<NetworkFrame> f;
             for (int k = t - 1; k <= t + hmax; ++k) f.push_back(resample_frame(frame(k), r));
             auto at = [&](int k) -> const NetworkFrame& { return f[size_t(k - (t - 1))]; };
@@ -474,6 +495,15 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
         }
     }
     progress2.finish();
+    if (scored_last < last) {
+        if (!o.quiet)
+            std::fprintf(stderr, "dynsky: interrupted: writing the report of start frames %d..%d (of %d..%d)\n", first,
+                         scored_last, first, last);
+        part += "; STOPPED by an interrupt after start frame " + std::to_string(scored_last) + " of " +
+                std::to_string(first) + ".." + std::to_string(last);
+        last = scored_last, result.last = scored_last;
+        note_stopped_early();  // exit kInterrupted once the report is written
+    }
     for (auto& [r, by_h] : acc)
         for (auto& [h, by_m] : by_h)
             for (auto& [m, a] : by_m) result.scores[r][h][m] = a.mean();

@@ -39,7 +39,9 @@ namespace dynsky {
 // shared folder); horizons "1,2,6"; resolutions "64,256"; frames "" (see above; "A-B": start frames
 // A..B of the sequence); report "evaluation.md" (with .csv and _RES.png charts beside it);
 // import_resolution 256; limit 0 (all start frames; K: only the first K); paper true (also the
-// paper's model when installed); quiet false.
+// paper's model when installed); quiet false; stop_on_request false (true: an interrupt,
+// util/interrupt.h, ends the scoring after the start frame under way, and the report of the frames
+// scored is written, saying so; `sky evaluate` sets it).
 struct EvaluationOptions {
     std::string model = "auto";
     std::string sequence, photos, preset, shared;
@@ -48,6 +50,7 @@ struct EvaluationOptions {
     int import_resolution = 256, limit = 0;
     bool paper = true;
     bool quiet = false;
+    bool stop_on_request = false;
 };
 
 struct MethodScore {

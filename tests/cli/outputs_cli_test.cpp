@@ -302,6 +302,26 @@ TEST(OutputsCli, AnInterruptedRenderWritesTheImageOfTheSamplesTaken) {
     fs::remove_all(dir);
 }
 
+// An interrupted evaluation (a long folder of photographs) writes the report of the start frames
+// it scored, saying so; before, it wrote nothing until the end.
+TEST(OutputsCli, AnInterruptedEvaluationWritesTheReportOfTheFramesScored) {
+    DYNSKY_REQUIRE_SHARED();
+    const std::string dir = test::temp_dir("outputs_evaluate_interrupt"), log = dir + "/log";
+    auto r = test::run_command(kExe + " sky evaluate --sequence arm-tsi --model advect --no-paper --out " + dir +
+                               "/e.md 2> " + log + " & p=$!; for i in $(seq 1200); do grep -qF 'evaluate [' " + log +
+                               " && break; sleep 0.1; done; sleep 0.5; kill -INT $p; wait $p; echo \"rc=$?\"; cat " +
+                               log);
+    EXPECT_NE(r.output.find("rc=3"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("finishing the start frame under way, then writing the report"), std::string::npos)
+        << r.output;
+    std::ifstream in(dir + "/e.md");
+    const std::string md((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_NE(md.find("STOPPED by an interrupt after start frame"), std::string::npos) << md;
+    EXPECT_NE(md.find("| 6 | 180 s |"), std::string::npos) << md;
+    for (const char* f : {"/e.csv", "/e_64.png", "/e_256.png"}) EXPECT_TRUE(fs::exists(dir + f)) << f;
+    fs::remove_all(dir);
+}
+
 TEST(OutputsCli, OutputThatIsAnInputIsRefusedBeforeAnyWork) {
     const std::string dir = test::temp_dir("outputs_same");
     ASSERT_EQ(test::run_command(kExe +

@@ -648,6 +648,13 @@ TEST(SkyModelCli, EvaluateRejectsBadArguments) {
     r = test::run_command(dynsky("sky evaluate --model advect --sequence arm-tsi --resolutions 100"));
     EXPECT_EQ(r.exit_code, 2);  // a bad option value: usage error
     EXPECT_NE(r.output.find("--resolutions 100"), std::string::npos) << r.output;
+    // Below the model's own size: said before any photograph is read (it failed at the first frame
+    // scored, "the state is smaller than the network's 64 px").
+    r = test::run_command(
+        dynsky("sky evaluate --model advect --sequence arm-tsi --resolutions 32 --import-res 32 2>&1"));
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.output.find("--resolutions 32: below the 64 px the model steps at"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("import "), std::string::npos) << r.output;
     {
         // A report asked into a folder (`-o out/`) failed after the whole scoring, with charts
         // left in the folder: refused first.
