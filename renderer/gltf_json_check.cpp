@@ -54,6 +54,14 @@ class Checker {
             index(a, "bufferView", at + ".bufferView");
             integer(a, "byteOffset", at + ".byteOffset", 0);
             integer(a, "count", at + ".count", 1);
+            if (const Json* sparse = object_member(a, "sparse", at + ".sparse")) {  // tinygltf reads it as int
+                integer(*sparse, "count", at + ".sparse.count", 1, 2147483647.0);
+                for (const char* part : {"indices", "values"})
+                    if (const Json* p = object_member(*sparse, part, at + ".sparse." + part)) {
+                        index(*p, "bufferView", at + ".sparse." + part + ".bufferView");
+                        integer(*p, "byteOffset", at + ".sparse." + part + ".byteOffset", 0);
+                    }
+            }
             integer(a, "componentType", at + ".componentType", 0);
             boolean(a, "normalized", at + ".normalized");
             numbers(a, "min", at + ".min", 0);

@@ -2161,9 +2161,15 @@ class GltfLoader {
         }
         Camera cam;
         cam.name = name;
-        // The rotation part only: a camera frame must stay orthonormal even under scaled parents.
+        // The rotation part only: a camera frame must stay orthonormal even under scaled parents, and
+        // look down its node's -Z with its +Y up under a mirroring one (the spec: a camera's view
+        // ignores scale). Eigen's rotation() of a mirror turned it round to look along +Z.
         Eigen::Affine3f w = to_affine(world);
-        cam.camera_to_world = Eigen::Translation3f(w.translation()) * w.rotation();
+        const Eigen::Vector3f back = w.linear().col(2).normalized();
+        const Eigen::Vector3f up = (w.linear().col(1) - back * back.dot(w.linear().col(1))).normalized();
+        Eigen::Matrix3f frame;
+        frame << up.cross(back), up, back;
+        cam.camera_to_world = Eigen::Translation3f(w.translation()) * frame;
         const double far = world.col(3).head<3>().cwiseAbs().maxCoeff();
         if (!(far <= kMaxCoordinate))
             fail("camera " + in_quotes(name) + " is " + number_text(far, 3) + " m from the origin, beyond " +

@@ -394,6 +394,32 @@ TEST(GltfLoader, AScenePlacedFarOutByItsNodesIsMovedNearTheOrigin) {
     }
 }
 
+// A camera's view ignores its node's scale (glTF 2.0, 3.10): under a mirroring scale, its own or a
+// parent's, it still looks down the node's -Z with +Y up. Eigen's rotation() of the mirrored
+// matrix turned it round to look along +Z, away from what it was placed to see.
+TEST(GltfLoader, AMirroringScaleDoesNotTurnACameraRound) {
+    std::string dir = test::temp_dir("gltf");
+    for (const char* scale : {"[1,1,1]", "[-1,1,1]", "[1,-1,1]", "[2,3,-0.5]", "[-1,-1,1]"}) {
+        MiniGltf g;
+        g.view(quad_positions());  // (a buffer of at least a byte)
+        const std::string json = std::string("\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"scale\":") +
+                                 scale +
+                                 ",\"children\":[1]},{\"camera\":0,\"translation\":[0,0,3]}],\"cameras\":[{"
+                                 "\"type\":\"perspective\",\"perspective\":{\"yfov\":0.8,\"znear\":0.1}}]";
+        const Scene s = load_gltf(g.write(dir, "mirror", json));
+        ASSERT_EQ(s.cameras.size(), 1u) << scale;
+        const Eigen::Matrix3f r = s.cameras[0].camera_to_world.linear();
+        EXPECT_NEAR((r * r.transpose() - Eigen::Matrix3f::Identity()).norm(), 0, 1e-5) << scale;
+        EXPECT_NEAR(r.determinant(), 1, 1e-5) << scale;  // a rotation, not a mirror
+        // The node's -Z and +Y, normalised: what the camera looks along and holds up.
+        const std::string sc = scale;
+        const float sy = sc == "[1,-1,1]" || sc == "[-1,-1,1]" ? -1.0f : 1.0f;
+        const float sz = sc == "[2,3,-0.5]" ? -1.0f : 1.0f;
+        EXPECT_NEAR((r * Vec3(0, 0, -1) - Vec3(0, 0, -sz)).norm(), 0, 1e-5) << scale;
+        EXPECT_NEAR((r * Vec3(0, 1, 0) - Vec3(0, sy, 0)).norm(), 0, 1e-5) << scale;
+    }
+}
+
 TEST(GltfLoader, StripsAndFansBecomeTriangleListsAndPointsAreSkipped) {
     std::string dir = test::temp_dir("gltf");
     MiniGltf g;
@@ -1014,12 +1040,16 @@ TEST(GltfLoader, ValuesOfTheWrongTypeOrOutsideTheSpecAreNamedByTheirPath) {
     std::string dir = test::temp_dir("gltf");
     MiniGltf g;
     const int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
-    MiniGltf shifted_file = g, strided_file = g, packed_file = g;  // each bad accessor in its own file
+    MiniGltf shifted_file = g, strided_file = g, packed_file = g, sparse_file = g;  // each bad accessor alone
     const int shifted = shifted_file.accessor(shifted_file.view(quad_positions()), kFloat, 4, "VEC3",
                                               ",\"byteOffset\":-12");
     const int strided = strided_file.accessor(strided_file.view(quad_positions(), ",\"byteStride\":-12"), kFloat, 4,
                                               "VEC3");
     const int packed = packed_file.accessor(packed_file.view(quad_positions(), ",\"byteStride\":0"), kFloat, 4, "VEC3");
+    // A sparse count tinygltf reads as a 32-bit int: 3e9 was reported as -1294967296.
+    const int sparse = sparse_file.accessor(sparse_file.view(quad_positions()), kFloat, 4, "VEC3",
+                                            ",\"sparse\":{\"count\":3000000000,\"indices\":{\"bufferView\":0,"
+                                            "\"componentType\":5123},\"values\":{\"bufferView\":0}}");
     const int uv_int = g.accessor(g.view(std::vector<uint16_t>{0, 0, 1, 0, 1, 1, 0, 1}), kUShort, 4, "VEC2");
     const int uv = g.accessor(g.view(std::vector<float>{0, 0, 1, 0, 1, 1, 0, 1}), kFloat, 4, "VEC2");
     auto mesh = [](int p, const std::string& more = "") {
@@ -1090,6 +1120,8 @@ TEST(GltfLoader, ValuesOfTheWrongTypeOrOutsideTheSpecAreNamedByTheirPath) {
     }
     std::string e = load_error(shifted_file.write(dir, "offset_negative", one_node_scene(mesh(shifted))));
     EXPECT_NE(e.find("accessors[1].byteOffset is -12; it must be at least 0"), std::string::npos) << e;
+    e = load_error(sparse_file.write(dir, "sparse_huge", one_node_scene(mesh(sparse))));
+    EXPECT_NE(e.find("accessors[1].sparse.count is 3e+09"), std::string::npos) << e;
     e = load_error(strided_file.write(dir, "stride_negative", one_node_scene(mesh(strided))));
     EXPECT_NE(e.find("bufferViews[1].byteStride is -12"), std::string::npos) << e;
     // asset.version as a number said "asset object not found".
