@@ -18,6 +18,10 @@
 #              PATTERN (dynsky --sampler-pattern, sobol), BLENDER (blender).
 # Without Blender it says so, measures dynsky alone and exits 0.
 set -euo pipefail
+case ${1:-} in
+    -h | --help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
+    -*) echo "cycles_equal_error: unknown option '$1' (usage: $0 [OUT_DIR]; --help)" >&2; exit 2 ;;
+esac
 here=$(cd "$(dirname "$0")/.." && pwd)
 D=${DYNSKY:-$here/build/cli/dynsky}
 H=$here/tools/cycles

@@ -3,6 +3,10 @@
 # spheres: relative MSE against a random 2048 spp reference, untrimmed and without the 0.1 % worst
 # pixels (issue 13's measure). Usage: bench/sample_pattern_error.sh [OUT_DIR] (needs ../shared).
 set -euo pipefail
+case ${1:-} in
+    -h | --help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
+    -*) echo "sample_pattern_error: unknown option '$1' (usage: $0 [OUT_DIR]; --help)" >&2; exit 2 ;;
+esac
 here=$(cd "$(dirname "$0")/.." && pwd)
 D=$here/build/cli/dynsky
 out=${1:-/tmp/sample_pattern_error}

@@ -77,7 +77,7 @@ void register_sky_procedural_command(CLI::App& sky) {
                     "Height of the cumulus layer above the viewer, metres (1500: fair-weather cumulus)")
         ->check(finite_in(10, 1e5))
         ->capture_default_str();
-    add_hidden_alias(cmd, "--cumulus-altitude", &o->cloud_height_m)->check(finite_above(0, 1e5));  // its old range
+    add_hidden_alias(cmd, "--cumulus-altitude", &o->cloud_height_m)->check(finite_in(10, 1e5));  // as --cloud-height
     cmd->add_option("--evolution", o->evolution,
                     "Seconds for the cumulus shapes to change completely (0, or 1..1e7); 0 freezes them (pure\n"
                     "advection)")

@@ -17,6 +17,8 @@
 # resumes: keys keeps a complete timeline of the same settings, frames keeps complete frames.
 set -euo pipefail
 
+usage() { sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; }
+case ${1:-} in -h | --help) usage; exit 0 ;; esac
 stage=${1:-}
 shift || true
 out="" task="" tasks="" dynsky=""
@@ -28,6 +30,7 @@ while (($#)); do
     --tasks) tasks=$2; shift 2 ;;
     --dynsky) dynsky=$2; shift 2 ;;
     --) shift; break ;;
+    -h | --help) usage; exit 0 ;;
     *) echo "farm_stage: unknown option '$1' (before --)" >&2; exit 2 ;;
   esac
 done

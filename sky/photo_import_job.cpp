@@ -314,7 +314,11 @@ void import_one(const OnePhoto& o, bool verbose, const std::string& settings_key
             unit = "W m^-2 sr^-1 (calibrated against the clear-sky model)";
         }
     } else {
-        if (verbose) std::printf("HDR: none (give --time with --lat/--lon or a --preset for calibrated radiance)\n");
+        if (verbose)
+            std::printf("HDR: none (%s)\n",
+                        o.preset.empty() ? "give --time with --lat/--lon or a --preset for calibrated radiance"
+                                         : "the photograph's name and EXIF carry no time: give --time for calibrated "
+                                           "radiance");
     }
     std::ostringstream source;
     source << sky.source;
