@@ -6,6 +6,8 @@
 #include <tbb/parallel_for.h>
 #include <tiny_gltf.h>
 
+#include <Eigen/SVD>
+
 #include <algorithm>
 #include <functional>
 #include <cctype>
@@ -325,6 +327,16 @@ bool asset_read_file(std::vector<unsigned char>* out, std::string* err, const st
 bool asset_write_file(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
     if (err) *err += "dynsky never writes glTF files";
     return false;
+}
+
+// Whether a node's world transform collapses what it places to a point or a line (every axis, or
+// all but one, scaled to 0): it shows nothing, and is how animations hide objects (a scale keyed
+// to 0). Such a node is skipped, not refused; a plane (one axis flattened) is still refused below.
+bool transform_collapses(const Eigen::Matrix4d& world) {
+    const Eigen::Matrix3d m = world.topLeftCorner<3, 3>();
+    if (!m.allFinite()) return false;
+    const Eigen::Vector3d s = Eigen::JacobiSVD<Eigen::Matrix3d>(m).singularValues();  // descending
+    return s(0) == 0 || s(1) <= 1e-7 * s(0);
 }
 
 // Why a node's world transform cannot instance geometry ("" when it can): Embree stores it in
@@ -2254,8 +2266,11 @@ class GltfLoader {
             fail(what + ": " + name + " is " + number_text(position.cwiseAbs().maxCoeff(), 3) +
                  " m from the origin, beyond " + number_text(kMaxCoordinate, 3) + " m");
         const Eigen::Vector3d forward = -world.col(2).head<3>();
-        if (!(forward.norm() > 0) || !forward.allFinite())
-            fail(what + ": " + name + "'s world transform has no -Z axis (a zero scale?): it shines nowhere");
+        if (!forward.allFinite()) fail(what + ": " + name + "'s world transform is not finite: it shines nowhere");
+        if (!(forward.norm() > 0)) {  // a zero scale hides a light as it hides a mesh
+            warn(what + ": " + name + "'s world transform has no -Z axis (a scale of 0: hidden), not used");
+            return;
+        }
         light.position = position.cast<float>();
         light.direction = forward.normalized().cast<float>();
         if (light.intensity.maxCoeff() > 0) scene_.lights.push_back(light);
@@ -2373,9 +2388,12 @@ class GltfLoader {
                 if (std::string problem = transform_problem(m); !problem.empty())
                     fail(which + ": its world transform " + problem);
             };
-            if (node.mesh >= 0) {
-                if (node.mesh >= int(model_.meshes.size()))
-                    fail(what + " refers to mesh " + std::to_string(node.mesh) + ", which does not exist");
+            if (node.mesh >= int(model_.meshes.size()))
+                fail(what + " refers to mesh " + std::to_string(node.mesh) + ", which does not exist");
+            const bool collapsed = node.mesh >= 0 && node.skin < 0 && transform_collapses(world);
+            if (collapsed)
+                warn(what + ": its world transform scales it to a point or a line (a scale of 0: hidden), not drawn");
+            if (node.mesh >= 0 && !collapsed) {
                 VertexPose pose;
                 pose.morph_weights = morph_weights(node, what);
                 if (node.skin >= 0) pose.joints = skin_joints(node.skin, world_of, what);

@@ -2033,6 +2033,39 @@ TEST(GltfLoader, HostileInputIsRefusedAtItsRoot) {
     Scene ok = load_gltf(g.write(dir, "ok", node_scene("{\"mesh\":0,\"scale\":[2,2,2]}")));
     ASSERT_EQ(ok.instances.size(), 1u);
     EXPECT_FLOAT_EQ(ok.instances[0].transform.linear()(0, 0), 2.0f);
+    // A node scaled to a point or a line (how animations hide objects) shows nothing: skipped with a
+    // warning, the rest of the scene drawn (the whole file was refused as "singular").
+    for (const char* hidden :
+         {"\"scale\":[0,0,0]", "\"scale\":[0,0,1]", "\"matrix\":[0,0,0,0,0,0,0,0,0,0,0,0,1,2,3,1]"}) {
+        std::vector<std::string> warnings;
+        const Scene s = load_gltf(
+            g.write(dir, "hidden",
+                    "\"scene\":0,\"scenes\":[{\"nodes\":[0,1]}],\"nodes\":[{\"name\":\"gone\",\"mesh\":0," +
+                        std::string(hidden) + "},{\"mesh\":0,\"translation\":[5,0,0]}],\"meshes\":[" + mesh(pos) + "]"),
+            &warnings);
+        ASSERT_EQ(s.instances.size(), 1u) << hidden;
+        EXPECT_FLOAT_EQ(s.instances[0].transform.translation().x(), 5.0f) << hidden;
+        bool said = false;
+        for (const std::string& w : warnings)
+            said |= w.find("node 'gone'") != std::string::npos && w.find("not drawn") != std::string::npos;
+        EXPECT_TRUE(said) << hidden;
+    }
+    {  // A light under a zero scale likewise (it was refused: "it shines nowhere").
+        std::vector<std::string> warnings;
+        const Scene s = load_gltf(
+            g.write(dir, "hidden_light",
+                    "\"scene\":0,\"scenes\":[{\"nodes\":[0,1]}],\"nodes\":[{\"mesh\":0},{\"scale\":[0,0,0],"
+                    "\"extensions\":{\"KHR_lights_punctual\":{\"light\":0}}}],\"meshes\":[" +
+                        mesh(pos) +
+                        "],\"extensions\":{\"KHR_lights_punctual\":{\"lights\":[{\"type\":\"directional\"}]}},"
+                        "\"extensionsUsed\":[\"KHR_lights_punctual\"]"),
+            &warnings);
+        EXPECT_EQ(s.lights.size(), 0u);
+        EXPECT_EQ(s.instances.size(), 1u);
+        bool said = false;
+        for (const std::string& w : warnings) said |= w.find("not used") != std::string::npos;
+        EXPECT_TRUE(said);
+    }
 
     struct Case {
         std::string name, body, expect;
