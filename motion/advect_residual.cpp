@@ -618,6 +618,12 @@ cv::Mat filled_mask(const SkyImage& sky) {
     return cv::Mat(n, n, CV_8UC1, const_cast<unsigned char*>(sky.filled.data())) * 255;  // a copy
 }
 
+double network_trust_of_brightness(double median_radiance) {
+    constexpr double kNone = 0.1, kFull = 1.0;  // W m^-2 sr^-1
+    if (!(median_radiance > kNone)) return 0.0;
+    return std::min(1.0, std::log(median_radiance / kNone) / std::log(kFull / kNone));
+}
+
 CloudRollout::CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start, const CloudFlow& flow,
                            const cv::Mat& background, const cv::Mat& unseen, const std::optional<Vec3d>& sun,
                            bool sun_seen_whole, const cv::Mat& filled)
@@ -642,6 +648,24 @@ CloudRollout::CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start,
             for (int x = 0; x < big; ++x) positions_.at<cv::Vec2f>(y, x) = cv::Vec2f(float(x), float(y));
     }
     corrections_ = cv::Mat(big, big, CV_32FC3, cv::Scalar::all(0));
+    if (network->has_network()) {
+        // The start's median radiance (the mean of its channels), back from the log map.
+        const UnitMapParams& map = network->info().form.unit_map;
+        const double span = std::log1p(map.max_radiance / map.scale);
+        std::vector<float> radiance;
+        radiance.reserve(size_t(big) * big);
+        for (int y = 0; y < big; ++y)
+            for (int x = 0; x < big; ++x)
+                if (disc_big_.at<unsigned char>(y, x)) {
+                    const cv::Vec3f v = start_.at<cv::Vec3f>(y, x);
+                    radiance.push_back(float(map.scale * std::expm1((v[0] + v[1] + v[2]) / 3.0 * span)));
+                }
+        if (!radiance.empty()) {
+            auto mid = radiance.begin() + std::ptrdiff_t(radiance.size() / 2);
+            std::nth_element(radiance.begin(), mid, radiance.end());
+            network_trust_ = network_trust_of_brightness(*mid);
+        }
+    }
     if (!flow.hold_background) {
         // Held by the clear share of the start sky (the cloud rule on the networks' image).
         cv::Mat small;
@@ -998,7 +1022,7 @@ const cv::Mat& CloudRollout::advance() {
         if (!compensation_n.empty()) base += compensation_n;
         cv::Mat correction = network_->step_network(small, f_n, compensation_n) - base, up = correction;
         if (big != n) cv::resize(correction, up, cv::Size(big, big), 0, 0, cv::INTER_LINEAR);
-        moved += up * (k == 1 ? flow_.correction_gain : 1.0);
+        moved += up * (network_trust_ * (k == 1 ? flow_.correction_gain : 1.0));
     }
     cv::min(cv::max(moved, 0.0), 1.0, state_);
     state_.setTo(cv::Scalar::all(0), ~disc_big_);

@@ -205,6 +205,15 @@ cv::Mat filled_mask(const SkyImage& sky);
 // of every step's warp. The network's corrections (its output minus the warp it was given) ride
 // along as a field of their own. The network itself sees the last step's image at N, as it was
 // trained.
+//
+// The network was trained on daylight skies (median radiance 0.3-40 W m^-2 sr^-1) and adds its
+// corrections in the log map's units, where a dim sky lies near 0: its small bias there multiplied
+// a clear twilight sky's radiance by 4.5, a night sky's by 40,000 and a dusk overcast (0.013) by 5
+// within ten steps, where pure advection keeps them. Its corrections are therefore weighed by
+// network_trust_of_brightness of the start's median radiance: all of them from 1 W m^-2 sr^-1 up,
+// none at 0.1 and below (pure advection), log-linear between.
+double network_trust_of_brightness(double median_radiance);
+
 class CloudRollout {
   public:
     // unseen (CV_8UC1, may be empty): pixels of the start whose cloud cannot be judged (the sun cut
@@ -243,6 +252,8 @@ class CloudRollout {
     // How far the clouds at the background's sun have moved since the start (pixels of the state):
     // the length of the summed flow at the sun (motion/sun_patch.h opacity_sun_weight's travel).
     double sun_travel_px() const { return cv::norm(sun_travel_); }
+    // The share of the network's corrections the steps add (network_trust_of_brightness).
+    double network_trust() const { return network_trust_; }
 
   private:
     AdvectResidualNetwork* network_;
@@ -269,6 +280,7 @@ class CloudRollout {
     bool halo_measured_ = false;
     std::optional<Vec3d> sun_;  // the background's
     double background_weight_ = 1.0;
+    double network_trust_ = 1.0;
     int steps_ = 0;
     cv::Vec2d sun_travel_ = cv::Vec2d(0, 0);
 };
