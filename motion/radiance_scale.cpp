@@ -97,7 +97,12 @@ RadianceScale bring_to_model_scale(SkyImage* sky, std::shared_ptr<const SkyImage
     // model's radiance because it is dark, and moved at the model's scale it read as a thinner cloud
     // (`compare` darkened its clear sky to match). A sky that says it is W m^-2 sr^-1 and shows
     // little clear sky is taken at its word.
-    if (sky->units == kAbsoluteRadiance && scale.clear_weight < 0.5) scale.apply = false;
+    // Brighter than any sky can be (30 x the clear-sky model's on its mean: a sunlit cumulus field
+    // is 2-3 x) it is not in those units whatever it says: an overcast x 1e4 clipped at the log
+    // map's 300 and came out a flat 0.2 % of itself after one step.
+    constexpr double kBrighterThanAnySky = 30;
+    if (sky->units == kAbsoluteRadiance && scale.clear_weight < 0.5 && scale.factor <= kBrighterThanAnySky)
+        scale.apply = false;
     if (!scale.apply) return scale;
     scale_radiance(sky, 1 / scale.factor);
     if (*previous) {  // the same units as the sky: one factor for both

@@ -64,6 +64,16 @@ TEST(RadianceScale, SkiesAtScaleMeasureOneOthersTheirFactor) {
         std::shared_ptr<const SkyImage> none;
         EXPECT_EQ(bring_to_model_scale(&dark, &none).apply, !says) << says;
     }
+    // ... unless it is brighter than any sky can be (30 x the clear-sky model's mean): then it is
+    // not in those units whatever it says (an overcast x 1e4 clipped at the log map's top and came
+    // out at 0.2 % of itself after one step).
+    for (const double f : {5.0, 1e4}) {
+        SkyImage bright = scaled(overcast, f);
+        ASSERT_EQ(bright.units, kAbsoluteRadiance);
+        std::shared_ptr<const SkyImage> none;
+        const RadianceScale b = bring_to_model_scale(&bright, &none);
+        EXPECT_EQ(b.apply, f > 100) << f << ": " << b.factor;
+    }
     {
         SkyImage bright = scaled(clear_sky(35), 3);
         ASSERT_EQ(bright.units, kAbsoluteRadiance);
