@@ -427,16 +427,22 @@ namespace {
 
 // A fisheye's lens circle on a black surround (the Mobotix, most all-sky cameras): the outline of
 // everything lit, fitted with a circle that ignores what is not the rim. None when the corners are
-// not black or no circle fits well.
-std::optional<SkyCircle> find_lens_circle_on_black(const cv::Mat& level, double r_min, double r_max) {
+// not black or no circle fits well; an outline that is an ellipse instead (a photograph scaled
+// unevenly) is given in *ellipse.
+std::optional<SkyCircle> find_lens_circle_on_black(const cv::Mat& level, double r_min, double r_max,
+                                                   std::optional<cv::RotatedRect>* ellipse) {
     double p99 = quantile(std::vector<float>(level.begin<float>(), level.end<float>()), 0.99);
     int cw = std::max(1, level.cols / 12), ch = std::max(1, level.rows / 12);
-    double corner = 0;
+    // The surround's level: that of the three darkest corners (a lens circle cut by the frame on
+    // two sides lights the fourth; it went to the Hough search, which found it 15 % too small).
+    std::vector<double> corners;
     for (cv::Rect r : {cv::Rect(0, 0, cw, ch), cv::Rect(level.cols - cw, 0, cw, ch),
                        cv::Rect(0, level.rows - ch, cw, ch), cv::Rect(level.cols - cw, level.rows - ch, cw, ch)}) {
         cv::Mat patch = level(r).clone();
-        corner = std::max(corner, double(quantile(std::vector<float>(patch.begin<float>(), patch.end<float>()), 0.75)));
+        corners.push_back(double(quantile(std::vector<float>(patch.begin<float>(), patch.end<float>()), 0.75)));
     }
+    std::sort(corners.begin(), corners.end());
+    const double corner = corners[2];
     if (!(p99 >= 8 && corner <= std::max(2.0, 0.03 * p99))) return std::nullopt;
 
     // Any light at all is inside the lens first; failing that (a JPEG's ringing beyond a bright rim
@@ -521,7 +527,27 @@ std::optional<SkyCircle> find_lens_circle_on_black(const cv::Mat& level, double 
             }
             // A lens circle: most directions on one circle, closely. A lit shape that is not one
             // (a letterboxed picture, a lamp) fails here and goes to the Hough search.
-            if (inliers * 2 < rim.size() || rms > 0.01 * r + 0.5) return std::optional<SkyCircle>();
+            if (inliers * 2 < rim.size() || rms > 0.01 * r + 0.5) {
+                // Unless the outline is an ellipse, closely: the photograph was scaled unevenly (a
+                // 1280 x 960 frame resized to 1001 x 777: the Hough search then found a circle 10 %
+                // inside the lens).
+                std::vector<cv::Point2f> points;
+                for (size_t i = 0; i < rim.size(); ++i)
+                    if (in[i]) points.emplace_back(float(rim[i].x), float(rim[i].y));
+                if (points.size() >= 20 && inliers * 2 >= rim.size()) {
+                    const cv::RotatedRect e = cv::fitEllipse(points);
+                    const double a = e.size.width / 2.0, b = e.size.height / 2.0, t = e.angle * kPiD / 180;
+                    std::vector<double> off;
+                    for (const cv::Point2f& p : points) {
+                        const double dx = p.x - e.center.x, dy = p.y - e.center.y;
+                        const double u = dx * std::cos(t) + dy * std::sin(t), v = -dx * std::sin(t) + dy * std::cos(t);
+                        off.push_back(std::abs(std::hypot(u / a, v / b) - 1) * (a + b) / 2);
+                    }
+                    const double ratio = std::max(a, b) / std::max(1e-9, std::min(a, b));
+                    if (ratio > 1.01 && quantile(off, 0.5) < 0.005 * (a + b) / 2 + 0.5) *ellipse = e;
+                }
+                return std::optional<SkyCircle>();
+            }
         }
         if (r < r_min || r > r_max) return std::optional<SkyCircle>();
         return SkyCircle{cx, cy, r};
@@ -556,9 +582,30 @@ SkyCircle find_sky_circle(const Image& photo, const std::string& name, double mi
             for (int c = 0; c < std::min(photo.channels, 3); ++c) brightest = std::max(brightest, photo.at(x, y, c));
             level.at<float>(y, x) = 255.0f * brightest;
         }
+    std::optional<cv::RotatedRect> ellipse;
     if (std::optional<SkyCircle> lens = find_lens_circle_on_black(level, 0.5 * min_fraction * shorter_side,
-                                                                  1.4 * max_fraction * shorter_side))
+                                                                  1.4 * max_fraction * shorter_side, &ellipse))
         return *lens;
+    if (ellipse) {
+        // The largest circle inside it (the sky beyond along its long axis left out), and the
+        // height that would make it round. The Hough search below found one 10 % inside the lens.
+        const double a = ellipse->size.width / 2.0, b = ellipse->size.height / 2.0, t = ellipse->angle * kPiD / 180;
+        const double half_w = std::hypot(a * std::cos(t), b * std::sin(t));
+        const double half_h = std::hypot(a * std::sin(t), b * std::cos(t));
+        const int square_h = int(std::lround(photo.height * half_w / half_h));
+        SkyCircle c{ellipse->center.x, ellipse->center.y, std::min(a, b)};
+        c.caution = "the lens's outline is an ellipse, not a circle (" + fmt(2 * half_w, 0) + " x " +
+                    fmt(2 * half_h, 0) + " px about (" + fmt(ellipse->center.x, 0) + ", " + fmt(ellipse->center.y, 0) +
+                    ")): the photograph's pixels are not square (scaled unevenly?); the largest circle inside it is "
+                    "used, so the sky is " +
+                    fmt(100 * (std::max(a, b) / std::min(a, b) - 1), 0) +
+                    " % stretched along one axis. For an exact import scale it to square pixels first (" +
+                    std::to_string(photo.width) + " x " + std::to_string(square_h) + ", e.g. oiiotool IN --resize " +
+                    std::to_string(photo.width) + "x" + std::to_string(square_h) + " -o OUT)";
+        return c;
+    }
+    // A frame this dark shows no lens outline: the search below finds the sky's edges, inside it.
+    const double level_p99 = quantile(std::vector<float>(level.begin<float>(), level.end<float>()), 0.99);
     double scale = std::min(1.0, 400.0 / std::max(grey.cols, grey.rows));
     cv::Mat small;
     cv::resize(grey, small, cv::Size(), scale, scale, cv::INTER_AREA);
@@ -586,6 +633,11 @@ SkyCircle find_sky_circle(const Image& photo, const std::string& name, double mi
     c.center_x = (circles[0][0] + 0.5) / scale - 0.5;
     c.center_y = (circles[0][1] + 0.5) / scale - 0.5;
     c.radius = circles[0][2] / scale;
+    if (level_p99 < 8)
+        c.caution = "the photograph is dark (99 % of it at most " + fmt(level_p99, 0) +
+                    " of 255): its sky circle was found from the sky's edges, which on a dark frame lie inside "
+                    "the lens, and may be too small; check it (--preview), give --center X,Y --radius R, or "
+                    "import the frame with its sequence (one circle for all)";
     if (c.center_x < 0 || c.center_y < 0 || c.center_x > photo.width - 1 || c.center_y > photo.height - 1)
         throw_file_error(name, "the circle found lies outside the photograph: give --center and --radius");
     return c;

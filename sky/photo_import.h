@@ -42,6 +42,10 @@ double lens_angle(LensLaw law, double r);       // inverse, r >= 0
 // The sky circle in a photograph, in pixels: r = 1 of the lens law lies at `radius` from the centre.
 struct SkyCircle {
     double center_x = 0, center_y = 0, radius = 0;
+    // Why a circle found automatically may be wrong ("" when it is found from the lens's own
+    // outline): the import warns with it. A dark frame's circle comes from the sky's edges, which
+    // lie inside the lens (a dawn Mobotix frame: 435-448 px against 489).
+    std::string caution;
 };
 
 // Where the sky is in the photo and how the photo is oriented. Directions map to pixels as:

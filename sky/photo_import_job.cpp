@@ -223,6 +223,8 @@ void import_one(const OnePhoto& o, bool verbose, const std::string& settings_key
             "(--center, --north and masks refer to that view)\n",
             imported.exif_orientation);
     const SkyCircle& c = imported.geometry.circle;
+    if (imported.circle_detected && !c.caution.empty())  // even with -q: the sky may be cut wrong
+        std::fprintf(stderr, "dynsky: warning: %s: %s\n", o.photo.c_str(), c.caution.c_str());
     if (verbose)
         std::printf("sky circle: centre (%.1f, %.1f) px, radius %.1f px (%s); lens %s, north %.1f deg, %s%s\n",
                     c.center_x, c.center_y, c.radius,

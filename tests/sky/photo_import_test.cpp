@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgproc.hpp>
@@ -800,6 +801,50 @@ TEST(SkyCircle, SameLensCircleFromDawnToNoonOnTheMobotix) {
         // 428-449 px before on the morning frames. The preset's radius was measured where the rim
         // is brighter than 2 of 255; any light at all reaches up to 1 % further on bright frames.
         EXPECT_NEAR(c.radius, preset.radius, 0.0125 * preset.radius);
+    }
+}
+
+// A user's own photographs of a lens on black (a helper's audit): a frame cropped so the frame cuts
+// the lens on two sides (its fourth corner lit: it went to the Hough search, 15 % too small), the
+// frame resized to other proportions (an ellipse: 10 % too small, no word of it), and a frame too
+// dark to show the lens (a circle inside it, unsaid). Found, or said.
+TEST(SkyCircle, ACutUnevenlyScaledOrDarkFrameIsFoundOrSaid) {
+    DYNSKY_REQUIRE_SHARED();
+    const std::string path = test::shared_path("skies/mobotix_sophia_20200812_morning/images/2020-08-12_11_00.jpg");
+    const Image photo = read_image(path);
+    const SkyCircle whole = find_sky_circle(photo, path);
+    EXPECT_TRUE(whole.caution.empty()) << whole.caution;
+    auto as_mat = [](const Image& im) {
+        return cv::Mat(im.height, im.width, CV_32FC(im.channels), const_cast<float*>(im.pixels.data())).clone();
+    };
+    auto as_image = [](const cv::Mat& roi) {
+        const cv::Mat m = roi.clone();  // continuous
+        Image im(m.cols, m.rows, m.channels());
+        std::memcpy(im.pixels.data(), m.ptr<float>(), im.pixels.size() * sizeof(float));
+        return im;
+    };
+    {  // Cut on the left and the top: 53 % of the rim in the frame.
+        const SkyCircle c = find_sky_circle(as_image(as_mat(photo)(cv::Rect(250, 100, 1030, 860))), "cut");
+        EXPECT_NEAR(c.center_x, whole.center_x - 250, 1.5);
+        EXPECT_NEAR(c.center_y, whole.center_y - 100, 1.5);
+        EXPECT_NEAR(c.radius, whole.radius, 0.005 * whole.radius);
+        EXPECT_TRUE(c.caution.empty()) << c.caution;
+    }
+    {  // 1280 x 960 resized to 1001 x 777: x 0.782 across, x 0.809 down.
+        cv::Mat m;
+        cv::resize(as_mat(photo), m, cv::Size(1001, 777), 0, 0, cv::INTER_AREA);
+        const SkyCircle c = find_sky_circle(as_image(m), "stretched");
+        EXPECT_NE(c.caution.find("an ellipse"), std::string::npos) << c.caution;
+        EXPECT_NE(c.caution.find("(1001 x 75"), std::string::npos) << c.caution;  // 960 x 0.782: 751
+        EXPECT_NEAR(c.center_x, (whole.center_x + 0.5) * 1001 / 1280 - 0.5, 2.0);
+        EXPECT_NEAR(c.center_y, (whole.center_y + 0.5) * 777 / 960 - 0.5, 2.0);
+        EXPECT_NEAR(c.radius, whole.radius * 1001 / 1280, 0.02 * whole.radius * 1001 / 1280);  // the short axis
+    }
+    {  // A hundredth of the light: nothing of the lens's outline shows.
+        Image dark = photo;
+        for (float& v : dark.pixels) v *= 0.01f;
+        const SkyCircle c = find_sky_circle(dark, "dark");
+        EXPECT_NE(c.caution.find("the photograph is dark"), std::string::npos) << c.caution;
     }
 }
 
