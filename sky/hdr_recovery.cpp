@@ -61,7 +61,7 @@ std::string HdrCalibrationReport::sun_offset_warning() const {
           << sun_elsewhere->sun_zenith_deg << "): the sun disc was not restored and the sky's sun direction is the "
           << "computed one; if the camera's north is not where --north says, --north " << sun_elsewhere->north_deg
           << " (or --find-north) puts the computed sun on it (a camera whose east is on the right needs --mirror "
-             "as well, with its own north: one sun cannot tell a mirrored view from a turned one)";
+             "as well, and its own --north, since one sun cannot tell a mirrored view from a turned one)";
         return s.str();
     }
     if (!(sun_offset_deg > kSunOffsetWarningDeg)) return "";
