@@ -210,7 +210,8 @@ cv::Mat filled_mask(const SkyImage& sky);
 // corrections in the log map's units, where a dim sky lies near 0: its small bias there multiplied
 // a clear twilight sky's radiance by 4.5, a night sky's by 40,000 and a dusk overcast (0.013) by 5
 // within ten steps, where pure advection keeps them. Its corrections are therefore weighed by
-// network_trust_of_brightness of the start's median radiance: all of them from 1 W m^-2 sr^-1 up,
+// network_trust_of_brightness of the start's median radiance (its channels' mean in the log map,
+// mapped back): all of them from 1 W m^-2 sr^-1 up,
 // none at 0.1 and below (pure advection), log-linear between.
 double network_trust_of_brightness(double median_radiance);
 

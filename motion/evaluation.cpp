@@ -369,18 +369,23 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
 
     // Imported skies leave out the pixels their import filled when a STEM.filled.png lies beside
     // them (sky import --filled-mask); say how many have one, since the scores depend on it.
-    std::string filled_note;
-    if (seq.preset.empty()) {
+    auto describe_filled = [&](int last_start, bool* all) -> std::string {
+        if (!seq.preset.empty()) return "";
         int with_mask = 0;
-        for (int k = first - 1; k <= last + hmax; ++k) with_mask += fs::exists(filled_mask_path(seq.photos[size_t(k)]));
-        const int used = last + hmax - first + 2;
-        filled_note = with_mask == used ? "every sky's filled pixels (STEM.filled.png) left out"
-                      : with_mask == 0
-                          ? "no STEM.filled.png beside the skies: pixels their imports filled are scored too"
-                          : std::to_string(with_mask) + " of the " + std::to_string(used) +
-                                " skies with a STEM.filled.png (their filled pixels left out), the others scored whole";
-        if (with_mask < used && !o.quiet) std::fprintf(stderr, "dynsky: note: %s\n", filled_note.c_str());
-    }
+        for (int k = first - 1; k <= last_start + hmax; ++k)
+            with_mask += fs::exists(filled_mask_path(seq.photos[size_t(k)]));
+        const int used = last_start + hmax - first + 2;
+        *all = with_mask == used;
+        return with_mask == used ? "every sky's filled pixels (STEM.filled.png) left out"
+               : with_mask == 0
+                   ? "no STEM.filled.png beside the skies: pixels their imports filled are scored too"
+                   : std::to_string(with_mask) + " of the " + std::to_string(used) +
+                         " skies with a STEM.filled.png (their filled pixels left out), the others scored whole";
+    };
+    bool every_sky_masked = true;
+    std::string filled_note = describe_filled(last, &every_sky_masked);
+    if (!filled_note.empty() && !every_sky_masked && !o.quiet)
+        std::fprintf(stderr, "dynsky: note: %s\n", filled_note.c_str());
 
     // Import the frames needed (first - 1 .. last + hmax) once, at the import resolution.
     const int big = o.import_resolution;
@@ -502,7 +507,8 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
         part += "; STOPPED by an interrupt after start frame " + std::to_string(scored_last) + " of " +
                 std::to_string(first) + ".." + std::to_string(last);
         last = scored_last, result.last = scored_last;
-        note_stopped_early();  // exit kInterrupted once the report is written
+        filled_note = describe_filled(last, &every_sky_masked);  // of the skies scored
+        note_stopped_early();                                    // exit kInterrupted once the report is written
     }
     for (auto& [r, by_h] : acc)
         for (auto& [h, by_m] : by_h)

@@ -53,7 +53,8 @@ void scale_radiance(SkyImage* sky, double factor);
 // What `sky predict` and the timeline do with the sky they move and its previous frame (if any):
 // measures the sky's scale (against `sun_if_unrecorded` when the sky records no sun: a clock's)
 // and, when it is to be applied, divides both by it. Not for a sky in kAbsoluteRadiance units measured
-// mostly on its mean (an overcast: dark because it is dark). The
+// mostly on its mean (an overcast: dark because it is dark), unless it is brighter than any sky can
+// be (over 30 x the clear-sky model's: then not in those units whatever it says). The
 // caller gives the results back multiplied by the returned factor.
 RadianceScale bring_to_model_scale(SkyImage* sky, std::shared_ptr<const SkyImage>* previous,
                                    const std::optional<Vec3d>& sun_if_unrecorded = std::nullopt);

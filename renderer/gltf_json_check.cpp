@@ -59,7 +59,7 @@ class Checker {
                 for (const char* part : {"indices", "values"})
                     if (const Json* p = object_member(*sparse, part, at + ".sparse." + part)) {
                         index(*p, "bufferView", at + ".sparse." + part + ".bufferView");
-                        integer(*p, "byteOffset", at + ".sparse." + part + ".byteOffset", 0);
+                        integer(*p, "byteOffset", at + ".sparse." + part + ".byteOffset", 0, 2147483647.0);
                     }
             }
             integer(a, "componentType", at + ".componentType", 0);

@@ -2176,12 +2176,17 @@ class GltfLoader {
         // The rotation part only: a camera frame must stay orthonormal even under scaled parents, and
         // look down its node's -Z with its +Y up under a mirroring one (the spec: a camera's view
         // ignores scale). Eigen's rotation() of a mirror turned it round to look along +Z.
+        // In double: a scale of 1e20 overflows a float's squared norm.
         Eigen::Affine3f w = to_affine(world);
-        const Eigen::Vector3f back = w.linear().col(2).normalized();
-        const Eigen::Vector3f up = (w.linear().col(1) - back * back.dot(w.linear().col(1))).normalized();
-        Eigen::Matrix3f frame;
+        const Eigen::Matrix3d m = world.topLeftCorner<3, 3>();
+        const Eigen::Vector3d back = m.col(2).normalized();
+        const Eigen::Vector3d up = (m.col(1) - back * back.dot(m.col(1))).normalized();
+        Eigen::Matrix3d frame;
         frame << up.cross(back), up, back;
-        cam.camera_to_world = Eigen::Translation3f(w.translation()) * frame;
+        if (frame.allFinite() && std::abs(frame.determinant() - 1) < 1e-6)
+            cam.camera_to_world = Eigen::Translation3f(w.translation()) * Eigen::Matrix3f(frame.cast<float>());
+        else  // -Z and +Y (nearly) parallel: a sheared frame
+            cam.camera_to_world = Eigen::Translation3f(w.translation()) * w.rotation();
         const double far = world.col(3).head<3>().cwiseAbs().maxCoeff();
         if (!(far <= kMaxCoordinate))
             fail("camera " + in_quotes(name) + " is " + number_text(far, 3) + " m from the origin, beyond " +
@@ -2409,6 +2414,11 @@ class GltfLoader {
                         scene_.instances.push_back({group, to_affine(world)});
                     } else {
                         for (size_t i = 0; i < instances.size(); ++i) {
+                            if (transform_collapses(world * instances[i])) {  // hidden, as a node can be
+                                warn(what + " instance " + std::to_string(i) +
+                                     ": scaled to a point or a line (a scale of 0: hidden), not drawn");
+                                continue;
+                            }
                             check_transform(world * instances[i], what + " instance " + std::to_string(i));
                             scene_.instances.push_back({group, to_affine(world * instances[i])});
                         }

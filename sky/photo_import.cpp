@@ -535,16 +535,51 @@ std::optional<SkyCircle> find_lens_circle_on_black(const cv::Mat& level, double 
                 for (size_t i = 0; i < rim.size(); ++i)
                     if (in[i]) points.emplace_back(float(rim[i].x), float(rim[i].y));
                 if (points.size() >= 20 && inliers * 2 >= rim.size()) {
+                    // The median distance of the points from an ellipse (centre, half-axes, angle).
+                    auto median_off = [&](cv::Point2d c, double a, double b, double t) {
+                        std::vector<double> off;
+                        for (const cv::Point2f& p : points) {
+                            const double dx = p.x - c.x, dy = p.y - c.y;
+                            const double u = dx * std::cos(t) + dy * std::sin(t),
+                                         v = -dx * std::sin(t) + dy * std::cos(t);
+                            off.push_back(std::abs(std::hypot(u / a, v / b) - 1) * (a + b) / 2);
+                        }
+                        return quantile(off, 0.5);
+                    };
                     const cv::RotatedRect e = cv::fitEllipse(points);
-                    const double a = e.size.width / 2.0, b = e.size.height / 2.0, t = e.angle * kPiD / 180;
-                    std::vector<double> off;
-                    for (const cv::Point2f& p : points) {
-                        const double dx = p.x - e.center.x, dy = p.y - e.center.y;
-                        const double u = dx * std::cos(t) + dy * std::sin(t), v = -dx * std::sin(t) + dy * std::cos(t);
-                        off.push_back(std::abs(std::hypot(u / a, v / b) - 1) * (a + b) / 2);
+                    double a = e.size.width / 2.0, b = e.size.height / 2.0;
+                    const double off = median_off(e.center, a, b, e.angle * kPiD / 180);
+                    // An uneven resize stretches along the image's axes: the ellipse with its axes
+                    // there (least squares on x^2 + B y^2 + D x + E y + F = 0), if it fits nearly as
+                    // well (a 3 % ellipse's own angle is poorly determined: 12 degrees for one).
+                    Eigen::MatrixXd m(points.size(), 4);
+                    Eigen::VectorXd rhs(points.size());
+                    for (size_t i = 0; i < points.size(); ++i) {
+                        const double x = points[i].x, y = points[i].y;
+                        m(Eigen::Index(i), 0) = y * y, m(Eigen::Index(i), 1) = x, m(Eigen::Index(i), 2) = y;
+                        m(Eigen::Index(i), 3) = 1, rhs(Eigen::Index(i)) = -x * x;
+                    }
+                    const Eigen::Vector4d q = m.colPivHouseholderQr().solve(rhs);
+                    cv::RotatedRect fitted = e;
+                    if (q(0) > 0) {
+                        const cv::Point2d c(-q(1) / 2, -q(2) / (2 * q(0)));
+                        const double a2 = c.x * c.x + q(0) * c.y * c.y - q(3);
+                        if (a2 > 0) {
+                            const double aa = std::sqrt(a2), bb = std::sqrt(a2 / q(0));
+                            if (median_off(c, aa, bb, 0) <= std::max(1.25 * off, off + 0.5)) {
+                                fitted = cv::RotatedRect(cv::Point2f(float(c.x), float(c.y)),
+                                                         cv::Size2f(float(2 * aa), float(2 * bb)), 0.0f);
+                                a = aa, b = bb;
+                            }
+                        }
                     }
                     const double ratio = std::max(a, b) / std::max(1e-9, std::min(a, b));
-                    if (ratio > 1.01 && quantile(off, 0.5) < 0.005 * (a + b) / 2 + 0.5) *ellipse = e;
+                    // Of the lens's size, centred in the photograph (a small lit blob is not one).
+                    const bool lens_sized = std::min(a, b) >= r_min && std::max(a, b) <= r_max &&
+                                            fitted.center.x >= 0 && fitted.center.y >= 0 &&
+                                            fitted.center.x <= level.cols - 1 && fitted.center.y <= level.rows - 1;
+                    // (The outline of any light, the first fit's, is the lens's: kept over the second's.)
+                    if (ratio > 1.01 && lens_sized && off < 0.005 * (a + b) / 2 + 0.5 && !*ellipse) *ellipse = fitted;
                 }
                 return std::optional<SkyCircle>();
             }
@@ -558,7 +593,9 @@ std::optional<SkyCircle> find_lens_circle_on_black(const cv::Mat& level, double 
 
 }  // namespace
 
-SkyCircle find_sky_circle(const Image& photo, const std::string& name, double min_fraction, double max_fraction) {
+SkyCircle find_sky_circle(const Image& photo, const std::string& name, double min_fraction, double max_fraction,
+                          std::string* caution) {
+    if (caution) caution->clear();
     if (!(min_fraction > 0 && max_fraction > min_fraction))
         throw Error("sky circle search: the radius range must satisfy 0 < min < max (got " + fmt(min_fraction, 3) +
                     ", " + fmt(max_fraction, 3) + ")");
@@ -593,15 +630,21 @@ SkyCircle find_sky_circle(const Image& photo, const std::string& name, double mi
         const double half_w = std::hypot(a * std::cos(t), b * std::sin(t));
         const double half_h = std::hypot(a * std::sin(t), b * std::cos(t));
         const int square_h = int(std::lround(photo.height * half_w / half_h));
-        SkyCircle c{ellipse->center.x, ellipse->center.y, std::min(a, b)};
-        c.caution = "the lens's outline is an ellipse, not a circle (" + fmt(2 * half_w, 0) + " x " +
-                    fmt(2 * half_h, 0) + " px about (" + fmt(ellipse->center.x, 0) + ", " + fmt(ellipse->center.y, 0) +
-                    ")): the photograph's pixels are not square (scaled unevenly?); the largest circle inside it is "
-                    "used, so the sky is " +
-                    fmt(100 * (std::max(a, b) / std::min(a, b) - 1), 0) +
-                    " % stretched along one axis. For an exact import scale it to square pixels first (" +
-                    std::to_string(photo.width) + " x " + std::to_string(square_h) + ", e.g. oiiotool IN --resize " +
-                    std::to_string(photo.width) + "x" + std::to_string(square_h) + " -o OUT)";
+        const SkyCircle c{ellipse->center.x, ellipse->center.y, std::min(a, b)};
+        // An uneven resize stretches along the image's axes (the fit above), a tilted ellipse is the lens's own.
+        const bool along_axes = ellipse->angle == 0.0f;
+        if (caution)
+            *caution = "the lens's outline is an ellipse, not a circle (" + fmt(2 * half_w, 0) + " x " +
+                       fmt(2 * half_h, 0) + " px about (" + fmt(ellipse->center.x, 0) + ", " +
+                       fmt(ellipse->center.y, 0) + (along_axes ? "" : ", tilted " + fmt(ellipse->angle, 0) + " deg") +
+                       "); the largest circle inside it is used, so the sky is " +
+                       fmt(100 * (std::max(a, b) / std::min(a, b) - 1), 0) + " % stretched along one axis. " +
+                       (along_axes ? "The photograph's pixels are not square (scaled unevenly?): for an exact import "
+                                     "scale it to square pixels first (" +
+                                         std::to_string(photo.width) + " x " + std::to_string(square_h) +
+                                         ", e.g. oiiotool IN --resize " + std::to_string(photo.width) + "x" +
+                                         std::to_string(square_h) + " -o OUT)"
+                                   : std::string("Tilted, it is not a resize: the lens or sensor itself"));
         return c;
     }
     // A frame this dark shows no lens outline: the search below finds the sky's edges, inside it.
@@ -633,11 +676,11 @@ SkyCircle find_sky_circle(const Image& photo, const std::string& name, double mi
     c.center_x = (circles[0][0] + 0.5) / scale - 0.5;
     c.center_y = (circles[0][1] + 0.5) / scale - 0.5;
     c.radius = circles[0][2] / scale;
-    if (level_p99 < 8)
-        c.caution = "the photograph is dark (99 % of it at most " + fmt(level_p99, 0) +
-                    " of 255): its sky circle was found from the sky's edges, which on a dark frame lie inside "
-                    "the lens, and may be too small; check it (--preview), give --center X,Y --radius R, or "
-                    "import the frame with its sequence (one circle for all)";
+    if (level_p99 < 8 && caution)
+        *caution = "the photograph is dark (99 % of it at most " + fmt(level_p99, 0) +
+                   " of 255): its sky circle was found from the sky's edges, which on a dark frame lie inside "
+                   "the lens, and may be too small; check it (--preview), give --center X,Y --radius R, or "
+                   "import the frame with its sequence (one circle for all)";
     if (c.center_x < 0 || c.center_y < 0 || c.center_x > photo.width - 1 || c.center_y > photo.height - 1)
         throw_file_error(name, "the circle found lies outside the photograph: give --center and --radius");
     return c;
@@ -955,10 +998,11 @@ Image encoded_photo(const std::string& path, const PhotoImportParams& params) {
 
 }  // namespace
 
-SkyCircle find_photo_sky_circle(const std::string& path, const PhotoImportParams& params, std::array<int, 2>* size) {
+SkyCircle find_photo_sky_circle(const std::string& path, const PhotoImportParams& params, std::array<int, 2>* size,
+                                std::string* caution) {
     const Image encoded = encoded_photo(path, params);
     if (size) *size = {encoded.width, encoded.height};
-    return find_sky_circle(encoded, path, params.min_radius_fraction, params.max_radius_fraction);
+    return find_sky_circle(encoded, path, params.min_radius_fraction, params.max_radius_fraction, caution);
 }
 
 std::vector<unsigned char> find_sequence_obstructions(const std::vector<std::string>& photos, const SkyCircle& circle,
@@ -1095,7 +1139,9 @@ SequenceSkyCircle find_sequence_sky_circle(const std::vector<std::string>& photo
         std::array<int, 2> size{0, 0};
         SkyCircle c;
         try {
-            c = find_photo_sky_circle(path, params, &size);
+            std::string caution;
+            c = find_photo_sky_circle(path, params, &size, &caution);
+            if (!caution.empty()) out.cautions.push_back(path + ": " + caution);
         } catch (const Error& e) {
             out.not_found.push_back(e.what());
             continue;
@@ -1197,7 +1243,8 @@ ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, 
         if (!(params.circle->radius > 0)) throw Error("the sky circle's radius must be positive");
     } else {
         out.geometry.circle = find_sky_circle(out.display_referred ? photo : tone_mapped_grey(rgb), name,
-                                              params.min_radius_fraction, params.max_radius_fraction);
+                                              params.min_radius_fraction, params.max_radius_fraction,
+                                              &out.circle_caution);
         out.circle_detected = true;
     }
     const SkyCircle circle = out.geometry.circle;

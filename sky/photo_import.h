@@ -42,10 +42,6 @@ double lens_angle(LensLaw law, double r);       // inverse, r >= 0
 // The sky circle in a photograph, in pixels: r = 1 of the lens law lies at `radius` from the centre.
 struct SkyCircle {
     double center_x = 0, center_y = 0, radius = 0;
-    // Why a circle found automatically may be wrong ("" when it is found from the lens's own
-    // outline): the import warns with it. A dark frame's circle comes from the sky's edges, which
-    // lie inside the lens (a dawn Mobotix frame: 435-448 px against 489).
-    std::string caution;
 };
 
 // Where the sky is in the photo and how the photo is oriented. Directions map to pixels as:
@@ -173,6 +169,7 @@ struct ImportedPhoto {
     SkyImage sky;                        // linear, relative to the photo (see the file comment)
     PhotoGeometry geometry;              // the geometry used, with the circle found or given
     bool circle_detected = false;        // true if the circle was found automatically
+    std::string circle_caution;          // why that circle may be wrong (find_sky_circle), "" if none
     bool display_referred = true;        // true if the photo was sRGB-decoded (8-bit input)
     std::vector<unsigned char> not_sky;  // N*N: 1 where the sky was hidden and has been filled
     std::vector<unsigned char> clipped;  // N*N: 1 where the photo was saturated (LDR input only)
@@ -211,8 +208,12 @@ ImportedPhoto import_photo_image(const Image& photo, const std::string& name, co
 // may then lie in [min_fraction / 2, 1.4 max_fraction]. Otherwise the strongest circular edge
 // (cv::HoughCircles on a contrast-stretched, blurred copy about 400 px wide). `photo` holds
 // display-encoded values in [0, 1]. Throws dynsky::Error naming `name` if no circle is found.
+// *caution (if given): why the circle found may be wrong, "" when it is the lens's own outline: an
+// outline that is an ellipse (the photograph's pixels not square: the largest circle inside it is
+// returned), or a frame too dark to show the lens (the circle from the sky's edges lies inside it:
+// a dawn Mobotix frame 435-448 px against 489). The import warns with it.
 SkyCircle find_sky_circle(const Image& photo, const std::string& name, double min_fraction = 0.30,
-                          double max_fraction = 0.55);
+                          double max_fraction = 0.55, std::string* caution = nullptr);
 
 // Which photograph is the k-th of `tries` spread evenly over a sequence of `count` (the first and
 // the last among them): what the sequence-wide searches below look at.
@@ -230,7 +231,7 @@ bool is_display_encoded(const Image& photo, const std::string& path, const std::
 // HDR files tone-mapped first), with params' search range and encoding; *size: the photo's width
 // and height as turned.
 SkyCircle find_photo_sky_circle(const std::string& path, const PhotoImportParams& params,
-                                std::array<int, 2>* size = nullptr);
+                                std::array<int, 2>* size = nullptr, std::string* caution = nullptr);
 
 // One sky circle for a sequence of one camera's photographs, so that frames imported one by one do
 // not wobble against each other: found on up to max_photos of them spread evenly over the
@@ -241,6 +242,7 @@ struct SequenceSkyCircle {
     int tried = 0, found = 0;
     double centre_spread_px = 0, radius_spread_px = 0;  // largest distance of a photo's from the median
     std::vector<std::string> not_found;                 // the errors of the photos without one
+    std::vector<std::string> cautions;                  // "PHOTO: why its circle may be wrong" (find_sky_circle)
     std::array<int, 2> photo_size{0, 0};                // width, height of the photographs (as turned)
 };
 SequenceSkyCircle find_sequence_sky_circle(const std::vector<std::string>& photos, const PhotoImportParams& params,

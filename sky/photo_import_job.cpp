@@ -223,8 +223,8 @@ void import_one(const OnePhoto& o, bool verbose, const std::string& settings_key
             "(--center, --north and masks refer to that view)\n",
             imported.exif_orientation);
     const SkyCircle& c = imported.geometry.circle;
-    if (imported.circle_detected && !c.caution.empty())  // even with -q: the sky may be cut wrong
-        std::fprintf(stderr, "dynsky: warning: %s: %s\n", o.photo.c_str(), c.caution.c_str());
+    if (imported.circle_detected && !imported.circle_caution.empty())  // even with -q: the sky may be cut wrong
+        std::fprintf(stderr, "dynsky: warning: %s: %s\n", o.photo.c_str(), imported.circle_caution.c_str());
     if (verbose)
         std::printf("sky circle: centre (%.1f, %.1f) px, radius %.1f px (%s); lens %s, north %.1f deg, %s%s\n",
                     c.center_x, c.center_y, c.radius,
@@ -487,6 +487,11 @@ void run_photo_import(const PhotoImportJob& o) {
             "sequence (each within %.1f px of centre, %.1f px of radius); used for every photograph\n",
             c.center_x, c.center_y, c.radius, found.found, found.tried, found.centre_spread_px, found.radius_spread_px);
         for (const std::string& e : found.not_found) std::fprintf(stderr, "dynsky: warning: %s\n", e.c_str());
+        // The median holds against a few dark frames; a caution most frames share (an elliptical
+        // outline: every frame of the camera) holds for the circle used.
+        if (!found.cautions.empty() && 2 * found.cautions.size() >= size_t(found.found))
+            std::fprintf(stderr, "dynsky: warning: %zu of the %d photographs whose circle was found say: %s\n",
+                         found.cautions.size(), found.found, found.cautions.front().c_str());
         each.circle = c;
         each.auto_circle = false;
         each.circle_origin = "the sequence's";

@@ -8,6 +8,7 @@ namespace {
 std::atomic<bool> allowed{false}, requested{false}, stopped{false};
 std::atomic<const char*> action{""};
 static_assert(std::atomic<bool>::is_always_lock_free, "read and set from a signal handler");
+static_assert(std::atomic<const char*>::is_always_lock_free, "read from a signal handler");
 }  // namespace
 
 bool graceful_stop_allowed() noexcept { return allowed.load(); }

@@ -473,6 +473,27 @@ TEST(SkyImportCli, FindNorthTurnsThePhotographByTheSunItShows) {
     fs::remove_all(dir);
 }
 
+// A sequence of photographs whose lens outline is an ellipse (pixels not square) says so once,
+// for the circle it uses for all (the frames' own cautions were dropped by the median).
+TEST(SkyImportCli, ASequenceOfStretchedPhotographsSaysSoOnce) {
+    const std::string dir = test::temp_dir("sky-import-ellipse");
+    fs::create_directories(dir + "/photos");
+    Image photo(800, 600, 3);
+    for (int y = 0; y < 600; ++y)
+        for (int x = 0; x < 800; ++x) {
+            const double u = (x - 399.5) / 262.0, v = (y - 299.5) / 250.0;  // 5 % wider than tall
+            if (u * u + v * v > 1) continue;
+            for (int c = 0; c < 3; ++c) photo.at(x, y, c) = float((0.3 + 0.3 * (u * u + v * v)) * (0.6 + 0.2 * c));
+        }
+    for (const char* t : {"09-00-00Z", "09-01-00Z"}) write_image(dir + "/photos/p_2026-06-21T" + t + ".png", photo);
+    auto r = test::run_command(exe() + " sky import " + dir + "/photos --sky-res 32 -q -o " + dir + "/skies 2>&1");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("2 of the 2 photographs whose circle was found say"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("an ellipse, not a circle (52"), std::string::npos) << r.output;  // 524 x 500
+    EXPECT_NE(r.output.find("scale it to square pixels first (800 x 629"), std::string::npos) << r.output;
+    fs::remove_all(dir);
+}
+
 TEST(SkyImportCli, MaskOfAWsisegPhoto) {
     DYNSKY_REQUIRE_SHARED();
     std::string dir = test::temp_dir("sky-mask-cli");

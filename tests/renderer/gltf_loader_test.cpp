@@ -2050,6 +2050,22 @@ TEST(GltfLoader, HostileInputIsRefusedAtItsRoot) {
             said |= w.find("node 'gone'") != std::string::npos && w.find("not drawn") != std::string::npos;
         EXPECT_TRUE(said) << hidden;
     }
+    {  // A GPU instance scaled to 0 likewise (EXT_mesh_gpu_instancing: one hidden of two).
+        MiniGltf gi = g;
+        const int scales = gi.accessor(gi.view(std::vector<float>{1, 1, 1, 0, 0, 0}), kFloat, 2, "VEC3");
+        std::vector<std::string> warnings;
+        const Scene s =
+            load_gltf(gi.write(dir, "hidden_instance",
+                               "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0,\"extensions\":{"
+                               "\"EXT_mesh_gpu_instancing\":{\"attributes\":{\"SCALE\":" +
+                                   std::to_string(scales) + "}}}}],\"meshes\":[" + mesh(pos) +
+                                   "],\"extensionsUsed\":[\"EXT_mesh_gpu_instancing\"]"),
+                      &warnings);
+        EXPECT_EQ(s.instances.size(), 1u);
+        bool said = false;
+        for (const std::string& w : warnings) said |= w.find("instance 1") != std::string::npos;
+        EXPECT_TRUE(said);
+    }
     {  // A light under a zero scale likewise (it was refused: "it shines nowhere").
         std::vector<std::string> warnings;
         const Scene s = load_gltf(

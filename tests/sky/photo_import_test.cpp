@@ -812,8 +812,9 @@ TEST(SkyCircle, ACutUnevenlyScaledOrDarkFrameIsFoundOrSaid) {
     DYNSKY_REQUIRE_SHARED();
     const std::string path = test::shared_path("skies/mobotix_sophia_20200812_morning/images/2020-08-12_11_00.jpg");
     const Image photo = read_image(path);
-    const SkyCircle whole = find_sky_circle(photo, path);
-    EXPECT_TRUE(whole.caution.empty()) << whole.caution;
+    std::string caution = "unset";
+    const SkyCircle whole = find_sky_circle(photo, path, 0.30, 0.55, &caution);
+    EXPECT_TRUE(caution.empty()) << caution;
     auto as_mat = [](const Image& im) {
         return cv::Mat(im.height, im.width, CV_32FC(im.channels), const_cast<float*>(im.pixels.data())).clone();
     };
@@ -824,27 +825,40 @@ TEST(SkyCircle, ACutUnevenlyScaledOrDarkFrameIsFoundOrSaid) {
         return im;
     };
     {  // Cut on the left and the top: 53 % of the rim in the frame.
-        const SkyCircle c = find_sky_circle(as_image(as_mat(photo)(cv::Rect(250, 100, 1030, 860))), "cut");
+        const SkyCircle c = find_sky_circle(as_image(as_mat(photo)(cv::Rect(250, 100, 1030, 860))), "cut", 0.30, 0.55,
+                                            &caution);
         EXPECT_NEAR(c.center_x, whole.center_x - 250, 1.5);
         EXPECT_NEAR(c.center_y, whole.center_y - 100, 1.5);
         EXPECT_NEAR(c.radius, whole.radius, 0.005 * whole.radius);
-        EXPECT_TRUE(c.caution.empty()) << c.caution;
+        EXPECT_TRUE(caution.empty()) << caution;
     }
     {  // 1280 x 960 resized to 1001 x 777: x 0.782 across, x 0.809 down.
         cv::Mat m;
         cv::resize(as_mat(photo), m, cv::Size(1001, 777), 0, 0, cv::INTER_AREA);
-        const SkyCircle c = find_sky_circle(as_image(m), "stretched");
-        EXPECT_NE(c.caution.find("an ellipse"), std::string::npos) << c.caution;
-        EXPECT_NE(c.caution.find("(1001 x 75"), std::string::npos) << c.caution;  // 960 x 0.782: 751
+        const SkyCircle c = find_sky_circle(as_image(m), "stretched", 0.30, 0.55, &caution);
+        EXPECT_NE(caution.find("an ellipse"), std::string::npos) << caution;
+        EXPECT_NE(caution.find("(1001 x 75"), std::string::npos) << caution;  // 960 x 0.782: 751
         EXPECT_NEAR(c.center_x, (whole.center_x + 0.5) * 1001 / 1280 - 0.5, 2.0);
         EXPECT_NEAR(c.center_y, (whole.center_y + 0.5) * 777 / 960 - 0.5, 2.0);
         EXPECT_NEAR(c.radius, whole.radius * 1001 / 1280, 0.02 * whole.radius * 1001 / 1280);  // the short axis
     }
+    {  // A small lit ellipse is not a lens (it was taken as one, radius 50 px in an 800 x 600 frame).
+        cv::Mat m(600, 800, CV_32FC3, cv::Scalar::all(0));
+        cv::ellipse(m, cv::Point(400, 300), cv::Size(60, 50), 0, 0, 360, cv::Scalar::all(0.8), -1);
+        EXPECT_THROW(find_sky_circle(as_image(m), "blob", 0.30, 0.55, &caution), Error);
+    }
+    {  // A tilted ellipse is not an uneven resize: no resize offered.
+        cv::Mat m(600, 800, CV_32FC3, cv::Scalar::all(0));
+        cv::ellipse(m, cv::Point(400, 300), cv::Size(270, 250), 45, 0, 360, cv::Scalar(0.5, 0.6, 0.8), -1);
+        find_sky_circle(as_image(m), "tilted", 0.30, 0.55, &caution);
+        EXPECT_NE(caution.find("tilted"), std::string::npos) << caution;
+        EXPECT_EQ(caution.find("--resize"), std::string::npos) << caution;
+    }
     {  // A hundredth of the light: nothing of the lens's outline shows.
         Image dark = photo;
         for (float& v : dark.pixels) v *= 0.01f;
-        const SkyCircle c = find_sky_circle(dark, "dark");
-        EXPECT_NE(c.caution.find("the photograph is dark"), std::string::npos) << c.caution;
+        find_sky_circle(dark, "dark", 0.30, 0.55, &caution);
+        EXPECT_NE(caution.find("the photograph is dark"), std::string::npos) << caution;
     }
 }
 
