@@ -140,9 +140,32 @@ std::string plain_parse_message(const std::string& message) {
     return message;
 }
 
+// The first option given on the command line that --help leaves out (an old spelling kept
+// working: add_hidden_alias), "" if none. CLI11 names a hidden option "" in its errors.
+std::string hidden_option_given(CLI::App& app, int argc, char** argv) {
+    CLI::App* cmd = &app;
+    for (int i = 1; i < argc; ++i) {
+        std::string word = argv[i];
+        if (word == "--") break;
+        if (word.empty()) continue;
+        if (word[0] != '-') {
+            if (CLI::App* sub = subcommand_named(cmd, word)) cmd = sub;
+            continue;
+        }
+        word = word.substr(0, word.find('='));
+        const CLI::Option* opt = cmd->get_option_no_throw(word);
+        if (opt != nullptr && opt->get_group().empty()) return word;
+    }
+    return "";
+}
+
 int report_parse_error(CLI::App& app, const CLI::ParseError& e, int argc, char** argv) {
     if (e.get_exit_code() == int(CLI::ExitCodes::Success)) return app.exit(e);  // --help, --help-all
     std::string hint = suggestion(app, argc, argv);
+    // CLI11's error of a hidden option begins ": ..." (its name left out): named here.
+    if (hint.empty() && std::string(e.what()).rfind(": ", 0) == 0)
+        if (const std::string name = hidden_option_given(app, argc, argv); !name.empty())
+            hint = name + std::string(e.what());
     // The hint names what is wrong ("'rendr' is not a command ...; did you mean 'render'?"), where
     // CLI11's own line said "A subcommand is required": the hint alone then.
     std::fprintf(stderr, "dynsky: usage error: %s\n",

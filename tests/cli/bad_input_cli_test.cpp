@@ -754,7 +754,7 @@ TEST(BadInputCli, OutOfRangeNumericOptionsAreRefusedNamingTheOption) {
         {p + "--coverage 2", "--coverage"},
         {p + "--dt 0", "--dt"},
         // The old spelling of --cloud-height, with its range (it kept "above 0": 1e-308 passed).
-        {p + "--cumulus-altitude 1e-308", "is outside [10, 100000]"},
+        {p + "--cumulus-altitude 1e-308", "--cumulus-altitude: '1e-308' is outside [10, 100000]"},
         {p + "--sky-res 4", "--sky-res"},
         {p + "--turbidity 0", "--turbidity"},
         {p + "--visibility -1", "--visibility"},
