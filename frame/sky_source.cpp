@@ -13,6 +13,7 @@
 #include "motion/sun_patch.h"
 #include "sky/clear_sky.h"
 #include "sky/latlong.h"
+#include "sky/sun_position.h"
 #include "util/data_path.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
@@ -193,7 +194,19 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
                                                  ? std::optional<Vec3d>(input.sun_direction->cast<double>())
                                                  : sun_from_brightest_pixels(input);
             const double apart = own ? std::acos(std::clamp(clock_sun->dot(*own), -1.0, 1.0)) * 180 / kPiD : 0;
-            if (apart > 3 && input.sun_direction)
+            // Taken at the clock's own time: the place is right too, or the sky's sun is not the
+            // clock's because its import put it where the photograph shows it (a camera whose north
+            // is off: the import warned) - said so, not "give the time and place" again.
+            const std::optional<double> taken = sky_recorded_utc_seconds(input);
+            const bool own_time = taken && std::abs(*taken - julian_date(clock->start) * 86400.0) < 60;
+            if (apart > 3 && input.sun_direction && own_time)
+                std::fprintf(stderr,
+                             "dynsky: warning: %s records its sun %.0f degrees from the sun of its own time at --lat "
+                             "and --lon: its sun was put where its photograph shows it (the camera's north or the "
+                             "place may be off; 'sky import' said so). The clock's sun is used, away from the sky's "
+                             "glow (leave --time out to keep the sky's own sun%s)\n",
+                             sky_file.c_str(), apart, o.sky_turn_deg != 0 ? ", turned by --sky-turn" : "");
+            else if (apart > 3 && input.sun_direction)
                 std::fprintf(stderr,
                              "dynsky: warning: %s records its sun %.0f degrees from where --time, --lat and --lon put "
                              "it: the clock's sun is used (give the place and time the sky was taken at, or leave "
