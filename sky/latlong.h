@@ -22,6 +22,8 @@
 
 namespace dynsky {
 
+class ProgressBar;
+
 // Direction of a lat-long point (u, v) in [0, 1]^2 and back (u in [0, 1), v in [0, 1]).
 Vec3d latlong_direction(double u, double v);
 void latlong_uv(const Vec3d& w, double* u, double* v);
@@ -47,7 +49,8 @@ Image sky_to_latlong(const SkyImage& sky, int width, const Color& ground = Color
 // enough bilinear lat-long lookups to see every lat-long pixel it covers. lower = false: the sky
 // (upper half); lower = true: the ground (lower half) as a fisheye seen from above, the pixel of
 // direction (x, y, z) holding the radiance arriving from (x, -y, z).
-SkyImage latlong_to_fisheye(const Image& latlong, int resolution, bool lower = false);
+// progress (may be null) advances by 2 a row of the fisheye.
+SkyImage latlong_to_fisheye(const Image& latlong, int resolution, bool lower = false, ProgressBar* progress = nullptr);
 
 // An equirect (2:1) image is a lat-long environment, anything else not.
 inline bool is_latlong_shape(int width, int height) { return height > 0 && width == 2 * height; }
