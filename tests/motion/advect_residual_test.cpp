@@ -339,6 +339,20 @@ TEST(AdvectResidual, AFilledBandThroughTheSunIsNotCloudOverIt) {
     }
 }
 
+// A grey overcast at 128 px, brighter towards its low sun (2-4 W m^-2 sr^-1 x scale).
+SkyImage grey_overcast(float scale) {
+    SkyImage grey(128);
+    grey.sun_direction = fisheye::direction_from_angles(88 * kPiD / 180, 290 * kPiD / 180).cast<float>();
+    for (int j = 0; j < 128; ++j)
+        for (int i = 0; i < 128; ++i)
+            if (grey.in_disc(i, j)) {
+                const Vec3d w = fisheye::direction_from_pixel(i, j, 128);
+                const float l = scale * float(2.0 + 2.0 * std::max(0.0, w.dot(grey.sun_direction->cast<double>())));
+                for (int c = 0; c < 3; ++c) grey.rgb[(size_t(j) * 128 + i) * 3 + c] = l * (0.95f + 0.03f * c);
+            }
+    return grey;
+}
+
 // An overcast stays overcast under the default wind: a grey overcast at dusk (the sun 2 degrees up
 // in the west-north-west, the grey brighter towards it) and, with the shared data, the ARM overcast
 // dusk photograph. Its grey was added to the model's clear sky as broken cloud is, and carried from
@@ -347,16 +361,7 @@ TEST(AdvectResidual, AFilledBandThroughTheSunIsNotCloudOverIt) {
 TEST(AdvectResidual, AnOvercastStaysOvercastUnderTheWind) {
     AdvectResidualNetwork net = AdvectResidualNetwork::load(shipped());
     std::vector<std::pair<std::string, SkyImage>> starts;
-    SkyImage grey(128);
-    grey.sun_direction = fisheye::direction_from_angles(88 * kPiD / 180, 290 * kPiD / 180).cast<float>();
-    for (int j = 0; j < 128; ++j)
-        for (int i = 0; i < 128; ++i)
-            if (grey.in_disc(i, j)) {
-                const Vec3d w = fisheye::direction_from_pixel(i, j, 128);
-                const float l = float(2.0 + 2.0 * std::max(0.0, w.dot(grey.sun_direction->cast<double>())));
-                for (int c = 0; c < 3; ++c) grey.rgb[(size_t(j) * 128 + i) * 3 + c] = l * (0.95f + 0.03f * c);
-            }
-    starts.emplace_back("grey overcast", grey);
+    starts.emplace_back("grey overcast", grey_overcast(1.0f));
     if (test::shared_available())
         starts.emplace_back("ARM overcast dusk",
                             import_preset_photo(test::shared_path("skies/arm_tsi_sgp_20170524_overcast_dusk/images/"
@@ -393,15 +398,7 @@ TEST(AdvectResidual, SkiesDimmerThanTheTrainingDaysMoveAsPureAdvection) {
     p.sun_direction = fisheye::direction_from_angles((90 + 4.8) * kPiD / 180, 300 * kPiD / 180);
     SkyImage twilight = make_clear_sky(p, 128, false);
     twilight.sun_direction = p.sun_direction.cast<float>();
-    SkyImage dusk(128);
-    dusk.sun_direction = fisheye::direction_from_angles(88 * kPiD / 180, 290 * kPiD / 180).cast<float>();
-    for (int j = 0; j < 128; ++j)
-        for (int i = 0; i < 128; ++i)
-            if (dusk.in_disc(i, j)) {
-                const Vec3d w = fisheye::direction_from_pixel(i, j, 128);
-                const float l = float(2.0 + 2.0 * std::max(0.0, w.dot(dusk.sun_direction->cast<double>()))) / 300;
-                for (int c = 0; c < 3; ++c) dusk.rgb[(size_t(j) * 128 + i) * 3 + c] = l * (0.95f + 0.03f * c);
-            }
+    const SkyImage dusk = grey_overcast(1.0f / 300);
     for (const auto& [name, sky] : {std::pair<std::string, SkyImage>{"twilight", twilight}, {"dusk overcast", dusk}}) {
         CloudMotion motion;
         motion.wind = Wind{};
