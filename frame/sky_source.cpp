@@ -202,9 +202,9 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
             if (apart > 3 && input.sun_direction && own_time)
                 std::fprintf(stderr,
                              "dynsky: warning: %s records its sun %.0f degrees from the sun of its own time at --lat "
-                             "and --lon: its sun was put where its photograph shows it (the camera's north or the "
-                             "place may be off; 'sky import' said so). The clock's sun is used, away from the sky's "
-                             "glow (leave --time out to keep the sky's own sun%s)\n",
+                             "and --lon: the place is not the sky's, or its sun was put where its photograph shows it "
+                             "(a camera whose north is off: 'sky import' warned then). The clock's sun is used, away "
+                             "from the sky's glow (leave --time out to keep the sky's own sun%s)\n",
                              sky_file.c_str(), apart, o.sky_turn_deg != 0 ? ", turned by --sky-turn" : "");
             else if (apart > 3 && input.sun_direction)
                 std::fprintf(stderr,
