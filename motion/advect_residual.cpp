@@ -651,21 +651,15 @@ CloudRollout::CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start,
     if (network->has_network()) {
         // The start's median radiance: its channels' mean in the log map, mapped back (about their
         // geometric mean), on about 13,000 pixels at any size.
-        const UnitMapParams& map = network->info().form.unit_map;
-        const double span = std::log1p(map.max_radiance / map.scale);
         const int stride = std::max(1, big / 128);
         std::vector<float> radiance;
         for (int y = stride / 2; y < big; y += stride)
             for (int x = stride / 2; x < big; x += stride)
                 if (disc_big_.at<unsigned char>(y, x)) {
                     const cv::Vec3f v = start_.at<cv::Vec3f>(y, x);
-                    radiance.push_back(float(map.scale * std::expm1((v[0] + v[1] + v[2]) / 3.0 * span)));
+                    radiance.push_back(unit_to_radiance((v[0] + v[1] + v[2]) / 3, network->info().form.unit_map));
                 }
-        if (!radiance.empty()) {
-            auto mid = radiance.begin() + std::ptrdiff_t(radiance.size() / 2);
-            std::nth_element(radiance.begin(), mid, radiance.end());
-            network_trust_ = network_trust_of_brightness(*mid);
-        }
+        if (!radiance.empty()) network_trust_ = network_trust_of_brightness(median(std::move(radiance)));
     }
     if (!flow.hold_background) {
         // Held by the clear share of the start sky (the cloud rule on the networks' image).
