@@ -425,13 +425,63 @@ bool PhotoGeometry::unproject(double x, double y, Vec3d* direction) const {
 
 namespace {
 
+// The ellipse of an outline's rim points, when they lie on one closely (median distance under
+// 0.5 % of its size + 0.5 px), it is no circle (axes over 1 % apart), and it has the lens's size
+// (half-axes in [r_min, r_max]) and centre (inside the cols x rows photograph: a small lit blob is
+// not one). An uneven resize stretches along the image's axes: the ellipse with its axes there
+// (least squares on x^2 + B y^2 + D x + E y + F = 0) is taken if it fits nearly as well (a 3 %
+// ellipse's own angle is poorly determined: 12 degrees for one), angle 0.
+std::optional<cv::RotatedRect> lens_ellipse(const std::vector<cv::Point2f>& points, double r_min, double r_max,
+                                            int cols, int rows) {
+    if (points.size() < 20) return std::nullopt;
+    // The median distance of the points from an ellipse (centre, half-axes, angle).
+    auto median_off = [&](cv::Point2d c, double a, double b, double t) {
+        std::vector<double> off;
+        for (const cv::Point2f& p : points) {
+            const double dx = p.x - c.x, dy = p.y - c.y;
+            const double u = dx * std::cos(t) + dy * std::sin(t), v = -dx * std::sin(t) + dy * std::cos(t);
+            off.push_back(std::abs(std::hypot(u / a, v / b) - 1) * (a + b) / 2);
+        }
+        return quantile(off, 0.5);
+    };
+    const cv::RotatedRect e = cv::fitEllipse(points);
+    double a = e.size.width / 2.0, b = e.size.height / 2.0;
+    const double off = median_off(e.center, a, b, e.angle * kPiD / 180);
+    Eigen::MatrixXd m(points.size(), 4);
+    Eigen::VectorXd rhs(points.size());
+    for (size_t i = 0; i < points.size(); ++i) {
+        const double x = points[i].x, y = points[i].y;
+        m(Eigen::Index(i), 0) = y * y, m(Eigen::Index(i), 1) = x, m(Eigen::Index(i), 2) = y;
+        m(Eigen::Index(i), 3) = 1, rhs(Eigen::Index(i)) = -x * x;
+    }
+    const Eigen::Vector4d q = m.colPivHouseholderQr().solve(rhs);
+    cv::RotatedRect fitted = e;
+    if (q(0) > 0) {
+        const cv::Point2d c(-q(1) / 2, -q(2) / (2 * q(0)));
+        const double a2 = c.x * c.x + q(0) * c.y * c.y - q(3);
+        if (a2 > 0) {
+            const double aa = std::sqrt(a2), bb = std::sqrt(a2 / q(0));
+            if (median_off(c, aa, bb, 0) <= std::max(1.25 * off, off + 0.5)) {
+                fitted = cv::RotatedRect(cv::Point2f(float(c.x), float(c.y)), cv::Size2f(float(2 * aa), float(2 * bb)),
+                                         0.0f);
+                a = aa, b = bb;
+            }
+        }
+    }
+    const double ratio = std::max(a, b) / std::max(1e-9, std::min(a, b));
+    const bool lens_sized = std::min(a, b) >= r_min && std::max(a, b) <= r_max && fitted.center.x >= 0 &&
+                            fitted.center.y >= 0 && fitted.center.x <= cols - 1 && fitted.center.y <= rows - 1;
+    if (ratio > 1.01 && lens_sized && off < 0.005 * (a + b) / 2 + 0.5) return fitted;
+    return std::nullopt;
+}
+
 // A fisheye's lens circle on a black surround (the Mobotix, most all-sky cameras): the outline of
 // everything lit, fitted with a circle that ignores what is not the rim. None when the corners are
 // not black or no circle fits well; an outline that is an ellipse instead (a photograph scaled
 // unevenly) is given in *ellipse.
-std::optional<SkyCircle> find_lens_circle_on_black(const cv::Mat& level, double r_min, double r_max,
+// p99: the level's 99th percentile.
+std::optional<SkyCircle> find_lens_circle_on_black(const cv::Mat& level, double p99, double r_min, double r_max,
                                                    std::optional<cv::RotatedRect>* ellipse) {
-    double p99 = quantile(std::vector<float>(level.begin<float>(), level.end<float>()), 0.99);
     int cw = std::max(1, level.cols / 12), ch = std::max(1, level.rows / 12);
     // The surround's level: that of the three darkest corners (a lens circle cut by the frame on
     // two sides lights the fourth; it went to the Hough search, which found it 15 % too small).
@@ -530,56 +580,13 @@ std::optional<SkyCircle> find_lens_circle_on_black(const cv::Mat& level, double 
             if (inliers * 2 < rim.size() || rms > 0.01 * r + 0.5) {
                 // Unless the outline is an ellipse, closely: the photograph was scaled unevenly (a
                 // 1280 x 960 frame resized to 1001 x 777: the Hough search then found a circle 10 %
-                // inside the lens).
-                std::vector<cv::Point2f> points;
-                for (size_t i = 0; i < rim.size(); ++i)
-                    if (in[i]) points.emplace_back(float(rim[i].x), float(rim[i].y));
-                if (points.size() >= 20 && inliers * 2 >= rim.size()) {
-                    // The median distance of the points from an ellipse (centre, half-axes, angle).
-                    auto median_off = [&](cv::Point2d c, double a, double b, double t) {
-                        std::vector<double> off;
-                        for (const cv::Point2f& p : points) {
-                            const double dx = p.x - c.x, dy = p.y - c.y;
-                            const double u = dx * std::cos(t) + dy * std::sin(t),
-                                         v = -dx * std::sin(t) + dy * std::cos(t);
-                            off.push_back(std::abs(std::hypot(u / a, v / b) - 1) * (a + b) / 2);
-                        }
-                        return quantile(off, 0.5);
-                    };
-                    const cv::RotatedRect e = cv::fitEllipse(points);
-                    double a = e.size.width / 2.0, b = e.size.height / 2.0;
-                    const double off = median_off(e.center, a, b, e.angle * kPiD / 180);
-                    // An uneven resize stretches along the image's axes: the ellipse with its axes
-                    // there (least squares on x^2 + B y^2 + D x + E y + F = 0), if it fits nearly as
-                    // well (a 3 % ellipse's own angle is poorly determined: 12 degrees for one).
-                    Eigen::MatrixXd m(points.size(), 4);
-                    Eigen::VectorXd rhs(points.size());
-                    for (size_t i = 0; i < points.size(); ++i) {
-                        const double x = points[i].x, y = points[i].y;
-                        m(Eigen::Index(i), 0) = y * y, m(Eigen::Index(i), 1) = x, m(Eigen::Index(i), 2) = y;
-                        m(Eigen::Index(i), 3) = 1, rhs(Eigen::Index(i)) = -x * x;
-                    }
-                    const Eigen::Vector4d q = m.colPivHouseholderQr().solve(rhs);
-                    cv::RotatedRect fitted = e;
-                    if (q(0) > 0) {
-                        const cv::Point2d c(-q(1) / 2, -q(2) / (2 * q(0)));
-                        const double a2 = c.x * c.x + q(0) * c.y * c.y - q(3);
-                        if (a2 > 0) {
-                            const double aa = std::sqrt(a2), bb = std::sqrt(a2 / q(0));
-                            if (median_off(c, aa, bb, 0) <= std::max(1.25 * off, off + 0.5)) {
-                                fitted = cv::RotatedRect(cv::Point2f(float(c.x), float(c.y)),
-                                                         cv::Size2f(float(2 * aa), float(2 * bb)), 0.0f);
-                                a = aa, b = bb;
-                            }
-                        }
-                    }
-                    const double ratio = std::max(a, b) / std::max(1e-9, std::min(a, b));
-                    // Of the lens's size, centred in the photograph (a small lit blob is not one).
-                    const bool lens_sized = std::min(a, b) >= r_min && std::max(a, b) <= r_max &&
-                                            fitted.center.x >= 0 && fitted.center.y >= 0 &&
-                                            fitted.center.x <= level.cols - 1 && fitted.center.y <= level.rows - 1;
-                    // (The outline of any light, the first fit's, is the lens's: kept over the second's.)
-                    if (ratio > 1.01 && lens_sized && off < 0.005 * (a + b) / 2 + 0.5 && !*ellipse) *ellipse = fitted;
+                // inside the lens). (The outline of any light, the first fit's, is the lens's: kept
+                // over the second's.)
+                if (inliers * 2 >= rim.size() && !*ellipse) {
+                    std::vector<cv::Point2f> points;
+                    for (size_t i = 0; i < rim.size(); ++i)
+                        if (in[i]) points.emplace_back(float(rim[i].x), float(rim[i].y));
+                    *ellipse = lens_ellipse(points, r_min, r_max, level.cols, level.rows);
                 }
                 return std::optional<SkyCircle>();
             }
@@ -619,8 +626,11 @@ SkyCircle find_sky_circle(const Image& photo, const std::string& name, double mi
             for (int c = 0; c < std::min(photo.channels, 3); ++c) brightest = std::max(brightest, photo.at(x, y, c));
             level.at<float>(y, x) = 255.0f * brightest;
         }
+    // (A frame darker than 8 of 255 here shows no lens outline: the Hough search below then finds
+    // the sky's edges, inside it.)
+    const double level_p99 = quantile(std::vector<float>(level.begin<float>(), level.end<float>()), 0.99);
     std::optional<cv::RotatedRect> ellipse;
-    if (std::optional<SkyCircle> lens = find_lens_circle_on_black(level, 0.5 * min_fraction * shorter_side,
+    if (std::optional<SkyCircle> lens = find_lens_circle_on_black(level, level_p99, 0.5 * min_fraction * shorter_side,
                                                                   1.4 * max_fraction * shorter_side, &ellipse))
         return *lens;
     if (ellipse) {
@@ -647,8 +657,6 @@ SkyCircle find_sky_circle(const Image& photo, const std::string& name, double mi
                                    : std::string("Tilted, it is not a resize: the lens or sensor itself"));
         return c;
     }
-    // A frame this dark shows no lens outline: the search below finds the sky's edges, inside it.
-    const double level_p99 = quantile(std::vector<float>(level.begin<float>(), level.end<float>()), 0.99);
     double scale = std::min(1.0, 400.0 / std::max(grey.cols, grey.rows));
     cv::Mat small;
     cv::resize(grey, small, cv::Size(), scale, scale, cv::INTER_AREA);
