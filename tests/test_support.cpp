@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 namespace dynsky::test {
 
@@ -50,6 +52,11 @@ CommandResult run_command(const std::string& command_line) {
         if (result.output.find(report) != std::string::npos)
             ADD_FAILURE() << "sanitizer report (" << report << ") from: " << command_line << "\n" << result.output;
     return result;
+}
+
+std::string read_text(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
 }  // namespace dynsky::test

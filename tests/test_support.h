@@ -13,6 +13,9 @@ bool shared_available();
 // A fresh, empty temporary directory unique to this test (removed by the caller or left in /tmp).
 std::string temp_dir(const std::string& tag);
 
+// The whole of a file (bytes as they are; "" if it cannot be read).
+std::string read_text(const std::string& path);
+
 // True when DYNSKY_TEST_SMALL is set to anything but "" or "0": the ASan + UBSan run
 // (scripts/test_sanitizers.sh, several times slower) asks long tests for a smaller size that
 // checks the same property (fewer steps, pixels or frames). docs/testing.md.

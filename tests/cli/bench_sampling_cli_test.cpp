@@ -13,12 +13,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string read_text(const std::string& path) {
-    std::ifstream f(path);
-    std::ostringstream s;
-    s << f.rdbuf();
-    return s.str();
-}
+using test::read_text;
 
 TEST(BenchSamplingCli, FinishedCasesAreKeptAndReused) {
     DYNSKY_REQUIRE_SHARED();

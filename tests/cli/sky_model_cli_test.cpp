@@ -36,12 +36,7 @@ std::string small_sky(const std::string& dir, int n) {
     return path;
 }
 
-std::string read_text(const std::string& path) {
-    std::ifstream f(path);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
-}
+using test::read_text;
 
 TEST(SkyModelCli, PredictWritesStepsAndStats) {
     const std::string dir = test::temp_dir("predict");

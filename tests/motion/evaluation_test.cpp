@@ -17,12 +17,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string read_text(const std::string& path) {
-    std::ifstream in(path);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
+using test::read_text;
 
 // A run of `sky evaluate` asked to stop (Ctrl-C, SIGTERM: util/interrupt.h) ends after the start
 // frame under way and writes the report of the frames it scored, saying so: the same scores as a
