@@ -431,10 +431,17 @@ SunPosition compute_sun_position(const UtcTime& t, const GeoLocation& where, boo
     double azimuth = wrap_degrees(gamma / kDeg + 180.0);
 
     // Refraction, Saemundsson (1986) as in Meeus eq. 16.4, scaled by P/1010 * 283/(273 + T).
+    // Below -1 degree (where the formula is no longer meant to hold) it decays as 1 / tan of the
+    // depression from its value at -1 degree, as NOAA's calculator does below the horizon: cut off
+    // there, the elevation jumped 0.67 degrees in an instant and the twilight sky doubled in
+    // brightness within seconds, 4-5 minutes from every sunrise and sunset.
     double de = 0;
-    if (refraction && e0 > -1.0)
-        de = (pressure_mbar / 1010.0) * (283.0 / (273.0 + temperature_c)) * 1.02 /
-             (60.0 * std::tan((e0 + 10.3 / (e0 + 5.11)) * kDeg));
+    if (refraction) {
+        const double scale = (pressure_mbar / 1010.0) * (283.0 / (273.0 + temperature_c));
+        auto saemundsson = [&](double e) { return scale * 1.02 / (60.0 * std::tan((e + 10.3 / (e + 5.11)) * kDeg)); };
+        de = e0 > -1.0 ? saemundsson(e0)
+                       : saemundsson(-1.0) * std::tan(1.0 * kDeg) / std::tan(std::min(-e0, 89.0) * kDeg);
+    }
 
     SunPosition s;
     s.zenith_deg = 90.0 - (e0 + de);

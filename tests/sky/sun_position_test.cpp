@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <vector>
+
 #include <cmath>
 
 #include "sky/fisheye.h"
@@ -214,6 +217,40 @@ TEST(SunPosition, RefractionLiftsTheSun) {
     EXPECT_NEAR(lift, expected, 1e-9);
     EXPECT_GT(lift, 0.0);
     EXPECT_DOUBLE_EQ(raw.azimuth_deg, refracted.azimuth_deg);
+}
+
+// Through sunrise the refracted elevation climbs at the pace the sun does, with no jump where
+// the formula stops (-1 degree): cut off there, it jumped 0.67 degrees within 10 s (about 0.035
+// degrees a step otherwise) and the twilight sky doubled (Paris, 2026-06-21 03:45:30-40Z; an
+// audit of sunrise animations). Every 10 s step within 1.7 x the median step (the formula's own
+// slope above -1 degree and the decay's below differ: 0.84 and 1.65 of the sun's pace), and
+// 5 degrees down the lift is a small fraction of a degree.
+TEST(SunPosition, RefractionIsContinuousThroughSunrise) {
+    GeoLocation where{48.8566, 2.3522, 0.0};
+    const UtcTime start = parse_utc_time("2026-06-21T03:30:00Z");
+    std::vector<double> steps;
+    double previous = compute_sun_position(start, where).elevation_deg(), lowest = 90, highest = -90;
+    for (int k = 1; k <= 180; ++k) {
+        const SunPosition p = compute_sun_position(add_seconds(start, 10.0 * k), where);
+        steps.push_back(p.elevation_deg() - previous);
+        previous = p.elevation_deg();
+        const double raw = compute_sun_position(add_seconds(start, 10.0 * k), where, false).elevation_deg();
+        lowest = std::min(lowest, raw), highest = std::max(highest, raw);
+    }
+    ASSERT_LT(lowest, -2.0) << "the window must cross -1 degree, or the test says nothing";
+    ASSERT_GT(highest, 0.5);
+    std::vector<double> sorted = steps;
+    std::sort(sorted.begin(), sorted.end());
+    const double typical = sorted[sorted.size() / 2];
+    for (size_t k = 0; k < steps.size(); ++k) {
+        EXPECT_GT(steps[k], 0.0) << "step " << k;
+        EXPECT_LT(steps[k], 1.7 * typical) << "step " << k;
+    }
+    const UtcTime deep = parse_utc_time("2026-06-21T03:00:00Z");  // about 5 degrees down
+    const double lift = compute_sun_position(deep, where).elevation_deg() -
+                        compute_sun_position(deep, where, false).elevation_deg();
+    EXPECT_GT(lift, 0.0);
+    EXPECT_LT(lift, 0.2);
 }
 
 TEST(SunPosition, DirectionFollowsTheWorldFrame) {
