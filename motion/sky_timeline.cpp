@@ -232,12 +232,9 @@ Color SkyTimeline::relight_to_clock(double t, SkyImage* out) {
     }
     // The patch holds radiance: put at a pixel of another solid angle it carries that much more or
     // less light (a sun climbing 11 degrees gained 5 % in an hour): its irradiance kept.
-    auto solid_angle_at = [&](const Vec3d& sun) {
-        double x = 0, y = 0;
-        fisheye::pixel_from_direction(sun, n, &x, &y);
-        const int i = std::clamp(int(std::lround(x)), 0, n - 1), j = std::clamp(int(std::lround(y)), 0, n - 1);
-        return fisheye::pixel_solid_angle(i, j, n);
-    };
+    // Between pixels the patch is shared bilinearly (insert_sun), so the solid angle is too: at
+    // the nearest pixel's the illuminance stepped 0.5 % as the sun crossed into the next one.
+    auto solid_angle_at = [&](const Vec3d& sun) { return sun_pixel_solid_angle(n, sun); };
     const double omega_start = solid_angle_at(start), omega_now = solid_angle_at(now);
     const double moved = omega_start > 0 && omega_now > 0 ? omega_start / omega_now : 1.0;
     const Color irradiance_now = sun_irradiance(now);

@@ -157,7 +157,11 @@ void SkyTimeline::save(const std::string& folder, int last_step, const std::stri
                              {"cloud_opacity", opacity}});
             json excess = json::array();
             for (const Color& c : suns_[size_t(i)].excess) excess.push_back({c[0], c[1], c[2]});
-            suns.push_back({{"di", suns_[size_t(i)].di}, {"dj", suns_[size_t(i)].dj}, {"excess", excess}});
+            suns.push_back({{"di", suns_[size_t(i)].di},
+                            {"dj", suns_[size_t(i)].dj},
+                            {"excess", excess},
+                            {"fx", suns_[size_t(i)].fx},
+                            {"fy", suns_[size_t(i)].fy}});
             if (i > 0) {
                 cv::Mat f = flow(i - 1);
                 if (f.type() != CV_32FC2 || !f.isContinuous()) f = f.clone();
@@ -255,6 +259,8 @@ SkyTimeline SkyTimeline::load(const std::string& folder, std::string* settings) 
             patch.dj = p.at("dj").get<std::vector<int>>();
             for (const json& c : p.at("excess"))
                 patch.excess.emplace_back(c[0].get<float>(), c[1].get<float>(), c[2].get<float>());
+            // Where in its pixel the sun was cut (absent before 2026-12-07: its pixel's centre).
+            patch.fx = p.value("fx", 0.0), patch.fy = p.value("fy", 0.0);
             t.suns_.push_back(std::move(patch));
         }
         if (int(t.suns_.size()) != t.stored_last_step_ + 1 || int(j.at("steps").size()) != t.stored_last_step_ + 1 ||

@@ -76,6 +76,7 @@ SunPatch remove_sun(SkyImage* sky) {
             if (sky->in_disc(i, j)) around.push_back(luminance(sky->pixel(i, j)));
     if (around.empty()) return patch;
     const float threshold = 20.0f * std::max(median(std::move(around)), 1e-6f);
+    patch.fx = x - ci, patch.fy = y - cj;
 
     const int w = i1 - i0 + 1, h = j1 - j0 + 1;
     cv::Mat mask = cv::Mat::zeros(h, w, CV_8UC1);
@@ -130,6 +131,7 @@ SunPatch clear_sun_patch(int n, const Vec3d& sun_in, double turbidity) {
     double x, y;
     fisheye::pixel_from_direction(sun, n, &x, &y);
     const int ci = int(std::lround(x)), cj = int(std::lround(y));
+    patch.fx = x - ci, patch.fy = y - cj;
     std::map<std::pair<int, int>, Color> disc;  // a pixel may come several times
     model.splat_sun_disc(n, [&](int i, int j, const Color& c) {
         disc.emplace(std::make_pair(j, i), Color::Zero()).first->second += c;
@@ -164,11 +166,53 @@ void insert_sun(SkyImage* sky, const SunPatch& patch, const Vec3d& direction, do
     double x, y;
     fisheye::pixel_from_direction(direction, n, &x, &y);
     const int ci = int(std::lround(x)), cj = int(std::lround(y));
+    // The displacement within the pixel grid: the patch's pixel (ci, cj) plus the sun's move
+    // inside it, split into a whole-pixel part and bilinear weights. Zero at the cut's own
+    // position (within a float direction's rounding), so the sun goes back on its pixels bit for bit.
+    auto split = [](double shift, int* whole, double* frac) {
+        if (std::abs(shift) < 1e-3) shift = 0;
+        *whole = int(std::floor(shift));
+        *frac = shift - *whole;
+    };
+    int wx, wy;
+    double ax, ay;
+    split((x - ci) - patch.fx, &wx, &ax);
+    split((y - cj) - patch.fy, &wy, &ay);
+    auto add = [&](int i, int j, const Color& c) {
+        if (i < 0 || j < 0 || i >= n || j >= n || !sky->in_disc(i, j)) return;
+        sky->set_pixel(i, j, sky->pixel(i, j) + c);
+    };
     for (size_t k = 0; k < patch.di.size(); ++k) {
-        int i = ci + patch.di[k], j = cj + patch.dj[k];
-        if (i < 0 || j < 0 || i >= n || j >= n || !sky->in_disc(i, j)) continue;
-        sky->set_pixel(i, j, sky->pixel(i, j) + float(weight) * patch.excess[k]);
+        const int i = ci + wx + patch.di[k], j = cj + wy + patch.dj[k];
+        const Color e = float(weight) * patch.excess[k];
+        if (ax == 0 && ay == 0) {
+            add(i, j, e);
+            continue;
+        }
+        add(i, j, float((1 - ax) * (1 - ay)) * e);
+        if (ax > 0) add(i + 1, j, float(ax * (1 - ay)) * e);
+        if (ay > 0) add(i, j + 1, float((1 - ax) * ay) * e);
+        if (ax > 0 && ay > 0) add(i + 1, j + 1, float(ax * ay) * e);
     }
+}
+
+double sun_pixel_solid_angle(int n, const Vec3d& direction) {
+    double x = 0, y = 0;
+    fisheye::pixel_from_direction(direction, n, &x, &y);
+    const int i0 = int(std::floor(x)), j0 = int(std::floor(y));
+    const double ax = x - i0, ay = y - j0;
+    double omega[2][2];
+    for (int dj = 0; dj < 2; ++dj)
+        for (int di = 0; di < 2; ++di) {
+            const int i = i0 + di, j = j0 + dj;
+            omega[dj][di] = i < 0 || j < 0 || i >= n || j >= n ? 0.0 : fisheye::pixel_solid_angle(i, j, n);
+        }
+    // At the rim a neighbour outside the disc has none: the nearest pixel's there.
+    if (!(omega[0][0] > 0 && omega[0][1] > 0 && omega[1][0] > 0 && omega[1][1] > 0)) {
+        const int i = std::clamp(int(std::lround(x)), 0, n - 1), j = std::clamp(int(std::lround(y)), 0, n - 1);
+        return fisheye::pixel_solid_angle(i, j, n);
+    }
+    return (1 - ay) * ((1 - ax) * omega[0][0] + ax * omega[0][1]) + ay * ((1 - ax) * omega[1][0] + ax * omega[1][1]);
 }
 
 std::optional<Vec3d> sun_from_brightest_pixels(const SkyImage& sky) {
