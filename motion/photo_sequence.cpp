@@ -30,6 +30,30 @@ std::string default_shared_dir() {
     return "../shared";
 }
 
+namespace {
+
+// Throws naming the first frame whose gap to the one before is not the cadence (a repeated time,
+// a missing frame, mixed cadences). `timed`: (UTC seconds, path) in time order.
+void check_regular_cadence(const std::vector<std::pair<double, std::string>>& timed, double cadence) {
+    // Names carry whole seconds and timer-driven cameras jitter by one: a gap within 10 % of the
+    // cadence (at least 1.5 s, under half of it) is the cadence; a missing frame doubles it.
+    const double tolerance = std::min(std::max(1.5, 0.1 * cadence), 0.45 * cadence);
+    for (size_t k = 1; k < timed.size(); ++k) {
+        const double gap = timed[k].first - timed[k - 1].first;
+        if (gap < 0.5)
+            throw_file_error(timed[k].second,
+                             "has the same time as " + fs::path(timed[k - 1].second).filename().string());
+        if (std::abs(gap - cadence) > tolerance)
+            throw_file_error(timed[k].second,
+                             "comes " + std::to_string(long(std::lround(gap))) + " s after " +
+                                 fs::path(timed[k - 1].second).filename().string() + ", but the cadence is " +
+                                 std::to_string(long(std::lround(cadence))) +
+                                 " s (mixed cadence or missing frames: give a folder of one regular sequence)");
+    }
+}
+
+}  // namespace
+
 PhotoSequence named_photo_sequence(const std::string& name, const std::string& shared_dir) {
     // name (as in data sets and split.json), CLI spelling, preset, folder in shared/skies, cadence.
     struct Known {
@@ -71,6 +95,12 @@ PhotoSequence named_photo_sequence(const std::string& name, const std::string& s
         const std::string time = time_from_file_name(p, utc_offset);
         s.utc.push_back(time.empty() ? std::nan("") : utc_seconds(time));
     }
+    // A frame missing from the folder: the pairs around it are not one step apart (training data
+    // paired them as one 30 s step; the evaluation of a folder refused the same photographs).
+    std::vector<std::pair<double, std::string>> timed;
+    for (size_t k = 0; k < s.photos.size(); ++k)
+        if (std::isfinite(s.utc[k])) timed.emplace_back(s.utc[k], s.photos[k]);
+    if (timed.size() == s.photos.size()) check_regular_cadence(timed, s.dt);
     return s;
 }
 
@@ -141,21 +171,7 @@ PhotoSequence photo_sequence_from_folder(const std::string& folder, const std::s
     std::vector<double> gaps;
     for (size_t k = 1; k < timed.size(); ++k) gaps.push_back(timed[k].first - timed[k - 1].first);
     const double cadence = median(gaps);
-    // Names carry whole seconds and timer-driven cameras jitter by one: a gap within 10 % of the
-    // cadence (at least 1.5 s, under half of it) is the cadence; a missing frame doubles it.
-    const double tolerance = std::min(std::max(1.5, 0.1 * cadence), 0.45 * cadence);
-    for (size_t k = 1; k < timed.size(); ++k) {
-        const double gap = timed[k].first - timed[k - 1].first;
-        if (gap < 0.5)
-            throw_file_error(timed[k].second,
-                             "has the same time as " + fs::path(timed[k - 1].second).filename().string());
-        if (std::abs(gap - cadence) > tolerance)
-            throw_file_error(timed[k].second,
-                             "comes " + std::to_string(long(std::lround(gap))) + " s after " +
-                                 fs::path(timed[k - 1].second).filename().string() + ", but the cadence is " +
-                                 std::to_string(long(std::lround(cadence))) +
-                                 " s (mixed cadence or missing frames: give a folder of one regular sequence)");
-    }
+    check_regular_cadence(timed, cadence);
     PhotoSequence s;
     s.name = fs::path(folder).filename().string();
     if (s.name.empty()) s.name = fs::path(folder).parent_path().filename().string();

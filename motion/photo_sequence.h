@@ -17,7 +17,8 @@ struct PhotoSequence {
 };
 
 // A named sequence ("arm-tsi", "mobotix") in the shared data folder. Throws dynsky::Error for an
-// unknown name or a missing folder.
+// unknown name, a missing folder, or frames whose times are not the sequence's cadence apart (a
+// photograph missing from the folder: the file after the gap is named).
 PhotoSequence named_photo_sequence(const std::string& name, const std::string& shared_dir);
 
 // Any folder of photographs of one camera preset (JPEG/PNG in the folder or its images/ sub-folder),

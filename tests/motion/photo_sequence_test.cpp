@@ -50,6 +50,26 @@ TEST(PhotoSequence, OneSecondOfJitterIsTheCadenceAMissingFrameIsNot) {
     fs::remove_all(dir);
 }
 
+// A named sequence in a shared folder missing a photograph: `sky training-data` paired the frames
+// around the gap as one 30 s step (the next frame's time made up as 300 s for 330), where the
+// evaluation of the same folder refused it (a researcher's audit). Both now refuse, naming the
+// frame after the gap; a whole sequence still loads.
+TEST(PhotoSequence, ANamedSequenceMissingAFrameIsRefused) {
+    DYNSKY_REQUIRE_SHARED();
+    const std::string dir = test::temp_dir("photo_sequence_named_gap");
+    arm_photos_at(dir + "/skies/arm_tsi_sgp_20170524/images", {0, 30, 60, 90, 120});
+    EXPECT_EQ(named_photo_sequence("arm-tsi", dir).photos.size(), 5u);
+    fs::remove(dir + "/skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524174630Z.jpg");
+    try {
+        named_photo_sequence("arm-tsi", dir);
+        ADD_FAILURE() << "a missing frame was taken for the cadence";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("tsi_sgpC1_20170524174700Z.jpg"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("missing frames"), std::string::npos) << e.what();
+    }
+    fs::remove_all(dir);
+}
+
 // Dot-files (macOS's ._NAME.jpg resource forks with the photograph's own name and time,
 // .DS_Store) are not photographs: they were refused as a second frame of the same time.
 TEST(PhotoSequence, HiddenFilesAreNotPhotographs) {
