@@ -117,6 +117,51 @@ TrainedFrames model_training_frames(const PhotoSequence& seq, const std::string&
                     sources.push_back(name.get<std::string>());
     }
     for (const std::string& name : sources) {
+        const nlohmann::json part = split.contains(name) ? split[name] : nlohmann::json::object();
+        // A split made since 2026-12-07 names the photographs trained on and when they were taken
+        // (split.json "trained_photos", "trained_utc_s": [first, last]): matched wherever they
+        // lie. Frame numbers alone number the data set's own folder, which need not be the shared
+        // sequence: a model trained on 25 frames of a copy was scored on them as held out.
+        std::vector<std::string> trained_names;
+        if (part.contains("trained_photos") && part["trained_photos"].is_array())
+            for (const auto& v : part["trained_photos"])
+                if (v.is_string()) trained_names.push_back(v.get<std::string>());
+        double first = std::nan(""), last = std::nan("");
+        if (part.contains("trained_utc_s") && part["trained_utc_s"].is_array() && part["trained_utc_s"].size() == 2 &&
+            part["trained_utc_s"][0].is_number() && part["trained_utc_s"][1].is_number())
+            first = part["trained_utc_s"][0].get<double>(), last = part["trained_utc_s"][1].get<double>();
+        const double dt = part.contains("dt_s") && part["dt_s"].is_number() ? part["dt_s"].get<double>() : 30.0;
+        if (!trained_names.empty() || std::isfinite(first)) {
+            // The camera of its photographs (the split's "preset", else the named sequences'): times
+            // of another camera are other skies.
+            std::string preset = part.contains("preset") && part["preset"].is_string()
+                                     ? part["preset"].get<std::string>()
+                                     : std::string();
+            if (preset.empty() && name.rfind("arm_", 0) == 0) preset = "arm-tsi";
+            if (preset.empty() && name == "mobotix") preset = "mobotix";
+            const double tolerance = std::max(1.0, 0.25 * dt);
+            int count = 0, ahead = 0;
+            for (size_t k = 0; k < seq.photos.size(); ++k) {
+                const std::string base = fs::path(seq.photos[k]).filename().string();
+                const bool timed = k < seq.utc.size() && std::isfinite(seq.utc[k]) && std::isfinite(first) &&
+                                   (seq.preset.empty() || preset.empty() || seq.preset == preset);
+                if (std::find(trained_names.begin(), trained_names.end(), base) != trained_names.end() ||
+                    (timed && seq.utc[k] >= first - tolerance && seq.utc[k] <= last + tolerance)) {
+                    r.trained[k] = 1, ++count;
+                } else if (timed && first - seq.utc[k] > 0 && first - seq.utc[k] <= kSeenAheadSeconds) {
+                    r.trained[k] = 1, ++ahead;  // the same clouds, trained on later (below)
+                }
+            }
+            if (ahead > 0)
+                r.matched += (r.matched.empty() ? "" : "; ") + std::to_string(ahead) + " frames up to " +
+                             std::to_string(int(kSeenAheadSeconds / 60)) + " minutes before " + name +
+                             "'s frames trained on (the same clouds, later)";
+            if (count > 0)
+                r.matched += (r.matched.empty() ? "" : "; ") + name + " frames trained on: " + std::to_string(count) +
+                             " of these (its split.json names the " + std::to_string(trained_names.size()) +
+                             " photographs it trained on)";
+            continue;
+        }
         PhotoSequence known;
         try {
             known = named_photo_sequence(name, shared);
@@ -168,7 +213,9 @@ TrainedFrames model_training_frames(const PhotoSequence& seq, const std::string&
             r.matched += (r.matched.empty() ? "" : "; ") + name + " frames " + std::to_string(lo) + "-" +
                          std::to_string(hi) + " trained on" +
                          (heldout < int(known.photos.size())
-                              ? ", its split.json holding out frames " + std::to_string(heldout) + " on"
+                              ? ", its split.json holding out frames " + std::to_string(heldout) +
+                                    " on (frame numbers only, read as the shared sequence's: a data set built "
+                                    "from part of it numbers its frames otherwise)"
                               : std::string(": model.json lists it, with no split.json to say what was held out"));
     }
     return r;

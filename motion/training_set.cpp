@@ -1,5 +1,6 @@
 #include "motion/training_set.h"
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -60,6 +61,7 @@ void build_training_sequence(const TrainingSetOptions& o) {
     std::vector<NetworkFrame> frames_big;
     std::vector<cv::Mat> exact;
     std::vector<std::string> names;
+    std::vector<double> capture_utc;  // photographs only: UTC seconds (utc_seconds), NaN unknown
     nlohmann::ordered_json meta;
     double dt = 0;
     if (!o.sequence.empty()) {
@@ -72,6 +74,7 @@ void build_training_sequence(const TrainingSetOptions& o) {
             frames_big.push_back(network_frame_from_photo(seq.photos[k], seq.preset, big, big, form));
             frames_big.back().time_seconds = k * dt;
             names.push_back(fs::path(seq.photos[k]).filename().string());
+            capture_utc.push_back(k < seq.utc.size() ? seq.utc[k] : std::nan(""));
             progress.advance();
         }
         progress.finish();
@@ -143,6 +146,13 @@ void build_training_sequence(const TrainingSetOptions& o) {
     meta["frame_count"] = t;
     meta["times_s"] = times;
     meta["frames"] = names;
+    // When each photograph was taken, so that a split of this data set says which photographs a
+    // model trained on wherever they are evaluated (frame numbers alone are this folder's).
+    if (!capture_utc.empty()) {
+        nlohmann::json utc = nlohmann::json::array();
+        for (double t : capture_utc) utc.push_back(std::isfinite(t) ? nlohmann::json(t) : nlohmann::json());
+        meta["frames_utc_s"] = utc;
+    }
     meta["flow_farneback"] =
         "OpenCV calcOpticalFlowFarneback (pyr 0.5, 3 levels, window 15, 3 iterations, poly 5 / 1.2) "
         "frame k -> k+1 on the luminance at the import resolution, area-averaged to N, pixels of N";

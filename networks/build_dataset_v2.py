@@ -27,6 +27,8 @@ import shutil
 import subprocess
 import sys
 
+from split_info import photographs_trained, same_split
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 HELDOUT_FRACTION = 0.2
@@ -126,12 +128,13 @@ def main(argv=None):
             meta = json.load(f)
         split[name] = split_for(meta["frame_count"])
         split[name]["dt_s"] = meta["dt_s"]
+        split[name].update(photographs_trained(meta, split[name]["train"][1]))
     path = os.path.join(args.out, "split.json")
     if os.path.exists(path):
         with open(path) as f:
             old = json.load(f)
         for name, s in split.items():
-            if name in old and old[name] != s:
+            if name in old and not same_split(old[name], s):
                 sys.exit(f"{path}: the fixed split for {name} is {old[name]}, this build would make {s}")
         old.update(split)
         split = old

@@ -6,6 +6,7 @@
 #include <map>
 #include <vector>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 
 #include "motion/cloud_model.h"
@@ -14,6 +15,7 @@
 #include "sky/latlong.h"
 #include "sky/procedural_clouds.h"
 #include "sky/sky_image.h"
+#include "sky/sun_position.h"
 #include "tests/test_support.h"
 #include "util/data_path.h"
 #include "util/image.h"
@@ -521,14 +523,54 @@ TEST(SkyModelCli, EvaluateNeverScoresTheModelsTrainingFramesAsHeldOut) {
         ASSERT_EQ(r.exit_code, 0) << r.output;
         EXPECT_NE(read_text(dir + "/f.md").find("predicting frames the model was trained on"), std::string::npos);
     }
-    // Without the training photographs (a wrong --shared) it cannot tell, and says so in the report.
+    // The shipped split names its photographs and their times: found without the shared data too.
     {
         const std::string photos = dir + "/mine";
         auto r = test::run_command(dynsky("sky evaluate --shared " + dir + "/nowhere --photos " + photos + common +
-                                          dir + "/u.md 2>&1"));
+                                          dir + "/n.md 2>&1"));
+        EXPECT_EQ(r.exit_code, 1) << r.output;
+        EXPECT_NE(r.output.find("nothing held out to score"), std::string::npos) << r.output;
+    }
+    // A split of frame numbers only (made before 2026-12-07) needs the training photographs: without
+    // them (a wrong --shared) it cannot tell, and says so in the report.
+    const std::string legacy = dir + "/legacy_model";
+    fs::create_directories(legacy);
+    for (const char* f : {"model.json", "model.onnx"})
+        fs::copy_file(data_path("networks/models/advect_residual/" + std::string(f)), legacy + "/" + f);
+    std::ofstream(legacy + "/split.json") << R"({"arm_tsi": {"train": [0, 240], "heldout": [240, 300], "dt_s": 30.0}})";
+    {
+        const std::string photos = dir + "/mine";
+        auto r = test::run_command(dynsky("sky evaluate --model " + legacy + " --shared " + dir + "/nowhere --photos " +
+                                          photos + common + dir + "/u.md 2>&1"));
         ASSERT_EQ(r.exit_code, 0) << r.output;
         EXPECT_NE(r.output.find("warning: the model was trained on"), std::string::npos) << r.output;
         EXPECT_NE(read_text(dir + "/u.md").find("NOT checked against the model's training photographs"),
+                  std::string::npos);
+    }
+    // A model trained on a copy of 5 of the day's photographs (frames 100-104; its data set numbers
+    // them 0-4): those are found wherever they lie, and the day's first frames, which frame numbers
+    // read against the shared sequence took for them, are held out (a researcher's audit: the
+    // evaluation scored a model on its own training photographs and called them held out).
+    {
+        std::string names = "[";
+        for (int k = 100; k < 105; ++k) {
+            char name[64];
+            const int t = 15 * 3600 + 40 * 60 + 30 * k;
+            std::snprintf(name, sizeof name, "\"tsi_sgpC1_20170524%02d%02d%02dZ.jpg\"", t / 3600, t / 60 % 60, t % 60);
+            names += std::string(k > 100 ? "," : "") + name;
+        }
+        const double first = utc_seconds("2017-05-24T16:30:00Z"), last = utc_seconds("2017-05-24T16:32:00Z");
+        std::ofstream(legacy + "/split.json")
+            << R"({"arm_tsi": {"train": [0, 5], "heldout": [5, 6], "dt_s": 30.0, "preset": "arm-tsi", "trained_photos": )"
+            << names << R"(], "trained_utc_s": [)" << std::setprecision(17) << first << "," << last << "]}}";
+        auto r = test::run_command(dynsky("sky evaluate --model " + legacy + " --photos " + dir + "/mine" + common +
+                                          dir + "/c.md 2>&1"));
+        EXPECT_EQ(r.exit_code, 1) << r.output;
+        EXPECT_NE(r.output.find("arm_tsi frames trained on: 5 of these"), std::string::npos) << r.output;
+        const std::string early = photo_folder(dir + "/early", 5, {}, 0);
+        r = test::run_command(dynsky("sky evaluate --model " + legacy + " --photos " + early + common + dir + "/e.md"));
+        ASSERT_EQ(r.exit_code, 0) << r.output;
+        EXPECT_NE(read_text(dir + "/e.md").find("none of them among the model's training photographs"),
                   std::string::npos);
     }
     // The clear morning's last photographs end 30 s before the frames of the broken-cumulus sequence the
