@@ -49,9 +49,11 @@ void register_render_command(CLI::App& app) {
            "See docs/sampling/README.md")
         ->check(parsed_by([](const std::string& s) { parse_sky_sampler(s); }, "SAMPLER"))
         ->capture_default_str();
-    cmd->add_option("--aovs", o->aovs,
-                    "Extra passes in the EXR, comma-separated: albedo ('Denoising Albedo'), normal ('Normal', world),\n"
-                    "depth ('Depth', camera Z, 1e10 on the sky), alpha (the 'A' channel), samples ('Sample Count')");
+    cmd->add_option(
+        "--aovs", o->aovs,
+        "Extra passes in the EXR, comma-separated: albedo ('Denoising Albedo'), normal ('Normal', world),\n"
+        "depth ('Depth', camera Z, 1e10 on the sky), alpha (the 'A' channel: the sky seen from the camera\n"
+        "becomes transparent and RGB premultiplied, as Cycles' Film > Transparent), samples ('Sample Count')");
     cmd->add_option(
         "--region", o->region,
         "Render only pixels [x0, x1) x [y0, y1) of the --res image, 'x0,y0,x1,y1' (the output is cropped to\n"

@@ -371,7 +371,10 @@ Color PathIntegrator::trace_path(const Ray& camera_ray_in, Sampler& rng, RenderS
         if (!found) {
             Vec3 w = ray.direction.normalized();
             if (depth == 0) {
-                L += beta * light_.radiance_filtered(w);
+                // With an alpha pass the sky seen from the camera is transparent (A = 0 there), as
+                // Cycles' Film > Transparent: the colour is premultiplied by A, so an "over" on a
+                // plate shows the plate. It still lights the scene.
+                if (!settings_.aovs.alpha) L += beta * light_.radiance_filtered(w);
                 break;
             }
             if (use_bsdf_hits) {
@@ -534,6 +537,7 @@ void PathIntegrator::sample_tile(const Camera& camera, float tan_half, float asp
             if (primary[p].hit.geomID == RTC_INVALID_GEOMETRY_ID) {
                 if (observer_) observer_(ray, RayKind::Camera);
                 c = *sky++;
+                if (settings_.aovs.alpha) c = Color::Zero();  // transparent (above)
             } else {
                 c = sobol ? trace_path(ray, zsobol[size_t(p)], stats, fh, &primary[p])
                           : trace_path(ray, st->rng, stats, fh, &primary[p]);

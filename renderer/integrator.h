@@ -33,10 +33,12 @@ enum class LightStrategy { Mis, LightOnly, BsdfOnly };
 // names its passes: "Denoising Albedo", "Normal", "Depth", the alpha as the image's "A", and
 // "Sample Count".
 struct AovSelection {
-    bool albedo = false;        // base colour at the first surface seen (0 on the sky), averaged
-    bool normal = false;        // world shading normal there, facing the camera (0 on the sky), averaged
-    bool depth = false;         // camera-space Z depth of the first sample's surface (1e10 on the sky)
-    bool alpha = false;         // share of samples that see a surface (1) rather than the sky (0)
+    bool albedo = false;  // base colour at the first surface seen (0 on the sky), averaged
+    bool normal = false;  // world shading normal there, facing the camera (0 on the sky), averaged
+    bool depth = false;   // camera-space Z depth of the first sample's surface (1e10 on the sky)
+    // Share of samples that see a surface (1) rather than the sky (0); with it the sky seen from
+    // the camera is transparent and the colour premultiplied (Cycles' Film > Transparent).
+    bool alpha = false;
     bool sample_count = false;  // samples taken in the pixel (adaptive sampling, time limit)
     bool any() const { return albedo || normal || depth || alpha || sample_count; }
 };

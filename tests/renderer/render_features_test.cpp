@@ -119,6 +119,38 @@ TEST(RenderAovs, LambertWallGivesItsAlbedoNormalDepthAndAlphaExactly) {
     }
 }
 
+// With an alpha pass the colour is premultiplied, as Cycles' Film > Transparent writes it: where
+// A = 0 (sky) the colour is 0, where A = 1 it is the render without the pass, bit for bit (the
+// same samples), and at the sphere's edge it holds only its surface samples' light, never more
+// than the render with the sky in it. Before, RGB kept the sky where A = 0, and an "over" on a
+// plate (oiiotool --over, Nuke, Blender) added the sky to the plate (an output audit).
+TEST(RenderAovs, AlphaPremultipliesTheColourAsATransparentFilm) {
+    Scene scene = sphere_on_floor(false);
+    scene.meshes.pop_back(), scene.instances.pop_back();  // the sphere alone: sky around it
+    Accel accel(scene);
+    EnvLight light(sunny_sky(64, 200, 3), 0.3f);
+    RenderSettings s;
+    s.width = 40, s.height = 30, s.spp = 8, s.quiet = true, s.seed = 3;
+    Camera cam = camera_at(Vec3(0.5f, 1.0f, 4.5f), Vec3(0, 0, 0), 0.8f);
+    const RenderResult plain = PathIntegrator(accel, light, s).render(cam);
+    s.aovs.alpha = true;
+    const RenderResult film = PathIntegrator(accel, light, s).render(cam);
+    int sky = 0, surface = 0, edge = 0;
+    for (int y = 0; y < s.height; ++y)
+        for (int x = 0; x < s.width; ++x) {
+            const float a = film.alpha.at(x, y, 0);
+            for (int k = 0; k < 3; ++k) {
+                if (a == 0) EXPECT_EQ(film.color.at(x, y, k), 0.0f) << x << "," << y;
+                if (a == 1) EXPECT_EQ(film.color.at(x, y, k), plain.color.at(x, y, k)) << x << "," << y;
+                if (a > 0 && a < 1) EXPECT_LT(film.color.at(x, y, k), plain.color.at(x, y, k)) << x << "," << y;
+            }
+            sky += a == 0, surface += a == 1, edge += a > 0 && a < 1;
+        }
+    EXPECT_GT(sky, 100);
+    EXPECT_GT(surface, 50);
+    EXPECT_GT(edge, 10);
+}
+
 TEST(RenderRegion, RegionEqualsTheSamePixelsOfTheFullRenderBitwise) {
     Scene scene = sphere_on_floor(false);
     Accel accel(scene);
