@@ -12,15 +12,17 @@ and its training checkpoint); the others are trained by networks/train.py into O
 another (skipped where OUT/NAME/model.json exists; resumed where only the checkpoint does).
 
 Each model is then scored by `dynsky sky evaluate` (C++ / OpenCV, held-out ARM frames, PSNR and
-SSIM at the given horizons, median flow magnitudes; its report and histogram go to OUT/eval/NAME)
-and, in PyTorch, on what the cosine term is meant to help, FlowNet's flow direction: on held-out
-pairs, seen cloud pixels with a Farneback target, the mean cosine between predicted and target
-directions, and the median angle between them where the target moves at least 0.5 px.
+SSIM at the given horizons; `sky evaluate --model` takes advect-residual models only, so each
+folder is scored as its 'paper' column, the folder standing in for networks/models/arm_tsi through
+DYNSKY_DATA: evaluate_cpp; its report goes to OUT/eval/NAME) and, in PyTorch, on what the cosine
+term is meant to help, FlowNet's flow direction: on held-out pairs, seen cloud pixels with a
+Farneback target, the mean cosine between predicted and target directions, and the median angle
+between them where the target moves at least 0.5 px.
 """
 import argparse
+import csv
 import json
 import os
-import re
 import subprocess
 import sys
 
@@ -69,29 +71,53 @@ def train_missing(args, runs):
 
 
 def evaluate_cpp(args, name, folder):
-    """Runs `dynsky sky evaluate` into OUT/eval/NAME and parses its table and motion line."""
+    """Scores the FlowNet + CloudNet folder with `dynsky sky evaluate` into OUT/eval/NAME and reads its CSV.
+
+    `sky evaluate --model` takes advect-residual models only; it scores the paper's form in its own
+    column ("paper"), the model it finds at networks/models/arm_tsi under its data roots. So each
+    folder is scored as that model: a data root OUT/eval/NAME/data-root whose
+    networks/models/arm_tsi links to the folder, given first through DYNSKY_DATA (util/data_path.cpp;
+    every other data file falls through to the usual roots), beside --model advect. The start frames
+    are the folder's held-out ARM frames (its split.json), at its resolution."""
     edir = os.path.join(args.out, "eval", name + ("-shipped" if folder == args.shipped else ""))
     os.makedirs(edir, exist_ok=True)
+    with open(os.path.join(folder, "model.json")) as f:
+        info = json.load(f)
+    with open(os.path.join(folder, "split.json")) as f:
+        lo, hi = json.load(f)["arm_tsi"]["heldout"]
+    root = os.path.join(edir, "data-root")
+    link = os.path.join(root, "networks", "models", "arm_tsi")
+    os.makedirs(os.path.dirname(link), exist_ok=True)
+    if os.path.islink(link) or os.path.exists(link):
+        os.remove(link)
+    os.symlink(os.path.abspath(folder), link)
     report = os.path.join(edir, "evaluation.md")
-    cmd = [args.dynsky, "sky", "evaluate", "--model", folder, "--sequence", "arm-tsi", "--horizons", args.horizons,
-           "--report", report, "--histogram", os.path.join(edir, "flow-histogram.png"), "--quiet"]
-    print("+", " ".join(cmd), flush=True)
-    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
-    text = open(report).read()
+    cmd = [args.dynsky, "sky", "evaluate", "--model", "advect", "--sequence", "arm-tsi", "--horizons", args.horizons,
+           "--resolutions", str(info["resolution"]), "--frames", f"{lo}-{hi - 1}", "--out", report, "--quiet"]
+    if args.shared:
+        cmd += ["--shared", args.shared]
+    if args.limit:
+        cmd += ["--limit", str(args.limit)]
+    print("+ DYNSKY_DATA=" + root, " ".join(cmd), flush=True)
+    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, env=dict(os.environ, DYNSKY_DATA=os.path.abspath(root)))
+    scores = {}
+    with open(os.path.splitext(report)[0] + ".csv") as f:
+        for row in csv.DictReader(f):
+            if int(row["resolution"]) == info["resolution"]:
+                scores[(int(row["horizon"]), row["method"])] = row
     rows = {}
-    for line in text.splitlines():
-        m = re.match(r"\|\s*(\d+)\s*\|", line)
-        if not m:
-            continue
-        c = [x.strip() for x in line.strip().strip("|").split("|")]
-        num = [float(x.split()[0]) for x in c[2:]]
-        rows[int(c[0])] = {"model_psnr": num[0], "model_ssim": num[1], "persistence_psnr": num[2],
-                           "persistence_ssim": num[3], "farneback_psnr": num[4], "farneback_ssim": num[5],
-                           "model_mse": num[6], "frames": int(num[9])}
-    m = re.search(r"real frames \(Farneback\) (\d+(?:\.\d+)?), model rollout frames \(Farneback\) (\d+(?:\.\d+)?), "
-                  r"FlowNet output (\d+(?:\.\d+)?)", text)
-    motion = {"real": float(m.group(1)), "rollout": float(m.group(2)), "flownet": float(m.group(3))} if m else None
-    return {"horizons": rows, "median_motion_px": motion}
+    for h in sorted({h for h, _ in scores}):
+        if (h, "paper") not in scores:
+            raise SystemExit(f"ablation.py: error: {report}: no 'paper' column at horizon {h}: `dynsky sky evaluate` "
+                             f"did not score {folder} as the paper's model (its Delta t must divide the photographs' "
+                             "30 s; run the command above without --quiet to see why)")
+        m, p, fb = scores[(h, "paper")], scores[(h, "persistence")], scores[(h, "farneback")]
+        rows[h] = {"model_psnr": float(m["psnr_db"]), "model_ssim": float(m["ssim"]),
+                   "persistence_psnr": float(p["psnr_db"]), "persistence_ssim": float(p["ssim"]),
+                   "farneback_psnr": float(fb["psnr_db"]), "farneback_ssim": float(fb["ssim"]),
+                   "model_mse": float(m["mse"]), "frames": int(m["frames"])}
+    # `sky evaluate` no longer reports median flow magnitudes (the rollout's and FlowNet's motion).
+    return {"horizons": rows, "median_motion_px": None}
 
 
 def load_model(folder, ckpt):
@@ -152,31 +178,31 @@ def write_report(args, results, path):
          f"({', '.join(map(str, seeds))}). MSE only: image MSE + 0.1 x flow MSE (`--cos-weight 0`). MSE + cosine "
          "(the default, 0.5): image MSE + 0.05 x (1 - cos of RGB vectors) + 0.1 x (flow MSE + 0.5 x (1 - cos of "
          "flow directions on cloud pixels)). MSE + cosine seed 1 is the shipped model `networks/models/arm_tsi`.", "",
-         f"Image scores: `dynsky sky evaluate --sequence arm-tsi --horizons {args.horizons}` (held-out ARM frames, "
-         f"{first[hs[0]]['frames']} start frames, 64 px, [0, 1] form, seen sky pixels, means of per-frame values). "
+         f"Image scores: `dynsky sky evaluate --model advect --sequence arm-tsi --horizons {args.horizons}`'s "
+         "'paper' column, each model standing in for the paper's (networks/ablation.py evaluate_cpp), with "
+         "--frames the model's held-out ARM frames ("
+         f"{first[hs[0]]['frames']} start frames, 64 px, [0, 1] form, seen sky pixels, means of per-frame values; "
+         "Farneback extrapolation: the previous pair's flow applied h times along its streamlines). "
          "Flow direction: FlowNet's output against the Farneback target on the held-out pairs, seen cloud pixels "
          "with a target direction; mean cosine over all of them, median angle and share within 45 degrees over "
-         f"those moving at least {MIN_MOVE_PX} px. Median motion: `dynsky sky evaluate`'s median flow magnitude on "
-         "cloud pixels, pixels per step at 64 px (real frames "
-         f"{results[0]['cpp']['median_motion_px']['real']:.2f} px).", "",
+         f"those moving at least {MIN_MOVE_PX} px.", "",
          "## Per model", "",
          "| loss | seed | " + " | ".join(f"PSNR {h}" for h in hs) + " | " + " | ".join(f"SSIM {h}" for h in hs) +
-         " | flow cos | flow angle (median) | within 45 deg | motion: rollout / FlowNet |",
-         "|---|---:|" + "---:|" * (2 * len(hs) + 4)]
+         " | flow cos | flow angle (median) | within 45 deg |",
+         "|---|---:|" + "---:|" * (2 * len(hs) + 3)]
     for r in results:
-        c, fd, mo = r["cpp"]["horizons"], r["direction"], r["cpp"]["median_motion_px"]
+        c, fd = r["cpp"]["horizons"], r["direction"]
         L.append(f"| {r['label']} | {r['seed']}{' (shipped)' if r['shipped'] else ''} | " +
                  " | ".join(f"{c[h]['model_psnr']:.2f}" for h in hs) + " | " +
                  " | ".join(f"{c[h]['model_ssim']:.3f}" for h in hs) +
-                 f" | {fd['mean_cos']:.3f} | {fd['median_angle_deg']:.1f} deg | {100 * fd['within_45deg']:.1f} % | "
-                 f"{mo['rollout']:.2f} / {mo['flownet']:.2f} px |")
+                 f" | {fd['mean_cos']:.3f} | {fd['median_angle_deg']:.1f} deg | {100 * fd['within_45deg']:.1f} % |")
     L.append("| persistence | | " + " | ".join(f"{first[h]['persistence_psnr']:.2f}" for h in hs) + " | " +
-             " | ".join(f"{first[h]['persistence_ssim']:.3f}" for h in hs) + " | | | | |")
+             " | ".join(f"{first[h]['persistence_ssim']:.3f}" for h in hs) + " | | | |")
     L.append("| Farneback extrapolation | | " + " | ".join(f"{first[h]['farneback_psnr']:.2f}" for h in hs) + " | " +
-             " | ".join(f"{first[h]['farneback_ssim']:.3f}" for h in hs) + " | | | | |")
+             " | ".join(f"{first[h]['farneback_ssim']:.3f}" for h in hs) + " | | | |")
     L += ["", "PSNR in dB, horizons in 30 s steps.", "",
           f"## Mean over seeds (min - max)", "",
-          "| loss | " + " | ".join(f"PSNR {h}" for h in hs) + " | SSIM 1 | SSIM 6 | flow cos | flow angle (median) |",
+          "| loss | " + " | ".join(f"PSNR {h}" for h in hs) + f" | SSIM {hs[0]} | SSIM {hs[-1]} | flow cos | flow angle (median) |",
           "|---|" + "---:|" * (len(hs) + 4)]
     summary = {}
     for key, label, _ in LOSSES:
@@ -219,7 +245,7 @@ def write_report(args, results, path):
                 f" | {paired(lambda r: r['direction']['mean_cos'], 3, '')} | "
                 f"{paired(lambda r: r['direction']['median_angle_deg'], 1, ' deg', False)} |")
     L += ["", f"![PSNR against horizon, per loss]({os.path.relpath(args.chart, os.path.dirname(path))})", "",
-          f"Per-model reports and flow histograms of `dynsky sky evaluate`: `{os.path.relpath(args.out, ROOT)}/eval/NAME/`; "
+          f"Per-model reports of `dynsky sky evaluate`: `{os.path.relpath(args.out, ROOT)}/eval/NAME/`; "
           f"all numbers: `{os.path.relpath(json_path(args), ROOT)}`.", ""]
     with open(path, "w") as f:
         f.write("\n".join(L))
@@ -282,6 +308,8 @@ def main(argv=None):
     p.add_argument("--report", default=os.path.join(ROOT, "docs", "networks-ablation.md"))
     p.add_argument("--chart", default=os.path.join(ROOT, "docs", "networks-ablation.png"))
     p.add_argument("--no-train", action="store_true", help="only evaluate models already trained")
+    p.add_argument("--shared", default="", help="the shared data folder for `dynsky sky evaluate` (default: its own)")
+    p.add_argument("--limit", type=int, default=0, help="score only the first K held-out start frames (quick checks)")
     args = p.parse_args(argv)
     args.argv = [os.path.relpath(a, ROOT) if os.path.isabs(a) else a for a in (argv if argv is not None else sys.argv[1:])]
     if args.shipped and not os.path.exists(args.shipped_checkpoint):

@@ -51,7 +51,11 @@ def evaluate_source(model, src, split, part="heldout", horizons=(1, 2, 6), max_s
         trusted = A.trusted_flow_pixels(AD.t_valid(src.valid[[k - 1 for k in ks]]), v0,
                                          AD.t_img(src.images[[k - 1 for k in ks]]), x0)
         f_model = A.smooth_motion(f_prev, trusted) if smooth else f_prev
-        bg = AD.t_img(src.background[ks]) if compensated and src.background is not None else None
+        if compensated and src.background is None:
+            # Scoring a compensated model on the plain warp (B = 0) would score another model.
+            raise ValueError(f"source {src.name}: no background.npy, which a model trained with --compensated needs "
+                             "(rebuild the data set with networks/build_dataset_v2.py)")
+        bg = AD.t_img(src.background[ks]) if compensated else None
         flows = {"model_prev": f_model, "advect_prev": f_model, "model_zero": torch.zeros_like(f_prev)}
         if "model_true" in methods:
             flows["model_true"] = AD.true_flow(src, ks)

@@ -28,6 +28,7 @@ import advect as A  # noqa: E402
 import advect_data as AD  # noqa: E402
 import advect_eval as AE  # noqa: E402
 import train_advect as T  # noqa: E402
+from script_errors import fail, run_main  # noqa: E402
 
 
 def cpu_time(model, n, repeats=30, rounds=5):
@@ -237,6 +238,8 @@ def main(argv=None):
     torch.set_num_threads(1)
     os.makedirs(args.out, exist_ok=True)
     names = [s for s in args.sources.split(",") if s] or None
+    if not os.path.isfile(os.path.join(args.data, "split.json")):
+        fail(f"{os.path.join(args.data, 'split.json')}: not found (--data must be a data set of networks/build_dataset_v2.py)")
     base_sources, split = AD.load_sources(args.data, names)
     results, cpu = {}, {}
     for spec in args.model:
@@ -246,6 +249,12 @@ def main(argv=None):
             path, scale = path.split("@")
             scale = float(scale)
         model, targs = T.load_model(path)
+        compensated, smooth = bool(targs.get("compensated")), bool(targs.get("smooth"))
+        if compensated:
+            missing = [s.name for s in base_sources if s.background is None]
+            if missing:
+                fail(f"{path}: trained with --compensated, but {args.data}/{missing[0]}/background.npy is not there "
+                     "(rebuild the data set with networks/build_dataset_v2.py)")
         model.bound *= scale
         sources = base_sources
         if targs.get("res") and targs["res"] != base_sources[0].n:
@@ -259,7 +268,8 @@ def main(argv=None):
         print(name, json.dumps(cpu[name]), flush=True)
         if not args.no_heldout:
             t0 = time.time()
-            results[name] = AE.evaluate(model, sources, split, args.part, (1, 2, 6))
+            results[name] = AE.evaluate(model, sources, split, args.part, (1, 2, 6), compensated=compensated,
+                                        smooth=smooth)
             print(f"{name}: evaluated in {time.time() - t0:.0f} s", flush=True)
         if args.rollouts and spec == args.model[0]:
             roll, frames = run_rollouts(model, sources, split, args.clear_steps, args.cloudy_steps, args.rollout_part)
@@ -276,4 +286,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    run_main("evaluate_advect.py", main)

@@ -211,3 +211,20 @@ def write_model_card(folder, info, seqs, split, log, metrics, args):
               "- The [0, 1] form cannot hold the sun; `dynsky sky predict` re-inserts the input's sun.", ""]
     with open(os.path.join(folder, "MODEL_CARD.md"), "w") as f:
         f.write("\n".join(lines))
+
+
+def main(argv=None):
+    """Not a command of its own: --help says what writes the model folder."""
+    import argparse
+    p = argparse.ArgumentParser(
+        prog="export.py", formatter_class=argparse.RawDescriptionHelpFormatter,
+        description=__doc__ + "\nA module, not a command: networks/train.py writes this folder at the end of training "
+        "(write_model_folder). To write it again from a finished run's checkpoint, repeat the training command with "
+        "--resume (every epoch is done, so it only exports). Advect-residual models: networks/export_advect.py.")
+    p.parse_args(argv)
+    p.exit(2, "export.py: error: not a command: networks/train.py writes the model folder (run it again with --resume "
+              "to export a finished run's checkpoint); see export.py --help\n")
+
+
+if __name__ == "__main__":
+    main()

@@ -30,6 +30,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import advect as A  # noqa: E402
 import export as E  # noqa: E402
 import unet as U  # noqa: E402
+from script_errors import fail, run_main  # noqa: E402
 
 INTERFACE = """\
 N = the network resolution (model.json "resolution"). Images are in the [0, 1] network form
@@ -219,11 +220,11 @@ def main(argv=None):
     os.makedirs(args.out, exist_ok=True)
     split_path = os.path.join(args.data, "split.json")
     if not os.path.exists(split_path):
-        sys.exit(f"{split_path}: not found (--data must be a data set of networks/build_dataset_v2.py)")
+        fail(f"{split_path}: not found (--data must be a data set of networks/build_dataset_v2.py)")
     split = json.load(open(split_path))
     reference = args.reference_source or ("arm_tsi" if "arm_tsi" in split else (sorted(split) or [""])[0])
     if reference not in split or not os.path.exists(os.path.join(args.data, reference, "meta.json")):
-        sys.exit(f"{args.data}: no sequence '{reference}' for the reference pair (--reference-source; "
+        fail(f"{args.data}: no sequence '{reference}' for the reference pair (--reference-source; "
                  f"the data set has: {', '.join(sorted(split)) or 'none'})")
     src = AD.Source(os.path.join(args.data, reference))
     if targs.get("res") and targs["res"] != src.n:
@@ -233,7 +234,7 @@ def main(argv=None):
     k = split[src.name]["heldout"][0] + 1
     compensated = bool(targs.get("compensated"))
     if compensated and src.background is None:
-        sys.exit(f"{args.data}/{reference}: no background.npy, which a model trained with --compensated needs for its "
+        fail(f"{args.data}/{reference}: no background.npy, which a model trained with --compensated needs for its "
                  "reference pair (rebuild the data set with networks/build_dataset_v2.py)")
     for stale in ("reference_background.npy",):
         if os.path.exists(os.path.join(args.out, stale)):
@@ -265,4 +266,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    run_main("export_advect.py", main)

@@ -28,6 +28,13 @@ import torch
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import data as D  # noqa: E402
 import unet as U  # noqa: E402
+from script_errors import ScriptError, check_resume_args, fail, load_checkpoint, run_main  # noqa: E402,F401
+
+SCRIPT = "train.py"
+# Options a --resume may change: --epochs extends a run; the others do not change the model or the
+# batches it is trained on (--no-export, --name: what is written after training).
+RESUME_MAY_CHANGE = {"epochs", "threads", "eval_every", "out", "checkpoint_dir", "resume", "no_export", "name",
+                     "argv_text"}
 
 
 def set_seed(seed):
@@ -151,29 +158,76 @@ def cpu_time_per_step(model, n, threads=1, repeats=20):
     return float(np.median(times))
 
 
+def check_data(args):
+    """The data set and the sequences asked for: one-line refusals instead of tracebacks."""
+    split_path = os.path.join(args.data, "split.json")
+    if not os.path.isfile(split_path):
+        fail(f"{split_path}: not found (--data must be a data set of networks/dataset.py)")
+    try:
+        split = D.load_split(args.data)
+    except (OSError, ValueError) as e:
+        fail(f"{split_path}: not readable as JSON ({e})")
+    names = [s for s in args.sequences.split(",") if s]
+    if not names:
+        fail("--sequences: empty", 2)
+    unknown = [s for s in names if s not in split]
+    if unknown:
+        fail(f"--sequences {','.join(unknown)}: no such sequence in {split_path} (it has: {', '.join(sorted(split)) or 'none'})", 2)
+    for name in names:
+        for part in ("train", "heldout"):
+            if part not in split[name]:
+                fail(f"{split_path}: sequence '{name}' has no '{part}' part (a data set of networks/dataset.py has both)")
+        for f in ("meta.json", "images.npy", "valid.npy", "cloud.npy", "flow_farneback.npy"):
+            if not os.path.isfile(os.path.join(args.data, name, f)):
+                fail(f"{os.path.join(args.data, name, f)}: not found (rebuild the data set with networks/dataset.py)")
+    try:
+        fw, cw = parse_widths(args.flow_widths), parse_widths(args.cloud_widths)
+    except ValueError:
+        fail(f"--flow-widths {args.flow_widths} / --cloud-widths {args.cloud_widths}: expected comma-separated "
+             "integers (e.g. 16,32,64,64)", 2)
+    return split, names, fw, cw
+
+
 def train(args):
     torch.set_num_threads(min(args.threads, 2))
     set_seed(args.seed)
-    split = D.load_split(args.data)
-    names = args.sequences.split(",")
+    split, names, fw, cw = check_data(args)
+    ckpt_path = os.path.join(args.checkpoint_dir or args.out, "checkpoint.pt")
+    ck = None
+    if args.resume:
+        if not os.path.exists(ckpt_path):
+            fail(f"--resume: {ckpt_path}: no checkpoint to resume (train without --resume to start this run)")
+        ck = load_checkpoint(ckpt_path)
+        check_resume_args(ckpt_path, ck.get("args"), args, {a.dest: a.default for a in parser()._actions},
+                          RESUME_MAY_CHANGE, SCRIPT)
     seqs = []
     for name in names:
         s = D.Sequence(os.path.join(args.data, name))
         if args.res and s.resolution != args.res:
+            if s.resolution % args.res:
+                fail(f"--res {args.res}: does not divide the resolution {s.resolution} of {args.data}/{name}", 2)
             s = D.resize_sequence(s, args.res)
         seqs.append(s)
     n = seqs[0].resolution
-    assert all(s.resolution == n for s in seqs), "all sequences must share one resolution"
+    if not all(s.resolution == n for s in seqs):
+        fail(f"--sequences {args.sequences}: the sequences differ in resolution (give --res)", 2)
     dt = seqs[0].meta["dt_s"]
-    assert all(abs(s.meta["dt_s"] - dt) < 1e-6 for s in seqs), "all sequences must share Delta t"
+    if not all(abs(s.meta["dt_s"] - dt) < 1e-6 for s in seqs):
+        fail(f"--sequences {args.sequences}: the sequences differ in Delta t (dt_s in meta.json)", 2)
     weights = {}
     for w in (args.weights or "").split(","):
         if w:
-            k, v = w.split("=")
-            weights[k] = float(v)
+            k, _, v = w.partition("=")
+            try:
+                weights[k] = float(v)
+            except ValueError:
+                fail(f"--weights {args.weights}: expected NAME=REPEATS,...", 2)
     train_w = Windows(seqs, split, "train", args.unroll, weights)
+    if not train_w.items:
+        parts = ", ".join(f"{s.name} frames {split[s.name]['train'][0]}-{split[s.name]['train'][1] - 1}" for s in seqs)
+        fail(f"{args.data}: no training window of --unroll {args.unroll} + 1 = {args.unroll + 1} frames fits in the "
+             f"train part ({parts}): use a longer sequence or a smaller --unroll")
     disc = torch.from_numpy(D.disc_mask(n).astype(np.float32))[None, None]
-    fw, cw = parse_widths(args.flow_widths), parse_widths(args.cloud_widths)
     model = U.CloudModel(fw, cw, args.kernel)
     opt = torch.optim.Adam(model.parameters(), lr=args.lr)
     steps_per_epoch = max(1, len(train_w.items) // args.batch)
@@ -181,10 +235,8 @@ def train(args):
     sched = torch.optim.lr_scheduler.LambdaLR(
         opt, lambda i: 0.5 * (1 + math.cos(math.pi * min(i, total_steps) / total_steps)) * 0.97 + 0.03)
     os.makedirs(args.out, exist_ok=True)
-    ckpt_path = os.path.join(args.checkpoint_dir or args.out, "checkpoint.pt")
     start_epoch, log = 0, []
-    if args.resume and os.path.exists(ckpt_path):
-        ck = torch.load(ckpt_path)
+    if ck is not None:
         model.load_state_dict(ck["model"])
         opt.load_state_dict(ck["opt"])
         sched.load_state_dict(ck["sched"])
@@ -224,8 +276,8 @@ def train(args):
     return model, seqs, split, log
 
 
-def main(argv=None):
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def parser():
+    p = argparse.ArgumentParser(prog=SCRIPT, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--data", required=True, help="dataset folder made by networks/dataset.py (with split.json)")
     p.add_argument("--sequences", default="arm_tsi", help="comma-separated sequence folders to train on")
     p.add_argument("--weights", default="", help="NAME=REPEATS,... how often each sequence's windows repeat per epoch")
@@ -247,10 +299,18 @@ def main(argv=None):
     p.add_argument("--eval-every", type=int, default=5, help="held-out PSNR every this many epochs (0: never)")
     p.add_argument("--out", required=True, help="model folder to write (ONNX, model.json, MODEL_CARD.md)")
     p.add_argument("--checkpoint-dir", default="", help="where checkpoint.pt goes (default: --out)")
-    p.add_argument("--resume", action="store_true", help="continue from the checkpoint")
+    p.add_argument("--resume", action="store_true",
+                   help="continue from the checkpoint (refused when an option other than --epochs, --threads, "
+                        "--eval-every, --out, --checkpoint-dir, --no-export, --name differs from the checkpoint's)")
     p.add_argument("--no-export", action="store_true", help="train only (no ONNX / model card)")
     p.add_argument("--name", default="", help="model name for the card (default: the folder name)")
-    args = p.parse_args(argv)
+    return p
+
+
+def main(argv=None):
+    """Trains (and exports); a bad input raises ScriptError (the command line prints it as one line,
+    exit 1 or 2)."""
+    args = parser().parse_args(argv)
     # For the model card: the from-scratch command (a resumed run reproduces it).
     args.argv_text = " ".join(a for a in (argv if argv is not None else sys.argv[1:]) if a != "--resume")
     model, seqs, split, log = train(args)
@@ -261,4 +321,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    run_main(SCRIPT, main)

@@ -29,6 +29,12 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import advect as A  # noqa: E402
 import advect_data as AD  # noqa: E402
 import advect_eval as AE  # noqa: E402
+from script_errors import ScriptError, check_resume_args, fail, load_checkpoint, run_main  # noqa: E402,F401
+
+SCRIPT = "train_advect.py"
+# Options a --resume may change: --epochs extends a run; the others do not change the model or the
+# batches it is trained on.
+RESUME_MAY_CHANGE = {"epochs", "threads", "eval_every", "val_starts", "out", "resume"}
 
 
 def set_seed(seed):
@@ -103,24 +109,76 @@ def parse_widths(text):
 
 
 def build_model(args):
-    return A.AdvectResidual(parse_widths(args.widths), args.kernel, args.bound, gate=args.gate)
+    try:
+        widths = parse_widths(args.widths)
+    except ValueError:
+        fail(f"--widths {args.widths}: expected comma-separated integers (e.g. 16,32,64,64)", 2)
+    return A.AdvectResidual(widths, args.kernel, args.bound, gate=args.gate)
+
+
+def check_data(args):
+    """The data set and the sources asked for: one-line refusals instead of tracebacks. Returns the
+    source names to load (None: all of split.json)."""
+    split_path = os.path.join(args.data, "split.json")
+    if not os.path.isfile(split_path):
+        fail(f"{split_path}: not found (--data must be a data set of networks/build_dataset_v2.py)")
+    try:
+        with open(split_path) as f:
+            split = json.load(f)
+    except (OSError, ValueError) as e:
+        fail(f"{split_path}: not readable as JSON ({e})")
+    known = sorted(split)
+    names = [s for s in args.sources.split(",") if s] or None
+    for opt, given in (("--sources", names or []), ("--exclude", [s for s in args.exclude.split(",") if s])):
+        unknown = [s for s in given if s not in split]
+        if unknown:
+            fail(f"{opt} {','.join(unknown)}: no such source in {split_path} (it has: {', '.join(known) or 'none'})", 2)
+    for name in names or known:
+        if args.part not in split[name]:
+            fail(f"{split_path}: source '{name}' has no '{args.part}' part (it has: {', '.join(k for k in sorted(split[name]) if isinstance(split[name][k], list))}; "
+                 "a data set of networks/dataset.py?): use --part train, or build the data set with "
+                 "networks/build_dataset_v2.py", 1)
+        for f in ("meta.json", "images.npy", "valid.npy", "cloud.npy", "flow_farneback.npy"):
+            if not os.path.isfile(os.path.join(args.data, name, f)):
+                fail(f"{os.path.join(args.data, name, f)}: not found (rebuild the data set with networks/build_dataset_v2.py)")
+        if args.compensated and not os.path.isfile(os.path.join(args.data, name, "background.npy")):
+            fail(f"--compensated: {os.path.join(args.data, name, 'background.npy')} not found, and the compensated "
+                 "warp needs the frames' clear background (rebuild the data set with networks/build_dataset_v2.py, "
+                 "or drop --compensated)")
+    return names
 
 
 def train(args):
     torch.set_num_threads(args.threads)
     set_seed(args.seed)
-    names = [s for s in args.sources.split(",") if s] or None
+    names = check_data(args)
+    ckpt = os.path.join(args.out, "checkpoint.pt")
+    ck = None
+    if args.resume:
+        if not os.path.exists(ckpt):
+            fail(f"--resume: {ckpt}: no checkpoint to resume (train without --resume to start this run)")
+        ck = load_checkpoint(ckpt)
+        check_resume_args(ckpt, ck.get("args"), args, {a.dest: a.default for a in parser()._actions},
+                          RESUME_MAY_CHANGE, SCRIPT)
     sources, split = AD.load_sources(args.data, names)
     if args.exclude:
         ex = set(args.exclude.split(","))
         sources = [s for s in sources if s.name not in ex]
+    if not sources:
+        fail(f"--exclude {args.exclude}: leaves no source to train on", 2)
     n = sources[0].n
     if args.res and args.res != n:
+        if n % args.res:
+            fail(f"--res {args.res}: does not divide the data set's resolution {n}", 2)
         for s in sources:
             resize_sequence_advect(s, args.res)
         n = args.res
     sampler = AD.Sampler(sources, split, args.part, args.unroll + args.pushforward, p_zero=args.p_zero, seed=args.seed,
                          compensated=args.compensated, smooth=args.smooth)
+    for s, (lo, hi) in zip(sources, sampler.ranges):
+        if hi <= lo:
+            fail(f"{args.data}/{s.name}: its '{args.part}' part is too short for --unroll {args.unroll} + --pushforward "
+                 f"{args.pushforward} (a start frame needs the frame before it and the frames it predicts)")
     pf_rng = np.random.default_rng(args.seed + 1000)
     model = build_model(args)
     opt = torch.optim.Adam(model.parameters(), lr=args.lr)
@@ -128,10 +186,8 @@ def train(args):
     sched = torch.optim.lr_scheduler.LambdaLR(
         opt, lambda i: 0.5 * (1 + math.cos(math.pi * min(i, total_steps) / total_steps)) * 0.97 + 0.03)
     os.makedirs(args.out, exist_ok=True)
-    ckpt = os.path.join(args.out, "checkpoint.pt")
     start_epoch, log, best = 0, [], None
-    if args.resume and os.path.exists(ckpt):
-        ck = torch.load(ckpt)
+    if ck is not None:
         model.load_state_dict(ck["model"])
         opt.load_state_dict(ck["opt"])
         sched.load_state_dict(ck["sched"])
@@ -204,15 +260,26 @@ def resize_sequence_advect(s, n):
 
 
 def load_model(path):
-    ck = torch.load(path)
-    a = ck["args"]
-    m = A.AdvectResidual(parse_widths(a["widths"]), a["kernel"], a["bound"], gate=a.get("gate", False))
-    m.load_state_dict(ck["model"])
+    """(model in eval mode, its training args) of a checkpoint of this script (checkpoint.pt, best.pt,
+    final.pt); a ScriptError for a missing, unreadable or foreign (e.g. paper-form, networks/train.py)
+    checkpoint."""
+    ck = load_checkpoint(path)
+    a = ck.get("args")
+    if not isinstance(a, dict) or "widths" not in a:
+        other = " (a checkpoint of networks/train.py, the paper's FlowNet + CloudNet)" if isinstance(a, dict) and \
+            "flow_widths" in a else ""
+        fail(f"{path}: not an advect-residual checkpoint of networks/train_advect.py{other}")
+    try:
+        m = A.AdvectResidual(parse_widths(a["widths"]), a["kernel"], a["bound"], gate=a.get("gate", False))
+        m.load_state_dict(ck["model"])
+    except (KeyError, ValueError, RuntimeError) as e:
+        fail(f"{path}: its weights do not fit the model its args describe ({type(e).__name__}: "
+             f"{str(e).splitlines()[0] if str(e) else ''})")
     return m.eval(), a
 
 
-def main(argv=None):
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def parser():
+    p = argparse.ArgumentParser(prog=SCRIPT, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--data", required=True)
     p.add_argument("--sources", default="", help="comma-separated sources (default: all in split.json)")
     p.add_argument("--exclude", default="", help="sources to leave out (the unseen-camera check: mobotix)")
@@ -242,10 +309,17 @@ def main(argv=None):
     p.add_argument("--eval-every", type=int, default=2)
     p.add_argument("--val-starts", type=int, default=24)
     p.add_argument("--out", required=True, help="run folder (checkpoint.pt, best.pt, final.pt, training_log.json)")
-    p.add_argument("--resume", action="store_true")
-    args = p.parse_args(argv)
+    p.add_argument("--resume", action="store_true",
+                   help="continue OUT/checkpoint.pt (refused when an option other than --epochs, --threads, "
+                        "--eval-every, --val-starts differs from the checkpoint's)")
+    return p
+
+
+def main(argv=None):
+    """Trains; a bad input raises ScriptError (the command line prints it as one line, exit 1 or 2)."""
+    args = parser().parse_args(argv)
     return train(args)
 
 
 if __name__ == "__main__":
-    main()
+    run_main(SCRIPT, main)

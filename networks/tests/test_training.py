@@ -318,5 +318,71 @@ class AdvectResidualTest(unittest.TestCase):
         self.assertGreater(float(np.abs(x - A.network_input(image, flow).numpy()).max()), 1e-3)
 
 
+    def advect_dataset(self, background=True):
+        """A tiny data set of build_dataset_v2.py's form (fit / val parts; background.npy optional)."""
+        write_dataset(self.tmp, frames=24, n=32)
+        seq = os.path.join(self.tmp, "synthetic")
+        if background:
+            images = np.load(os.path.join(seq, "images.npy"))
+            np.save(os.path.join(seq, "background.npy"), np.full_like(images, 0.4))
+        with open(os.path.join(self.tmp, "split.json")) as f:
+            split = json.load(f)
+        split["synthetic"].update({"fit": [0, 16], "val": [16, 19]})
+        with open(os.path.join(self.tmp, "split.json"), "w") as f:
+            json.dump(split, f)
+
+    TINY = ["--widths", "4,8", "--epochs", "1", "--steps-per-epoch", "2", "--batch", "2", "--unroll", "1",
+            "--eval-every", "5", "--threads", "1"]
+
+    def test_compensated_training_without_backgrounds_is_refused_before_it_starts(self):
+        """It trained as if the background were zero (the same weights as without --compensated) and
+        export then labelled the model compensated (a researcher's audit)."""
+        import train_advect as TA
+        from script_errors import ScriptError
+        self.advect_dataset(background=False)
+        run = os.path.join(self.tmp, "run")
+        with self.assertRaises(ScriptError) as e:
+            TA.train(TA.parser().parse_args(["--data", self.tmp, "--compensated", "--out", run] + self.TINY))
+        self.assertIn("background.npy", str(e.exception))
+        self.assertFalse(os.path.exists(os.path.join(run, "checkpoint.pt")))
+
+    def test_resume_refuses_other_options_and_a_missing_checkpoint_and_allows_more_epochs(self):
+        """--resume went on silently under another seed, learning rate or warp (the checkpoint's args
+        then said the new ones), died with a traceback for other widths, and started from scratch
+        when there was no checkpoint."""
+        import train_advect as TA
+        from script_errors import ScriptError
+        self.advect_dataset()
+        run = os.path.join(self.tmp, "run")
+        TA.main(["--data", self.tmp, "--out", run] + self.TINY)
+        for changed in (["--seed", "7"], ["--widths", "4,8,8"], ["--compensated"]):
+            args = ["--data", self.tmp, "--out", run, "--resume"] + self.TINY + changed
+            with self.assertRaises(ScriptError) as e:
+                TA.train(TA.parser().parse_args(args))
+            self.assertEqual(e.exception.code, 2)
+            self.assertIn(changed[0], str(e.exception))
+        with self.assertRaises(ScriptError) as e:
+            TA.train(TA.parser().parse_args(["--data", self.tmp, "--out", os.path.join(self.tmp, "none"),
+                                             "--resume"] + self.TINY))
+        self.assertIn("no checkpoint", str(e.exception))
+        more = [a if a != "1" or self.TINY[i - 1] != "--epochs" else "2" for i, a in enumerate(self.TINY)]
+        TA.main(["--data", self.tmp, "--out", run, "--resume"] + more)  # more epochs: allowed
+        self.assertTrue(os.path.exists(os.path.join(run, "final.pt")))
+
+    def test_foreign_and_truncated_checkpoints_are_refused_in_one_line(self):
+        import train_advect as TA
+        from script_errors import ScriptError
+        bad = os.path.join(self.tmp, "cut.pt")
+        with open(bad, "wb") as f:
+            f.write(b"PK\x03\x04 not a whole zip")
+        with self.assertRaises(ScriptError) as e:
+            TA.load_model(bad)
+        self.assertIn("cut.pt", str(e.exception))
+        paper = os.path.join(self.tmp, "paper.pt")
+        torch.save({"model": {}, "args": {"flow_widths": "4,8"}}, paper)
+        with self.assertRaises(ScriptError) as e:
+            TA.load_model(paper)
+        self.assertIn("FlowNet", str(e.exception))
+
 if __name__ == "__main__":
     unittest.main()
