@@ -318,9 +318,11 @@ void import_one(const OnePhoto& o, bool verbose, const std::string& settings_key
     } else {
         if (verbose)
             std::printf("HDR: none (%s)\n",
-                        o.preset.empty() ? "give --time with --lat/--lon or a --preset for calibrated radiance"
-                                         : "the photograph's name and EXIF carry no time: give --time for calibrated "
-                                           "radiance");
+                        o.hdr == "none"    ? "--hdr none: the photograph's own values, uncalibrated"
+                        : !time.empty()    ? "no place: give --lat/--lon or a --preset for calibrated radiance"
+                        : o.preset.empty() ? "give --time with --lat/--lon or a --preset for calibrated radiance"
+                                           : "the photograph's name and EXIF carry no time: give --time for calibrated "
+                                             "radiance");
     }
     std::ostringstream source;
     source << sky.source;

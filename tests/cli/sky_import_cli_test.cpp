@@ -45,6 +45,20 @@ TEST(SkyImportCli, ImportsATsiFrameWithItsPreset) {
     fs::remove_all(dir);
 }
 
+// Asked for no calibration, the import says so: it said the photograph's name and EXIF carried no
+// time, which they did (an output audit), sending users after a time problem that was not there.
+TEST(SkyImportCli, HdrNoneSaysItWasAskedFor) {
+    DYNSKY_REQUIRE_SHARED();
+    std::string dir = test::temp_dir("sky-import-hdr-none");
+    std::string photo = test::shared_path("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524170000Z.jpg");
+    auto r = test::run_command(exe() + " sky import " + photo + " --preset arm-tsi --hdr none --sky-res 32 --out " +
+                               dir + "/none.exr");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("HDR: none (--hdr none"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("carry no time"), std::string::npos) << r.output;
+    fs::remove_all(dir);
+}
+
 // A photograph as an editor or phone leaves it: a 16-bit TIFF tagged to be shown turned 90 degrees.
 // The import turns it as a viewer shows it and decodes it as sRGB, and says both; the sky circle is
 // found where the turned photograph has it.
