@@ -361,13 +361,7 @@ AnimationReport render_animation(const AnimationSettings& o) {
         meta.sky = sky->source, meta.sky_model = timeline.model().name(), meta.scene = o.scene.scene;
         meta.camera = scene->camera.name, meta.gamma = gamma_name(timeline.gamma());
         meta.settings = settings;
-        if (is_generated_sky(o.sky.sky) || !o.sky.time.empty()) {
-            const UtcTime when = add_seconds(start_time(o.sky), t);
-            char text[32];
-            std::snprintf(text, sizeof text, "%04d:%02d:%02d %02d:%02d:%02d", when.year, when.month, when.day,
-                          when.hour, when.minute, int(std::floor(when.second)));
-            meta.date_time = text;
-        }
+        meta.date_time = exif_date_time(o.sky, *sky0, t);  // the time the input records, + t
         meta.write_to(&image.metadata);
         // The frame's timing row first: killed before its images are all written, the frame is
         // rendered again and its row replaced; the other way round a kept frame lost its row.

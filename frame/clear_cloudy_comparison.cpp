@@ -280,8 +280,8 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
         if (!model.empty()) m.strings["dynsky:sky_model"] = model;
         m.strings["dynsky:scene"] = o.scene.scene;
         m.strings["dynsky:camera"] = scene.camera.name;
-        record_image_inputs(&m, scene.path, o.sky);     // the build, the files, how the sky file was taken
-        m.strings["DateTime"] = "    :  :     :  :  ";  // EXIF's unknown: not the time of writing
+        record_image_inputs(&m, scene.path, o.sky);  // the build, the files, how the sky file was taken
+        if (const std::string when = exif_date_time(o.sky, sky, 0.0); !when.empty()) m.strings["DateTime"] = when;
     };
     describe(&a, *clear0, "");
     describe(&b, *cloudy0, cloudy.model().name());

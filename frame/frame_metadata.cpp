@@ -154,7 +154,7 @@ void FrameMetadata::write_to(ImageMetadata* m) const {
     m->strings["dynsky:scene"] = scene;
     m->strings["dynsky:camera"] = camera;
     m->strings["dynsky:settings"] = settings;
-    m->strings["DateTime"] = date_time.empty() ? "    :  :     :  :  " : date_time;
+    if (!date_time.empty()) m->strings["DateTime"] = date_time;  // none when unknown (util/image.cpp)
     m->strings["dynsky:settings_hash"] = settings_hash(settings);
 }
 

@@ -30,6 +30,23 @@ UtcTime start_time(const SkySourceSpec& o) {
     return parse_utc_time(o.time.empty() ? std::string(default_sky::kStartTime) : o.time);
 }
 
+std::optional<UtcTime> sky_time_at(const SkySourceSpec& o, const SkyImage& input, double t) {
+    if (is_generated_sky(o.sky) || !o.time.empty()) return add_seconds(start_time(o), t);
+    const std::optional<double> taken = sky_recorded_utc_seconds(input);
+    if (!taken) return std::nullopt;
+    const UtcTime j2000{2000, 1, 1, 12, 0, 0.0};  // Julian date 2451545.0
+    return add_seconds(j2000, *taken - julian_date(j2000) * 86400.0 + t);
+}
+
+std::string exif_date_time(const SkySourceSpec& o, const SkyImage& input, double t) {
+    const std::optional<UtcTime> when = sky_time_at(o, input, t);
+    if (!when) return "";
+    char text[32];
+    std::snprintf(text, sizeof text, "%04d:%02d:%02d %02d:%02d:%02d", when->year, when->month, when->day, when->hour,
+                  when->minute, int(std::floor(when->second)));
+    return text;
+}
+
 namespace {
 
 ProceduralSkyParams procedural_params(const SkySourceSpec& o, uint64_t seed, const Vec3d& sun) {

@@ -4,6 +4,7 @@
 // skies here, so an option means the same thing everywhere.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "frame/frame_metadata.h"
@@ -118,5 +119,13 @@ SkyTimeline load_sky_timeline(const std::string& folder, const SkySourceSpec& sk
 
 // The UTC time of t = 0 (the default when the spec gives none: 2026-06-21T16:00:00Z).
 UtcTime start_time(const SkySourceSpec& sky);
+
+// When the sky at t seconds was (or is made to be): the clock's time for a generated sky or a
+// given --time, else the time a sky file records being taken at (`sky import`'s), else nullopt.
+std::optional<UtcTime> sky_time_at(const SkySourceSpec& sky, const SkyImage& input, double t);
+
+// EXIF's "YYYY:MM:DD hh:mm:ss" of sky_time_at, or "" when it is not known (the frame then carries
+// no DateTime: blanks were junk to asset tools).
+std::string exif_date_time(const SkySourceSpec& sky, const SkyImage& input, double t);
 
 }  // namespace dynsky

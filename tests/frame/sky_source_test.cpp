@@ -25,6 +25,20 @@ SkySourceSpec small_sky(const std::string& sky) {
 
 // An import's filled mask beside the input sky changes its motion (SkyImage::filled), so it is part
 // of the settings that decide whether an animation's earlier frames or a stored timeline are kept.
+// A frame's EXIF DateTime: the clock's for a made sky or a given time, the time an imported sky
+// records plus t for a sky file (its frames said "    :  :     :  :  ", which asset tools read as
+// junk; an output audit), and none when nothing says.
+TEST(SkySource, AFramesDateIsTheSkysTime) {
+    SkyImage imported;
+    imported.source = "photo tsi_sgpC1_20170524154000Z.jpg (preset arm-tsi) time=2017-05-24T15:40:00Z";
+    EXPECT_EQ(exif_date_time(small_sky("imported.exr"), imported, 75.0), "2017:05:24 15:41:15");
+    EXPECT_EQ(exif_date_time(small_sky("imported.exr"), SkyImage(), 75.0), "");
+    SkySourceSpec clock = small_sky("imported.exr");
+    clock.time = "2026-12-31T23:59:30Z";
+    EXPECT_EQ(exif_date_time(clock, imported, 45.0), "2027:01:01 00:00:15");
+    EXPECT_EQ(exif_date_time(small_sky("clear"), SkyImage(), 0.0), "2026:06:21 16:00:00");  // the default start
+}
+
 TEST(SkySource, TheFilledMaskBesideTheSkyIsPartOfItsSettings) {
     const std::string dir = test::temp_dir("sky_source_mask");
     ClearSkyParams p;
