@@ -23,6 +23,7 @@
 #include "util/atomic_file.h"
 #include "util/chart.h"
 #include "util/error.h"
+#include "util/file_hash.h"
 #include "util/image.h"
 #include "util/interrupt.h"
 #include "util/json_file.h"
@@ -140,7 +141,7 @@ TrainedFrames model_training_frames(const PhotoSequence& seq, const std::string&
             if (preset.empty() && name.rfind("arm_", 0) == 0) preset = "arm-tsi";
             if (preset.empty() && name == "mobotix") preset = "mobotix";
             const double tolerance = std::max(1.0, 0.25 * dt);
-            int count = 0, ahead = 0;
+            int count = 0, ahead = 0, lo = -1, hi = -1;
             for (size_t k = 0; k < seq.photos.size(); ++k) {
                 const std::string base = fs::path(seq.photos[k]).filename().string();
                 const bool timed = k < seq.utc.size() && std::isfinite(seq.utc[k]) && std::isfinite(first) &&
@@ -148,6 +149,7 @@ TrainedFrames model_training_frames(const PhotoSequence& seq, const std::string&
                 if (std::find(trained_names.begin(), trained_names.end(), base) != trained_names.end() ||
                     (timed && seq.utc[k] >= first - tolerance && seq.utc[k] <= last + tolerance)) {
                     r.trained[k] = 1, ++count;
+                    lo = lo < 0 ? int(k) : lo, hi = int(k);
                 } else if (timed && first - seq.utc[k] > 0 && first - seq.utc[k] <= kSeenAheadSeconds) {
                     r.trained[k] = 1, ++ahead;  // the same clouds, trained on later (below)
                 }
@@ -158,8 +160,9 @@ TrainedFrames model_training_frames(const PhotoSequence& seq, const std::string&
                              "'s frames trained on (the same clouds, later)";
             if (count > 0)
                 r.matched += (r.matched.empty() ? "" : "; ") + name + " frames trained on: " + std::to_string(count) +
-                             " of these (its split.json names the " + std::to_string(trained_names.size()) +
-                             " photographs it trained on)";
+                             " of these (" + (count == hi - lo + 1 ? "" : "among ") + "frames " + std::to_string(lo) +
+                             "-" + std::to_string(hi) + "; its split.json names the " +
+                             std::to_string(trained_names.size()) + " photographs it trained on)";
             continue;
         }
         PhotoSequence known;
@@ -292,9 +295,11 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
                                            : named_photo_sequence(o.sequence, shared);
 
     std::optional<CloudModel> paper;
+    std::string paper_folder;
     if (o.paper) {
         try {
-            paper = CloudModel::load(resolve_cloud_model("paper"));
+            paper_folder = resolve_cloud_model("paper");
+            paper = CloudModel::load(paper_folder);
         } catch (const Error&) {
             if (!o.quiet) std::fprintf(stderr, "dynsky: note: the paper's model is not installed; not scored\n");
         }
@@ -566,6 +571,17 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
     csv << "resolution,horizon,ahead_s,method,psnr_db,ssim,mse,frames\n";
     md << "# Cloud model evaluation: " << (folder == "advect" ? "advect" : model.info().name) << " on " << seq.name
        << "\n\n";
+    // Which model exactly: two runs of the same name told apart (a researcher's audit: reports of two
+    // trainings were headed alike and named no folder).
+    if (folder != "advect") {
+        md << "Model: `" << folder << "` (kind " << model.info().kind << ", " << model.info().resolution << " px; "
+           << describe_file((fs::path(folder) / "model.onnx").string()) << ")";
+        if (paper)
+            md << "; the paper's form: `" << paper_folder << "` ("
+               << describe_file((fs::path(paper_folder) / "flownet.onnx").string()) << ", "
+               << describe_file((fs::path(paper_folder) / "cloudnet.onnx").string()) << ")";
+        md << ".\n\n";
+    }
     md << "Photographs: `" << seq.folder << "` (" << count << " frames every " << seq.dt << " s, "
        << (seq.preset.empty() ? std::string("imported skies") : "preset " + seq.preset) << "); scored: " << part
        << ", start frames " << first << ".." << last << ". Imported at " << big
@@ -601,7 +617,8 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
                    result.scores[r].begin()->second.count(m);
         };
         std::ostringstream chart_csv;
-        chart_csv << "horizon (steps)";
+        // The chart's values, not the scores (those are in the report's CSV): said in the header.
+        chart_csv << "horizon (steps); the other columns: PSNR minus the better Farneback form's (dB)";
         for (const std::string& m : result.methods)
             if (charted(m)) chart_csv << "," << (m == "farneback" ? std::string("farneback (better form)") : m);
         chart_csv << "\n";

@@ -546,6 +546,12 @@ TEST(SkyModelCli, EvaluateNeverScoresTheModelsTrainingFramesAsHeldOut) {
         EXPECT_NE(r.output.find("warning: the model was trained on"), std::string::npos) << r.output;
         EXPECT_NE(read_text(dir + "/u.md").find("NOT checked against the model's training photographs"),
                   std::string::npos);
+        // The report names the model scored, its folder and its network's bytes (two trainings'
+        // reports were headed alike: a researcher's audit).
+        EXPECT_NE(read_text(dir + "/u.md").find("Model: `" + legacy + "` (kind advect-residual, 64 px; model.onnx ("),
+                  std::string::npos)
+            << read_text(dir + "/u.md");
+        EXPECT_NE(read_text(dir + "/u.md").find("fnv1a"), std::string::npos);
     }
     // A model trained on a copy of 5 of the day's photographs (frames 100-104; its data set numbers
     // them 0-4): those are found wherever they lie, and the day's first frames, which frame numbers
