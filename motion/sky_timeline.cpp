@@ -224,7 +224,8 @@ Color SkyTimeline::relight_to_clock(double t, SkyImage* out) {
     });
     if (!relight_warned_ && now.y() < 0) {
         relight_warned_ = true;
-        if (!reports_silenced())
+        // Below from the start: the start's own warning said so (this named the first step's time).
+        if (!reports_silenced() && start.y() >= 0)
             std::fprintf(stderr,
                          "dynsky: warning: the sun is below the horizon %.0f s into the sky timeline: the clear sky "
                          "there is the sunset's, dimmed for twilight (no stars or moon)\n",
