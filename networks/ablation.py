@@ -177,7 +177,7 @@ def write_report(args, results, path):
          f"ARM training frames) and differs only in the loss (`networks/train.py --cos-weight`) and the seed "
          f"({', '.join(map(str, seeds))}). MSE only: image MSE + 0.1 x flow MSE (`--cos-weight 0`). MSE + cosine "
          "(the default, 0.5): image MSE + 0.05 x (1 - cos of RGB vectors) + 0.1 x (flow MSE + 0.5 x (1 - cos of "
-         "flow directions on cloud pixels)). MSE + cosine seed 1 is the shipped model `networks/models/arm_tsi`.", "",
+         "flow directions on cloud pixels))." + (f" MSE + cosine seed 1 is the shipped model `{os.path.relpath(args.shipped, ROOT)}`." if args.shipped else " Every model was trained here (no --shipped)."), "",
          f"Image scores: `dynsky sky evaluate --model advect --sequence arm-tsi --horizons {args.horizons}`'s "
          "'paper' column, each model standing in for the paper's (networks/ablation.py evaluate_cpp), with "
          "--frames the model's held-out ARM frames ("

@@ -58,8 +58,9 @@ def cpu_time(model, n, repeats=30, rounds=5):
 
 
 @torch.no_grad()
-def rollout(model, img, flow, steps, mask):
-    """Returns per-step stats of a rollout with fixed F (mask: pixels to measure, (1, 1, N, N))."""
+def rollout(model, img, flow, steps, mask, comp=None):
+    """Returns per-step stats of a rollout with fixed F (mask: pixels to measure, (1, 1, N, N));
+    comp: the background compensation of a model trained with --compensated (A.compensation)."""
     x = A.fill_saturated(img)
     stats = {"cover": [], "mean": [], "hf": [], "min": [], "max": [], "finite": True}
     frames = [x]
@@ -74,7 +75,7 @@ def rollout(model, img, flow, steps, mask):
 
     record(x)
     for t in range(steps):
-        x = A.step(model, x, flow)
+        x = A.step(model, x, flow, comp)
         record(x)
         if (t + 1) in (1, 10, 30, 60, 120, 240, 360):
             frames.append(x)
@@ -92,7 +93,15 @@ def user_wind(n, speed_mps, from_deg, height_m=1500.0, dt=30.0):
     return A.wind_flow(n, [[-east, -north]])
 
 
-def run_rollouts(model, sources, split, clear_steps=120, cloudy_steps=360, part="heldout"):
+def compensation_at(s, k, flow, compensated):
+    """What a compensated model's warp adds at frame k of source s (None for a plain-warp model), as
+    AE.evaluate and the C++ side step it: the frame's clear background moved back."""
+    if not compensated:
+        return None
+    return A.compensation(AD.t_img(s.background[k:k + 1]), flow)
+
+
+def run_rollouts(model, sources, split, clear_steps=120, cloudy_steps=360, part="heldout", compensated=False):
     by = {s.name: s for s in sources}
     out = {}
     frames = {}
@@ -114,7 +123,7 @@ def run_rollouts(model, sources, split, clear_steps=120, cloudy_steps=360, part=
             f = AD.true_flow(s, [k])
         else:
             f = user_wind(s.n, 10.0, 270.0)
-        st, fr = rollout(model, img, f, steps, mask)
+        st, fr = rollout(model, img, f, steps, mask, compensation_at(s, k, f, compensated))
         st["start_frame"] = k
         st["flow"] = kind
         st["flow_rms_px"] = float(f.pow(2).sum(1).sqrt().mean())
@@ -138,15 +147,21 @@ def to_rgb(t):
 
 
 def save_frames_png(model, sources, split, path, names=("arm_tsi", "arm_dusk", "mobotix", "proc_05", "arm_clear"),
-                    h=6):
+                    h=6, compensated=False):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     by = {s.name: s for s in sources}
-    names = [n for n in names if n in by]
+    # A held-out part shorter than the horizon and the frame before has no frame to show.
+    short = [n for n in names if n in by and split[n]["heldout"][1] - split[n]["heldout"][0] < h + 2]
+    names = [n for n in names if n in by and n not in short]
+    if short:
+        print(f"frames: {', '.join(short)} left out (held-out part shorter than {h + 2} frames)", flush=True)
+    if not names:
+        return
     cols = ["input I_k", f"truth k+{h}", f"model prev F, {h} steps", f"model true F, {h} steps",
             f"Farneback x{h}", "persistence"]
-    fig, axes = plt.subplots(len(names), len(cols), figsize=(2.2 * len(cols), 2.3 * len(names)))
+    fig, axes = plt.subplots(len(names), len(cols), figsize=(2.2 * len(cols), 2.3 * len(names)), squeeze=False)
     with torch.no_grad():
         for r, name in enumerate(names):
             s = by[name]
@@ -156,9 +171,10 @@ def save_frames_png(model, sources, split, path, names=("arm_tsi", "arm_dusk", "
             fp = AD.t_img(s.flow[k - 1:k])
             ft = AD.true_flow(s, [k])
             a, b = A.fill_saturated(x0), A.fill_saturated(x0)
+            cp, ct = compensation_at(s, k, fp, compensated), compensation_at(s, k, ft, compensated)
             for _ in range(h):
-                a = A.step(model, a, fp)
-                b = A.step(model, b, ft)
+                a = A.step(model, a, fp, cp)
+                b = A.step(model, b, ft, ct)
             ims = [x0, AD.t_img(s.images[k + h:k + h + 1]), a, b, A.advect_by_flow(x0, fp, h), x0]
             for c, im in enumerate(ims):
                 ax = axes[r, c]
@@ -205,7 +221,7 @@ def save_rollout_png(roll, frames, path):
     keys = [k for k in ("arm_tsi/prev", "mobotix/prev", "proc_05/true", "arm_clear/wind") if k in frames]
     if keys:
         ncol = max(len(frames[k]) for k in keys)
-        fig, axes = plt.subplots(len(keys), ncol, figsize=(1.9 * ncol, 2.0 * len(keys)))
+        fig, axes = plt.subplots(len(keys), ncol, figsize=(1.9 * ncol, 2.0 * len(keys)), squeeze=False)
         labels = ["start", "1", "10", "30", "60", "120", "240", "360"]
         for r, k in enumerate(keys):
             for c in range(ncol):
@@ -272,12 +288,14 @@ def main(argv=None):
                                         smooth=smooth)
             print(f"{name}: evaluated in {time.time() - t0:.0f} s", flush=True)
         if args.rollouts and spec == args.model[0]:
-            roll, frames = run_rollouts(model, sources, split, args.clear_steps, args.cloudy_steps, args.rollout_part)
+            roll, frames = run_rollouts(model, sources, split, args.clear_steps, args.cloudy_steps, args.rollout_part,
+                                        compensated)
             with open(os.path.join(args.out, "rollouts.json"), "w") as f:
                 json.dump(roll, f)
             save_rollout_png(roll, frames, os.path.join(args.out, "rollouts.png"))
         if args.frames and spec == args.model[0]:
-            save_frames_png(model, sources, split, os.path.join(args.out, f"frames_{args.part}.png"))
+            save_frames_png(model, sources, split, os.path.join(args.out, f"frames_{args.part}.png"),
+                            compensated=compensated)
     if results:
         with open(os.path.join(args.out, f"{args.part}.json"), "w") as f:
             json.dump(results, f, indent=1)
