@@ -375,7 +375,7 @@ AnimationReport render_animation(const AnimationSettings& o) {
         // A frame's files go together: a write failing (a full disk) removes those of this frame
         // already written (a frame_0005.png stayed without its EXR).
         try {
-            write_image(store.frame_png(k), tonemap_to_display(image, ev));
+            write_image(store.frame_png(k), tonemap_to_display(image, result.alpha, ev));
             write_image(store.sky_png(k), tonemap_to_display(sky_to_image(*sky), sky_ev));
             write_image(store.frame_exr(k), aovs.any() ? render_layers(result) : image);
         } catch (...) {

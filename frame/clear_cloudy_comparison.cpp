@@ -244,9 +244,16 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
         // motion/radiance_scale.h), so the two are compared like for like.
         if (cloudy.radiance_scale() != 1.0) scale_radiance(s.get(), cloudy.radiance_scale());
         if (!own_sun.empty()) {
+            // Dimmed and reddened as the model's sun at t (the cloudy sky's is, in its timeline):
+            // put back at its start radiance, the clear sky's sun stayed at the start's strength,
+            // and an hour of a Paris evening read 17 % more light than the cloudy sky of the same
+            // clear start.
             s->sun_direction = p.sun_direction.cast<float>();
             remove_sun(s.get());
-            insert_sun(s.get(), own_sun, p.sun_direction);
+            SunPatch relit = own_sun;
+            const Color factor = sun_patch_relight(sky_n, *cloudy.sun_direction_at(0.0), p.sun_direction, turbidity);
+            for (Color& e : relit.excess) e *= factor;
+            insert_sun(s.get(), relit, p.sun_direction);
         }
         s->time_seconds = t;
         return s;

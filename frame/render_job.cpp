@@ -172,10 +172,10 @@ void run_render_job(const RenderJob& o) {
         // when both are, so a PNG that cannot be written (a full disk) leaves neither, and an
         // earlier render's pair under these names stays as it was.
         write_files_atomic({{o.out, encode_image(o.out, settings.aovs.any() ? render_layers(result) : image)},
-                            {png_beside, encode_image(png_beside, tonemap_to_display(image, ev))}});
+                            {png_beside, encode_image(png_beside, tonemap_to_display(image, result.alpha, ev))}});
         if (!o.quiet) std::fprintf(stderr, "wrote %s and %s\n", o.out.c_str(), png_beside.c_str());
     } else {
-        write_image(o.out, tonemap_to_display(image, ev));
+        write_image(o.out, tonemap_to_display(image, result.alpha, ev));
         if (!o.quiet) std::fprintf(stderr, "wrote %s\n", o.out.c_str());
     }
     if (!o.quiet && result.stopped)

@@ -20,6 +20,8 @@
 #include "motion/network_step_model.h"
 #include "motion/photo_sequence.h"
 #include "motion/sun_patch.h"
+#include "sky/photo_import.h"
+#include "sky/sun_position.h"
 #include "util/atomic_file.h"
 #include "util/chart.h"
 #include "util/error.h"
@@ -132,6 +134,7 @@ TrainedFrames model_training_frames(const PhotoSequence& seq, const std::string&
             part["trained_utc_s"][0].is_number() && part["trained_utc_s"][1].is_number())
             first = part["trained_utc_s"][0].get<double>(), last = part["trained_utc_s"][1].get<double>();
         const double dt = part.contains("dt_s") && part["dt_s"].is_number() ? part["dt_s"].get<double>() : 30.0;
+        if (std::isfinite(first) && first > last) std::swap(first, last);
         if (!trained_names.empty() || std::isfinite(first)) {
             // The camera of its photographs (the split's "preset", else the named sequences'): times
             // of another camera are other skies.
@@ -140,6 +143,21 @@ TrainedFrames model_training_frames(const PhotoSequence& seq, const std::string&
                                      : std::string();
             if (preset.empty() && name.rfind("arm_", 0) == 0) preset = "arm-tsi";
             if (preset.empty() && name == "mobotix") preset = "mobotix";
+            // Names without times (a split of a data set built before frames_utc_s): the times
+            // their names carry, on the camera's clock, so that imported skies of them and copies
+            // under other names are found too.
+            if (!std::isfinite(first) && !preset.empty()) {
+                double offset = 0;
+                try {
+                    offset = camera_preset(preset).filename_utc_offset_hours;
+                } catch (const Error&) {}
+                for (const std::string& trained : trained_names)
+                    if (const std::string iso = time_from_file_name(trained, offset); !iso.empty()) {
+                        const double t = utc_seconds(iso);
+                        first = std::isfinite(first) ? std::min(first, t) : t;
+                        last = std::isfinite(last) ? std::max(last, t) : t;
+                    }
+            }
             const double tolerance = std::max(1.0, 0.25 * dt);
             int count = 0, ahead = 0, lo = -1, hi = -1;
             for (size_t k = 0; k < seq.photos.size(); ++k) {
@@ -161,8 +179,11 @@ TrainedFrames model_training_frames(const PhotoSequence& seq, const std::string&
             if (count > 0)
                 r.matched += (r.matched.empty() ? "" : "; ") + name + " frames trained on: " + std::to_string(count) +
                              " of these (" + (count == hi - lo + 1 ? "" : "among ") + "frames " + std::to_string(lo) +
-                             "-" + std::to_string(hi) + "; its split.json names the " +
-                             std::to_string(trained_names.size()) + " photographs it trained on)";
+                             "-" + std::to_string(hi) + "; its split.json " +
+                             (trained_names.empty() ? std::string("gives the times of the photographs it trained on")
+                                                    : "names the " + std::to_string(trained_names.size()) +
+                                                          " photographs it trained on") +
+                             ")";
             continue;
         }
         PhotoSequence known;

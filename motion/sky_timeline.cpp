@@ -171,17 +171,12 @@ Color SkyTimeline::relight_to_clock(double t, SkyImage* out) {
         p.sun_direction = sun, p.sun_disc = false;
         return make_clear_sky(p, size, false).rgb;
     };
-    auto sun_irradiance = [&](const Vec3d& sun) {
-        p.sun_direction = sun, p.sun_disc = true;
-        return ClearSkyModel(p, false).sun_irradiance();
-    };
     // The ratio of two clear backgrounds is smooth: computed at most at 256 px and upsampled (at
     // 1024 px the two Hosek-Wilkie skies per frame were a sixth of the sky's time).
     const int w = std::min(n, 256);
     if (relight_n_ != w) {
         p.turbidity = relight_turbidity_ = clear_sky_turbidity(*step(0), start);
         relight_start_ = background_at(start, w);
-        relight_sun_start_ = sun_irradiance(start);
         relight_n_ = w;
     }
     p.turbidity = relight_turbidity_;
@@ -232,17 +227,9 @@ Color SkyTimeline::relight_to_clock(double t, SkyImage* out) {
                          t);
     }
     // The patch holds radiance: put at a pixel of another solid angle it carries that much more or
-    // less light (a sun climbing 11 degrees gained 5 % in an hour): its irradiance kept.
-    // Between pixels the patch is shared bilinearly (insert_sun), so the solid angle is too: at
-    // the nearest pixel's the illuminance stepped 0.5 % as the sun crossed into the next one.
-    auto solid_angle_at = [&](const Vec3d& sun) { return sun_pixel_solid_angle(n, sun); };
-    const double omega_start = solid_angle_at(start), omega_now = solid_angle_at(now);
-    const double moved = omega_start > 0 && omega_now > 0 ? omega_start / omega_now : 1.0;
-    const Color irradiance_now = sun_irradiance(now);
-    Color factor = Color::Ones();
-    for (int k = 0; k < 3; ++k)
-        factor[k] = float(moved) * (relight_sun_start_[k] > 0 ? irradiance_now[k] / relight_sun_start_[k] : 1.0f);
-    return factor;
+    // less light (a sun climbing 11 degrees gained 5 % in an hour): its irradiance kept, and the
+    // model's sun's change applied.
+    return sun_patch_relight(n, start, now, relight_turbidity_);
 }
 
 std::optional<Vec3d> SkyTimeline::sun_direction_at(double t) const {

@@ -185,7 +185,6 @@ class SkyTimeline {
     int relight_n_ = 0;
     std::vector<float> relight_start_;
     double relight_turbidity_ = 3;
-    Color relight_sun_start_ = Color::Ones();
     bool relight_warned_ = false;
     SkyTimelineTimings timings_;
     std::string stored_folder_;  // a loaded timeline's folder (steps and flows read from there)

@@ -41,7 +41,9 @@ void check_values(const NpyArray& a, const std::string& file, const std::string&
 }
 
 // 2: the steps keep the input's sun and frames are relit to the clock (SkyTimeline::relight_to_clock).
-constexpr const char* kFormat = "dynsky sky timeline 2";
+// 3 since 2026-12-07: the suns' patches record where in its pixel the sun was cut (fx, fy), which
+// insert_sun moves them by; a timeline of 2 would give other frames than a run without it.
+constexpr const char* kFormat = "dynsky sky timeline 3";
 
 std::string numbered(const std::string& folder, const char* prefix, int i, const char* ext) {
     char name[64];
@@ -224,7 +226,8 @@ SkyTimeline SkyTimeline::load(const std::string& folder, std::string* settings) 
         j = json::parse(in);
         if (j.at("format").get<std::string>() != kFormat)
             throw_file_error(path, "not a stored sky timeline of this version (format '" +
-                                       j.at("format").get<std::string>() + "')");
+                                       j.at("format").get<std::string>() + "', this dynsky reads '" + kFormat +
+                                       "'): make it again with 'dynsky sky timeline'");
         SkyTimeline t;
         t.dt_ = j.at("dt").get<double>();
         t.stored_last_step_ = j.at("last_step").get<int>();
@@ -259,8 +262,10 @@ SkyTimeline SkyTimeline::load(const std::string& folder, std::string* settings) 
             patch.dj = p.at("dj").get<std::vector<int>>();
             for (const json& c : p.at("excess"))
                 patch.excess.emplace_back(c[0].get<float>(), c[1].get<float>(), c[2].get<float>());
-            // Where in its pixel the sun was cut (absent before 2026-12-07: its pixel's centre).
-            patch.fx = p.value("fx", 0.0), patch.fy = p.value("fy", 0.0);
+            // Where in its pixel the sun was cut (format 3 on).
+            if (!p.contains("fx") || !p.contains("fy") || !p["fx"].is_number() || !p["fy"].is_number())
+                throw_file_error(path, "a sun patch without its position in its pixel (fx, fy)");
+            patch.fx = p["fx"].get<double>(), patch.fy = p["fy"].get<double>();
             t.suns_.push_back(std::move(patch));
         }
         if (int(t.suns_.size()) != t.stored_last_step_ + 1 || int(j.at("steps").size()) != t.stored_last_step_ + 1 ||

@@ -215,6 +215,21 @@ double sun_pixel_solid_angle(int n, const Vec3d& direction) {
     return (1 - ay) * ((1 - ax) * omega[0][0] + ax * omega[0][1]) + ay * ((1 - ax) * omega[1][0] + ax * omega[1][1]);
 }
 
+Color sun_patch_relight(int n, const Vec3d& from, const Vec3d& to, double turbidity) {
+    ClearSkyParams p;
+    p.turbidity = turbidity;
+    p.sun_disc = true;
+    p.sun_direction = from;
+    const Color before = ClearSkyModel(p, false).sun_irradiance();
+    p.sun_direction = to;
+    const Color after = ClearSkyModel(p, false).sun_irradiance();
+    const double omega_from = sun_pixel_solid_angle(n, from), omega_to = sun_pixel_solid_angle(n, to);
+    const double moved = omega_from > 0 && omega_to > 0 ? omega_from / omega_to : 1.0;
+    Color factor = Color::Ones();
+    for (int k = 0; k < 3; ++k) factor[k] = float(moved) * (before[k] > 0 ? after[k] / before[k] : 1.0f);
+    return factor;
+}
+
 std::optional<Vec3d> sun_from_brightest_pixels(const SkyImage& sky) {
     const int n = sky.resolution;
     cv::Mat lum(n, n, CV_32FC1, cv::Scalar(0));

@@ -71,6 +71,13 @@ void insert_sun(SkyImage* sky, const SunPatch& patch, const Vec3d& direction, do
 // insert_sun covers, smooth as the sun moves.
 double sun_pixel_solid_angle(int n, const Vec3d& direction);
 
+// What a sun patch cut at `from` is multiplied by when insert_sun puts it at `to` on the clock: the
+// clear-sky model's sun irradiance there over at `from` (per channel: the sun reddens and dims as
+// it sets), times the solid angle of the pixels it leaves over that of those it lands on
+// (sun_pixel_solid_angle), so that its irradiance follows the model's. 1 where the model has no
+// sun at `from`. The sky timeline and compare's clear sky both use it.
+Color sun_patch_relight(int n, const Vec3d& from, const Vec3d& to, double turbidity);
+
 // In an image in the [0, 1] form (CV_32FC3): the pixels where any channel is >= 0.999, dilated by
 // one pixel, filled from their unclipped surroundings (normalised convolution); the image clamped to
 // [0, 1], 0 outside the disc. Returns that mask (CV_8UC1,

@@ -191,6 +191,9 @@ def check_data(args):
 def train(args):
     torch.set_num_threads(min(args.threads, 2))
     set_seed(args.seed)
+    # Stored (and compared on --resume) as the folder itself: a relative --data named another data
+    # set from another working folder, and the same one from there was refused.
+    args.data = os.path.realpath(args.data)
     split, names, fw, cw = check_data(args)
     ckpt_path = os.path.join(args.checkpoint_dir or args.out, "checkpoint.pt")
     ck = None

@@ -151,6 +151,9 @@ def check_data(args):
 def train(args):
     torch.set_num_threads(args.threads)
     set_seed(args.seed)
+    # Stored (and compared on --resume) as the folder itself: a relative --data named another data
+    # set from another working folder, and the same one from there was refused.
+    args.data = os.path.realpath(args.data)
     names = check_data(args)
     ckpt = os.path.join(args.out, "checkpoint.pt")
     ck = None

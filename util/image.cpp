@@ -379,6 +379,27 @@ Image tonemap_to_display(const Image& linear, float exposure_ev) {
     return out;
 }
 
+Image tonemap_to_display(const Image& premultiplied, const Image& alpha, float exposure_ev) {
+    if (alpha.empty()) return tonemap_to_display(premultiplied, exposure_ev);
+    if (alpha.width != premultiplied.width || alpha.height != premultiplied.height || alpha.channels != 1)
+        throw Error("tonemap_to_display: the alpha is not one channel of the image's size");
+    Image out(premultiplied.width, premultiplied.height, 4);
+    const float scale = std::exp2(exposure_ev);
+    for (int y = 0; y < out.height; ++y)
+        for (int x = 0; x < out.width; ++x) {
+            const float a = std::clamp(alpha.at(x, y, 0), 0.0f, 1.0f);
+            for (int c = 0; c < 3; ++c)
+                out.at(x, y,
+                       c) = a > 0
+                                ? linear_to_srgb(tonemap_aces(
+                                      scale * premultiplied.at(x, y, std::min(c, premultiplied.channels - 1)) / a))
+                                : 0.0f;
+            out.at(x, y, 3) = a;
+        }
+    out.metadata = premultiplied.metadata;
+    return out;
+}
+
 void check_extension(const std::string& option, const std::string& path, const std::string& ext) {
     if (file_extension(path) != ext) throw Error(option + " " + path + ": must name a " + ext + " file");
 }

@@ -110,6 +110,10 @@ std::string encode_image(const std::string& path, const Image& image);
 // Linear radiance to an 8-bit-ready display image: exposure (2^ev), ACES filmic, sRGB encode.
 // The exposure policies (which ev) are util/exposure.h.
 Image tonemap_to_display(const Image& linear, float exposure_ev = 0.0f);
+// The same for a colour premultiplied by `alpha` (1 channel, the same size; a render's alpha pass):
+// RGBA, the colour divided by alpha before the tone curve (straight alpha, as PNG and viewers
+// take it), 0 where alpha is 0.
+Image tonemap_to_display(const Image& premultiplied, const Image& alpha, float exposure_ev);
 
 // Lower-cased extension with the dot (".exr"), or "" if none.
 std::string file_extension(const std::string& path);

@@ -369,6 +369,30 @@ class AdvectResidualTest(unittest.TestCase):
         TA.main(["--data", self.tmp, "--out", run, "--resume"] + more)  # more epochs: allowed
         self.assertTrue(os.path.exists(os.path.join(run, "final.pt")))
 
+    def test_resume_compares_the_data_folder_itself(self):
+        """A relative --data was compared as written: the same folder from another working folder was
+        refused, another folder of the same name accepted (a review)."""
+        import train_advect as TA
+        from script_errors import ScriptError
+        self.advect_dataset()
+        run = os.path.join(self.tmp, "run")
+        other = tempfile.mkdtemp()
+        cwd = os.getcwd()
+        try:
+            os.chdir(os.path.dirname(self.tmp))
+            TA.main(["--data", os.path.basename(self.tmp), "--out", run] + self.TINY)
+            os.chdir(self.tmp)
+            more = [a if a != "1" or self.TINY[i - 1] != "--epochs" else "2" for i, a in enumerate(self.TINY)]
+            TA.main(["--data", ".", "--out", run, "--resume"] + more)  # the same folder, spelt otherwise
+            shutil.copytree(self.tmp, os.path.join(other, os.path.basename(self.tmp)), ignore=shutil.ignore_patterns("run"))
+            os.chdir(other)
+            with self.assertRaises(ScriptError) as e:
+                TA.train(TA.parser().parse_args(["--data", os.path.basename(self.tmp), "--out", run, "--resume"] + more))
+            self.assertIn("--data", str(e.exception))
+        finally:
+            os.chdir(cwd)
+            shutil.rmtree(other, ignore_errors=True)
+
     def test_foreign_and_truncated_checkpoints_are_refused_in_one_line(self):
         import train_advect as TA
         from script_errors import ScriptError

@@ -1,6 +1,8 @@
 // End-to-end tests of `dynsky sky procedural`.
 #include <gtest/gtest.h>
 
+#include <sstream>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -198,6 +200,31 @@ TEST(SkyProceduralCli, AClearSkyWithItsOwnSunComparesEqualToItsClearSky) {
     std::string output;
     EXPECT_NEAR(cloudy_over_clear(dir + "/bright_sun.exr", dir + "/cmp", &output), 1.0, 0.02) << output;
     EXPECT_NE(output.find("own sun (3.00 x the clear-sky model's"), std::string::npos) << output;
+    fs::remove_all(dir);
+}
+
+// A clear start compared over an evening hour: its moved sky and the clear sky of each time agree
+// as the sun sets, since both dim and redden the start's sun as the model's (sun_patch_relight).
+// The clear sky put the start's sun back at its start radiance: 17 % brighter than the cloudy sky
+// of the same clear start after an hour (Paris, 18:00 to 19:00 UTC; a review of this code).
+TEST(SkyProceduralCli, AClearStartAndItsClearSkyAgreeThroughAnEvening) {
+    const std::string dir = test::temp_dir("compare_evening");
+    auto r = test::run_command(std::string(DYNSKY_EXE) +
+                               " compare builtin --sky clear --model advect --sky-res 64 --time 2026-06-21T18:00:00Z "
+                               "--duration 3600 --chart-frames 3 --chart-res 8x4 --res 16x9 --spp 1 -q --out " +
+                               dir + " 2>&1");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    std::istringstream csv(test::read_text(dir + "/illuminance.csv"));
+    std::string line;
+    std::getline(csv, line);  // header
+    int rows = 0;
+    while (std::getline(csv, line)) {
+        double t = 0, clear = 0, cloudy = 0;
+        ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%lf,%lf", &t, &clear, &cloudy), 3) << line;
+        EXPECT_NEAR(cloudy / clear, 1.0, 0.02) << "t = " << t << " s: " << line;
+        ++rows;
+    }
+    EXPECT_EQ(rows, 3);
     fs::remove_all(dir);
 }
 

@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <nlohmann/json.hpp>
+#include <fstream>
 #include <opencv2/imgproc.hpp>
 
 #include "sky/clear_sky.h"
@@ -18,6 +20,7 @@
 #include "motion/flow_extrapolation_model.h"
 #include "motion/network_step_model.h"
 #include "motion/procedural_step_model.h"
+#include "tests/test_support.h"
 #include "util/error.h"
 #include "util/math.h"
 
@@ -611,6 +614,23 @@ TEST(SkyTimeline, DamagedStoredFlowsAndEndlessSpansAreRefused) {
             ADD_FAILURE() << "a flow holding " << bad << " was used";
         } catch (const Error& e) {
             EXPECT_NE(std::string(e.what()).find("flow_0001.npy: value 100 is"), std::string::npos) << e.what();
+        }
+    }
+    // A timeline of the format before the suns recorded where in their pixel they were cut gives
+    // other frames than a run without it: refused, saying what to do (it was kept silently).
+    computed.save(dir, 3, "settings");
+    {
+        const std::string path = dir + "/timeline.json";
+        nlohmann::json j = nlohmann::json::parse(test::read_text(path));
+        j["format"] = "dynsky sky timeline 2";
+        for (auto& p : j["suns"]) p.erase("fx"), p.erase("fy");
+        std::ofstream(path) << j.dump();
+        try {
+            SkyTimeline::load(dir);
+            ADD_FAILURE() << "a timeline of the earlier format was loaded";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("make it again with 'dynsky sky timeline'"), std::string::npos)
+                << e.what();
         }
     }
     std::filesystem::remove_all(dir);

@@ -38,6 +38,26 @@ TEST(ImageIo, ExrRoundTripKeepsPixelsAndMetadata) {
     EXPECT_EQ(files, 1);
 }
 
+// A render with an alpha pass has its colour premultiplied (the sky seen from the camera
+// transparent): its PNG is RGBA with straight alpha, so the sky is transparent there too rather
+// than black (a review), and a half-covered pixel shows its surface's own colour.
+TEST(ImageIo, APremultipliedRenderTonemapsToStraightAlpha) {
+    Image color(3, 1, 3), alpha(3, 1, 1);
+    for (int c = 0; c < 3; ++c)
+        color.at(0, 0, c) = 0.0f, color.at(1, 0, c) = 0.1f * (c + 1), color.at(2, 0, c) = 0.2f * (c + 1);
+    alpha.at(0, 0, 0) = 0.0f, alpha.at(1, 0, 0) = 0.5f, alpha.at(2, 0, 0) = 1.0f;
+    const Image rgba = tonemap_to_display(color, alpha, 0.5f), rgb = tonemap_to_display(color, 0.5f);
+    ASSERT_EQ(rgba.channels, 4);
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_EQ(rgba.at(0, 0, c), 0.0f);
+        EXPECT_FLOAT_EQ(rgba.at(1, 0, c), rgb.at(2, 0, c)) << "0.5 x a colour at alpha 0.5 is that colour";
+        EXPECT_FLOAT_EQ(rgba.at(2, 0, c), rgb.at(2, 0, c));
+    }
+    EXPECT_EQ(rgba.at(0, 0, 3), 0.0f);
+    EXPECT_EQ(rgba.at(1, 0, 3), 0.5f);
+    EXPECT_EQ(tonemap_to_display(color, Image(), 0.5f).channels, 3);  // no alpha pass: as before
+}
+
 TEST(ImageIo, WorkMadeEarlierIsKeptOnlyWholeFiniteAndOfTheSameSettings) {
     std::string dir = test::temp_dir("image");
     Image sky(4, 2, 3), other(3, 3, 3);
