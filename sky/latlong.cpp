@@ -292,7 +292,8 @@ SkyImage load_sky_or_latlong(const std::string& path, std::shared_ptr<SkyImage>*
 
 void check_latlong_pixels(const Image& image, const std::string& path) {
     if (image.channels < 3)
-        throw Error(path + ": lat-long environment has " + std::to_string(image.channels) + " channel(s), want RGB");
+        throw Error(path + ": lat-long environment has " + std::to_string(image.channels) +
+                    " channel(s), want R, G and B (a luminance-only Y file has no colour to light with)");
     for (int y = 0; y < image.height; ++y)
         for (int x = 0; x < image.width; ++x)
             for (int c = 0; c < 3; ++c) {

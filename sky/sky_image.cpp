@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <filesystem>
 #include <opencv2/imgproc.hpp>
@@ -145,6 +146,15 @@ std::array<int, 3> rgb_channel_indices(const Image& image, const std::string& na
     return rgb;
 }
 
+namespace {
+// ": NAME, NAME" of an image's channels, "" when it names none.
+std::string channel_list(const Image& image) {
+    std::string s;
+    for (const std::string& c : image.channel_names) s += (s.empty() ? " (its channels: " : ", ") + c;
+    return s.empty() ? s : s + "; a luminance-only Y sky has no colour to light with)";
+}
+}  // namespace
+
 SkyImage sky_from_image(const Image& image, const std::string& name) {
     if (image.width != image.height)
         throw_file_error(name, "sky image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
@@ -154,7 +164,8 @@ SkyImage sky_from_image(const Image& image, const std::string& name) {
         throw_file_error(name, "sky image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
                                    " pixels: too small to hold a sky (at least 4 x 4)");
     if (image.channels < 3)
-        throw_file_error(name, "sky image needs 3 colour channels, has " + std::to_string(image.channels));
+        throw_file_error(name, "sky image needs 3 colour channels (R, G, B), has " + std::to_string(image.channels) +
+                                   channel_list(image));
     const std::array<int, 3> rgb = rgb_channel_indices(image, name);
     SkyImage sky(image.width);
     for (size_t p = 0; p < size_t(image.width) * image.height; ++p)
@@ -255,9 +266,49 @@ void require_radiance_pixels(const Image& image, const std::string& path) {
                                    "(.exr, .hdr) it was made from");
 }
 
+namespace {
+
+// A square image whose corners, outside the sky disc, hold light is not an upper-hemisphere fisheye
+// (a canonical sky has nothing there): a lat-long's top half stored square, a cropped panorama.
+// Taken as one, its corners were dropped and its sun put at the horizon (2.4 x too dark a render,
+// without a word; an audit of files from other tools). Skies this program wrote say their layout.
+void refuse_light_outside_the_disc(const SkyImage& sky, const Image& image, const std::string& path) {
+    if (image.metadata.strings.count("dynsky:layout")) return;
+    double inside = 0, outside = 0, top_in = 0, top_out = 0, low_in = std::numeric_limits<double>::infinity();
+    long n_inside = 0, n_outside = 0;
+    for (int j = 0; j < sky.resolution; ++j)
+        for (int i = 0; i < sky.resolution; ++i) {
+            const double l = luminance(sky.pixel(i, j));
+            if (!std::isfinite(l)) continue;  // validate_sky names it
+            if (sky.in_disc(i, j)) inside += l, ++n_inside, top_in = std::max(top_in, l), low_in = std::min(low_in, l);
+            else outside += l, ++n_outside, top_out = std::max(top_out, l);
+        }
+    if (n_inside == 0 || n_outside == 0 || !(inside > 0) || !(outside > 0)) return;
+    const double ratio = (outside / n_outside) / (inside / n_inside);
+    const std::string share = number_text(100 * ratio, 3) + " % of the disc's mean radiance";
+    // Its brightest light (a sun) outside the disc: dropping it is surely wrong.
+    if (top_out > top_in)
+        throw_file_error(path,
+                         "is not an upper-hemisphere fisheye: its brightest pixel lies in a corner, outside "
+                         "the sky disc (the corners hold " +
+                             share +
+                             "; a canonical sky has nothing there). A 2:1 lat-long (whole sphere) is taken as "
+                             "it is; a photograph's fisheye with 'dynsky sky import'; a panorama's top half or "
+                             "a cropped image must be made a lat-long or a fisheye first");
+    // A uniform sky (a furnace test's) is the same in any layout: nothing to say.
+    if (ratio > kMaxLightOutsideDisc && top_in > 1.01 * low_in)
+        std::fprintf(stderr,
+                     "dynsky: warning: %s: its corners, outside the sky disc, hold light (%s) that is dropped: is "
+                     "it an upper-hemisphere fisheye (north up, east left)? A 2:1 lat-long is taken as it is\n",
+                     path.c_str(), share.c_str());
+}
+
+}  // namespace
+
 SkyImage sky_from_radiance_file(const Image& image, const std::string& path) {
     require_radiance_pixels(image, path);
     SkyImage sky = sky_from_image(image, path);
+    refuse_light_outside_the_disc(sky, image, path);
     validate_sky(sky, path);
     if (sky.source.empty()) sky.source = path;
     sky.filled = filled_mask_beside(path, sky.resolution);
@@ -354,9 +405,11 @@ std::vector<std::string> sky_sequence_files(const std::string& folder) {
         const std::string ext = file_extension(e.path().string());
         // `sky procedural`'s flow_NNNN.exr beside its frames hold motion, not skies (at the
         // frames' times: ordered by time, one was taken for the previous frame).
-        if (ext == ".exr" && !image_header_number(e.path().string(), "dynsky:flow_dt")) {
+        // Radiance .hdr and .pfm files are float skies too (a capture tool's HDR sequence).
+        if ((ext == ".exr" && !image_header_number(e.path().string(), "dynsky:flow_dt")) || ext == ".hdr" ||
+            ext == ".pfm") {
             exrs.push_back(e.path().string());
-        } else if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".hdr" || ext == ".tif") {
+        } else if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tif" || ext == ".tiff") {
             if (written_beside_a_sky(e.path().string())) continue;
             others.push_back(e.path().filename().string());
         }
@@ -365,12 +418,13 @@ std::vector<std::string> sky_sequence_files(const std::string& folder) {
     if (!others.empty()) {  // a photograph among the skies, not imported: said, not silently skipped
         std::sort(others.begin(), others.end());
         std::fprintf(stderr,
-                     "dynsky: warning: %s: %zu image(s) that are not sky EXRs ignored (%s%s); the sequence is its "
-                     ".exr files (import photographs with 'dynsky sky import')\n",
+                     "dynsky: warning: %s: %zu image(s) that are not float skies ignored (%s%s); the sequence is its "
+                     ".exr, .hdr and .pfm files (import photographs with 'dynsky sky import')\n",
                      folder.c_str(), others.size(), others[0].c_str(), others.size() > 1 ? ", ..." : "");
     }
     if (exrs.empty())
-        throw_file_error(folder, "a folder without sky EXRs (give a captured sequence of canonical fisheyes)");
+        throw_file_error(
+            folder, "a folder without sky files (.exr, .hdr, .pfm: give a captured sequence of canonical fisheyes)");
     return exrs;
 }
 

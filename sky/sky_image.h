@@ -80,8 +80,12 @@ std::string filled_mask_path(const std::string& sky_path);
 std::vector<unsigned char> filled_mask_beside(const std::string& sky_path, int n);
 
 // EXR in, validated. A file of integer pixels (8-bit JPEG/PNG, 16-bit PNG: display-encoded values,
-// whatever its name) is refused: photographs are made skies by `dynsky sky import`. Reads the
-// "dynsky:time" and "dynsky:sun_*" attributes when present.
+// whatever its name) is refused: photographs are made skies by `dynsky sky import`. So is a file
+// that does not say it is a dynsky sky (no "dynsky:layout") whose brightest pixel lies outside the
+// sky disc (not a fisheye of the upper hemisphere: a lat-long's top half stored square); one whose
+// corners hold a mean radiance of more than kMaxLightOutsideDisc of the disc's (and is not uniform)
+// is taken with a warning. Reads the "dynsky:time" and "dynsky:sun_*" attributes when present.
+inline constexpr double kMaxLightOutsideDisc = 0.05;
 SkyImage load_sky(const std::string& path);
 // The same for an image already read from `path` (read_radiance_image): one read where the caller
 // looked at the image first (sky/latlong.h load_sky_or_latlong). Both read the filled mask beside it.

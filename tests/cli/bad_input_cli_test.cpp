@@ -931,7 +931,7 @@ TEST(BadInputCli, FourthAuditsTinyMovingSkiesAndMaskPhotosAreRefusedFirst) {
             {"small.jpg", "integer pixels", "sky import"});
     bad.check();
     // A float sky in another file format is taken by animate as render takes it (it was refused as
-    // "not a sky EXR"); images that are not sky EXRs in a captured sequence's folder are named.
+    // "not a sky EXR"); images that are not float skies in a captured sequence's folder are named.
     {
         auto out = OIIO::ImageOutput::create(dir + "/sky.hdr");  // Radiance RGBE: float pixels
         ASSERT_TRUE(out);
@@ -956,7 +956,7 @@ TEST(BadInputCli, FourthAuditsTinyMovingSkiesAndMaskPhotosAreRefusedFirst) {
                                    "--no-video -q -o " +
                                    dir + "/a5");
     EXPECT_EQ(r.exit_code, 0) << r.output;
-    EXPECT_NE(r.output.find("1 image(s) that are not sky EXRs ignored (b.png)"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("1 image(s) that are not float skies ignored (b.png)"), std::string::npos) << r.output;
     fs::remove_all(dir);
 }
 

@@ -69,6 +69,58 @@ TEST(SkyImage, SaveAndLoadKeepPixelsBitForBitAndTheAttributes) {
 // A folder's skies in the order they were taken, from their headers: by name, sky_9 came after
 // sky_11 and a sequence started from the wrong frame. Imported photographs (all at 0 on the clock)
 // by the UTC times their imports recorded; a file without either leaves name order.
+// A square file from another tool whose brightest light lies in a corner is not an upper-hemisphere
+// fisheye (a lat-long's top half stored square): refused, where its corners were dropped and its
+// sun put at the horizon silently. A uniform square and a fisheye with black corners are taken.
+TEST(SkyImage, ASquareImageWithLightOutsideTheDiscIsNotAFisheye) {
+    const std::string dir = test::temp_dir("sky_not_fisheye");
+    Image full(32, 32, 3);
+    for (float& v : full.pixels) v = 2.0f;
+    write_image(dir + "/uniform.exr", full);  // a furnace test's sky: the same in any layout
+    EXPECT_NO_THROW(load_sky(dir + "/uniform.exr"));
+    for (int c = 0; c < 3; ++c) full.at(1, 1, c) = 5000.0f;  // its sun in a corner
+    write_image(dir + "/square_panorama.exr", full);
+    try {
+        load_sky(dir + "/square_panorama.exr");
+        ADD_FAILURE() << "a square image with light in its corners was taken as a fisheye";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("square_panorama.exr: is not an upper-hemisphere fisheye: its brightest"),
+                  std::string::npos)
+            << e.what();
+    }
+    SkyImage disc(32);
+    for (int j = 0; j < 32; ++j)
+        for (int i = 0; i < 32; ++i)
+            if (disc.in_disc(i, j)) disc.set_pixel(i, j, Color(1.0f, 2.0f, 3.0f));
+    Image plain(32, 32, 3);
+    plain.pixels = disc.rgb;  // no dynsky:layout: as another tool writes it
+    write_image(dir + "/fisheye.exr", plain);
+    EXPECT_NO_THROW(load_sky(dir + "/fisheye.exr"));
+    std::filesystem::remove_all(dir);
+}
+
+// A capture tool's sequence of Radiance .hdr skies is a sequence (it was refused as "a folder
+// without sky EXRs", though each file worked alone).
+TEST(SkyImage, AFolderOfHdrSkiesIsASequence) {
+    const std::string dir = test::temp_dir("sky_hdr_sequence");
+    SkyImage disc(16);
+    for (int j = 0; j < 16; ++j)
+        for (int i = 0; i < 16; ++i)
+            if (disc.in_disc(i, j)) disc.set_pixel(i, j, Color(1.0f, 2.0f, 3.0f));
+    for (const char* name : {"sky_0002.hdr", "sky_0001.hdr"}) {  // as another tool writes them
+        auto out = OIIO::ImageOutput::create(dir + "/" + name);
+        ASSERT_TRUE(out);
+        ASSERT_TRUE(out->open(dir + "/" + name, OIIO::ImageSpec(16, 16, 3, OIIO::TypeDesc::FLOAT)));
+        ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, disc.rgb.data()));
+        out->close();
+    }
+    const std::vector<std::string> files = sky_sequence_files(dir);
+    ASSERT_EQ(files.size(), 2u);
+    EXPECT_NE(files[0].find("sky_0001.hdr"), std::string::npos);
+    EXPECT_NO_THROW(load_sky(files[1]));
+    std::filesystem::remove_all(dir);
+}
+
 TEST(SkyImage, SkiesOfAFolderAreOrderedByTheirClocksThenTheirRecordedTimes) {
     const std::string dir = test::temp_dir("sky_order");
     SkyImage sky = awkward_sky(8);
