@@ -66,3 +66,15 @@ def check_resume_args(ckpt_path, stored, args, defaults, ignore, script):
     if diffs:
         fail(f"--resume: {ckpt_path} was trained with other options: {'; '.join(diffs)} "
              "(resume with the checkpoint's options, or train into a new --out)", 2)
+
+
+def resume_checkpoint(ckpt_path, args, parser, may_change):
+    """The checkpoint a --resume continues (None without --resume): refused when it is missing or
+    was trained with other options than those a resume may change (check_resume_args)."""
+    if not args.resume:
+        return None
+    if not os.path.exists(ckpt_path):
+        fail(f"--resume: {ckpt_path}: no checkpoint to resume (train without --resume to start this run)")
+    ck = load_checkpoint(ckpt_path)
+    check_resume_args(ckpt_path, ck.get("args"), args, {a.dest: a.default for a in parser._actions}, may_change, None)
+    return ck

@@ -28,7 +28,7 @@ import torch
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import data as D  # noqa: E402
 import unet as U  # noqa: E402
-from script_errors import ScriptError, check_resume_args, fail, load_checkpoint, run_main  # noqa: E402,F401
+from script_errors import ScriptError, check_resume_args, fail, load_checkpoint, resume_checkpoint, run_main  # noqa: E402,F401
 
 SCRIPT = "train.py"
 # Options a --resume may change: --epochs extends a run; the others do not change the model or the
@@ -196,13 +196,7 @@ def train(args):
     args.data = os.path.realpath(args.data)
     split, names, fw, cw = check_data(args)
     ckpt_path = os.path.join(args.checkpoint_dir or args.out, "checkpoint.pt")
-    ck = None
-    if args.resume:
-        if not os.path.exists(ckpt_path):
-            fail(f"--resume: {ckpt_path}: no checkpoint to resume (train without --resume to start this run)")
-        ck = load_checkpoint(ckpt_path)
-        check_resume_args(ckpt_path, ck.get("args"), args, {a.dest: a.default for a in parser()._actions},
-                          RESUME_MAY_CHANGE, SCRIPT)
+    ck = resume_checkpoint(ckpt_path, args, parser(), RESUME_MAY_CHANGE)
     seqs = []
     for name in names:
         s = D.Sequence(os.path.join(args.data, name))

@@ -29,7 +29,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import advect as A  # noqa: E402
 import advect_data as AD  # noqa: E402
 import advect_eval as AE  # noqa: E402
-from script_errors import ScriptError, check_resume_args, fail, load_checkpoint, run_main  # noqa: E402,F401
+from script_errors import ScriptError, check_resume_args, fail, load_checkpoint, resume_checkpoint, run_main  # noqa: E402,F401
 
 SCRIPT = "train_advect.py"
 # Options a --resume may change: --epochs extends a run; the others do not change the model or the
@@ -156,13 +156,7 @@ def train(args):
     args.data = os.path.realpath(args.data)
     names = check_data(args)
     ckpt = os.path.join(args.out, "checkpoint.pt")
-    ck = None
-    if args.resume:
-        if not os.path.exists(ckpt):
-            fail(f"--resume: {ckpt}: no checkpoint to resume (train without --resume to start this run)")
-        ck = load_checkpoint(ckpt)
-        check_resume_args(ckpt, ck.get("args"), args, {a.dest: a.default for a in parser()._actions},
-                          RESUME_MAY_CHANGE, SCRIPT)
+    ck = resume_checkpoint(ckpt, args, parser(), RESUME_MAY_CHANGE)
     sources, split = AD.load_sources(args.data, names)
     if args.exclude:
         ex = set(args.exclude.split(","))

@@ -355,17 +355,7 @@ TEST(SkyTimeline, AClockDrivenSunMovesSmoothlyBetweenPixels) {
     p.sun_direction = compute_sun_position(clock.start, clock.where).direction();
     const int n = 128;
     SkyTimeline timeline(make_clear_sky(p, n), std::make_unique<FlowExtrapolationStepModel>(), 3600.0, clock);
-    auto horizontal = [](const SkyImage& s) {
-        double e = 0;
-        for (int j = 0; j < s.resolution; ++j)
-            for (int i = 0; i < s.resolution; ++i) {
-                const double omega = fisheye::pixel_solid_angle(i, j, s.resolution);
-                if (omega > 0)
-                    e += luminance(s.pixel(i, j)) * omega *
-                         std::max(0.0, fisheye::direction_from_pixel(i, j, s.resolution).y());
-            }
-        return 683 * e;
-    };
+    auto horizontal = [](const SkyImage& s) { return horizontal_illuminance(s); };
     std::vector<double> e, change;
     for (double t = 0; t <= 120; t += 5) e.push_back(horizontal(timeline.sky_at(t)));
     for (size_t k = 1; k < e.size(); ++k) change.push_back(e[k] - e[k - 1]);
