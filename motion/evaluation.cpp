@@ -99,7 +99,9 @@ struct TrainedFrames {
 
 // A frame whose next 20 minutes (the same camera) the model was trained on is not held out: at
 // 10 m/s a layer at 1500 m crosses the view within 60 degrees of the zenith in about that time.
-constexpr double kSeenAheadSeconds = 20 * 60;
+// Less than 20 minutes (by a second: capture times are whole seconds, and the same instant computed
+// two ways differs in the last digits, which decided whether a frame exactly 20 minutes ahead counted).
+constexpr double kSeenAheadSeconds = 20 * 60 - 1;
 
 TrainedFrames model_training_frames(const PhotoSequence& seq, const std::string& model_folder,
                                     const std::string& shared) {
@@ -174,7 +176,7 @@ TrainedFrames model_training_frames(const PhotoSequence& seq, const std::string&
             }
             if (ahead > 0)
                 r.matched += (r.matched.empty() ? "" : "; ") + std::to_string(ahead) + " frames up to " +
-                             std::to_string(int(kSeenAheadSeconds / 60)) + " minutes before " + name +
+                             std::to_string(std::lround(kSeenAheadSeconds / 60)) + " minutes before " + name +
                              "'s frames trained on (the same clouds, later)";
             if (count > 0)
                 r.matched += (r.matched.empty() ? "" : "; ") + name + " frames trained on: " + std::to_string(count) +
@@ -231,7 +233,7 @@ TrainedFrames model_training_frames(const PhotoSequence& seq, const std::string&
         }
         if (ahead > 0)
             r.matched += (r.matched.empty() ? "" : "; ") + std::to_string(ahead) + " frames up to " +
-                         std::to_string(int(kSeenAheadSeconds / 60)) + " minutes before " + name +
+                         std::to_string(std::lround(kSeenAheadSeconds / 60)) + " minutes before " + name +
                          "'s frames trained on (the same clouds, later)";
         if (lo >= 0)
             r.matched += (r.matched.empty() ? "" : "; ") + name + " frames " + std::to_string(lo) + "-" +
@@ -594,11 +596,17 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
        << "\n\n";
     // Which model exactly: two runs of the same name told apart (a researcher's audit: reports of two
     // trainings were headed alike and named no folder).
+    // A folder inside the working folder by its relative path (the reports in docs/ name no machine).
+    auto shown = [](const std::string& path) {
+        std::error_code ec;
+        const fs::path rel = fs::relative(path, ec);
+        return !ec && !rel.empty() && rel.begin()->string() != ".." ? rel.string() : path;
+    };
     if (folder != "advect") {
-        md << "Model: `" << folder << "` (kind " << model.info().kind << ", " << model.info().resolution << " px; "
-           << describe_file((fs::path(folder) / "model.onnx").string()) << ")";
+        md << "Model: `" << shown(folder) << "` (kind " << model.info().kind << ", " << model.info().resolution
+           << " px; " << describe_file((fs::path(folder) / "model.onnx").string()) << ")";
         if (paper)
-            md << "; the paper's form: `" << paper_folder << "` ("
+            md << "; the paper's form: `" << shown(paper_folder) << "` ("
                << describe_file((fs::path(paper_folder) / "flownet.onnx").string()) << ", "
                << describe_file((fs::path(paper_folder) / "cloudnet.onnx").string()) << ")";
         md << ".\n\n";
