@@ -155,7 +155,12 @@ TrainedFrames model_training_frames(const PhotoSequence& seq, const std::string&
                 } catch (const Error&) {}
                 for (const std::string& trained : trained_names)
                     if (const std::string iso = time_from_file_name(trained, offset); !iso.empty()) {
-                        const double t = utc_seconds(iso);
+                        double t = std::nan("");
+                        try {
+                            t = utc_seconds(iso);
+                        } catch (const Error&) {  // not a date after all: matched by its name alone
+                            continue;
+                        }
                         first = std::isfinite(first) ? std::min(first, t) : t;
                         last = std::isfinite(last) ? std::max(last, t) : t;
                     }
