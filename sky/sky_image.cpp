@@ -308,8 +308,8 @@ void refuse_light_outside_the_disc(const SkyImage& sky, const Image& image, cons
 SkyImage sky_from_radiance_file(const Image& image, const std::string& path) {
     require_radiance_pixels(image, path);
     SkyImage sky = sky_from_image(image, path);
+    validate_sky(sky, path);  // a NaN or huge pixel named as such first, wherever it lies
     refuse_light_outside_the_disc(sky, image, path);
-    validate_sky(sky, path);
     if (sky.source.empty()) sky.source = path;
     sky.filled = filled_mask_beside(path, sky.resolution);
     return sky;
