@@ -105,19 +105,35 @@ void add_scene_options(CLI::App* cmd, SceneSpec* o) {
 }
 
 void warn_options_of_generated_skies(const CLI::App* cmd, const std::string& sky) {
+    auto given = [&](const char* name) {
+        const CLI::Option* opt = cmd->get_option_no_throw(name);
+        return opt && opt->count() > 0;
+    };
     if (sky.empty() || is_generated_sky(sky)) {
-        if (const CLI::Option* turn = cmd->get_option_no_throw("--sky-turn"); turn && turn->count() > 0)
+        if (given("--sky-turn"))
             throw Error("--sky-turn turns a sky file; " +
                         std::string(sky.empty() ? "the built-in sky" : "'" + sky + "'") +
                         " is made here with its sun where --time, --lat and --lon put it");
+        // Cloud cover shapes the procedural sky only: a clear sky given it was the same sky, and
+        // its frames were made again on a resume for no change.
+        if (sky == "clear" && given("--coverage"))
+            std::fprintf(stderr,
+                         "dynsky: warning: --coverage shapes the procedural sky; 'clear' has no clouds: --coverage "
+                         "is ignored\n");
         return;
     }
-    for (const char* name : {"--coverage"})
-        if (const CLI::Option* opt = cmd->get_option_no_throw(name); opt && opt->count() > 0)
-            std::fprintf(stderr,
-                         "dynsky: warning: %s shapes the skies made here ('clear', 'procedural'); %s is a file "
-                         "and keeps its own: %s is ignored\n",
-                         name, sky.c_str(), name);
+    if (given("--coverage"))
+        std::fprintf(stderr,
+                     "dynsky: warning: --coverage shapes the procedural sky; %s is a file and keeps its own clouds: "
+                     "--coverage is ignored\n",
+                     sky.c_str());
+    // A sky file keeps its own sun unless --time puts it on the clock, at --lat and --lon: without
+    // it they changed nothing, silently (render refuses them).
+    if ((given("--lat") || given("--lon")) && !given("--time") && cmd->get_name() != "render")  // render refuses
+        std::fprintf(stderr,
+                     "dynsky: warning: %s keeps the sun it has: --lat and --lon place the sun only with --time "
+                     "(the sun follows the clock from there); ignored\n",
+                     sky.c_str());
 }
 
 void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {

@@ -153,6 +153,7 @@ void check_animation_settings(const AnimationSettings& o, bool inputs_exist) {
     check_outputs_are_not_inputs({o.out}, {o.sky.sky, o.sky.previous, o.scene.scene, o.timeline});
     check_numbered_outputs_spare(o.out, {"frame", "sky"}, {o.sky.sky, o.sky.previous, o.scene.scene});
     if (!inputs_exist) return;
+    check_sky_source(o.sky, o.model, o.duration);  // what the run refuses before any step
     // What a farm script checks before queueing anything (--count-frames): the files named exist
     // and the model is one there is (their contents are read by the stages).
     auto exists = [&](const std::string& path, const char* option) {

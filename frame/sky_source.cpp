@@ -130,8 +130,18 @@ SkyImage make_builtin_clear_sky(int resolution) {
     return sky;
 }
 
-SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
+void check_sky_source(const SkySourceSpec& o, const StepModelSpec& m, double duration) {
     if (!(m.dt >= 0)) throw Error("--dt must be positive (or 0: automatic)");
+    if (o.sky.rfind("procedural", 0) == 0) procedural_seed(o.sky);  // 'procedural:abc' named
+    if (!o.previous.empty() && o.wind_given)
+        throw Error("--prev and --wind-from/--wind-speed: give one source of motion, not both");
+    if (step_model_name(m.model) == "procedural" && o.sky.rfind("procedural", 0) != 0)
+        throw Error("--model procedural needs --sky procedural (it is the procedural sky's own motion)");
+    if (m.dt > 0 && duration > 0) SkyTimeline::check_span(duration, m.dt);
+}
+
+SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
+    check_sky_source(o, m, 0.0);
     const GammaKind gamma = parse_gamma(m.gamma);
     check_sky_resolution(o.sky_resolution);
     if (!(o.coverage >= 0 && o.coverage <= 1)) throw Error("--coverage must be in [0, 1]");
@@ -146,8 +156,6 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     // A captured sequence (a folder of sky EXRs): the last in time is the input, the one before it
     // the previous frame.
     std::string sky_file = o.sky, previous_file = o.previous;
-    if (!o.previous.empty() && o.wind_given)
-        throw Error("--prev and --wind-from/--wind-speed: give one source of motion, not both");
     if (fs::is_directory(o.sky)) {
         sky_file = sequence_start(o.sky, previous_file.empty() && !o.wind_given, &previous_file, reports_silenced());
     }

@@ -66,6 +66,13 @@ struct StepModelSpec {
     std::string gamma = "constant";
 };
 
+// The checks of a sky and its model that need no file read (make_sky_timeline makes them first;
+// `animate --count-frames` makes them so that a farm never queues a run that fails): the --sky
+// spelling of a procedural sky, --prev with a wind, --model procedural on another sky, and a
+// --dt that would make more than SkyTimeline::kMaxSteps steps of `duration`. Throws dynsky::Error
+// naming the options.
+void check_sky_source(const SkySourceSpec& sky, const StepModelSpec& model, double duration);
+
 // True for the skies made here: 'clear' and 'procedural[:SEED]'.
 bool is_generated_sky(const std::string& sky);
 

@@ -237,7 +237,7 @@ std::optional<Vec3d> SkyTimeline::sun_direction_at(double t) const {
     return input_sun_;
 }
 
-void SkyTimeline::check_span(double seconds) const {
+void SkyTimeline::check_span(double seconds, double dt_) {
     const double steps = seconds / dt_;
     if (!(steps <= kMaxSteps)) {
         char text[240];

@@ -122,7 +122,8 @@ class SkyTimeline {
     static constexpr double kMaxSteps = 100000;
     // Throws dynsky::Error naming --duration and --dt when `seconds` spans more than kMaxSteps
     // steps: a --dt of 1e-9 s (or a --duration of 1e9 s) would otherwise compute steps for days.
-    void check_span(double seconds) const;
+    void check_span(double seconds) const { check_span(seconds, dt_); }
+    static void check_span(double seconds, double dt);
 
   private:
     SkyTimeline() = default;

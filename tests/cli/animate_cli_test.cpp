@@ -367,7 +367,11 @@ TEST(AnimateCli, CountFramesChecksWhatAFarmWouldQueue) {
     EXPECT_EQ(r.output, "9\n");
     for (const std::string& bad :
          {std::string("scenes/tower/towr.gltf --duration 90 --fps 0.1 --out ") + dir + "/a",
-          ok + " --sky-res 64 --model nosuch", ok + " --aovs bogus", "builtin --sky nosuch.exr --out " + dir + "/a"}) {
+          ok + " --sky-res 64 --model nosuch", ok + " --aovs bogus", "builtin --sky nosuch.exr --out " + dir + "/a",
+          // What the run refuses before any step (an audit of the options: each passed --count-frames).
+          "builtin --sky procedural:abc --duration 90 --fps 0.1 --out " + dir + "/a",
+          "builtin --sky clear --model procedural --duration 90 --fps 0.1 --out " + dir + "/a",
+          ok + " --model advect --dt 1e-9"}) {
         r = test::run_command(base + bad + " --count-frames 2>&1");
         EXPECT_NE(r.exit_code, 0) << bad << "\n" << r.output;
         EXPECT_EQ(r.output.find("\n9\n"), std::string::npos) << bad;
@@ -384,6 +388,23 @@ TEST(AnimateCli, CountFramesChecksWhatAFarmWouldQueue) {
         EXPECT_NE(r.exit_code, 0) << spelling << "\n" << r.output;
         EXPECT_NE(r.output.find("give it a folder of its own"), std::string::npos) << r.output;
     }
+    fs::remove_all(dir);
+}
+
+// A sky file keeps its own sun unless --time puts it on the clock: --lat and --lon alone changed
+// nothing, silently (render refuses them); and --coverage on a clear sky, which has no clouds.
+TEST(AnimateCli, OptionsASkyDoesNotUseAreSaidToBeIgnored) {
+    const std::string dir = test::temp_dir("animate_ignored");
+    auto r = test::run_command(std::string(DYNSKY_EXE) + " sky clear --sky-res 32 -q -o " + dir + "/clear.exr");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const std::string base = std::string(DYNSKY_EXE) + " animate builtin --count-frames --duration 10 --fps 0.1 ";
+    r = test::run_command(base + "--sky " + dir + "/clear.exr --lat -60 --lon 100 2>&1");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("--lat and --lon place the sun only with --time"), std::string::npos) << r.output;
+    r = test::run_command(base + "--sky " + dir + "/clear.exr --lat -60 --time 2026-06-21T12:00:00Z 2>&1");
+    EXPECT_EQ(r.output.find("--lat and --lon place the sun only"), std::string::npos) << r.output;
+    r = test::run_command(base + "--sky clear --coverage 0.9 2>&1");
+    EXPECT_NE(r.output.find("'clear' has no clouds: --coverage is ignored"), std::string::npos) << r.output;
     fs::remove_all(dir);
 }
 
