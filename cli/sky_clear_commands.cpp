@@ -60,11 +60,15 @@ void add_sun_options(CLI::App* cmd, SunOptions* o) {
         ->capture_default_str();
     cmd->add_option("--elevation", o->elevation_m, "Height of the place above sea level in metres (default 0)")
         ->check(finite_in(-1000, 100000));
-    cmd->add_flag("--no-refraction", o->no_refraction, "Geometric position: no atmospheric refraction");
+    CLI::Option* no_refraction = cmd->add_flag("--no-refraction", o->no_refraction,
+                                               "Geometric position: no atmospheric refraction");
+    // The air of a refraction that is off would be ignored silently (an options audit): refused.
     cmd->add_option("--pressure", o->pressure_mbar, "Air pressure for refraction, mbar (default 1010)")
-        ->check(finite_above(0, 2000));
+        ->check(finite_above(0, 2000))
+        ->excludes(no_refraction);
     cmd->add_option("--temperature", o->temperature_c, "Air temperature for refraction, Celsius (default 10)")
-        ->check(finite_in(-100, 100));
+        ->check(finite_in(-100, 100))
+        ->excludes(no_refraction);
 }
 
 SunPosition sun_from(const SunOptions& o, UtcTime* t) {

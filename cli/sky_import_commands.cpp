@@ -175,13 +175,15 @@ void register_sky_import_commands(CLI::App& sky) {
     imp->add_flag("--keep-thin-objects", io->keep_thin,
                   "Do not look for thin dark objects (masts, wires, the housing's dark edge inside the circle), which "
                   "are otherwise found and filled on any photograph");
-    imp->add_flag("--no-inpaint", io->no_inpaint, "Leave non-sky pixels black instead of filling them");
+    CLI::Option* no_inpaint = imp->add_flag("--no-inpaint", io->no_inpaint,
+                                            "Leave non-sky pixels black instead of filling them");
     io->fill_opt =
         imp->add_option("--fill", io->fill,
                         "How non-sky pixels are filled: texture (default for one photograph: the sky's own clouds and\n"
                         "blue copied in, so a moved sky carries no smooth streak; ~4 s at 512 px) or smooth (Telea\n"
                         "inpainting: fast, the same from frame to frame; the default for a sequence)")
-            ->check(CLI::IsMember({"texture", "smooth"}));
+            ->check(CLI::IsMember({"texture", "smooth"}))
+            ->excludes(no_inpaint);  // how to fill, and not to fill: refused, not one silently dropped
     imp->add_option(
            "--encoding", io->encoding,
            "Input values: auto (default: by the file's pixels: 8- and 16-bit files are sRGB unless their header\n"

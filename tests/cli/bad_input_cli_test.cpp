@@ -790,6 +790,9 @@ TEST(BadInputCli, NamesNotOnAnOptionsListAreUsageErrors) {
         {"sky import " + photo + " -o " + dir + "/s.exr --encoding rec709", "--encoding"},
         {"sky import " + photo + " -o " + dir + "/s.exr --preset gopro", "--preset"},
         {"sky import " + photo + " -o " + dir + "/s.exr --mask-layout tsi", "--mask"},
+        // Options that contradict each other (one was dropped silently: an options audit).
+        {"sky import " + photo + " -o " + dir + "/s.exr --no-inpaint --fill smooth", "--no-inpaint excludes --fill"},
+        {"sky clear --sky-res 16 -o " + dir + "/c.exr --no-refraction --pressure 900", "--no-refraction excludes"},
         {"sky mask " + photo + " -o " + dir + "/m.png --cloud-rule blue", "--cloud-rule"},
         {"sky mask " + photo + " -o " + dir + "/m.png --preset gopro", "--preset"},
         {"sky evaluate --photos " + dir + " --preset gopro", "--preset"},
