@@ -277,8 +277,6 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     if (!model) {
         if (model_name == "auto" || model_name == "flow") {
             model = std::make_unique<FlowExtrapolationStepModel>(o.wind_from_deg, m.drift_deg_per_s);
-        } else if (model_name == "procedural") {
-            throw Error("--model procedural needs --sky procedural (it is the procedural sky's own motion)");
         } else {
             throw Error("--model '" + model_name + "': expected auto, procedural, flow or network:FOLDER");
         }

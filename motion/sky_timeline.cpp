@@ -237,14 +237,14 @@ std::optional<Vec3d> SkyTimeline::sun_direction_at(double t) const {
     return input_sun_;
 }
 
-void SkyTimeline::check_span(double seconds, double dt_) {
-    const double steps = seconds / dt_;
+void SkyTimeline::check_span(double seconds, double dt) {
+    const double steps = seconds / dt;
     if (!(steps <= kMaxSteps)) {
         char text[240];
         std::snprintf(text, sizeof text,
                       "--duration %g s at a medium step of %g s (--dt) is %.4g steps, more than the %.0f one sky "
                       "timeline may span: a longer --dt or a shorter --duration",
-                      seconds, dt_, steps, kMaxSteps);
+                      seconds, dt, steps, kMaxSteps);
         throw Error(text);
     }
 }

@@ -47,7 +47,7 @@ def _norm(key, value):
     return value
 
 
-def check_resume_args(ckpt_path, stored, args, defaults, ignore, script):
+def check_resume_args(ckpt_path, stored, args, defaults, ignore):
     """Refuses (exit 2) when an option that defines the model or the run differs from the one the
     checkpoint at ckpt_path was trained with. stored: the checkpoint's args (a dict, or None for a
     checkpoint that kept none); defaults: the parser's defaults, standing for options an older
@@ -76,5 +76,5 @@ def resume_checkpoint(ckpt_path, args, parser, may_change):
     if not os.path.exists(ckpt_path):
         fail(f"--resume: {ckpt_path}: no checkpoint to resume (train without --resume to start this run)")
     ck = load_checkpoint(ckpt_path)
-    check_resume_args(ckpt_path, ck.get("args"), args, {a.dest: a.default for a in parser._actions}, may_change, None)
+    check_resume_args(ckpt_path, ck.get("args"), args, {a.dest: a.default for a in parser._actions}, may_change)
     return ck

@@ -28,7 +28,7 @@ import torch
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import data as D  # noqa: E402
 import unet as U  # noqa: E402
-from script_errors import ScriptError, check_resume_args, fail, load_checkpoint, resume_checkpoint, run_main  # noqa: E402,F401
+from script_errors import ScriptError, fail, load_checkpoint, resume_checkpoint, run_main  # noqa: E402,F401
 
 SCRIPT = "train.py"
 # Options a --resume may change: --epochs extends a run; the others do not change the model or the

@@ -29,7 +29,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import advect as A  # noqa: E402
 import advect_data as AD  # noqa: E402
 import advect_eval as AE  # noqa: E402
-from script_errors import ScriptError, check_resume_args, fail, load_checkpoint, resume_checkpoint, run_main  # noqa: E402,F401
+from script_errors import ScriptError, fail, load_checkpoint, resume_checkpoint, run_main  # noqa: E402,F401
 
 SCRIPT = "train_advect.py"
 # Options a --resume may change: --epochs extends a run; the others do not change the model or the

@@ -520,9 +520,11 @@ void PathIntegrator::sample_tile(const Camera& camera, float tan_half, float asp
         // The hits' mesh records start loading together, not one cache miss per path.
         for (int p = 0; p < n; ++p) accel_.prefetch(primary[p]);
         // The sky seen directly (most camera samples), looked up together: what trace_path does for
-        // it, which draws no random numbers.
+        // it, which draws no random numbers. With an alpha pass it is transparent (trace_path): not
+        // looked up.
+        const bool sky_seen = !settings_.aovs.alpha;
         int misses = 0;
-        for (int p = 0; p < n; ++p)
+        for (int p = 0; p < n && sky_seen; ++p)
             if (primary[p].hit.geomID == RTC_INVALID_GEOMETRY_ID)
                 scratch.sky_directions[size_t(misses++)] = rays[p].direction;
         light_.radiance_filtered(scratch.sky_directions.data(), misses, scratch.sky.data());
@@ -536,8 +538,7 @@ void PathIntegrator::sample_tile(const Camera& camera, float tan_half, float asp
             Color c;
             if (primary[p].hit.geomID == RTC_INVALID_GEOMETRY_ID) {
                 if (observer_) observer_(ray, RayKind::Camera);
-                c = *sky++;
-                if (settings_.aovs.alpha) c = Color::Zero();  // transparent (above)
+                c = sky_seen ? *sky++ : Color::Zero();
             } else {
                 c = sobol ? trace_path(ray, zsobol[size_t(p)], stats, fh, &primary[p])
                           : trace_path(ray, st->rng, stats, fh, &primary[p]);

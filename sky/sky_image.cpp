@@ -268,11 +268,12 @@ void require_radiance_pixels(const Image& image, const std::string& path) {
 
 namespace {
 
-// A square image whose corners, outside the sky disc, hold light is not an upper-hemisphere fisheye
+// A square image whose brightest light lies outside the sky disc is not an upper-hemisphere fisheye
 // (a canonical sky has nothing there): a lat-long's top half stored square, a cropped panorama.
 // Taken as one, its corners were dropped and its sun put at the horizon (2.4 x too dark a render,
-// without a word; an audit of files from other tools). Skies this program wrote say their layout.
-void refuse_light_outside_the_disc(const SkyImage& sky, const Image& image, const std::string& path) {
+// without a word; an audit of files from other tools): refused. Corners that hold light without
+// it are said to be dropped. Skies this program wrote say their layout.
+void check_light_outside_the_disc(const SkyImage& sky, const Image& image, const std::string& path) {
     if (image.metadata.strings.count("dynsky:layout")) return;
     double inside = 0, outside = 0, top_in = 0, top_out = 0, low_in = std::numeric_limits<double>::infinity();
     long n_inside = 0, n_outside = 0;
@@ -309,7 +310,7 @@ SkyImage sky_from_radiance_file(const Image& image, const std::string& path) {
     require_radiance_pixels(image, path);
     SkyImage sky = sky_from_image(image, path);
     validate_sky(sky, path);  // a NaN or huge pixel named as such first, wherever it lies
-    refuse_light_outside_the_disc(sky, image, path);
+    check_light_outside_the_disc(sky, image, path);
     if (sky.source.empty()) sky.source = path;
     sky.filled = filled_mask_beside(path, sky.resolution);
     return sky;
@@ -399,7 +400,7 @@ std::optional<double> sky_recorded_utc_seconds(const SkyImage& sky) {
 }
 
 std::vector<std::string> sky_sequence_files(const std::string& folder) {
-    std::vector<std::string> exrs, others;
+    std::vector<std::string> skies, others;
     for (const auto& e : std::filesystem::directory_iterator(folder)) {
         if (!e.is_regular_file() || is_hidden_file(e.path().string())) continue;
         const std::string ext = file_extension(e.path().string());
@@ -408,13 +409,13 @@ std::vector<std::string> sky_sequence_files(const std::string& folder) {
         // Radiance .hdr and .pfm files are float skies too (a capture tool's HDR sequence).
         if ((ext == ".exr" && !image_header_number(e.path().string(), "dynsky:flow_dt")) || ext == ".hdr" ||
             ext == ".pfm") {
-            exrs.push_back(e.path().string());
+            skies.push_back(e.path().string());
         } else if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tif" || ext == ".tiff") {
             if (written_beside_a_sky(e.path().string())) continue;
             others.push_back(e.path().filename().string());
         }
     }
-    exrs = skies_in_time_order(exrs);
+    skies = skies_in_time_order(skies);
     if (!others.empty()) {  // a photograph among the skies, not imported: said, not silently skipped
         std::sort(others.begin(), others.end());
         std::fprintf(stderr,
@@ -422,10 +423,10 @@ std::vector<std::string> sky_sequence_files(const std::string& folder) {
                      ".exr, .hdr and .pfm files (import photographs with 'dynsky sky import')\n",
                      folder.c_str(), others.size(), others[0].c_str(), others.size() > 1 ? ", ..." : "");
     }
-    if (exrs.empty())
+    if (skies.empty())
         throw_file_error(
             folder, "a folder without sky files (.exr, .hdr, .pfm: give a captured sequence of canonical fisheyes)");
-    return exrs;
+    return skies;
 }
 
 std::string sequence_start(const std::string& folder, bool previous_wanted, std::string* previous, bool quiet) {

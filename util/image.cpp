@@ -388,12 +388,10 @@ Image tonemap_to_display(const Image& premultiplied, const Image& alpha, float e
     for (int y = 0; y < out.height; ++y)
         for (int x = 0; x < out.width; ++x) {
             const float a = std::clamp(alpha.at(x, y, 0), 0.0f, 1.0f);
-            for (int c = 0; c < 3; ++c)
-                out.at(x, y,
-                       c) = a > 0
-                                ? linear_to_srgb(tonemap_aces(
-                                      scale * premultiplied.at(x, y, std::min(c, premultiplied.channels - 1)) / a))
-                                : 0.0f;
+            for (int c = 0; c < 3; ++c) {
+                const float straight = a > 0 ? premultiplied.at(x, y, std::min(c, premultiplied.channels - 1)) / a : 0;
+                out.at(x, y, c) = a > 0 ? linear_to_srgb(tonemap_aces(scale * straight)) : 0.0f;
+            }
             out.at(x, y, 3) = a;
         }
     out.metadata = premultiplied.metadata;
