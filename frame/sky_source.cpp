@@ -298,7 +298,10 @@ std::string step_model_name(const std::string& model) {
         model.rfind("network:", 0) == 0)
         return model;
     // A model folder as `sky predict` takes it (network: optional), else a usage error.
+    // A path that is missing is a file error (exit 1), as sky predict and sky evaluate say it.
     std::error_code ec;
+    if (model.find('/') != std::string::npos && !fs::is_directory(resolve_user_path(model), ec))
+        throw_file_error(resolve_user_path(model), "model folder not found");
     if (!fs::is_directory(resolve_user_path(model), ec))
         throw Error("--model '" + model +
                     "': expected auto, advect, paper, procedural, flow, or a model folder (network:FOLDER)");

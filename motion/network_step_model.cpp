@@ -1,5 +1,7 @@
 #include "motion/network_step_model.h"
 
+#include <filesystem>
+
 #include "motion/cloud_model.h"
 #include "util/data_path.h"
 #include "util/error.h"
@@ -57,7 +59,15 @@ std::string resolve_cloud_model(const std::string& name_in) {
         if (f.empty()) throw Error("--model paper: networks/models/arm_tsi is not installed");
         return f;
     }
-    return resolve_user_path(name);  // a folder: from the working folder, else the shipped one of that name
+    if (name == "advect") return name;  // pure advection (make_network_step_model)
+    // A folder: from the working folder, else the shipped one of that name. A word that names none
+    // is a mistyped choice (a usage error, as animate says it); a path that is missing is a file error.
+    const std::string folder = resolve_user_path(name);
+    std::error_code ec;
+    if (name.find('/') == std::string::npos && !std::filesystem::is_directory(folder, ec))
+        throw Error("--model '" + name + "': expected auto, advect, paper or a model folder (no folder '" + name +
+                    "' here or among the shipped models)");
+    return folder;
 }
 
 

@@ -344,6 +344,28 @@ TEST(SkyModelCli, APreviousFrameMinutesBeforeIsWarnedAboutAFolderIsASequence) {
     fs::remove_all(dir);
 }
 
+// A missing model folder is a file error (1) and a mistyped choice a usage error (2), the same in
+// every command that takes --model (animate said "usage error" for a missing folder).
+TEST(SkyModelCli, AMissingModelIsTheSameErrorInEveryCommand) {
+    const std::string dir = test::temp_dir("model_missing");
+    const std::string in = small_sky(dir, 32);
+    const std::vector<std::string> commands = {"sky predict --in " + in + " --steps 1 --out " + dir + "/p.exr",
+                                               "animate --sky " + in + " --count-frames --out " + dir + "/a",
+                                               "sky timeline --sky " + in + " --duration 20 --out " + dir + "/t"};
+    for (const auto& c : commands) {
+        auto r = test::run_command(dynsky(c + " --model " + dir + "/no_model 2>&1"));
+        EXPECT_EQ(r.exit_code, 1) << c << "\n" << r.output;
+        EXPECT_NE(r.output.find("no_model: model folder not found"), std::string::npos) << c << "\n" << r.output;
+        r = test::run_command(dynsky(c + " --model advekt 2>&1"));
+        EXPECT_EQ(r.exit_code, 2) << c << "\n" << r.output;
+        EXPECT_NE(r.output.find("--model 'advekt': expected auto, advect, paper"), std::string::npos) << c << "\n"
+                                                                                                      << r.output;
+    }
+    EXPECT_FALSE(fs::exists(dir + "/p.exr"));
+    EXPECT_FALSE(fs::exists(dir + "/t"));
+    fs::remove_all(dir);
+}
+
 TEST(SkyModelCli, PredictBadInputsFailClearlyAndWriteNothing) {
     const std::string dir = test::temp_dir("predict_bad");
     const std::string in = small_sky(dir, 32);
