@@ -6,6 +6,7 @@
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "motion/evaluation.h"
+#include "motion/photo_sequence.h"
 #include "motion/prediction.h"
 #include "motion/training_set.h"
 #include "sky/cloud_mask.h"
@@ -115,6 +116,7 @@ void register_sky_model_commands(CLI::App& sky) {
             ->capture_default_str();
         add_hidden_alias(cmd, "--report", &o->report);
         cmd->add_option("--import-res", o->import_resolution, "Resolution the photographs are imported at")
+            ->check(CLI::Range(kImportResolutionMin, kImportResolutionMax))
             ->capture_default_str();
         cmd->add_option("--limit", o->limit, "Score only the first K start frames (0: all; for quick checks)")
             ->capture_default_str();
@@ -141,6 +143,7 @@ void register_sky_model_commands(CLI::App& sky) {
         cmd->add_option("--sky-res", o->resolution, "Resolution N of the training images")->capture_default_str();
         cmd->add_option("--import-res", o->import_resolution,
                         "Resolution frames are imported (and Farneback flow computed) at; a multiple of --sky-res")
+            ->check(CLI::Range(kImportResolutionMin, kImportResolutionMax))
             ->capture_default_str();
         cmd->add_option("--unit-scale", o->form.unit_map.scale,
                         "HDR -> [0, 1] log map (sky/hdr_recovery.h): radiance scale, W m^-2 sr^-1")

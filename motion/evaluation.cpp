@@ -259,7 +259,9 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
     const std::vector<int> resolutions = parse_int_list(o.resolutions, "--resolutions");
     int hmax = horizons.back();
     if (o.limit < 0) throw Error("--limit: must be >= 0");
-    if (o.import_resolution < 16 || o.import_resolution > 2048) throw Error("--import-res: must be 16..2048");
+    if (o.import_resolution < kImportResolutionMin || o.import_resolution > kImportResolutionMax)
+        throw Error("--import-res " + std::to_string(o.import_resolution) + ": must be " +
+                    std::to_string(kImportResolutionMin) + ".." + std::to_string(kImportResolutionMax));
     for (int r : resolutions)
         if (r > o.import_resolution || o.import_resolution % r != 0)
             throw Error("--resolutions " + std::to_string(r) + ": must divide --import-res " +

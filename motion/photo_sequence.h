@@ -7,6 +7,10 @@
 
 namespace dynsky {
 
+// The resolutions `sky evaluate` and `sky training-data` import photographs at (--import-res): the
+// same range in both, so a training set can always be scored at its own resolution.
+constexpr int kImportResolutionMin = 16, kImportResolutionMax = 4096;
+
 struct PhotoSequence {
     std::string name;    // the dataset's and split's name ("arm_tsi")
     std::string preset;  // camera preset of the import (sky/preset_import.h); empty: imported skies

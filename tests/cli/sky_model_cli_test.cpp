@@ -810,5 +810,24 @@ TEST(SkyModelCli, TrainingDataNeedsOneSource) {
     fs::remove_all(dir);
 }
 
+
+// --import-res takes the same range in sky evaluate and sky training-data (8..4096 against
+// 16..2048 before), refused before any photograph is read.
+TEST(SkyModelCli, ImportResolutionHasOneRangeInEveryCommand) {
+    const std::string dir = test::temp_dir("import_res_range");
+    for (const std::string c : {"sky evaluate --photos " + dir + " --preset arm-tsi --out " + dir + "/e.md",
+                                "sky training-data --sequence arm-dusk --out " + dir + "/td"})
+        for (const std::string v : {"8", "8192"}) {
+            auto r = test::run_command(dynsky(c + " --import-res " + v + " 2>&1"));
+            EXPECT_EQ(r.exit_code, 2) << c << "\n" << r.output;
+            EXPECT_NE(r.output.find("--import-res: '" + v + "' is not a number in 16 .. 4096"), std::string::npos)
+                << c << "\n"
+                << r.output;
+        }
+    EXPECT_FALSE(fs::exists(dir + "/e.md"));
+    EXPECT_FALSE(fs::exists(dir + "/td"));
+    fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace dynsky
