@@ -161,6 +161,7 @@ void check_animation_settings(const AnimationSettings& o, bool inputs_exist) {
             throw_file_error(path, std::string("no such file or folder (") + option + ")");
     };
     if (o.scene.scene != "builtin") exists(o.scene.scene, "the scene");
+    check_scene_camera(o.scene);
     if (!is_generated_sky(o.sky.sky)) exists(o.sky.sky, "--sky");
     exists(o.sky.previous, "--prev");
     if (stage != "keys" && stage != "all") exists(o.timeline, "--timeline");

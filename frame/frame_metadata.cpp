@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "renderer/gltf_json_check.h"
 #include "util/file_hash.h"
 #include "util/image.h"
 #include "util/parse.h"
@@ -88,30 +89,10 @@ std::string describe_scene_input(const std::string& scene) {
     if (!fs::is_regular_file(scene, ec) || (ext != ".gltf" && ext != ".glb")) return describe_input(scene);
     std::string s = describe_file(scene);
     // The files its buffers and images name (percent-escapes decoded; data: URIs are in the JSON).
-    // A .glb's JSON is its first chunk (a 12-byte header, then length, "JSON", the text); its
-    // images may still be files beside it (the Kenney city kit's shared colormap.png).
-    nlohmann::json j;
-    try {
-        std::ifstream f(scene, std::ios::binary);
-        if (ext == ".glb") {
-            unsigned char head[20] = {};
-            if (!f.read(reinterpret_cast<char*>(head), sizeof head)) return s;
-            auto word = [&](int at) {
-                return uint32_t(head[at]) | uint32_t(head[at + 1]) << 8 | uint32_t(head[at + 2]) << 16 |
-                       uint32_t(head[at + 3]) << 24;
-            };
-            const uint32_t length = word(12);
-            if (std::memcmp(head, "glTF", 4) != 0 || std::memcmp(head + 16, "JSON", 4) != 0 || length > (64u << 20))
-                return s;  // the loader names what is wrong with it
-            std::string text(length, '\0');
-            if (!f.read(text.data(), std::streamsize(length))) return s;
-            j = nlohmann::json::parse(text);
-        } else {
-            j = nlohmann::json::parse(f);
-        }
-    } catch (const nlohmann::json::exception&) {
-        return s;  // the loader names what is wrong with it
-    }
+    // A .glb's images may still be files beside it (the Kenney city kit's shared colormap.png).
+    const std::optional<nlohmann::json> json = read_gltf_json(scene);
+    if (!json) return s;  // the loader names what is wrong with it
+    const nlohmann::json& j = *json;
     for (const char* key : {"buffers", "images"}) {
         if (!j.contains(key) || !j[key].is_array()) continue;
         for (const auto& item : j[key]) {

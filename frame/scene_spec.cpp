@@ -5,11 +5,33 @@
 #include <cstdio>
 
 #include "renderer/builtin_scene.h"
+#include "renderer/gltf_json_check.h"
 #include "renderer/gltf_loader.h"
 #include "util/data_path.h"
 #include "util/error.h"
 
 namespace dynsky {
+
+namespace {
+
+// --camera against a file's cameras array (counted as in the file, placed on a node or not).
+void check_camera_index(const SceneSpec& o, size_t file_cameras) {
+    if (file_cameras == 0 && o.camera != 0)
+        throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " asked for, but the file has no cameras");
+    if (file_cameras > 0 && (o.camera < 0 || o.camera >= int(file_cameras)))
+        throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " is out of range (the file has " +
+                    std::to_string(file_cameras) + " camera(s), numbered from 0)");
+}
+
+}  // namespace
+
+void check_scene_camera(const SceneSpec& o) {
+    if (o.scene == "builtin") return;
+    const std::optional<nlohmann::json> j = read_gltf_json(resolve_user_path(o.scene));
+    if (!j || !j->is_object()) return;  // the loader names what is wrong with it
+    const auto it = j->find("cameras");
+    check_camera_index(o, it != j->end() && it->is_array() ? it->size() : 0);
+}
 
 LoadedScene load_scene(const SceneSpec& o, float aspect_ratio, bool print_warnings) {
     if (!(o.ground_albedo >= 0 && o.ground_albedo <= 1)) throw Error("--ground-albedo must be in [0, 1]");
@@ -58,9 +80,7 @@ void choose_camera(const SceneSpec& o, float aspect_ratio, LoadedScene* loaded, 
         // glTF cameras are numbered as in the file's cameras array (counting only those placed on a
         // node, camera 1 of three of which two were placed rendered the third).
         const std::vector<std::string>& names = out.scene.file_camera_names;
-        if (o.camera < 0 || o.camera >= int(names.size()))
-            throw Error(o.scene + ": --camera " + std::to_string(o.camera) + " is out of range (the file has " +
-                        std::to_string(names.size()) + " camera(s), numbered from 0)");
+        check_camera_index(o, names.size());
         auto it = std::find_if(out.scene.cameras.begin(), out.scene.cameras.end(),
                                [&](const Camera& c) { return c.file_index == o.camera; });
         // Camera 0 (the default) placed nowhere, or any under --look-at (which replaces it): the

@@ -47,4 +47,8 @@ LoadedScene pose_scene(const SceneSpec& spec, AnimatedGltf& file, const std::str
 // look-at and field-of-view overrides); throws for a scene without triangles or a bad camera.
 void choose_camera(const SceneSpec& spec, float aspect_ratio, LoadedScene* loaded, bool print_warnings = true);
 
+// What choose_camera refuses of --camera, from the glTF's JSON alone (no geometry read): for
+// `animate --count-frames`, which checks a run before a farm queues it.
+void check_scene_camera(const SceneSpec& spec);
+
 }  // namespace dynsky

@@ -1,6 +1,8 @@
 #include "renderer/gltf_json_check.h"
 
 #include <cmath>
+#include <cstring>
+#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "util/parse.h"
@@ -361,6 +363,29 @@ GltfJsonReport check_gltf_json(const Json& root) {
         if (!e.empty()) checker.report.error = e.substr(1);  // no leading "."
     }
     return checker.report;
+}
+
+std::optional<nlohmann::json> read_gltf_json(const std::string& path) {
+    try {
+        std::ifstream f(path, std::ios::binary);
+        if (!f) return std::nullopt;
+        unsigned char head[20] = {};
+        f.read(reinterpret_cast<char*>(head), sizeof head);
+        if (f.gcount() >= 4 && std::memcmp(head, "glTF", 4) == 0) {
+            if (f.gcount() < 20) return std::nullopt;
+            const uint32_t length = uint32_t(head[12]) | uint32_t(head[13]) << 8 | uint32_t(head[14]) << 16 |
+                                    uint32_t(head[15]) << 24;
+            if (std::memcmp(head + 16, "JSON", 4) != 0 || length > (64u << 20)) return std::nullopt;
+            std::string text(length, '\0');
+            if (!f.read(text.data(), std::streamsize(length))) return std::nullopt;
+            return nlohmann::json::parse(text);
+        }
+        f.clear();
+        f.seekg(0);
+        return nlohmann::json::parse(f);
+    } catch (const nlohmann::json::exception&) {
+        return std::nullopt;
+    }
 }
 
 }  // namespace dynsky

@@ -8,7 +8,8 @@
 // decides) or can read safely (byteStride 0 as tightly packed) is a warning.
 #pragma once
 
-#include <nlohmann/json_fwd.hpp>
+#include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,5 +23,10 @@ struct GltfJsonReport {
 // `root` is the parsed document (the JSON chunk of a .glb); a non-object gives an empty report
 // (tinygltf names the syntax error).
 GltfJsonReport check_gltf_json(const nlohmann::json& root);
+
+// The JSON document of a .gltf, or the JSON chunk of a .glb (a 12-byte header, then its length,
+// "JSON", the text), without its buffers or images: for checks that need no geometry. Nothing
+// when it cannot be read or parsed: the loader names what is wrong with it.
+std::optional<nlohmann::json> read_gltf_json(const std::string& path);
 
 }  // namespace dynsky

@@ -371,11 +371,17 @@ TEST(AnimateCli, CountFramesChecksWhatAFarmWouldQueue) {
           // What the run refuses before any step (an audit of the options: each passed --count-frames).
           "builtin --sky procedural:abc --duration 90 --fps 0.1 --out " + dir + "/a",
           "builtin --sky clear --model procedural --duration 90 --fps 0.1 --out " + dir + "/a",
-          ok + " --model advect --dt 1e-9"}) {
+          ok + " --model advect --dt 1e-9",
+          // A camera the file does not have (found by the frames tasks before).
+          std::string("scenes/tower/tower.gltf --camera 2 --duration 90 --fps 0.1 --out ") + dir + "/a"}) {
         r = test::run_command(base + bad + " --count-frames 2>&1");
         EXPECT_NE(r.exit_code, 0) << bad << "\n" << r.output;
         EXPECT_EQ(r.output.find("\n9\n"), std::string::npos) << bad;
     }
+    r = test::run_command(base + "scenes/tower/tower.gltf --camera 1 --duration 90 --fps 0.1 --out " + dir +
+                          "/a --count-frames");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(r.output, "9\n");
     r = test::run_command(base + "builtin --sky procedural:1 --sky-res 64 --duration 60 --fps 0.1 --out " + dir +
                           "/e --timeline " + dir + "/e --stage keys 2>&1");
     EXPECT_NE(r.exit_code, 0) << r.output;

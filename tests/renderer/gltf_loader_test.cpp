@@ -1,3 +1,4 @@
+#include "renderer/gltf_json_check.h"
 #include "renderer/gltf_loader.h"
 #include "renderer/material_eval.h"
 
@@ -2118,6 +2119,31 @@ TEST(GltfLoader, HostileInputIsRefusedAtItsRoot) {
         EXPECT_TRUE(e.find("asset's folder") != std::string::npos || e.find("absolute") != std::string::npos)
             << uri << ": " << e;
     }
+}
+
+// The JSON of a .gltf and of a .glb's first chunk, read without buffers (animate --count-frames
+// checks --camera with it); a .glb cut short, or text that is no JSON, gives nothing.
+TEST(GltfJson, ReadsTheDocumentOfGltfAndGlbFiles) {
+    const std::string dir = test::temp_dir("gltf_json");
+    const std::string text = R"({"asset":{"version":"2.0"},"cameras":[{"type":"perspective"},{"type":"perspective"}]})";
+    std::ofstream(dir + "/a.gltf") << text;
+    std::string chunk = text;
+    while (chunk.size() % 4) chunk += ' ';
+    auto word = [](uint32_t v) { return std::string{char(v), char(v >> 8), char(v >> 16), char(v >> 24)}; };
+    const std::string glb = "glTF" + word(2) + word(uint32_t(20 + chunk.size())) + word(uint32_t(chunk.size())) +
+                            "JSON" + chunk;
+    std::ofstream(dir + "/a.glb", std::ios::binary) << glb;
+    std::ofstream(dir + "/cut.glb", std::ios::binary) << glb.substr(0, 30);
+    std::ofstream(dir + "/not.gltf") << "glTF? no";
+    for (const char* name : {"/a.gltf", "/a.glb"}) {
+        const auto j = read_gltf_json(dir + name);
+        ASSERT_TRUE(j.has_value()) << name;
+        EXPECT_EQ((*j)["cameras"].size(), 2u) << name;
+    }
+    EXPECT_FALSE(read_gltf_json(dir + "/cut.glb").has_value());
+    EXPECT_FALSE(read_gltf_json(dir + "/not.gltf").has_value());
+    EXPECT_FALSE(read_gltf_json(dir + "/missing.gltf").has_value());
+    fs::remove_all(dir);
 }
 
 }  // namespace
