@@ -2,11 +2,13 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <exception>
 #include <filesystem>
 #include <functional>
+#include <iostream>
 #include <new>
 #include <string>
 
@@ -81,9 +83,8 @@ void install_signal_handlers() {
     for (int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &sa, nullptr);
 }
 
-}  // namespace
 
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
     install_signal_handlers();
     CLI::App app{
         "dynsky: time-varying HDR skies (clear, photographed, procedural, with moving clouds) and a\n"
@@ -163,3 +164,20 @@ int main(int argc, char** argv) {
     if (dynsky::stopped_early()) return dynsky::cli::kInterrupted;
     return dynsky::cli::kSuccess;
 }
+
+// What a command printed must have arrived: `$(dynsky animate --count-frames)` into a full disk or
+// a closed stdout read an empty string with exit 0.
+int checked_standard_output(int code) {
+    std::cout.flush();
+    errno = 0;
+    const bool failed = std::fflush(stdout) != 0 || std::ferror(stdout) || std::cout.fail();
+    if (!failed) return code;
+    const int err = errno;
+    std::fprintf(stderr, "dynsky: error: standard output: %s: what the command printed did not all arrive\n",
+                 err ? std::strerror(err) : "could not be written (closed, or a full disk)");
+    return code == dynsky::cli::kSuccess ? dynsky::cli::kRuntimeError : code;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return checked_standard_output(run(argc, argv)); }

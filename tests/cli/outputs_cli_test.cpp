@@ -130,6 +130,27 @@ TEST(OutputsCli, FullDiskFailsCleanlyForEveryFormat) {
 // A folder's "complete" marker (a timeline's timeline.json, a procedural sequence's manifest.json)
 // goes before a run replaces any of the files it describes: a run into the same folder that stopped
 // midway (here a full disk) left the old marker over new files, and the next run kept them.
+// What a command prints is an output too: a farm script reading `$(dynsky animate --count-frames)`
+// from a full disk or a closed stdout got an empty string and exit 0.
+TEST(OutputsCli, StandardOutputThatCannotBeWrittenFails) {
+    for (const std::string c : {"animate --count-frames", "sky sun -q", "--version", "--help"}) {
+        for (const std::string redirect : {" >/dev/full", " >&-"}) {
+            // Grouped: run_command's own 2>&1 then takes stderr alone.
+            const auto r = test::run_command("{ " + std::string(DYNSKY_EXE) + " " + c + redirect + "; }");
+            EXPECT_EQ(r.exit_code, 1) << c << redirect << "\n" << r.output;
+            EXPECT_NE(r.output.find("dynsky: error: standard output:"), std::string::npos) << c << redirect;
+        }
+        const auto r = test::run_command(std::string(DYNSKY_EXE) + " " + c + " >/dev/null");
+        EXPECT_EQ(r.exit_code, 0) << c << "\n" << r.output;
+    }
+    // A command that prints nothing to stdout does not mind it closed.
+    const std::string dir = test::temp_dir("stdout_closed");
+    const auto r = test::run_command("{ " + std::string(DYNSKY_EXE) + " sky clear --sky-res 16 -q -o " + dir +
+                                     "/c.exr >&-; }");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    fs::remove_all(dir);
+}
+
 TEST(OutputsCli, AStoppedRunLeavesNoMarkerOverItsFiles) {
     const std::string dir = test::temp_dir("outputs_marker");
     const std::string tl = dir + "/tl", proc = dir + "/proc";
