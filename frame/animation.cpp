@@ -360,7 +360,8 @@ AnimationReport render_animation(const AnimationSettings& o) {
         FrameMetadata meta;
         meta.frame = k, meta.time_seconds = t, meta.fps = o.fps, meta.spp = o.spp, meta.seed = render.seed;
         meta.medium_step_seconds = timeline.dt(), meta.png_exposure_ev = ev;
-        meta.sky = sky->source, meta.sky_model = timeline.model().name(), meta.scene = o.scene.scene;
+        meta.sky = sky->source, meta.units = sky->units, meta.sky_model = timeline.model().name(),
+        meta.scene = o.scene.scene;
         meta.camera = scene->camera.name, meta.gamma = gamma_name(timeline.gamma());
         meta.settings = settings;
         meta.date_time = exif_date_time(o.sky, *sky0, t);  // the time the input records, + t

@@ -129,6 +129,7 @@ void FrameMetadata::write_to(ImageMetadata* m) const {
     m->numbers["dynsky:medium_step_seconds"] = medium_step_seconds;
     m->numbers["dynsky:png_exposure_ev"] = png_exposure_ev;
     m->strings["dynsky:sky"] = sky;
+    if (!units.empty()) m->strings["dynsky:units"] = units;
     m->strings["Software"] = dynsky_version();  // the build (util/version.h): a mixed farm shows in its frames
     m->strings["dynsky:sky_model"] = sky_model;
     m->strings["dynsky:gamma"] = gamma;

@@ -47,6 +47,7 @@ struct FrameMetadata {
     double medium_step_seconds = 0;  // Delta t
     double png_exposure_ev = 0;
     std::string sky, sky_model, scene, camera;
+    std::string units;     // the sky's (dynsky:units); empty: relative
     std::string gamma;     // the in-between: constant | paper (dynsky:gamma)
     std::string settings;  // canonical_settings of the run (dynsky:settings, dynsky:settings_hash)
     // The EXR's DateTime ("YYYY:MM:DD HH:MM:SS"): the UTC moment the frame shows when its sky follows

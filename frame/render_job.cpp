@@ -128,6 +128,9 @@ void run_render_job(const RenderJob& o) {
     image.metadata.numbers["dynsky:ground_albedo"] = o.scene.ground_albedo;
     image.metadata.numbers["dynsky:time"] = sky->time_seconds;  // frame time (glossary)
     image.metadata.strings["dynsky:sky"] = sky->source;
+    // Lit by a sky in known units (and lights in the same), the image is radiance in them; a sky in
+    // relative units (an uncalibrated import, an HDRI) says nothing, and neither does the image.
+    if (!sky->units.empty()) image.metadata.strings["dynsky:units"] = sky->units;
     image.metadata.strings["dynsky:scene"] = o.scene.scene;
     SkySourceSpec taken = o.generated;
     taken.sky = o.sky;

@@ -74,6 +74,7 @@ SkyTimeline::SkyTimeline(SkyImage input, std::unique_ptr<MediumStepModel> model,
         if (const auto found = sun_from_brightest_pixels(input)) input.sun_direction = found->cast<float>();
     input_sun_ = to_double(input.sun_direction);
     input_time_ = input.time_seconds;
+    input_units_ = input.units;
     // The sun is cut out where the image has it; it is put back where the clock says.
     suns_.push_back(remove_sun(&input));
     if (input_sun_) input_look_transmittance_ = estimate_sun_transmittance(input, *input_sun_);
@@ -365,6 +366,7 @@ void SkyTimeline::sky_at(double t, SkyImage* out) {
     }
     auto t0 = std::chrono::steady_clock::now();
     out->time_seconds = input_time_ + t;
+    out->units = input_units_;  // the steps' images are back in the input's units (below)
     auto sun = sun_direction_at(t);
     last_sun_weight_ = 1.0;
     const Color sun_factor = relight_to_clock(t, out);

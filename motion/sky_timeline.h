@@ -175,6 +175,7 @@ class SkyTimeline {
     std::optional<double> input_sun_share_;
     double input_sun_share();
     double input_time_ = 0;
+    std::string input_units_;  // dynsky:units of the input, given to every frame
     // With a clock, the clear sky under the clouds follows the sun: a frame at t is the moved sky
     // times the Hosek-Wilkie background (no sun, the input's turbidity) at the clock's sun at t
     // over the one at t = 0, pixel by pixel and channel by channel, and its sun is put back times

@@ -19,6 +19,7 @@
 #include "util/color.h"
 #include "util/error.h"
 #include "util/image_input.h"
+#include "util/parse.h"
 
 namespace dynsky {
 
@@ -337,7 +338,12 @@ std::string encode_image(const std::string& path, const Image& image) {
         spec.alpha_channel = image.channel_index("A");
         spec.z_channel = image.channel_index("Depth.Z");
     }
-    for (const auto& [name, value] : image.metadata.numbers) spec.attribute(name, OIIO::TypeDesc::DOUBLE, &value);
+    // A PNG keeps only text (its tEXt chunks): numbers there are written as text, or they were lost
+    // (a render's PNG did not say its exposure).
+    for (const auto& [name, value] : image.metadata.numbers) {
+        if (is_exr) spec.attribute(name, OIIO::TypeDesc::DOUBLE, &value);
+        else spec.attribute(name, number_text(value, 15));
+    }
     for (const auto& [name, value] : image.metadata.strings) spec.attribute(name, value);
 
     // Encoded in memory, then written by the one checked atomic writer (util/atomic_file.h): the
@@ -368,6 +374,21 @@ std::string encode_image(const std::string& path, const Image& image) {
     return std::string(reinterpret_cast<const char*>(encoded.data()), encoded.size());
 }
 
+namespace {
+
+// A display image's header: the radiance's, less its units (its pixels are display values now),
+// with how they were made from it.
+ImageMetadata display_metadata(const ImageMetadata& linear, float exposure_ev) {
+    ImageMetadata m = linear;
+    m.strings.erase("dynsky:units");
+    m.numbers["dynsky:png_exposure_ev"] = exposure_ev;
+    m.strings["dynsky:display_transform"] =
+        "radiance x 2^dynsky:png_exposure_ev, ACES filmic curve (Narkowicz 2015), sRGB encoding";
+    return m;
+}
+
+}  // namespace
+
 Image tonemap_to_display(const Image& linear, float exposure_ev) {
     Image out(linear.width, linear.height, std::min(linear.channels, 3));
     float scale = std::exp2(exposure_ev);
@@ -375,7 +396,7 @@ Image tonemap_to_display(const Image& linear, float exposure_ev) {
         for (int x = 0; x < linear.width; ++x)
             for (int c = 0; c < out.channels; ++c)
                 out.at(x, y, c) = linear_to_srgb(tonemap_aces(scale * linear.at(x, y, c)));
-    out.metadata = linear.metadata;
+    out.metadata = display_metadata(linear.metadata, exposure_ev);
     return out;
 }
 
@@ -394,7 +415,7 @@ Image tonemap_to_display(const Image& premultiplied, const Image& alpha, float e
             }
             out.at(x, y, 3) = a;
         }
-    out.metadata = premultiplied.metadata;
+    out.metadata = display_metadata(premultiplied.metadata, exposure_ev);
     return out;
 }
 

@@ -241,6 +241,15 @@ TEST(RenderCli, WritesExrWithMetadataAndPng) {
         << m.metadata.strings["dynsky:sky"];
     EXPECT_EQ(im.metadata.strings.count("dynsky:override_material"), 0u);  // none: not said
     EXPECT_EQ(im.metadata.strings["dynsky:sky_sampler"], "cdf+mis");
+    // Lit by a sky in W m^-2 sr^-1, the image is radiance in them; under a sky of no stated units
+    // (an HDRI) it says none. Its PNG says its exposure (PNGs dropped numbers) and no units.
+    EXPECT_EQ(m.metadata.strings["dynsky:units"], "W m^-2 sr^-1");
+    const auto png = image_header_strings(dir + "/more.png", {"dynsky:png_exposure_ev", "dynsky:units"});
+    EXPECT_NEAR(std::stod(png[0]), m.metadata.numbers["dynsky:png_exposure_ev"], 1e-9);
+    EXPECT_EQ(png[1], "");
+    Outcome hdri = render("builtin --sky " + write_sky(dir, "hdri.exr", 16, 16, 1.0f), dir + "/h.exr");
+    ASSERT_EQ(hdri.result.exit_code, 0) << hdri.result.output;
+    EXPECT_EQ(read_image(dir + "/h.exr").metadata.strings.count("dynsky:units"), 0u);
 }
 
 // A 2:1 image is a lat-long environment: its upper half lights the scene, its lower half is the ground.

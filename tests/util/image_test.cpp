@@ -38,6 +38,29 @@ TEST(ImageIo, ExrRoundTripKeepsPixelsAndMetadata) {
     EXPECT_EQ(files, 1);
 }
 
+// A display image says how it was made from the radiance (its exposure and curve), not the
+// radiance's units, and a PNG keeps the header's numbers as text (they were dropped: a render's PNG
+// did not say its exposure, and a sky preview claimed W m^-2 sr^-1 for 8-bit display values).
+TEST(ImageIo, ADisplayPngSaysItsExposureAndNoUnits) {
+    const std::string dir = test::temp_dir("display_png");
+    Image linear(2, 2, 3);
+    linear.metadata.strings["dynsky:units"] = "W m^-2 sr^-1";
+    linear.metadata.numbers["dynsky:time"] = 1781539200.5;
+    const Image display = tonemap_to_display(linear, -1.25f);
+    EXPECT_EQ(display.metadata.strings.count("dynsky:units"), 0u);
+    write_image(dir + "/d.png", display);
+    const auto got = image_header_strings(dir + "/d.png", {"dynsky:png_exposure_ev", "dynsky:time", "dynsky:units",
+                                                           "dynsky:display_transform"});
+    EXPECT_EQ(got[0], "-1.25");
+    EXPECT_EQ(got[1], "1781539200.5");
+    EXPECT_EQ(got[2], "");
+    EXPECT_NE(got[3].find("ACES"), std::string::npos);
+    // An EXR keeps numbers as numbers.
+    write_image(dir + "/l.exr", linear);
+    EXPECT_EQ(image_header_number(dir + "/l.exr", "dynsky:time"), 1781539200.5);
+    fs::remove_all(dir);
+}
+
 // A render with an alpha pass has its colour premultiplied (the sky seen from the camera
 // transparent): its PNG is RGBA with straight alpha, so the sky is transparent there too rather
 // than black (a review), and a half-covered pixel shows its surface's own colour.
