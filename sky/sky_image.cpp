@@ -56,7 +56,8 @@ void validate_sky(const SkyImage& sky, const std::string& name) {
     if (!(total > 0))
         throw_file_error(name,
                          "sky is black everywhere inside the fisheye disc: nothing to light with (a scene lit by its "
-                         "own lights at night: give a faint sky, e.g. a constant 1e-4, the light of a moonless night)");
+                         "own lights at night: give a faint sky, e.g. a constant 5e-7 W m^-2 sr^-1, about 0.001 lx, the "
+                         "light of a moonless night; a full moon's 0.2 lx is about 1e-4)");
     // Light this faint underflows single precision on its way to a pixel: a black render.
     if (brightest < kMinSkyRadiance)
         throw_file_error(name, "sky's brightest pixel is " + number_text(brightest, 3) + ", below " +
