@@ -223,7 +223,7 @@ AnimationReport render_animation(const AnimationSettings& o) {
     const bool farm_task = stage == "frames";
     // Removed again if this run fails before writing anything.
     const OutputFolder folder(o.out, farm_task ? FolderUse::shared : FolderUse::exclusive);
-    const FrameStore store(o.out);
+    const FrameStore store(o.out, total);
     const std::string timings_name = farm_task
                                          ? "timings_" + std::to_string(first) + "-" + std::to_string(last) + ".csv"
                                          : "timings.csv";

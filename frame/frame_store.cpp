@@ -13,9 +13,9 @@ namespace dynsky {
 
 namespace fs = std::filesystem;
 
-std::string FrameStore::frame_exr(int k) const { return numbered_path(folder_, "frame", k, ".exr"); }
-std::string FrameStore::frame_png(int k) const { return numbered_path(folder_, "frame", k, ".png"); }
-std::string FrameStore::sky_png(int k) const { return numbered_path(folder_, "sky", k, ".png"); }
+std::string FrameStore::frame_exr(int k) const { return numbered_path(folder_, "frame", k, ".exr", count_); }
+std::string FrameStore::frame_png(int k) const { return numbered_path(folder_, "frame", k, ".png", count_); }
+std::string FrameStore::sky_png(int k) const { return numbered_path(folder_, "sky", k, ".png", count_); }
 std::string FrameStore::file(const std::string& name) const { return (fs::path(folder_) / name).string(); }
 
 FrameCheck FrameStore::check(int k, int width, int height, const std::string& settings) const {

@@ -20,7 +20,8 @@ struct FrameCheck {
 
 class FrameStore {
   public:
-    explicit FrameStore(std::string folder) : folder_(std::move(folder)) {}
+    // `count`: the animation's frames (names are padded to its largest number; util/frame_names.h).
+    explicit FrameStore(std::string folder, int count = 0) : folder_(std::move(folder)), count_(count) {}
     const std::string& folder() const { return folder_; }
 
     std::string frame_exr(int k) const;
@@ -34,6 +35,7 @@ class FrameStore {
 
   private:
     std::string folder_;
+    int count_ = 0;
 };
 
 // Inclusive frame range from "A-B" or "A" (numbered from 0) for an animation of `total` frames;

@@ -66,7 +66,7 @@ void make_video(const std::string& dir, const std::string& prefix, int frames, d
     for (char c : fs::absolute(dir).lexically_normal().string())
         folder += c == '%' ? std::string("%%") : std::string(1, c);
     if (!folder.empty() && folder.back() != '/') folder += '/';
-    const std::string pattern = folder + numbered_pattern(prefix, ".png");
+    const std::string pattern = folder + numbered_pattern(prefix, ".png", frames);
     const std::string output = fs::absolute(tmp.path()).lexically_normal().string();
     char rate[32];
     std::snprintf(rate, sizeof rate, "%g", fps);

@@ -205,7 +205,7 @@ void write_prediction(const PredictionOptions& given) {
     int written = 0;
     rollout([&](int k, const SkyImage& s) {
         if (k % o.every == 0 || k == o.steps) {
-            std::string base = numbered_path(o.out, "step", k, "");
+            std::string base = numbered_path(o.out, "step", k, "", o.steps + 1);
             // In the input's units (the statistics stay at the models' scale, where the form is defined).
             SkyImage given = s;
             given.source = made_by + std::to_string(k) + " of " + std::to_string(o.steps);

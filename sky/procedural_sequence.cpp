@@ -220,8 +220,10 @@ void write_procedural_sequence(const ProceduralSequenceSettings& o) {
             Vec3d s = sun_at(t);
             if (s != current_sun) sky.set_sun_direction(s), current_sun = s;
         }
-        std::string image_name = numbered_name("frame", k, ".exr"), flow_name = numbered_name("flow", k, ".exr");
-        const std::string png = numbered_name("frame", k, ".png"), flow_png = numbered_name("flow", k, ".png");
+        std::string image_name = numbered_name("frame", k, ".exr", frames),
+                    flow_name = numbered_name("flow", k, ".exr", frames);
+        const std::string png = numbered_name("frame", k, ".png", frames),
+                          flow_png = numbered_name("flow", k, ".png", frames);
         std::vector<std::string> files = {(fs::path(o.out) / image_name).string(),
                                           (fs::path(o.out) / flow_name).string()};
         if (o.preview)

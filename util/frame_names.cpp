@@ -5,14 +5,26 @@
 
 namespace dynsky {
 
-std::string numbered_name(const std::string& prefix, int k, const std::string& ext) {
+namespace {
+
+// Digits of the set's largest number, at least four.
+int name_width(int count) {
+    int width = 4;
+    for (long largest = long(count) - 1, limit = 10000; largest >= limit; limit *= 10) ++width;
+    return width;
+}
+
+}  // namespace
+
+std::string numbered_name(const std::string& prefix, int k, const std::string& ext, int count) {
     char digits[32];
-    std::snprintf(digits, sizeof digits, "_%04d", k);
+    std::snprintf(digits, sizeof digits, "_%0*d", name_width(count), k);
     return prefix + digits + ext;
 }
 
-std::string numbered_path(const std::string& folder, const std::string& prefix, int k, const std::string& ext) {
-    return (std::filesystem::path(folder) / numbered_name(prefix, k, ext)).string();
+std::string numbered_path(const std::string& folder, const std::string& prefix, int k, const std::string& ext,
+                          int count) {
+    return (std::filesystem::path(folder) / numbered_name(prefix, k, ext, count)).string();
 }
 
 std::optional<int> numbered_index(const std::string& name, const std::string& prefix) {
@@ -25,7 +37,9 @@ std::optional<int> numbered_index(const std::string& name, const std::string& pr
     return std::stoi(digits);
 }
 
-std::string numbered_pattern(const std::string& prefix, const std::string& ext) { return prefix + "_%04d" + ext; }
+std::string numbered_pattern(const std::string& prefix, const std::string& ext, int count) {
+    return prefix + "_%0" + std::to_string(name_width(count)) + "d" + ext;
+}
 
 bool natural_less(const std::string& a, const std::string& b) {
     auto digit = [](char c) { return c >= '0' && c <= '9'; };

@@ -354,6 +354,21 @@ TEST(AnimateCli, ResumeRerendersFramesOfAChangedModelOrGlbTexture) {
     fs::remove_all(dir);
 }
 
+// An animation of more than 10000 frames names every frame with five digits, so that they sort
+// in order in any listing (an audit: frame_10000 came between frame_1000 and frame_1001).
+TEST(AnimateCli, FramesOfALongAnimationSortInOrder) {
+    const std::string dir = test::temp_dir("animate_long_names");
+    auto r = test::run_command(std::string(DYNSKY_EXE) +
+                               " animate builtin --sky clear --sky-res 32 --res 16x9 --spp 1 --no-video -q "
+                               "--duration 100.01 --fps 100 --frames 9999-10000 --out " +
+                               dir);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    for (const char* name : {"frame_09999.exr", "frame_09999.png", "sky_09999.png", "frame_10000.exr"})
+        EXPECT_TRUE(fs::exists(dir + "/" + name)) << name;
+    EXPECT_FALSE(fs::exists(dir + "/frame_9999.exr"));
+    fs::remove_all(dir);
+}
+
 // What a farm script checks before queueing anything (`--count-frames`): a typo in the scene, sky
 // or model name, or a bad pass list, fails there, not in every frames task after the keys job
 // (a misspelt scene went through, and each task failed and was requeued). A timeline folder that

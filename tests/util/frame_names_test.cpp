@@ -18,6 +18,21 @@ TEST(FrameNames, NumberedNamesRoundTrip) {
     EXPECT_FALSE(numbered_index("sky_0007.exr", "frame"));
 }
 
+// A set of more than 10000 names pads every one to its largest number's width, so that they sort
+// in order (frame_10000 sorted between frame_1000 and frame_1001), and ffmpeg's pattern follows.
+TEST(FrameNames, LargeSetsArePaddedToSortInOrder) {
+    EXPECT_EQ(numbered_name("frame", 7, ".exr", 10000), "frame_0007.exr");
+    EXPECT_EQ(numbered_name("frame", 7, ".exr", 10001), "frame_00007.exr");
+    EXPECT_EQ(numbered_name("frame", 10000, ".exr", 10001), "frame_10000.exr");
+    EXPECT_EQ(numbered_name("frame", 7, ".exr", 100001), "frame_000007.exr");
+    EXPECT_EQ(numbered_pattern("frame", ".png", 10000), "frame_%04d.png");
+    EXPECT_EQ(numbered_pattern("frame", ".png", 10001), "frame_%05d.png");
+    std::vector<std::string> names;
+    for (int k : {999, 1000, 1001, 9999, 10000, 10001}) names.push_back(numbered_name("frame", k, ".png", 10002));
+    EXPECT_TRUE(std::is_sorted(names.begin(), names.end())) << names[1] << " " << names[4];
+    EXPECT_EQ(numbered_index(names[0], "frame"), 999);
+}
+
 // Folders of frames whose files say no time are taken in the order people number them: "img 10"
 // after "img 9" (plain string order put it first, and a captured sequence moved on from the wrong
 // last sky, its motion measured backwards).
