@@ -1,9 +1,11 @@
 #include "util/progress.h"
 
+#include <sys/ioctl.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 
 namespace dynsky {
 
@@ -54,12 +56,20 @@ void ProgressBar::finish() {
     draw(done_.load(), true);
 }
 
-std::string format_progress(const std::string& label, double fraction, double elapsed, double time_limit) {
+namespace {
+
+// The terminal's width in columns (stderr's, else $COLUMNS); 0 when unknown.
+int terminal_columns() {
+    winsize ws{};
+    if (ioctl(STDERR_FILENO, TIOCGWINSZ, &ws) == 0 && ws.ws_col > 0) return ws.ws_col;
+    if (const char* c = std::getenv("COLUMNS")) return std::max(0, std::atoi(c));
+    return 0;
+}
+
+}  // namespace
+
+std::string format_progress(const std::string& label, double fraction, double elapsed, double time_limit, int columns) {
     double frac = std::clamp(fraction, 0.0, 1.0);
-    const int width = 30;
-    int filled = int(frac * width);
-    std::string bar(size_t(filled), '#');
-    bar += std::string(size_t(width - filled), '.');
     char left[32] = "?";
     if (frac > 0) {
         double seconds = elapsed * (1 - frac) / frac;
@@ -68,17 +78,36 @@ std::string format_progress(const std::string& label, double fraction, double el
     } else if (time_limit > 0) {
         std::snprintf(left, sizeof left, "at most %.1fs", std::max(0.0, time_limit - elapsed));
     }
-    char line[256];
-    std::snprintf(line, sizeof line, "%s [%s] %5.1f%%  %.1fs elapsed, %s left", label.c_str(), bar.c_str(), 100 * frac,
-                  elapsed, left);
+    char tail[128];
+    std::snprintf(tail, sizeof tail, "%5.1f%%  %.1fs elapsed, %s left", 100 * frac, elapsed, left);
+    const size_t fit = columns > 0 ? size_t(columns - 1) : std::string::npos;
+    int width = 30;  // the bar's, shrunk to fit, dropped below 10
+    const size_t without_bar = label.size() + 3 + std::string(tail).size() + 1;  // "L [] T"
+    if (without_bar + size_t(width) > fit) width = fit > without_bar ? int(fit - without_bar) : 0;
+    std::string line;
+    if (width >= 10) {
+        const int filled = int(frac * width);
+        line = label + " [" + std::string(size_t(filled), '#') + std::string(size_t(width - filled), '.') + "] " + tail;
+    } else {
+        line = label + " " + tail;
+    }
+    if (line.size() > fit) line.resize(fit);
     return line;
 }
 
 void ProgressBar::draw(long long done, bool final) {
     last_drawn_ = done;
-    std::string line = format_progress(label_, double(done) / double(total_), elapsed_seconds(), time_limit_);
-    if (tty_) std::fprintf(stderr, "\r%s%s", line.c_str(), final ? "\n" : "   ");
-    else std::fprintf(stderr, "%s\n", line.c_str());
+    const double fraction = double(done) / double(total_);
+    if (tty_) {
+        // Fitted to the terminal and padded to its width less one (a shorter line leaves none of
+        // the last one behind; a longer one wraps, and every redraw scrolled a new line).
+        const int columns = terminal_columns();
+        const std::string line = format_progress(label_, fraction, elapsed_seconds(), time_limit_, columns);
+        const int pad = columns > 0 ? std::max(0, columns - 1 - int(line.size())) : 3;
+        std::fprintf(stderr, "\r%s%*s%s", line.c_str(), pad, "", final ? "\n" : "");
+    } else {
+        std::fprintf(stderr, "%s\n", format_progress(label_, fraction, elapsed_seconds(), time_limit_).c_str());
+    }
     std::fflush(stderr);
 }
 

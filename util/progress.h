@@ -10,9 +10,11 @@
 namespace dynsky {
 
 // One progress line: label, bar, percentage, time elapsed and left (estimated from the rate so
-// far; "?" before any progress), at most what a time limit (> 0) leaves.
+// far; "?" before any progress), at most what a time limit (> 0) leaves. `columns` > 0: the line fits
+// in one less than that (a terminal's width; a longer line wrapped and scrolled on every redraw):
+// the bar shrinks, then goes, then the line is cut.
 std::string format_progress(const std::string& label, double fraction, double elapsed_seconds,
-                            double time_limit_seconds = 0);
+                            double time_limit_seconds = 0, int columns = 0);
 
 // The program-wide -q (cli/main.cpp sets it for every command, with or without a --quiet of its
 // own): progress bars and reports on stderr stay silent (warnings and errors are still said).

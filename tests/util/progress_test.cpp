@@ -24,5 +24,23 @@ TEST(Progress, NoEstimateBeforeAnyProgressAndNoneLeftAtTheEnd) {
     EXPECT_NE(format_progress("render", 0.0, 2.0, 15.0).find("at most 13.0s left"), std::string::npos);
 }
 
+// On a terminal narrower than the line, every redraw wrapped and scrolled a new line (an audit at
+// 40 columns): the line fits in the width less one, the bar shrinking, then going, then the cut.
+TEST(Progress, TheLineFitsTheTerminal) {
+    const std::string wide = format_progress("render", 0.5, 1.0, 0, 200);
+    EXPECT_NE(wide.find("[###############...............]"), std::string::npos) << wide;
+    EXPECT_EQ(wide, format_progress("render", 0.5, 1.0));
+    for (int columns : {70, 60, 50, 40, 20, 8, 1}) {
+        const std::string line = format_progress("render", 0.5, 1.0, 0, columns);
+        EXPECT_LE(int(line.size()), columns - 1) << columns << ": " << line;
+        if (columns >= 60) {
+            EXPECT_NE(line.find("##"), std::string::npos) << columns << ": " << line;
+        }
+        if (columns == 40) {
+            EXPECT_EQ(line, "render  50.0%  1.0s elapsed, 1.0s left") << line;
+        }
+    }
+}
+
 }  // namespace
 }  // namespace dynsky
