@@ -158,7 +158,7 @@ void check_animation_settings(const AnimationSettings& o, bool inputs_exist) {
     // and the model is one there is (their contents are read by the stages).
     auto exists = [&](const std::string& path, const char* option) {
         if (!path.empty() && !fs::exists(resolve_user_path(path), ec))
-            throw_file_error(path, std::string("no such file or folder (") + option + ")");
+            throw_file_error(path, missing_user_path_text(path) + " (" + option + ")");
     };
     if (o.scene.scene != "builtin") exists(o.scene.scene, "the scene");
     check_scene_camera(o.scene);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 
 #include "renderer/builtin_scene.h"
 #include "renderer/gltf_json_check.h"
@@ -44,6 +45,8 @@ LoadedScene load_scene(const SceneSpec& o, float aspect_ratio, bool print_warnin
                          o.animation.c_str());
     } else {
         out.path = resolve_user_path(o.scene);  // shipped scenes work from any folder
+        std::error_code ec;
+        if (!std::filesystem::exists(out.path, ec)) throw_file_error(o.scene, missing_user_path_text(o.scene));
         out.scene = load_gltf(out.path, nullptr, o.animation_time, o.animation);
         if (print_warnings)
             for (const std::string& w : out.scene.warnings) std::fprintf(stderr, "dynsky: warning: %s\n", w.c_str());

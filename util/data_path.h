@@ -25,4 +25,8 @@ std::string data_path(const std::string& relative);
 // from any folder), else as given (the caller's error then names it).
 std::string resolve_user_path(const std::string& path);
 
+// What to say of a user's path that resolve_user_path found nowhere: "no such file", and for a
+// relative one where else it was looked for (the data roots, and how to name another).
+std::string missing_user_path_text(const std::string& path);
+
 }  // namespace dynsky

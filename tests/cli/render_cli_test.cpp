@@ -81,6 +81,18 @@ TEST(RenderCli, OptionsOfGeneratedSkiesWithASkyFileAreSaidToBeIgnored) {
 TEST(RenderCli, MissingSceneFile) {
     std::string dir = test::temp_dir("render");
     expect_clean_failure(render(dir + "/nope.glb", dir + "/out.exr"), "nope.glb");
+    // A relative name is looked for among the shipped scenes too: the message says where, and how
+    // to name other data; a DYNSKY_DATA that is no folder is said to be ignored (it was silently).
+    const Outcome relative = render("scenes/tower/towr.gltf", dir + "/out.exr");
+    expect_clean_failure(relative, "scenes/tower/towr.gltf: no such file here, nor in dynsky's data (searched ");
+    EXPECT_NE(relative.result.output.find("set DYNSKY_DATA"), std::string::npos) << relative.result.output;
+    const auto r = test::run_command("DYNSKY_DATA=" + dir + "/no_data " + exe() + " sky clear --sky-res 16 -q -o " +
+                                     dir + "/c.exr");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("warning: DYNSKY_DATA=" + dir + "/no_data is not a folder: it is ignored"),
+              std::string::npos)
+        << r.output;
+    fs::remove_all(dir);
 }
 
 TEST(RenderCli, TruncatedGlb) {

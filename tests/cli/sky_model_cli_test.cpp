@@ -815,8 +815,8 @@ TEST(SkyModelCli, TrainingDataNeedsOneSource) {
 // 16..2048 before), refused before any photograph is read.
 TEST(SkyModelCli, ImportResolutionHasOneRangeInEveryCommand) {
     const std::string dir = test::temp_dir("import_res_range");
-    for (const std::string c : {"sky evaluate --photos " + dir + " --preset arm-tsi --out " + dir + "/e.md",
-                                "sky training-data --sequence arm-dusk --out " + dir + "/td"})
+    for (const std::string& c : {"sky evaluate --photos " + dir + " --preset arm-tsi --out " + dir + "/e.md",
+                                 "sky training-data --sequence arm-dusk --out " + dir + "/td"})
         for (const std::string v : {"8", "8192"}) {
             auto r = test::run_command(dynsky(c + " --import-res " + v + " 2>&1"));
             EXPECT_EQ(r.exit_code, 2) << c << "\n" << r.output;
