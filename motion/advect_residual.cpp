@@ -618,6 +618,15 @@ cv::Mat filled_mask(const SkyImage& sky) {
     return cv::Mat(n, n, CV_8UC1, const_cast<unsigned char*>(sky.filled.data())) * 255;  // a copy
 }
 
+double start_departs_from(const cv::Mat& start, const cv::Mat& background, const cv::Mat& disc) {
+    cv::Mat d;
+    cv::absdiff(start, background, d);
+    std::vector<cv::Mat> ch;
+    cv::split(d, ch);
+    const cv::Mat departs = cv::max(ch[0], cv::max(ch[1], ch[2])) > kClearStartTolerance;
+    return double(cv::countNonZero(departs & disc)) / std::max(1, cv::countNonZero(disc));
+}
+
 double network_trust_of_brightness(double median_radiance) {
     constexpr double kNone = 0.1, kFull = 1.0;  // W m^-2 sr^-1
     if (!(median_radiance > kNone)) return 0.0;
@@ -683,6 +692,15 @@ CloudRollout::CloudRollout(AdvectResidualNetwork* network, const cv::Mat& start,
 
 void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3d>& sun) {
     sun_ = sun;
+    // A start that is the model's clear sky (within 0.01 of the log map, about 2 % in radiance,
+    // on all but 2 % of the disc) has no cloud to grow or thin: the network is not asked. At
+    // sunset the cloud rule reads a clear sky's red as cloud everywhere, and the network's
+    // corrections brightened it 2.5 % on the first step and 4 % within ten (a compare of a clear
+    // start over sunset read 6 % more light than the clear sky). Photographs of clear skies
+    // depart from the model on 90 % of the disc and procedural cumulus on 60 %: unchanged.
+    if (!given.empty() && given.size() == start_.size() &&
+        start_departs_from(start_, given, disc_big_) < kClearStartShare)
+        network_trust_ = 0.0;
     cv::Mat background, clipped, halo_angle;  // halo_angle: halo_angles of the sun, where a halo is added
     // An overcast start (the networks' cloud rule finds cloud on at least 90 % of the disc) shows no
     // clear sky: what stays where it is while its clouds move is its own light, the large-scale

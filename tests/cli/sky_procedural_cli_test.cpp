@@ -228,6 +228,30 @@ TEST(SkyProceduralCli, AClearStartAndItsClearSkyAgreeThroughAnEvening) {
     fs::remove_all(dir);
 }
 
+// With the default model too, through sunset: the network read the clear sky's red as cloud and
+// its corrections brightened the moved start 6 % above its clear sky from five minutes on (a
+// compare audit). A start that is the model's clear sky is not given to the network.
+TEST(SkyProceduralCli, AClearStartAndItsClearSkyAgreeThroughSunsetWithTheDefaultModel) {
+    const std::string dir = test::temp_dir("compare_sunset");
+    auto r = test::run_command(std::string(DYNSKY_EXE) +
+                               " compare builtin --sky clear --sky-res 64 --time 2026-06-21T19:50:00Z "
+                               "--duration 600 --chart-frames 3 --chart-res 8x4 --res 16x9 --spp 1 -q --out " +
+                               dir + " 2>&1");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    std::istringstream csv(test::read_text(dir + "/illuminance.csv"));
+    std::string line;
+    std::getline(csv, line);  // header
+    int rows = 0;
+    while (std::getline(csv, line)) {
+        double t = 0, clear = 0, cloudy = 0;
+        ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%lf,%lf", &t, &clear, &cloudy), 3) << line;
+        EXPECT_NEAR(cloudy / clear, 1.0, 0.005) << "t = " << t << " s: " << line;
+        ++rows;
+    }
+    EXPECT_EQ(rows, 3);
+    fs::remove_all(dir);
+}
+
 TEST(SkyProceduralCli, DefaultsAreThoseOfEveryCommandsProceduralSky) {
     std::string dir = test::temp_dir("procedural_cli_defaults") + "/seq";
     auto r = procedural("--cloud-seed 2 --duration 0 --sky-res 64 --out " + dir);
