@@ -235,6 +235,18 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
                          "height)\n",
                          so.sky.c_str(), share);
     }
+    // Else the model's own sun, cut from the clear sky at the start and moved the same way: drawn
+    // anew at each time it fell on whole pixels, and the clear column stepped by up to 1 % as the
+    // sun crossed them (0.8 % apart at the same time from a clear and an overcast start).
+    if (own_sun.empty()) {
+        ClearSkyParams p0;
+        p0.sun_direction = *cloudy.sun_direction_at(0.0);
+        p0.turbidity = turbidity;
+        SkyImage c0 = make_clear_sky(p0, sky_n, false);
+        if (cloudy.radiance_scale() != 1.0) scale_radiance(&c0, cloudy.radiance_scale());
+        c0.sun_direction = p0.sun_direction.cast<float>();
+        own_sun = remove_sun(&c0);
+    }
     auto clear_at = [&](double t) {
         ClearSkyParams p;
         p.sun_direction = *cloudy.sun_direction_at(t);
@@ -349,9 +361,14 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
     std::string csv = (fs::path(o.out) / "illuminance.csv").string();
     {
         std::ostringstream f;  // written whole at the end: a stopped run leaves no half table
-        f << "time_s,clear sky horizontal (lx / 100),cloudy sky horizontal (lx / 100)";
+        // In a sky's own units the figures are 683 x those, not lux and cd/m2 (the note said so,
+        // the table and the chart did not).
+        const bool absolute = cloudy.radiance_scale() == 1.0;
+        const std::string e_unit = absolute ? "lx / 100" : "683 x sky units / 100",
+                          l_unit = absolute ? "cd/m2" : "683 x sky units";
+        f << "time_s,clear sky horizontal (" << e_unit << "),cloudy sky horizontal (" << e_unit << ")";
         for (size_t p = 0; p < points.size(); ++p)
-            f << ",cloudy point " << p + 1 << " (cd/m2),clear point " << p + 1 << " (cd/m2)";
+            f << ",cloudy point " << p + 1 << " (" << l_unit << "),clear point " << p + 1 << " (" << l_unit << ")";
         f << '\n';
         ProgressBar chart_progress(o.chart_frames, "compare: chart frames");
         for (int k = 0; k < o.chart_frames; ++k) {
@@ -373,7 +390,9 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
         write_file_atomic(csv, f.str());
     }
     make_line_chart(csv, (fs::path(o.out) / "illuminance.png").string(),
-                    "Clear vs cloudy sky: illuminance and luminance at chosen points", "time (s)", "lux / 100, cd/m^2",
+                    "Clear vs cloudy sky: illuminance and luminance at chosen points", "time (s)",
+                    cloudy.radiance_scale() == 1.0 ? "lux / 100, cd/m^2"
+                                                   : "683 x the sky's units (/ 100 for illuminance)",
                     true);
     if (!reports_silenced()) std::fprintf(stderr, "wrote %s and illuminance.png\n", csv.c_str());
 }

@@ -25,13 +25,27 @@ rows = list(csv.reader(open(path)))
 head, data = rows[0], [[float(v) for v in r] for r in rows[1:]]
 x = [r[0] for r in data]
 fig, ax = plt.subplots(figsize=(11, 4.5), dpi=110)
+colours = {}
 for c in range(1, len(head)):
     if head[c] == 'boundary':
         for r in data:
             if r[c] > 0.5: ax.axvline(r[0], color='0.8', lw=6, zorder=0)
         continue
-    ax.plot(x, [r[c] for r in data], marker='o', ms=3, label=head[c])
-if logy == '1': ax.set_yscale('log')
+    # A clear/cloudy pair (compare's columns) shares a colour, the clear one dashed.
+    key = head[c].replace('cloudy', '').replace('clear', '')
+    colour = colours.setdefault(key, 'C%d' % (len(colours) % 10))
+    dashed = 'clear' in head[c] and 'cloudy' not in head[c]
+    ax.plot(x, [r[c] for r in data], marker='o', ms=3, label=head[c], color=colour, ls='--' if dashed else '-')
+if logy == '1':
+    ax.set_yscale('log')
+    # Within three decades a tick at 1, 2, 3 and 5 of each, labelled as plain numbers: one labelled
+    # tick (10^3) was all a chart from 250 to 6000 showed.
+    values = [r[c] for r in data for c in range(1, len(head)) if head[c] != 'boundary' and r[c] > 0]
+    if values and max(values) / min(values) < 1000:
+        from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+        ax.yaxis.set_major_locator(LogLocator(base=10, subs=(1, 2, 3, 5)))
+        ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: '%g' % v))
+        ax.yaxis.set_minor_formatter(NullFormatter())
 ax.set_title(title); ax.set_xlabel(xlabel); ax.set_ylabel(ylabel); ax.grid(alpha=0.3)
 # The legend beside the plot, never over the lines.
 ax.legend(fontsize=8, loc='upper left', bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
