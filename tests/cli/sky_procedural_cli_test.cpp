@@ -302,6 +302,20 @@ TEST(SkyProceduralCli, CompareInASkysOwnUnitsSaysSo) {
     EXPECT_NE(header.find("cloudy point 1 (683 x sky units)"), std::string::npos) << header;
     EXPECT_EQ(header.find("lx"), std::string::npos) << header;
     EXPECT_EQ(header.find("cd/m2"), std::string::npos) << header;
+    EXPECT_EQ(r.output.find("covered by cloud, or clipped"), std::string::npos) << r.output;
+    // Its sun gone (clipped in an 8-bit photograph, or under a cloud): said, since the clear sky's
+    // whole sun then makes the sky read as shaded.
+    p.sun_disc = false;
+    SkyImage sunless = make_clear_sky(p, 32);
+    for (float& v : sunless.rgb) v *= 1e-3f;
+    sunless.units.clear();
+    save_sky(dir + "/sunless.exr", sunless);
+    r = test::run_command(std::string(DYNSKY_EXE) + " compare builtin --sky " + dir +
+                          "/sunless.exr --model advect --duration 60 --chart-frames 2 --chart-res 8x4 --res 16x9 "
+                          "--spp 1 --out " +
+                          dir + "/d 2>&1");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("covered by cloud, or clipped"), std::string::npos) << r.output;
     fs::remove_all(dir);
 }
 
