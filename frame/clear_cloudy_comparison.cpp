@@ -232,11 +232,11 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
         // In a sky's own units a sun that holds little light may be clipped (an 8-bit photograph
         // imported with --hdr none) rather than covered: the clear sky's sun is the model's, and the
         // cloudy figures came out 23 % darker for the light the clipping lost (a compare audit).
-        else if (!reports_silenced() && cloudy.radiance_scale() != 1.0 && cloudy.sun_direction_at(0.0)->y() > 0)
+        else if (cloudy.radiance_scale() != 1.0 && cloudy.sun_direction_at(0.0)->y() > 0)  // a warning: even with -q
             std::fprintf(stderr,
                          "dynsky: warning: %s holds %.2f x the clear-sky model's sun light at its sun: covered by "
-                         "cloud, or clipped (an 8-bit photograph not recovered to HDR: sky import without --hdr "
-                         "none); in a sky's own units the two cannot be told apart, and a clipped sun reads as cloud "
+                         "cloud, or clipped (an 8-bit photograph imported with --hdr none, not recovered to HDR); in a "
+                         "sky's own units the two cannot be told apart, and a clipped sun reads as cloud "
                          "shade against the clear sky's whole sun\n",
                          so.sky.c_str(), share);
         if (!own_sun.empty() && !reports_silenced() && std::abs(share - 1) > 0.1)

@@ -214,9 +214,10 @@ cv::Mat filled_mask(const SkyImage& sky);
 // mapped back): all of them from 1 W m^-2 sr^-1 up,
 // none at 0.1 and below (pure advection), log-linear between. None either for a start that is
 // the model's clear sky: one that departs from its background (network form) by more than
-// kClearStartTolerance on less than kClearStartShare of the disc has no cloud to change.
+// kClearStartTolerance on less than kClearStartShare of the disc, counted more than
+// kClearStartSunDeg from the sun, has no cloud to change.
 double network_trust_of_brightness(double median_radiance);
-constexpr double kClearStartTolerance = 0.01, kClearStartShare = 0.02;
+constexpr double kClearStartTolerance = 0.01, kClearStartShare = 0.002, kClearStartSunDeg = 5.0;
 // The share of the disc where `start` departs from `background` (both network form, N x N CV_32FC3)
 // by more than kClearStartTolerance in any channel.
 double start_departs_from(const cv::Mat& start, const cv::Mat& background, const cv::Mat& disc);

@@ -37,7 +37,8 @@ std::unique_ptr<MediumStepModel> make_network_step_model(const std::string& fold
 
 std::string resolve_cloud_model(const std::string& name_in) {
     // "network:FOLDER", as animate and sky timeline write a folder, is the folder.
-    const std::string name = name_in.rfind("network:", 0) == 0 ? name_in.substr(8) : name_in;
+    const bool named_folder = name_in.rfind("network:", 0) == 0;
+    const std::string name = named_folder ? name_in.substr(8) : name_in;
     if (name == "flow" || name == "procedural")
         throw Error("--model " + name +
                     ": a model of the moving sky of 'animate' and 'sky timeline' (it needs their sky); give auto, "
@@ -64,7 +65,7 @@ std::string resolve_cloud_model(const std::string& name_in) {
     // is a mistyped choice (a usage error, as animate says it); a path that is missing is a file error.
     const std::string folder = resolve_user_path(name);
     std::error_code ec;
-    if (name.find('/') == std::string::npos && !std::filesystem::is_directory(folder, ec))
+    if (!named_folder && name.find('/') == std::string::npos && !std::filesystem::is_directory(folder, ec))
         throw Error("--model '" + name + "': expected auto, advect, paper or a model folder (no folder '" + name +
                     "' here or among the shipped models)");
     return folder;

@@ -126,6 +126,7 @@ void SkyTimeline::save(const std::string& folder, int last_step, const std::stri
                   {"model_makes_own_sun", model_->makes_own_sun()},
                   {"model_native_dt", model_->native_dt()},
                   {"input_time", input_time_},
+                  {"input_units", input_units_},
                   {"input_sun",
                    input_sun_ ? json::array({(*input_sun_)[0], (*input_sun_)[1], (*input_sun_)[2]}) : json(nullptr)},
                   {"input_look_transmittance", input_look_transmittance_},
@@ -238,6 +239,7 @@ SkyTimeline SkyTimeline::load(const std::string& folder, std::string* settings) 
                                                      j.at("model_makes_own_sun").get<bool>(),
                                                      j.at("model_native_dt").get<double>());
         t.input_time_ = j.at("input_time").get<double>();
+        t.input_units_ = j.value("input_units", std::string());  // absent before 2026-12-07: unsaid
         if (!j.at("input_sun").is_null())
             t.input_sun_ = Vec3d(j["input_sun"][0].get<double>(), j["input_sun"][1].get<double>(),
                                  j["input_sun"][2].get<double>());

@@ -60,6 +60,19 @@ void check_image_size(const std::string& name, long long width, long long height
 
 namespace {
 
+// The shortest text that reads back as the value; a float's value widened to double (an exposure)
+// as the float it was ("0.3", not "0.300000011920929").
+std::string shortest_number_text(double v) {
+    const bool from_float = std::isfinite(v) && double(float(v)) == v;
+    for (int digits = 6; digits <= 17; ++digits) {
+        const std::string s = number_text(v, digits);
+        const double back = std::strtod(s.c_str(), nullptr);
+        if (from_float ? float(back) == float(v) : back == v) return s;
+    }
+    return number_text(v, 17);
+}
+
+
 // libjpeg fills a file cut short with grey and only warns, which OpenImageIO does not report: walk
 // the markers to the end-of-image marker instead. Returns "" when it is there, else the problem.
 std::string jpeg_truncation(const std::string& path) {
@@ -342,7 +355,7 @@ std::string encode_image(const std::string& path, const Image& image) {
     // (a render's PNG did not say its exposure).
     for (const auto& [name, value] : image.metadata.numbers) {
         if (is_exr) spec.attribute(name, OIIO::TypeDesc::DOUBLE, &value);
-        else spec.attribute(name, number_text(value, 15));
+        else spec.attribute(name, shortest_number_text(value));
     }
     for (const auto& [name, value] : image.metadata.strings) spec.attribute(name, value);
 
@@ -381,6 +394,10 @@ namespace {
 ImageMetadata display_metadata(const ImageMetadata& linear, float exposure_ev) {
     ImageMetadata m = linear;
     m.strings.erase("dynsky:units");
+    // Wall-clock measurements: a display image depends only on its pixels and settings, so two runs
+    // of one render give the same PNG (they did while PNGs dropped numbers).
+    for (const char* timing : {"dynsky:render_seconds", "dynsky:render_cpu_seconds", "dynsky:sky_distribution_seconds"})
+        m.numbers.erase(timing);
     m.numbers["dynsky:png_exposure_ev"] = exposure_ev;
     m.strings["dynsky:display_transform"] =
         "radiance x 2^dynsky:png_exposure_ev, ACES filmic curve (Narkowicz 2015), sRGB encoding";
