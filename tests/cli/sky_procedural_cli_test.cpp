@@ -3,6 +3,7 @@
 
 #include <sstream>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -203,6 +204,20 @@ TEST(SkyProceduralCli, AClearSkyWithItsOwnSunComparesEqualToItsClearSky) {
     fs::remove_all(dir);
 }
 
+// compare's illuminance.csv: time, clear and cloudy horizontal illuminance of each row.
+std::vector<std::array<double, 3>> illuminance_rows(const std::string& path) {
+    std::istringstream csv(test::read_text(path));
+    std::string line;
+    std::getline(csv, line);  // header
+    std::vector<std::array<double, 3>> rows;
+    while (std::getline(csv, line)) {
+        std::array<double, 3> row{};
+        EXPECT_EQ(std::sscanf(line.c_str(), "%lf,%lf,%lf", &row[0], &row[1], &row[2]), 3) << line;
+        rows.push_back(row);
+    }
+    return rows;
+}
+
 // A clear start compared over an evening hour: its moved sky and the clear sky of each time agree
 // as the sun sets, since both dim and redden the start's sun as the model's (sun_patch_relight).
 // The clear sky put the start's sun back at its start radiance: 17 % brighter than the cloudy sky
@@ -214,17 +229,9 @@ TEST(SkyProceduralCli, AClearStartAndItsClearSkyAgreeThroughAnEvening) {
                                "--duration 3600 --chart-frames 3 --chart-res 8x4 --res 16x9 --spp 1 -q --out " +
                                dir + " 2>&1");
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    std::istringstream csv(test::read_text(dir + "/illuminance.csv"));
-    std::string line;
-    std::getline(csv, line);  // header
-    int rows = 0;
-    while (std::getline(csv, line)) {
-        double t = 0, clear = 0, cloudy = 0;
-        ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%lf,%lf", &t, &clear, &cloudy), 3) << line;
-        EXPECT_NEAR(cloudy / clear, 1.0, 0.02) << "t = " << t << " s: " << line;
-        ++rows;
-    }
-    EXPECT_EQ(rows, 3);
+    const auto rows = illuminance_rows(dir + "/illuminance.csv");
+    EXPECT_EQ(rows.size(), 3u);
+    for (const auto& [t, clear, cloudy] : rows) EXPECT_NEAR(cloudy / clear, 1.0, 0.02) << "t = " << t << " s";
     fs::remove_all(dir);
 }
 
@@ -238,17 +245,9 @@ TEST(SkyProceduralCli, AClearStartAndItsClearSkyAgreeThroughSunsetWithTheDefault
                                "--duration 600 --chart-frames 3 --chart-res 8x4 --res 16x9 --spp 1 -q --out " +
                                dir + " 2>&1");
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    std::istringstream csv(test::read_text(dir + "/illuminance.csv"));
-    std::string line;
-    std::getline(csv, line);  // header
-    int rows = 0;
-    while (std::getline(csv, line)) {
-        double t = 0, clear = 0, cloudy = 0;
-        ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%lf,%lf", &t, &clear, &cloudy), 3) << line;
-        EXPECT_NEAR(cloudy / clear, 1.0, 0.005) << "t = " << t << " s: " << line;
-        ++rows;
-    }
-    EXPECT_EQ(rows, 3);
+    const auto rows = illuminance_rows(dir + "/illuminance.csv");
+    EXPECT_EQ(rows.size(), 3u);
+    for (const auto& [t, clear, cloudy] : rows) EXPECT_NEAR(cloudy / clear, 1.0, 0.005) << "t = " << t << " s";
     fs::remove_all(dir);
 }
 
@@ -291,14 +290,8 @@ TEST(SkyProceduralCli, TheClearColumnIsTheSameForEveryStart) {
                                    "-q --out " +
                                    dir + out + " 2>&1");
         EXPECT_EQ(r.exit_code, 0) << r.output;
-        std::istringstream csv(test::read_text(dir + out + "/illuminance.csv"));
-        std::string line;
-        std::getline(csv, line);
         std::vector<double> column;
-        while (std::getline(csv, line)) {
-            double t = 0, clear = 0;
-            if (std::sscanf(line.c_str(), "%lf,%lf", &t, &clear) == 2) column.push_back(clear);
-        }
+        for (const auto& row : illuminance_rows(dir + out + "/illuminance.csv")) column.push_back(row[1]);
         return column;
     };
     const std::vector<double> a = clear_column("procedural:2 --coverage 1 --model procedural", "/overcast");
