@@ -46,8 +46,16 @@ fi
 
 sky=$out/sky.exr
 "$D" sky clear --lat 48.8566 --lon 2.3522 --time 2026-06-21T16:00:00Z --sky-res 512 --out "$sky" >/dev/null
+# A failing Blender step is named with the end of its log (a script that raised inside Blender
+# exits 0 without --python-exit-code; the log went to /dev/null and the run stopped without a word).
+blender_failed() {  # step log
+    echo "cycles_equal_error: Blender failed at $1 (log: $2):" >&2
+    tail -n 5 "$2" >&2
+    exit 1
+}
 if ((have_blender)) && [[ ! -f $out/sky_equirect.exr ]]; then
-    "$BLENDER" -b -P "$H/fisheye_to_equirect.py" -- "$sky" "$out/sky_equirect.exr" >/dev/null 2>&1
+    "$BLENDER" -b --python-exit-code 1 -P "$H/fisheye_to_equirect.py" -- "$sky" "$out/sky_equirect.exr" \
+        >"$out/blender_equirect.log" 2>&1 || blender_failed "the sky's equirect conversion" "$out/blender_equirect.log"
 fi
 
 # name|scene|dynsky camera options|Cycles camera options
@@ -64,9 +72,14 @@ dynsky_render() {  # out spp seed scene camera-options...
 cycles_render() {  # out spp seed scene camera-options...
     local o=$1 spp=$2 seed=$3 scene=$4
     shift 4
-    "$BLENDER" -b -P "$H/render_cycles.py" -- --scene "$scene" "$@" --sky "$out/sky_equirect.exr" \
-        --max-bounces 8 --res "$RES" --spp "$spp" --seed "$seed" --out "$o" 2>&1 |
-        sed -n 's/.*render cpu seconds: *\([0-9.eE+-]*\).*/\1/p'
+    local log=${o%.exr}.log
+    "$BLENDER" -b --python-exit-code 1 -P "$H/render_cycles.py" -- --scene "$scene" "$@" \
+        --sky "$out/sky_equirect.exr" --max-bounces 8 --res "$RES" --spp "$spp" --seed "$seed" --out "$o" \
+        >"$log" 2>&1 || blender_failed "the Cycles render $o" "$log"
+    local t
+    t=$(sed -n 's/.*render cpu seconds: *\([0-9.eE+-]*\).*/\1/p' "$log")
+    [[ -n $t ]] || blender_failed "the Cycles render $o (no 'render cpu seconds' line)" "$log"
+    echo "$t"
 }
 
 table=$out/points.txt

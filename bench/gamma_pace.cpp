@@ -17,6 +17,7 @@
 #include "motion/flow.h"
 #include "sky/fisheye.h"
 #include "util/atomic_file.h"
+#include "util/parse.h"
 
 using namespace dynsky;
 
@@ -40,10 +41,29 @@ double mean_displacement_deg(const SkyImage& a, const SkyImage& b) {
 
 }  // namespace
 
+int run(int argc, char** argv);
+
 int main(int argc, char** argv) {
+    if (argc > 1 && (std::string(argv[1]) == "-h" || std::string(argv[1]) == "--help")) {
+        std::printf(
+            "usage: gamma_pace [OUT=docs] [MODEL=paper] [SKY_RES=256]\n"
+            "The pace of the constant and the paper's in-between over three medium steps: per-frame cloud\n"
+            "displacement and the second difference of horizontal illuminance; writes OUT/gamma-pace.csv\n"
+            "(scripts/gamma_pace_chart.py draws the chart).\n");
+        return 0;
+    }
+    try {
+        return run(argc, argv);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "gamma_pace: %s\n", e.what());
+        return 1;
+    }
+}
+
+int run(int argc, char** argv) {
     const std::string out = argc > 1 ? argv[1] : "docs";
     SkySourceSpec sky;
-    sky.sky_resolution = argc > 3 ? std::stoi(argv[3]) : 256;
+    sky.sky_resolution = argc > 3 ? int(parse_whole_number(argv[3], "SKY_RES", 16, 4096)) : 256;
     StepModelSpec model;
     model.model = argc > 2 ? argv[2] : "paper";
     const int intervals = 3, per_interval = 12;

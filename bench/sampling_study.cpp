@@ -174,6 +174,9 @@ std::vector<NamedSky> make_skies(int n, const SamplingStudyOptions& o, std::stri
                              std::make_shared<SkyImage>(std::move(imp.sky))});
         } catch (const std::exception& e) {
             *notes += std::string("- photo sky skipped: ") + e.what() + "\n";
+            // Said where it is seen too (a warning, also under -q): the study's medians are then
+            // over fewer skies than asked for.
+            std::fprintf(stderr, "dynsky: warning: bench sampling: the photo sky is skipped: %s\n", e.what());
         }
     return skies;
 }
@@ -192,6 +195,8 @@ std::vector<NamedScene> make_scenes(const SamplingStudyOptions& o, float aspect,
         if (!selected(o.scenes, name)) return;
         if (!fs::exists(path)) {
             *notes += "- scene " + name + " skipped: " + path + " not found\n";
+            std::fprintf(stderr, "dynsky: warning: bench sampling: scene %s is skipped: %s not found (--shared)\n",
+                         name.c_str(), path.c_str());
             return;
         }
         add(name, desc, [&] { return load_gltf(path); });

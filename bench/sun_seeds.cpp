@@ -97,6 +97,7 @@ int run(int argc, char** argv) {
     const fs::path out_dir = argc > 1 ? argv[1] : "docs";
     const int want_crossing = argc > 2 ? int(parse_whole_number(argv[2], "CROSSING", 0, 200)) : 14;
     const int want_clearing = argc > 3 ? int(parse_whole_number(argv[3], "CLEARING", 0, 200)) : 6;
+    if (want_crossing + want_clearing == 0) throw Error("CROSSING and CLEARING: give at least one seed to measure");
     const uint64_t png_seed = argc > 4 ? uint64_t(parse_whole_number(argv[4], "PNG_SEED", 0, 999)) : 0;
     const int res = argc > 5 ? int(parse_whole_number(argv[5], "RES", 32, 2048)) : 128;  // the skies'
     fs::create_directories(out_dir);
