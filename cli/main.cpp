@@ -83,7 +83,6 @@ void install_signal_handlers() {
     for (int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &sa, nullptr);
 }
 
-
 int run(int argc, char** argv) {
     install_signal_handlers();
     CLI::App app{
