@@ -6,6 +6,8 @@
 // Run: build-NAME/bench/animation_bench  (counters in ms; sky_pct = (sky + rebuild) / frame).
 #include <benchmark/benchmark.h>
 
+#include "bench/bench_main.h"
+
 #include <chrono>
 #include <filesystem>
 
@@ -143,4 +145,4 @@ BENCHMARK(BM_PlayedAnimationScene)->Iterations(10)->Unit(benchmark::kMillisecond
 }  // namespace
 }  // namespace dynsky
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) { return dynsky::bench::run_benchmarks(argc, argv); }

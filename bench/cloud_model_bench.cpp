@@ -6,6 +6,8 @@
 //   DYNSKY_CLOUD_MODEL=DIR build-nets/bench/cloud_model_bench
 #include <benchmark/benchmark.h>
 
+#include "bench/bench_main.h"
+
 #include <cstdio>
 #include <opencv2/core.hpp>
 
@@ -138,7 +140,6 @@ BENCHMARK(BM_MotionFromPreviousFrame1024)->Unit(benchmark::kMillisecond)->UseRea
 // The models are loaded before any benchmark runs: one that cannot be (a DYNSKY_*_MODEL naming no
 // model folder) threw inside a benchmark, aborted the program and left --benchmark_out cut short.
 int main(int argc, char** argv) {
-    benchmark::Initialize(&argc, argv);
     try {
         dynsky::model();
         dynsky::advect_model();
@@ -146,7 +147,5 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "cloud_model_bench: %s\n", e.what());
         return 1;
     }
-    benchmark::RunSpecifiedBenchmarks();
-    benchmark::Shutdown();
-    return 0;
+    return dynsky::bench::run_benchmarks(argc, argv);
 }

@@ -6,6 +6,8 @@
 // Photographs come from ../shared/skies (DYNSKY_SHARED_DIR); without them the benchmarks skip.
 #include <benchmark/benchmark.h>
 
+#include "bench/bench_main.h"
+
 #include <filesystem>
 
 #include "sky/hdr_recovery.h"
@@ -71,9 +73,5 @@ void register_all() {
 
 int main(int argc, char** argv) {
     dynsky::register_all();
-    benchmark::Initialize(&argc, argv);
-    if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-    benchmark::RunSpecifiedBenchmarks();
-    benchmark::Shutdown();
-    return 0;
+    return dynsky::bench::run_benchmarks(argc, argv);
 }

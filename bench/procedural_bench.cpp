@@ -1,5 +1,7 @@
 // Time to render one procedural cloudy-sky frame (with and without its flow field).
 #include <benchmark/benchmark.h>
+
+#include "bench/bench_main.h"
 #include <tbb/global_control.h>
 
 #include "sky/fisheye.h"
@@ -76,4 +78,4 @@ BENCHMARK(BM_RenderProceduralSkyCold)->Arg(512)->Arg(1024)->Arg(2048)->Unit(benc
 }  // namespace
 }  // namespace dynsky
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) { return dynsky::bench::run_benchmarks(argc, argv); }

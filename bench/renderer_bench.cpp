@@ -11,6 +11,8 @@
 #include <algorithm>
 #include <atomic>
 #include <benchmark/benchmark.h>
+
+#include "bench/bench_main.h"
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
@@ -187,4 +189,4 @@ BENCHMARK(BM_PathTracerVsEmbree_FlightHelmet)->Arg(1)->Iterations(7)->UseManualT
 }  // namespace
 }  // namespace dynsky
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) { return dynsky::bench::run_benchmarks(argc, argv); }

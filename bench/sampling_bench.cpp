@@ -2,6 +2,8 @@
 // cost of one sample() and one pdf() call. Wall and CPU time are both reported (the machine is
 // shared); the ratio to the floor is measured in the same iterations.
 #include <benchmark/benchmark.h>
+
+#include "bench/bench_main.h"
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
@@ -100,4 +102,4 @@ BENCHMARK(BM_SampleAndPdf)->Apply(call_args);
 }  // namespace
 }  // namespace dynsky
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) { return dynsky::bench::run_benchmarks(argc, argv); }

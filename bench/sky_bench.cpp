@@ -3,6 +3,8 @@
 // process (all threads): on a loaded machine CPU / cores is the better guide.
 #include <benchmark/benchmark.h>
 
+#include "bench/bench_main.h"
+
 #include "sky/clear_sky.h"
 #include "sky/fisheye.h"
 #include "sky/latlong.h"
@@ -50,4 +52,4 @@ BENCHMARK(BM_SkyToLatLong)->Arg(512)->Arg(1024)->Unit(benchmark::kMillisecond)->
 }  // namespace
 }  // namespace dynsky
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) { return dynsky::bench::run_benchmarks(argc, argv); }
