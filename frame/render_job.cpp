@@ -170,15 +170,20 @@ void run_render_job(const RenderJob& o) {
     else image.metadata.numbers["dynsky:camera_yfov_deg"] = camera.yfov * 180.0 / kPiD;
     float ev = std::isnan(o.exposure) ? exposure_log_average(image) : o.exposure;
     image.metadata.numbers["dynsky:png_exposure_ev"] = ev;
+    // The timings are the EXR's: the PNG depends only on its pixels and settings, so two runs of
+    // one render give the same PNG (they did while PNGs dropped numbers).
+    Image display = tonemap_to_display(image, result.alpha, ev);
+    for (const char* timing : {"dynsky:render_seconds", "dynsky:render_cpu_seconds", "dynsky:sky_distribution_seconds"})
+        display.metadata.numbers.erase(timing);
     if (ext == ".exr") {
         // A render is its two files: both are written under temporary names first and renamed only
         // when both are, so a PNG that cannot be written (a full disk) leaves neither, and an
         // earlier render's pair under these names stays as it was.
         write_files_atomic({{o.out, encode_image(o.out, settings.aovs.any() ? render_layers(result) : image)},
-                            {png_beside, encode_image(png_beside, tonemap_to_display(image, result.alpha, ev))}});
+                            {png_beside, encode_image(png_beside, display)}});
         if (!o.quiet) std::fprintf(stderr, "wrote %s and %s\n", o.out.c_str(), png_beside.c_str());
     } else {
-        write_image(o.out, tonemap_to_display(image, result.alpha, ev));
+        write_image(o.out, display);
         if (!o.quiet) std::fprintf(stderr, "wrote %s\n", o.out.c_str());
     }
     if (!o.quiet && result.stopped)

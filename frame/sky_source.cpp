@@ -297,14 +297,15 @@ std::string step_model_name(const std::string& model) {
     if (model == "auto" || model == "flow" || model == "procedural" || model == "advect" || model == "paper" ||
         model.rfind("network:", 0) == 0)
         return model;
-    // A model folder as `sky predict` takes it (network: optional), else a usage error.
-    // A path that is missing is a file error (exit 1), as sky predict and sky evaluate say it.
+    // A model folder as `sky predict` takes it (network: optional). Missing, a path is a file error
+    // (exit 1), as sky predict and sky evaluate say it; a word is a mistyped choice (a usage error).
+    const std::string folder = resolve_user_path(model);
     std::error_code ec;
-    if (model.find('/') != std::string::npos && !fs::is_directory(resolve_user_path(model), ec))
-        throw_file_error(resolve_user_path(model), "model folder not found");
-    if (!fs::is_directory(resolve_user_path(model), ec))
+    if (!fs::is_directory(folder, ec)) {
+        if (model.find('/') != std::string::npos) throw_file_error(folder, "model folder not found");
         throw Error("--model '" + model +
                     "': expected auto, advect, paper, procedural, flow, or a model folder (network:FOLDER)");
+    }
     return "network:" + model;
 }
 

@@ -698,19 +698,13 @@ void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3
     // corrections brightened it 2.5 % on the first step and 4 % within ten (a compare of a clear
     // start over sunset read 6 % more light than the clear sky). Photographs of clear skies
     // depart from the model on 90 % of the disc and procedural cumulus on 60 %: unchanged.
-    if (!given.empty() && given.size() == start_.size()) {
+    // Judged once, against the first background (the start's sun): the timeline gives a new one
+    // each time the sun moves, and the start stays what it was.
+    if (!clear_start_judged_ && !given.empty() && given.size() == start_.size()) {
+        clear_start_judged_ = true;
         // Counted away from the sun (its cut pixels and glow depart from any model).
-        cv::Mat away = disc_big_.clone();
-        if (sun) {
-            const Vec3d s = sun->normalized();
-            const double near = std::cos(kClearStartSunDeg * kPiD / 180);
-            for (int y = 0; y < away.rows; ++y)
-                for (int x = 0; x < away.cols; ++x)
-                    if (fisheye::direction_from_pixel(double(x), double(y), away.rows).dot(s) > near)
-                        away.at<unsigned char>(y, x) = 0;
-        }
-        const double departs = start_departs_from(start_, given, away);
-        if (departs < kClearStartShare) network_trust_ = 0.0;
+        const cv::Mat away = sun ? disc_big_ & ~sun_cone_mask(start_.rows, *sun, kClearStartSunDeg) : disc_big_;
+        if (start_departs_from(start_, given, away) < kClearStartShare) network_trust_ = 0.0;
     }
     cv::Mat background, clipped, halo_angle;  // halo_angle: halo_angles of the sun, where a halo is added
     // An overcast start (the networks' cloud rule finds cloud on at least 90 % of the disc) shows no

@@ -270,6 +270,7 @@ class CloudRollout {
     cv::Mat background_, background_ext_, background_n_, disc_big_, disc_n_;
     std::unique_ptr<CloudLayerPaths> paths_;  // with a wind
     bool seam_chosen_ = false;
+    bool clear_start_judged_ = false;    // whether the start was compared with its clear sky (set_background)
     cv::Mat departure_;                  // smoothed measured - wind flow (pixels per step), relaxing
     cv::Mat detail_;                     // the flow's confirmed detail: one step's displacement
     double departure_sum_ = 0;           // sum of its relaxation weights so far

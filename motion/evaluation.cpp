@@ -259,9 +259,7 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
     const std::vector<int> resolutions = parse_int_list(o.resolutions, "--resolutions");
     int hmax = horizons.back();
     if (o.limit < 0) throw Error("--limit: must be >= 0");
-    if (o.import_resolution < kImportResolutionMin || o.import_resolution > kImportResolutionMax)
-        throw Error("--import-res " + std::to_string(o.import_resolution) + ": must be " +
-                    std::to_string(kImportResolutionMin) + ".." + std::to_string(kImportResolutionMax));
+    check_import_resolution(o.import_resolution);
     for (int r : resolutions)
         if (r > o.import_resolution || o.import_resolution % r != 0)
             throw Error("--resolutions " + std::to_string(r) + ": must divide --import-res " +

@@ -182,4 +182,10 @@ PhotoSequence photo_sequence_from_folder(const std::string& folder, const std::s
     return s;
 }
 
+void check_import_resolution(int resolution) {
+    if (resolution < kImportResolutionMin || resolution > kImportResolutionMax)
+        throw Error("--import-res " + std::to_string(resolution) + ": must be " + std::to_string(kImportResolutionMin) +
+                    ".." + std::to_string(kImportResolutionMax));
+}
+
 }  // namespace dynsky

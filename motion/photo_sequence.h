@@ -10,6 +10,8 @@ namespace dynsky {
 // The resolutions `sky evaluate` and `sky training-data` import photographs at (--import-res): the
 // same range in both, so a training set can always be scored at its own resolution.
 constexpr int kImportResolutionMin = 16, kImportResolutionMax = 4096;
+// Throws dynsky::Error naming --import-res when `resolution` is outside that range.
+void check_import_resolution(int resolution);
 
 struct PhotoSequence {
     std::string name;    // the dataset's and split's name ("arm_tsi")

@@ -40,16 +40,15 @@ cv::Mat sun_cut_mask(int n, const Vec3d& sun) {
     return mask;
 }
 
-cv::Mat sun_unseen_mask(int n, const Vec3d& sun) {
-    cv::Mat mask = sun_cut_mask(n, sun);
-    if (!(sun.y() > 0)) return mask;
+cv::Mat sun_cone_mask(int n, const Vec3d& sun, double degrees) {
+    cv::Mat mask(n, n, CV_8UC1, cv::Scalar(0));
     const Vec3d s = sun.normalized();
-    const double cos_max = std::cos(kSunUnseenDeg * kPiD / 180);
+    const double cos_max = std::cos(degrees * kPiD / 180);
     double x, y;
     fisheye::pixel_from_direction(s, n, &x, &y);
-    // The disc's pixels lie within this many pixels of the sun's (a degree spans n / 180 px radially
+    // The cone's pixels lie within this many pixels of the sun's (a degree spans n / 180 px radially
     // and at most pi / 2 times that across, at the horizon; 2 px spare).
-    const int reach = int(std::ceil(kSunUnseenDeg * n / 180.0 * kPiD / 2)) + 2;
+    const int reach = int(std::ceil(degrees * n / 180.0 * kPiD / 2)) + 2;
     const int ci = int(std::lround(x)), cj = int(std::lround(y));
     for (int j = std::max(0, cj - reach); j <= std::min(n - 1, cj + reach); ++j)
         for (int i = std::max(0, ci - reach); i <= std::min(n - 1, ci + reach); ++i)
@@ -57,6 +56,12 @@ cv::Mat sun_unseen_mask(int n, const Vec3d& sun) {
                 fisheye::direction_from_pixel(i, j, n).dot(s) >= cos_max)
                 mask.at<uint8_t>(j, i) = 255;
     return mask;
+}
+
+cv::Mat sun_unseen_mask(int n, const Vec3d& sun) {
+    cv::Mat mask = sun_cut_mask(n, sun);
+    if (!(sun.y() > 0)) return mask;
+    return mask | sun_cone_mask(n, sun, kSunUnseenDeg);
 }
 
 SunPatch remove_sun(SkyImage* sky) {

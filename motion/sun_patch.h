@@ -50,6 +50,9 @@ cv::Mat sun_cut_mask(int n, const Vec3d& sun);
 inline constexpr double kSunUnseenDeg = 1.5;
 cv::Mat sun_unseen_mask(int n, const Vec3d& sun);
 
+// The pixels of an n x n sky (CV_8UC1, 255) inside its disc and within `degrees` of the sun.
+cv::Mat sun_cone_mask(int n, const Vec3d& sun, double degrees);
+
 // The clear sun of an n x n sky: the Hosek-Wilkie disc (turbidity as the clear sky compared with
 // in estimate_sun_transmittance) splatted as make_clear_sky and the photo import's sun restoration
 // splat it, as a patch centred on the pixel of `sun`. Empty below the horizon.

@@ -44,9 +44,7 @@ void build_training_sequence(const TrainingSetOptions& o) {
     if (o.sequence.empty() == o.procedural.empty())
         throw Error(
             "--sequence, --procedural: give exactly one of --sequence (real photographs) and --procedural (a `sky procedural` folder)");
-    if (o.import_resolution < kImportResolutionMin || o.import_resolution > kImportResolutionMax)
-        throw Error("--import-res " + std::to_string(o.import_resolution) + ": must be " +
-                    std::to_string(kImportResolutionMin) + ".." + std::to_string(kImportResolutionMax));
+    check_import_resolution(o.import_resolution);
     if (o.resolution < 8 || o.import_resolution < o.resolution || o.import_resolution % o.resolution != 0)
         throw Error("--sky-res " + std::to_string(o.resolution) + ": must be >= 8 and divide --import-res " +
                     std::to_string(o.import_resolution));

@@ -1,7 +1,8 @@
 // File names of numbered images (glossary): PREFIX_NNNN.EXT with at least four digits, numbered
 // from 0; a set of more than 10000 pads every name to its largest number's width, so that names
-// sort in order (frame_10000 came between frame_1000 and frame_1001). "frame" for frames of an animation or a procedural sequence, "sky" for an animation's sky
-// frames, "flow" for a procedural sequence's flow fields, "step" for medium steps of a prediction.
+// sort in order (frame_10000 came between frame_1000 and frame_1001). "frame" for frames of an
+// animation or a procedural sequence, "sky" for an animation's sky frames, "flow" for a procedural
+// sequence's flow fields, "step" for medium steps of a prediction.
 #pragma once
 
 #include <optional>

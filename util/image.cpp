@@ -72,7 +72,6 @@ std::string shortest_number_text(double v) {
     return number_text(v, 17);
 }
 
-
 // libjpeg fills a file cut short with grey and only warns, which OpenImageIO does not report: walk
 // the markers to the end-of-image marker instead. Returns "" when it is there, else the problem.
 std::string jpeg_truncation(const std::string& path) {
@@ -394,10 +393,6 @@ namespace {
 ImageMetadata display_metadata(const ImageMetadata& linear, float exposure_ev) {
     ImageMetadata m = linear;
     m.strings.erase("dynsky:units");
-    // Wall-clock measurements: a display image depends only on its pixels and settings, so two runs
-    // of one render give the same PNG (they did while PNGs dropped numbers).
-    for (const char* timing : {"dynsky:render_seconds", "dynsky:render_cpu_seconds", "dynsky:sky_distribution_seconds"})
-        m.numbers.erase(timing);
     m.numbers["dynsky:png_exposure_ev"] = exposure_ev;
     m.strings["dynsky:display_transform"] =
         "radiance x 2^dynsky:png_exposure_ev, ACES filmic curve (Narkowicz 2015), sRGB encoding";
