@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "sky/cloud_mask.h"
+#include "sky/fill_seams.h"
 #include "sky/fisheye.h"
 #include "util/color.h"
 #include "util/error.h"
@@ -332,6 +333,12 @@ void inpaint_texture(cv::Mat& rgb, const cv::Mat& fill) {
     cv::min(src * scale, 4.0f, lab);
     cv::cvtColor(lab, lab, cv::COLOR_LRGB2Lab);
     cv::xphoto::inpaint(lab, ~interior, filled, cv::xphoto::INPAINT_SHIFTMAP);
+    // Copied from elsewhere, the texture keeps its source's level: re-levelled to meet the sky
+    // around the region with no step (sky/fill_seams.h). The shift map also changes known pixels
+    // next to the region (OpenCV 4.6: by up to a tenth of L), which are not copied back: the level
+    // to meet is theirs as they were.
+    lab.copyTo(filled, ~interior);
+    remove_fill_seams(&filled, interior);
     cv::cvtColor(filled, filled, cv::COLOR_Lab2LRGB);
     filled = cv::max(filled / scale, 0.0f);
     cv::Mat where = interior;

@@ -616,6 +616,51 @@ TEST(PhotoImport, TextureFillPutsCloudsInAWideBandNotAGlareStreak) {
         smooth_detail, texture_detail, smooth_mean, texture_mean);
 }
 
+// The texture copied into a band comes from sky of another brightness (the sky brightens towards
+// the sun and the horizon): re-levelled (sky/fill_seams.h), the band's edges show no step. A
+// luminance step across its edges is measured against that of neighbouring seen pixels; the shift
+// map's copy alone left them 3.9x steeper than the sky's own here (and, looked at on the ARM day,
+// a paler strip with straight edges across the aureole).
+TEST(PhotoImport, TextureFillMeetsTheSkyAroundItWithNoStep) {
+    TestCamera cam{200.0, 200.0, 180.0, 0.0, LensLaw::Equidistant, false};
+    Image photo(400, 400, 3), band(400, 400, 1);
+    for (int y = 0; y < 400; ++y)
+        for (int x = 0; x < 400; ++x) {
+            // A sky three times brighter on its east side than on its west, small clouds on it.
+            const double level = 0.3 * std::exp(1.1 * (x - 200.0) / 180.0);
+            const double cloud = 0.5 + 0.25 * (std::sin(0.31 * x + 0.11 * y) + std::sin(0.23 * y - 0.07 * x + 1.3));
+            const double a = std::clamp((cloud - 0.6) / 0.15, 0.0, 1.0);
+            const bool inside = std::hypot(x - 200.0, y - 200.0) <= 180;
+            const Color c = inside ? Color(float(level * (0.35 + 0.6 * a)), float(level * (0.5 + 0.45 * a)),
+                                           float(level * (1.0 - 0.05 * a)))
+                                   : Color(0.02f, 0.02f, 0.02f);
+            for (int k = 0; k < 3; ++k) photo.at(x, y, k) = c[k];
+            if (std::abs(x - 200) < 16 && y > 40 && y < 360) band.at(x, y, 0) = 1.0f;  // across the gradient
+        }
+    PhotoImportParams p = params_for(cam, 128, false);
+    p.detect_thin_obstructions = false;
+    p.fill_method = PhotoImportParams::FillMethod::Texture;
+    const ImportedPhoto im = import_photo_image(photo, "gradient", p, &band);
+    const int n = 128;
+    auto lum = [&](int i, int j) { return std::log(std::max(1e-6f, im.sky.pixel(i, j).mean())); };
+    double across = 0, seen = 0;
+    long c_across = 0, c_seen = 0;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i + 1 < n; ++i) {
+            if (fisheye::pixel_center_uv(i, j, n).norm() > 0.8 || fisheye::pixel_center_uv(i + 1, j, n).norm() > 0.8)
+                continue;
+            const bool a = im.not_sky[size_t(j) * n + i], b = im.not_sky[size_t(j) * n + i + 1];
+            const double d = std::abs(lum(i, j) - lum(i + 1, j));
+            if (a != b) across += d, ++c_across;
+            else if (!a) seen += d, ++c_seen;
+        }
+    ASSERT_GT(c_across, 60);
+    ASSERT_GT(c_seen, 1000);
+    const double ratio = (across / c_across) / (seen / c_seen);
+    std::printf("log-luminance step across the band's edges / between seen neighbours: %.2f\n", ratio);
+    EXPECT_LT(ratio, 1.5);
+}
+
 TEST(PhotoImport, StrongDownsamplingAveragesInsteadOfAliasing) {
     // A fine checkerboard far above the output's Nyquist rate must import as its mean (0.5), not
     // as a beat pattern.
