@@ -187,7 +187,8 @@ void register_sky_import_commands(CLI::App& sky) {
     imp->add_option(
            "--encoding", io->encoding,
            "Input values: auto (default: by the file's pixels: 8- and 16-bit files are sRGB unless their header\n"
-           "says linear, float files (EXR, HDR, PFM, float TIFF) linear), srgb, linear")
+           "says linear or gives a gamma (a PNG's gAMA), float files (EXR, HDR, PFM, float TIFF) linear, in the\n"
+           "primaries their header names, e.g. ACEScg, converted to Rec.709), srgb, linear")
         ->check(CLI::IsMember({"auto", "srgb", "linear"}));
     imp->add_option(
            "--time", io->time,

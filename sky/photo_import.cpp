@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <new>
 #include <optional>
@@ -351,6 +352,16 @@ void inpaint_texture(cv::Mat& rgb, const cv::Mat& fill) {
 }
 
 }  // namespace
+
+std::optional<float> header_gamma(const Image& photo) {
+    const auto space = photo.metadata.strings.find("oiio:ColorSpace");
+    if (space == photo.metadata.strings.end() || space->second.rfind("Gamma", 0) != 0) return std::nullopt;
+    const std::string digits = space->second.substr(5);
+    char* end = nullptr;
+    const double gamma = std::strtod(digits.c_str(), &end);
+    if (end == digits.c_str() || *end != '\0' || !(gamma > 0.05 && gamma < 20)) return std::nullopt;
+    return float(gamma);
+}
 
 bool is_display_encoded(const Image& photo, const std::string& path, const std::string& encoding) {
     if (encoding == "srgb") return true;
@@ -1322,13 +1333,20 @@ ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, 
     cv::Mat clipped = cv::Mat::zeros(rgb.size(), CV_8U);
     out.clip_level = 1.0;
     if (out.display_referred) {
+        // A PNG's gAMA says its curve (OpenImageIO's oiio:ColorSpace "GammaG": values v mean v^G);
+        // decoded as sRGB, a gamma-1.8 PNG came out 18-37 % dark per channel. --encoding srgb means
+        // the sRGB curve whatever the header says.
+        const std::optional<float> gamma = params.encoding == "auto" ? header_gamma(photo) : std::nullopt;
+        if (gamma) out.decoding = "gamma " + number_text(*gamma, 4) + " (its header)";
         out.clip_level = params.clip_level >= 0 ? params.clip_level : find_clip_level(rgb, circle, not_sky);
         float level = float(out.clip_level);
         for (int y = 0; y < rgb.rows; ++y)
             for (int x = 0; x < rgb.cols; ++x) {
                 cv::Vec3f& p = rgb.at<cv::Vec3f>(y, x);
                 if (std::max({p[0], p[1], p[2]}) >= level - 0.5f / 255.0f) clipped.at<unsigned char>(y, x) = 1;
-                for (int c = 0; c < 3; ++c) p[c] = srgb_to_linear(std::min(p[c], 1.0f));
+                for (int c = 0; c < 3; ++c)
+                    p[c] = gamma ? std::pow(std::clamp(p[c], 0.0f, 1.0f), *gamma)
+                                 : srgb_to_linear(std::min(p[c], 1.0f));
             }
     }
 

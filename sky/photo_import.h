@@ -171,6 +171,7 @@ struct ImportedPhoto {
     bool circle_detected = false;        // true if the circle was found automatically
     std::string circle_caution;          // why that circle may be wrong (find_sky_circle), "" if none
     bool display_referred = true;        // true if the photo was sRGB-decoded (8-bit input)
+    std::string decoding;                // how, when not by the sRGB curve ("gamma 1.8 (its header)")
     std::vector<unsigned char> not_sky;  // N*N: 1 where the sky was hidden and has been filled
     std::vector<unsigned char> clipped;  // N*N: 1 where the photo was saturated (LDR input only)
     double clip_level = 1.0;             // encoded level treated as saturation (1: none found)
@@ -226,6 +227,11 @@ size_t spread_index(int k, int tries, int count);
 // in memory (no file type) goes by the name's extension.
 // encoding: "auto", "srgb" or "linear" (PhotoImportParams::encoding).
 bool is_display_encoded(const Image& photo, const std::string& path, const std::string& encoding);
+
+// The power law a display-encoded image's header gives (a PNG's gAMA, OpenImageIO's oiio:ColorSpace
+// "GammaG": values v mean v^G); nullopt: none (the sRGB curve). With --encoding auto the import
+// decodes by it.
+std::optional<float> header_gamma(const Image& photo);
 
 // The sky circle of one photograph file as import_photo finds it (turned by its EXIF orientation,
 // HDR files tone-mapped first), with params' search range and encoding; *size: the photo's width

@@ -4,12 +4,16 @@
 #include <cctype>
 #include <cmath>
 #include <limits>
+#include <set>
+#include <mutex>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <opencv2/imgproc.hpp>
 
 #include "sky/fisheye.h"
 #include "sky/sun_position.h"
+#include "util/color.h"
 #include "util/error.h"
 #include "util/frame_names.h"
 #include "util/parse.h"
@@ -54,10 +58,11 @@ void validate_sky(const SkyImage& sky, const std::string& name) {
         }
     }
     if (!(total > 0))
-        throw_file_error(name,
-                         "sky is black everywhere inside the fisheye disc: nothing to light with (a scene lit by its "
-                         "own lights at night: give a faint sky, e.g. a constant 5e-7 W m^-2 sr^-1, about 0.001 lx, the "
-                         "light of a moonless night; a full moon's 0.2 lx is about 1e-4)");
+        throw_file_error(
+            name,
+            "sky is black everywhere inside the fisheye disc: nothing to light with (a scene lit by its "
+            "own lights at night: give a faint sky, e.g. a constant 5e-7 W m^-2 sr^-1, about 0.001 lx, the "
+            "light of a moonless night; a full moon's 0.2 lx is about 1e-4)");
     // Light this faint underflows single precision on its way to a pixel: a black render.
     if (brightest < kMinSkyRadiance)
         throw_file_error(name, "sky's brightest pixel is " + number_text(brightest, 3) + ", below " +
@@ -186,6 +191,76 @@ void refuse_jpeg_as_radiance(const std::string& path) {
                          "the HDR (.exr, .hdr) it was made from");
 }
 
+void convert_to_rec709(Image* image, const std::string& path) {
+    const auto flag = image->metadata.numbers.find("acesImageContainerFlag");
+    const auto space = image->metadata.strings.find("oiio:ColorSpace");
+    const std::optional<Chromaticities> primaries =
+        file_primaries(image->chromaticities, flag != image->metadata.numbers.end() && flag->second == 1,
+                       space == image->metadata.strings.end() ? "" : space->second);
+    // What the file said is not said of what it becomes (a sky written from it is Rec.709).
+    if (flag != image->metadata.numbers.end()) image->metadata.numbers.erase(flag);
+    image->chromaticities.reset();
+    if (!primaries) return;
+    // Integer pixels are display-encoded (photographs): a matrix on encoded values would be wrong,
+    // and photographs' primaries are the camera's anyway (sky-import calibrates colour).
+    const std::string& type = image->file_pixel_type;
+    if (type != "half" && type != "float" && type != "double") {
+        std::fprintf(stderr, "dynsky: warning: %s: says its pixels are in %s primaries: taken as sRGB's\n",
+                     path.c_str(), describe_chromaticities(*primaries).c_str());
+        return;
+    }
+    if (image->channels < 3)
+        throw_file_error(path, "says its pixels are in " + describe_chromaticities(*primaries) +
+                                   " but has fewer than three channels");
+    Eigen::Matrix3d m;
+    try {
+        m = rec709_from(*primaries);
+    } catch (const Error& e) {
+        throw_file_error(path, e.what());
+    }
+    const Eigen::Matrix3f mf = m.cast<float>();
+    const size_t count = size_t(image->width) * image->height;
+    size_t negative = 0;
+    for (size_t q = 0; q < count; ++q) {
+        float* p = &image->pixels[q * image->channels];
+        const Eigen::Vector3f v = mf * Eigen::Vector3f(p[0], p[1], p[2]);
+        bool clipped = false;
+        for (int c = 0; c < 3; ++c) {
+            // Beyond Rec.709's gamut a colour has a negative part, which no light can be.
+            clipped = clipped || v[c] < 0;
+            p[c] = std::isfinite(v[c]) ? std::max(v[c], 0.0f) : v[c];
+        }
+        negative += clipped;
+    }
+    if (space != image->metadata.strings.end()) space->second = "Linear";
+    std::fprintf(stderr, "dynsky: note: %s: pixels converted from %s primaries to linear Rec.709 (dynsky's space)%s\n",
+                 path.c_str(), describe_chromaticities(*primaries).c_str(),
+                 negative
+                     ? (", " + std::to_string(negative) + " pixel(s) outside Rec.709's gamut clipped to it").c_str()
+                     : "");
+}
+
+void warn_of_unapplied_profile(const Image& image, const std::string& path) {
+    const auto& strings = image.metadata.strings;
+    // An ICC profile other than sRGB's (a camera's Adobe RGB, Display P3) is not applied.
+    const auto icc = strings.find("ICCProfile:profile_description");
+    if (icc != strings.end()) {
+        std::string name = icc->second;
+        std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return std::tolower(c); });
+        // Once per profile: a sequence's photographs share theirs.
+        static std::mutex mutex;
+        static std::set<std::string> warned;
+        const std::lock_guard<std::mutex> lock(mutex);
+        if (name.find("srgb") == std::string::npos && name.find("61966") == std::string::npos &&
+            warned.insert(icc->second).second)
+            std::fprintf(stderr,
+                         "dynsky: warning: %s: its ICC profile '%s' is not applied: its values are taken as sRGB's "
+                         "(colours off by up to 15 %% for Adobe RGB); convert it to sRGB first (e.g. jpgicc or tificc "
+                         "of liblcms2-utils, or a photo editor); said once for every file with it\n",
+                         path.c_str(), icc->second.c_str());
+    }
+}
+
 Image read_radiance_image(const std::string& path) {
     Image image = read_image(path);
     if (image.channels > 3 || (image.channels == 3 && !image.channel_names.empty())) {
@@ -203,6 +278,8 @@ Image read_radiance_image(const std::string& path) {
         }
         image.channel_names = {"R", "G", "B"};
     }
+    convert_to_rec709(&image, path);
+    warn_of_unapplied_profile(image, path);
     // Lossy compression's ringing beside a bright pixel reads as 0: a negative within 1e-3 of the
     // brightest value in its 33 x 33 neighbourhood (DWA's blocks are 8 x 8 / 32 lines). Measured
     // against the whole image's brightest, a -500 pixel 70 degrees from a 2e6 sun read as 0 silently.

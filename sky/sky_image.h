@@ -143,6 +143,18 @@ void read_sky_metadata(const ImageMetadata& metadata, const std::string& name, S
 // largest finite value read as 0. Larger negatives stay (validation refuses them). An image of
 // more than 3 channels, or of 3 named ones, comes back as its R, G and B (rgb_channel_indices).
 Image read_radiance_image(const std::string& path);
+
+// An image read from `path` in the primaries its header names (util/colour_space.h file_primaries:
+// an EXR's chromaticities, the ACES container's AP0, an ACEScg oiio:ColorSpace) converted to linear
+// Rec.709, its first three channels, colours beyond Rec.709's gamut clipped to it, with a note on
+// stderr; the header's colour space is then forgotten (what is written from it is Rec.709).
+// read_radiance_image does this.
+void convert_to_rec709(Image* image, const std::string& path);
+
+// An image whose header carries an ICC profile other than sRGB's (a camera's Adobe RGB, Display
+// P3): a warning on stderr that it is not applied (its values are taken as sRGB's, as every
+// integer image's are). read_radiance_image does this.
+void warn_of_unapplied_profile(const Image& image, const std::string& path);
 // Throws naming the file when it is a JPEG (by its first bytes, whatever its name): 8-bit display
 // values, never radiance. Called before any decoder reads a file that must hold radiance.
 void refuse_jpeg_as_radiance(const std::string& path);

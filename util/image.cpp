@@ -285,6 +285,10 @@ Image read_image(const std::string& path, DataWindow part) {
             if (spec.getattribute(name, OIIO::TypeDesc::DOUBLE, &d)) image.metadata.numbers[name] = d;
         }
     }
+    // The primaries the file says its pixels are in (OpenEXR's float[8] attribute).
+    Chromaticities primaries;
+    if (spec.getattribute("chromaticities", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 8), primaries.data()))
+        image.chromaticities = primaries;
     in->close();
     // Radiance files record in EXPOSURE what was multiplied into their pixels (pfilt, hdrgen's
     // exposure changes): the radiance is the pixel over it.

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "util/colour_space.h"
+
 namespace dynsky {
 
 // Metadata carried in EXR headers (and PNG text chunks): numbers and strings by name.
@@ -30,6 +32,9 @@ struct Image {
     // pbrt and Cycles write crops, and compositors put it in its place. full_width 0: the pixels
     // are the whole image. Only EXR keeps it.
     int origin_x = 0, origin_y = 0, full_width = 0, full_height = 0;
+    // For images read from a file: the primaries its header gives (an EXR's `chromaticities`);
+    // nullopt: none given. util/colour_space.h says what dynsky makes of them.
+    std::optional<Chromaticities> chromaticities;
 
     Image() = default;
     Image(int w, int h, int c) : width(w), height(h), channels(c), pixels(size_t(w) * h * c, 0.0f) {}

@@ -829,6 +829,41 @@ TEST(SkyCircle, LensCircleCutByTheFrameInAJpegIsFoundDespiteItsRinging) {
     std::filesystem::remove_all(dir);
 }
 
+// A PNG's gAMA chunk says how its values encode light: with gamma 1.8 an encoded 0.6 is 0.6^1.8 =
+// 0.398 of the top, not the 0.319 the sRGB curve makes of it (18-37 % dark per channel). Without a
+// gAMA the sRGB curve stands; --encoding srgb means it whatever the header says.
+TEST(PhotoImport, APngsGammaDecodesIt) {
+    const std::string dir = test::temp_dir("photo_gamma");
+    const int w = 64;
+    std::vector<unsigned char> px(size_t(w) * w * 3, 153);  // 0.6 encoded
+    auto write = [&](const std::string& name, const char* space) {
+        auto out = OIIO::ImageOutput::create(dir + "/" + name);
+        ASSERT_TRUE(out);
+        OIIO::ImageSpec spec(w, w, 3, OIIO::TypeDesc::UINT8);
+        if (space) spec.attribute("oiio:ColorSpace", space);
+        ASSERT_TRUE(out->open(dir + "/" + name, spec));
+        ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, px.data()));
+        out->close();
+    };
+    write("gamma18.png", "Gamma1.8");
+    write("plain.png", nullptr);
+    ASSERT_EQ(header_gamma(read_image(dir + "/gamma18.png")).value_or(0.0f), 1.8f) << "the PNG has its gAMA";
+    PhotoImportParams p;
+    p.resolution = 16;
+    p.circle = SkyCircle{31.5, 31.5, 30.0};
+    p.detect_thin_obstructions = false;
+    p.clip_level = 1.0;  // a uniform photo is one plateau: not a clipped one
+    auto centre = [&](const std::string& name, const std::string& encoding) {
+        p.encoding = encoding;
+        return import_photo(dir + "/" + name, p).sky.pixel(8, 8);
+    };
+    const double encoded = 153.0 / 255.0;
+    EXPECT_NEAR(centre("gamma18.png", "auto")[1], std::pow(encoded, 1.8), 2e-3);
+    EXPECT_NEAR(centre("plain.png", "auto")[1], srgb_to_linear(float(encoded)), 2e-3);
+    EXPECT_NEAR(centre("gamma18.png", "srgb")[1], srgb_to_linear(float(encoded)), 2e-3);
+    std::filesystem::remove_all(dir);
+}
+
 TEST(SkyCircle, SameLensCircleFromDawnToNoonOnTheMobotix) {
     DYNSKY_REQUIRE_SHARED();
     // A sequence imported photo by photo must not wobble: the circle found on each frame of the

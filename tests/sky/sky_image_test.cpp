@@ -101,6 +101,45 @@ TEST(SkyImage, ASquareImageWithLightOutsideTheDiscIsNotAFisheye) {
 
 // A capture tool's sequence of Radiance .hdr skies is a sequence (it was refused as "a folder
 // without sky EXRs", though each file worked alone).
+// An ACEScg or ACES2065-1 sky (VFX renders and HDRIs) is read in dynsky's linear Rec.709: an
+// AP1 grey stays grey, an AP1 red becomes the Rec.709 colour it is (1.705, -0.130, -0.024: its
+// negative part, outside Rec.709's gamut, clipped to 0), not the Rec.709 red (1, 0, 0) it read as.
+TEST(SkyImage, SkiesInAcesPrimariesAreReadInRec709) {
+    const std::string dir = test::temp_dir("sky_aces");
+    const std::vector<float> pixels = {0.5f, 0.5f, 0.5f, 1.0f, 0.0f, 0.0f, 0.2f, 0.4f, 0.1f, 0.0f, 0.0f, 1.0f};
+    auto write = [&](const std::string& name, auto&& tag) {
+        OIIO::ImageSpec spec(2, 2, 3, OIIO::TypeDesc::FLOAT);
+        tag(spec);
+        auto out = OIIO::ImageOutput::create(dir + "/" + name);
+        ASSERT_TRUE(out);
+        ASSERT_TRUE(out->open(dir + "/" + name, spec));
+        ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()));
+        out->close();
+    };
+    write("ap1.exr", [](OIIO::ImageSpec& spec) {
+        const Chromaticities c = aces_ap1_chromaticities();
+        spec.attribute("chromaticities", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 8), c.data());
+    });
+    write("aces_container.exr", [](OIIO::ImageSpec& spec) { spec.attribute("acesImageContainerFlag", 1); });
+    write("plain.exr", [](OIIO::ImageSpec&) {});
+    const Image ap1 = read_radiance_image(dir + "/ap1.exr");
+    const Eigen::Matrix3d m = rec709_from(aces_ap1_chromaticities());
+    for (int q = 0; q < 4; ++q) {
+        const Eigen::Vector3d in(pixels[q * 3], pixels[q * 3 + 1], pixels[q * 3 + 2]), out = m * in;
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(ap1.pixels[q * 3 + c], std::max(0.0, out[c]), 1e-5) << q << " " << c;
+    }
+    EXPECT_NEAR(ap1.pixels[0], 0.5, 1e-3);  // grey stays grey
+    EXPECT_NEAR(ap1.pixels[2], 0.5, 1e-3);
+    EXPECT_NEAR(ap1.pixels[3], 1.705, 2e-3);  // the AP1 red
+    EXPECT_EQ(ap1.pixels[4], 0.0f);           // outside Rec.709: clipped
+    const Image container = read_radiance_image(dir + "/aces_container.exr");
+    EXPECT_NEAR(container.pixels[3], 2.5217, 2e-3);  // AP0's red
+    EXPECT_EQ(container.metadata.numbers.count("acesImageContainerFlag"), 0u) << "not passed on to what is written";
+    const Image plain = read_radiance_image(dir + "/plain.exr");
+    EXPECT_EQ(plain.pixels, pixels);
+    std::filesystem::remove_all(dir);
+}
+
 TEST(SkyImage, AFolderOfHdrSkiesIsASequence) {
     const std::string dir = test::temp_dir("sky_hdr_sequence");
     SkyImage disc(16);
