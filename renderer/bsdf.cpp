@@ -187,7 +187,7 @@ MetalRoughBsdf::MetalRoughBsdf(const Color& base_color, float metallic, float ro
       transmission_(clamp(transmission, 0.0f, 1.0f)) {
     roughness_ = clamp(roughness, 0.0f, 1.0f);
     alpha_ = std::max(roughness_ * roughness_, kMinAlpha);
-    if (specular_ > 0) e_avg_ = specular_ * SpecularAlbedoTable::get().average(roughness_, f0_);
+    if (specular_ > 0) e_avg_ = specular_ * specular_average();
 }
 
 void MetalRoughBsdf::set_ior(float ior) {
@@ -211,32 +211,65 @@ void MetalRoughBsdf::update_f0() {
     // channel within energy.
     f0_colour_ = (f0_ior_ * specular_color_).min(1.0f);
     f0_ = coloured_ ? f0_colour_.maxCoeff() : f0_ior_;
-    if (specular_ > 0) e_avg_ = specular_ * SpecularAlbedoTable::get().average(roughness_, f0_);
+    if (specular_ > 0) e_avg_ = specular_ * specular_average();
     cached_wo_z_ = -1;  // set_wo again
 }
 
 Color MetalRoughBsdf::transmitted(const Vec3& wo) const {
     if (transmission_ <= 0 || metallic_ >= 1 || !(wo.z() > 0)) return Color::Zero();
-    const float e_o = specular_ <= 0 ? 0.0f : wo.z() == cached_wo_z_ ? cached_e_o_ : specular_albedo(wo.z());
-    const float under_coat = coat_ > 0 ? 1 - (wo.z() == cached_wo_z_ ? cached_e_coat_ : coat_albedo(wo.z())) : 1.0f;
+    const float e_o = specular_ <= 0 ? 0.0f : cached_for(wo) ? cached_e_o_ : specular_albedo(wo);
+    const float under_coat = coat_ > 0 ? 1 - (cached_for(wo) ? cached_e_coat_ : coat_albedo(wo.z())) : 1.0f;
     const float under_sheen = sheen_max_ > 0 ? sheen_scaling(wo.z()) : 1.0f;
     return base_ * tint_ * ((1 - metallic_) * transmission_ * (1 - e_o) * under_coat * under_sheen);
 }
 
-float MetalRoughBsdf::specular_albedo(float mu) const {
-    return specular_ * SpecularAlbedoTable::get().albedo(mu, roughness_, f0_);
+float MetalRoughBsdf::specular_albedo(const Vec3& w) const {
+    return specular_ *
+           SpecularAlbedoTable::get().albedo(w.z(), anisotropic_ ? projected_roughness(w) : roughness_, f0_);
+}
+
+float MetalRoughBsdf::projected_roughness(const Vec3& w) const {
+    // An anisotropic lobe's albedo towards w is close to the isotropic one of the roughness w's
+    // azimuth meets (what its Smith masking takes: alpha^2 = cos^2 phi alpha_x^2 + sin^2 phi
+    // alpha_y^2, Heitz 2014). With the mean roughness a white dielectric seen at 88 degrees along
+    // the stretch reflected 1.22, across it 0.80. Straight down every azimuth is alike: the mean.
+    const float xy2 = w.x() * w.x() + w.y() * w.y();
+    if (!(xy2 > 1e-12f)) return roughness_;
+    const float a2 = (w.x() * w.x() * alpha_x_ * alpha_x_ + w.y() * w.y() * alpha_y_ * alpha_y_) / xy2;
+    return std::sqrt(std::sqrt(a2));  // the tables' perceptual roughness: alpha = r^2
+}
+
+float MetalRoughBsdf::specular_average() const {
+    const SpecularAlbedoTable& table = SpecularAlbedoTable::get();
+    if (!anisotropic_) return table.average(roughness_, f0_);
+    // The cosine-weighted mean of the directional albedo over the hemisphere, 2 int E mu dmu over
+    // the azimuths (midpoints; a quarter turn by symmetry).
+    const int nm = 32, np = 16;
+    double sum = 0;
+    for (int a = 0; a < nm; ++a) {
+        const float mu = (a + 0.5f) / nm, r = safe_sqrt(1 - mu * mu);
+        for (int b = 0; b < np; ++b) {
+            const float phi = 0.5f * kPi * (b + 0.5f) / np;
+            sum += table.albedo(mu, projected_roughness(Vec3(r * std::cos(phi), r * std::sin(phi), mu)), f0_) * mu;
+        }
+    }
+    return float(2.0 * sum / (double(nm) * np));
+}
+
+bool MetalRoughBsdf::cached_for(const Vec3& wo) const {
+    return wo.z() == cached_wo_z_ && (!anisotropic_ || (wo.x() == cached_wo_x_ && wo.y() == cached_wo_y_));
 }
 
 void MetalRoughBsdf::set_wo(const Vec3& wo) {
     cached_wo_z_ = -1;
     if (!(wo.z() > 0)) return;
-    cached_e_o_ = specular_albedo(wo.z());
+    cached_e_o_ = specular_albedo(wo);
     cached_ps_ = specular_probability_for(wo, cached_e_o_);
     if (coat_ > 0) {
         cached_e_coat_ = coat_albedo(wo.z());
         cached_pc_ = coat_probability_for(wo, cached_e_coat_);
     }
-    cached_wo_z_ = wo.z();
+    cached_wo_z_ = wo.z(), cached_wo_x_ = wo.x(), cached_wo_y_ = wo.y();
 }
 
 float MetalRoughBsdf::ggx_d(const Vec3& wm, float alpha) {
@@ -337,8 +370,8 @@ Color MetalRoughBsdf::metal_rough_eval(const Vec3& wo, const Vec3& wi) const {
     float f_dielectric = specular_ * (f0_ + (1 - f0_) * w);
     float diffuse_weight = 1.0f;
     if (specular_ > 0) {
-        float e_o = wo.z() == cached_wo_z_ ? cached_e_o_ : specular_albedo(wo.z());
-        diffuse_weight = (1 - e_o) * (1 - specular_albedo(wi.z())) / std::max(1 - e_avg_, 1e-4f);
+        float e_o = cached_for(wo) ? cached_e_o_ : specular_albedo(wo);
+        diffuse_weight = (1 - e_o) * (1 - specular_albedo(wi)) / std::max(1 - e_avg_, 1e-4f);
     }
     diffuse_weight *= 1 - transmission_;  // the rest passes through (transmitted())
     Color dielectric = diffuse_weight * base_ * kInvPi;
@@ -349,8 +382,8 @@ Color MetalRoughBsdf::metal_rough_eval(const Vec3& wo, const Vec3& wi) const {
 }
 
 float MetalRoughBsdf::specular_probability(const Vec3& wo) const {
-    if (wo.z() == cached_wo_z_) return cached_ps_;
-    return specular_probability_for(wo, metallic_ >= 1 ? 0.0f : specular_albedo(wo.z()));
+    if (cached_for(wo)) return cached_ps_;
+    return specular_probability_for(wo, metallic_ >= 1 ? 0.0f : specular_albedo(wo));
 }
 
 float MetalRoughBsdf::specular_probability_for(const Vec3& wo, float e_spec) const {
@@ -385,7 +418,7 @@ float MetalRoughBsdf::sheen_scaling(float mu) const {
 }
 
 float MetalRoughBsdf::base_albedo_estimate(const Vec3& wo) const {
-    const float e_spec = metallic_ >= 1 ? 0.0f : specular_albedo(wo.z());
+    const float e_spec = metallic_ >= 1 ? 0.0f : specular_albedo(wo);
     const float w = schlick_weight(std::max(0.0f, wo.z()));
     return (1 - metallic_) * (e_spec + (1 - e_spec) * (1 - transmission_) * luminance(base_)) +
            metallic_ * luminance(base_ + (1 - base_) * w);
@@ -459,7 +492,7 @@ float MetalRoughBsdf::coat_albedo(float mu) const {
 }
 
 float MetalRoughBsdf::coat_probability(const Vec3& wo) const {
-    if (wo.z() == cached_wo_z_) return cached_pc_;
+    if (cached_for(wo)) return cached_pc_;
     return coat_probability_for(wo, coat_albedo(wo.z()));
 }
 
@@ -475,7 +508,7 @@ Color MetalRoughBsdf::eval(const Vec3& wo, const Vec3& wi) const {
     if (wo.z() <= 0 || wi.z() <= 0) return Color::Zero();
     // The base under the coat receives and returns what the coat's lobe does not reflect (its
     // albedo E_c each way): energy never grows, and the layer stays reciprocal.
-    const float e_o = wo.z() == cached_wo_z_ ? cached_e_coat_ : coat_albedo(wo.z());
+    const float e_o = cached_for(wo) ? cached_e_coat_ : coat_albedo(wo.z());
     const Color base = base_eval(wo, wi) * ((1 - e_o) * (1 - coat_albedo(wi.z())));
     const Vec3 wm = (wo + wi).normalized();
     const float f = kCoatF0 + (1 - kCoatF0) * schlick_weight(clamp(wo.dot(wm), 0.0f, 1.0f));

@@ -50,7 +50,8 @@ class MetalRoughBsdf {
     // KHR_materials_anisotropy: the specular lobe's roughness stretched along the local x axis (the
     // caller turns the shading frame's tangent to the anisotropy direction): alpha_x = mix(alpha, 1,
     // strength^2), alpha_y = alpha, as the extension defines. The albedo tables (energy compensation,
-    // lobe probabilities) take the lobe's mean roughness, alpha = sqrt(alpha_x alpha_y). 0 (the
+    // lobe probabilities) take the roughness each direction's azimuth meets (projected_roughness),
+    // their cosine-weighted mean integrated over the hemisphere. 0 (the
     // default): isotropic, every result bitwise as without it. Before set_wo.
     void set_anisotropy(float strength);
 
@@ -109,7 +110,10 @@ class MetalRoughBsdf {
     float coat_albedo(float mu) const;  // coat_ x E_c(mu): what the clearcoat's lobe reflects
     float coat_probability(const Vec3& wo) const;
     float coat_probability_for(const Vec3& wo, float e_coat) const;
-    float specular_albedo(float mu) const;  // specular_ x E(mu): what the specular lobe reflects
+    float specular_albedo(const Vec3& w) const;      // specular_ x E(w): what the specular lobe reflects
+    float projected_roughness(const Vec3& w) const;  // an anisotropic lobe's roughness towards w
+    float specular_average() const;                  // E's cosine-weighted mean (no specular_)
+    bool cached_for(const Vec3& wo) const;           // set_wo's cache holds wo
     float specular_probability_for(const Vec3& wo, float e_spec) const;
 
     Color base_;
@@ -122,7 +126,7 @@ class MetalRoughBsdf {
     Color tint_ = Color::Ones();  // set_transmission_tint
     float e_avg_ = 0;             // specular_ x the lobe's cosine-weighted mean albedo
     // set_wo's cache: wo.z(), specular_albedo(wo.z()) and the lobe probability (valid: cached_wo_z_ > 0).
-    float cached_wo_z_ = -1, cached_e_o_ = 0, cached_ps_ = 0;
+    float cached_wo_z_ = -1, cached_wo_x_ = 0, cached_wo_y_ = 0, cached_e_o_ = 0, cached_ps_ = 0;
     float coat_ = 0, coat_roughness_ = 0, coat_alpha_ = 1;  // set_clearcoat
     float cached_e_coat_ = 0, cached_pc_ = 0;
     Color sheen_ = Color::Zero();  // set_sheen
