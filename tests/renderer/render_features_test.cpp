@@ -140,9 +140,15 @@ TEST(RenderAovs, AlphaPremultipliesTheColourAsATransparentFilm) {
         for (int x = 0; x < s.width; ++x) {
             const float a = film.alpha.at(x, y, 0);
             for (int k = 0; k < 3; ++k) {
-                if (a == 0) EXPECT_EQ(film.color.at(x, y, k), 0.0f) << x << "," << y;
-                if (a == 1) EXPECT_EQ(film.color.at(x, y, k), plain.color.at(x, y, k)) << x << "," << y;
-                if (a > 0 && a < 1) EXPECT_LT(film.color.at(x, y, k), plain.color.at(x, y, k)) << x << "," << y;
+                if (a == 0) {
+                    EXPECT_EQ(film.color.at(x, y, k), 0.0f) << x << "," << y;
+                }
+                if (a == 1) {
+                    EXPECT_EQ(film.color.at(x, y, k), plain.color.at(x, y, k)) << x << "," << y;
+                }
+                if (a > 0 && a < 1) {
+                    EXPECT_LT(film.color.at(x, y, k), plain.color.at(x, y, k)) << x << "," << y;
+                }
             }
             sky += a == 0, surface += a == 1, edge += a > 0 && a < 1;
         }
