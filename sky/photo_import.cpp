@@ -1337,7 +1337,7 @@ ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, 
         // decoded as sRGB, a gamma-1.8 PNG came out 18-37 % dark per channel. --encoding srgb means
         // the sRGB curve whatever the header says.
         const std::optional<float> gamma = params.encoding == "auto" ? header_gamma(photo) : std::nullopt;
-        if (gamma) out.decoding = "gamma " + number_text(*gamma, 4) + " (its header)";
+        if (gamma) out.decoding = "gamma " + number_text(*gamma, 4);
         out.clip_level = params.clip_level >= 0 ? params.clip_level : find_clip_level(rgb, circle, not_sky);
         float level = float(out.clip_level);
         for (int y = 0; y < rgb.rows; ++y)

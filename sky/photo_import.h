@@ -171,7 +171,7 @@ struct ImportedPhoto {
     bool circle_detected = false;        // true if the circle was found automatically
     std::string circle_caution;          // why that circle may be wrong (find_sky_circle), "" if none
     bool display_referred = true;        // true if the photo was sRGB-decoded (8-bit input)
-    std::string decoding;                // how, when not by the sRGB curve ("gamma 1.8 (its header)")
+    std::string decoding;                // how, when not by the sRGB curve ("gamma 1.8": its header's)
     std::vector<unsigned char> not_sky;  // N*N: 1 where the sky was hidden and has been filled
     std::vector<unsigned char> clipped;  // N*N: 1 where the photo was saturated (LDR input only)
     double clip_level = 1.0;             // encoded level treated as saturation (1: none found)

@@ -251,9 +251,10 @@ void import_one(const OnePhoto& o, bool verbose, const std::string& settings_key
                                                 (imported.display_referred ? "linear" : "srgb") + " if they are not)";
     if (verbose)
         std::printf("values: %s%s\n",
-                    !imported.display_referred  ? "linear, taken as they are"
-                    : imported.decoding.empty() ? "sRGB-encoded, decoded to linear"
-                                                : (imported.decoding + "-encoded, decoded to linear").c_str(),
+                    !imported.display_referred ? "linear, taken as they are"
+                    : imported.decoding.empty()
+                        ? "sRGB-encoded, decoded to linear"
+                        : (imported.decoding + "-encoded (its header), decoded to linear").c_str(),
                     why.c_str());
     if (imported.display_referred && verbose)
         std::printf("saturation: %s\n",
