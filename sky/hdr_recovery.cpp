@@ -261,7 +261,7 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     // Encoded values for the cloud rule (the photo's own, up to resampling).
     auto encoded = [&](size_t p) {
         const float* c = &in.rgb[p * 3];
-        return Color(linear_to_srgb(c[0]), linear_to_srgb(c[1]), linear_to_srgb(c[2]));
+        return Color(photo.encoded(c[0]), photo.encoded(c[1]), photo.encoded(c[2]));
     };
     int sun_blob = -1;
     for (int l = 1; l < blobs && !sun_hidden; ++l)
@@ -468,7 +468,7 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
         const double bg = (std::log(c[2] / c[1]) - rep.grey_bg) / rep.chroma_bg;
         Color out(float(std::exp(rg)), 1.0f, float(std::exp(bg)));
         const double y = luminance(c);
-        const double w = smoothstep01((linear_to_srgb(c.minCoeff()) / clip - 0.85) / 0.12);
+        const double w = smoothstep01((photo.encoded(c.minCoeff()) / clip - 0.85) / 0.12);
         return (1 - w) * out * float(y / luminance(out)) + w * Color(float(y), float(y), float(y));
     };
     for (Sample& s : samples) s.photo = corrected(s.photo);

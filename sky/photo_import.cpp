@@ -353,6 +353,11 @@ void inpaint_texture(cv::Mat& rgb, const cv::Mat& fill) {
 
 }  // namespace
 
+float ImportedPhoto::encoded(float linear) const {
+    return encoding_gamma > 0 ? std::pow(std::clamp(linear, 0.0f, 1.0f), 1.0f / encoding_gamma)
+                              : linear_to_srgb(linear);
+}
+
 std::optional<float> header_gamma(const Image& photo) {
     const auto space = photo.metadata.strings.find("oiio:ColorSpace");
     if (space == photo.metadata.strings.end() || space->second.rfind("Gamma", 0) != 0) return std::nullopt;
@@ -1108,7 +1113,7 @@ std::optional<SequenceColourShading> find_sequence_colour_shading(const std::vec
                 if (r >= 0.9 || imp.not_sky[p] || imp.clipped[p] || !(v.minCoeff() > 0)) continue;
                 if (r < 0.5) {
                     ++centre;
-                    cloudy += is_cloud(linear_to_srgb(v[0]), linear_to_srgb(v[1]), linear_to_srgb(v[2]), rule);
+                    cloudy += is_cloud(imp.encoded(v[0]), imp.encoded(v[1]), imp.encoded(v[2]), rule);
                 }
                 const int b = std::min(kBands - 1, int(r * 20));
                 prg[size_t(b)].push_back(std::log(double(v[0]) / v[1]));
@@ -1337,7 +1342,7 @@ ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, 
         // decoded as sRGB, a gamma-1.8 PNG came out 18-37 % dark per channel. --encoding srgb means
         // the sRGB curve whatever the header says.
         const std::optional<float> gamma = params.encoding == "auto" ? header_gamma(photo) : std::nullopt;
-        if (gamma) out.decoding = "gamma " + number_text(*gamma, 4);
+        if (gamma) out.encoding_gamma = *gamma;
         out.clip_level = params.clip_level >= 0 ? params.clip_level : find_clip_level(rgb, circle, not_sky);
         float level = float(out.clip_level);
         for (int y = 0; y < rgb.rows; ++y)

@@ -166,12 +166,15 @@ struct PhotoImportParams {
 
 // A photograph after import.
 struct ImportedPhoto {
-    SkyImage sky;                        // linear, relative to the photo (see the file comment)
-    PhotoGeometry geometry;              // the geometry used, with the circle found or given
-    bool circle_detected = false;        // true if the circle was found automatically
-    std::string circle_caution;          // why that circle may be wrong (find_sky_circle), "" if none
-    bool display_referred = true;        // true if the photo was sRGB-decoded (8-bit input)
-    std::string decoding;                // how, when not by the sRGB curve ("gamma 1.8": its header's)
+    SkyImage sky;                  // linear, relative to the photo (see the file comment)
+    PhotoGeometry geometry;        // the geometry used, with the circle found or given
+    bool circle_detected = false;  // true if the circle was found automatically
+    std::string circle_caution;    // why that circle may be wrong (find_sky_circle), "" if none
+    bool display_referred = true;  // true if the photo was sRGB-decoded (8-bit input)
+    float encoding_gamma = 0;      // the power law its values were decoded by (header_gamma); 0: sRGB's
+    // A linear value encoded as the photograph's values were (sRGB, or its header's gamma): for the
+    // rules judged on encoded values (the cloud rule, the clip level).
+    float encoded(float linear) const;
     std::vector<unsigned char> not_sky;  // N*N: 1 where the sky was hidden and has been filled
     std::vector<unsigned char> clipped;  // N*N: 1 where the photo was saturated (LDR input only)
     double clip_level = 1.0;             // encoded level treated as saturation (1: none found)

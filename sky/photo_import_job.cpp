@@ -12,6 +12,7 @@
 #include "sky/preset_import.h"
 #include "sky/sky_image.h"
 #include "sky/sun_position.h"
+#include "util/parse.h"
 #include "util/image_input.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
@@ -251,10 +252,11 @@ void import_one(const OnePhoto& o, bool verbose, const std::string& settings_key
                                                 (imported.display_referred ? "linear" : "srgb") + " if they are not)";
     if (verbose)
         std::printf("values: %s%s\n",
-                    !imported.display_referred ? "linear, taken as they are"
-                    : imported.decoding.empty()
-                        ? "sRGB-encoded, decoded to linear"
-                        : (imported.decoding + "-encoded (its header), decoded to linear").c_str(),
+                    !imported.display_referred     ? "linear, taken as they are"
+                    : imported.encoding_gamma <= 0 ? "sRGB-encoded, decoded to linear"
+                                                   : ("gamma " + number_text(imported.encoding_gamma, 4) +
+                                                      "-encoded (its header), decoded to linear")
+                                                         .c_str(),
                     why.c_str());
     if (imported.display_referred && verbose)
         std::printf("saturation: %s\n",

@@ -209,9 +209,8 @@ void convert_to_rec709(Image* image, const std::string& path) {
                      path.c_str(), describe_chromaticities(*primaries).c_str());
         return;
     }
-    if (image->channels < 3)
-        throw_file_error(path, "says its pixels are in " + describe_chromaticities(*primaries) +
-                                   " but has fewer than three channels");
+    // A grey image is the same grey in any primaries of this white (the adapted white stays white).
+    if (image->channels < 3) return;
     Eigen::Matrix3d m;
     try {
         m = rec709_from(*primaries);
@@ -274,6 +273,7 @@ Image read_radiance_image(const std::string& path) {
                     picked.pixels[q * 3 + c] = image.pixels[q * image.channels + size_t(rgb[c])];
             picked.metadata = std::move(image.metadata);
             picked.file_format = image.file_format, picked.file_pixel_type = image.file_pixel_type;
+            picked.chromaticities = image.chromaticities;
             image = std::move(picked);
         }
         image.channel_names = {"R", "G", "B"};

@@ -137,6 +137,25 @@ TEST(SkyImage, SkiesInAcesPrimariesAreReadInRec709) {
     EXPECT_EQ(container.metadata.numbers.count("acesImageContainerFlag"), 0u) << "not passed on to what is written";
     const Image plain = read_radiance_image(dir + "/plain.exr");
     EXPECT_EQ(plain.pixels, pixels);
+    // With alpha (a render's RGBA) the colour is converted as well; a grey image stays as it is.
+    {
+        const std::vector<float> rgba = {1.0f, 0.0f, 0.0f, 0.5f};
+        OIIO::ImageSpec spec(1, 1, 4, OIIO::TypeDesc::FLOAT);
+        const Chromaticities c = aces_ap1_chromaticities();
+        spec.attribute("chromaticities", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 8), c.data());
+        auto out = OIIO::ImageOutput::create(dir + "/rgba.exr");
+        ASSERT_TRUE(out && out->open(dir + "/rgba.exr", spec) && out->write_image(OIIO::TypeDesc::FLOAT, rgba.data()));
+        out->close();
+        OIIO::ImageSpec grey_spec(2, 1, 1, OIIO::TypeDesc::FLOAT);
+        grey_spec.attribute("chromaticities", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 8), c.data());
+        auto grey_out = OIIO::ImageOutput::create(dir + "/grey.exr");
+        ASSERT_TRUE(grey_out && grey_out->open(dir + "/grey.exr", grey_spec) &&
+                    grey_out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()));
+        grey_out->close();
+    }
+    EXPECT_NEAR(read_radiance_image(dir + "/rgba.exr").pixels[0], 1.705, 2e-3);
+    const Image grey = read_radiance_image(dir + "/grey.exr");
+    EXPECT_EQ(grey.pixels, std::vector<float>(pixels.begin(), pixels.begin() + 2));
     std::filesystem::remove_all(dir);
 }
 
