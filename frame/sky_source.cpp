@@ -365,7 +365,7 @@ FrameSettings sky_timeline_settings(const SkySourceSpec& o, const StepModelSpec&
     // What the moving sky is, when its steps or frames change meaning: frames and stored timelines of
     // another revision are made again (the 21st session's relight to the clock: resumed frames of the
     // revision before jumped 17 % in blue at the first new frame).
-    s["sky_revision"] = "3 (an import's filled pixels neither move nor cover the sun)";
+    s["sky_revision"] = "4 (the default model's step flows by source: in-betweens without doubled edges)";
     return s;
 }
 

@@ -1327,7 +1327,8 @@ SkyImage AdvectResidualStepModel::step(const std::vector<std::shared_ptr<const S
         rollout_->set_background(background_, sun->cast<double>());
     }
     SkyImage next = from_network_form(rollout_->advance(), input, network_.info().form);
-    last_flow_ = flow_at_resolution(flow_.at(rollout_->steps()), given_resolution);
+    // The rollout's flows are by destination (wind_flow); last_step_flow is by source.
+    last_flow_ = flow_by_source(flow_at_resolution(flow_.at(rollout_->steps()), given_resolution));
     std::optional<Vec3d> at;
     if (sun) at = sun->cast<double>();
     last_opacity_ = at_most_256(rollout_->opacity());

@@ -53,12 +53,29 @@ cv::Mat extend_past_rim(const cv::Mat& src) {
 }
 
 
+namespace {
+
+SkyImage advect_along_arcs(const SkyImage& sky, const cv::Mat& flow, double fraction, bool from_end);
+
+}  // namespace
+
 SkyImage advect_great_arc(const SkyImage& sky, const cv::Mat& flow, double fraction) {
+    return advect_along_arcs(sky, flow, fraction, false);
+}
+
+SkyImage advect_great_arc_from_end(const SkyImage& end, const cv::Mat& flow, double fraction) {
+    return advect_along_arcs(end, flow, fraction, true);
+}
+
+namespace {
+
+SkyImage advect_along_arcs(const SkyImage& sky, const cv::Mat& flow, double fraction, bool from_end) {
     const int n = sky.resolution;
     if (flow.type() != CV_32FC2 || flow.rows != n || flow.cols != n)
         throw Error("advect_great_arc: flow must be " + std::to_string(n) + "x" + std::to_string(n) + " CV_32FC2");
     SkyImage out = sky;
-    if (fraction == 0.0) return out;
+    if (!from_end && fraction == 0.0) return out;
+    if (from_end && fraction == 1.0) return out;
     // The lookup maps are smooth (the flow is), so they are computed on a grid of at most 256^2 and
     // resized: the per-pixel trigonometry then costs the same for 1024 and 2048 skies. (At 512^2 a
     // 1024 sky's constant-pace frame cost 362 ms; at 256^2 255 ms, its frames within 1e-5 of the
@@ -94,6 +111,16 @@ SkyImage advect_great_arc(const SkyImage& sky, const cv::Mat& flow, double fract
                 if (std::abs(nx - px) < 1e-3 && std::abs(ny - py) < 1e-3) break;
                 px = nx, py = ny;
             }
+            if (from_end) {
+                // src is where q's content starts (p): the step after shows it at the end of p's
+                // own arc. Carried back along the flow at q instead (the flow of where content
+                // ends, not starts), the two steps' copies met a few pixels apart wherever the flow
+                // varies, and every in-between frame of a 1024 px sky doubled its cloud edges.
+                double fx, fy;
+                fisheye::pixel_from_direction(src, n, &fx, &fy);
+                const cv::Vec2f f = sample_flow(flow, fx, fy);
+                src = fisheye::direction_from_pixel(fx + f[0], fy + f[1], n);  // the whole arc's end
+            }
             double x, y;
             fisheye::pixel_from_direction(src, n, &x, &y);
             map_x.at<float>(cj, ci) = float(x);
@@ -120,6 +147,8 @@ SkyImage advect_great_arc(const SkyImage& sky, const cv::Mat& flow, double fract
     clear_outside_disc(&out);
     return out;
 }
+
+}  // namespace
 
 cv::Mat advect_by_flow(const cv::Mat& image, const cv::Mat& flow, double steps) {
     if (flow.type() != CV_32FC2 || flow.size() != image.size())

@@ -1,5 +1,7 @@
 #include "motion/flow.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <vector>
@@ -221,6 +223,39 @@ MeasuredMotion MeasuredMotion::at_resolution(int n) const {
         cv::resize(agreement, m.agreement, cv::Size(n, n), 0, 0,
                    n < agreement.rows ? cv::INTER_AREA : cv::INTER_LINEAR);
     return m;
+}
+
+cv::Mat flow_by_source(const cv::Mat& by_destination) {
+    if (by_destination.empty()) return cv::Mat();
+    if (by_destination.type() != CV_32FC2) throw Error("flow_by_source: the flow must be CV_32FC2");
+    // A smooth field (a wind's, a relaxed measurement): found on at most 256^2 and resized, as
+    // advect_great_arc's maps are (at 1024^2 the iteration cost 16 reads a pixel).
+    if (by_destination.cols > 256 && by_destination.rows == by_destination.cols)
+        return flow_at_resolution(flow_by_source(flow_at_resolution(by_destination, 256)), by_destination.cols);
+    const cv::Mat& f = by_destination;
+    const int w = f.cols, h = f.rows;
+    auto read = [&](double x, double y) {
+        x = std::clamp(x, 0.0, w - 1.0), y = std::clamp(y, 0.0, h - 1.0);
+        const int x0 = std::min(int(x), std::max(0, w - 2)), y0 = std::min(int(y), std::max(0, h - 2));
+        const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
+        const float fx = float(x - x0), fy = float(y - y0);
+        return (1 - fy) * ((1 - fx) * f.at<cv::Vec2f>(y0, x0) + fx * f.at<cv::Vec2f>(y0, x1)) +
+               fy * ((1 - fx) * f.at<cv::Vec2f>(y1, x0) + fx * f.at<cv::Vec2f>(y1, x1));
+    };
+    cv::Mat out(h, w, CV_32FC2);
+    tbb::parallel_for(0, h, [&](int py) {
+        for (int px = 0; px < w; ++px) {
+            cv::Vec2f d = f.at<cv::Vec2f>(py, px);
+            for (int it = 0; it < 16; ++it) {
+                const cv::Vec2f next = read(px + d[0], py + d[1]);
+                const bool settled = std::abs(next[0] - d[0]) < 1e-3f && std::abs(next[1] - d[1]) < 1e-3f;
+                d = next;
+                if (settled) break;
+            }
+            out.at<cv::Vec2f>(py, px) = d;
+        }
+    });
+    return out;
 }
 
 cv::Mat flow_at_resolution(const cv::Mat& flow, int n) {

@@ -317,7 +317,7 @@ SkyTimeline::Interval& SkyTimeline::interval_with_keys(int i) {
     auto a = step(i), b = step(i + 1);
     auto t0 = std::chrono::steady_clock::now();
     iv.third = advect_great_arc(*a, iv.flow, 1.0 / 3.0);
-    iv.two_thirds = advect_great_arc(*b, iv.flow, -1.0 / 3.0);
+    iv.two_thirds = advect_great_arc_from_end(*b, iv.flow, 2.0 / 3.0);
     iv.has_keys = true;
     timings_.medium_seconds += seconds_since(t0);
     return iv;
@@ -353,7 +353,7 @@ void SkyTimeline::sky_at(double t, SkyImage* out) {
         auto a = step(i), b = step(i + 1);
         auto t0 = std::chrono::steady_clock::now();
         // Both steps carried to this moment along the flow, then cross-faded by time.
-        blend_skies(advect_great_arc(*a, iv.flow, s), advect_great_arc(*b, iv.flow, -(1.0 - s)), s, out);
+        blend_skies(advect_great_arc(*a, iv.flow, s), advect_great_arc_from_end(*b, iv.flow, s), s, out);
         timings_.gamma_seconds = seconds_since(t0);
     } else {
         Interval& iv = interval_with_keys(i);

@@ -72,12 +72,12 @@ TEST(SkyTimeline, GammaReproducesMediumStepsAndKeys) {
     // Frames a rate would give (k / 3 fps) land on the keys: the advected images, independently made.
     cv::Mat f0 = estimate_sky_flow(s0, s1);
     EXPECT_EQ(timeline.sky_at(10.0 / 3.0).rgb, advect_great_arc(s0, f0, 1.0 / 3.0).rgb);
-    EXPECT_EQ(timeline.sky_at(20.0 / 3.0).rgb, advect_great_arc(s1, f0, -1.0 / 3.0).rgb);
+    EXPECT_EQ(timeline.sky_at(20.0 / 3.0).rgb, advect_great_arc_from_end(s1, f0, 2.0 / 3.0).rgb);
     cv::Mat f1 = estimate_sky_flow(s1, s2);
     EXPECT_EQ(timeline.sky_at(10.0 + 10.0 / 3.0).rgb, advect_great_arc(s1, f1, 1.0 / 3.0).rgb);
     // Half-way: the even blend of the two keys.
     SkyImage mid = timeline.sky_at(15.0), k1 = advect_great_arc(s1, f1, 1.0 / 3.0),
-             k2 = advect_great_arc(s2, f1, -1.0 / 3.0);
+             k2 = advect_great_arc_from_end(s2, f1, 2.0 / 3.0);
     for (size_t k = 0; k < mid.rgb.size(); k += 97) EXPECT_NEAR(mid.rgb[k], 0.5f * (k1.rgb[k] + k2.rgb[k]), 1e-5f);
     // Continuity: approaching a key from either side converges to it (no jump inside an interval).
     SkyImage a = timeline.sky_at(10.0 / 3.0 - 1e-4), b = timeline.sky_at(10.0 / 3.0 + 1e-4),
@@ -180,7 +180,7 @@ TEST(SkyTimeline, ConstantGammaIsExactAtTheStepsAndCarriesBothStepsToTheMoment) 
     EXPECT_EQ(cv::norm(f1, estimate_sky_flow(s0, s1), cv::NORM_INF), 0.0);
     const double s = 0.37;
     SkyImage got = timeline.sky_at(10.0 + s * 10.0);
-    SkyImage want = blend_skies(advect_great_arc(s1, f1, s), advect_great_arc(s2, f1, -(1 - s)), s);
+    SkyImage want = blend_skies(advect_great_arc(s1, f1, s), advect_great_arc_from_end(s2, f1, s), s);
     ASSERT_EQ(got.rgb.size(), want.rgb.size());
     for (size_t k = 0; k < got.rgb.size(); k += 31) EXPECT_NEAR(got.rgb[k], want.rgb[k], 1e-5f * (1 + want.rgb[k]));
     EXPECT_DOUBLE_EQ(got.time_seconds, 10.0 + s * 10.0);
