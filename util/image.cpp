@@ -132,6 +132,23 @@ bool has_png_signature(const std::string& path) {
     return in.read(reinterpret_cast<char*>(head), 8) && std::memcmp(head, signature, 8) == 0;
 }
 
+// A Radiance file whose header names a pixel format OpenImageIO does not read (XYZE): said as
+// such, not as the reader's "no FORMAT specifier found". "" for any other file.
+std::string radiance_format_problem(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    char magic[6] = {};
+    if (!in.read(magic, 6) || (std::memcmp(magic, "#?RADI", 6) != 0 && std::memcmp(magic, "#?RGBE", 6) != 0)) return "";
+    // The header's lines up to the blank one (at most 64 of at most 1 KB: a header, not pixels).
+    char buffer[1024];
+    in.getline(buffer, sizeof buffer);  // the rest of the magic line
+    for (int k = 0; k < 64 && in.getline(buffer, sizeof buffer) && buffer[0] != '\0'; ++k)
+        if (const std::string line = buffer; line.rfind("FORMAT=", 0) == 0 && line.find("xyze") != std::string::npos)
+            return "a Radiance file of XYZE pixels (" + line +
+                   "): dynsky reads RGBE ones (FORMAT=32-bit_rle_rgbe); convert it, e.g. with Radiance's "
+                   "ra_xyze -r IN.hdr OUT.hdr";
+    return "";
+}
+
 }  // namespace
 
 bool has_jpeg_signature(const std::string& path) {
@@ -152,7 +169,7 @@ std::string image_file_problem(const std::string& path) {
     if (std::FILE* f = std::fopen(path.c_str(), "rb")) std::fclose(f);
     else return std::string("cannot be opened: ") + std::strerror(errno);
     if (has_png_signature(path)) return png_truncation(path);
-    return "";
+    return radiance_format_problem(path);
 }
 
 bool is_black_everywhere(const Image& image) {

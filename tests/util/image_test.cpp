@@ -314,6 +314,19 @@ TEST(ImageIo, RadianceExposureIsDividedOut) {
     };
     write_hdr(dir + "/plain.hdr", "");
     write_hdr(dir + "/exposed.hdr", "EXPOSURE=2.0\n");
+    {
+        // XYZE pixels (OpenImageIO reads RGBE only): said as such.
+        std::ofstream f(dir + "/xyze.hdr", std::ios::binary);
+        f << "#?RADIANCE\nFORMAT=32-bit_rle_xyze\n\n-Y 2 +X 2\n";
+        for (int p = 0; p < 4; ++p) f.write("\x80\x80\x80\x81", 4);
+    }
+    try {
+        read_image(dir + "/xyze.hdr");
+        ADD_FAILURE() << "an XYZE file was read as RGB";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("XYZE"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("xyze.hdr"), std::string::npos) << e.what();
+    }
     const Image plain = read_image(dir + "/plain.hdr"), exposed = read_image(dir + "/exposed.hdr");
     ASSERT_EQ(plain.pixels.size(), exposed.pixels.size());
     for (size_t k = 0; k < plain.pixels.size(); ++k) {
