@@ -23,19 +23,6 @@ cv::Mat sky_mat(const SkyImage& sky) {
 
 }  // namespace
 
-namespace {
-
-cv::Vec2f sample_flow(const cv::Mat& flow, double x, double y) {
-    const int n = flow.cols;
-    x = std::clamp(x, 0.0, n - 1.0), y = std::clamp(y, 0.0, n - 1.0);
-    int x0 = std::min(int(x), n - 2), y0 = std::min(int(y), n - 2);
-    float fx = float(x - x0), fy = float(y - y0);
-    return (1 - fy) * ((1 - fx) * flow.at<cv::Vec2f>(y0, x0) + fx * flow.at<cv::Vec2f>(y0, x0 + 1)) +
-           fy * ((1 - fx) * flow.at<cv::Vec2f>(y0 + 1, x0) + fx * flow.at<cv::Vec2f>(y0 + 1, x0 + 1));
-}
-
-}  // namespace
-
 cv::Mat extend_past_rim(const cv::Mat& src) {
     const int n = src.cols;
     const double r_in = 1.0 - 1.5 / n;
@@ -52,20 +39,6 @@ cv::Mat extend_past_rim(const cv::Mat& src) {
     return out;
 }
 
-
-namespace {
-
-SkyImage advect_along_arcs(const SkyImage& sky, const cv::Mat& flow, double fraction, bool from_end);
-
-}  // namespace
-
-SkyImage advect_great_arc(const SkyImage& sky, const cv::Mat& flow, double fraction) {
-    return advect_along_arcs(sky, flow, fraction, false);
-}
-
-SkyImage advect_great_arc_from_end(const SkyImage& end, const cv::Mat& flow, double fraction) {
-    return advect_along_arcs(end, flow, fraction, true);
-}
 
 namespace {
 
@@ -149,6 +122,14 @@ SkyImage advect_along_arcs(const SkyImage& sky, const cv::Mat& flow, double frac
 }
 
 }  // namespace
+
+SkyImage advect_great_arc(const SkyImage& sky, const cv::Mat& flow, double fraction) {
+    return advect_along_arcs(sky, flow, fraction, false);
+}
+
+SkyImage advect_great_arc_from_end(const SkyImage& end, const cv::Mat& flow, double fraction) {
+    return advect_along_arcs(end, flow, fraction, true);
+}
 
 cv::Mat advect_by_flow(const cv::Mat& image, const cv::Mat& flow, double steps) {
     if (flow.type() != CV_32FC2 || flow.size() != image.size())

@@ -227,27 +227,21 @@ MeasuredMotion MeasuredMotion::at_resolution(int n) const {
 
 cv::Mat flow_by_source(const cv::Mat& by_destination) {
     if (by_destination.empty()) return cv::Mat();
-    if (by_destination.type() != CV_32FC2) throw Error("flow_by_source: the flow must be CV_32FC2");
+    if (by_destination.type() != CV_32FC2 || by_destination.rows != by_destination.cols)
+        throw Error("flow_by_source: the flow must be square CV_32FC2");
+    if (by_destination.rows < 2) return by_destination.clone();  // one displacement: its own inverse's
     // A smooth field (a wind's, a relaxed measurement): found on at most 256^2 and resized, as
     // advect_great_arc's maps are (at 1024^2 the iteration cost 16 reads a pixel).
-    if (by_destination.cols > 256 && by_destination.rows == by_destination.cols)
+    if (by_destination.cols > 256)
         return flow_at_resolution(flow_by_source(flow_at_resolution(by_destination, 256)), by_destination.cols);
     const cv::Mat& f = by_destination;
     const int w = f.cols, h = f.rows;
-    auto read = [&](double x, double y) {
-        x = std::clamp(x, 0.0, w - 1.0), y = std::clamp(y, 0.0, h - 1.0);
-        const int x0 = std::min(int(x), std::max(0, w - 2)), y0 = std::min(int(y), std::max(0, h - 2));
-        const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
-        const float fx = float(x - x0), fy = float(y - y0);
-        return (1 - fy) * ((1 - fx) * f.at<cv::Vec2f>(y0, x0) + fx * f.at<cv::Vec2f>(y0, x1)) +
-               fy * ((1 - fx) * f.at<cv::Vec2f>(y1, x0) + fx * f.at<cv::Vec2f>(y1, x1));
-    };
     cv::Mat out(h, w, CV_32FC2);
     tbb::parallel_for(0, h, [&](int py) {
         for (int px = 0; px < w; ++px) {
             cv::Vec2f d = f.at<cv::Vec2f>(py, px);
             for (int it = 0; it < 16; ++it) {
-                const cv::Vec2f next = read(px + d[0], py + d[1]);
+                const cv::Vec2f next = sample_flow(f, px + d[0], py + d[1]);
                 const bool settled = std::abs(next[0] - d[0]) < 1e-3f && std::abs(next[1] - d[1]) < 1e-3f;
                 d = next;
                 if (settled) break;
@@ -340,6 +334,15 @@ Wind fit_wind(const cv::Mat& flow, const cv::Mat& weight, double dt, double clou
     double to = std::atan2(east, north) * 180.0 / kPiD;
     w.from_deg = std::fmod(to + 180.0 + 720.0, 360.0);
     return w;
+}
+
+cv::Vec2f sample_flow(const cv::Mat& flow, double x, double y) {
+    const int n = flow.cols;
+    x = std::clamp(x, 0.0, n - 1.0), y = std::clamp(y, 0.0, n - 1.0);
+    int x0 = std::min(int(x), n - 2), y0 = std::min(int(y), n - 2);
+    float fx = float(x - x0), fy = float(y - y0);
+    return (1 - fy) * ((1 - fx) * flow.at<cv::Vec2f>(y0, x0) + fx * flow.at<cv::Vec2f>(y0, x0 + 1)) +
+           fy * ((1 - fx) * flow.at<cv::Vec2f>(y0 + 1, x0) + fx * flow.at<cv::Vec2f>(y0 + 1, x0 + 1));
 }
 
 cv::Vec2f flow_at_direction(const cv::Mat& flow, const Vec3d& direction) {

@@ -121,11 +121,15 @@ cv::Mat flow_at_resolution(const cv::Mat& flow, int n);
 // A flow by destination (F(y) = y - s(y): the content arriving at y came from y - F(y), as
 // wind_flow gives it) as the same motion by source (S(p): the content at p goes to p + S(p), as
 // the step models' last_step_flow and advect_great_arc take it): for each p the y with
-// y - F(y) = p, by fixed-point iteration (bilinear F, reads clamped to the image; above 256 px on
+// y - F(y) = p, by fixed-point iteration (sample_flow; above 256 px on
 // 256^2 and resized, the field being smooth). The two differ
 // by F's change over one displacement: for animate's wind at 1024 px by up to 5 px, and read one
 // way where the other was meant, in-between frames showed every cloud edge twice.
 cv::Mat flow_by_source(const cv::Mat& by_destination);
+
+// A square flow field's displacement (CV_32FC2) at continuous pixel coordinates (x, y): bilinear,
+// the reads clamped to the image.
+cv::Vec2f sample_flow(const cv::Mat& flow, double x, double y);
 
 // A flow field's displacement (CV_32FC2, pixels of its own resolution) at the pixel nearest to a
 // direction of the sky: the motion of the clouds at the sun.

@@ -372,9 +372,8 @@ bool is_display_encoded(const Image& photo, const std::string& path, const std::
     if (encoding == "srgb") return true;
     if (encoding == "linear") return false;
     if (encoding != "auto") throw Error("unknown input encoding '" + encoding + "' (use auto, srgb or linear)");
-    const std::string& type = photo.file_pixel_type;
-    if (type == "half" || type == "float" || type == "double") return false;
-    if (!type.empty()) {
+    if (photo.has_float_file_pixels()) return false;
+    if (!photo.file_pixel_type.empty()) {
         auto it = photo.metadata.strings.find("oiio:ColorSpace");
         std::string space = it == photo.metadata.strings.end() ? "" : it->second;
         std::transform(space.begin(), space.end(), space.begin(), [](unsigned char c) { return std::tolower(c); });

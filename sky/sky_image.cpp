@@ -7,13 +7,11 @@
 #include <set>
 #include <mutex>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <opencv2/imgproc.hpp>
 
 #include "sky/fisheye.h"
 #include "sky/sun_position.h"
-#include "util/color.h"
 #include "util/error.h"
 #include "util/frame_names.h"
 #include "util/parse.h"
@@ -203,8 +201,7 @@ void convert_to_rec709(Image* image, const std::string& path) {
     if (!primaries) return;
     // Integer pixels are display-encoded (photographs): a matrix on encoded values would be wrong,
     // and photographs' primaries are the camera's anyway (sky-import calibrates colour).
-    const std::string& type = image->file_pixel_type;
-    if (type != "half" && type != "float" && type != "double") {
+    if (!image->has_float_file_pixels()) {
         std::fprintf(stderr, "dynsky: warning: %s: says its pixels are in %s primaries: taken as sRGB's\n",
                      path.c_str(), describe_chromaticities(*primaries).c_str());
         return;

@@ -125,22 +125,13 @@ std::string png_truncation(const std::string& path) {
            "or copy?";
 }
 
-bool has_png_signature(const std::string& path) {
-    static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
-    unsigned char head[8] = {};
-    std::ifstream in(path, std::ios::binary);
-    return in.read(reinterpret_cast<char*>(head), 8) && std::memcmp(head, signature, 8) == 0;
-}
-
-// A Radiance file whose header names a pixel format OpenImageIO does not read (XYZE): said as
-// such, not as the reader's "no FORMAT specifier found". "" for any other file.
+// A Radiance file (its magic checked by the caller) whose header names a pixel format OpenImageIO
+// does not read (XYZE): said as such, not as the reader's "no FORMAT specifier found". "" else.
 std::string radiance_format_problem(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
-    char magic[6] = {};
-    if (!in.read(magic, 6) || (std::memcmp(magic, "#?RADI", 6) != 0 && std::memcmp(magic, "#?RGBE", 6) != 0)) return "";
     // The header's lines up to the blank one (at most 64 of at most 1 KB: a header, not pixels).
     char buffer[1024];
-    in.getline(buffer, sizeof buffer);  // the rest of the magic line
+    in.getline(buffer, sizeof buffer);  // the magic line
     for (int k = 0; k < 64 && in.getline(buffer, sizeof buffer) && buffer[0] != '\0'; ++k)
         if (const std::string line = buffer; line.rfind("FORMAT=", 0) == 0 && line.find("xyze") != std::string::npos)
             return "a Radiance file of XYZE pixels (" + line +
@@ -166,10 +157,20 @@ std::string image_file_problem(const std::string& path) {
     // A FIFO or device would block or never end: images are read from regular files only.
     if (!fs::is_regular_file(path, ec)) return "not a regular file (a FIFO or a device?)";
     // Unreadable (permissions): said as such, not as "not an OpenEXR file" by the reader.
-    if (std::FILE* f = std::fopen(path.c_str(), "rb")) std::fclose(f);
-    else return std::string("cannot be opened: ") + std::strerror(errno);
-    if (has_png_signature(path)) return png_truncation(path);
-    return radiance_format_problem(path);
+    // Its first bytes, read once, say which of the checks below applies.
+    unsigned char head[8] = {};
+    size_t got = 0;
+    if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
+        got = std::fread(head, 1, sizeof head, f);
+        std::fclose(f);
+    } else {
+        return std::string("cannot be opened: ") + std::strerror(errno);
+    }
+    static const unsigned char png_signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+    if (got == 8 && std::memcmp(head, png_signature, 8) == 0) return png_truncation(path);
+    if (got >= 6 && (std::memcmp(head, "#?RADI", 6) == 0 || std::memcmp(head, "#?RGBE", 6) == 0))
+        return radiance_format_problem(path);
+    return "";
 }
 
 bool is_black_everywhere(const Image& image) {

@@ -37,6 +37,11 @@ struct Image {
     std::optional<Chromaticities> chromaticities;
 
     Image() = default;
+    // Read from a file of floating-point pixels (EXR, HDR, PFM, float TIFF: linear light), by
+    // file_pixel_type; false for integer files and for images made here.
+    bool has_float_file_pixels() const {
+        return file_pixel_type == "half" || file_pixel_type == "float" || file_pixel_type == "double";
+    }
     Image(int w, int h, int c) : width(w), height(h), channels(c), pixels(size_t(w) * h * c, 0.0f) {}
     float& at(int x, int y, int c) { return pixels[(size_t(y) * width + x) * channels + c]; }
     float at(int x, int y, int c) const { return pixels[(size_t(y) * width + x) * channels + c]; }
