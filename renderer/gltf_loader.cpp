@@ -195,6 +195,20 @@ bool image_header_size(const unsigned char* b, size_t n, long long* width, long 
     return true;
 }
 
+// Whether a PNG is grey (colour type 0) with a tRNS chunk: one grey value that is transparent.
+// OpenCV decodes it to one channel and drops the key (a cut-out mask came out opaque).
+bool is_grey_png_with_key_colour(const unsigned char* b, size_t n) {
+    if (n < 33 || !is_png(b, n) || b[25] != 0) return false;
+    for (size_t at = 8; at + 8 <= n;) {
+        const size_t length = (size_t(b[at]) << 24) | (size_t(b[at + 1]) << 16) | (size_t(b[at + 2]) << 8) | b[at + 3];
+        const std::string type(reinterpret_cast<const char*>(b + at + 4), 4);
+        if (type == "tRNS") return true;
+        if (type == "IDAT" || type == "IEND") return false;  // tRNS comes before the image data
+        at += 12 + length;
+    }
+    return false;
+}
+
 // A PNG decoded to RGBA in [0, 1] (8- or 16-bit; grey, grey + alpha, palette, RGB, RGBA): "" or why not.
 // Decodes a PNG or WebP (`format` names it in messages) through OpenCV into float RGBA.
 std::string decode_with_opencv(const unsigned char* bytes, size_t size, const std::string& format, int* width,
@@ -1658,7 +1672,11 @@ class GltfLoader {
             if (png || is_webp(encoded[k].first, encoded[k].second)) {
                 decoded[k].error = decode_with_opencv(encoded[k].first, encoded[k].second, png ? "PNG" : "WebP",
                                                       &decoded[k].width, &decoded[k].height, &decoded[k].rgba);
-                return;
+                // A grey PNG's transparent key colour: once libpng has checked the file, stb (which
+                // turns the key into alpha) decodes it below.
+                if (!(png && decoded[k].error.empty() &&
+                      is_grey_png_with_key_colour(encoded[k].first, encoded[k].second)))
+                    return;
             }
             tg::Image img;
             std::string err, warn_text;

@@ -609,6 +609,36 @@ TEST(GltfLoader, TexturesAreSharedPerImageSamplerAndColourSpace) {
     EXPECT_EQ(s.meshes[0].primitives[0].texcoords[1][2], Vec2(2, 2));
 }
 
+TEST(GltfLoader, AGreyPngsTransparentKeyColourIsItsAlpha) {
+    // A 2 x 1 grey PNG (grey 0, grey 200) whose tRNS chunk makes grey 0 transparent, as lossless
+    // PNG optimisers write a cut-out mask with on/off alpha. OpenCV decoded it opaque (the leaves
+    // of a MASK material rendered as a solid black sheet).
+    std::string dir = test::temp_dir("gltf");
+    write_bytes(
+        dir + "/key.png",
+        std::string(
+            "\x89\x50\x4e\x47\x0d\x0a\x1a\x0a\x00\x00\x00\x0d\x49\x48\x44\x52\x00\x00\x00\x02\x00\x00\x00\x01\x08\x00\x00\x00\x00\xd1\x49\x20\x56\x00\x00\x00\x02\x74\x52\x4e\x53\x00\x00\x76\x93\xcd\x38\x00\x00\x00\x0b\x49\x44\x41\x54\x78\x9c\x63\x60\x38\x01\x00\x00\xcb\x00\xc9\x69\xc8\xc3\x6c\x00\x00\x00\x00\x49\x45\x4e\x44\xae\x42\x60\x82",
+            82));
+    MiniGltf g;
+    int pos = g.accessor(g.view(quad_positions()), kFloat, 4, "VEC3");
+    int uv = g.accessor(g.view(std::vector<float>{0, 0, 1, 0, 1, 1, 0, 1}), kFloat, 4, "VEC2");
+    std::string body =
+        "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":" +
+        std::to_string(pos) + ",\"TEXCOORD_0\":" + std::to_string(uv) +
+        "},\"material\":0}]}],\"images\":[{\"uri\":\"key.png\"}],"
+        "\"samplers\":[{\"magFilter\":9728}],\"textures\":[{\"source\":0,\"sampler\":0}],"
+        "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}},"
+        "\"alphaMode\":\"MASK\"}]";
+    Scene s = load_gltf(g.write(dir, "key", body));
+    ASSERT_EQ(s.textures.size(), 1u);
+    const Vec4 left = s.textures[0]->evaluate(Vec2(0.25f, 0.5f)), right = s.textures[0]->evaluate(Vec2(0.75f, 0.5f));
+    EXPECT_NEAR(left[3], 0.0f, 1e-6f);
+    EXPECT_NEAR(right[3], 1.0f, 1e-6f);
+    EXPECT_NEAR(right[0], srgb_to_linear(200.0f / 255), 1e-6f);
+    EXPECT_NEAR(right[2], right[0], 1e-6f);
+}
+
 TEST(GltfLoader, TextureTransformMatrixFollowsTheExtensionSpec) {
     // uv' = T(offset) R(rotation) S(scale) uv, rotation counter-clockwise (u towards -v).
     const float off_u = 0.3f, off_v = -0.2f, rot = 0.7f, su = 1.5f, sv = 0.5f;
