@@ -1341,7 +1341,11 @@ class GltfLoader {
             for (int c = 0; c < 3; ++c) {
                 const double e = m.emissiveFactor.size() == 3 ? m.emissiveFactor[size_t(c)] : 0.0;
                 if (!(e >= -1e-4 && e <= kMaxEmissiveStrength))
-                    fail(what + ": emissiveFactor " + number_text(e) + " is outside [0, 1]");
+                    fail(what + ": emissiveFactor " + number_text(e) + " is " +
+                         (e < 0 ? std::string("negative (the spec's range is [0, 1])")
+                                : "not a number or above " + number_text(kMaxEmissiveStrength) +
+                                      " (the spec's range is [0, 1]; brighter emission belongs in "
+                                      "KHR_materials_emissive_strength)"));
             }
             if (!(strength >= 0 && strength <= kMaxEmissiveStrength))
                 fail(what + ": KHR_materials_emissive_strength " + number_text(strength) + " is outside [0, " +
@@ -1353,7 +1357,10 @@ class GltfLoader {
             for (size_t c = 0; c < pbr.baseColorFactor.size(); ++c) {
                 const double b = pbr.baseColorFactor[c];
                 if (!(b >= -1e-4 && b <= kMaxEmissiveStrength))
-                    fail(what + ": baseColorFactor " + number_text(b) + " is outside [0, 1]");
+                    fail(what + ": baseColorFactor " + number_text(b) + " is " +
+                         (b < 0 ? std::string("negative")
+                                : "not a number or above " + number_text(kMaxEmissiveStrength)) +
+                         " (the spec's range is [0, 1])");
                 if (b > 1 + 1e-4 && c < 3) warn(what + ": baseColorFactor " + number_text(b) + " above 1, taken as 1");
             }
             out.emissive = out.emissive.max(0.0f) * float(strength);

@@ -662,7 +662,13 @@ TEST(BadInputCli, AuditedInputsAreRefusedClearly) {
     write_bytes(dir + "/dark.gltf",
                 gltf + R"(,"materials":[{"pbrMetallicRoughness":{"baseColorFactor":[-1,0,0,1]}}]})");
     bad.add(render_args(dir + "/emissive.gltf", dir), {"emissive.gltf", "material 0", "emissive_strength 1e+39"});
-    bad.add(render_args(dir + "/dark.gltf", dir), {"dark.gltf", "baseColorFactor -1 is outside [0, 1]"});
+    bad.add(render_args(dir + "/dark.gltf", dir),
+            {"dark.gltf", "baseColorFactor -1 is negative (the spec's range is [0, 1])"});
+    // An emissive factor above 1 is kept (older exporters), an absurd one refused saying where
+    // brighter emission belongs (it said "outside [0, 1]" of a value it accepts up to 1e6).
+    write_bytes(dir + "/bright.gltf", gltf + R"(,"materials":[{"emissiveFactor":[2e6,0,0]}]})");
+    bad.add(render_args(dir + "/bright.gltf", dir),
+            {"bright.gltf", "emissiveFactor", "KHR_materials_emissive_strength"});
     // A sky circle off the photograph: the whole sky was invented by inpainting, exit 0.
     const std::string photo = ldr_image(dir + "/photo.png", 200, 160);
     bad.add("sky import " + photo + " --center 5000,5000 --radius 100 -o " + dir + "/s.exr",
