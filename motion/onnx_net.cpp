@@ -54,6 +54,8 @@ QuietOpenCv::~QuietOpenCv() { cv::utils::logging::setLogLevel(cv::utils::logging
 cv::dnn::Net read_onnx(const std::string& path) {
     QuietOpenCv quiet;
     if (!fs::exists(path)) throw_file_error(path, "model file not found");
+    if (!fs::is_regular_file(path))
+        throw_file_error(path, "not a file (a folder or a device), where a model file belongs");
     if (fs::file_size(path) == 0) throw_file_error(path, "model file is empty");
     try {
         cv::dnn::Net net = cv::dnn::readNetFromONNX(path);

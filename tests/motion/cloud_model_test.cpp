@@ -191,6 +191,11 @@ TEST(CloudModel, MissingOrCorruptModelsGiveClearErrors) {
     fs::remove(dir + "/cloudnet.onnx");
     e = error_of([&] { CloudModel::load(dir); });
     EXPECT_NE(e.find("cloudnet.onnx: model file not found"), std::string::npos) << e;
+    // A folder where the file belongs: named as such, not a filesystem library's message.
+    fs::create_directory(dir + "/cloudnet.onnx");
+    e = error_of([&] { CloudModel::load(dir); });
+    EXPECT_NE(e.find("cloudnet.onnx: not a file"), std::string::npos) << e;
+    fs::remove(dir + "/cloudnet.onnx");
     fs::copy_file(shipped_model() + "/cloudnet.onnx", dir + "/cloudnet.onnx");
     // model.json that disagrees with the networks' input size.
     nlohmann::json j;
