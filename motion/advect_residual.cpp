@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -195,7 +196,8 @@ CloudFlow CloudFlow::from_measured(const MeasuredMotion& motion, double dt, cons
     // arm-tsi +0.09 to +0.32 dB over Farneback at 1-6 steps, the others +0.00 to +0.01
     // (docs/networks-advect-residual.md).
     if (sun) inner.setTo(0, circumsolar_share(n, sun) > 0);
-    f.wind = wind_flow(n, fit_wind(motion.smoothed, inner, dt), dt);
+    f.fitted_wind = fit_wind(motion.smoothed, inner, dt);
+    f.wind = wind_flow(n, *f.fitted_wind, dt);
     if (!motion.confirmed.empty()) {
         // The departure from the wind that the clouds keep for several steps: the smoothed flow's,
         // where the flow measured back agrees with it. Where it does not (flat cloud, Farneback's
@@ -546,33 +548,58 @@ cv::Mat halo_angles(int n, const Vec3d& sun) {
 }
 
 // Per ring, in radiance (a glow adds light; the network form is logarithmic, and an added glow's
-// share of it changes with the sky under it around the ring).
+// share of it changes with the sky under it around the ring). The pixels an import filled (a TSI's
+// shadow band lies over the sun, its arm nearby) say nothing of the glow and are left out; a ring
+// with none left takes the nearest ring outwards that has some (inside the first) or the ring
+// inside (beyond the horizon). Of each ring, the pixels between the 20th and 30th percentile of
+// the excess luminance give the excess, all three channels from the same pixels: taken per channel
+// (lower quartiles of different pixels) an ARM photograph's glow came out magenta (R 20, G 14, B 20)
+// and left a pink ring 30-35 degrees around the sun once the clouds moved off it.
 std::vector<cv::Vec3f> halo_excess(const cv::Mat& start, const cv::Mat& background, const Vec3d& sun,
-                                   const UnitMapParams& unit) {
+                                   const UnitMapParams& unit, const cv::Mat& filled) {
     const int n = start.rows, rings = int(kGlareHaloDeg);
     const cv::Mat angle = halo_angles(n, sun);
-    std::vector<std::array<std::vector<float>, 3>> values(static_cast<size_t>(rings));
+    cv::Mat hidden = filled;
+    if (!hidden.empty() && hidden.size() != start.size())
+        cv::resize(filled, hidden, start.size(), 0, 0, cv::INTER_NEAREST);
+    std::vector<std::vector<std::pair<float, cv::Vec3f>>> values(static_cast<size_t>(rings));
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x)
             if (const float a = angle.at<float>(y, x); a >= 0) {
+                if (!hidden.empty() && hidden.at<uint8_t>(y, x)) continue;
                 const cv::Vec3f s = start.at<cv::Vec3f>(y, x), b = background.at<cv::Vec3f>(y, x);
-                for (int k = 0; k < 3; ++k)
-                    values[size_t(a)][size_t(k)].push_back(unit_to_radiance(s[k], unit) - unit_to_radiance(b[k], unit));
+                cv::Vec3f e;
+                for (int k = 0; k < 3; ++k) e[k] = unit_to_radiance(s[k], unit) - unit_to_radiance(b[k], unit);
+                values[size_t(a)].push_back({0.2126f * e[0] + 0.7152f * e[1] + 0.0722f * e[2], e});
             }
     std::vector<cv::Vec3f> excess(size_t(rings), cv::Vec3f(0, 0, 0));
+    std::vector<bool> known(size_t(rings), false);
+    for (int r = 0; r < rings; ++r) {
+        auto& v = values[size_t(r)];
+        if (v.empty()) continue;
+        std::sort(v.begin(), v.end(), [](const auto& p, const auto& q) { return p.first < q.first; });
+        const size_t lo = v.size() / 5, hi = std::max(lo + 1, (3 * v.size()) / 10);
+        cv::Vec3f sum(0, 0, 0);
+        for (size_t i = lo; i < hi; ++i) sum += v[i].second;
+        const cv::Vec3f mean = sum * (1.0f / float(hi - lo));
+        for (int k = 0; k < 3; ++k) excess[size_t(r)][k] = std::max(0.0f, mean[k]);
+        known[size_t(r)] = true;
+    }
+    const auto first = std::find(known.begin(), known.end(), true);
+    if (first == known.end()) return {};
     for (int r = 0; r < rings; ++r)
-        for (int k = 0; k < 3; ++k) {
-            std::vector<float>& v = values[size_t(r)][size_t(k)];
-            if (v.empty()) {  // beyond the horizon: the ring inside
-                if (r > 0) excess[size_t(r)][k] = excess[size_t(r) - 1][k];
-                continue;
-            }
-            std::nth_element(v.begin(), v.begin() + long(v.size() / 4), v.end());
-            excess[size_t(r)][k] = std::max(0.0f, v[v.size() / 4]);
-            if (r > 0) excess[size_t(r)][k] = std::min(excess[size_t(r)][k], excess[size_t(r) - 1][k]);
-        }
+        if (!known[size_t(r)])
+            excess[size_t(r)] = r < first - known.begin() ? excess[size_t(first - known.begin())]
+                                                          : excess[size_t(r) - 1];
+    // A glow falls off away from the sun: never more light than the ring inside (scaled as a whole,
+    // so the ring keeps its colour).
+    const auto luminance = [](const cv::Vec3f& e) { return 0.2126f * e[0] + 0.7152f * e[1] + 0.0722f * e[2]; };
+    for (int r = 1; r < rings; ++r) {
+        const float inside = luminance(excess[size_t(r) - 1]), here = luminance(excess[size_t(r)]);
+        if (here > inside) excess[size_t(r)] *= here > 0 ? std::max(0.0f, inside) / here : 0.0f;
+    }
     // None (a sky the model explains, as its own clear skies): nothing to add at any step.
-    if (excess.front() == cv::Vec3f(0, 0, 0)) return {};
+    if (luminance(excess.front()) <= 0) return {};
     return excess;
 }
 
@@ -763,7 +790,7 @@ void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3
             if (!halo_measured_) {
                 halo_measured_ = true;
                 if (!glare.empty() || sun_seen_whole_)
-                    halo_excess_ = halo_excess(start_, given, *sun_, network_->info().form.unit_map);
+                    halo_excess_ = halo_excess(start_, given, *sun_, network_->info().form.unit_map, filled_);
             }
             if (!halo_excess_.empty()) {
                 halo_angle = halo_angles(background.rows, *sun_);

@@ -100,6 +100,9 @@ struct CloudFlow {
     // of theirs): 1 unless a previous frame says otherwise (AdvectResidualNetwork::correction_gain).
     // Scaling every step's lost 0.05-0.09 dB six steps ahead on the validation frames.
     double correction_gain = 1.0;
+    // With a measured flow: the uniform wind fitted to it (at the layer's assumed height), which the
+    // flow relaxes to; reported to users, who otherwise cannot tell what motion a pair gave.
+    std::optional<Wind> fitted_wind;
     cv::Mat at(int k) const;  // the flow of step k = 1, 2, ...
     CloudFlow resized(int n) const;
     static CloudFlow from_wind(const cv::Mat& flow) { return CloudFlow{flow, cv::Mat(), 0.0, true, true, cv::Mat()}; }

@@ -82,6 +82,12 @@ void write_prediction(const PredictionOptions& given) {
     const SkyImage& stepped = work.resolution > 0 ? work : sky;
     CloudFlow flow;
     if (advect) flow = advect->motion_flow(stepped, motion, dt, stepped.resolution);
+    if (advect && flow.fitted_wind && !o.quiet)
+        std::fprintf(stderr,
+                     "dynsky: note: the motion measured from %s -> %s is a wind from %.0f deg at %.1f m/s (clouds "
+                     "taken at %.0f m), the flow relaxing to it over %.0f steps\n",
+                     o.previous.c_str(), o.in.c_str(), flow.fitted_wind->from_deg, flow.fitted_wind->speed_mps,
+                     flow.fitted_wind->cloud_height_m, flow.relax_steps);
     if (advect && advect->has_network() && motion.previous && !o.quiet)
         std::fprintf(stderr,
                      "dynsky: note: the pair %s -> %s supports %.0f %% of the network's correction; the first step "
