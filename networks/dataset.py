@@ -21,8 +21,8 @@ import json
 import os
 import shutil
 import subprocess
-import sys
 
+from script_errors import fail, run_main
 from split_info import photographs_trained, same_split
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -43,11 +43,45 @@ def split_for(frame_count):
 
 
 def run(cmd):
+    """Runs a dynsky step; dynsky prints its own error on stderr, this adds one line and its exit code
+    (check=True had followed every clear dynsky message with a CalledProcessError traceback)."""
     print("+", " ".join(cmd), flush=True)
-    subprocess.run(cmd, check=True)
+    rc = subprocess.run(cmd).returncode
+    if rc != 0:
+        what = " ".join(os.path.basename(c) if i == 0 else c for i, c in enumerate(cmd[:3]))
+        fail(f"{what} failed (exit {rc}; its message is above)", rc if 0 < rc < 256 else 1)
+
+
+def check_split(name, frame_count, split):
+    """A sequence too short for the time split (2 frames gave held-out [2, 2]) is refused here; it
+    had failed only at the end of training (IndexError in export's write_reference)."""
+    for part in ("train", "heldout"):
+        lo, hi = split[part]
+        if hi <= lo:
+            fail(f"{name}: {frame_count} frames leave the {part} part of the time split empty (frames "
+                 f"[{lo}, {hi})): use a longer sequence")
 
 
 def main(argv=None):
+    """Builds the data set. An --out folder this run created is removed when it stops before writing
+    split.json (an empty or partial folder had been left behind)."""
+    created = []
+    try:
+        return build(argv, created)
+    except KeyboardInterrupt:
+        remove(created)
+        fail("interrupted; run it again", 3)
+    except BaseException:
+        remove(created)
+        raise
+
+
+def remove(folders):
+    for folder in folders:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def build(argv, created):
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--out", required=True, help="dataset folder (one sub-folder per sequence + split.json)")
     p.add_argument("--dynsky", default=os.path.join(ROOT, "build-nets", "cli", "dynsky"), help="the dynsky program")
@@ -60,8 +94,10 @@ def main(argv=None):
     args = p.parse_args(argv)
 
     if not os.path.exists(args.dynsky):
-        sys.exit(f"{args.dynsky}: dynsky not found (build it, or give --dynsky)")
-    os.makedirs(args.out, exist_ok=True)
+        fail(f"{args.dynsky}: dynsky not found (build it, or give --dynsky)")
+    if not os.path.exists(args.out):
+        os.makedirs(args.out)
+        created.append(args.out)
     common = ["--sky-res", str(args.res), "--import-res", str(args.import_res), "--quiet"]
     sequences = {}
     run([args.dynsky, "sky", "training-data", "--sequence", "arm-tsi", "--shared", args.shared, "--out",
@@ -82,6 +118,7 @@ def main(argv=None):
         with open(os.path.join(folder, "meta.json")) as f:
             meta = json.load(f)
         split[name] = split_for(meta["frame_count"])
+        check_split(name, meta["frame_count"], split[name])
         split[name]["dt_s"] = meta["dt_s"]
         split[name].update(photographs_trained(meta, split[name]["train"][1]))
     path = os.path.join(args.out, "split.json")
@@ -90,8 +127,8 @@ def main(argv=None):
             old = json.load(f)
         for name, s in split.items():
             if name in old and not same_split(old[name], s):
-                sys.exit(f"{path}: the fixed split for {name} is {old[name]}, this build would make {s}; "
-                         "remove the dataset folder to start over")
+                fail(f"{path}: the fixed split for {name} is {old[name]}, this build would make {s}; "
+                     "remove the dataset folder to start over")
         old.update(split)
         split = old
     with open(path, "w") as f:
@@ -100,4 +137,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    run_main("dataset.py", main)

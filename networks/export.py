@@ -12,6 +12,7 @@
 import datetime
 import json
 import os
+import shutil
 
 import numpy as np
 import onnx
@@ -92,10 +93,91 @@ def write_reference(model, image, folder):
     np.save(os.path.join(folder, "reference_next.npy"), nxt[0].permute(1, 2, 0).numpy().astype(np.float32))
 
 
+# What write_model_folder writes; anything else in an existing model folder (train.py's checkpoint.pt,
+# a user's notes) is carried into the new one.
+EXPORTED = {"flownet.onnx", "cloudnet.onnx", "reference_input.npy", "reference_flow.npy", "reference_next.npy",
+            "split.json", "model.json", "training_log.json", "MODEL_CARD.md"}
+
+
 def write_model_folder(model, seqs, split, log, args, horizons=(1, 2, 3, 6)):
+    """Writes the whole folder into a temporary sibling and swaps it in at the end: a failure or a
+    kill midway had left new ONNX files under an old model.json, which dynsky then ran. The folder
+    is the complete new one or the untouched old one (a failure is one line, exit 1)."""
+    from script_errors import fail
+    folder = os.path.realpath(args.out)
+    parent, base = os.path.split(folder)
+    remove_stale_temporaries(parent, base)
+    work = os.path.join(parent, f".tmp-{base}-{os.getpid()}")
+    try:
+        shutil.rmtree(work, ignore_errors=True)
+        os.makedirs(work)
+        info = write_model_files(model, seqs, split, log, args, work, horizons)
+        if os.path.isdir(folder):
+            carry_other_files(folder, work)
+        aside = os.path.join(parent, f".old-{base}-{os.getpid()}")
+        if os.path.isdir(folder):
+            os.rename(folder, aside)
+            try:
+                os.rename(work, folder)
+            except OSError:
+                os.rename(aside, folder)
+                raise
+            shutil.rmtree(aside, ignore_errors=True)
+        else:
+            os.rename(work, folder)
+    except OSError as e:
+        shutil.rmtree(work, ignore_errors=True)
+        fail(f"{args.out}: could not write the model folder ({e}); the previous one is unchanged")
+    except BaseException:
+        shutil.rmtree(work, ignore_errors=True)
+        raise
+    return info
+
+
+def remove_stale_temporaries(parent, base):
+    """Removes the .tmp-/.old- folders of killed runs into this folder (their process is gone). Only
+    while the folder exists: a kill between the two renames leaves it only as those folders."""
+    if not os.path.isdir(os.path.join(parent, base)):
+        return
+    for name in os.listdir(parent):
+        for prefix in (f".tmp-{base}-", f".old-{base}-"):
+            pid = name[len(prefix):]
+            if name.startswith(prefix) and pid.isdigit() and not process_alive(int(pid)):
+                shutil.rmtree(os.path.join(parent, name), ignore_errors=True)
+
+
+def process_alive(pid):
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True
+    return True
+
+
+def carry_other_files(old, new):
+    """Hard-links (copies where links fail) what the old folder holds besides the exported files
+    into the new one, so the swap keeps the checkpoint that --resume needs."""
+    def link_or_copy(src, dst):
+        try:
+            os.link(src, dst)
+        except OSError:
+            shutil.copy2(src, dst)
+    for name in os.listdir(old):
+        if name in EXPORTED or name.startswith(".tmp-"):
+            continue
+        src, dst = os.path.join(old, name), os.path.join(new, name)
+        if os.path.isdir(src) and not os.path.islink(src):
+            shutil.copytree(src, dst, symlinks=True, copy_function=link_or_copy)
+        elif os.path.islink(src):
+            os.symlink(os.readlink(src), dst)
+        else:
+            link_or_copy(src, dst)
+
+
+def write_model_files(model, seqs, split, log, args, folder, horizons):
     import train as T
-    folder = args.out
-    os.makedirs(folder, exist_ok=True)
     n = seqs[0].resolution
     paths = export_onnx(model, n, folder)
     ops = sorted(set(check_onnx_for_opencv(paths["flownet"])) | set(check_onnx_for_opencv(paths["cloudnet"])))
@@ -111,7 +193,7 @@ def write_model_folder(model, seqs, split, log, args, horizons=(1, 2, 3, 6)):
     info = {
         "format": "dynsky-cloud-model",
         "version": 1,
-        "name": args.name or os.path.basename(os.path.normpath(folder)),
+        "name": args.name or os.path.basename(os.path.normpath(args.out)),
         "resolution": n,
         "import_resolution": int(seqs[0].meta.get("import_resolution", n)),
         "dt_s": float(seqs[0].meta["dt_s"]),
@@ -143,7 +225,7 @@ def write_model_folder(model, seqs, split, log, args, horizons=(1, 2, 3, 6)):
         json.dump(info, f, indent=2)
     with open(os.path.join(folder, "training_log.json"), "w") as f:
         json.dump(log, f, indent=1)
-    write_model_card(folder, info, seqs, used_split, log, metrics, args)
+    write_model_card(args.out, info, seqs, used_split, log, metrics, args, into=folder)
     return info
 
 
@@ -163,7 +245,8 @@ def loss_text(args):
             f"{cw:g} x (1 - cosine similarity of directions) on cloud pixels) (--cos-weight {cw:g})")
 
 
-def write_model_card(folder, info, seqs, split, log, metrics, args):
+def write_model_card(folder, info, seqs, split, log, metrics, args, into=None):
+    """folder: the model folder the card names; into: where it is written (default: folder)."""
     lines = [f"# Model card: {info['name']}", "",
              "The medium-timescale cloud model of Satilmis & Bashford-Rogers, \"Deep Dynamic Cloud Lighting\": "
              "one step moves the clouds of a sky forward by Delta t, xi(I) = CloudNet(I concat FlowNet(I)). "
@@ -209,7 +292,7 @@ def write_model_card(folder, info, seqs, split, log, metrics, args):
               "- Trained on one day of one camera: it has learnt that day's wind. It sees one frame, so it cannot "
               "know a different day's wind except from cloud shapes; expect persistence-like behaviour elsewhere.",
               "- The [0, 1] form cannot hold the sun; `dynsky sky predict` re-inserts the input's sun.", ""]
-    with open(os.path.join(folder, "MODEL_CARD.md"), "w") as f:
+    with open(os.path.join(into or folder, "MODEL_CARD.md"), "w") as f:
         f.write("\n".join(lines))
 
 

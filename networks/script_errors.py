@@ -7,7 +7,8 @@ import sys
 
 
 class ScriptError(Exception):
-    """A refusal: message (one line) and exit code (1: bad or missing file; 2: usage error)."""
+    """A refusal: message (one line) and exit code (1: bad or missing file; 2: usage error; 3: Ctrl-C,
+    docs/exit-codes.md; dataset.py passes on dynsky's own code)."""
 
     def __init__(self, message, code=1):
         super().__init__(message)

@@ -158,6 +158,37 @@ def cpu_time_per_step(model, n, threads=1, repeats=20):
     return float(np.median(times))
 
 
+def check_options(args):
+    """Option values the training cannot run with: one-line usage errors (exit 2) before any work.
+    (--epochs -1 had exited 0 with an untrained model, 0 with ZeroDivisionError; an even --kernel
+    and a zero --unroll or --batch died with tracebacks.)"""
+    for opt, value in (("epochs", args.epochs), ("unroll", args.unroll), ("batch", args.batch)):
+        if value < 1:
+            fail(f"--{opt} {value}: must be at least 1", 2)
+    if args.kernel < 0 or (args.kernel and args.kernel % 2 == 0):
+        fail(f"--kernel {args.kernel}: must be odd (e.g. 3 or 5), or 0 for the plain residual", 2)
+    if not (args.lr > 0 and math.isfinite(args.lr)):
+        fail(f"--lr {args.lr}: must be a positive number", 2)
+    if args.res < 0:
+        fail(f"--res {args.res}: must be positive (or 0: the data set's resolution)", 2)
+
+
+def check_depth(fw, cw, n, batch):
+    """Each UNet level halves the map: n must be divisible by 2^levels, and a 1 x 1 bottleneck's
+    BatchNorm needs at least 2 images per batch (else PyTorch errors midway through training)."""
+    levels = (n & -n).bit_length() - 1  # how often n halves evenly
+    for opt, widths in (("--flow-widths", fw), ("--cloud-widths", cw)):
+        if any(w < 1 for w in widths):
+            fail(f"{opt} {','.join(map(str, widths))}: widths must be at least 1", 2)
+        if len(widths) > levels:
+            fail(f"{opt} {','.join(map(str, widths))}: {len(widths)} levels need a resolution divisible by "
+                 f"2^{len(widths)} = {2 ** len(widths)}, the training resolution is {n} (use at most {levels} "
+                 "levels, or another --res)", 2)
+        if n >> len(widths) == 1 and batch < 2:
+            fail(f"{opt} {','.join(map(str, widths))}: {len(widths)} levels leave a 1 x 1 map at {n} px, which "
+                 f"needs batches of at least 2 windows (this run has {batch}): use fewer levels or a larger --batch", 2)
+
+
 def check_data(args):
     """The data set and the sequences asked for: one-line refusals instead of tracebacks."""
     split_path = os.path.join(args.data, "split.json")
@@ -177,6 +208,10 @@ def check_data(args):
         for part in ("train", "heldout"):
             if part not in split[name]:
                 fail(f"{split_path}: sequence '{name}' has no '{part}' part (a data set of networks/dataset.py has both)")
+            lo, hi = split[name][part]
+            if hi <= lo:  # an empty held-out part died in export's write_reference with IndexError
+                fail(f"{split_path}: sequence '{name}' has an empty {part} part (frames [{lo}, {hi})): the sequence "
+                     "is too short; rebuild the data set from a longer one")
         for f in ("meta.json", "images.npy", "valid.npy", "cloud.npy", "flow_farneback.npy"):
             if not os.path.isfile(os.path.join(args.data, name, f)):
                 fail(f"{os.path.join(args.data, name, f)}: not found (rebuild the data set with networks/dataset.py)")
@@ -189,6 +224,7 @@ def check_data(args):
 
 
 def train(args):
+    check_options(args)
     torch.set_num_threads(min(args.threads, 2))
     set_seed(args.seed)
     # Stored (and compared on --resume) as the folder itself: a relative --data named another data
@@ -197,6 +233,10 @@ def train(args):
     split, names, fw, cw = check_data(args)
     ckpt_path = os.path.join(args.checkpoint_dir or args.out, "checkpoint.pt")
     ck = resume_checkpoint(ckpt_path, args, parser(), RESUME_MAY_CHANGE)
+    if ck is not None and ck["epoch"] > args.epochs:
+        # It would export the checkpoint's weights under model.json's and the card's smaller count.
+        fail(f"--epochs {args.epochs}: {ckpt_path} has already finished {ck['epoch']} epochs (resume with "
+             f"--epochs {ck['epoch']} or more, or train into a new --out)", 2)
     seqs = []
     for name in names:
         s = D.Sequence(os.path.join(args.data, name))
@@ -224,6 +264,7 @@ def train(args):
         parts = ", ".join(f"{s.name} frames {split[s.name]['train'][0]}-{split[s.name]['train'][1] - 1}" for s in seqs)
         fail(f"{args.data}: no training window of --unroll {args.unroll} + 1 = {args.unroll + 1} frames fits in the "
              f"train part ({parts}): use a longer sequence or a smaller --unroll")
+    check_depth(fw, cw, n, min(args.batch, len(train_w.items)))
     disc = torch.from_numpy(D.disc_mask(n).astype(np.float32))[None, None]
     model = U.CloudModel(fw, cw, args.kernel)
     opt = torch.optim.Adam(model.parameters(), lr=args.lr)
@@ -268,9 +309,37 @@ def train(args):
                 entry[f"persistence_psnr1_{name}"] = r[1]["persistence"]
         log.append(entry)
         print(json.dumps(entry), flush=True)
-        torch.save({"model": model.state_dict(), "opt": opt.state_dict(), "sched": sched.state_dict(),
-                    "epoch": epoch + 1, "log": log, "rng": torch.get_rng_state(), "args": vars(args)}, ckpt_path)
+        save_checkpoint({"model": model.state_dict(), "opt": opt.state_dict(), "sched": sched.state_dict(),
+                         "epoch": epoch + 1, "log": log, "rng": torch.get_rng_state(), "args": vars(args)}, ckpt_path)
     return model, seqs, split, log
+
+
+def save_checkpoint(state, path):
+    """Writes a temporary file beside path, fsyncs it and renames it over path: a kill or a full disk
+    during the write (torch.save straight onto the only checkpoint lost every epoch) leaves the
+    previous checkpoint whole."""
+    folder = os.path.dirname(path) or "."
+    tmp = os.path.join(folder, f".tmp-checkpoint-{os.getpid()}.pt")
+    try:
+        with open(tmp, "wb") as f:
+            torch.save(state, f)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException as e:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        if isinstance(e, OSError):
+            fail(f"{path}: could not write the checkpoint ({e.strerror or e}); the previous one is unchanged")
+        raise
+    try:  # make the rename itself durable
+        fd = os.open(folder, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+    except OSError:
+        pass
 
 
 def parser():
@@ -304,16 +373,34 @@ def parser():
     return p
 
 
+def file_id(path):
+    try:
+        st = os.stat(path)
+        return st.st_ino, st.st_mtime_ns
+    except OSError:
+        return None
+
+
 def main(argv=None):
     """Trains (and exports); a bad input raises ScriptError (the command line prints it as one line,
-    exit 1 or 2)."""
+    exit 1 or 2; 3 for Ctrl-C)."""
     args = parser().parse_args(argv)
     # For the model card: the from-scratch command (a resumed run reproduces it).
     args.argv_text = " ".join(a for a in (argv if argv is not None else sys.argv[1:]) if a != "--resume")
-    model, seqs, split, log = train(args)
-    if not args.no_export:
-        import export as E
-        E.write_model_folder(model, seqs, split, log, args)
+    ckpt = os.path.join(args.checkpoint_dir or args.out, "checkpoint.pt")
+    before = file_id(ckpt)
+    try:
+        model, seqs, split, log = train(args)
+        if not args.no_export:
+            import export as E
+            E.write_model_folder(model, seqs, split, log, args)
+    except KeyboardInterrupt:
+        # Ctrl-C: one line and exit 3 (docs/exit-codes.md), not a traceback. The checkpoint is this
+        # run's when it resumed or wrote a new one (an older run's may lie there too).
+        if file_id(ckpt) is not None and (args.resume or file_id(ckpt) != before):
+            fail(f"interrupted; the last finished epoch is in {ckpt}: rerun with --resume to continue "
+                 "(or to export a finished run)", 3)
+        fail("interrupted before the first epoch finished; nothing to resume", 3)
     return model, log
 
 

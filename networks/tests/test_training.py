@@ -141,6 +141,181 @@ class TrainingTest(unittest.TestCase):
         self.assertIn("heldout_psnr_python", info)
         ref_in = np.load(os.path.join(out, "reference_input.npy"))
         self.assertEqual(ref_in.shape, (32, 32, 3))
+        self.assertTrue(os.path.exists(os.path.join(out, "checkpoint.pt")))  # the export keeps it
+
+    def tiny_args(self, out, **over):
+        """train.py's arguments for a tiny run on write_dataset's data; over: option -> value (None: drop)."""
+        opts = {"--data": self.tmp, "--sequences": "synthetic", "--flow-widths": "4,8", "--cloud-widths": "4,8",
+                "--epochs": "1", "--batch": "4", "--unroll": "2", "--eval-every": "1", "--threads": "1", "--out": out}
+        opts.update(over)
+        args = [a for k, v in opts.items() if v is not None for a in (k, v)]
+        return args
+
+    def test_failed_export_leaves_the_old_model_folder_and_the_checkpoint(self):
+        """The export wrote the ONNX files, then model.json, into the folder itself: a failure midway
+        left new networks under an old model.json, which dynsky ran (an audit)."""
+        import export as E
+        import train as T
+        from unittest import mock
+        from script_errors import ScriptError
+        write_dataset(self.tmp, frames=16, n=32)
+        out = os.path.join(self.tmp, "model")
+        T.main(self.tiny_args(out))
+        with open(os.path.join(out, "notes.txt"), "w") as f:
+            f.write("a user's file")
+        def read(f):
+            with open(os.path.join(out, f), "rb") as fh:
+                return fh.read()
+        before = {f: read(f) for f in ("model.json", "flownet.onnx", "MODEL_CARD.md")}
+        with mock.patch.object(E, "write_model_card", side_effect=OSError(28, "No space left on device")):
+            with self.assertRaises(ScriptError) as e:
+                T.main(self.tiny_args(out, **{"--epochs": "2"}) + ["--resume"])
+        self.assertEqual(e.exception.code, 1)
+        self.assertIn("unchanged", str(e.exception))
+        for f, data in before.items():
+            self.assertEqual(read(f), data, f)
+        self.assertEqual(torch.load(os.path.join(out, "checkpoint.pt"))["epoch"], 2)
+        self.assertEqual([f for f in os.listdir(self.tmp) if f.startswith(".")], [])  # no temporary left
+        T.main(self.tiny_args(out, **{"--epochs": "2"}) + ["--resume"])  # every epoch done: exports only
+        with open(os.path.join(out, "model.json")) as f:
+            self.assertEqual(json.load(f)["epochs"], 2)
+        self.assertEqual(torch.load(os.path.join(out, "checkpoint.pt"))["epoch"], 2)
+        self.assertTrue(os.path.exists(os.path.join(out, "notes.txt")))
+        self.assertEqual([f for f in os.listdir(self.tmp) if f.startswith(".")], [])
+
+    def test_empty_heldout_part_is_refused_before_training(self):
+        """A 2-frame sequence has held-out [2, 2]: training ran and died in export (IndexError)."""
+        import train as T
+        from script_errors import ScriptError
+        write_dataset(self.tmp, frames=16, n=32)
+        with open(os.path.join(self.tmp, "split.json"), "w") as f:
+            json.dump({"synthetic": {"train": [0, 16], "heldout": [16, 16], "dt_s": 30.0}}, f)
+        out = os.path.join(self.tmp, "model")
+        with self.assertRaises(ScriptError) as e:
+            T.main(self.tiny_args(out))
+        self.assertEqual(e.exception.code, 1)
+        self.assertIn("empty heldout part", str(e.exception))
+        self.assertFalse(os.path.exists(out))
+
+    def test_interrupted_checkpoint_write_keeps_the_previous_checkpoint(self):
+        """torch.save wrote straight onto the only checkpoint: a kill during the write lost every
+        epoch; Ctrl-C printed a traceback."""
+        import train as T
+        from unittest import mock
+        from script_errors import ScriptError
+        write_dataset(self.tmp, frames=16, n=32)
+        out = os.path.join(self.tmp, "model")
+        T.main(self.tiny_args(out, **{"--no-export": None}) + ["--no-export"])
+
+        def cut_short(obj, f, *a, **k):  # half a file, then Ctrl-C
+            if isinstance(f, str):
+                f = open(f, "wb")
+            f.write(b"PK\x03\x04 half a checkpoint")
+            f.flush()
+            raise KeyboardInterrupt
+
+        def interrupted(args):
+            try:
+                T.main(args)
+            except ScriptError as e:
+                return e
+            except KeyboardInterrupt:
+                self.fail("Ctrl-C ended in a KeyboardInterrupt traceback")
+            self.fail("not interrupted")
+
+        with mock.patch("torch.save", side_effect=cut_short):
+            e = interrupted(self.tiny_args(out, **{"--epochs": "2"}) + ["--no-export", "--resume"])
+            self.assertEqual(e.code, 3)
+            self.assertIn("--resume", str(e))
+            e = interrupted(self.tiny_args(os.path.join(self.tmp, "new")) + ["--no-export"])  # in its first epoch
+            self.assertEqual(e.code, 3)
+            self.assertIn("nothing to resume", str(e))
+        self.assertEqual(torch.load(os.path.join(out, "checkpoint.pt"))["epoch"], 1)
+        self.assertEqual(sorted(os.listdir(out)), ["checkpoint.pt"])
+
+    def test_option_values_training_cannot_use_are_usage_errors(self):
+        """--epochs -1 exited 0 with an untrained model, --epochs 0 with ZeroDivisionError; the others
+        died with tracebacks (an even --kernel, 6 levels at 32 px: BatchNorm on a 1 x 1 map)."""
+        import train as T
+        from script_errors import ScriptError
+        write_dataset(self.tmp, frames=16, n=32)
+        out = os.path.join(self.tmp, "model")
+        for over, name in (({"--epochs": "0"}, "--epochs"), ({"--epochs": "-1"}, "--epochs"),
+                           ({"--unroll": "0"}, "--unroll"), ({"--batch": "0"}, "--batch"),
+                           ({"--kernel": "4"}, "--kernel"), ({"--lr": "0"}, "--lr"), ({"--lr": "-0.001"}, "--lr"),
+                           ({"--flow-widths": "4,4,4,4,4,4"}, "--flow-widths"),
+                           ({"--res": "16", "--cloud-widths": "4,4,4,4,4"}, "--cloud-widths"),
+                           ({"--cloud-widths": "4,4,4,4,4", "--batch": "1"}, "--cloud-widths")):
+            with self.assertRaises(ScriptError, msg=str(over)) as e:
+                T.main(self.tiny_args(out, **over))
+            self.assertEqual(e.exception.code, 2, str(over))
+            self.assertIn(name, str(e.exception))
+            self.assertEqual(len(str(e.exception).splitlines()), 1)
+        self.assertFalse(os.path.exists(out))
+
+    def test_resume_with_fewer_epochs_than_finished_is_refused(self):
+        """It exported the checkpoint's 2-epoch weights and wrote "epochs": 1 in model.json and the card."""
+        import train as T
+        from script_errors import ScriptError
+        write_dataset(self.tmp, frames=16, n=32)
+        out = os.path.join(self.tmp, "model")
+        T.main(self.tiny_args(out, **{"--epochs": "2"}) + ["--no-export"])
+        with self.assertRaises(ScriptError) as e:
+            T.main(self.tiny_args(out) + ["--resume"])
+        self.assertEqual(e.exception.code, 2)
+        self.assertIn("--epochs 1", str(e.exception))
+        self.assertIn("2 epochs", str(e.exception))
+        self.assertFalse(os.path.exists(os.path.join(out, "model.json")))
+
+
+class DatasetScriptTest(unittest.TestCase):
+    """networks/dataset.py with a stand-in for dynsky (no build needed, no torch)."""
+
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp(prefix="dynsky-networks-test-")
+
+    def tearDown(self):
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+    def fake_dynsky(self, body):
+        path = os.path.join(self.tmp, "dynsky")
+        with open(path, "w") as f:
+            f.write(f"#!{sys.executable}\nimport json, os, sys\n{body}\n")
+        os.chmod(path, 0o755)
+        return path
+
+    def dataset(self, dynsky, out):
+        import subprocess
+        script = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "dataset.py")
+        return subprocess.run([sys.executable, script, "--out", out, "--dynsky", dynsky, "--no-procedural"],
+                              capture_output=True, text=True, timeout=60)
+
+    def test_dynsky_errors_are_one_line_with_dynsky_exit_code(self):
+        """check=True followed each clear dynsky message with a CalledProcessError traceback, and an
+        empty --out folder was left behind."""
+        for code in (1, 2):
+            dynsky = self.fake_dynsky(f"print('dynsky: error: skies: no photographs', file=sys.stderr)\nsys.exit({code})")
+            out = os.path.join(self.tmp, "data")
+            r = self.dataset(dynsky, out)
+            self.assertEqual(r.returncode, code, r.stderr)
+            self.assertIn("dynsky: error: skies: no photographs", r.stderr)
+            self.assertIn("dataset.py: error:", r.stderr)
+            self.assertNotIn("Traceback", r.stderr)
+            self.assertFalse(os.path.exists(out))
+        os.makedirs(out)  # a folder the run did not create stays
+        self.dataset(dynsky, out)
+        self.assertTrue(os.path.isdir(out))
+
+    def test_sequence_too_short_for_the_split_is_refused(self):
+        """2 frames gave held-out [2, 2]; training died at its end with IndexError."""
+        dynsky = self.fake_dynsky("out = sys.argv[sys.argv.index('--out') + 1]\nos.makedirs(out)\n"
+                                  "json.dump({'frame_count': 2, 'dt_s': 30.0}, open(os.path.join(out, 'meta.json'), 'w'))")
+        out = os.path.join(self.tmp, "data")
+        r = self.dataset(dynsky, out)
+        self.assertEqual(r.returncode, 1, r.stderr)
+        self.assertIn("heldout part", r.stderr)
+        self.assertNotIn("Traceback", r.stderr)
+        self.assertFalse(os.path.exists(out))
 
 
 @unittest.skipUnless(HAVE_TORCH, "SKIPPED: torch (or numpy) is not installed for /usr/bin/python3")
