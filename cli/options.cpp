@@ -127,6 +127,11 @@ void warn_options_of_generated_skies(const CLI::App* cmd, const std::string& sky
                      "dynsky: warning: --coverage shapes the procedural sky; %s is a file and keeps its own clouds: "
                      "--coverage is ignored\n",
                      sky.c_str());
+    if (given("--turbidity"))
+        std::fprintf(stderr,
+                     "dynsky: warning: --turbidity sets the haze of a sky made here; %s is a file and keeps its own: "
+                     "--turbidity is ignored\n",
+                     sky.c_str());
     // A sky file keeps its own sun unless --time puts it on the clock, at --lat and --lon: without
     // it they changed nothing, silently (render refuses them).
     if ((given("--lat") || given("--lon")) && !given("--time") && cmd->get_name() != "render")  // render refuses
@@ -210,6 +215,11 @@ void add_generated_sky_options(CLI::App* cmd, SkySourceSpec* o) {
            "--time the sun stays where the file has it; with it, animate, compare and sky timeline start the clock\n"
            "there and move the file's sun to it (a warning when the file records another), render refuses it")
         ->check(utc_time());
+    cmd->add_option("--turbidity", o->turbidity,
+                    "Turbidity of the Hosek-Wilkie sky made here ('clear', and the clear sky under 'procedural'\n"
+                    "clouds), 1..10 (2: very clear, 3: clear, 6+: hazy), as 'sky clear --turbidity'")
+        ->check(finite_in(1, 10))
+        ->capture_default_str();
     cmd->add_option("--lat", o->latitude, "Latitude of the place, degrees north (with --time)")
         ->check(finite_in(-90, 90))
         ->capture_default_str();

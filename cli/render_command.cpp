@@ -20,7 +20,7 @@ void register_render_command(CLI::App& app) {
         "(equirect, 2:1) HDRI in Blender's mapping: its upper half becomes the fisheye sky, its lower half the\n"
         "ground (instead of the ground model); or one made here as 'animate' makes it: 'clear' (Hosek-Wilkie)\n"
         "or 'procedural[:SEED]' at --time, --lat, --lon.\n"
-        "Default: a built-in clear sky (Paris, 2026-06-21 16:00 UTC, turbidity 3; with --time, --lat or --lon:\n"
+        "Default: a built-in clear sky (Paris, 2026-06-21 16:00 UTC, turbidity 3; with --time, --lat, --lon or --turbidity:\n"
         "'clear' there)");
     add_generated_sky_options(cmd, &o->generated);
     cmd->add_option("--out,-o", o->out,

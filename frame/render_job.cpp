@@ -61,7 +61,7 @@ void run_render_job(const RenderJob& o) {
     // the built-in Paris sky ignored them without a word.
     const SkySourceSpec defaults;
     const bool placed = o.generated.latitude != defaults.latitude || o.generated.longitude != defaults.longitude;
-    if (o.sky.empty() && o.generated.time.empty() && !placed) {
+    if (o.sky.empty() && o.generated.time.empty() && !placed && o.generated.turbidity == defaults.turbidity) {
         sky = std::make_shared<SkyImage>(make_builtin_clear_sky(o.generated.sky_resolution));
     } else if (o.sky.empty() || is_generated_sky(o.sky)) {
         SkySourceSpec spec = o.generated;  // made as animate and compare make it (frame/sky_source.h)

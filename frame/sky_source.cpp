@@ -58,7 +58,7 @@ ProceduralSkyParams procedural_params(const SkySourceSpec& o, uint64_t seed, con
     p.layers[0].wind_speed_mps = o.wind_speed_mps;
     p.layers[0].altitude_m = o.cloud_height_m;
     p.clear_sky.sun_direction = sun;
-    p.clear_sky.turbidity = default_sky::kTurbidity;
+    p.clear_sky.turbidity = o.turbidity;
     validate_procedural_params(p);
     return p;
 }
@@ -109,7 +109,8 @@ SkyImage make_generated_sky(const SkySourceSpec& o) {
     if (o.sky == "clear") {
         ClearSkyParams p;
         p.sun_direction = sun;
-        p.turbidity = default_sky::kTurbidity;
+        p.turbidity = o.turbidity;
+        validate_clear_sky_params(p);
         input = make_clear_sky(p, o.sky_resolution);
         input.source = "clear sky (Hosek-Wilkie, turbidity " + number_text(p.turbidity) + ")" + made;
     } else {
@@ -355,6 +356,8 @@ FrameSettings sky_timeline_settings(const SkySourceSpec& o, const StepModelSpec&
     s["time"] = o.time;
     s["lat"] = number(o.latitude), s["lon"] = number(o.longitude);
     s["coverage"] = number(o.coverage);
+    // Only when given (older folders keep their frames).
+    if (o.turbidity != default_sky::kTurbidity) s["turbidity"] = number(o.turbidity);
     s["wind_from"] = number(o.wind_from_deg), s["wind_speed"] = number(o.wind_speed_mps);
     s["cloud_height"] = number(o.cloud_height_m);
     s["prev"] = o.previous.empty() ? "" : with_mask(o.previous);

@@ -41,6 +41,8 @@ struct SkySourceSpec {
     std::string time;
     double latitude = default_sky::kLatitudeDeg, longitude = default_sky::kLongitudeDeg;
     double coverage = default_sky::kCoverage;
+    // --turbidity: of 'clear', and of the clear sky under the procedural clouds (Hosek-Wilkie, 1..10).
+    double turbidity = default_sky::kTurbidity;
     double wind_from_deg = default_sky::kWindFromDeg, wind_speed_mps = default_sky::kWindSpeedMps;
     double cloud_height_m = default_sky::kCloudHeightM;
     // --wind-from or --wind-speed was given: the clouds of an input sky move with that wind, not with

@@ -50,6 +50,36 @@ TEST(SkySource, TheFilledMaskBesideTheSkyIsPartOfItsSettings) {
     std::filesystem::remove_all(dir);
 }
 
+// --turbidity makes the sky here as `sky clear --turbidity` does (render, animate and compare
+// always made turbidity 3; an option of `sky clear` only), is part of the settings when given, and
+// is checked as there.
+TEST(SkySource, TheTurbidityOfASkyMadeHere) {
+    SkySourceSpec hazy = small_sky("clear");
+    hazy.turbidity = 8;
+    const SkyImage made = make_generated_sky(hazy);
+    ClearSkyParams p;
+    p.sun_direction = made.sun_direction->cast<double>();
+    p.turbidity = 8;
+    const SkyImage direct = make_clear_sky(p, 32);
+    ASSERT_EQ(made.rgb.size(), direct.rgb.size());
+    double diff = 0, sum = 0, sum3 = 0;
+    const SkyImage clear3 = make_generated_sky(small_sky("clear"));
+    for (size_t k = 0; k < made.rgb.size(); ++k)
+        diff += std::abs(made.rgb[k] - direct.rgb[k]), sum += direct.rgb[k], sum3 += clear3.rgb[k];
+    EXPECT_LT(diff, 1e-6 * sum);
+    EXPECT_GT(std::abs(sum - sum3), 0.05 * sum3) << "turbidity 8 made the same sky as 3";
+    EXPECT_NE(make_generated_sky(hazy).source.find("turbidity 8"), std::string::npos);
+    StepModelSpec m;
+    const std::string plain = canonical_settings(sky_timeline_settings(small_sky("clear"), m));
+    EXPECT_EQ(plain.find("turbidity"), std::string::npos);  // older folders keep their frames
+    EXPECT_NE(canonical_settings(sky_timeline_settings(hazy, m)), plain);
+    SkySourceSpec cloudy = small_sky("procedural:3");
+    cloudy.turbidity = 8;
+    EXPECT_NE(make_generated_sky(cloudy).source, make_generated_sky(small_sky("procedural:3")).source);
+    hazy.turbidity = 11;
+    EXPECT_THROW(make_generated_sky(hazy), Error);
+}
+
 TEST(SkySource, ProceduralInputWithItsOwnMotion) {
     StepModelSpec m;
     m.model = "procedural";
