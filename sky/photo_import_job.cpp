@@ -617,8 +617,13 @@ void run_photo_import(const PhotoImportJob& o) {
             // A stopped import goes on where it stopped: a sky made from the same photograph with the
             // same settings is kept (long sequences lost every finished sky to an interruption).
             const std::string key = import_settings_key(each);
+            // (Or the same with the texture fill: the sequence's last sky, below.)
+            OnePhoto textured = each;
+            textured.fill = PhotoImportParams::FillMethod::Texture;
             // Its sky, filled mask and preview whole, the sky made from the same photograph and settings.
-            if (made_earlier_with({each.out, each.filled_mask, each.preview}, kImportSettingsKey, key)) {
+            if (made_earlier_with({each.out, each.filled_mask, each.preview}, kImportSettingsKey, key) ||
+                (!o.fill && made_earlier_with({each.out, each.filled_mask, each.preview}, kImportSettingsKey,
+                                              import_settings_key(textured)))) {
                 ++kept;
                 progress.advance();
                 continue;
@@ -638,6 +643,37 @@ void run_photo_import(const PhotoImportJob& o) {
         progress.advance();
     }
     progress.finish();
+    // Where a moving sky made from the folder starts (its last sky in time: `animate --sky FOLDER`,
+    // `sky predict --sky FOLDER`) the hidden pixels are filled with the sky's own texture, as a single
+    // import fills them: the smooth fill of a TSI's shadow band (pale streaks) rode the wind across
+    // every predicted step. The others keep the smooth fill, the same from frame to frame.
+    if (!o.fill && photos.size() - failed.size() >= 2) {
+        std::vector<std::string> written;
+        for (size_t i = 0; i < photos.size(); ++i)
+            if (std::find(failed.begin(), failed.end(), photos[i]) == failed.end()) written.push_back(outputs[i]);
+        const std::string last = skies_in_time_order(written).back();
+        const size_t i = size_t(std::find(outputs.begin(), outputs.end(), last) - outputs.begin());
+        each.photo = photos[i];
+        each.out = outputs[i];
+        each.preview = (fs::path(o.out) / (fs::path(photos[i]).stem().string() + ".png")).string();
+        each.filled_mask = filled_mask_path(outputs[i]);
+        each.fill = PhotoImportParams::FillMethod::Texture;
+        try {
+            const std::string key = import_settings_key(each);
+            if (!made_earlier_with({each.out, each.filled_mask, each.preview}, kImportSettingsKey, key)) {
+                std::error_code gone;
+                fs::remove(each.preview, gone), fs::remove(each.filled_mask, gone);
+                import_one(each, false, key);
+            }
+            std::printf(
+                "%s, the sequence's last sky (where a moving sky made from the folder starts), is filled with "
+                "the sky's own texture (as --fill texture); the others smoothly\n",
+                last.c_str());
+        } catch (const Error& e) {
+            std::fprintf(stderr, "dynsky: error: %s\n", e.what());
+            failed.push_back(photos[i]);
+        }
+    }
     std::printf("imported %zu of %zu photographs into %s%s (STEM.exr, STEM.png, STEM.filled.png)%s\n",
                 photos.size() - failed.size(), photos.size(), o.out.c_str(), o.out.back() == '/' ? "" : "/",
                 kept ? (": " + std::to_string(kept) +

@@ -16,7 +16,8 @@
 //                   measured on its overcast photos and divided out (false)
 //   mask, mask_layout   a non-sky mask file ("", photo layout)
 //   no_preset_mask, detect_obstructions, keep_thin_objects, no_inpaint   (all false)
-//   fill            none: texture for one photograph, smooth for a sequence
+//   fill            none: texture for one photograph, smooth for a sequence but its last sky in time
+//                   (where a moving sky made from the folder starts) texture
 //   encoding        "auto" (the file's pixels decide), "srgb" or "linear"
 //   time            ISO 8601 with a zone ("": the file name's, else the EXIF's)
 //   utc_offset_hours, latitude_deg, longitude_deg, elevation_m   none: the preset's, else 0

@@ -12,6 +12,7 @@
 #include "sky/sun_position.h"
 #include "tests/test_support.h"
 #include "util/image.h"
+#include "util/math.h"
 
 namespace dynsky {
 namespace {
@@ -427,6 +428,43 @@ Image photo_with_clipped_sun(const Vec3d& sun, double sun_radius_deg, double gla
 // photograph by it, for one photograph and for a sequence. Also when the sun clips only a few
 // pixels beside a larger clipped cloud edge at about its height (a low-resolution camera): the
 // largest blob was taken, north 8.6 degrees off on 1 of 7 photographs.
+// A TSI sequence: the skies are filled smoothly (the same from frame to frame), but the last in
+// time, where a moving sky made from the folder starts, with the sky's own texture: the smooth
+// fill of the shadow band (pale streaks) rode the wind across every step of `sky predict --sky
+// FOLDER` (looked at: ARM 15:40:00Z -> 15:40:30Z). The photographs are given latest first.
+TEST(SkyImportCli, ASequencesLastSkyIsFilledWithTheSkysTexture) {
+    DYNSKY_REQUIRE_SHARED();
+    const std::string dir = test::temp_dir("sky-import-last-textured");
+    std::string photos;
+    for (const char* t : {"154100", "154030", "154000"})
+        photos += " " +
+                  test::shared_path(std::string("skies/arm_tsi_sgp_20170524/images/tsi_sgpC1_20170524") + t + "Z.jpg");
+    auto r = test::run_command(exe() + " sky import" + photos + " --preset arm-tsi --sky-res 256 -o " + dir);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("tsi_sgpC1_20170524154100Z.exr, the sequence's last sky"), std::string::npos) << r.output;
+    // The last sky's filled pixels are those a single import (texture fill) of its photograph
+    // gives; the first's, filled smoothly, are not.
+    auto filled_difference = [&](const std::string& stem) {
+        auto one = test::run_command(exe() + " sky import " +
+                                     test::shared_path("skies/arm_tsi_sgp_20170524/images/" + stem + ".jpg") +
+                                     " --preset arm-tsi --sky-res 256 -q -o " + dir + "/single_" + stem + ".exr");
+        EXPECT_EQ(one.exit_code, 0) << one.output;
+        const SkyImage seq = load_sky(dir + "/" + stem + ".exr"), alone = load_sky(dir + "/single_" + stem + ".exr");
+        double diff = 0, sum = 0;
+        for (int j = 0; j < seq.resolution; ++j)
+            for (int i = 0; i < seq.resolution; ++i)
+                if (seq.is_filled(i, j))
+                    diff += (seq.pixel(i, j) - alone.pixel(i, j)).abs().sum(), sum += alone.pixel(i, j).sum();
+        return sum > 0 ? diff / sum : -1.0;
+    };
+    const double last = filled_difference("tsi_sgpC1_20170524154100Z"),
+                 first = filled_difference("tsi_sgpC1_20170524154000Z");
+    std::printf("filled pixels against a single import's (texture): last sky %.4f, first %.4f\n", last, first);
+    EXPECT_GE(last, 0.0);
+    EXPECT_LT(last, 1e-3);
+    EXPECT_GT(first, 0.02);  // 0.04: the smooth fill
+}
+
 TEST(SkyImportCli, FindNorthTurnsThePhotographByTheSunItShows) {
     std::string dir = test::temp_dir("sky-import-north");
     fs::create_directories(dir + "/seq");
