@@ -531,6 +531,7 @@ cv::Mat glare_plateau(const cv::Mat& start, const Vec3d& sun) {
 // whiter than the model's, was torn off the sun (a white crescent downwind, a pink hole at the sun),
 // and a cloud then moved onto the sun did not dim it (the start's sun counted as covered already).
 constexpr double kGlareHaloDeg = 35.0;
+constexpr double kHaloSeenShare = 0.25;  // a ring's share of seen (not filled) pixels to be measured
 
 // Angle from the sun (degrees) of each pixel of an n x n sky, -1 outside the disc or beyond the halo.
 cv::Mat halo_angles(int n, const Vec3d& sun) {
@@ -546,6 +547,8 @@ cv::Mat halo_angles(int n, const Vec3d& sun) {
         }
     return angle;
 }
+
+}  // namespace
 
 // Per ring, in radiance (a glow adds light; the network form is logarithmic, and an added glow's
 // share of it changes with the sky under it around the ring). The pixels an import filled (a TSI's
@@ -563,9 +566,11 @@ std::vector<cv::Vec3f> halo_excess(const cv::Mat& start, const cv::Mat& backgrou
     if (!hidden.empty() && hidden.size() != start.size())
         cv::resize(filled, hidden, start.size(), 0, 0, cv::INTER_NEAREST);
     std::vector<std::vector<std::pair<float, cv::Vec3f>>> values(static_cast<size_t>(rings));
+    std::vector<int> in_ring(static_cast<size_t>(rings), 0);
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x)
             if (const float a = angle.at<float>(y, x); a >= 0) {
+                ++in_ring[size_t(a)];
                 if (!hidden.empty() && hidden.at<uint8_t>(y, x)) continue;
                 const cv::Vec3f s = start.at<cv::Vec3f>(y, x), b = background.at<cv::Vec3f>(y, x);
                 cv::Vec3f e;
@@ -576,7 +581,10 @@ std::vector<cv::Vec3f> halo_excess(const cv::Mat& start, const cv::Mat& backgrou
     std::vector<bool> known(size_t(rings), false);
     for (int r = 0; r < rings; ++r) {
         auto& v = values[size_t(r)];
-        if (v.empty()) continue;
+        // A ring mostly hidden says little, and what it shows lies beside the hidden part (the
+        // glare along a TSI's band): taken for the rings inside it, a few bright pixels made a
+        // pale disc with a hard edge 12 degrees around the sun (ARM 17:51Z, 36 of 550 pixels seen).
+        if (v.empty() || double(v.size()) < kHaloSeenShare * in_ring[size_t(r)]) continue;
         std::sort(v.begin(), v.end(), [](const auto& p, const auto& q) { return p.first < q.first; });
         const size_t lo = v.size() / 5, hi = std::max(lo + 1, (3 * v.size()) / 10);
         cv::Vec3f sum(0, 0, 0);
@@ -602,6 +610,8 @@ std::vector<cv::Vec3f> halo_excess(const cv::Mat& start, const cv::Mat& backgrou
     if (luminance(excess.front()) <= 0) return {};
     return excess;
 }
+
+namespace {
 
 // angle: halo_angles of the background's size and the sun it is added around.
 void halo_background(const std::vector<cv::Vec3f>& excess, const cv::Mat& angle, const UnitMapParams& unit,

@@ -200,6 +200,13 @@ SkyImage scaled_sky(const SkyImage& sky, double factor);
 // SkyImage::filled as a mask (CV_8UC1, 255 = filled) at the sky's resolution; empty when none.
 cv::Mat filled_mask(const SkyImage& sky);
 
+// The glow of a start around its sun beyond the model's background (both N x N CV_32FC3 in the
+// network form, `unit` its map), per 1-degree ring out to 35 degrees, in radiance, measured on the
+// pixels `filled` (CV_8UC1, may be empty) does not mark: added to the background around the sun of
+// every step, so that the glow neither reads as cloud nor moves. Empty: none. Exposed for tests.
+std::vector<cv::Vec3f> halo_excess(const cv::Mat& start, const cv::Mat& background, const Vec3d& sun,
+                                   const UnitMapParams& unit, const cv::Mat& filled);
+
 // One rollout in progress on the network form, semi-Lagrangian: the clouds are always read from the
 // start image along their accumulated paths, not re-warped from the last step's image, so hours of
 // steps do not blur them away. With a wind (CloudFlow::recycle) the paths are the layer's
