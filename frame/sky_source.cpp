@@ -287,6 +287,17 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     else if (model->dt_is_fixed() && std::abs(dt - model->native_dt()) > 1e-9)
         std::fprintf(stderr, "dynsky: warning: --dt %g s, but the network was trained for Delta t = %g s\n", dt,
                      model->native_dt());
+    // A long Delta t under a wind: the frames between two steps carry each step along the motion of a
+    // whole step, and beyond about half the clouds' height a step the in-betweens ghost and break
+    // into speckle that snaps back at every step (a TD's audit: --dt 600 at 12 m/s, 1.5 km).
+    const double per_step = o.wind_speed_mps * dt / o.cloud_height_m;
+    if (!motion.previous && (model_name == "advect" || model_name.rfind("network:", 0) == 0) && per_step > 0.5)
+        std::fprintf(stderr,
+                     "dynsky: warning: --dt %g s: the wind (%g m/s, clouds at %g m) moves the clouds %.1f x their "
+                     "height a step (%.0f degrees at the zenith): the frames between steps will ghost and break up; "
+                     "--dt %.0f or less keeps it under half their height\n",
+                     dt, o.wind_speed_mps, o.cloud_height_m, per_step, std::atan(per_step) * 180 / kPiD,
+                     std::floor(0.5 * o.cloud_height_m / o.wind_speed_mps));
     SkyTimeline timeline(std::move(input), std::move(model), dt, clock);
     timeline.set_gamma(gamma);
     if (scale.apply) timeline.set_radiance_scale(scale.factor);

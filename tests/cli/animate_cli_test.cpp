@@ -429,6 +429,30 @@ TEST(AnimateCli, OptionsASkyDoesNotUseAreSaidToBeIgnored) {
     fs::remove_all(dir);
 }
 
+// A Delta t over which the wind moves the clouds more than half their height is warned about: the
+// frames between steps broke into speckle that snapped back at every step (--dt 600, 12 m/s).
+// --turbidity with a sky file is said to be ignored.
+TEST(AnimateCli, ALongDeltaTUnderAWindAndATurbidityNotUsedAreSaid) {
+    const std::string dir = test::temp_dir("animate_long_dt");
+    const std::string base = std::string(DYNSKY_EXE) +
+                             " animate builtin --sky procedural:3 --model advect --duration 600 --fps 0.005 --res 8x4 "
+                             "--spp 1 --sky-res 32 --no-video -q -o " +
+                             dir;
+    auto r = test::run_command(base + "/a --dt 600 2>&1");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("--dt 600 s: the wind (12 m/s, clouds at 1500 m) moves the clouds 4.8 x their height"),
+              std::string::npos)
+        << r.output;
+    EXPECT_NE(r.output.find("--dt 62 or less"), std::string::npos) << r.output;
+    r = test::run_command(base + "/b --dt 30 2>&1");
+    EXPECT_EQ(r.output.find("will ghost"), std::string::npos) << r.output;
+    r = test::run_command(std::string(DYNSKY_EXE) + " sky clear --sky-res 32 -q -o " + dir + "/clear.exr");
+    r = test::run_command(std::string(DYNSKY_EXE) + " animate builtin --count-frames --duration 10 --fps 0.1 --sky " +
+                          dir + "/clear.exr --turbidity 6 2>&1");
+    EXPECT_NE(r.output.find("--turbidity is ignored"), std::string::npos) << r.output;
+    fs::remove_all(dir);
+}
+
 TEST(AnimateCli, FrameRangesEqualOneRun) {
     std::string dir = test::temp_dir("animate_ranges");
     std::string full = dir + "/full", parts = dir + "/parts";
