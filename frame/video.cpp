@@ -123,6 +123,24 @@ void contact_sheet_grid(int total, int* count, int* columns) {
     *count = n / c * c, *columns = c;
 }
 
+std::string frame_time_label(double seconds) {
+    char text[64];
+    if (!(std::abs(seconds) < 100)) {
+        const bool negative = seconds < 0;
+        const long long whole = std::llround(std::abs(seconds));
+        const long long h = whole / 3600, m = whole / 60 % 60, s = whole % 60;
+        const char* sign = negative ? "-" : "";
+        if (h == 0 && s == 0) std::snprintf(text, sizeof text, "%s%lld min", sign, m);
+        else if (h == 0) std::snprintf(text, sizeof text, "%s%lld min %02lld s", sign, m, s);
+        else if (m == 0 && s == 0) std::snprintf(text, sizeof text, "%s%lld h", sign, h);
+        else if (s == 0) std::snprintf(text, sizeof text, "%s%lld h %02lld min", sign, h, m);
+        else std::snprintf(text, sizeof text, "%s%lld h %02lld min %02lld s", sign, h, m, s);
+        return text;
+    }
+    std::snprintf(text, sizeof text, "%.4g s", seconds);
+    return text;
+}
+
 void make_contact_sheet(const FrameStore& store, int total, double fps, const std::string& out) {
     int count, columns;
     contact_sheet_grid(total, &count, &columns);
@@ -139,8 +157,8 @@ void make_contact_sheet(const FrameStore& store, int total, double fps, const st
         th = std::max(1, int(std::lround(double(tw) * img.height / img.width)));
         cv::resize(rgb, small, cv::Size(tw, th), 0, 0, cv::INTER_AREA);
         // The frame's time, white on a dark box in the top-left corner.
-        char label[64];
-        std::snprintf(label, sizeof label, "t = %.4g s", k / fps);
+        const std::string text = "t = " + frame_time_label(k / fps);
+        const char* label = text.c_str();
         int baseline = 0;
         const double scale = 0.5;
         cv::Size size = cv::getTextSize(label, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline);

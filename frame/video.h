@@ -23,4 +23,8 @@ void make_contact_sheet(const FrameStore& store, int total, double fps, const st
 // How many frames the contact sheet of an animation of `total` frames shows, in how many columns.
 void contact_sheet_grid(int total, int* count, int* columns);
 
+// A frame's time as the contact sheet labels it: "12.5 s", "14 min 24 s", "4 h", "1 h 05 min 30 s"
+// (printf's %g gave "1.44e+04 s" on a day-long animation).
+std::string frame_time_label(double seconds);
+
 }  // namespace dynsky

@@ -193,6 +193,19 @@ TEST(ContactSheet, GridShowsTheMostFramesAFullGridCan) {
     }
 }
 
+// Labels a person reads at any duration (a day-long animation said "t = 1.44e+04 s").
+TEST(ContactSheet, TimeLabelsReadAtAnyDuration) {
+    EXPECT_EQ(frame_time_label(0), "0 s");
+    EXPECT_EQ(frame_time_label(12.5), "12.5 s");
+    EXPECT_EQ(frame_time_label(99), "99 s");
+    EXPECT_EQ(frame_time_label(120), "2 min");
+    EXPECT_EQ(frame_time_label(864), "14 min 24 s");
+    EXPECT_EQ(frame_time_label(14400), "4 h");
+    EXPECT_EQ(frame_time_label(82800 + 300), "23 h 05 min");
+    EXPECT_EQ(frame_time_label(3600 + 330), "1 h 05 min 30 s");
+    EXPECT_EQ(frame_time_label(86400 * 2), "48 h");
+}
+
 TEST(FrameStore, NamesAndCompleteness) {
     const std::string dir = test::temp_dir("frame_store");
     FrameStore store(dir);
