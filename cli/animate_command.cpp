@@ -66,6 +66,11 @@ void register_animate_command(CLI::App& app) {
            "--exposure", a->exposure,
            "PNG exposure in stops for every frame (default: from the sky's irradiance at t = 0, the same for all frames)")
         ->check(finite_in(-64, 64));
+    cmd->add_flag(
+        "--exposure-follows-sun", a->exposure_follows_sun,
+        "The PNGs' exposure follows the clear sky's light at each frame's sun, from that at t = 0 (for\n"
+        "animations through sunrise or sunset, whose PNGs otherwise clip white or go black; passing clouds do\n"
+        "not move it, so it does not flicker); the EXRs are the same either way");
     cmd->add_option("--aovs", a->aovs,
                     "Extra passes in each frame's EXR: albedo, normal, depth, alpha (as for 'dynsky render')");
     cmd->add_option("--clamp-indirect", a->clamp_indirect,

@@ -25,6 +25,7 @@
 #include "util/data_path.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
+#include "sky/clear_sky.h"
 #include "util/exposure.h"
 #include "util/image.h"
 
@@ -102,6 +103,7 @@ FrameSettings animation_frame_settings(const AnimationSettings& o, const std::st
     if (o.play_scene_animation) s["play_anim"] = "1";
     if (!o.scene.animation.empty()) s["animation"] = o.scene.animation;
     s["exposure"] = number(png_exposure_ev);
+    if (o.exposure_follows_sun) s["exposure_follows_sun"] = "1";  // only when used: older frames keep theirs
     std::string look_at;
     for (double v : o.scene.look_at) look_at += (look_at.empty() ? "" : ",") + number(v);
     s["look_at"] = look_at, s["fov"] = number(o.scene.fov_deg);
@@ -257,6 +259,28 @@ AnimationReport render_animation(const AnimationSettings& o) {
     const float sky_ev = exposure_log_average(sky_to_image(*sky0));
     const std::string settings = canonical_settings(animation_frame_settings(o, timeline.model().name(), timeline.dt(),
                                                                              ev));
+    // The PNG exposure of the frame at t: ev, or with --exposure-follows-sun ev moved by the change
+    // of the clear sky's horizontal illuminance at the clock's sun since t = 0 (a sunrise's frames
+    // were clipped white from 20 minutes on, a sunset's black: 7-11 stops over an hour). The clear
+    // sky's, not the frame's own: clouds passing do not make the exposure flicker.
+    std::optional<double> clear_light_at_start;
+    auto clear_light = [&](double t) {
+        ClearSkyParams p;
+        p.sun_direction = *timeline.sun_direction_at(t);
+        return horizontal_illuminance(make_clear_sky(p, 32, false));
+    };
+    if (o.exposure_follows_sun) {
+        if (!timeline.sun_direction_at(0.0))
+            throw Error(
+                "--exposure-follows-sun: the sky has no sun to follow (a sky file without one; give --time, "
+                "--lat and --lon to put it on the clock)");
+        clear_light_at_start = clear_light(0.0);
+    }
+    auto exposure_at = [&](double t) {
+        if (!clear_light_at_start || !(*clear_light_at_start > 0)) return ev;
+        const double now = clear_light(t);
+        return now > 0 ? float(ev + std::log2(*clear_light_at_start / now)) : ev;
+    };
 
     // Which frames of the range are kept: complete and made with these settings. The others are
     // rendered, and what was wrong with those that had files is said (grouped by reason).
@@ -359,7 +383,8 @@ AnimationReport render_animation(const AnimationSettings& o) {
         }
         FrameMetadata meta;
         meta.frame = k, meta.time_seconds = t, meta.fps = o.fps, meta.spp = o.spp, meta.seed = render.seed;
-        meta.medium_step_seconds = timeline.dt(), meta.png_exposure_ev = ev;
+        const float frame_ev = exposure_at(t);
+        meta.medium_step_seconds = timeline.dt(), meta.png_exposure_ev = frame_ev;
         meta.sky = sky->source, meta.units = sky->units, meta.sky_model = timeline.model().name(),
         meta.scene = o.scene.scene;
         meta.camera = scene->camera.name, meta.gamma = gamma_name(timeline.gamma());
@@ -378,8 +403,8 @@ AnimationReport render_animation(const AnimationSettings& o) {
         // A frame's files go together: a write failing (a full disk) removes those of this frame
         // already written (a frame_0005.png stayed without its EXR).
         try {
-            write_image(store.frame_png(k), tonemap_to_display(image, result.alpha, ev));
-            write_image(store.sky_png(k), tonemap_to_display(sky_to_image(*sky), sky_ev));
+            write_image(store.frame_png(k), tonemap_to_display(image, result.alpha, frame_ev));
+            write_image(store.sky_png(k), tonemap_to_display(sky_to_image(*sky), sky_ev + (frame_ev - ev)));
             write_image(store.frame_exr(k), aovs.any() ? render_layers(result) : image);
         } catch (...) {
             std::error_code ec;

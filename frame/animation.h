@@ -31,6 +31,8 @@ namespace dynsky {
 //   aovs ""                  passes in each frame's EXR ("albedo,normal,depth,alpha")
 //   clamp_indirect 0, filter_glossy 0   firefly remedies (renderer/integrator.h), off
 //   exposure NaN             PNG exposure in stops; NaN: from the sky's irradiance at t = 0
+//   exposure_follows_sun false   the PNGs' exposure follows the clear sky's light at each frame's
+//                            sun (through sunrise or sunset), from that at t = 0; clouds do not move it
 //   force false              render every frame of the range even if complete
 //   no_video false, quiet false
 //   timeline ""              a stored timeline's folder (frame/sky_source.h write_sky_timeline): the
@@ -72,6 +74,7 @@ struct AnimationSettings {
     float clamp_indirect = 0, filter_glossy = 0;  // firefly remedies, off (0) by default
     std::string sampler_pattern = "random";       // "random" or "sobol" (renderer/zsobol_sampler.h)
     float exposure = std::numeric_limits<float>::quiet_NaN();
+    bool exposure_follows_sun = false;
     bool force = false;
     bool no_video = false;
     bool quiet = false;

@@ -453,6 +453,36 @@ TEST(AnimateCli, ALongDeltaTUnderAWindAndATurbidityNotUsedAreSaid) {
     fs::remove_all(dir);
 }
 
+// Through sunrise one exposure from t = 0 clipped the PNGs white within 20 minutes; with
+// --exposure-follows-sun it follows the clear sky's light: the last frame's PNG is about as bright
+// as the first's, the EXRs are the same either way.
+TEST(AnimateCli, TheExposureCanFollowTheSunThroughSunrise) {
+    const std::string dir = test::temp_dir("animate_sunrise");
+    const std::string base = std::string(DYNSKY_EXE) +
+                             " animate builtin --sky clear --time 2026-06-21T03:15:00Z --duration 3600 --fps 0.00055 "
+                             "--res 16x9 --spp 2 --sky-res 32 --no-video -q -o " +
+                             dir;
+    auto r = test::run_command(base + "/fixed 2>&1");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    r = test::run_command(base + "/follow --exposure-follows-sun 2>&1");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    auto mean = [](const std::string& png) {
+        const Image img = read_image(png);
+        double sum = 0;
+        for (float v : img.pixels) sum += v;
+        return sum / double(img.pixels.size());
+    };
+    const double fixed0 = mean(dir + "/fixed/frame_0000.png"), fixed1 = mean(dir + "/fixed/frame_0001.png");
+    const double follow0 = mean(dir + "/follow/frame_0000.png"), follow1 = mean(dir + "/follow/frame_0001.png");
+    std::printf("PNG means at 0 and 30 min: one exposure %.3f %.3f, following the sun %.3f %.3f\n", fixed0, fixed1,
+                follow0, follow1);
+    EXPECT_GT(fixed1, 1.3 * fixed0);  // the light rises 100-fold: the fixed exposure clips towards white
+    EXPECT_NEAR(follow0, fixed0, 1e-6);
+    EXPECT_NEAR(follow1 / follow0, 1.0, 0.35);
+    EXPECT_EQ(read_image(dir + "/fixed/frame_0001.exr").pixels, read_image(dir + "/follow/frame_0001.exr").pixels);
+    fs::remove_all(dir);
+}
+
 TEST(AnimateCli, FrameRangesEqualOneRun) {
     std::string dir = test::temp_dir("animate_ranges");
     std::string full = dir + "/full", parts = dir + "/parts";
