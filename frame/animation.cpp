@@ -22,10 +22,10 @@
 #include "renderer/accel.h"
 #include "renderer/env_light.h"
 #include "renderer/integrator.h"
+#include "sky/clear_sky.h"
 #include "util/data_path.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
-#include "sky/clear_sky.h"
 #include "util/exposure.h"
 #include "util/image.h"
 

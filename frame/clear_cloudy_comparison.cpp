@@ -217,7 +217,10 @@ void render_clear_cloudy_comparison(const ComparisonSettings& o) {
     // The clear sky of the cloudy one's haze: a Hosek-Wilkie sky of another turbidity keeps its own
     // (a cloudless turbidity-6 sky came out brighter than "clear" at 3), photographs and cloudy skies
     // 3 (motion/network_form.h clear_sky_turbidity), as the moving sky's own background.
-    const double turbidity = clear_sky_turbidity(*cloudy.step(0), *cloudy.sun_direction_at(0.0));
+    // A sky made here has the turbidity it was made with (--turbidity; the procedural clouds' haze).
+    const double turbidity = is_generated_sky(so.sky)
+                                 ? so.turbidity
+                                 : clear_sky_turbidity(*cloudy.step(0), *cloudy.sun_direction_at(0.0));
     // The clear sky's sun is the cloudy sky's own when its first sky shows it whole: a downloaded
     // HDRI's sun is rarely the model's (a cloudless one's sun came out 2.7 x weaker than its own
     // in the clear sky, and clouds far from the sun "brightened" the scene 1.5 stops).

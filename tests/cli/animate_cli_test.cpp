@@ -483,6 +483,28 @@ TEST(AnimateCli, TheExposureCanFollowTheSunThroughSunrise) {
     fs::remove_all(dir);
 }
 
+// compare's clear sky of a sky made here has the turbidity it was made with: that of cumulus at
+// --turbidity 8 is the clear sky at 8 (it was turbidity 3's, as for a photograph).
+TEST(CompareCli, TheClearSkyOfASkyMadeHereHasItsTurbidity) {
+    const std::string dir = test::temp_dir("compare_turbidity");
+    auto clear_light = [&](const std::string& sky) {
+        auto r =
+            test::run_command(std::string(DYNSKY_EXE) + " compare builtin --sky " + sky +
+                              " --coverage 0.4 --turbidity 8 --res 16x9 --spp 1 --sky-res 32 --duration 10 -q -o " +
+                              dir + "/" + sky.substr(0, 5) + " 2>&1");
+        EXPECT_EQ(r.exit_code, 0) << r.output;
+        std::ifstream csv(dir + "/" + sky.substr(0, 5) + "/illuminance.csv");
+        std::string header, row;
+        std::getline(csv, header), std::getline(csv, row);
+        double t = 0, clear = 0;
+        EXPECT_EQ(std::sscanf(row.c_str(), "%lf,%lf", &t, &clear), 2) << row;
+        return clear;
+    };
+    const double of_cumulus = clear_light("procedural:3"), of_clear = clear_light("clear");
+    EXPECT_NEAR(of_cumulus / of_clear, 1.0, 0.05);  // 0.98 (its own sun patch); 0.75 at turbidity 3
+    fs::remove_all(dir);
+}
+
 TEST(AnimateCli, FrameRangesEqualOneRun) {
     std::string dir = test::temp_dir("animate_ranges");
     std::string full = dir + "/full", parts = dir + "/parts";
