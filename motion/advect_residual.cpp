@@ -575,7 +575,7 @@ std::vector<cv::Vec3f> halo_excess(const cv::Mat& start, const cv::Mat& backgrou
                 const cv::Vec3f s = start.at<cv::Vec3f>(y, x), b = background.at<cv::Vec3f>(y, x);
                 cv::Vec3f e;
                 for (int k = 0; k < 3; ++k) e[k] = unit_to_radiance(s[k], unit) - unit_to_radiance(b[k], unit);
-                values[size_t(a)].push_back({0.2126f * e[0] + 0.7152f * e[1] + 0.0722f * e[2], e});
+                values[size_t(a)].push_back({luminance(e[0], e[1], e[2]), e});
             }
     std::vector<cv::Vec3f> excess(size_t(rings), cv::Vec3f(0, 0, 0));
     std::vector<bool> known(size_t(rings), false);
@@ -601,13 +601,13 @@ std::vector<cv::Vec3f> halo_excess(const cv::Mat& start, const cv::Mat& backgrou
                                                           : excess[size_t(r) - 1];
     // A glow falls off away from the sun: never more light than the ring inside (scaled as a whole,
     // so the ring keeps its colour).
-    const auto luminance = [](const cv::Vec3f& e) { return 0.2126f * e[0] + 0.7152f * e[1] + 0.0722f * e[2]; };
+    const auto luminance_of = [](const cv::Vec3f& e) { return luminance(e[0], e[1], e[2]); };
     for (int r = 1; r < rings; ++r) {
-        const float inside = luminance(excess[size_t(r) - 1]), here = luminance(excess[size_t(r)]);
+        const float inside = luminance_of(excess[size_t(r) - 1]), here = luminance_of(excess[size_t(r)]);
         if (here > inside) excess[size_t(r)] *= here > 0 ? std::max(0.0f, inside) / here : 0.0f;
     }
     // None (a sky the model explains, as its own clear skies): nothing to add at any step.
-    if (luminance(excess.front()) <= 0) return {};
+    if (luminance_of(excess.front()) <= 0) return {};
     return excess;
 }
 

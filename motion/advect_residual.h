@@ -102,7 +102,7 @@ struct CloudFlow {
     double correction_gain = 1.0;
     // With a measured flow: the uniform wind fitted to it (at the layer's assumed height), which the
     // flow relaxes to; reported to users, who otherwise cannot tell what motion a pair gave.
-    std::optional<Wind> fitted_wind;
+    std::optional<Wind> fitted_wind = std::nullopt;
     cv::Mat at(int k) const;  // the flow of step k = 1, 2, ...
     CloudFlow resized(int n) const;
     static CloudFlow from_wind(const cv::Mat& flow) { return CloudFlow{flow, cv::Mat(), 0.0, true, true, cv::Mat()}; }

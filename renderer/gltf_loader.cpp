@@ -180,13 +180,15 @@ bool webp_header_size(const unsigned char* b, size_t n, long long* width, long l
     return false;
 }
 
+// A PNG's big-endian 32-bit number (chunk lengths, IHDR's width and height) at b.
+uint32_t png_uint32(const unsigned char* b) {
+    return (uint32_t(b[0]) << 24) | (uint32_t(b[1]) << 16) | (uint32_t(b[2]) << 8) | b[3];
+}
+
 bool image_header_size(const unsigned char* b, size_t n, long long* width, long long* height) {
     if (is_webp(b, n)) return webp_header_size(b, n, width, height);
     if (n >= 24 && is_png(b, n)) {
-        const auto be32 = [&](size_t at) {
-            return (uint32_t(b[at]) << 24) | (uint32_t(b[at + 1]) << 16) | (uint32_t(b[at + 2]) << 8) | b[at + 3];
-        };
-        *width = be32(16), *height = be32(20);
+        *width = png_uint32(b + 16), *height = png_uint32(b + 20);
         return true;
     }
     int w = 0, h = 0, c = 0;
@@ -200,7 +202,7 @@ bool image_header_size(const unsigned char* b, size_t n, long long* width, long 
 bool is_grey_png_with_key_colour(const unsigned char* b, size_t n) {
     if (n < 33 || !is_png(b, n) || b[25] != 0) return false;
     for (size_t at = 8; at + 8 <= n;) {
-        const size_t length = (size_t(b[at]) << 24) | (size_t(b[at + 1]) << 16) | (size_t(b[at + 2]) << 8) | b[at + 3];
+        const size_t length = png_uint32(b + at);
         const std::string type(reinterpret_cast<const char*>(b + at + 4), 4);
         if (type == "tRNS") return true;
         if (type == "IDAT" || type == "IEND") return false;  // tRNS comes before the image data

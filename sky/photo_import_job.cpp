@@ -607,33 +607,42 @@ void run_photo_import(const PhotoImportJob& o) {
     std::vector<std::string> failed;
     size_t kept = 0;
     bool said = false;
-    ProgressBar progress((long long)photos.size(), "importing " + std::to_string(photos.size()) + " photographs");
-    for (size_t i = 0; i < photos.size(); ++i) {
+    // Photograph i's files, and whether they are whole and made with `key` (a stopped import goes on
+    // where it stopped: long sequences lost every finished sky to an interruption).
+    auto take = [&](size_t i) {
         each.photo = photos[i];
         each.out = outputs[i];
         each.preview = (fs::path(o.out) / (fs::path(photos[i]).stem().string() + ".png")).string();
         each.filled_mask = filled_mask_path(outputs[i]);
+    };
+    auto made_with = [&](const std::string& key) {
+        return made_earlier_with({each.out, each.filled_mask, each.preview}, kImportSettingsKey, key);
+    };
+    auto key_with_fill = [&](PhotoImportParams::FillMethod fill) {
+        OnePhoto other = each;
+        other.fill = fill;
+        return import_settings_key(other);
+    };
+    // The earlier sky's preview and mask go first: the sky is written first and carries the key, so
+    // a run stopped after it left the earlier import's preview beside it, kept on resume.
+    auto import_again = [&](const std::string& key, bool verbose) {
+        std::error_code gone;
+        fs::remove(each.preview, gone), fs::remove(each.filled_mask, gone);
+        import_one(each, verbose, key);
+    };
+    ProgressBar progress((long long)photos.size(), "importing " + std::to_string(photos.size()) + " photographs");
+    for (size_t i = 0; i < photos.size(); ++i) {
+        take(i);
         try {
-            // A stopped import goes on where it stopped: a sky made from the same photograph with the
-            // same settings is kept (long sequences lost every finished sky to an interruption).
             const std::string key = import_settings_key(each);
-            // (Or the same with the texture fill: the sequence's last sky, below.)
-            OnePhoto textured = each;
-            textured.fill = PhotoImportParams::FillMethod::Texture;
-            // Its sky, filled mask and preview whole, the sky made from the same photograph and settings.
-            if (made_earlier_with({each.out, each.filled_mask, each.preview}, kImportSettingsKey, key) ||
-                (!o.fill && made_earlier_with({each.out, each.filled_mask, each.preview}, kImportSettingsKey,
-                                              import_settings_key(textured)))) {
+            // Kept also when made with the texture fill: the sequence's last sky (below).
+            if (made_with(key) || (!o.fill && made_with(key_with_fill(PhotoImportParams::FillMethod::Texture)))) {
                 ++kept;
                 progress.advance();
                 continue;
             }
-            // The earlier sky's preview and mask go first: the sky is written first and carries the key,
-            // so a run stopped after it left the earlier import's preview beside it, kept on resume.
-            std::error_code gone;
-            fs::remove(each.preview, gone), fs::remove(each.filled_mask, gone);
             // The first imported says what it found and did, as a single import does; the rest as it.
-            import_one(each, !said, key);
+            import_again(key, !said);
             said = true;
         } catch (const Error& e) {
             // One unreadable frame does not lose the others: reported, the run exits 1 at the end.
@@ -653,18 +662,11 @@ void run_photo_import(const PhotoImportJob& o) {
             if (std::find(failed.begin(), failed.end(), photos[i]) == failed.end()) written.push_back(outputs[i]);
         const std::string last = skies_in_time_order(written).back();
         const size_t i = size_t(std::find(outputs.begin(), outputs.end(), last) - outputs.begin());
-        each.photo = photos[i];
-        each.out = outputs[i];
-        each.preview = (fs::path(o.out) / (fs::path(photos[i]).stem().string() + ".png")).string();
-        each.filled_mask = filled_mask_path(outputs[i]);
+        take(i);
         each.fill = PhotoImportParams::FillMethod::Texture;
         try {
             const std::string key = import_settings_key(each);
-            if (!made_earlier_with({each.out, each.filled_mask, each.preview}, kImportSettingsKey, key)) {
-                std::error_code gone;
-                fs::remove(each.preview, gone), fs::remove(each.filled_mask, gone);
-                import_one(each, false, key);
-            }
+            if (!made_with(key)) import_again(key, false);
             std::printf(
                 "%s, the sequence's last sky (where a moving sky made from the folder starts), is filled with "
                 "the sky's own texture (as --fill texture); the others smoothly\n",
