@@ -359,21 +359,23 @@ void import_one(const OnePhoto& o, bool verbose, const std::string& settings_key
 // time and others none (a name without a zone, no EXIF) made skies calibrated against the sun
 // (W m^-2 sr^-1) beside skies in the photographs' own units, 40 x apart on a test, and ordered them
 // wrongly; the warning named the first photograph only.
-void refuse_mixed_times(const PhotoImportJob& o, const std::vector<std::string>& photos,
-                        const std::vector<std::string>& outputs) {
-    std::vector<std::string> timeless;
+// Returns each photograph's planned time ("" for one whose plan fails: named by its own import).
+std::vector<std::string> refuse_mixed_times(const PhotoImportJob& o, const std::vector<std::string>& photos,
+                                            const std::vector<std::string>& outputs) {
+    std::vector<std::string> timeless, times(photos.size());
     size_t timed = 0;
     for (size_t i = 0; i < photos.size(); ++i) {
         OnePhoto probe(o);
         probe.photo = photos[i], probe.out = outputs[i], probe.preview.clear(), probe.filled_mask.clear();
         try {
-            if (plan_import(probe, false).time.empty()) timeless.push_back(photos[i]);
+            times[i] = plan_import(probe, false).time;
+            if (times[i].empty()) timeless.push_back(photos[i]);
             else ++timed;
         } catch (const Error&) {
             // Named by its own import below.
         }
     }
-    if (timed == 0 || timeless.empty()) return;
+    if (timed == 0 || timeless.empty()) return times;
     std::string listed;
     for (size_t k = 0; k < timeless.size() && k < 4; ++k) listed += (k ? ", " : "") + timeless[k];
     if (timeless.size() > 4) listed += ", ...";
@@ -408,6 +410,26 @@ void refuse_mixed_encodings(const std::vector<std::string>& photos, const std::s
 
 // The image files of a folder, in name order as people number them (a sequence's frames are named
 // by their time; "img 9" before "img 10").
+// The photograph whose sky skies_in_time_order will put last: the latest planned time (the last in
+// natural order among equal times), or the last in natural order where not every photograph has a
+// time. Imported once, with the texture fill, instead of smoothly and then again.
+size_t last_photo_in_time(const std::vector<std::string>& outputs, const std::vector<std::string>& times) {
+    std::vector<size_t> order(outputs.size());
+    for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return natural_less(outputs[a], outputs[b]); });
+    const bool all_timed = std::none_of(times.begin(), times.end(), [](const std::string& t) { return t.empty(); });
+    if (!all_timed) return order.back();
+    try {
+        size_t last = order.front();
+        for (size_t k : order)
+            if (utc_seconds(times[k]) >= utc_seconds(times[last])) last = k;
+        return last;
+    } catch (const Error&) {
+        return order.back();  // a time that does not parse: checked against the written skies anyway
+    }
+}
+
 std::vector<std::string> photos_in_folder(const std::string& folder) {
     std::vector<std::string> out;
     for (const auto& e : std::filesystem::directory_iterator(folder)) {
@@ -474,7 +496,7 @@ void run_photo_import(const PhotoImportJob& o) {
                 throw Error(photos[i] + " and " + photos[j] + " would both become " + outputs[i] +
                             " (the same name): rename one");
     check_outputs_are_not_inputs(outputs, photos);
-    refuse_mixed_times(o, photos, outputs);
+    const std::vector<std::string> planned_times = refuse_mixed_times(o, photos, outputs);
     refuse_mixed_encodings(photos, o.encoding);
     // Held alone while it is written (two imports into one folder mixed their skies and previews).
     const OutputFolder out_folder(o.out);
@@ -630,9 +652,16 @@ void run_photo_import(const PhotoImportJob& o) {
         fs::remove(each.preview, gone), fs::remove(each.filled_mask, gone);
         import_one(each, verbose, key);
     };
+    // The last sky in time is filled with the sky's texture (below); guessed here from the planned
+    // times so that it is imported once, checked against the written skies after.
+    const std::optional<size_t> texture_at = !o.fill && photos.size() >= 2
+                                                 ? std::optional<size_t>(last_photo_in_time(outputs, planned_times))
+                                                 : std::nullopt;
     ProgressBar progress((long long)photos.size(), "importing " + std::to_string(photos.size()) + " photographs");
     for (size_t i = 0; i < photos.size(); ++i) {
         take(i);
+        each.fill = texture_at == i ? PhotoImportParams::FillMethod::Texture : PhotoImportParams::FillMethod::Smooth;
+        if (o.fill) each.fill = o.fill;
         try {
             const std::string key = import_settings_key(each);
             // Kept also when made with the texture fill: the sequence's last sky (below).
@@ -652,6 +681,7 @@ void run_photo_import(const PhotoImportJob& o) {
         progress.advance();
     }
     progress.finish();
+    if (!o.fill) each.fill = PhotoImportParams::FillMethod::Smooth;
     // Where a moving sky made from the folder starts (its last sky in time: `animate --sky FOLDER`,
     // `sky predict --sky FOLDER`) the hidden pixels are filled with the sky's own texture, as a single
     // import fills them: the smooth fill of a TSI's shadow band (pale streaks) rode the wind across
