@@ -116,17 +116,19 @@ void warn_options_of_generated_skies(const CLI::App* cmd, const std::string& sky
                         " is made here with its sun where --time, --lat and --lon put it");
         // Cloud cover shapes the procedural sky only: a clear sky given it was the same sky, and
         // its frames were made again on a resume for no change.
-        if (sky == "clear" && given("--coverage"))
-            std::fprintf(stderr,
-                         "dynsky: warning: --coverage shapes the procedural sky; 'clear' has no clouds: --coverage "
-                         "is ignored\n");
+        for (const char* shape : {"--coverage", "--evolution"})
+            if (sky == "clear" && given(shape))
+                std::fprintf(stderr,
+                             "dynsky: warning: %s shapes the procedural sky; 'clear' has no clouds: %s is ignored\n",
+                             shape, shape);
         return;
     }
-    if (given("--coverage"))
-        std::fprintf(stderr,
-                     "dynsky: warning: --coverage shapes the procedural sky; %s is a file and keeps its own clouds: "
-                     "--coverage is ignored\n",
-                     sky.c_str());
+    for (const char* shape : {"--coverage", "--evolution"})
+        if (given(shape))
+            std::fprintf(stderr,
+                         "dynsky: warning: %s shapes the procedural sky; %s is a file and keeps its own clouds: "
+                         "%s is ignored\n",
+                         shape, sky.c_str(), shape);
     if (given("--turbidity"))
         std::fprintf(stderr,
                      "dynsky: warning: --turbidity sets the haze of a sky made here; %s is a file and keeps its own: "
@@ -175,6 +177,11 @@ void add_sky_source_options(CLI::App* cmd, SkySourceSpec* o, StepModelSpec* m) {
     add_generated_sky_options(cmd, o);
     cmd->add_option("--coverage", o->coverage, "Cloud cover of the procedural sky, 0..1")
         ->check(finite_in(0, 1))
+        ->capture_default_str();
+    cmd->add_option("--evolution", o->evolution_s,
+                    "Seconds for the procedural sky's cumulus shapes to change completely (0, or 1..1e7); 0 freezes\n"
+                    "them (the clouds moved by the wind alone, as a model from one frame moves them)")
+        ->check(finite_in(0, 1e7))
         ->capture_default_str();
     cmd->add_option("--wind-from", o->wind_from_deg,
                     "Where the wind at the clouds blows from, degrees clockwise from north (moves the procedural\n"

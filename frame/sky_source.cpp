@@ -57,6 +57,7 @@ ProceduralSkyParams procedural_params(const SkySourceSpec& o, uint64_t seed, con
     p.layers[0].wind_from_deg = o.wind_from_deg;
     p.layers[0].wind_speed_mps = o.wind_speed_mps;
     p.layers[0].altitude_m = o.cloud_height_m;
+    p.layers[0].evolution_time_s = o.evolution_s;
     p.clear_sky.sun_direction = sun;
     p.clear_sky.turbidity = o.turbidity;
     validate_procedural_params(p);
@@ -134,6 +135,9 @@ SkyImage make_builtin_clear_sky(int resolution) {
 void check_sky_source(const SkySourceSpec& o, const StepModelSpec& m, double duration) {
     if (!(m.dt >= 0)) throw Error("--dt must be positive (or 0: automatic)");
     if (o.sky.rfind("procedural", 0) == 0) procedural_seed(o.sky);  // 'procedural:abc' named
+    // As `sky procedural --evolution`: under a second the shapes would boil from frame to frame.
+    if (!(o.evolution_s == 0 || (o.evolution_s >= 1 && o.evolution_s <= 1e7)))
+        throw Error("--evolution: " + number_text(o.evolution_s) + " s: give 0 (frozen shapes) or 1..1e7 s");
     if (!o.previous.empty() && o.wind_given)
         throw Error("--prev and --wind-from/--wind-speed: give one source of motion, not both");
     if (step_model_name(m.model) == "procedural" && o.sky.rfind("procedural", 0) != 0)
@@ -369,6 +373,7 @@ FrameSettings sky_timeline_settings(const SkySourceSpec& o, const StepModelSpec&
     s["coverage"] = number(o.coverage);
     // Only when given (older folders keep their frames).
     if (o.turbidity != default_sky::kTurbidity) s["turbidity"] = number(o.turbidity);
+    if (o.evolution_s != default_sky::kCloudEvolutionS) s["evolution"] = number(o.evolution_s);
     s["wind_from"] = number(o.wind_from_deg), s["wind_speed"] = number(o.wind_speed_mps);
     s["cloud_height"] = number(o.cloud_height_m);
     s["prev"] = o.previous.empty() ? "" : with_mask(o.previous);

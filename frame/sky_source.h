@@ -28,6 +28,8 @@ namespace dynsky {
 //                                 Default 2026-06-21T16:00:00Z for skies made here; an EXR keeps its sun
 //   latitude, longitude  48.8566, 2.3522 (Paris)
 //   coverage        0.5           procedural cloud cover
+//   evolution_s     900           seconds for the procedural cumulus to change shape completely
+//                                 (0: frozen shapes, moved by the wind alone)
 //   wind_from_deg, wind_speed_mps, cloud_height_m  270, 12, 1500  the wind at the clouds: it moves
 //                                 the procedural sky's cumulus and, for any input, the clouds of the
 //                                 models that take a motion (advect-residual, advect)
@@ -41,6 +43,7 @@ struct SkySourceSpec {
     std::string time;
     double latitude = default_sky::kLatitudeDeg, longitude = default_sky::kLongitudeDeg;
     double coverage = default_sky::kCoverage;
+    double evolution_s = default_sky::kCloudEvolutionS;
     // --turbidity: of 'clear', and of the clear sky under the procedural clouds (Hosek-Wilkie, 1..10).
     double turbidity = default_sky::kTurbidity;
     double wind_from_deg = default_sky::kWindFromDeg, wind_speed_mps = default_sky::kWindSpeedMps;

@@ -8,6 +8,7 @@
 //   place           48.8566 N, 2.3522 E    Paris
 //   turbidity       3                      a clear day
 //   cloud coverage  0.5                    procedural cumulus
+//   cloud evolution 900 s                  time for the cumulus shapes to change completely
 //   wind            from 270 deg at 12 m/s, clouds at 1500 m (fair-weather cumulus): what moves
 //                   the procedural sky and, with no previous frame, the clouds of any input sky
 #pragma once
@@ -19,6 +20,7 @@ inline constexpr double kLatitudeDeg = 48.8566;
 inline constexpr double kLongitudeDeg = 2.3522;
 inline constexpr double kTurbidity = 3.0;
 inline constexpr double kCoverage = 0.5;
+inline constexpr double kCloudEvolutionS = 900.0;
 inline constexpr double kWindFromDeg = 270.0;
 inline constexpr double kWindSpeedMps = 12.0;
 inline constexpr double kCloudHeightM = 1500.0;

@@ -36,7 +36,7 @@ struct ProceduralSequenceSettings {
     double wind_from_deg = default_sky::kWindFromDeg, wind_speed_mps = default_sky::kWindSpeedMps;
     double cloud_height_m = default_sky::kCloudHeightM;
     std::vector<double> cirrus_wind;  // SPEED,FROM_DEG of the cirrus layer
-    double evolution = 900.0;
+    double evolution = default_sky::kCloudEvolutionS;
     std::string mask_image;
     double mask_extent = 0.0;
     double mask_detail = 0.35;

@@ -80,6 +80,41 @@ TEST(SkySource, TheTurbidityOfASkyMadeHere) {
     EXPECT_THROW(make_generated_sky(hazy), Error);
 }
 
+// --evolution: the procedural sky's cumulus change shape over that many seconds, 0 freezing them
+// (the clouds moved by the wind alone, as a model from one frame moves them), as `sky procedural
+// --evolution` says. The truth (--model procedural) and the start both take it.
+TEST(SkySource, TheProceduralSkysEvolutionTime) {
+    SkySourceSpec s = small_sky("procedural:3");
+    StepModelSpec m;
+    const std::string plain = canonical_settings(sky_timeline_settings(s, m));
+    EXPECT_EQ(plain.find("evolution"), std::string::npos);  // older folders keep their frames
+    EXPECT_NE(make_generated_sky(s).source.find("evolution 900 s"), std::string::npos) << make_generated_sky(s).source;
+    s.evolution_s = 0;
+    EXPECT_NE(canonical_settings(sky_timeline_settings(s, m)), plain);
+    EXPECT_NE(make_generated_sky(s).source.find("evolution 0 s"), std::string::npos) << make_generated_sky(s).source;
+    // Frozen shapes under no wind: the truth (--model procedural) stays as it was; with the default
+    // evolution its small eddies change within a minute.
+    auto change = [&](double evolution) {
+        SkySourceSpec e = small_sky("procedural:3");
+        e.sky_resolution = 48;
+        e.evolution_s = evolution;
+        e.wind_speed_mps = 0;
+        StepModelSpec truth;
+        truth.model = "procedural";
+        SkyTimeline t = make_sky_timeline(e, truth);
+        const std::shared_ptr<const SkyImage> a = t.step(0), b = t.step(6);
+        double diff = 0, sum = 0;
+        for (size_t k = 0; k < a->rgb.size(); ++k) diff += std::abs(a->rgb[k] - b->rgb[k]), sum += a->rgb[k];
+        return diff / sum;
+    };
+    const double frozen = change(0), evolving = change(900);
+    std::printf("the truth's change over 60 s without wind: frozen %.2e, evolving %.2e\n", frozen, evolving);
+    EXPECT_LT(frozen, 0.2 * evolving);  // what is left: the sun following the clock
+    EXPECT_GT(evolving, 1e-2);
+    s.evolution_s = 0.5;  // the shapes would boil from frame to frame
+    EXPECT_THROW(check_sky_source(s, m, 60), Error);
+}
+
 TEST(SkySource, ProceduralInputWithItsOwnMotion) {
     StepModelSpec m;
     m.model = "procedural";
