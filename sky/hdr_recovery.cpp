@@ -85,6 +85,8 @@ namespace {
 // lowest elevation for it (below it the light is coloured: dusk).
 constexpr double kMinCloudFractionForGrey = 0.5;
 constexpr double kMinSunElevationForGreyDeg = 10;
+// Below it, a green excess of the clouds' colour over both red and blue (log ratio) is taken out.
+constexpr double kGreenCastLog = 0.03;
 
 }  // namespace
 
@@ -436,11 +438,20 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
             for (const Sample& s : samples)
                 if (!s.clear && s.photo.minCoeff() > floor) add_chroma(s.photo, &cloud_rg, &cloud_bg);
             const double cloud_fraction = double(cloud_rg.size()) / double(std::max<size_t>(1, samples.size()));
-            if (cloud_rg.size() >= 20 && cloud_fraction >= kMinCloudFractionForGrey &&
-                rep.sun_elevation_deg >= kMinSunElevationForGreyDeg) {
+            const bool clouds = cloud_rg.size() >= 20 && cloud_fraction >= kMinCloudFractionForGrey;
+            if (clouds && rep.sun_elevation_deg >= kMinSunElevationForGreyDeg) {
                 grey_rg = median_of(cloud_rg);
                 grey_bg = median_of(cloud_bg);
                 stand_in = "cloud pixels made grey (per-channel gains; too few clear pixels)";
+            } else if (clouds && std::max(median_of(cloud_rg), median_of(cloud_bg)) < -kGreenCastLog) {
+                // At dawn and dusk the light is coloured, but never green: clouds greener than both
+                // their red and their blue are the camera's (the Mobotix's dark dawn frames came out
+                // green, R/G and B/G 0.8). Only that excess is taken out: green brought down to the
+                // larger of red and blue, so the light stays as warm or as cool as it was.
+                grey_rg = grey_bg = std::max(median_of(cloud_rg), median_of(cloud_bg));
+                stand_in =
+                    "green cast of the clouds taken out (per-channel gains; the sun low, too few clear "
+                    "pixels)";
             } else {
                 stand_in = "none (too few clear pixels to fit it, and the camera's colour is unknown)";
             }
