@@ -1095,7 +1095,8 @@ std::optional<double> rollout_sun_weight(const CloudRollout& rollout, const std:
     if (!sun || rollout.opacity().empty() || rollout.start_opacity().empty()) return std::nullopt;
     return opacity_sun_weight(sun_transmittance_of_opacity(rollout.opacity(), *sun),
                               sun_transmittance_of_opacity(rollout.start_opacity(), *sun), start_look, input_sun_share,
-                              sun_travel_fraction(rollout.sun_travel_px(), rollout.state().rows));
+                              sun_travel_fraction(rollout.sun_travel_px(), rollout.state().rows),
+                              cloud_share(rollout.start_opacity()));
 }
 
 // How much of the clear sun a sky shows at its sun (sun_patch_share of the sun remove_sun would cut

@@ -140,7 +140,7 @@ std::optional<double> SkyTimeline::model_sun_weight(int i, double s, const Vec3d
     // timeline: a farm's frames equal one run's).
     const double travel = sun_travel_fraction(sun_travel_px(i, s, sun, o0.rows), o0.rows);
     return opacity_sun_weight(t, sun_transmittance_of_opacity(o0, sun), input_look_transmittance_, input_sun_share(),
-                              travel);
+                              travel, cloud_share(o0));
 }
 
 const SunPatch& SkyTimeline::covered_input_sun(int n) {
@@ -393,7 +393,17 @@ void SkyTimeline::sky_at(double t, SkyImage* out) {
             // step, the grey around it read as cloud); where it clears, up to the clear sun.
             // Where the input's cover at the sun reads as its share (the usual case) this is
             // t_frame itself.
-            last_sun_weight_ = std::clamp(input_sun_share() + t_frame - covered_input_transmittance_, 0.0, 1.0);
+            double weight = input_sun_share() + t_frame - covered_input_transmittance_;
+            // Under broken cloud (not overcast: kOvercastCloudShare) a sun partly seen through the
+            // cloud around it is at that cloud's edge, and once the clouds have moved a sun's
+            // diameter the cover moved over it decides, not the input's gap: procedural seed 8's
+            // half-covered sun stayed half out for a minute where the truth's went in within 10 s.
+            const cv::Mat o0 = model_opacity_.empty() ? cv::Mat() : model_opacity_[0];
+            if (!o0.empty() && cloud_share(o0) < kOvercastCloudShare) {
+                const double travel = sun_travel_fraction(sun_travel_px(i, s, *sun, o0.rows), o0.rows);
+                weight = (1.0 - travel) * weight + travel * t_frame;
+            }
+            last_sun_weight_ = std::clamp(weight, 0.0, 1.0);
             insert_sun(out, relit(clear_sun_), *sun, last_sun_weight_);
         } else {
             if (!model_->makes_own_sun() && !at_input && !suns_[0].empty()) {

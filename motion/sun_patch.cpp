@@ -400,12 +400,19 @@ double relative_sun_transmittance(const SkyImage& moved, const SkyImage& start, 
 }
 
 double opacity_sun_weight(double moved_opacity_t, double start_opacity_t, double start_look, double input_sun_share,
-                          double travel) {
+                          double travel, double start_cloud_share) {
     const double own = relative_transmittance(moved_opacity_t, start_opacity_t);
-    if (start_look < 0.05 && input_sun_share >= 0.05) return own;
+    if (start_look < 0.05 && input_sun_share >= 0.05 && start_cloud_share >= kOvercastCloudShare) return own;
     const double moved = std::clamp(moved_opacity_t / sun_weight_reference(start_opacity_t, input_sun_share), 0.0, 1.0);
     travel = std::clamp(travel, 0.0, 1.0);
     return (1.0 - travel) * own + travel * moved;
+}
+
+double cloud_share(const cv::Mat& opacity) {
+    if (opacity.empty()) return 1.0;
+    const cv::Mat disc = sun_cone_mask(opacity.rows, Vec3d(0, 1, 0), 90.0);
+    const int all = cv::countNonZero(disc);
+    return all ? double(cv::countNonZero((opacity >= 0.5) & disc)) / all : 1.0;
 }
 
 double sun_diameter_px(int resolution) { return 0.53 / 90.0 * resolution / 2.0; }

@@ -177,8 +177,17 @@ double relative_sun_transmittance(const SkyImage& moved, const SkyImage& start,
 // (sun_travel_fraction): clouds that have not moved cover the sun as they did at the start, so the
 // weight goes from the start's own (1 when nothing moved) at 0 to the rule above at 1. With no
 // wind a sun in a gap 2 degrees from a cloud went to half its radiance on the first step.
+// Only where the start is overcast (start_cloud_share, the share of its disc a cloud covers, at
+// least kOvercastCloudShare): under broken cloud a sun partly seen through the cloud around it is at
+// a cloud's edge, and the clouds moved over it decide (a procedural sun half out at the start stayed
+// half out for a minute where the truth's went in within 10 s).
+inline constexpr double kOvercastCloudShare = 0.85;
 double opacity_sun_weight(double moved_opacity_t, double start_opacity_t, double start_look, double input_sun_share,
-                          double travel = 1.0);
+                          double travel = 1.0, double start_cloud_share = 1.0);
+
+// The share of an opacity map's disc (square CV_32FC1, 0 clear .. 1 cloud) at opacity 0.5 or more;
+// 1 for an empty map.
+double cloud_share(const cv::Mat& opacity);
 
 // The clouds' displacement at the sun (pixels of a sky of `resolution`) as a fraction of the sun's
 // diameter (0.53 degrees), in [0, 1].

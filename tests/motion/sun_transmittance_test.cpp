@@ -384,6 +384,25 @@ TEST(SunTransmittance, RelativeTransmittanceIsContinuousAndKeepsAnOpaqueStart) {
     EXPECT_NEAR(relative_transmittance(0.02, 0.05), 0.4, 1e-12);
 }
 
+// A sun partly seen through the cloud around it: under an overcast (its disc at least
+// kOvercastCloudShare cloud) a thin cloud it shines through, kept while nothing thickens it; under
+// broken cloud it is at a cloud's edge, and once the clouds have moved a sun's diameter the cover
+// moved over it decides (procedural seed 8: half out for the whole minute, the truth's in within
+// 10 s).
+TEST(SunTransmittance, ASunHalfSeenAtABrokenCloudsEdgeGoesInWhenTheCloudComes) {
+    // moved T, start T, start look, input sun share, travel, cloud share
+    EXPECT_DOUBLE_EQ(opacity_sun_weight(0.0, 0.0, 0.0, 0.3, 1.0, 0.9), 1.0);      // overcast: kept
+    EXPECT_DOUBLE_EQ(opacity_sun_weight(0.0, 0.0, 0.0, 0.3, 1.0, 0.5), 0.0);      // broken: gone in
+    EXPECT_DOUBLE_EQ(opacity_sun_weight(0.0, 0.0, 0.0, 0.3, 0.0, 0.5), 1.0);      // nothing moved yet
+    EXPECT_DOUBLE_EQ(opacity_sun_weight(0.6, 0.0, 0.0, 0.3, 1.0, 0.5), 1.0);      // clearer than the start
+    EXPECT_NEAR(opacity_sun_weight(0.15, 0.0, 0.0, 0.3, 0.5, 0.5), 0.75, 1e-12);  // halfway: 1/2 + 1/2 x 1/2
+    cv::Mat half = cv::Mat::zeros(64, 64, CV_32FC1);
+    half.rowRange(0, 32).setTo(1.0f);
+    EXPECT_NEAR(cloud_share(half), 0.5, 0.02);
+    EXPECT_DOUBLE_EQ(cloud_share(cv::Mat::ones(64, 64, CV_32FC1)), 1.0);
+    EXPECT_DOUBLE_EQ(cloud_share(cv::Mat::zeros(64, 64, CV_32FC1)), 0.0);
+}
+
 // The cumulus above on seed 1, whose sun starts covered and comes out at 25 s: the input's sun is
 // the dim one behind the cloud, so once the cloud moves off the clear sun must come back (it stayed
 // at 0.35 of the truth's illuminance when only the input's own sun was put back).
