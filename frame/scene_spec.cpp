@@ -10,6 +10,7 @@
 #include "renderer/gltf_loader.h"
 #include "util/data_path.h"
 #include "util/error.h"
+#include "util/parse.h"
 
 namespace dynsky {
 
@@ -69,7 +70,23 @@ LoadedScene pose_scene(const SceneSpec& o, AnimatedGltf& file, const std::string
 
 void choose_camera(const SceneSpec& o, float aspect_ratio, LoadedScene* loaded, bool print_warnings) {
     LoadedScene& out = *loaded;
-    if (out.scene.instances.empty()) throw Error(o.scene + ": the scene has no triangles to render");
+    if (out.scene.instances.empty()) {
+        // Animations hide objects by scaling them to 0 (a pop-in starts so): a pose where every
+        // mesh is hidden is the sky and the ground from the file's camera, not an error that
+        // stopped an animation at its first frame. Without a camera nothing says where to look.
+        const bool hidden = out.scene.hidden_meshes > 0;
+        const bool placed = !out.scene.cameras.empty() || !o.look_at.empty();
+        if (!hidden || !placed)
+            throw Error(o.scene + ": the scene has no triangles to render" +
+                        (hidden ? " at animation time " + number_text(o.animation_time) +
+                                      " s (every mesh hidden by a scale of 0) and no camera to look from"
+                                : std::string()));
+        if (print_warnings)
+            std::fprintf(stderr,
+                         "dynsky: warning: %s: every mesh is hidden at animation time %s s (a scale of 0): the "
+                         "frame shows the sky and the ground only\n",
+                         o.scene.c_str(), number_text(o.animation_time).c_str());
+    }
     if (out.scene.cameras.empty() && o.camera == 0) {
         out.camera = frame_bounds_camera(out.scene.world_bounds(), aspect_ratio);
     } else if (out.scene.cameras.empty() && out.scene.file_camera_names.empty()) {

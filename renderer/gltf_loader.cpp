@@ -2423,8 +2423,10 @@ class GltfLoader {
             if (node.mesh >= int(model_.meshes.size()))
                 fail(what + " refers to mesh " + std::to_string(node.mesh) + ", which does not exist");
             const bool collapsed = node.mesh >= 0 && node.skin < 0 && transform_collapses(world);
-            if (collapsed)
+            if (collapsed) {
                 warn(what + ": its world transform scales it to a point or a line (a scale of 0: hidden), not drawn");
+                ++scene_.hidden_meshes;
+            }
             if (node.mesh >= 0 && !collapsed) {
                 VertexPose pose;
                 pose.morph_weights = morph_weights(node, what);
@@ -2444,6 +2446,7 @@ class GltfLoader {
                             if (transform_collapses(world * instances[i])) {  // hidden, as a node can be
                                 warn(what + " instance " + std::to_string(i) +
                                      ": scaled to a point or a line (a scale of 0: hidden), not drawn");
+                                ++scene_.hidden_meshes;
                                 continue;
                             }
                             check_transform(world * instances[i], what + " instance " + std::to_string(i));

@@ -164,6 +164,7 @@ struct Scene {
     std::vector<std::string> file_camera_names;
     std::vector<PunctualLight> lights;      // KHR_lights_punctual, one per node that holds one
     std::vector<std::string> warnings;      // e.g. extensions used but not supported
+    int hidden_meshes = 0;                  // meshes (or their instances) scaled to 0: not drawn
     std::vector<std::string> source_files;  // the files it was read from (glTF, buffers, images): never outputs
 
     Bounds3 world_bounds() const;

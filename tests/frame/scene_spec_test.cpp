@@ -58,6 +58,39 @@ std::string write_camera_gltf(const std::string& dir, float yfov, float ymag) {
     return dir + "/cameras.gltf";
 }
 
+// A pose where every mesh is hidden by a scale of 0 (how animations hide objects: a pop-in starts
+// so) is the sky and the ground seen from the file's camera, with a warning; `animate --play-anim`
+// stopped at such a first frame ("no triangles to render"). Without a camera nothing says where to
+// look: an error that says why.
+TEST(RenderCamera, APoseWithEveryMeshHiddenShowsTheSkyFromTheFilesCamera) {
+    std::string dir = test::temp_dir("camera-hidden");
+    const std::string path = write_camera_gltf(dir, 0.6f, 1.5f);
+    std::string json;
+    {
+        std::ifstream in(path);
+        json.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    }
+    auto replaced = [](std::string s, const std::string& from, const std::string& to) {
+        const size_t at = s.find(from);
+        EXPECT_NE(at, std::string::npos) << from;
+        return at == std::string::npos ? s : s.replace(at, from.size(), to);
+    };
+    const std::string hidden = replaced(json, R"("nodes": [{"mesh": 0},)",
+                                        R"("nodes": [{"mesh": 0, "scale": [0, 0, 0]},)");
+    std::ofstream(dir + "/hidden.gltf") << hidden;
+    std::ofstream(dir + "/hidden_nocam.gltf")
+        << replaced(hidden, R"("scenes": [{"nodes": [0, 1, 2]}])", R"("scenes": [{"nodes": [0]}])");
+    const LoadedScene seen = load_scene(SceneSpec{dir + "/hidden.gltf", 0, 0.3f, {}, 0, -1, ""}, 1.0f);
+    EXPECT_TRUE(seen.scene.instances.empty());
+    EXPECT_EQ(seen.scene.hidden_meshes, 1);
+    try {
+        load_scene(SceneSpec{dir + "/hidden_nocam.gltf", 0, 0.3f, {}, 0, -1, ""}, 1.0f);
+        ADD_FAILURE() << "a hidden scene without a camera loaded";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("no camera to look from"), std::string::npos) << e.what();
+    }
+}
+
 TEST(RenderCamera, LookAtOverrideEqualsTheEquivalentGltfCamera) {
     std::string dir = test::temp_dir("camera");
     const float yfov = 0.6f;

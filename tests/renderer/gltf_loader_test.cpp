@@ -2072,6 +2072,7 @@ TEST(GltfLoader, HostileInputIsRefusedAtItsRoot) {
                         std::string(hidden) + "},{\"mesh\":0,\"translation\":[5,0,0]}],\"meshes\":[" + mesh(pos) + "]"),
             &warnings);
         ASSERT_EQ(s.instances.size(), 1u) << hidden;
+        EXPECT_EQ(s.hidden_meshes, 1) << hidden;
         EXPECT_FLOAT_EQ(s.instances[0].transform.translation().x(), 5.0f) << hidden;
         bool said = false;
         for (const std::string& w : warnings)
