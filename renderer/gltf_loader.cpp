@@ -9,6 +9,7 @@
 #include <Eigen/SVD>
 
 #include <algorithm>
+#include <optional>
 #include <functional>
 #include <cctype>
 #include <cerrno>
@@ -910,12 +911,31 @@ class GltfLoader {
                      "); --animation NAME or INDEX plays one");
             return;
         }
+        // By name, else by index. Names need not be unique in glTF: the first of that name plays
+        // (two named 'Walk' played together, without a word).
+        std::vector<size_t> named;
         for (size_t i = 0; i < count; ++i)
-            if (model_.animations[i].name == animation_) playing_[i] = true;
-        if (std::count(playing_.begin(), playing_.end(), true) == 0 && !animation_.empty() &&
-            std::all_of(animation_.begin(), animation_.end(), [](char c) { return c >= '0' && c <= '9'; }) &&
-            animation_.size() < 10 && size_t(std::stoul(animation_)) < count)
-            playing_[std::stoul(animation_)] = true;
+            if (model_.animations[i].name == animation_) named.push_back(i);
+        const bool digits = std::all_of(animation_.begin(), animation_.end(),
+                                        [](char c) { return c >= '0' && c <= '9'; }) &&
+                            animation_.size() < 10;
+        const std::optional<size_t> index = digits && size_t(std::stoul(animation_)) < count
+                                                ? std::optional<size_t>(std::stoul(animation_))
+                                                : std::nullopt;
+        if (!named.empty()) {
+            playing_[named.front()] = true;
+            if (named.size() > 1) {
+                std::string others;
+                for (size_t k = 1; k < named.size(); ++k) others += (k > 1 ? ", " : "") + std::to_string(named[k]);
+                warn(std::to_string(named.size()) + " animations are named '" + animation_ + "': animation " +
+                     std::to_string(named.front()) + " plays, not " + others + " (--animation INDEX chooses one)");
+            }
+            if (index && *index != named.front())
+                warn("--animation " + animation_ + " is the name of animation " + std::to_string(named.front()) +
+                     ", which plays (a name goes before an index), not animation " + std::to_string(*index));
+        } else if (index) {
+            playing_[*index] = true;
+        }
         if (std::count(playing_.begin(), playing_.end(), true) == 0)
             fail("has no animation '" + animation_ + "' (--animation; its animations: " + list() + ")");
     }
@@ -942,10 +962,15 @@ class GltfLoader {
                             : ch.target_path == "rotation"                               ? 4
                                                                                          : 0;
                 if (weights) {
-                    if (node.mesh < 0 || size_t(node.mesh) >= model_.meshes.size()) continue;
-                    for (const tg::Primitive& p : model_.meshes[size_t(node.mesh)].primitives)
-                        width = std::max(width, int(p.targets.size()));
-                    if (width == 0) continue;
+                    if (node.mesh >= 0 && size_t(node.mesh) < model_.meshes.size())
+                        for (const tg::Primitive& p : model_.meshes[size_t(node.mesh)].primitives)
+                            width = std::max(width, int(p.targets.size()));
+                    if (width == 0) {
+                        warn(what + ": animates the morph weights of node " + std::to_string(ch.target_node) +
+                             (node.mesh < 0 ? ", which has no mesh" : ", whose mesh has no morph targets") +
+                             ": nothing to move, ignored");
+                        continue;
+                    }
                 } else if (width == 0) {
                     warn(what + ": path " + in_quotes(ch.target_path) + " is not animated (not a transform)");
                     continue;

@@ -1328,6 +1328,19 @@ TEST(GltfLoader, AnimationsArePosedAtTheTimeAsked) {
                     sampler(third, spline, "CUBICSPLINE") + "],\"channels\":[" + channel(0, 0, "translation") + "," +
                     channel(1, 0, "scale") + "]}]");
     EXPECT_LT((corner(load_gltf(last_key, nullptr, 1.0 / 3.0), 0) - Vec3(7, 0, 0)).norm(), 1e-3f);
+    // Morph weights animated on a mesh without targets, or on a node without a mesh: nothing to
+    // move, said (ignored without a word, where other channels that do nothing warn).
+    const std::string plain_mesh = "{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) +
+                                   "},\"indices\":" + std::to_string(idx) + "}]}";
+    const Scene idle = load_gltf(
+        g.write(dir, "no_targets",
+                "\"scene\":0,\"scenes\":[{\"nodes\":[0,1]}],\"nodes\":[{\"mesh\":0},{\"translation\":[0,1,0]}],"
+                "\"meshes\":[" +
+                    plain_mesh + "],\"animations\":[{\"samplers\":[" + sampler(times, weights, "LINEAR") +
+                    "],\"channels\":[" + channel(0, 0, "weights") + "," + channel(0, 1, "weights") + "]}]"),
+        nullptr, 1.0);
+    EXPECT_TRUE(has_warning_containing(idle, "node 0, whose mesh has no morph targets: nothing to move"));
+    EXPECT_TRUE(has_warning_containing(idle, "node 1, which has no mesh: nothing to move"));
     fs::remove_all(dir);
 }
 
@@ -1374,6 +1387,20 @@ TEST(GltfLoader, OneAnimationOfSeveralPlaysByNameOrIndex) {
     }
     EXPECT_NE(e.find("has no animation 'Run' (--animation; its animations: 0 'Walk', 1 'Jump')"), std::string::npos)
         << e;
+    // Names need not be unique: the first of that name plays, and the warning names the others (both
+    // played, without a word); a name that is also another animation's index goes first, and says so.
+    const std::string twice = g.write(
+        dir, "twice",
+        "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[{\"primitives\":[{"
+        "\"attributes\":{\"POSITION\":" +
+            std::to_string(pos) + "},\"indices\":" + std::to_string(idx) + "}]}],\"animations\":[" +
+            animation("Walk", along_x) + "," + animation("0", along_y) + "," + animation("Walk", along_y) + "]");
+    const Scene first = load_gltf(twice, nullptr, 2.0, "Walk");
+    EXPECT_LT((origin(first) - Vec3(4, 0, 0)).norm(), 1e-5f);
+    EXPECT_TRUE(has_warning_containing(first, "2 animations are named 'Walk': animation 0 plays, not 2"));
+    const Scene named_zero = load_gltf(twice, nullptr, 2.0, "0");
+    EXPECT_LT((origin(named_zero) - Vec3(0, 6, 0)).norm(), 1e-5f);
+    EXPECT_TRUE(has_warning_containing(named_zero, "--animation 0 is the name of animation 1, which plays"));
     fs::remove_all(dir);
 }
 
