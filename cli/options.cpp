@@ -94,10 +94,10 @@ void add_scene_options(CLI::App* cmd, SceneSpec* o) {
                     "Pose the glTF's animations (nodes, skins, morph targets) at this time in seconds, held at their "
                     "ends (default: the rest pose)")
         ->check(finite_in(0, 1e9));
-    cmd->add_option(
-        "--animation", o->animation,
-        "Play only this one of the glTF's animations, by name (the first of that name), else by index (default: all of them, as one "
-        "timeline; a file exported with several actions, Idle, Walk, Run, plays them all at once)");
+    cmd->add_option("--animation", o->animation,
+                    "Play only this one of the glTF's animations, by name (the first of that name), else by index\n"
+                    "(default: all of them, as one timeline; a file exported with several actions, Idle, Walk, Run,\n"
+                    "plays them all at once)");
     cmd->add_option(
            "--ground-albedo", o->ground_albedo,
            "Albedo of the ground model below the horizon: a Lambertian plane lit by the sky, radiance albedo * E_sky / pi")

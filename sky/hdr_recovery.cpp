@@ -446,7 +446,7 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
             } else if (clouds && std::max(median_of(cloud_rg), median_of(cloud_bg)) < -kGreenCastLog) {
                 // At dawn and dusk the light is coloured, but never green: clouds greener than both
                 // their red and their blue are the camera's (the Mobotix's dark dawn frames came out
-                // green, R/G and B/G 0.8). Only that excess is taken out: green brought down to the
+                // green, R/G and B/G 0.64-0.74). Only that excess is taken out: green brought down to the
                 // larger of red and blue, so the light stays as warm or as cool as it was.
                 grey_rg = grey_bg = std::max(median_of(cloud_rg), median_of(cloud_bg));
                 stand_in =
