@@ -447,6 +447,14 @@ TEST(AnimateCli, ALongDeltaTUnderAWindIsSaid) {
     EXPECT_NE(r.output.find("--dt 62 or less"), std::string::npos) << r.output;
     r = test::run_command(base + "/b --dt 30 2>&1");
     EXPECT_EQ(r.output.find("will ghost"), std::string::npos) << r.output;
+    // Beyond what a sky can show (a thousand heights a step) it is refused before any frame, naming
+    // --dt and a Delta t that works: the first step failed after frame 0, naming the wind given, and
+    // the warning's advice read "--dt 0" (the model's own 30 s).
+    r = test::run_command(base + "/c --dt 60 --wind-speed 300 --cloud-height 10 2>&1");
+    EXPECT_NE(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("1800 times their height a step"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("give --dt 0.017 s or less"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/c/frame_0000.exr"));
     fs::remove_all(dir);
 }
 
