@@ -1,6 +1,8 @@
 // dynsky sky procedural: a sequence of procedural cloudy skies with their exact flow fields
 // (sky/procedural_sequence.h).
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <string>
 #include <vector>
@@ -125,7 +127,7 @@ void register_sky_procedural_command(CLI::App& sky) {
     cmd->add_flag("--previews", o->preview,
                   "Also write tone-mapped PNGs: frame_NNNN.png and flow_NNNN.png (colour-coded)");
     cmd->add_flag("--quiet,-q", o->quiet, "No progress bar or summary");
-    cmd->callback([o, other, elevation, azimuth, path_tracer_seed, wind_pair, wind_from, wind_speed]() {
+    cmd->callback([cmd, o, other, elevation, azimuth, path_tracer_seed, wind_pair, wind_from, wind_speed]() {
         if (path_tracer_seed->count() > 0)
             throw Error(
                 "--seed is the path tracer's seed (render, animate, compare); the clouds' seed here is "
@@ -147,6 +149,22 @@ void register_sky_procedural_command(CLI::App& sky) {
         if (!o->cirrus_wind.empty()) check_wind("--cirrus-wind", o->cirrus_wind);
         if (o->evolution > 0 && o->evolution < 1)
             throw Error("--evolution: " + number_text(o->evolution) + " s: give 0 (frozen shapes) or at least 1 s");
+        // [0, 1): at 1 the noise erodes the mask away (it failed later as "layer 0: mask detail").
+        if (o->mask_detail >= 1)
+            throw Error("--mask-detail: " + number_text(o->mask_detail) +
+                        ": give a value in [0, 1) (1 erodes the mask away)");
+        // Options that shape what was not asked for are said, as --coverage with a clear sky is.
+        auto given = [&](const char* name) { return cmd->get_option(name)->count() > 0; };
+        if (!o->cirrus_wind.empty() && std::find(o->layers.begin(), o->layers.end(), "cirrus") == o->layers.end())
+            std::fprintf(stderr,
+                         "dynsky: warning: --cirrus-wind moves the cirrus layer, which --layers does not ask for: "
+                         "--cirrus-wind is ignored\n");
+        if (o->mask_image.empty())
+            for (const char* mask_option : {"--mask-extent", "--mask-detail"})
+                if (given(mask_option))
+                    std::fprintf(stderr,
+                                 "dynsky: warning: %s shapes the --mask-image clouds; none is given: %s is ignored\n",
+                                 mask_option, mask_option);
         check_outputs_are_not_inputs({o->out}, {o->mask_image});
         check_numbered_outputs_spare(o->out, {"frame", "flow"}, {o->mask_image});
         remove_stale_temporaries(o->out);  // of a killed run into the same folder

@@ -71,7 +71,10 @@ std::string describe_settings_change(const FrameSettings& before, const FrameSet
     int named = 0, more = 0;
     for (const std::string& k : keys) {
         auto a = before.find(k), b = now.find(k);
-        std::string va = a == before.end() ? "(none)" : a->second, vb = b == now.end() ? "(none)" : b->second;
+        // A key recorded only when not the default (turbidity, evolution, sky_turn) or by later revisions:
+        // "(none)" read as "no evolution" where the clouds had evolved at the default 900 s.
+        const std::string unset = "(default)";
+        std::string va = a == before.end() ? unset : a->second, vb = b == now.end() ? unset : b->second;
         if (va == vb) continue;
         if (named == limit) {
             ++more;

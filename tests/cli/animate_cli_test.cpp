@@ -203,7 +203,7 @@ TEST(AnimateCli, ATurnedSkyFileIsOtherSettings) {
     const Image unturned = read_image(frame(dir + "/a", 1));
     r = test::run_command(cmd + "--sky-turn 90 2>&1");
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    EXPECT_NE(r.output.find("sky_turn (none) -> 90)"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("sky_turn (default) -> 90)"), std::string::npos) << r.output;
     EXPECT_NE(read_image(frame(dir + "/a", 1)).pixels, unturned.pixels);
     fs::remove_all(dir);
 }

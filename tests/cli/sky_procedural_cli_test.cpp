@@ -78,6 +78,8 @@ TEST(SkyProceduralCli, BadArgumentsLeaveNoOutput) {
         // --seed is the path tracer's everywhere else: refused, naming the clouds' option.
         {"--seed 3", "--cloud-seed"},
         {"--lat 40 --sun-elevation 30", "excludes"},
+        // [0, 1): 1 passed the option's check and failed later, not naming the option.
+        {"--mask-image " + base + "/missing.png --mask-detail 1", "--mask-detail: 1: give a value in [0, 1)"},
     };
     int k = 0;
     for (const Case& c : cases) {
@@ -87,6 +89,20 @@ TEST(SkyProceduralCli, BadArgumentsLeaveNoOutput) {
         EXPECT_NE(r.output.find(c.expect), std::string::npos) << c.args << ": " << r.output;
         EXPECT_FALSE(fs::exists(dir)) << c.args;
     }
+}
+
+// Options that shape what was not asked for are said, as --coverage with a clear sky is: the
+// cirrus wind without a cirrus layer, the mask's extent and detail without a mask.
+TEST(SkyProceduralCli, OptionsForLayersNotAskedForAreSaid) {
+    const std::string dir = test::temp_dir("procedural_cli_ignored");
+    auto r = procedural("--duration 0 --sky-res 16 --cirrus-wind 30,200 --mask-extent 1000 --mask-detail 0.1 --out " +
+                        dir + "/a 2>&1");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    for (const char* said : {"--cirrus-wind is ignored", "--mask-extent is ignored", "--mask-detail is ignored"})
+        EXPECT_NE(r.output.find(said), std::string::npos) << said << ": " << r.output;
+    r = procedural("--duration 0 --sky-res 16 --layers cumulus,cirrus --cirrus-wind 30,200 --out " + dir + "/b 2>&1");
+    EXPECT_EQ(r.output.find("ignored"), std::string::npos) << r.output;
+    fs::remove_all(dir);
 }
 
 // A shorter sequence into the folder of a longer one: the frames and flows it did not write, as the

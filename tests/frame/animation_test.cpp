@@ -255,7 +255,7 @@ TEST(FrameStore, SettingsAreCanonicalAndHashed) {
     EXPECT_EQ(settings_hash("a"), "af63dc4c8601ec8c");
     EXPECT_NE(settings_hash(canonical_settings(a)), settings_hash(canonical_settings({{"spp", "4"}})));
     EXPECT_EQ(describe_settings_change(a, {{"spp", "4"}, {"model", "procedural"}, {"res", "8x8"}}),
-              "res (none) -> 8x8, spp 2 -> 4");
+              "res (default) -> 8x8, spp 2 -> 4");
 }
 
 TEST(FrameStore, FrameRanges) {
