@@ -104,9 +104,9 @@ struct LayerModel {
         for (int k = 0; k < n; ++k) {
             double x = noise_unit(state = noise_hash(state)) * 2048.0 * spec.feature_size_m;
             double z = noise_unit(state = noise_hash(state)) * 2048.0 * spec.feature_size_m;
-            const double t = statistics_time(noise_unit(state = noise_hash(state)));
-            const double v = field_at(x, z, t, 0.0).value;
-            g[k] = std::hypot(field_at(x + h, z, t, 0.0).value - v, field_at(x, z + h, t, 0.0).value - v) / h;
+            double t = noise_unit(state = noise_hash(state)) * 256.0 * spec.evolution_time_s;
+            const double v = field(x, z, t, 0.0).value;
+            g[k] = std::hypot(field(x + h, z, t, 0.0).value - v, field(x, z + h, t, 0.0).value - v) / h;
         }
         std::nth_element(g.begin(), g.begin() + (n * 99) / 100, g.end());
         return 2.0 * g[size_t((n * 99) / 100)];
@@ -123,7 +123,8 @@ struct LayerModel {
             // Points spread over thousands of features and a long time: the field's statistics.
             double x = noise_unit(state = noise_hash(state)) * 2048.0 * spec.feature_size_m;
             double z = noise_unit(state = noise_hash(state)) * 2048.0 * spec.feature_size_m;
-            values[k] = field_at(x, z, statistics_time(noise_unit(state = noise_hash(state))), 0.0).value;
+            double t = noise_unit(state = noise_hash(state)) * 256.0 * spec.evolution_time_s;
+            values[k] = field(x, z, t, 0.0).value;
         }
         std::sort(values.begin(), values.end());
         double index = (1.0 - coverage) * (n - 1);
@@ -140,24 +141,10 @@ struct LayerModel {
     // The noise field that the coverage threshold cuts, at material coordinates (qx, qz)
     // (metres, world frame, wind removed), time t (s), for a pixel footprint (m) on the layer.
     FractalNoise::Sample field(double qx, double qz, double t, double footprint) const {
-        return field_at(qx, qz, t * inv_evolution, footprint);
-    }
-
-    // The noise time (units of the field's time axis) of a point of the field's statistics
-    // (coverage_threshold, field_gradient_bound), from u in [0, 1): spread over 256 units whatever
-    // the evolution time. Frozen shapes (evolution 0) sampled them on the one slice they show, so
-    // `--evolution 0` cut the same noise at another threshold: other clouds than the evolving sky's
-    // at t = 0 (4 % of the pixels turned). The expression for evolving shapes is the one they always
-    // had (the same bits).
-    double statistics_time(double u) const {
-        return spec.evolution_time_s > 0 ? (u * 256.0 * spec.evolution_time_s) * inv_evolution : u * 256.0;
-    }
-
-    // field at a time in the noise's own units.
-    FractalNoise::Sample field_at(double qx, double qz, double time, double footprint) const {
         double across = spec.feature_size_m, along = spec.feature_size_m * spec.stretch;
         double a = (qx * along_x + qz * along_z) / along;
         double b = (-qx * along_z + qz * along_x) / across;
+        double time = t * inv_evolution;
         if (spec.type != CloudType::Cirrus) return noise.evaluate(a, b, time, footprint / across);
         // Cirrus: fall streaks curve (a smooth shift across the wind, a few features wide) and
         // come in patches (a large, round field added to the streaks before the threshold).

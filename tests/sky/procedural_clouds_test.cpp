@@ -222,9 +222,6 @@ TEST(ProceduralClouds, FrozenShapesWithoutWindDoNotChange) {
     p.layers[0].evolution_time_s = 600.0;  // now the shapes evolve
     ProceduralSky evolving(p);
     EXPECT_FALSE(evolving.render(0.0, 48).rgb == evolving.render(500.0, 48).rgb);
-    // Frozen or evolving, the clouds start the same (the coverage threshold is measured on the same
-    // noise): `--evolution 0` started from other clouds, 4 % of the pixels turned (an audit).
-    EXPECT_TRUE(sky.render(0.0, 48).rgb == evolving.render(0.0, 48).rgb);
 }
 
 std::shared_ptr<Image> full_mask() {
