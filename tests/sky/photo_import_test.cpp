@@ -411,6 +411,14 @@ TEST(PhotoImport, ColourShadingIsDividedOut) {
     for (double r0 : {0.0, 0.3, 0.6, 0.75}) {
         EXPECT_NEAR(ring_log_rg(flat.sky, flat.not_sky, r0, r0 + 0.13), 0.0, 0.01) << r0;
     }
+    // A monochrome photograph (R = G = B: the Mobotix's night frames) has no colour to correct: it
+    // stays grey (divided out anyway, its rim came out pink, R/G 1.23).
+    Image mono = photo;
+    for (int y = 0; y < 300; ++y)
+        for (int x = 0; x < 400; ++x) mono.at(x, y, 0) = mono.at(x, y, 2) = mono.at(x, y, 1);
+    const ImportedPhoto grey = import_photo_image(mono, "monochrome", p);
+    for (double r0 : {0.0, 0.3, 0.6, 0.75})
+        EXPECT_NEAR(ring_log_rg(grey.sky, grey.not_sky, r0, r0 + 0.13), 0.0, 1e-6) << r0;
 }
 
 // A camera's shading measured on its own overcast sequence: recovered from five shaded grey skies
