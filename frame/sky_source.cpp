@@ -300,16 +300,15 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
     const double half_height_dt = 0.5 * o.cloud_height_m / o.wind_speed_mps;
     const std::string longest_dt = half_height_dt >= 10 ? number_text(std::floor(half_height_dt))
                                                         : number_text(half_height_dt, 2);
-    const bool wind_moves = model_name == "advect" || model_name == "procedural" ||
-                            model_name.rfind("network:", 0) == 0;
+    const bool advected = model_name == "advect" || model_name.rfind("network:", 0) == 0;
     // Before the first frame: beyond a thousand heights a step (motion/flow.h wind_flow) the first
     // step failed after frame 0 was written, naming the wind that was given, not --dt.
-    if (!motion.previous && wind_moves && per_step > 1e3)
+    if (!motion.previous && (advected || model_name == "procedural") && per_step > 1e3)
         throw Error("--dt " + number_text(dt) + " s: the wind (" + number_text(o.wind_speed_mps) + " m/s, clouds at " +
                     number_text(o.cloud_height_m) + " m) moves the clouds " + number_text(per_step) +
                     " times their height a step, more than a sky can show (1000): give --dt " + longest_dt +
                     " s or less (half their height a step), a lower --wind-speed or a higher --cloud-height");
-    if (!motion.previous && model_name != "procedural" && wind_moves && per_step > 0.5)
+    if (!motion.previous && advected && per_step > 0.5)
         std::fprintf(stderr,
                      "dynsky: warning: --dt %g s: the wind (%g m/s, clouds at %g m) moves the clouds %.1f x their "
                      "height a step (%.0f degrees at the zenith): the frames between steps will ghost and break up; "

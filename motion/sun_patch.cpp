@@ -410,7 +410,7 @@ double opacity_sun_weight(double moved_opacity_t, double start_opacity_t, double
 
 double cloud_share(const cv::Mat& opacity) {
     if (opacity.empty()) return 1.0;
-    const cv::Mat disc = sun_cone_mask(opacity.rows, Vec3d(0, 1, 0), 90.0);
+    const cv::Mat disc = sky_disc_mask(opacity.rows);
     const int all = cv::countNonZero(disc);
     return all ? double(cv::countNonZero((opacity >= 0.5) & disc)) / all : 1.0;
 }

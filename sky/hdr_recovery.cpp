@@ -439,16 +439,17 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
                 if (!s.clear && s.photo.minCoeff() > floor) add_chroma(s.photo, &cloud_rg, &cloud_bg);
             const double cloud_fraction = double(cloud_rg.size()) / double(std::max<size_t>(1, samples.size()));
             const bool clouds = cloud_rg.size() >= 20 && cloud_fraction >= kMinCloudFractionForGrey;
+            const double cloud_median_rg = median_of(cloud_rg), cloud_median_bg = median_of(cloud_bg);
             if (clouds && rep.sun_elevation_deg >= kMinSunElevationForGreyDeg) {
-                grey_rg = median_of(cloud_rg);
-                grey_bg = median_of(cloud_bg);
+                grey_rg = cloud_median_rg;
+                grey_bg = cloud_median_bg;
                 stand_in = "cloud pixels made grey (per-channel gains; too few clear pixels)";
-            } else if (clouds && std::max(median_of(cloud_rg), median_of(cloud_bg)) < -kGreenCastLog) {
+            } else if (clouds && std::max(cloud_median_rg, cloud_median_bg) < -kGreenCastLog) {
                 // At dawn and dusk the light is coloured, but never green: clouds greener than both
                 // their red and their blue are the camera's (the Mobotix's dark dawn frames came out
                 // green, R/G and B/G 0.64-0.74). Only that excess is taken out: green brought down to the
                 // larger of red and blue, so the light stays as warm or as cool as it was.
-                grey_rg = grey_bg = std::max(median_of(cloud_rg), median_of(cloud_bg));
+                grey_rg = grey_bg = std::max(cloud_median_rg, cloud_median_bg);
                 stand_in =
                     "green cast of the clouds taken out (per-channel gains; the sun low, too few clear "
                     "pixels)";

@@ -1444,16 +1444,15 @@ ImportedPhoto import_checked_photo(const Image& photo, const std::string& name, 
     // A monochrome photograph (the Mobotix writes its night frames so, R = G = B at every pixel) has
     // no colour for the camera's colour shading to correct: divided out anyway, it gave grey frames
     // a pink rim (R/G 1.23 at the horizon).
-    bool monochrome = true;
-    for (int j = 0; j < n && monochrome; ++j) {
-        const cv::Vec3f* row = sky.ptr<cv::Vec3f>(j);
-        for (int i = 0; i < n; ++i)
-            if (row[i][0] != row[i][1] || row[i][2] != row[i][1]) {
-                monochrome = false;
-                break;
-            }
-    }
-    if (const auto& shading = params.colour_shading; shading && !monochrome) {
+    auto monochrome = [&] {
+        for (int j = 0; j < n; ++j) {
+            const cv::Vec3f* row = sky.ptr<cv::Vec3f>(j);
+            for (int i = 0; i < n; ++i)
+                if (row[i][0] != row[i][1] || row[i][2] != row[i][1]) return false;
+        }
+        return true;
+    };
+    if (const auto& shading = params.colour_shading; shading && !monochrome()) {
         // Before the fill, so what fills the hidden pixels (the horizon ring) comes from corrected sky.
         const double c = (n - 1) / 2.0;
         tbb::parallel_for(0, n, [&](int j) {

@@ -408,8 +408,6 @@ void refuse_mixed_encodings(const std::vector<std::string>& photos, const std::s
     }
 }
 
-// The image files of a folder, in name order as people number them (a sequence's frames are named
-// by their time; "img 9" before "img 10").
 // The photograph whose sky skies_in_time_order will put last: the latest planned time (the last in
 // natural order among equal times), or the last in natural order where not every photograph has a
 // time. Imported once, with the texture fill, instead of smoothly and then again.
@@ -430,6 +428,8 @@ size_t last_photo_in_time(const std::vector<std::string>& outputs, const std::ve
     }
 }
 
+// The image files of a folder, in name order as people number them (a sequence's frames are named
+// by their time; "img 9" before "img 10").
 std::vector<std::string> photos_in_folder(const std::string& folder) {
     std::vector<std::string> out;
     for (const auto& e : std::filesystem::directory_iterator(folder)) {
@@ -654,14 +654,14 @@ void run_photo_import(const PhotoImportJob& o) {
     };
     // The last sky in time is filled with the sky's texture (below); guessed here from the planned
     // times so that it is imported once, checked against the written skies after.
-    const std::optional<size_t> texture_at = !o.fill && photos.size() >= 2
-                                                 ? std::optional<size_t>(last_photo_in_time(outputs, planned_times))
-                                                 : std::nullopt;
+    const size_t texture_at =  // photos.size(): none (a fill was asked for, or a single photograph)
+        !o.fill && photos.size() >= 2 ? last_photo_in_time(outputs, planned_times) : photos.size();
     ProgressBar progress((long long)photos.size(), "importing " + std::to_string(photos.size()) + " photographs");
     for (size_t i = 0; i < photos.size(); ++i) {
         take(i);
-        each.fill = texture_at == i ? PhotoImportParams::FillMethod::Texture : PhotoImportParams::FillMethod::Smooth;
-        if (o.fill) each.fill = o.fill;
+        each.fill = o.fill            ? o.fill
+                    : i == texture_at ? PhotoImportParams::FillMethod::Texture
+                                      : PhotoImportParams::FillMethod::Smooth;
         try {
             const std::string key = import_settings_key(each);
             // Kept also when made with the texture fill: the sequence's last sky (below).
@@ -681,7 +681,6 @@ void run_photo_import(const PhotoImportJob& o) {
         progress.advance();
     }
     progress.finish();
-    if (!o.fill) each.fill = PhotoImportParams::FillMethod::Smooth;
     // Where a moving sky made from the folder starts (its last sky in time: `animate --sky FOLDER`,
     // `sky predict --sky FOLDER`) the hidden pixels are filled with the sky's own texture, as a single
     // import fills them: the smooth fill of a TSI's shadow band (pale streaks) rode the wind across
