@@ -29,7 +29,7 @@ struct ImportOptions {
     bool mirror = false, keep_colours = false, auto_circle = false, no_preset_mask = false, detect = false,
          keep_thin = false, no_inpaint = false;
     std::string time, hdr = "auto", fill = "texture";
-    double lat = 0, lon = 0, elevation = 0, utc_offset = 0, turbidity = 3.0;
+    double lat = 0, lon = 0, elevation = 0, utc_offset = 0, turbidity = 3.0, calibration_window = 150;
     int resolution = 512;
     std::string out, preview, filled_mask;
     // Set by CLI11 when given, so presets can be overridden option by option.
@@ -83,6 +83,7 @@ PhotoImportJob import_job(const ImportOptions& o) {
     if (o.lon_opt->count()) job.longitude_deg = o.lon;
     if (o.elev_opt->count()) job.elevation_m = o.elevation;
     job.hdr = o.hdr, job.keep_colours = o.keep_colours, job.turbidity = o.turbidity;
+    job.calibration_window_s = o.calibration_window;
     job.resolution = o.resolution;
     job.out = o.out, job.preview = o.preview, job.filled_mask = o.filled_mask;
     return job;
@@ -214,6 +215,13 @@ void register_sky_import_commands(CLI::App& sky) {
                   "to the clear-sky model on the clear sky, clouds kept grey; docs/sky-import.md)");
     imp->add_option("--turbidity", io->turbidity, "Clear-sky model turbidity for the calibration (default 3)")
         ->check(finite_in(1, 10));
+    imp->add_option("--calibration-window", io->calibration_window,
+                    "Several photographs: how far each sky's calibration uses the scale and colour fitted on its "
+                    "clear pixels follows the median clear share of the photographs within this many seconds either "
+                    "side (and of the two nearest each side within twice it), so a frame whose clear share "
+                    "spikes is calibrated as its neighbours are; 0: each photograph by its own share")
+        ->check(finite_in(0, 86400))
+        ->capture_default_str();
     imp->add_option("--sky-res", io->resolution, "Output fisheye size N (N x N pixels), 16..16384")
         ->check(CLI::Range(kMinSkyResolution, kMaxSkyResolution))
         ->capture_default_str();

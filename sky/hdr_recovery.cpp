@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <map>
 #include <cmath>
+#include <Eigen/SVD>
 #include <opencv2/imgproc.hpp>
 #include <iomanip>
 #include <sstream>
@@ -38,6 +39,8 @@ std::string HdrCalibrationReport::summary() const {
     s << std::setprecision(4) << ", scale " << scale << " W m^-2 sr^-1 per unit";
     s.precision(3);
     s << ", clear pixels " << clear_fraction * 100 << "% of the disc (ratio spread " << ratio_spread * 100 << "%)";
+    if (trusted_clear_fraction != clear_fraction)
+        s << ", trusted as " << trusted_clear_fraction * 100 << "% (the sequence's around it)";
     s << ", colour: " << white_balance_method;
     if (white_balance_method.rfind("none", 0) != 0)
         s << " (grey R/G " << std::exp(grey_rg) << " B/G " << std::exp(grey_bg) << ", chroma stretch " << chroma_rg
@@ -232,9 +235,11 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     HdrCalibrationReport rep;
 
     SunPosition sp = compute_sun_position(params.time, params.location);
-    rep.computed_sun = sp.direction();
+    rep.clock_sun = sp.direction();
+    rep.computed_sun = params.sun_in_photo ? params.sun_in_photo->normalized() : rep.clock_sun;
     rep.sun_elevation_deg = sp.elevation_deg();
     rep.used_sun = rep.computed_sun;
+    const double sun_search_deg = params.sun_in_photo ? std::min(params.sun_search_deg, 5.0) : params.sun_search_deg;
 
     auto dir = [n](size_t p) {
         Vec2 uv = fisheye::pixel_center_uv(int(p % n), int(p / n), n);
@@ -267,7 +272,7 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     };
     int sun_blob = -1;
     for (int l = 1; l < blobs && !sun_hidden; ++l)
-        if (nearest[size_t(l)] <= params.sun_search_deg * kDeg &&
+        if (nearest[size_t(l)] <= sun_search_deg * kDeg &&
             (sun_blob < 0 || nearest[size_t(l)] < nearest[size_t(sun_blob)]))
             sun_blob = l;
     // Where the photo shows the sun. A compact blob: its centroid, as always. But the sun's round
@@ -302,15 +307,15 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
         const bool joined_glare = core.found && core.radius_deg <= kMaxSunCoreDeg &&
                                   angle_between(core.direction, rep.computed_sun) <= kSunCoreOnSunDeg * kDeg;
         if (compact && (!core.found || angle_between(blob_centre, core.direction) <= kSunCoreAgreeDeg * kDeg))
-            seen = blob_centre;
+            seen = blob_centre, rep.seen_sun = blob_centre;
         else if (joined_glare) seen = rep.computed_sun, rep.sun_joined = true;
-        else if (compact) seen = blob_centre;
+        else if (compact) seen = blob_centre, rep.seen_sun = blob_centre;
         else if (wide_glare_on_clear_sky(sun_blob)) seen = rep.computed_sun, rep.sun_in_wide_glare = true;
         else sun_blob = -1;
     }
-    if (sun_blob < 0 && !sun_hidden) {
+    if (sun_blob < 0 && !sun_hidden && !params.sun_in_photo) {
         std::optional<NorthFromSun> elsewhere = north_from_seen_sun(photo, params.time, params.location);
-        if (elsewhere && elsewhere->moved_deg > params.sun_search_deg) rep.sun_elsewhere = elsewhere;
+        if (elsewhere && elsewhere->moved_deg > sun_search_deg) rep.sun_elsewhere = elsewhere;
     }
     if (sun_blob > 0 && rep.computed_sun.y() > -0.02) {
         rep.sun_visible = true;
@@ -367,6 +372,7 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
         }
     rep.clear_pixels = clear * stride * stride;  // counted on the subsample
     rep.clear_fraction = disc ? std::min(1.0, double(rep.clear_pixels) / double(disc)) : 0;
+    rep.trusted_clear_fraction = params.trusted_clear_fraction.value_or(rep.clear_fraction);
 
     // Colour: log chromaticities (log R/G, log B/G) of the clear pixels against the model's.
     const float floor = 1e-4f;  // darker channels say nothing about colour
@@ -384,8 +390,8 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     // what stands in for it (the camera's typical colour, grey clouds, or nothing) from
     // min_white_balance_fraction up, so that a sky clouding over does not change colour at once
     // (the Mobotix 12:34 -> 12:35 CEST: R/G x1.15, B/G x0.78 between frames a minute apart).
-    const bool fit = rep.clear_fraction >= params.min_white_balance_fraction && photo_rg.size() >= 20;
-    const double fit_weight = fit ? trust_ramp(rep.clear_fraction, params.min_white_balance_fraction,
+    const bool fit = rep.trusted_clear_fraction >= params.min_white_balance_fraction && photo_rg.size() >= 20;
+    const double fit_weight = fit ? trust_ramp(rep.trusted_clear_fraction, params.min_white_balance_fraction,
                                                params.full_white_balance_fraction)
                                   : 0.0;
     auto weight_text = [](double w) {
@@ -497,7 +503,7 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     // under min_clear_fraction, and blended (in log) with the fallback's between: a sky clouding
     // over frame by frame then changes its scale smoothly. The hard switch made a frame a minute
     // after the last one 1.9x darker (Mobotix 12:38 -> 12:39 CEST, the photographs within 3 %).
-    const double clear_weight = ratios.size() >= 20 ? trust_ramp(rep.clear_fraction, params.min_clear_fraction,
+    const double clear_weight = ratios.size() >= 20 ? trust_ramp(rep.trusted_clear_fraction, params.min_clear_fraction,
                                                                  params.full_clear_fraction)
                                                     : 0.0;
     rep.clear_weight = clear_weight;
@@ -556,6 +562,55 @@ SkyImage recover_hdr(const ImportedPhoto& photo, const HdrCalibrationParams& par
     out.units = kAbsoluteRadiance;
     if (report_out) *report_out = rep;
     return out;
+}
+
+std::optional<SunTrack> fit_sun_track(const std::vector<Vec3d>& clock, const std::vector<Vec3d>& seen) {
+    if (clock.size() != seen.size()) throw Error("fit_sun_track: as many clock suns as seen ones are needed");
+    SunTrack track;
+    track.seen = int(seen.size());
+    std::vector<bool> use(seen.size(), true);
+    auto median = [](std::vector<double> v) {
+        std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+        return v[v.size() / 2];
+    };
+    std::vector<double> residual(seen.size());
+    for (int pass = 0; pass < 5; ++pass) {  // until the photographs taken stop changing
+        Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+        int used = 0;
+        for (size_t k = 0; k < seen.size(); ++k)
+            if (use[k]) h += seen[k].normalized() * clock[k].normalized().transpose(), ++used;
+        if (used < 5) return std::nullopt;
+        const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+        Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+        d(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1 : 1;
+        track.turn = svd.matrixU() * d * svd.matrixV().transpose();
+        track.used = used;
+        std::vector<double> kept;
+        for (size_t k = 0; k < seen.size(); ++k) {
+            residual[k] = angle_between(track.turn * clock[k].normalized(), seen[k].normalized()) / kDeg;
+            if (use[k]) kept.push_back(residual[k]);
+        }
+        track.median_residual_deg = median(kept);
+        const double limit = std::max(3 * track.median_residual_deg, 2.0);
+        bool changed = false;
+        for (size_t k = 0; k < seen.size(); ++k) {
+            changed |= use[k] != (residual[k] <= limit);
+            use[k] = residual[k] <= limit;
+        }
+        if (!changed) break;
+    }
+    double longest = 0;
+    std::vector<double> offsets;
+    for (size_t a = 0; a < seen.size(); ++a) {
+        if (!use[a]) continue;
+        offsets.push_back(angle_between(clock[a].normalized(), seen[a].normalized()) / kDeg);
+        for (size_t b = a + 1; b < seen.size(); ++b)
+            if (use[b]) longest = std::max(longest, angle_between(clock[a], clock[b]) / kDeg);
+    }
+    if (offsets.size() < 5 || longest < 10 || track.median_residual_deg > 2) return std::nullopt;
+    track.median_offset_deg = median(offsets);
+    track.turn_deg = std::acos(std::clamp((track.turn.trace() - 1) / 2, -1.0, 1.0)) / kDeg;
+    return track;
 }
 
 void validate_unit_map(const UnitMapParams& p) {

@@ -66,6 +66,16 @@ struct HdrCalibrationParams {
     double full_white_balance_fraction = 0.10;
     // The camera's colour rendering (CameraPreset::colour); none: per-channel gains.
     std::optional<CameraColour> camera_colour;
+    // The clear share that decides how far the fits on the clear pixels are trusted (the ramps
+    // above), instead of the photo's own: a sequence's, smoothed over time (sky/photo_import_job.h),
+    // so that a frame whose clear share spiked (the Mobotix's dawn: 0.03 %, 6.7 %, 0.03 % a minute
+    // apart, the middle sky 2x brighter) is calibrated as its neighbours are. The fits themselves
+    // stay the photo's own (its exposure and white balance may differ from theirs).
+    std::optional<double> trusted_clear_fraction;
+    // Where the sun lies in this photograph's own frame, instead of where the clock puts it: a
+    // sequence's sun track (fit_sun_track), for a camera that is not level or not turned as its
+    // north says. The clipped sun is then searched for within 5 degrees of it.
+    std::optional<Vec3d> sun_in_photo;
 };
 
 // A north found from the sun a photograph shows (north_from_seen_sun, below).
@@ -79,11 +89,12 @@ struct NorthFromSun {
 struct HdrCalibrationReport {
     // "clear-sky pixels", "mean-luminance fallback", or both blended (clear_weight between 0 and 1)
     std::string method;
-    double clear_weight = 0;     // the clear-pixel scale's weight in log (1 - the fallback's)
-    double scale = 0;            // radiance (W m^-2 sr^-1) per linear photo unit
-    long long clear_pixels = 0;  // pixels used (before subsampling)
-    double clear_fraction = 0;   // of the disc
-    double ratio_spread = 0;     // median absolute deviation / median of the per-pixel ratios
+    double clear_weight = 0;            // the clear-pixel scale's weight in log (1 - the fallback's)
+    double scale = 0;                   // radiance (W m^-2 sr^-1) per linear photo unit
+    long long clear_pixels = 0;         // pixels used (before subsampling)
+    double clear_fraction = 0;          // of the disc
+    double trusted_clear_fraction = 0;  // what the trust ramps took (clear_fraction, or one imposed)
+    double ratio_spread = 0;            // median absolute deviation / median of the per-pixel ratios
     // Colour correction applied before the scale (luminance kept): log(R/G), log(B/G) minus
     // grey_rg/grey_bg (the camera's grey, or the fitted gains' log), divided by chroma_rg/chroma_bg;
     // and where it came from ("clear-sky pixels", "the camera's typical colour (...)", "none (...)").
@@ -101,7 +112,11 @@ struct HdrCalibrationReport {
     // the camera's north is likely wrong; the north that would put the computed sun on it.
     std::optional<NorthFromSun> sun_elsewhere;
     double sun_elevation_deg = 0;  // computed
-    Vec3d computed_sun = Vec3d::UnitY(), used_sun = Vec3d::UnitY();
+    // computed_sun: where the sun was looked for (the clock's, or HdrCalibrationParams::sun_in_photo);
+    // clock_sun: the clock's always; seen_sun: the centre of the clipped blob taken for the sun, when
+    // its shape placed it (not joined to other glare).
+    Vec3d computed_sun = Vec3d::UnitY(), used_sun = Vec3d::UnitY(), clock_sun = Vec3d::UnitY();
+    std::optional<Vec3d> seen_sun;
     std::string summary() const;  // one line for people
     // Non-empty when the clipped sun lies farther than kSunOffsetWarningDeg from the computed one
     // (a wrong time, place or orientation, or glare taken for the sun), or is seen only elsewhere at
@@ -133,6 +148,20 @@ struct ConsensusNorth {
     bool agreed = false;
 };
 ConsensusNorth consensus_north(const std::vector<double>& norths_deg, int tries = 1);
+
+// The turn that takes where the clock puts the sun to where a sequence's photographs show it
+// (Wahba's problem, by SVD), fitted to the photographs whose clipped sun was seen and refitted
+// without those more than max(3 x the median, 2 degrees) off (glare taken for the sun). None with
+// fewer than 5 such photographs, a track under 10 degrees long, or a median residual over 2 degrees.
+// A camera that is tilted, or turned otherwise than its north says, shows the sun on such a track:
+// the Mobotix's morning, 82 photographs, 9-38 degrees from the clock's sun, within 1.1 degrees
+// (median) of one turn.
+struct SunTrack {
+    Eigen::Matrix3d turn = Eigen::Matrix3d::Identity();  // seen = turn * clock
+    int used = 0, seen = 0;
+    double median_residual_deg = 0, median_offset_deg = 0, turn_deg = 0;
+};
+std::optional<SunTrack> fit_sun_track(const std::vector<Vec3d>& clock, const std::vector<Vec3d>& seen);
 
 // Absolute radiance from an imported LDR photo (throws dynsky::Error if the photo was not
 // display-referred: HDR input already has its own scale). Sets sun_direction on the result.

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iomanip>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -36,8 +38,33 @@ struct OnePhoto : PhotoImportJob {
     std::string circle_origin;                            // how the circle given came about ("" : "given")
     std::optional<std::array<int, 2>> circle_photo_size;  // the sequence's photos' size, when its circle is used
     std::optional<PhotoImportParams::ColourShading> colour_shading;  // a sequence's, measured on it
-    std::optional<double> north_found;  // a sequence's north, found from the sun on its photographs
+    std::optional<double> north_found;             // a sequence's north, found from the sun on its photographs
+    std::optional<double> trusted_clear_fraction;  // imposed: the sequence's smoothed over time
+    std::optional<Vec3d> sun_in_photo;             // imposed: on the sequence's sun track
 };
+
+// The header keys of a calibrated sky's own clear share and, where one was imposed, that one: what
+// a sequence's smoothing reads (HdrCalibrationParams::trusted_clear_fraction).
+constexpr const char* kClearFractionKey = "dynsky:clear_fraction";
+constexpr const char* kTrustedClearFractionKey = "dynsky:trusted_clear_fraction";
+// ... and where the clock puts the sun, where the photograph shows it, and where a sequence's sun
+// track put it (direction_text): what a sequence's sun track is fitted to.
+constexpr const char* kSunClockKey = "dynsky:sun_clock";
+constexpr const char* kSunSeenKey = "dynsky:sun_seen";
+constexpr const char* kSunTrackKey = "dynsky:sun_track";
+
+std::string direction_text(const Vec3d& d) {
+    char t[120];
+    std::snprintf(t, sizeof t, "%.9g %.9g %.9g", d.x(), d.y(), d.z());
+    return t;
+}
+
+std::optional<Vec3d> parse_direction(const std::string& text) {
+    std::istringstream in(text);
+    Vec3d d;
+    if (!(in >> d.x() >> d.y() >> d.z()) || !(d.norm() > 0.5 && d.norm() < 2)) return std::nullopt;
+    return d.normalized();
+}
 
 // What one photograph's import is given: geometry and masks, the place, its time, and whether it is
 // calibrated.
@@ -286,6 +313,7 @@ void import_one(const OnePhoto& o, bool verbose, const std::string& settings_key
                     params.inpaint ? "" : " (left black: --no-inpaint)");
 
     SkyImage sky = imported.sky;
+    std::map<std::string, std::string> calibration_strings;
     std::string unit = "relative linear units (decoded photo values)";
     if (calibrate) {
         if (!imported.display_referred) {
@@ -313,8 +341,16 @@ void import_one(const OnePhoto& o, bool verbose, const std::string& settings_key
             hp.sun_search_deg = sun_search;
             hp.camera_colour = camera_colour;
             hp.white_balance = !o.keep_colours;
+            hp.trusted_clear_fraction = o.trusted_clear_fraction;
+            hp.sun_in_photo = o.sun_in_photo;
             HdrCalibrationReport report;
             sky = recover_hdr(imported, hp, &report);
+            calibration_strings[kClearFractionKey] = number_text(report.clear_fraction, 9);
+            if (o.trusted_clear_fraction)
+                calibration_strings[kTrustedClearFractionKey] = number_text(*o.trusted_clear_fraction, 9);
+            calibration_strings[kSunClockKey] = direction_text(report.clock_sun);
+            if (report.seen_sun) calibration_strings[kSunSeenKey] = direction_text(*report.seen_sun);
+            if (o.sun_in_photo) calibration_strings[kSunTrackKey] = direction_text(*o.sun_in_photo);
             if (verbose) std::printf("time %s; %s\n", format_utc_time(utc).c_str(), report.summary().c_str());
             if (std::string w = report.sun_offset_warning(); !w.empty())
                 std::fprintf(stderr, "dynsky: warning: %s: %s\n", o.photo.c_str(), w.c_str());
@@ -335,6 +371,7 @@ void import_one(const OnePhoto& o, bool verbose, const std::string& settings_key
     sky.source = source.str();
     ImageMetadata extra;
     if (!settings_key.empty()) extra.strings[kImportSettingsKey] = settings_key;
+    for (const auto& [key, value] : calibration_strings) extra.strings[key] = value;
     save_sky(o.out, sky, "", extra);
     if (!o.filled_mask.empty()) {
         // 255 where the import filled the sky in (arm, band, masts, unseen), 0 elsewhere: what
@@ -406,6 +443,49 @@ void refuse_mixed_encodings(const std::vector<std::string>& photos, const std::s
                         " display-encoded ones: their skies would be in different units in one sequence (the "
                         "HDR file's own scale beside skies calibrated against the sun). Import them apart");
     }
+}
+
+// Each photograph's clear share smoothed over time: the median of the photographs' own within
+// window_s either side (and the two nearest on each side within two windows), so that a frame whose clear
+// share spiked takes its neighbours' while a lasting change (the sky clearing) stays where it
+// happened. `seconds` in any order; photographs without a share get none.
+std::vector<std::optional<double>> smooth_over_time(const std::vector<double>& seconds,
+                                                    const std::vector<std::optional<double>>& values, double window_s) {
+    std::vector<size_t> order;
+    for (size_t i = 0; i < values.size(); ++i)
+        if (values[i]) order.push_back(i);
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return seconds[a] < seconds[b]; });
+    std::vector<std::optional<double>> out(values.size());
+    const size_t count = order.size();
+    for (size_t k = 0; k < count; ++k) {
+        // Within the window, or among the two nearest each side if those lie within two windows
+        // (photographs hours apart are not neighbours).
+        const double t = seconds[order[k]];
+        size_t lo = k, hi = k;
+        while (lo > 0 &&
+               (t - seconds[order[lo - 1]] <= window_s || (k - lo < 2 && t - seconds[order[lo - 1]] <= 2 * window_s)))
+            --lo;
+        while (hi + 1 < count &&
+               (seconds[order[hi + 1]] - t <= window_s || (hi - k < 2 && seconds[order[hi + 1]] - t <= 2 * window_s)))
+            ++hi;
+        std::vector<double> v;
+        for (size_t q = lo; q <= hi; ++q) v.push_back(*values[order[q]]);
+        const size_t m = v.size() / 2;
+        std::nth_element(v.begin(), v.begin() + m, v.end());
+        out[order[k]] = v.size() % 2 ? v[m] : 0.5 * (v[m] + *std::max_element(v.begin(), v.begin() + m));
+    }
+    return out;
+}
+
+// Whether two clear shares calibrate alike: the same trust in the clear pixels' scale and colour
+// (HdrCalibrationParams' ramps) within 0.01.
+bool same_trust(double a, double b) {
+    const HdrCalibrationParams p;
+    return std::abs(trust_ramp(a, p.min_clear_fraction, p.full_clear_fraction) -
+                    trust_ramp(b, p.min_clear_fraction, p.full_clear_fraction)) < 0.01 &&
+           std::abs(trust_ramp(a, p.min_white_balance_fraction, p.full_white_balance_fraction) -
+                    trust_ramp(b, p.min_white_balance_fraction, p.full_white_balance_fraction)) < 0.01 &&
+           (a >= p.min_white_balance_fraction) == (b >= p.min_white_balance_fraction);
 }
 
 // The photograph whose sky skies_in_time_order will put last: the latest planned time (the last in
@@ -703,6 +783,129 @@ void run_photo_import(const PhotoImportJob& o) {
         } catch (const Error& e) {
             std::fprintf(stderr, "dynsky: error: %s\n", e.what());
             failed.push_back(photos[i]);
+        }
+    }
+    // What one photograph's calibration cannot know, from the sequence's skies (read from their
+    // headers, so a resumed import does it as a whole one does); the skies concerned are imported
+    // again with it:
+    //  - the clear shares smoothed over time (PhotoImportJob::calibration_window_s): a sky whose own
+    //    share would trust its clear pixels otherwise than its neighbours' takes their median;
+    //  - the sun track (fit_sun_track): where the photographs show the sun along one turn of the
+    //    clock's, every sky's sun is put on that track (the sun where the photograph shows it, also
+    //    where a cloud hides it: the Mobotix's skies flipped 9-38 degrees between neighbours).
+    if (photos.size() >= 3) {
+        std::vector<double> seconds(photos.size(), 0.0);
+        std::vector<std::optional<double>> own(photos.size()), applied(photos.size());
+        std::vector<std::optional<Vec3d>> clock(photos.size()), seen(photos.size()), tracked(photos.size());
+        bool timed = true;
+        auto share = [](const std::string& text) -> std::optional<double> {
+            char* end = nullptr;
+            const double v = std::strtod(text.c_str(), &end);
+            if (text.empty() || *end || !(v >= 0 && v <= 1)) return std::nullopt;
+            return v;
+        };
+        for (size_t i = 0; i < photos.size(); ++i) {
+            if (std::find(failed.begin(), failed.end(), photos[i]) != failed.end()) continue;
+            try {
+                seconds[i] = utc_seconds(planned_times[i]);
+            } catch (const Error&) {
+                timed = false;  // no times (uncalibrated skies) or one that does not parse: nothing to order
+            }
+            const std::vector<std::string> h = image_header_strings(outputs[i],
+                                                                    {kClearFractionKey, kTrustedClearFractionKey,
+                                                                     kSunClockKey, kSunSeenKey, kSunTrackKey});
+            own[i] = share(h[0]);
+            applied[i] = h[1].empty() ? own[i] : share(h[1]);
+            clock[i] = parse_direction(h[2]), seen[i] = parse_direction(h[3]), tracked[i] = parse_direction(h[4]);
+        }
+        std::vector<std::optional<double>> smoothed(photos.size());
+        if (timed && o.calibration_window_s > 0) smoothed = smooth_over_time(seconds, own, o.calibration_window_s);
+        std::vector<Vec3d> clock_seen, seen_suns;
+        for (size_t i = 0; i < photos.size(); ++i)
+            if (clock[i] && seen[i]) clock_seen.push_back(*clock[i]), seen_suns.push_back(*seen[i]);
+        std::optional<SunTrack> track = fit_sun_track(clock_seen, seen_suns);
+        if (track && track->median_offset_deg < 3) track.reset();  // the clock's sun is where they show it
+        std::vector<size_t> redo;
+        size_t differ = 0, moved = 0;
+        std::vector<std::optional<Vec3d>> on_track(photos.size());
+        for (size_t i = 0; i < photos.size(); ++i) {
+            bool again = false;
+            if (smoothed[i] && applied[i]) {
+                again = !same_trust(*smoothed[i], *applied[i]);
+                if (!same_trust(*smoothed[i], *own[i])) ++differ;
+            }
+            if (track && clock[i] && clock[i]->y() > 0) {  // the sun up
+                on_track[i] = (track->turn * *clock[i]).normalized();
+                ++moved;
+                if (!tracked[i] || tracked[i]->dot(*on_track[i]) < std::cos(0.5 * kPiD / 180)) again = true;
+            } else if (tracked[i]) {
+                again = true;  // on a track an earlier run found
+            }
+            if (again) redo.push_back(i);
+        }
+        ProgressBar progress_again((long long)redo.size(), "importing " + std::to_string(redo.size()) +
+                                                               " skies again with the sequence's calibration");
+        for (size_t i : redo) {
+            take(i);
+            each.fill = o.fill ? o.fill
+                        : made_with(key_with_fill(PhotoImportParams::FillMethod::Texture))
+                            ? PhotoImportParams::FillMethod::Texture
+                            : PhotoImportParams::FillMethod::Smooth;
+            each.trusted_clear_fraction = smoothed[i];
+            each.sun_in_photo = on_track[i];
+            try {
+                import_again(import_settings_key(each), false);
+            } catch (const Error& e) {
+                std::fprintf(stderr, "dynsky: error: %s\n", e.what());
+                failed.push_back(photos[i]);
+            }
+            progress_again.advance();
+        }
+        progress_again.finish();
+        each.trusted_clear_fraction.reset(), each.sun_in_photo.reset();
+        if (differ)
+            std::printf(
+                "calibration: %zu skies whose clear share differed from the photographs' around them (the median "
+                "within %g s either side, --calibration-window) are calibrated with that share, as their "
+                "neighbours are\n",
+                differ, o.calibration_window_s);
+        if (track)
+            std::printf(
+                "sun: %d of the photographs show it %.1f deg (median) from where the clock puts it, along one turn of "
+                "%.1f deg of the clock's track (within %.1f deg, median; %d taken): every sky's sun (%zu with the sun "
+                "up) is put on that track, seen or hidden. The camera is not level or not turned as its north says "
+                "(--tilt, --tilt-azimuth, --north)\n",
+                track->seen, track->median_offset_deg, track->turn_deg, track->median_residual_deg, track->used, moved);
+    }
+    // The previews at one exposure, the median of the skies' own (exposure_median): each at its own
+    // hid the sequence's brightness changes (a frame 2x too bright looked like its neighbours).
+    {
+        std::vector<size_t> written;
+        std::vector<float> evs;
+        for (size_t i = 0; i < photos.size(); ++i) {
+            if (std::find(failed.begin(), failed.end(), photos[i]) != failed.end()) continue;
+            try {
+                const float ev = exposure_median(read_image(outputs[i]));
+                if (ev != 0) written.push_back(i), evs.push_back(ev);
+            } catch (const Error&) {
+                // Said by its import; its preview stays as it was.
+            }
+        }
+        if (written.size() >= 2) {
+            std::vector<float> sorted = evs;
+            std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+            const float ev = sorted[sorted.size() / 2];
+            ProgressBar previews((long long)written.size(), "previews at one exposure");
+            for (size_t i : written) {
+                take(i);
+                write_image(each.preview, tonemap_to_display(read_image(outputs[i]), ev));
+                previews.advance();
+            }
+            previews.finish();
+            std::printf(
+                "previews: one exposure for the sequence, %+.2f EV (the median of the skies' own, %+.2f to "
+                "%+.2f), so its brightness changes show\n",
+                ev, *std::min_element(evs.begin(), evs.end()), *std::max_element(evs.begin(), evs.end()));
         }
     }
     std::printf("imported %zu of %zu photographs into %s%s (STEM.exr, STEM.png, STEM.filled.png)%s\n",

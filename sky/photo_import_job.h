@@ -52,6 +52,12 @@ struct PhotoImportJob {
     std::optional<double> utc_offset_hours, latitude_deg, longitude_deg, elevation_m;
     std::string hdr = "auto";
     bool keep_colours = false;
+    // A sequence's photographs trust the scale and colour fitted on their clear pixels by the median
+    // clear share of the photographs within this many seconds either side (and of the two nearest
+    // each side within twice it; HdrCalibrationParams::trusted_clear_fraction), not by their
+    // own: a frame whose clear share spiked (the Mobotix's dawn, 07:03: 2x brighter than the minutes
+    // around it) is calibrated as its neighbours are. 0: each photograph by its own share.
+    double calibration_window_s = 150;
     double turbidity = 3.0;
     int resolution = 512;
     std::string out, preview, filled_mask;

@@ -465,6 +465,90 @@ TEST(SkyImportCli, ASequencesLastSkyIsFilledWithTheSkysTexture) {
     EXPECT_GT(first, 0.02);  // 0.04: the smooth fill
 }
 
+TEST(SkyImportCli, ASequencesFrameWhoseClearShareSpikesIsCalibratedAsItsNeighbours) {
+    // The Mobotix at dawn: 07:03's clear share is 6.7 % between frames with 0.03 %, so its own
+    // calibration trusted a fit on a few clear pixels and the sky came out 1.7x as bright as the
+    // minutes around it (the photographs' exposure flickers 2.4x here, which the fits follow).
+    DYNSKY_REQUIRE_SHARED();
+    const std::string dir = test::temp_dir("sky-import-clear-share-spike");
+    fs::create_directories(dir + "/photos");
+    for (const char* m : {"00", "01", "02", "03", "04", "05", "06"})
+        fs::copy_file(test::shared_path(std::string("skies/mobotix_sophia_20200812_morning/images/2020-08-12_07_") + m +
+                                        ".jpg"),
+                      dir + "/photos/2020-08-12_07_" + m + ".jpg");
+    auto brightness = [&](const std::string& skies, const char* minute) {
+        const SkyImage sky = load_sky(dir + "/" + skies + "/2020-08-12_07_" + minute + ".exr");
+        std::vector<float> y;
+        const double c = 0.5 * sky.resolution;
+        for (int j = 0; j < sky.resolution; ++j)
+            for (int i = 0; i < sky.resolution; ++i)
+                if (std::hypot(i + 0.5 - c, j + 0.5 - c) < 0.85 * c) y.push_back(luminance(sky.pixel(i, j)));
+        std::nth_element(y.begin(), y.begin() + y.size() / 2, y.end());
+        return double(y[y.size() / 2]);
+    };
+    auto spike = [&](const std::string& skies) {
+        return brightness(skies, "03") / std::sqrt(brightness(skies, "02") * brightness(skies, "04"));
+    };
+    const std::string common = " --preset mobotix --sky-res 64 ";
+    auto r = test::run_command(exe() + " sky import " + dir + "/photos" + common + "-o " + dir + "/smoothed");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("calibrated with that share, as their neighbours are"), std::string::npos) << r.output;
+    r = test::run_command(exe() + " sky import " + dir + "/photos" + common + "--calibration-window 0 -o " + dir +
+                          "/own");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(r.output.find("as their neighbours are"), std::string::npos) << r.output;
+    std::printf("07:03 against its neighbours: %.3f smoothed, %.3f by its own clear share\n", spike("smoothed"),
+                spike("own"));
+    EXPECT_GT(spike("own"), 1.4);                                      // 1.70
+    EXPECT_LT(std::abs(std::log(spike("smoothed"))), std::log(1.15));  // 1.04
+    for (const char* m : {"00", "01", "02", "04", "05", "06"})         // the others as they were
+        EXPECT_NEAR(brightness("smoothed", m), brightness("own", m), 1e-6 * brightness("own", m)) << m;
+    // Run again: every sky is kept, the one imported twice too.
+    const auto made = fs::last_write_time(dir + "/smoothed/2020-08-12_07_03.exr");
+    r = test::run_command(exe() + " sky import " + dir + "/photos" + common + "-o " + dir + "/smoothed");
+    EXPECT_NE(r.output.find("7 of them kept"), std::string::npos) << r.output;
+    EXPECT_EQ(fs::last_write_time(dir + "/smoothed/2020-08-12_07_03.exr"), made);
+}
+
+TEST(SkyImportCli, ASequencesSunIsPutOnTheTrackItsPhotographsShow) {
+    // The Mobotix is not level: its photographs show the sun 9-38 degrees from where the clock puts
+    // it, along one turn of the clock's track. A sky whose sun was hidden took the clock's, a sky
+    // whose sun was seen the photograph's, so the sun of neighbouring skies flipped.
+    DYNSKY_REQUIRE_SHARED();
+    const std::string dir = test::temp_dir("sky-import-sun-track");
+    fs::create_directories(dir + "/photos");
+    for (const char* t :
+         {"09_34", "09_52", "10_13", "10_22", "10_30", "10_57", "11_20", "11_50", "12_30", "12_50", "13_50"})
+        fs::copy_file(test::shared_path(std::string("skies/mobotix_sophia_20200812_morning/images/2020-08-12_") + t +
+                                        ".jpg"),
+                      dir + "/photos/2020-08-12_" + t + ".jpg");
+    auto r = test::run_command(exe() + " sky import " + dir + "/photos --preset mobotix --sky-res 96 -o " + dir +
+                               "/skies");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("is put on that track, seen or hidden"), std::string::npos) << r.output;
+    auto sun = [&](const char* t) {
+        return *load_sky(dir + "/skies/2020-08-12_" + std::string(t) + ".exr").sun_direction;
+    };
+    auto clock = [&](const char* t) {
+        const std::string h =
+            image_header_strings(dir + "/skies/2020-08-12_" + std::string(t) + ".exr", {"dynsky:sun_clock"}).front();
+        Eigen::Vector3f c;
+        EXPECT_EQ(std::sscanf(h.c_str(), "%f %f %f", &c.x(), &c.y(), &c.z()), 3) << t;
+        return c;
+    };
+    auto degrees = [](const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+        return std::acos(std::clamp(double(a.normalized().dot(b.normalized())), -1.0, 1.0)) * 180 / kPiD;
+    };
+    // The hidden suns of 10:30 and 12:50 beside the seen ones 8 and 20 minutes before (the sun moves
+    // 2 and 4 degrees in that time); where the clock puts them, 15 and 28 degrees away.
+    for (const auto& [hidden, seen] : {std::pair{"10_30", "10_22"}, std::pair{"12_50", "12_30"}}) {
+        std::printf("%s: sun %.1f deg from %s's (the clock's %.1f)\n", hidden, degrees(sun(hidden), sun(seen)), seen,
+                    degrees(clock(hidden), sun(seen)));
+        EXPECT_LT(degrees(sun(hidden), sun(seen)), 6.0) << hidden;
+        EXPECT_GT(degrees(clock(hidden), sun(seen)), 10.0) << hidden;
+    }
+}
+
 TEST(SkyImportCli, FindNorthTurnsThePhotographByTheSunItShows) {
     std::string dir = test::temp_dir("sky-import-north");
     fs::create_directories(dir + "/seq");

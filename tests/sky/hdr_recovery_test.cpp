@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -34,6 +36,44 @@ TEST(UnitMap, HdrToUnitToHdrRoundTripsFromDarkSkyToTheSun) {
     EXPECT_EQ(radiance_to_unit(0.0f, p), 0.0f);
     EXPECT_NEAR(radiance_to_unit(float(p.max_radiance), p), 1.0f, 1e-6);
     EXPECT_EQ(radiance_to_unit(float(10 * p.max_radiance), p), 1.0f);  // clamped above the range
+}
+
+TEST(SunTrack, OneTurnOfTheClocksSunIsFoundBesideGlareTakenForIt) {
+    // A day's sun (azimuth 90 -> 250 deg, up to 60 deg high) seen by a camera tilted 30 deg about an
+    // axis 40 deg from north and turned 10 deg about its own zenith, the blobs 0.5 deg off at random,
+    // and two bright clouds taken for the sun.
+    const auto axis = [](double deg, const Vec3d& a) { return Eigen::AngleAxisd(deg * kPiD / 180, a.normalized()); };
+    const Eigen::Matrix3d turn =
+        (axis(30, Vec3d(std::sin(0.7), 0, std::cos(0.7))) * axis(10, Vec3d::UnitY())).toRotationMatrix();
+    std::vector<Vec3d> clock, seen;
+    unsigned state = 7;
+    auto jitter = [&] {
+        state = state * 1664525u + 1013904223u;
+        return (double(state >> 8) / double(1u << 24) - 0.5) * 0.5 * kPiD / 180;
+    };
+    for (int k = 0; k < 20; ++k) {
+        const double az = (90 + 8.0 * k) * kPiD / 180, el = (20 + 40 * std::sin(kPiD * k / 19)) * kPiD / 180;
+        const Vec3d c(std::cos(el) * std::sin(az), std::sin(el), std::cos(el) * std::cos(az));
+        clock.push_back(c);
+        seen.push_back((axis(std::abs(jitter()) * 180 / kPiD, Vec3d(jitter(), jitter(), 1)) * (turn * c)).normalized());
+    }
+    seen[3] = Vec3d(0.3, 0.9, 0.1).normalized(), seen[11] = Vec3d(-0.5, 0.5, 0.7).normalized();  // glare
+    const std::optional<SunTrack> track = fit_sun_track(clock, seen);
+    ASSERT_TRUE(track);
+    std::printf("turn %.2f deg (true %.2f), residual %.2f deg, %d of %d taken, offset %.1f deg\n", track->turn_deg,
+                Eigen::AngleAxisd(turn).angle() * 180 / kPiD, track->median_residual_deg, track->used, track->seen,
+                track->median_offset_deg);
+    EXPECT_EQ(track->used, 18);
+    EXPECT_LT(track->median_residual_deg, 0.5);
+    EXPECT_LT(Eigen::AngleAxisd(track->turn * turn.transpose()).angle() * 180 / kPiD, 0.5);
+    // Too few, too short a track, or suns no one turn explains: none.
+    EXPECT_FALSE(fit_sun_track({clock.begin(), clock.begin() + 4}, {seen.begin(), seen.begin() + 4}));
+    std::vector<Vec3d> near_clock(5, clock[0]), near_seen(5, seen[0]);
+    EXPECT_FALSE(fit_sun_track(near_clock, near_seen));
+    std::vector<Vec3d> scattered = clock;
+    for (size_t k = 0; k < scattered.size(); ++k)
+        scattered[k] = (axis(20.0 * (k % 3), Vec3d(0, 1, 0)) * clock[k]).normalized();
+    EXPECT_FALSE(fit_sun_track(clock, scattered));
 }
 
 TEST(UnitMap, UnitToHdrToUnitIsExact) {
