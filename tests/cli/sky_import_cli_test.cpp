@@ -503,6 +503,18 @@ TEST(SkyImportCli, ASequencesFrameWhoseClearShareSpikesIsCalibratedAsItsNeighbou
     EXPECT_LT(std::abs(std::log(spike("smoothed"))), std::log(1.15));  // 1.04
     for (const char* m : {"00", "01", "02", "04", "05", "06"})         // the others as they were
         EXPECT_NEAR(brightness("smoothed", m), brightness("own", m), 1e-6 * brightness("own", m)) << m;
+    // The previews share one exposure, so a sky brighter than its neighbours looks it (each at its
+    // own exposure, 07:03 looked like the others).
+    EXPECT_NE(r.output.find("previews: one exposure for the sequence"), std::string::npos) << r.output;
+    auto preview = [&](const char* minute) {
+        const Image png = read_image(dir + "/own/2020-08-12_07_" + std::string(minute) + ".png");
+        double sum = 0;
+        for (int y = png.height / 4; y < 3 * png.height / 4; ++y)
+            for (int x = png.width / 4; x < 3 * png.width / 4; ++x) sum += png.at(x, y, 1);
+        return sum;
+    };
+    std::printf("previews' middles: 07:02 %.0f, 07:03 %.0f, 07:04 %.0f\n", preview("02"), preview("03"), preview("04"));
+    EXPECT_GT(preview("03"), 1.08 * std::max(preview("02"), preview("04")));  // 1.14 (ACES compresses 1.7x)
     // Run again: every sky is kept, the one imported twice too.
     const auto made = fs::last_write_time(dir + "/smoothed/2020-08-12_07_03.exr");
     r = test::run_command(exe() + " sky import " + dir + "/photos" + common + "-o " + dir + "/smoothed");
