@@ -12,14 +12,15 @@ namespace dynsky::cli {
 
 namespace {
 
-CLI::Validator finite_range(double min, double max, bool open_min) {
-    std::string range = (open_min ? "(" : "[") + number_text(min) + ", " + number_text(max) + "]";
+CLI::Validator finite_range(double min, double max, bool open_min, bool open_max = false) {
+    std::string range = (open_min ? "(" : "[") + number_text(min) + ", " + number_text(max) + (open_max ? ")" : "]");
     return CLI::Validator(
         [=](std::string& text) -> std::string {
             double v = 0;
             if (!CLI::detail::lexical_cast(text, v)) return "'" + text + "' is not a number";
             if (!std::isfinite(v)) return "'" + text + "' is not a finite number in " + range;
-            if (v < min || v > max || (open_min && v == min)) return "'" + text + "' is outside " + range;
+            if (v < min || v > max || (open_min && v == min) || (open_max && v == max))
+                return "'" + text + "' is outside " + range;
             return "";
         },
         "in " + range);
@@ -60,6 +61,8 @@ CLI::Validator utc_time() {
         "ISO 8601 with a zone");
 }
 CLI::Validator finite_above(double min, double max) { return finite_range(min, max, true); }
+
+CLI::Validator finite_below(double min, double max) { return finite_range(min, max, false, true); }
 
 CLI::Validator parsed_by(std::function<void(const std::string&)> parse, const std::string& what) {
     return CLI::Validator(

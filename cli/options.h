@@ -26,6 +26,8 @@ CLI::Validator utc_time();
 CLI::Validator parsed_by(std::function<void(const std::string&)> parse, const std::string& what);
 // A finite number in (min, max] (a strictly positive one for min = 0).
 CLI::Validator finite_above(double min, double max);
+// A finite number in [min, max) (a share that must leave something: --mask-detail 1 erodes all).
+CLI::Validator finite_below(double min, double max);
 // A whole number >= 0 written as digits (a seed): "-1" is refused, not wrapped to 2^64 - 1.
 CLI::Validator non_negative_whole();
 // Limits shared by the commands.

@@ -286,6 +286,12 @@ SkyTimeline make_sky_timeline(const SkySourceSpec& o, const StepModelSpec& m) {
             throw Error("--model '" + model_name + "': expected auto, procedural, flow or network:FOLDER");
         }
     }
+    // --drift shapes the flow model's first step only: said where another model ignores it.
+    if (m.drift_deg_per_s != StepModelSpec{}.drift_deg_per_s && model_name != "auto" && model_name != "flow")
+        std::fprintf(stderr,
+                     "dynsky: warning: --drift sets the flow model's first-step drift; the %s model moves the clouds "
+                     "by its own motion (--wind-from, --wind-speed, --prev): --drift is ignored\n",
+                     model_name.c_str());
     double dt = m.dt;
     if (dt == 0) dt = model->native_dt() > 0 ? model->native_dt() : 10.0;
     else if (model->dt_is_fixed() && std::abs(dt - model->native_dt()) > 1e-9)

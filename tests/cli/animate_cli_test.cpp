@@ -455,6 +455,13 @@ TEST(AnimateCli, ALongDeltaTUnderAWindIsSaid) {
     EXPECT_NE(r.output.find("1800 times their height a step"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("give --dt 0.017 s or less"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(dir + "/c/frame_0000.exr"));
+    // --drift shapes the flow model's first step only: another model ignored it without a word.
+    r = test::run_command(base + "/d --dt 30 --drift 1 2>&1");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("the advect model moves the clouds by its own motion"), std::string::npos) << r.output;
+    r = test::run_command(base + "/e --dt 30 --model flow --drift 1 2>&1");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(r.output.find("--drift is ignored"), std::string::npos) << r.output;
     fs::remove_all(dir);
 }
 

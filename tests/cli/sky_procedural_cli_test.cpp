@@ -79,7 +79,7 @@ TEST(SkyProceduralCli, BadArgumentsLeaveNoOutput) {
         {"--seed 3", "--cloud-seed"},
         {"--lat 40 --sun-elevation 30", "excludes"},
         // [0, 1): 1 passed the option's check and failed later, not naming the option.
-        {"--mask-image " + base + "/missing.png --mask-detail 1", "--mask-detail: 1: give a value in [0, 1)"},
+        {"--mask-image " + base + "/missing.png --mask-detail 1", "--mask-detail: '1' is outside [0, 1)"},
     };
     int k = 0;
     for (const Case& c : cases) {
