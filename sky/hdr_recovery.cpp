@@ -608,6 +608,7 @@ std::optional<SunTrack> fit_sun_track(const std::vector<Vec3d>& clock, const std
             if (use[b]) longest = std::max(longest, angle_between(clock[a], clock[b]) / kDeg);
     }
     if (offsets.size() < 5 || longest < 10 || track.median_residual_deg > 2) return std::nullopt;
+    track.taken = use;
     track.median_offset_deg = median(offsets);
     track.turn_deg = std::acos(std::clamp((track.turn.trace() - 1) / 2, -1.0, 1.0)) / kDeg;
     return track;

@@ -159,6 +159,7 @@ ConsensusNorth consensus_north(const std::vector<double>& norths_deg, int tries 
 struct SunTrack {
     Eigen::Matrix3d turn = Eigen::Matrix3d::Identity();  // seen = turn * clock
     int used = 0, seen = 0;
+    std::vector<bool> taken;  // per seen sun: whether the turn was fitted to it (false: glare)
     double median_residual_deg = 0, median_offset_deg = 0, turn_deg = 0;
 };
 std::optional<SunTrack> fit_sun_track(const std::vector<Vec3d>& clock, const std::vector<Vec3d>& seen);

@@ -41,6 +41,10 @@ struct OnePhoto : PhotoImportJob {
     std::optional<double> north_found;             // a sequence's north, found from the sun on its photographs
     std::optional<double> trusted_clear_fraction;  // imposed: the sequence's smoothed over time
     std::optional<Vec3d> sun_in_photo;             // imposed: on the sequence's sun track
+    // A sequence's: the clipped suns found far from the clock's, said once for all (photo -> its
+    // offset in degrees and the warning a single import prints).
+    std::map<std::string, std::pair<double, std::string>>* far_suns = nullptr;
+    bool say_preview = true;  // false: a sequence says its previews' exposure once for all
 };
 
 // The header keys of a calibrated sky's own clear share and, where one was imposed, that one: what
@@ -186,7 +190,9 @@ std::string import_settings_key(const OnePhoto& o) {
         if (v) s << *v;
         s << ';';
     };
-    s << "preset=" << o.preset << ";auto_circle=" << o.auto_circle << ";mirror=" << o.mirror
+    // calibration=2: the skies carry the headers a sequence's smoothing and sun track read (skies of
+    // an earlier version, without them, are imported again).
+    s << "calibration=2;preset=" << o.preset << ";auto_circle=" << o.auto_circle << ";mirror=" << o.mirror
       << ";flatten_colour=" << o.flatten_colour << ";find_north=" << o.find_north
       << ";no_preset_mask=" << o.no_preset_mask << ";detect_obstructions=" << o.detect_obstructions
       << ";keep_thin_objects=" << o.keep_thin_objects << ";no_inpaint=" << o.no_inpaint
@@ -352,8 +358,10 @@ void import_one(const OnePhoto& o, bool verbose, const std::string& settings_key
             if (report.seen_sun) calibration_strings[kSunSeenKey] = direction_text(*report.seen_sun);
             if (o.sun_in_photo) calibration_strings[kSunTrackKey] = direction_text(*o.sun_in_photo);
             if (verbose) std::printf("time %s; %s\n", format_utc_time(utc).c_str(), report.summary().c_str());
-            if (std::string w = report.sun_offset_warning(); !w.empty())
-                std::fprintf(stderr, "dynsky: warning: %s: %s\n", o.photo.c_str(), w.c_str());
+            if (std::string w = report.sun_offset_warning(); !w.empty()) {
+                if (o.far_suns && !report.sun_elsewhere) (*o.far_suns)[o.photo] = {report.sun_offset_deg, w};
+                else std::fprintf(stderr, "dynsky: warning: %s: %s\n", o.photo.c_str(), w.c_str());
+            }
             unit = "W m^-2 sr^-1 (calibrated against the clear-sky model)";
         }
     } else {
@@ -389,7 +397,7 @@ void import_one(const OnePhoto& o, bool verbose, const std::string& settings_key
         }
     }
     if (verbose) std::printf("wrote %s (%dx%d fisheye, %s)\n", o.out.c_str(), o.resolution, o.resolution, unit.c_str());
-    if (!o.preview.empty()) write_display_preview(o.preview, sky_to_image(sky), verbose);
+    if (!o.preview.empty()) write_display_preview(o.preview, sky_to_image(sky), verbose && o.say_preview);
 }
 
 // Every photograph's time, before anything is written: a sequence some of whose photographs have a
@@ -709,6 +717,9 @@ void run_photo_import(const PhotoImportJob& o) {
     std::vector<std::string> failed;
     size_t kept = 0;
     bool said = false;
+    std::map<std::string, std::pair<double, std::string>> far_suns;
+    each.far_suns = &far_suns;
+    each.say_preview = false;
     // Photograph i's files, and whether they are whole and made with `key` (a stopped import goes on
     // where it stopped: long sequences lost every finished sky to an interruption).
     auto take = [&](size_t i) {
@@ -791,12 +802,14 @@ void run_photo_import(const PhotoImportJob& o) {
     //  - the clear shares smoothed over time (PhotoImportJob::calibration_window_s): a sky whose own
     //    share would trust its clear pixels otherwise than its neighbours' takes their median;
     //  - the sun track (fit_sun_track): where the photographs show the sun along one turn of the
-    //    clock's, every sky's sun is put on that track (the sun where the photograph shows it, also
-    //    where a cloud hides it: the Mobotix's skies flipped 9-38 degrees between neighbours).
+    //    clock's, the sun of every sky within that stretch of track is put on it (the sun where the
+    //    photograph shows it, also where a cloud hides it: the Mobotix's skies flipped 9-38 degrees
+    //    between neighbours).
     if (photos.size() >= 3) {
         std::vector<double> seconds(photos.size(), 0.0);
         std::vector<std::optional<double>> own(photos.size()), applied(photos.size());
         std::vector<std::optional<Vec3d>> clock(photos.size()), seen(photos.size()), tracked(photos.size());
+        std::vector<bool> imposed_share(photos.size(), false);
         bool timed = true;
         auto share = [](const std::string& text) -> std::optional<double> {
             char* end = nullptr;
@@ -816,15 +829,31 @@ void run_photo_import(const PhotoImportJob& o) {
                                                                      kSunClockKey, kSunSeenKey, kSunTrackKey});
             own[i] = share(h[0]);
             applied[i] = h[1].empty() ? own[i] : share(h[1]);
+            imposed_share[i] = !h[1].empty();
             clock[i] = parse_direction(h[2]), seen[i] = parse_direction(h[3]), tracked[i] = parse_direction(h[4]);
         }
         std::vector<std::optional<double>> smoothed(photos.size());
         if (timed && o.calibration_window_s > 0) smoothed = smooth_over_time(seconds, own, o.calibration_window_s);
         std::vector<Vec3d> clock_seen, seen_suns;
+        std::vector<size_t> seen_at;
         for (size_t i = 0; i < photos.size(); ++i)
-            if (clock[i] && seen[i]) clock_seen.push_back(*clock[i]), seen_suns.push_back(*seen[i]);
-        std::optional<SunTrack> track = fit_sun_track(clock_seen, seen_suns);
+            if (clock[i] && seen[i])
+                clock_seen.push_back(*clock[i]), seen_suns.push_back(*seen[i]), seen_at.push_back(i);
+        std::optional<SunTrack> track = timed ? fit_sun_track(clock_seen, seen_suns) : std::nullopt;
         if (track && track->median_offset_deg < 3) track.reset();  // the clock's sun is where they show it
+        // The track holds between the first and the last photograph whose sun is on it (10 minutes
+        // either side): beyond, nothing shows where it goes (put on it, the Mobotix's sunrise sun
+        // went below the horizon and its skies 2x darker).
+        double track_from = 0, track_to = 0;
+        if (track) {
+            bool any = false;
+            for (size_t k = 0; k < seen_at.size(); ++k) {
+                if (!track->taken[k]) continue;
+                const double t = seconds[seen_at[k]];
+                track_from = any ? std::min(track_from, t) : t, track_to = any ? std::max(track_to, t) : t, any = true;
+            }
+            track_from -= 600, track_to += 600;
+        }
         std::vector<size_t> redo;
         size_t differ = 0, moved = 0;
         std::vector<std::optional<Vec3d>> on_track(photos.size());
@@ -833,8 +862,11 @@ void run_photo_import(const PhotoImportJob& o) {
             if (smoothed[i] && applied[i]) {
                 again = !same_trust(*smoothed[i], *applied[i]);
                 if (!same_trust(*smoothed[i], *own[i])) ++differ;
+            } else if (imposed_share[i]) {
+                again = true;  // a share an earlier run imposed, none now (--calibration-window 0)
             }
-            if (track && clock[i] && clock[i]->y() > 0) {  // the sun up
+            if (track && clock[i] && clock[i]->y() > 0 && seconds[i] >= track_from && seconds[i] <= track_to &&
+                (track->turn * *clock[i]).y() > 0.02) {  // the sun up, on the stretch of track seen
                 on_track[i] = (track->turn * *clock[i]).normalized();
                 ++moved;
                 if (!tracked[i] || tracked[i]->dot(*on_track[i]) < std::cos(0.5 * kPiD / 180)) again = true;
@@ -872,40 +904,67 @@ void run_photo_import(const PhotoImportJob& o) {
         if (track)
             std::printf(
                 "sun: %d of the photographs show it %.1f deg (median) from where the clock puts it, along one turn of "
-                "%.1f deg of the clock's track (within %.1f deg, median; %d taken): every sky's sun (%zu with the sun "
-                "up) is put on that track, seen or hidden. The camera is not level or not turned as its north says "
-                "(--tilt, --tilt-azimuth, --north)\n",
+                "%.1f deg of the clock's track (within %.1f deg, median; %d taken): the sun of every sky from 10 minutes "
+                "before the first to 10 minutes after the last of them (%zu skies) is put on that track, seen or "
+                "hidden. The camera is not level or not turned as its north says (--tilt, --tilt-azimuth, --north)\n",
                 track->seen, track->median_offset_deg, track->turn_deg, track->median_residual_deg, track->used, moved);
     }
-    // The previews at one exposure, the median of the skies' own (exposure_median): each at its own
-    // hid the sequence's brightness changes (a frame 2x too bright looked like its neighbours).
+    each.far_suns = nullptr;
+    if (far_suns.size() == 1) {
+        std::fprintf(stderr, "dynsky: warning: %s: %s\n", far_suns.begin()->first.c_str(),
+                     far_suns.begin()->second.second.c_str());
+    } else if (!far_suns.empty()) {
+        double least = 180, most = 0;
+        for (const auto& [photo, far] : far_suns) least = std::min(least, far.first), most = std::max(most, far.first);
+        std::fprintf(stderr,
+                     "dynsky: warning: %zu of the %zu photographs show the clipped sun %.1f-%.1f deg from the sun "
+                     "computed for their time and place; the first, %s: %s\n",
+                     far_suns.size(), photos.size(), least, most, far_suns.begin()->first.c_str(),
+                     far_suns.begin()->second.second.c_str());
+    }
+    // The previews at one exposure, the median of the calibrated skies' own, each within 2 stops of
+    // its own (exposure_median): each at its own hid the sequence's brightness changes (a frame 2x
+    // too bright looked like its neighbours), one for all turned noon white beside a night frame.
+    // Skies in a photograph's own units (uncalibrated) keep their own: their levels say nothing.
     {
-        std::vector<size_t> written;
-        std::vector<float> evs;
+        std::vector<size_t> calibrated;
+        std::vector<float> own_ev(photos.size(), 0.0f), evs;
         for (size_t i = 0; i < photos.size(); ++i) {
             if (std::find(failed.begin(), failed.end(), photos[i]) != failed.end()) continue;
             try {
-                const float ev = exposure_median(read_image(outputs[i]));
-                if (ev != 0) written.push_back(i), evs.push_back(ev);
+                const Image sky = read_image(outputs[i]);
+                const auto units = sky.metadata.strings.find("dynsky:units");
+                own_ev[i] = exposure_median(sky);
+                if (own_ev[i] != 0 && units != sky.metadata.strings.end() && units->second == kAbsoluteRadiance)
+                    calibrated.push_back(i), evs.push_back(own_ev[i]);
             } catch (const Error&) {
                 // Said by its import; its preview stays as it was.
             }
         }
-        if (written.size() >= 2) {
+        if (calibrated.size() >= 2) {
             std::vector<float> sorted = evs;
             std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
             const float ev = sorted[sorted.size() / 2];
-            ProgressBar previews((long long)written.size(), "previews at one exposure");
-            for (size_t i : written) {
+            constexpr float kMaxShiftEv = 2;
+            size_t shifted = 0;
+            ProgressBar previews((long long)calibrated.size(), "previews at one exposure");
+            for (size_t i : calibrated) {
                 take(i);
-                write_image(each.preview, tonemap_to_display(read_image(outputs[i]), ev));
+                const float own = own_ev[i], used = std::clamp(ev, own - kMaxShiftEv, own + kMaxShiftEv);
+                shifted += used != ev;
+                write_image(each.preview, tonemap_to_display(read_image(outputs[i]), used));
                 previews.advance();
             }
             previews.finish();
             std::printf(
                 "previews: one exposure for the sequence, %+.2f EV (the median of the skies' own, %+.2f to "
-                "%+.2f), so its brightness changes show\n",
-                ev, *std::min_element(evs.begin(), evs.end()), *std::max_element(evs.begin(), evs.end()));
+                "%+.2f), so its brightness changes show%s\n",
+                ev, *std::min_element(evs.begin(), evs.end()), *std::max_element(evs.begin(), evs.end()),
+                shifted ? (" (" + std::to_string(shifted) + " kept within 2 stops of their own)").c_str() : "");
+        } else {
+            std::printf(
+                "previews: each at its own exposure (the median luminance; skies in the photographs' own "
+                "units)\n");
         }
     }
     std::printf("imported %zu of %zu photographs into %s%s (STEM.exr, STEM.png, STEM.filled.png)%s\n",

@@ -520,6 +520,11 @@ TEST(SkyImportCli, ASequencesFrameWhoseClearShareSpikesIsCalibratedAsItsNeighbou
     r = test::run_command(exe() + " sky import " + dir + "/photos" + common + "-o " + dir + "/smoothed");
     EXPECT_NE(r.output.find("7 of them kept"), std::string::npos) << r.output;
     EXPECT_EQ(fs::last_write_time(dir + "/smoothed/2020-08-12_07_03.exr"), made);
+    // Without smoothing, run again: the sky is its own calibration again.
+    r = test::run_command(exe() + " sky import " + dir + "/photos" + common + "--calibration-window 0 -o " + dir +
+                          "/smoothed");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NEAR(brightness("smoothed", "03"), brightness("own", "03"), 1e-6 * brightness("own", "03"));
 }
 
 TEST(SkyImportCli, ASequencesSunIsPutOnTheTrackItsPhotographsShow) {
@@ -530,7 +535,7 @@ TEST(SkyImportCli, ASequencesSunIsPutOnTheTrackItsPhotographsShow) {
     const std::string dir = test::temp_dir("sky-import-sun-track");
     fs::create_directories(dir + "/photos");
     for (const char* t :
-         {"09_34", "09_52", "10_13", "10_22", "10_30", "10_57", "11_20", "11_50", "12_30", "12_50", "13_50"})
+         {"06_40", "09_34", "09_52", "10_13", "10_22", "10_30", "10_57", "11_20", "11_50", "12_30", "12_50", "13_50"})
         fs::copy_file(test::shared_path(std::string("skies/mobotix_sophia_20200812_morning/images/2020-08-12_") + t +
                                         ".jpg"),
                       dir + "/photos/2020-08-12_" + t + ".jpg");
@@ -559,6 +564,14 @@ TEST(SkyImportCli, ASequencesSunIsPutOnTheTrackItsPhotographsShow) {
         EXPECT_LT(degrees(sun(hidden), sun(seen)), 6.0) << hidden;
         EXPECT_GT(degrees(clock(hidden), sun(seen)), 10.0) << hidden;
     }
+    // Dawn lies beyond the stretch of track the photographs show: its sun stays the clock's (put on
+    // the track it went below the horizon, and the sky 2x darker).
+    EXPECT_LT(degrees(sun("06_40"), clock("06_40")), 0.01);
+    // Its preview, at most 2 stops from its own exposure, is not black beside noon's.
+    const Image dawn = read_image(dir + "/skies/2020-08-12_06_40.png");
+    double mean = 0;
+    for (float v : dawn.pixels) mean += v / dawn.pixels.size();
+    EXPECT_GT(mean, 0.05) << r.output;
 }
 
 TEST(SkyImportCli, FindNorthTurnsThePhotographByTheSunItShows) {
