@@ -10,6 +10,8 @@
 #include <set>
 #include <sstream>
 
+#include <Eigen/Geometry>
+
 #include "sky/hdr_recovery.h"
 #include "sky/preset_import.h"
 #include "sky/sky_image.h"
@@ -841,9 +843,11 @@ void run_photo_import(const PhotoImportJob& o) {
                 clock_seen.push_back(*clock[i]), seen_suns.push_back(*seen[i]), seen_at.push_back(i);
         std::optional<SunTrack> track = timed ? fit_sun_track(clock_seen, seen_suns) : std::nullopt;
         if (track && track->median_offset_deg < 3) track.reset();  // the clock's sun is where they show it
-        // The track holds between the first and the last photograph whose sun is on it (10 minutes
-        // either side): beyond, nothing shows where it goes (put on it, the Mobotix's sunrise sun
-        // went below the horizon and its skies 2x darker).
+        // The track holds between the first and the last photograph whose sun is on it, and the turn
+        // fades out over kTrackFadeS beyond them (a part of it, by slerp): beyond, nothing shows where
+        // the track goes (put on it, the Mobotix's sunrise sun went below the horizon and its skies
+        // 2x darker), and a hard end made the sun step 10 degrees between two skies.
+        constexpr double kTrackFadeS = 1800;
         double track_from = 0, track_to = 0;
         if (track) {
             bool any = false;
@@ -852,8 +856,10 @@ void run_photo_import(const PhotoImportJob& o) {
                 const double t = seconds[seen_at[k]];
                 track_from = any ? std::min(track_from, t) : t, track_to = any ? std::max(track_to, t) : t, any = true;
             }
-            track_from -= 600, track_to += 600;
         }
+        auto turn_share = [&](double t) {
+            return std::clamp(1 - std::max(track_from - t, t - track_to) / kTrackFadeS, 0.0, 1.0);
+        };
         std::vector<size_t> redo;
         size_t differ = 0, moved = 0;
         std::vector<std::optional<Vec3d>> on_track(photos.size());
@@ -865,9 +871,14 @@ void run_photo_import(const PhotoImportJob& o) {
             } else if (imposed_share[i]) {
                 again = true;  // a share an earlier run imposed, none now (--calibration-window 0)
             }
-            if (track && clock[i] && clock[i]->y() > 0 && seconds[i] >= track_from && seconds[i] <= track_to &&
-                (track->turn * *clock[i]).y() > 0.02) {  // the sun up, on the stretch of track seen
-                on_track[i] = (track->turn * *clock[i]).normalized();
+            const double share = track ? turn_share(seconds[i]) : 0.0;
+            const Eigen::Quaterniond turn = track
+                                                ? Eigen::Quaterniond::Identity().slerp(share,
+                                                                                       Eigen::Quaterniond(track->turn))
+                                                : Eigen::Quaterniond::Identity();
+            if (share > 0 && clock[i] && clock[i]->y() > 0 &&
+                (turn * *clock[i]).y() > 0.02) {  // the sun up, on the stretch of track seen or its fade
+                on_track[i] = (turn * *clock[i]).normalized();
                 ++moved;
                 if (!tracked[i] || tracked[i]->dot(*on_track[i]) < std::cos(0.5 * kPiD / 180)) again = true;
             } else if (tracked[i]) {
@@ -904,9 +915,9 @@ void run_photo_import(const PhotoImportJob& o) {
         if (track)
             std::printf(
                 "sun: %d of the photographs show it %.1f deg (median) from where the clock puts it, along one turn of "
-                "%.1f deg of the clock's track (within %.1f deg, median; %d taken): the sun of every sky from 10 minutes "
-                "before the first to 10 minutes after the last of them (%zu skies) is put on that track, seen or "
-                "hidden. The camera is not level or not turned as its north says (--tilt, --tilt-azimuth, --north)\n",
+                "%.1f deg of the clock's track (within %.1f deg, median; %d taken): the sun of every sky from the first "
+                "to the last of them is put on that track, seen or hidden, the turn fading out over 30 minutes "
+                "either side (%zu skies). The camera is not level or not turned as its north says (--tilt, --tilt-azimuth, --north)\n",
                 track->seen, track->median_offset_deg, track->turn_deg, track->median_residual_deg, track->used, moved);
     }
     each.far_suns = nullptr;
