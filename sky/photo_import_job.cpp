@@ -549,6 +549,10 @@ void run_photo_import(const PhotoImportJob& o) {
             throw Error(
                 "--flatten-colour measures a camera's colour shading on its overcast photographs: give a "
                 "sequence (several photographs or a folder)");
+        if (o.calibration_window_s != PhotoImportJob{}.calibration_window_s)
+            std::fprintf(stderr,
+                         "dynsky: warning: --calibration-window smooths a sequence's calibrations over time; one "
+                         "photograph is calibrated on its own: ignored\n");
         OnePhoto one(o);
         one.photo = o.photos.front();
         import_one(one, true);

@@ -496,6 +496,12 @@ TEST(SkyImportCli, ASequencesFrameWhoseClearShareSpikesIsCalibratedAsItsNeighbou
     r = test::run_command(exe() + " sky import " + dir + "/photos" + common + "--calibration-window 0 -o " + dir +
                           "/own");
     ASSERT_EQ(r.exit_code, 0) << r.output;
+    // One photograph has no neighbours: the option is said to be ignored.
+    const auto one = test::run_command(exe() + " sky import " + dir + "/photos/2020-08-12_07_03.jpg" + common +
+                                       "--calibration-window 60 -o " + dir + "/one.exr 2>&1");
+    EXPECT_EQ(one.exit_code, 0) << one.output;
+    EXPECT_NE(one.output.find("--calibration-window smooths a sequence's calibrations"), std::string::npos)
+        << one.output;
     EXPECT_EQ(r.output.find("as their neighbours are"), std::string::npos) << r.output;
     std::printf("07:03 against its neighbours: %.3f smoothed, %.3f by its own clear share\n", spike("smoothed"),
                 spike("own"));
