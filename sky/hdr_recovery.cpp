@@ -569,10 +569,6 @@ std::optional<SunTrack> fit_sun_track(const std::vector<Vec3d>& clock, const std
     SunTrack track;
     track.seen = int(seen.size());
     std::vector<bool> use(seen.size(), true);
-    auto median = [](std::vector<double> v) {
-        std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-        return v[v.size() / 2];
-    };
     std::vector<double> residual(seen.size());
     for (int pass = 0; pass < 5; ++pass) {  // until the photographs taken stop changing
         Eigen::Matrix3d h = Eigen::Matrix3d::Zero();

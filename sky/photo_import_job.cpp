@@ -24,6 +24,7 @@
 #include "util/file_hash.h"
 #include "util/frame_names.h"
 #include "util/image.h"
+#include "util/math.h"
 #include "util/progress.h"
 
 namespace dynsky {
@@ -480,9 +481,7 @@ std::vector<std::optional<double>> smooth_over_time(const std::vector<double>& s
             ++hi;
         std::vector<double> v;
         for (size_t q = lo; q <= hi; ++q) v.push_back(*values[order[q]]);
-        const size_t m = v.size() / 2;
-        std::nth_element(v.begin(), v.begin() + m, v.end());
-        out[order[k]] = v.size() % 2 ? v[m] : 0.5 * (v[m] + *std::max_element(v.begin(), v.begin() + m));
+        out[order[k]] = middle_mean(std::move(v));
     }
     return out;
 }
@@ -721,6 +720,7 @@ void run_photo_import(const PhotoImportJob& o) {
         each.find_north = false;
     }
     std::vector<std::string> failed;
+    auto has_failed = [&](size_t i) { return std::find(failed.begin(), failed.end(), photos[i]) != failed.end(); };
     size_t kept = 0;
     bool said = false;
     std::map<std::string, std::pair<double, std::string>> far_suns;
@@ -785,7 +785,7 @@ void run_photo_import(const PhotoImportJob& o) {
     if (!o.fill && photos.size() - failed.size() >= 2) {
         std::vector<std::string> written;
         for (size_t i = 0; i < photos.size(); ++i)
-            if (std::find(failed.begin(), failed.end(), photos[i]) == failed.end()) written.push_back(outputs[i]);
+            if (!has_failed(i)) written.push_back(outputs[i]);
         const std::string last = skies_in_time_order(written).back();
         const size_t i = size_t(std::find(outputs.begin(), outputs.end(), last) - outputs.begin());
         take(i);
@@ -824,7 +824,7 @@ void run_photo_import(const PhotoImportJob& o) {
             return v;
         };
         for (size_t i = 0; i < photos.size(); ++i) {
-            if (std::find(failed.begin(), failed.end(), photos[i]) != failed.end()) continue;
+            if (has_failed(i)) continue;
             try {
                 seconds[i] = utc_seconds(planned_times[i]);
             } catch (const Error&) {
@@ -945,7 +945,7 @@ void run_photo_import(const PhotoImportJob& o) {
         std::vector<size_t> calibrated;
         std::vector<float> own_ev(photos.size(), 0.0f), evs;
         for (size_t i = 0; i < photos.size(); ++i) {
-            if (std::find(failed.begin(), failed.end(), photos[i]) != failed.end()) continue;
+            if (has_failed(i)) continue;
             try {
                 const Image sky = read_image(outputs[i]);
                 const auto units = sky.metadata.strings.find("dynsky:units");
@@ -957,9 +957,7 @@ void run_photo_import(const PhotoImportJob& o) {
             }
         }
         if (calibrated.size() >= 2) {
-            std::vector<float> sorted = evs;
-            std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-            const float ev = sorted[sorted.size() / 2];
+            const float ev = median(evs);
             constexpr float kMaxShiftEv = 2;
             size_t shifted = 0;
             ProgressBar previews((long long)calibrated.size(), "previews at one exposure");
