@@ -532,6 +532,15 @@ cv::Mat glare_plateau(const cv::Mat& start, const Vec3d& sun) {
 // and a cloud then moved onto the sun did not dim it (the start's sun counted as covered already).
 constexpr double kGlareHaloDeg = 35.0;
 constexpr double kHaloSeenShare = 0.25;  // a ring's share of seen (not filled) pixels to be measured
+// A glow rises towards the sun no faster than (angle)^-kHaloSteepest from the rings outside it,
+// whose glow is taken as at least kHaloFloorShare of their background: a lens's glare and the
+// atmosphere's aureole fall off as about the inverse square of the angle (a clipped plateau is
+// flatter still). Without it, a broken-cumulus photograph whose sun sat amid cloud (ARM 17:19Z:
+// every seen pixel 12-17 degrees out cloud-white) measured its cloud as glow: 60 W m^-2 sr^-1 out to
+// 18 degrees, 2 beyond 24, a pale disc with a hard, coloured rim kept around the sun as its clouds
+// moved off.
+constexpr double kHaloSteepest = 4.0;
+constexpr double kHaloFloorShare = 0.02;
 
 // Angle from the sun (degrees) of each pixel of an n x n sky, -1 outside the disc or beyond the halo.
 cv::Mat halo_angles(int n, const Vec3d& sun) {
@@ -567,12 +576,15 @@ std::vector<cv::Vec3f> halo_excess(const cv::Mat& start, const cv::Mat& backgrou
         cv::resize(filled, hidden, start.size(), 0, 0, cv::INTER_NEAREST);
     std::vector<std::vector<std::pair<float, cv::Vec3f>>> values(static_cast<size_t>(rings));
     std::vector<int> in_ring(static_cast<size_t>(rings), 0);
+    std::vector<double> background_sum(static_cast<size_t>(rings), 0.0);
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x)
             if (const float a = angle.at<float>(y, x); a >= 0) {
                 ++in_ring[size_t(a)];
-                if (!hidden.empty() && hidden.at<uint8_t>(y, x)) continue;
                 const cv::Vec3f s = start.at<cv::Vec3f>(y, x), b = background.at<cv::Vec3f>(y, x);
+                background_sum[size_t(a)] += luminance(unit_to_radiance(b[0], unit), unit_to_radiance(b[1], unit),
+                                                       unit_to_radiance(b[2], unit));
+                if (!hidden.empty() && hidden.at<uint8_t>(y, x)) continue;
                 cv::Vec3f e;
                 for (int k = 0; k < 3; ++k) e[k] = unit_to_radiance(s[k], unit) - unit_to_radiance(b[k], unit);
                 values[size_t(a)].push_back({luminance(e[0], e[1], e[2]), e});
@@ -595,13 +607,27 @@ std::vector<cv::Vec3f> halo_excess(const cv::Mat& start, const cv::Mat& backgrou
     }
     const auto first = std::find(known.begin(), known.end(), true);
     if (first == known.end()) return {};
+    // No steeper than a glow can rise towards the sun (kHaloSteepest), from the nearest measured
+    // ring outside (scaled as a whole, so the ring keeps its colour).
+    const auto luminance_of = [](const cv::Vec3f& e) { return luminance(e[0], e[1], e[2]); };
+    int outer = -1;
+    for (int r = rings - 1; r >= 0; --r) {
+        if (!known[size_t(r)]) continue;
+        if (outer >= 0) {
+            const double floor = kHaloFloorShare * background_sum[size_t(outer)] / std::max(1, in_ring[size_t(outer)]);
+            const double cap = std::max(double(luminance_of(excess[size_t(outer)])), floor) *
+                               std::pow((outer + 0.5) / (r + 0.5), kHaloSteepest);
+            const double here = luminance_of(excess[size_t(r)]);
+            if (here > cap) excess[size_t(r)] *= float(cap / here);
+        }
+        outer = r;
+    }
     for (int r = 0; r < rings; ++r)
         if (!known[size_t(r)])
             excess[size_t(r)] = r < first - known.begin() ? excess[size_t(first - known.begin())]
                                                           : excess[size_t(r) - 1];
     // A glow falls off away from the sun: never more light than the ring inside (scaled as a whole,
     // so the ring keeps its colour).
-    const auto luminance_of = [](const cv::Vec3f& e) { return luminance(e[0], e[1], e[2]); };
     for (int r = 1; r < rings; ++r) {
         const float inside = luminance_of(excess[size_t(r) - 1]), here = luminance_of(excess[size_t(r)]);
         if (here > inside) excess[size_t(r)] *= here > 0 ? std::max(0.0f, inside) / here : 0.0f;

@@ -203,7 +203,9 @@ cv::Mat filled_mask(const SkyImage& sky);
 // The glow of a start around its sun beyond the model's background (both N x N CV_32FC3 in the
 // network form, `unit` its map), per 1-degree ring out to 35 degrees, in radiance, measured on the
 // pixels `filled` (CV_8UC1, may be empty) does not mark: added to the background around the sun of
-// every step, so that the glow neither reads as cloud nor moves. Empty: none. Exposed for tests.
+// every step, so that the glow neither reads as cloud nor moves. Shaped as a glow: falling away
+// from the sun, and rising towards it no faster than the angle^-4 from the rings outside (cloud
+// all around a sun is not its glow). Empty: none. Exposed for tests.
 std::vector<cv::Vec3f> halo_excess(const cv::Mat& start, const cv::Mat& background, const Vec3d& sun,
                                    const UnitMapParams& unit, const cv::Mat& filled);
 

@@ -369,6 +369,46 @@ TEST(AdvectResidual, ARingMostlyHiddenDoesNotMeasureTheGlow) {
     for (const int r : {0, 2, 8, 11, 15, 20}) EXPECT_NEAR(excess[size_t(r)][1], glow, 0.1 * glow) << "ring " << r;
 }
 
+// Cloud all around the sun is not its glow: a glow rises towards the sun no faster than about the
+// inverse square of the angle, so rings of cloud-white inside clear rings that show no glow measure
+// little. A broken-cumulus photograph (ARM 17:19Z) whose seen pixels 12-17 degrees from the sun were
+// all cloud measured 60 W m^-2 sr^-1 of glow out to 18 degrees and 2 beyond 24: a pale disc with a
+// hard, coloured rim stayed around the sun as its clouds moved off. A real glare (a clipped plateau,
+// then an inverse-square fall) is measured as it is.
+TEST(AdvectResidual, CloudAroundTheSunIsNotMeasuredAsItsGlow) {
+    const int n = 256;
+    const UnitMapParams unit = AdvectResidualNetwork::load(shipped()).info().form.unit_map;
+    const Vec3d sun = fisheye::direction_from_angles(30 * kPiD / 180, 1.0);
+    const float base = 10.0f;
+    for (const bool cloud : {true, false}) {
+        // Cloud: 50 over the background within 18 degrees, a glow of 0.1 beyond. Glare: 40 out to
+        // 4 degrees, then 40 (4 / a)^2.
+        auto glow_at = [&](double a) {
+            if (cloud) return a < 18 ? 50.0 : 0.1;
+            return a < 4 ? 40.0 : 40.0 * (4 / a) * (4 / a);
+        };
+        cv::Mat background(n, n, CV_32FC3), start(n, n, CV_32FC3);
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                const Vec3d d = fisheye::direction_from_pixel(i, j, n);
+                const double a = std::acos(std::clamp(d.dot(sun), -1.0, 1.0)) * 180 / kPiD;
+                const float b = radiance_to_unit(base, unit), s = radiance_to_unit(base + float(glow_at(a)), unit);
+                background.at<cv::Vec3f>(j, i) = cv::Vec3f(b, b, b);
+                start.at<cv::Vec3f>(j, i) = cv::Vec3f(s, s, s);
+            }
+        const std::vector<cv::Vec3f> excess = halo_excess(start, background, sun, unit, cv::Mat());
+        ASSERT_FALSE(excess.empty());
+        std::printf("%s: glow measured at 3, 8, 12, 16, 20 degrees: %.2f %.2f %.2f %.2f %.2f\n",
+                    cloud ? "cloud within 18 degrees" : "glare", excess[3][1], excess[8][1], excess[12][1],
+                    excess[16][1], excess[20][1]);
+        for (const int r : {8, 10, 12, 14, 16, 17}) {
+            if (cloud) EXPECT_LT(excess[size_t(r)][1], 5.0) << "ring " << r;  // 10 % of the cloud's
+            else EXPECT_NEAR(excess[size_t(r)][1], glow_at(r + 0.5), 0.15 * glow_at(r + 0.5)) << "ring " << r;
+        }
+        if (!cloud) EXPECT_NEAR(excess[2][1], 40.0, 4.0);
+    }
+}
+
 // A clear HDRI that does not record its sun (a downloaded one) moves as the same sky that does: its
 // scale is measured against the clear-sky model of the sun its brightest pixels show. Put at a
 // median of 20 instead, a sunset's sky (the sun 1.7 degrees up) was 8 x its model, read as cloud
