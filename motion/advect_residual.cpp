@@ -173,7 +173,7 @@ cv::Mat background_at(const Vec3& sun, int n, const NetworkFormParams& form, dou
 }
 
 // How much of the sun's aureole each pixel is (defined below).
-cv::Mat circumsolar_share(int n, const std::optional<Vec3d>& sun);
+cv::Mat circumsolar_share(int n, const std::optional<Vec3d>& sun, double inner_deg = 15.0, double outer_deg = 30.0);
 
 }  // namespace
 
@@ -658,11 +658,28 @@ void halo_background(const std::vector<cv::Vec3f>& excess, const cv::Mat& angle,
         }
 }
 
-cv::Mat circumsolar_share(int n, const std::optional<Vec3d>& sun) {
+// The glow's share of the background (luminance, radiance) over its outer rings, 28 to 35 degrees
+// from the sun (halo_angles `angle` of the background's size).
+double outer_glow_share(const std::vector<cv::Vec3f>& excess, const cv::Mat& angle, const cv::Mat& background,
+                        const UnitMapParams& unit) {
+    double glow = 0, sky = 0;
+    const int rings = int(excess.size());
+    for (int y = 0; y < background.rows; ++y)
+        for (int x = 0; x < background.cols; ++x) {
+            const float a = angle.at<float>(y, x);
+            if (a < 28 || int(a) >= rings) continue;
+            const cv::Vec3f b = background.at<cv::Vec3f>(y, x), e = excess[size_t(a)];
+            glow += luminance(e[0], e[1], e[2]);
+            sky += luminance(unit_to_radiance(b[0], unit), unit_to_radiance(b[1], unit), unit_to_radiance(b[2], unit));
+        }
+    return sky > 0 ? glow / sky : 0.0;
+}
+
+cv::Mat circumsolar_share(int n, const std::optional<Vec3d>& sun, double inner_deg, double outer_deg) {
     cv::Mat share(n, n, CV_32FC1, cv::Scalar(0));
     if (!sun) return share;
     const Vec3d s = sun->normalized();
-    const double inner = std::cos(15.0 * kPiD / 180), outer = std::cos(30.0 * kPiD / 180);
+    const double inner = std::cos(inner_deg * kPiD / 180), outer = std::cos(outer_deg * kPiD / 180);
     tbb::parallel_for(0, n, [&](int y) {
         float* o = share.ptr<float>(y);
         for (int x = 0; x < n; ++x) {
@@ -889,6 +906,22 @@ void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3
             alpha.setTo(cv::Scalar(ring), region & (alpha < ring));
             alpha.setTo(cv::Scalar(unseen_opacity_), unseen_ & disc_big_ & (alpha < unseen_opacity_));
         }
+        // The start's glow (halo_excess) is background a cloud hides wherever it goes: the clouds
+        // compose by opacity over all of it. Composed additively beyond 30 degrees, the clouds a
+        // wind carried into its outer rings shone with it: a hazy Mobotix photograph (11:59 CEST,
+        // its glow still half the sky's 30 degrees out) drew an orange ring 30-35 degrees around its
+        // sun within two steps, where the glow ends.
+        // Only where the glow there is more than a few percent of the sky (a procedural sky's,
+        // 0.1 % at the sun, left the composition as it was: clouds near the sun brighten as they
+        // come, as additive composition has them).
+        const cv::Mat near_sun = share_.clone();
+        if (!halo_excess_.empty() && !overcast && !halo_angle.empty()) {
+            const double outer = outer_glow_share(halo_excess_, halo_angle, background_,
+                                                  network_->info().form.unit_map);
+            const double w = smoothstep01((outer - 0.02) / (0.08 - 0.02));
+            if (w > 0)
+                cv::max(share_, w * circumsolar_share(start_.rows, sun_, kGlareHaloDeg, kGlareHaloDeg + 10.0), share_);
+        }
         cv::Mat alpha3, carried;
         cv::merge(std::vector<cv::Mat>{alpha, alpha, alpha}, alpha3);
         std::vector<cv::Mat> ch;
@@ -904,7 +937,7 @@ void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3
         // So do clear holes inside a cloud near the sun: a cloud lit from behind matches the
         // aureole and reads clear there, and carried elsewhere it showed a blue hole.
         cv::Mat own = start_ - background_ + background_.mul(alpha3);
-        cv::Mat tile_unknown = enclosed_clear_near_sun(alpha, share_, disc_big_);
+        cv::Mat tile_unknown = enclosed_clear_near_sun(alpha, near_sun, disc_big_);
         if (!unknown.empty()) tile_unknown |= unknown & disc_big_;
         std::vector<cv::Mat> oc;
         cv::split(own, oc);

@@ -267,6 +267,61 @@ TEST(AdvectResidual, AHazySkysGlowStaysOnItsSun) {
     }
 }
 
+// Clouds a wind carries into the sun's glow hide it there, out to the glow's edge: composed over it
+// additively beyond 30 degrees, they shone with it, and a hazy Mobotix photograph (11:59 CEST, its
+// glow still half the sky's 30 degrees out) drew an orange ring 30-35 degrees around its sun within
+// two steps, where the glow ends. Here a glow of 0.6 x the clear sky out to 35 degrees, opaque
+// clouds beyond 40 carried across it: the clouds 31-34 degrees from the sun shine as those far from it.
+TEST(AdvectResidual, CloudsCarriedIntoTheGlowHideIt) {
+    AdvectResidualNetwork net = AdvectResidualNetwork::load(shipped());
+    const int n = 128;
+    const Vec3d sun = fisheye::direction_from_angles(25 * kPiD / 180, 1.0);
+    ClearSkyParams p;
+    p.sun_direction = sun;
+    SkyImage sky = make_clear_sky(p, n);
+    const float cloud = 30.0f;  // about 3 x the clear sky's median
+    auto angle_to = [&](const Vec3d& a, const Vec3d& b) {
+        return std::acos(std::clamp(a.dot(b), -1.0, 1.0)) * 180 / kPiD;
+    };
+    std::vector<Vec3d> blobs;
+    for (double zenith = 20; zenith <= 75; zenith += 11)
+        for (double azimuth = 0; azimuth < 360; azimuth += 24) {
+            const Vec3d d = fisheye::direction_from_angles(zenith * kPiD / 180, azimuth * kPiD / 180);
+            if (angle_to(d, sun) > 42) blobs.push_back(d);
+        }
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            if (!sky.in_disc(i, j)) continue;
+            const Vec3d d = fisheye::direction_from_pixel(i, j, n);
+            const double a = angle_to(d, sun);
+            if (a > 1.5 && a < 35) sky.set_pixel(i, j, sky.pixel(i, j) * 1.6f);
+            for (const Vec3d& b : blobs)
+                if (angle_to(d, b) < 5) sky.set_pixel(i, j, Color(cloud, cloud, cloud));
+        }
+    CloudMotion motion;
+    motion.wind = Wind{270.0, 12.0, 1500.0};
+    std::vector<SkyImage> steps;
+    net.rollout(sky, net.motion_flow(sky, motion, net.info().dt, n), 4,
+                [&](int, const SkyImage& s) { steps.push_back(s); });
+    double band = 0, far = 0;
+    int band_count = 0, far_count = 0;
+    for (const SkyImage& s : steps)
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                if (!s.in_disc(i, j) || luminance(s.pixel(i, j)) < 0.75 * cloud) continue;  // cloud
+                const Vec3d d = fisheye::direction_from_pixel(i, j, n);
+                const double a = angle_to(d, sun), zenith = std::acos(std::clamp(d.y(), -1.0, 1.0)) * 180 / kPiD;
+                if (zenith > 70) continue;
+                if (a > 31 && a < 34) band += luminance(s.pixel(i, j)), ++band_count;
+                else if (a > 45) far += luminance(s.pixel(i, j)), ++far_count;
+            }
+    ASSERT_GT(band_count, 20);
+    ASSERT_GT(far_count, 100);
+    std::printf("cloud 31-34 degrees from the sun %.2f x the cloud beyond 45 (%d and %d pixels, steps 1-4)\n",
+                (band / band_count) / (far / far_count), band_count, far_count);
+    EXPECT_LT((band / band_count) / (far / far_count), 1.08);
+}
+
 // The glow measured around the sun leaves out the pixels an import filled, and keeps each ring's
 // colour: a TSI's shadow band runs through the sun, and its fill (here magenta) set the innermost
 // rings; capped channel by channel by them, an ARM photograph's glow came out magenta and left a
