@@ -194,7 +194,8 @@ void register_sky_import_commands(CLI::App& sky) {
     imp->add_option(
            "--time", io->time,
            "When the photo was taken, ISO 8601 with a zone (2017-05-24T17:00:00Z); default: from the file name, "
-           "else its EXIF DateTimeOriginal (docs/sky-import.md lists the names understood)")
+           "else its EXIF DateTimeOriginal (docs/sky-import.md lists the names understood). One photograph only: "
+           "a sequence takes each photograph's own")
         ->check(utc_time());
     io->offset_opt =
         imp->add_option(

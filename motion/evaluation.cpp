@@ -323,13 +323,14 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
                                            : named_photo_sequence(o.sequence, shared);
 
     std::optional<CloudModel> paper;
-    std::string paper_folder;
+    std::string paper_folder, paper_note;  // paper_note: why the paper's model was asked for and not scored
     if (o.paper) {
         try {
             paper_folder = resolve_cloud_model("paper");
             paper = CloudModel::load(paper_folder);
         } catch (const Error&) {
-            if (!o.quiet) std::fprintf(stderr, "dynsky: note: the paper's model is not installed; not scored\n");
+            paper_note = "the paper's model is not installed: not scored";
+            if (!o.quiet) std::fprintf(stderr, "dynsky: note: %s\n", paper_note.c_str());
         }
     }
     const NetworkFormParams& form = model.info().form;
@@ -340,12 +341,11 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
         const double k = seq.dt / paper->info().dt;
         paper_steps = int(std::lround(k));
         if (paper_steps < 1 || std::abs(k - paper_steps) > 0.1 * k) {
-            if (!o.quiet)
-                std::fprintf(
-                    stderr,
-                    "dynsky: note: the paper's model steps %g s, which does not divide the photographs' cadence "
-                    "of %g s: not scored\n",
-                    paper->info().dt, seq.dt);
+            // Said in the report too (-q hid it, and the report had no paper column and no word why).
+            paper_note = "the paper's model steps " + fmt("%g", paper->info().dt) +
+                         " s, which does not divide the photographs' cadence of " + fmt("%g", seq.dt) +
+                         " s: not scored";
+            if (!o.quiet) std::fprintf(stderr, "dynsky: note: %s\n", paper_note.c_str());
             paper.reset();
         }
     }
@@ -630,7 +630,7 @@ EvaluationResult evaluate_cloud_model(const EvaluationOptions& o) {
        << (paper ? "; paper = the paper's FlowNet + CloudNet, " + std::to_string(paper_steps) + " step(s) of " +
                        fmt("%g", paper->info().dt) + " s per frame"
                  : std::string())
-       << ".\n\n";
+       << (paper_note.empty() ? std::string() : "; " + paper_note) << ".\n\n";
     // An earlier report under this name goes just before this one is written (after the scoring: a
     // bad photograph, Ctrl-C or a failure during it keeps the earlier report whole): a run stopped
     // midway through writing left its new CSV beside the old report and charts.

@@ -72,13 +72,13 @@ std::string HdrCalibrationReport::sun_offset_warning() const {
     std::ostringstream s;
     s.precision(3);
     s << "the clipped sun was found " << sun_offset_deg << " deg from the sun computed for the photo's time and place"
-      << " (more than " << kSunOffsetWarningDeg << " deg: a wrong time, place or camera orientation, or glare taken"
-      << " for the sun); ";
+      << " (more than " << kSunOffsetWarningDeg << " deg: a wrong time, place or camera orientation, or glare or a"
+      << " sunlit cloud edge taken for the sun); ";
     if (sun_restored)
         s << "the sun disc was restored " << (at_seen ? "where the photo shows it" : "at the computed position");
     else s << "the sun disc was not restored";
     s << ", and the sky's sun direction is " << (at_seen ? "the one seen" : "the computed one")
-      << "; check --time, --lat/--lon and the preset's orientation";
+      << "; check --time, --lat/--lon and the camera's orientation (--north, or its preset's)";
     return s.str();
 }
 

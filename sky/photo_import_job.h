@@ -19,7 +19,7 @@
 //   fill            none: texture for one photograph, smooth for a sequence but its last sky in time
 //                   (where a moving sky made from the folder starts) texture
 //   encoding        "auto" (the file's pixels decide), "srgb" or "linear"
-//   time            ISO 8601 with a zone ("": the file name's, else the EXIF's)
+//   time            ISO 8601 with a zone ("": the file name's, else the EXIF's; one photograph only)
 //   utc_offset_hours, latitude_deg, longitude_deg, elevation_m   none: the preset's, else 0
 //   hdr             "auto" (calibrated when time and place are known), "none" or "calibrated"
 //   keep_colours    one scale for all channels (false); turbidity: 3

@@ -377,6 +377,13 @@ TEST(SkyImportCli, SequenceFolderImportsEveryFrameUnderOneCircle) {
     r = test::run_command(exe() + " sky import " + dir + "/photos" + common + " -o " + dir + "/one.exr");
     EXPECT_EQ(r.exit_code, 2);  // a usage error, as --out x.png is
     EXPECT_NE(r.output.find("is the folder their skies go to"), std::string::npos) << r.output;
+    // So is one --time for all of them (every sky stamped with it, without a word, and `sky predict`
+    // and `sky evaluate` then refused them as taken at the same moment).
+    r = test::run_command(exe() + " sky import " + dir + "/photos" + common + " --time 2020-08-12T10:00:00Z -o " + dir +
+                          "/timed");
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("the same time: a sequence takes each photograph's own"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/timed"));
 
     // Some photographs with a time (a zone in the name) and some without (no zone, no --utc-offset):
     // their skies were calibrated and not, 40 x apart, with a note on the first only. Refused before
