@@ -658,8 +658,10 @@ void halo_background(const std::vector<cv::Vec3f>& excess, const cv::Mat& angle,
         }
 }
 
-// The glow's share of the background (luminance, radiance) over its outer rings, 28 to 35 degrees
-// from the sun (halo_angles `angle` of the background's size).
+// The glow's share of the background it was added to (luminance, radiance; the background
+// unweighted: the network form is logarithmic, and a weight scales it there, not in radiance) over
+// its outer rings, 28 to 35 degrees from the sun, as halo_background adds it (fading out over the
+// last 5 degrees); halo_angles `angle` of the background's size.
 double outer_glow_share(const std::vector<cv::Vec3f>& excess, const cv::Mat& angle, const cv::Mat& background,
                         const UnitMapParams& unit) {
     double glow = 0, sky = 0;
@@ -669,7 +671,8 @@ double outer_glow_share(const std::vector<cv::Vec3f>& excess, const cv::Mat& ang
             const float a = angle.at<float>(y, x);
             if (a < 28 || int(a) >= rings) continue;
             const cv::Vec3f b = background.at<cv::Vec3f>(y, x), e = excess[size_t(a)];
-            glow += luminance(e[0], e[1], e[2]);
+            const double fade = std::clamp((kGlareHaloDeg - a) / 5.0, 0.0, 1.0);
+            glow += fade * luminance(e[0], e[1], e[2]);
             sky += luminance(unit_to_radiance(b[0], unit), unit_to_radiance(b[1], unit), unit_to_radiance(b[2], unit));
         }
     return sky > 0 ? glow / sky : 0.0;
@@ -916,8 +919,7 @@ void CloudRollout::set_background(const cv::Mat& given, const std::optional<Vec3
         // come, as additive composition has them).
         const cv::Mat near_sun = share_.clone();
         if (!halo_excess_.empty() && !overcast && !halo_angle.empty()) {
-            const double outer = outer_glow_share(halo_excess_, halo_angle, background_,
-                                                  network_->info().form.unit_map);
+            const double outer = outer_glow_share(halo_excess_, halo_angle, background, network_->info().form.unit_map);
             const double w = smoothstep01((outer - 0.02) / (0.08 - 0.02));
             if (w > 0)
                 cv::max(share_, w * circumsolar_share(start_.rows, sun_, kGlareHaloDeg, kGlareHaloDeg + 10.0), share_);

@@ -733,6 +733,7 @@ void run_photo_import(const PhotoImportJob& o) {
     bool said = false;
     std::map<std::string, std::pair<double, std::string>> far_suns;
     each.far_suns = &far_suns;
+    size_t suns_seen = 0;  // photographs whose clipped sun was found (their skies' dynsky:sun_seen)
     each.say_preview = false;
     // Photograph i's files, and whether they are whole and made with `key` (a stopped import goes on
     // where it stopped: long sequences lost every finished sky to an interruption).
@@ -853,6 +854,7 @@ void run_photo_import(const PhotoImportJob& o) {
         for (size_t i = 0; i < photos.size(); ++i)
             if (clock[i] && seen[i])
                 clock_seen.push_back(*clock[i]), seen_suns.push_back(*seen[i]), seen_at.push_back(i);
+        suns_seen = seen_suns.size();
         std::optional<SunTrack> track = timed ? fit_sun_track(clock_seen, seen_suns) : std::nullopt;
         if (track && track->median_offset_deg < 3) track.reset();  // the clock's sun is where they show it
         // The track holds between the first and the last photograph whose sun is on it, and the turn
@@ -942,7 +944,7 @@ void run_photo_import(const PhotoImportJob& o) {
         // A few among many: the others' suns agree with the clock, so the time, place and north are
         // likely right (an audit's synthetic camera, all three exact, was told to turn its north
         // by 17-32 degrees for 2 of 20 frames whose clipped sun was a sunlit cloud edge).
-        const bool few = 4 * far_suns.size() <= photos.size();
+        const bool few = 4 * far_suns.size() <= suns_seen;
         std::fprintf(stderr,
                      "dynsky: warning: %zu of the %zu photographs show the clipped sun %.1f-%.1f deg from the sun "
                      "computed for their time and place%s; the first, %s: %s\n",
